@@ -1,0 +1,72 @@
+"""smoothdist: smooth distances to points, edges, triangles and mixed meshes.
+
+A reference implementation of Madan & Levin, "Fast Evaluation of Smooth Distance Constraints
+on Co-Dimensional Geometry" (SIGGRAPH 2022), in numpy + numba.
+
+Conventions
+-----------
+* ``V (n, 3) float64`` vertices; ``F`` ``None`` (points), ``(m, 2)`` edges or ``(m, 3)``
+  triangles; ``Q (q, 3)`` query points.
+* Distances are unsigned, in scene units; gradients are with respect to the query point.
+* The smooth distance is conservative: ``d - log(A**S N)/alpha <= d_hat <= d``.
+"""
+
+from smoothdist.field import (ExactDistanceResult, QueryStats, SmoothDistanceField,
+                              SmoothDistanceResult)
+from smoothdist.mesh import DataMesh, MeshRepairWarning
+
+__all__ = ["DataMesh", "MeshRepairWarning", "SmoothDistanceField", "SmoothDistanceResult",
+           "ExactDistanceResult", "QueryStats", "smooth_distance", "exact_distance",
+           "load_mesh"]
+__version__ = "0.1.0"
+
+
+def load_mesh(path, kind=None):
+    """Load an OBJ/OFF/STL/PLY file as a :class:`DataMesh` (see :meth:`DataMesh.load`)."""
+    return DataMesh.load(path, kind=kind)
+
+
+def smooth_distance(Q, V, F=None, *, alpha, beta=0.5, alpha_u=None, gradient="metric",
+                    return_stats=False):
+    """Smooth distance from query points to a data mesh (Madan & Levin 2022, Eq. 3-4).
+
+    Parameters
+    ----------
+    Q : (q, 3) array_like of float
+        Query points.
+    V : (n, 3) array_like of float
+        Data vertices.
+    F : None, (m, 2) or (m, 3) array_like of int
+        ``None``: the vertices are a point cloud; ``(m, 2)`` edges; ``(m, 3)`` triangles.
+    alpha : float or "auto"
+        Sharpness, 1 / scene units (> 0).
+    beta : float
+        Barnes-Hut parameter (>= 0); 0 is exact.
+    alpha_u : float, optional
+        Attenuation threshold alpha_U; None disables attenuation.
+    gradient : {"metric", "exact"}
+        The paper's alpha-metric weight gradient, or the exact derivative of ``d_hat``.
+    return_stats : bool
+        Also return per-query :class:`QueryStats`.
+
+    Returns
+    -------
+    d : (q,) float64
+    grad : (q, 3) float64
+    stats : QueryStats, only with ``return_stats``
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> d, g = smooth_distance([[0, 0, 2.0]], np.zeros((1, 3)), alpha=5.0)
+    >>> float(d[0]), g[0].tolist()
+    (2.0, [0.0, 0.0, 1.0])
+    """
+    field = SmoothDistanceField(V, F)
+    return field.smooth_distance(Q, alpha=alpha, beta=beta, alpha_u=alpha_u, gradient=gradient,
+                                 return_stats=return_stats)
+
+
+def exact_distance(Q, V, F=None):
+    """Exact unsigned distance ``(d (q,), grad (q, 3))`` from query points to a data mesh."""
+    return SmoothDistanceField(V, F).exact_distance(Q)

@@ -1,0 +1,21 @@
+"""Numba compilation policy, in one place.
+
+Every kernel in this package is decorated through these flags; nothing else in the code base
+may hard-code ``fastmath=`` or ``parallel=`` (``tests/test_policy.py`` greps for it).
+
+* ``FASTMATH`` is off: LogSumExp relies on IEEE ``exp`` underflow and on ``inf`` comparisons,
+  which fastmath is allowed to break.
+* ``CACHE`` is on, so a fresh process loads compiled kernels from ``__pycache__``.
+* ``PARALLEL`` may be switched off with ``SMOOTHDIST_PARALLEL=0`` (serial reference runs).
+"""
+
+import os
+
+FASTMATH = False
+CACHE = True
+PARALLEL = os.environ.get("SMOOTHDIST_PARALLEL", "1") != "0"
+
+#: keyword arguments for small scalar kernels called from other kernels
+NJIT = dict(cache=CACHE, fastmath=FASTMATH, nogil=True)
+#: keyword arguments for batch kernels that loop over queries with ``prange``
+NJIT_PARALLEL = dict(cache=CACHE, fastmath=FASTMATH, nogil=True, parallel=PARALLEL)

@@ -1,0 +1,243 @@
+"""Bounding volume hierarchy over a mixed primitive table, stored as flat arrays.
+
+The tree is a :class:`TreeData` named tuple of numpy arrays (structure of arrays), which numba
+kernels receive whole. Primitives of all three kinds live in one table, reordered so that every
+node covers a contiguous range ``start[node] : start[node] + count[node]``.
+
+Build: top-down, iterative, object-median split on the longest axis of the primitive centroids'
+bounding box (balanced, so the depth is ``ceil(log2(m / leaf_size))`` and a traversal stack of
+``depth + 2`` entries suffices).
+"""
+
+from typing import NamedTuple
+
+import numba
+import numpy as np
+
+from smoothdist._config import NJIT
+from smoothdist.mesh import KIND_EDGE, KIND_POINT, KIND_TRIANGLE
+
+
+class TreeData(NamedTuple):
+    """Flat BVH plus primitive table; every array is C-contiguous.
+
+    Node arrays, ``n`` nodes (node 0 is the root):
+
+    lo, hi : (n, 3) float64
+        Bounding box of every vertex of every primitive below the node.
+    left, right : (n,) int64
+        Children, ``-1`` for a leaf.
+    start, count : (n,) int64
+        The node's primitive range in the reordered table.
+    diag : (n,) float64
+        Box diagonal length ``|hi - lo|`` (the Barnes-Hut "diameter" of the node).
+    whi : (n,) float64
+        Largest raw weight ``A w~`` (before attenuation) of any primitive below the node (>= 1):
+        the Barnes-Hut far field uses ``count * whi**S`` so that it bounds every replaced term.
+
+    Primitive arrays, ``m`` primitives, in tree order:
+
+    kind : (m,) int64
+        0 point, 1 edge, 2 triangle.
+    pts : (m, 9) float64
+        Vertex coordinates ``x0 y0 z0 x1 y1 z1 x2 y2 z2`` (unused slots are 0).
+    wc : (m, 13) float64
+        Weight polynomial coefficients (edges: the first 5; points: unused).
+    pwhi : (m,) float64
+        Upper clamp of the primitive's raw weight ``A w~`` (the lower clamp is 1).
+    orig : (m,) int64
+        Index of the primitive in the mesh's own numbering: points, then edges, then triangles.
+
+    Scalars:
+
+    A : float
+        The valence bound of the mesh (paper's ``A``).
+    depth : int
+        Depth of the tree (root = 0).
+    """
+
+    lo: np.ndarray
+    hi: np.ndarray
+    left: np.ndarray
+    right: np.ndarray
+    start: np.ndarray
+    count: np.ndarray
+    diag: np.ndarray
+    whi: np.ndarray
+    kind: np.ndarray
+    pts: np.ndarray
+    wc: np.ndarray
+    pwhi: np.ndarray
+    orig: np.ndarray
+    A: float
+    depth: int
+
+
+def primitive_table(mesh):
+    """Gather ``(kind, pts, wc, pwhi, A)`` for every primitive of a :class:`DataMesh`."""
+    V = mesh.V
+    P, E, T = mesh.points, mesh.edges, mesh.triangles
+    A, ecoef, ewhi, tcoef, twhi = mesh.weight_data()
+    m = P.size + E.shape[0] + T.shape[0]
+    kind = np.empty(m, dtype=np.int64)
+    pts = np.zeros((m, 9))
+    wc = np.zeros((m, 13))
+    pwhi = np.ones(m)
+    p, e = P.size, E.shape[0]
+    kind[:p] = KIND_POINT
+    pts[:p, 0:3] = V[P]
+    kind[p:p + e] = KIND_EDGE
+    pts[p:p + e, 0:3] = V[E[:, 0]]
+    pts[p:p + e, 3:6] = V[E[:, 1]]
+    wc[p:p + e, :5] = ecoef
+    pwhi[p:p + e] = ewhi
+    kind[p + e:] = KIND_TRIANGLE
+    for j in range(3):
+        pts[p + e:, 3 * j:3 * j + 3] = V[T[:, j]]
+    wc[p + e:] = tcoef
+    pwhi[p + e:] = twhi
+    return kind, pts, wc, pwhi, A
+
+
+def build_tree(mesh, leaf_size=1):
+    """Build the :class:`TreeData` of a :class:`DataMesh`.
+
+    Parameters
+    ----------
+    mesh : DataMesh
+    leaf_size : int
+        Largest number of primitives in a leaf (>= 1).
+    """
+    kind, pts, wc, pwhi, A = primitive_table(mesh)
+    nv = np.where(kind == KIND_POINT, 1, np.where(kind == KIND_EDGE, 2, 3))
+    cent = np.zeros((kind.size, 3))
+    plo = np.full((kind.size, 3), np.inf)
+    phi = np.full((kind.size, 3), -np.inf)
+    for j in range(3):
+        use = nv > j
+        Xj = pts[:, 3 * j:3 * j + 3]
+        cent[use] += Xj[use]
+        plo[use] = np.minimum(plo[use], Xj[use])
+        phi[use] = np.maximum(phi[use], Xj[use])
+    cent /= nv[:, None]
+    order, lo, hi, left, right, start, count, depth = _build(cent, plo, phi, int(leaf_size))
+    whi = _node_max(pwhi[order], start, count)
+    diag = np.sqrt(((hi - lo) ** 2).sum(axis=1))
+    return TreeData(lo=lo, hi=hi, left=left, right=right, start=start, count=count, diag=diag,
+                    whi=whi, kind=np.ascontiguousarray(kind[order]),
+                    pts=np.ascontiguousarray(pts[order]), wc=np.ascontiguousarray(wc[order]),
+                    pwhi=np.ascontiguousarray(pwhi[order]), orig=np.ascontiguousarray(order),
+                    A=float(A), depth=int(depth))
+
+
+@numba.njit(**NJIT)
+def _build(cent, plo, phi, leaf_size):
+    m = cent.shape[0]
+    order = np.arange(m)
+    cap = max(1, 2 * m)
+    lo = np.empty((cap, 3))
+    hi = np.empty((cap, 3))
+    left = np.full(cap, -1, dtype=np.int64)
+    right = np.full(cap, -1, dtype=np.int64)
+    start = np.zeros(cap, dtype=np.int64)
+    count = np.zeros(cap, dtype=np.int64)
+    st_node = np.empty(256, dtype=np.int64)
+    st_s = np.empty(256, dtype=np.int64)
+    st_e = np.empty(256, dtype=np.int64)
+    st_d = np.empty(256, dtype=np.int64)
+    st_node[0] = 0
+    st_s[0] = 0
+    st_e[0] = m
+    st_d[0] = 0
+    sp = 1
+    n_nodes = 1
+    depth = 0
+    while sp > 0:
+        sp -= 1
+        node = st_node[sp]
+        s = st_s[sp]
+        e = st_e[sp]
+        d = st_d[sp]
+        if d > depth:
+            depth = d
+        blo0 = np.inf
+        blo1 = np.inf
+        blo2 = np.inf
+        bhi0 = -np.inf
+        bhi1 = -np.inf
+        bhi2 = -np.inf
+        clo0 = np.inf
+        clo1 = np.inf
+        clo2 = np.inf
+        chi0 = -np.inf
+        chi1 = -np.inf
+        chi2 = -np.inf
+        for k in range(s, e):
+            i = order[k]
+            blo0 = min(blo0, plo[i, 0])
+            blo1 = min(blo1, plo[i, 1])
+            blo2 = min(blo2, plo[i, 2])
+            bhi0 = max(bhi0, phi[i, 0])
+            bhi1 = max(bhi1, phi[i, 1])
+            bhi2 = max(bhi2, phi[i, 2])
+            clo0 = min(clo0, cent[i, 0])
+            clo1 = min(clo1, cent[i, 1])
+            clo2 = min(clo2, cent[i, 2])
+            chi0 = max(chi0, cent[i, 0])
+            chi1 = max(chi1, cent[i, 1])
+            chi2 = max(chi2, cent[i, 2])
+        lo[node, 0] = blo0
+        lo[node, 1] = blo1
+        lo[node, 2] = blo2
+        hi[node, 0] = bhi0
+        hi[node, 1] = bhi1
+        hi[node, 2] = bhi2
+        start[node] = s
+        count[node] = e - s
+        if e - s <= leaf_size:
+            continue
+        ext0 = chi0 - clo0
+        ext1 = chi1 - clo1
+        ext2 = chi2 - clo2
+        axis = 0
+        if ext1 > ext0 and ext1 >= ext2:
+            axis = 1
+        elif ext2 > ext0 and ext2 > ext1:
+            axis = 2
+        sub = order[s:e].copy()
+        keys = np.empty(e - s)
+        for k in range(e - s):
+            keys[k] = cent[sub[k], axis]
+        idx = np.argsort(keys, kind="mergesort")
+        for k in range(e - s):
+            order[s + k] = sub[idx[k]]
+        mid = (s + e) // 2
+        l = n_nodes
+        r = n_nodes + 1
+        n_nodes += 2
+        left[node] = l
+        right[node] = r
+        st_node[sp] = r
+        st_s[sp] = mid
+        st_e[sp] = e
+        st_d[sp] = d + 1
+        sp += 1
+        st_node[sp] = l
+        st_s[sp] = s
+        st_e[sp] = mid
+        st_d[sp] = d + 1
+        sp += 1
+    return (order, lo[:n_nodes].copy(), hi[:n_nodes].copy(), left[:n_nodes].copy(),
+            right[:n_nodes].copy(), start[:n_nodes].copy(), count[:n_nodes].copy(), depth)
+
+
+@numba.njit(**NJIT)
+def _node_max(values, start, count):
+    n = start.size
+    out = np.empty(n)
+    for node in range(n):
+        v = values[start[node]]
+        for k in range(start[node] + 1, start[node] + count[node]):
+            v = max(v, values[k])
+        out[node] = v
+    return out

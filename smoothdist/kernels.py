@@ -1,0 +1,24 @@
+"""Public numba kernels for code that evaluates distances inside its own njit loops.
+
+Use them with a :class:`~smoothdist.field.SmoothDistanceField`'s ``tree`` and the scalars from
+``field.kernel_args(...)``; allocate the scratch stacks once per thread with :func:`new_stack`::
+
+    stack, dstack = new_stack(field.tree)
+    d, gx, gy, gz, nodes, leaves = smooth_distance_point(field.tree, x, y, z, alpha, beta, S,
+                                                         wgs, stack, dstack)
+
+Inside a kernel, allocate ``np.empty(tree.depth + 4, np.int64)`` and ``np.empty(tree.depth + 4)``.
+"""
+
+import numpy as np
+
+from smoothdist.bvh import TreeData
+from smoothdist.query import exact_distance_point, smooth_distance_point, stack_size
+
+__all__ = ["TreeData", "exact_distance_point", "smooth_distance_point", "new_stack", "stack_size"]
+
+
+def new_stack(tree):
+    """Scratch arrays ``(stack int64, dstack float64)`` for one traversal of ``tree``."""
+    k = stack_size(tree)
+    return np.empty(k, dtype=np.int64), np.empty(k)

@@ -1,0 +1,371 @@
+"""Query kernels: smooth distance (LogSumExp + Barnes-Hut) and exact distance over a TreeData.
+
+Three layers, as in the rest of the package:
+
+* ``primitive_term``: one primitive's distance, attenuated weight and gradient numerator;
+* ``smooth_distance_point`` / ``exact_distance_point``: one query point, an explicit stack,
+  nearest-child-first traversal (public: other njit code, e.g. the tracer, calls these);
+* ``*_batch``: ``prange`` over chunks of query points, one stack per chunk.
+
+Conventions: distances are unsigned, in scene units; gradients are with respect to the query
+point. The smooth sum is accumulated in float64 relative to a running shift ``m`` (the smallest
+distance seen so far), so ``d_hat = m - log(s) / alpha`` is finite for every finite query
+(design notes §1).
+"""
+
+import math
+
+import numba
+import numpy as np
+from numba import prange
+
+from smoothdist._config import NJIT, NJIT_PARALLEL
+from smoothdist.closest_point import (SEG_INTERIOR, TRI_AB, TRI_AC, TRI_BC, TRI_INTERIOR,
+                                      box_distance2, closest_point_segment,
+                                      closest_point_triangle)
+from smoothdist.weights import eval_edge_weight, eval_triangle_weight
+
+#: queries handled by one parallel task (one traversal stack each)
+CHUNK = 64
+
+
+@numba.njit(**NJIT)
+def _attenuate(raw, dwfac_in, whi, S):
+    """Clamp the raw weight ``A w~`` into ``[1, whi]`` and raise it to ``S``.
+
+    Returns ``(W, factor)`` with ``grad W = factor * grad(w~)`` (0 where clamped).
+    """
+    if raw <= 1.0:
+        return 1.0, 0.0
+    if raw >= whi:
+        return (whi if S == 1.0 else math.exp(S * math.log(whi))), 0.0
+    if S == 1.0:
+        return raw, dwfac_in
+    W = math.exp(S * math.log(raw))
+    return W, S * W / raw * dwfac_in
+
+
+@numba.njit(**NJIT)
+def primitive_term(tree, i, px, py, pz, S, wgs):
+    """Term of primitive ``i`` (tree order) for query ``p``.
+
+    Returns ``(d, W, vx, vy, vz)``: distance, attenuated weight ``W``, and the gradient
+    numerator ``W * unit(p - c) - wgs * grad W`` (to be multiplied by ``exp(-alpha d)``).
+    ``wgs`` is ``1/alpha`` for the exact derivative, ``1/alpha**2`` for the paper's metric.
+    """
+    k = tree.kind[i]
+    P = tree.pts[i]
+    gwx = 0.0
+    gwy = 0.0
+    gwz = 0.0
+    W = 1.0
+    if k == 0:
+        cx = P[0]
+        cy = P[1]
+        cz = P[2]
+    elif k == 1:
+        cx, cy, cz, t, feat = closest_point_segment(px, py, pz, P[0], P[1], P[2], P[3], P[4], P[5])
+        w, dw = eval_edge_weight(tree.wc[i], t)
+        W, fac = _attenuate(tree.A * w, tree.A * dw, tree.pwhi[i], S)
+        if fac != 0.0 and feat == SEG_INTERIOR:
+            ex = P[3] - P[0]
+            ey = P[4] - P[1]
+            ez = P[5] - P[2]
+            f = fac / (ex * ex + ey * ey + ez * ez)
+            gwx = f * ex
+            gwy = f * ey
+            gwz = f * ez
+    else:
+        cx, cy, cz, s, t, feat = closest_point_triangle(px, py, pz, P[0], P[1], P[2], P[3], P[4],
+                                                       P[5], P[6], P[7], P[8])
+        w, dws, dwt = eval_triangle_weight(tree.wc[i], s, t)
+        W, fac = _attenuate(tree.A * w, tree.A, tree.pwhi[i], S)
+        if fac != 0.0 and feat <= TRI_BC:
+            abx = P[3] - P[0]
+            aby = P[4] - P[1]
+            abz = P[5] - P[2]
+            acx = P[6] - P[0]
+            acy = P[7] - P[1]
+            acz = P[8] - P[2]
+            if feat == TRI_INTERIOR:
+                # barycentric gradients: altitude vectors over their squared lengths
+                u = (abx * acx + aby * acy + abz * acz) / (acx * acx + acy * acy + acz * acz)
+                h1x = abx - u * acx
+                h1y = aby - u * acy
+                h1z = abz - u * acz
+                u = (abx * acx + aby * acy + abz * acz) / (abx * abx + aby * aby + abz * abz)
+                h2x = acx - u * abx
+                h2y = acy - u * aby
+                h2z = acz - u * abz
+                f1 = fac * dws / (h1x * h1x + h1y * h1y + h1z * h1z)
+                f2 = fac * dwt / (h2x * h2x + h2y * h2y + h2z * h2z)
+                gwx = f1 * h1x + f2 * h2x
+                gwy = f1 * h1y + f2 * h2y
+                gwz = f1 * h1z + f2 * h2z
+            else:
+                # projection clamped to an edge: only the tangential derivative survives
+                if feat == TRI_AB:
+                    ex, ey, ez, dw = abx, aby, abz, dws
+                elif feat == TRI_AC:
+                    ex, ey, ez, dw = acx, acy, acz, dwt
+                else:
+                    ex, ey, ez, dw = acx - abx, acy - aby, acz - abz, dwt - dws
+                f = fac * dw / (ex * ex + ey * ey + ez * ez)
+                gwx = f * ex
+                gwy = f * ey
+                gwz = f * ez
+    rx = px - cx
+    ry = py - cy
+    rz = pz - cz
+    d = math.sqrt(rx * rx + ry * ry + rz * rz)
+    if d > 0.0:
+        inv = W / d
+        vx = rx * inv - wgs * gwx
+        vy = ry * inv - wgs * gwy
+        vz = rz * inv - wgs * gwz
+    else:
+        vx = -wgs * gwx
+        vy = -wgs * gwy
+        vz = -wgs * gwz
+    return d, W, vx, vy, vz
+
+
+@numba.njit(**NJIT)
+def _accumulate(m, s, gx, gy, gz, d, W, vx, vy, vz, alpha):
+    """Add ``W exp(-alpha d)`` (gradient numerator ``exp(-alpha d) v``) to sums shifted by ``m``."""
+    if d < m:
+        f = math.exp(-alpha * (m - d))
+        s *= f
+        gx *= f
+        gy *= f
+        gz *= f
+        m = d
+    e = math.exp(-alpha * (d - m))
+    return m, s + W * e, gx + e * vx, gy + e * vy, gz + e * vz
+
+
+def stack_size(tree):
+    """Traversal stack length needed for ``tree`` (nearest-first DFS holds <= depth + 1)."""
+    return tree.depth + 4
+
+
+@numba.njit(**NJIT)
+def smooth_distance_point(tree, px, py, pz, alpha, beta, S, wgs, stack, dstack):
+    """Smooth distance ``d_hat`` and gradient at one point (Madan & Levin 2022, Alg. 1-2).
+
+    Parameters
+    ----------
+    tree : TreeData
+    px, py, pz : float
+        Query point.
+    alpha : float
+        LogSumExp sharpness (1 / scene units), > 0.
+    beta : float
+        Barnes-Hut parameter: a node with ``diag < beta * dist(p, box)`` (and more than one
+        primitive) is replaced by ``count * whi**S * exp(-alpha * dist)``. 0 is exact.
+    S : float
+        Weight attenuation ``min(alpha / alpha_U, 1)``.
+    wgs : float
+        Weight-gradient scale: ``1/alpha`` (exact derivative) or ``1/alpha**2`` (paper metric).
+    stack : (k,) int64, dstack : (k,) float64
+        Scratch space of length ``stack_size(tree)``.
+
+    Returns
+    -------
+    (d_hat, gx, gy, gz, nodes_visited, leaves_visited)
+        ``leaves_visited`` counts exact primitive evaluations plus far-field nodes (the
+        authors' ``num_visited``).
+    """
+    m = np.inf
+    s = 0.0
+    gx = 0.0
+    gy = 0.0
+    gz = 0.0
+    nodes = 0
+    leaves = 0
+    lo = tree.lo
+    hi = tree.hi
+    d2, cx, cy, cz = box_distance2(px, py, pz, lo, hi, 0)
+    stack[0] = 0
+    dstack[0] = math.sqrt(d2)
+    sp = 1
+    while sp > 0:
+        sp -= 1
+        node = stack[sp]
+        bd = dstack[sp]
+        nodes += 1
+        cnt = tree.count[node]
+        if cnt > 1 and tree.diag[node] < beta * bd:
+            d2, cx, cy, cz = box_distance2(px, py, pz, lo, hi, node)
+            wh = tree.whi[node]
+            W = cnt * (wh if (S == 1.0 or wh == 1.0) else math.exp(S * math.log(wh)))
+            f = W / bd
+            m, s, gx, gy, gz = _accumulate(m, s, gx, gy, gz, bd, W, f * (px - cx),
+                                           f * (py - cy), f * (pz - cz), alpha)
+            leaves += 1
+            continue
+        l = tree.left[node]
+        if l < 0:
+            st = tree.start[node]
+            for i in range(st, st + cnt):
+                d, W, vx, vy, vz = primitive_term(tree, i, px, py, pz, S, wgs)
+                m, s, gx, gy, gz = _accumulate(m, s, gx, gy, gz, d, W, vx, vy, vz, alpha)
+            leaves += cnt
+            continue
+        r = tree.right[node]
+        dl = math.sqrt(box_distance2(px, py, pz, lo, hi, l)[0])
+        dr = math.sqrt(box_distance2(px, py, pz, lo, hi, r)[0])
+        if dl <= dr:
+            stack[sp] = r
+            dstack[sp] = dr
+            stack[sp + 1] = l
+            dstack[sp + 1] = dl
+        else:
+            stack[sp] = l
+            dstack[sp] = dl
+            stack[sp + 1] = r
+            dstack[sp + 1] = dr
+        sp += 2
+    inv = 1.0 / s
+    return m - math.log(s) / alpha, gx * inv, gy * inv, gz * inv, nodes, leaves
+
+
+@numba.njit(**NJIT)
+def exact_distance_point(tree, px, py, pz, stack, dstack):
+    """Exact unsigned distance at one point by nearest-first branch and bound.
+
+    Returns ``(d, gx, gy, gz, prim, nodes_visited, leaves_visited)``: the distance, the unit
+    gradient ``(p - c) / d`` (zero on the geometry), and the closest primitive's index in the
+    mesh numbering (points, then edges, then triangles).
+    """
+    best = np.inf
+    bi = -1
+    bx = px
+    by = py
+    bz = pz
+    nodes = 0
+    leaves = 0
+    lo = tree.lo
+    hi = tree.hi
+    stack[0] = 0
+    dstack[0] = box_distance2(px, py, pz, lo, hi, 0)[0]
+    sp = 1
+    while sp > 0:
+        sp -= 1
+        node = stack[sp]
+        if dstack[sp] >= best:
+            continue
+        nodes += 1
+        l = tree.left[node]
+        if l < 0:
+            st = tree.start[node]
+            for i in range(st, st + tree.count[node]):
+                k = tree.kind[i]
+                P = tree.pts[i]
+                if k == 0:
+                    cx = P[0]
+                    cy = P[1]
+                    cz = P[2]
+                elif k == 1:
+                    cx, cy, cz, t, f = closest_point_segment(px, py, pz, P[0], P[1], P[2], P[3],
+                                                             P[4], P[5])
+                else:
+                    cx, cy, cz, s, t, f = closest_point_triangle(px, py, pz, P[0], P[1], P[2],
+                                                                 P[3], P[4], P[5], P[6], P[7],
+                                                                 P[8])
+                d2 = (px - cx) ** 2 + (py - cy) ** 2 + (pz - cz) ** 2
+                leaves += 1
+                if d2 < best:
+                    best = d2
+                    bi = i
+                    bx = cx
+                    by = cy
+                    bz = cz
+            continue
+        r = tree.right[node]
+        dl = box_distance2(px, py, pz, lo, hi, l)[0]
+        dr = box_distance2(px, py, pz, lo, hi, r)[0]
+        if dl <= dr:
+            if dr < best:
+                stack[sp] = r
+                dstack[sp] = dr
+                sp += 1
+            if dl < best:
+                stack[sp] = l
+                dstack[sp] = dl
+                sp += 1
+        else:
+            if dl < best:
+                stack[sp] = l
+                dstack[sp] = dl
+                sp += 1
+            if dr < best:
+                stack[sp] = r
+                dstack[sp] = dr
+                sp += 1
+    d = math.sqrt(best)
+    if d > 0.0:
+        return d, (px - bx) / d, (py - by) / d, (pz - bz) / d, tree.orig[bi], nodes, leaves
+    return 0.0, 0.0, 0.0, 0.0, tree.orig[bi], nodes, leaves
+
+
+@numba.njit(**NJIT)
+def smooth_distance_brute_point(tree, px, py, pz, alpha, S, wgs):
+    """Smooth distance at one point summing every primitive (no tree): ``(d_hat, gx, gy, gz)``."""
+    m = np.inf
+    s = 0.0
+    gx = 0.0
+    gy = 0.0
+    gz = 0.0
+    for i in range(tree.kind.size):
+        d, W, vx, vy, vz = primitive_term(tree, i, px, py, pz, S, wgs)
+        m, s, gx, gy, gz = _accumulate(m, s, gx, gy, gz, d, W, vx, vy, vz, alpha)
+    return m - math.log(s) / alpha, gx / s, gy / s, gz / s
+
+
+@numba.njit(**NJIT_PARALLEL)
+def smooth_distance_batch(tree, Q, alpha, beta, S, wgs, brute, out_d, out_g, out_nodes,
+                          out_leaves):
+    """Fill ``out_d (q,)``, ``out_g (q, 3)``, ``out_nodes``, ``out_leaves (q,)`` for ``Q (q, 3)``."""
+    n = Q.shape[0]
+    nchunks = (n + CHUNK - 1) // CHUNK
+    k = tree.depth + 4
+    for c in prange(nchunks):
+        stack = np.empty(k, dtype=np.int64)
+        dstack = np.empty(k)
+        for i in range(c * CHUNK, min(n, (c + 1) * CHUNK)):
+            if brute:
+                d, gx, gy, gz = smooth_distance_brute_point(tree, Q[i, 0], Q[i, 1], Q[i, 2],
+                                                            alpha, S, wgs)
+                nodes = 0
+                leaves = tree.kind.size
+            else:
+                d, gx, gy, gz, nodes, leaves = smooth_distance_point(
+                    tree, Q[i, 0], Q[i, 1], Q[i, 2], alpha, beta, S, wgs, stack, dstack)
+            out_d[i] = d
+            out_g[i, 0] = gx
+            out_g[i, 1] = gy
+            out_g[i, 2] = gz
+            out_nodes[i] = nodes
+            out_leaves[i] = leaves
+
+
+@numba.njit(**NJIT_PARALLEL)
+def exact_distance_batch(tree, Q, out_d, out_g, out_prim, out_nodes, out_leaves):
+    """Exact distance for every row of ``Q (q, 3)`` into the output arrays."""
+    n = Q.shape[0]
+    nchunks = (n + CHUNK - 1) // CHUNK
+    k = tree.depth + 4
+    for c in prange(nchunks):
+        stack = np.empty(k, dtype=np.int64)
+        dstack = np.empty(k)
+        for i in range(c * CHUNK, min(n, (c + 1) * CHUNK)):
+            d, gx, gy, gz, p, nodes, leaves = exact_distance_point(tree, Q[i, 0], Q[i, 1],
+                                                                   Q[i, 2], stack, dstack)
+            out_d[i] = d
+            out_g[i, 0] = gx
+            out_g[i, 1] = gy
+            out_g[i, 2] = gz
+            out_prim[i] = p
+            out_nodes[i] = nodes
+            out_leaves[i] = leaves
