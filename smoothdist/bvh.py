@@ -42,7 +42,8 @@ class TreeData(NamedTuple):
     pts : (m, 9) float64
         Vertex coordinates ``x0 y0 z0 x1 y1 z1 x2 y2 z2`` (unused slots are 0).
     wc : (m, 13) float64
-        Weight polynomial coefficients (edges: the first 5; points: unused).
+        Coefficients of the raw weight polynomial ``A w~`` (the paper's ``w~`` scaled by the
+        mesh's ``A``; edges use the first 5; points: unused).
     pwhi : (m,) float64
         Upper clamp of the primitive's raw weight ``A w~`` (the lower clamp is 1).
     orig : (m,) int64
@@ -51,7 +52,8 @@ class TreeData(NamedTuple):
     Scalars:
 
     A : float
-        The valence bound of the mesh (paper's ``A``).
+        The valence bound of the mesh (paper's ``A``), already folded into ``wc``; kept for
+        reference only, so that trees of different meshes can be concatenated.
     depth : int
         Depth of the tree (root = 0).
     """
@@ -74,7 +76,10 @@ class TreeData(NamedTuple):
 
 
 def primitive_table(mesh):
-    """Gather ``(kind, pts, wc, pwhi, A)`` for every primitive of a :class:`DataMesh`."""
+    """Gather ``(kind, pts, wc, pwhi, A)`` for every primitive of a :class:`DataMesh`.
+
+    ``wc`` holds the coefficients of the raw weight ``A w~`` (already multiplied by ``A``).
+    """
     V = mesh.V
     P, E, T = mesh.points, mesh.edges, mesh.triangles
     A, ecoef, ewhi, tcoef, twhi = mesh.weight_data()
@@ -89,12 +94,12 @@ def primitive_table(mesh):
     kind[p:p + e] = KIND_EDGE
     pts[p:p + e, 0:3] = V[E[:, 0]]
     pts[p:p + e, 3:6] = V[E[:, 1]]
-    wc[p:p + e, :5] = ecoef
+    wc[p:p + e, :5] = A * ecoef
     pwhi[p:p + e] = ewhi
     kind[p + e:] = KIND_TRIANGLE
     for j in range(3):
         pts[p + e:, 3 * j:3 * j + 3] = V[T[:, j]]
-    wc[p + e:] = tcoef
+    wc[p + e:] = A * tcoef
     pwhi[p + e:] = twhi
     return kind, pts, wc, pwhi, A
 
@@ -241,3 +246,32 @@ def _node_max(values, start, count):
             v = max(v, values[k])
         out[node] = v
     return out
+
+
+def concatenate_trees(trees):
+    """Merge several :class:`TreeData` into one forest.
+
+    Returns ``(forest, roots)``: one TreeData whose node and primitive arrays are the inputs'
+    concatenated (child and range indices shifted), and ``roots (k,) int64``, the node index
+    of each input's root. Query it with the ``root`` argument of the point kernels. ``orig``
+    keeps each input's own primitive numbering; ``A`` and ``depth`` are the maxima.
+    """
+    node_off = np.cumsum([0] + [t.lo.shape[0] for t in trees])[:-1]
+    prim_off = np.cumsum([0] + [t.kind.size for t in trees])[:-1]
+
+    def cat(name):
+        return np.ascontiguousarray(np.concatenate([getattr(t, name) for t in trees]))
+
+    def shifted(name, offs):
+        parts = []
+        for t, o in zip(trees, offs):
+            a = getattr(t, name)
+            parts.append(np.where(a >= 0, a + o, a) if name in ("left", "right") else a + o)
+        return np.ascontiguousarray(np.concatenate(parts))
+
+    forest = TreeData(lo=cat("lo"), hi=cat("hi"), left=shifted("left", node_off),
+                      right=shifted("right", node_off), start=shifted("start", prim_off),
+                      count=cat("count"), diag=cat("diag"), whi=cat("whi"), kind=cat("kind"),
+                      pts=cat("pts"), wc=cat("wc"), pwhi=cat("pwhi"), orig=cat("orig"),
+                      A=float(max(t.A for t in trees)), depth=int(max(t.depth for t in trees)))
+    return forest, np.asarray(node_off, dtype=np.int64)

@@ -33,7 +33,8 @@ CHUNK = 64
 def _attenuate(raw, dwfac_in, whi, S):
     """Clamp the raw weight ``A w~`` into ``[1, whi]`` and raise it to ``S``.
 
-    Returns ``(W, factor)`` with ``grad W = factor * grad(w~)`` (0 where clamped).
+    ``dwfac_in`` is the factor that turns the caller's derivative into the raw weight's.
+    Returns ``(W, factor)`` with ``grad W = factor * grad(raw)`` (0 where clamped).
     """
     if raw <= 1.0:
         return 1.0, 0.0
@@ -66,7 +67,7 @@ def primitive_term(tree, i, px, py, pz, S, wgs):
     elif k == 1:
         cx, cy, cz, t, feat = closest_point_segment(px, py, pz, P[0], P[1], P[2], P[3], P[4], P[5])
         w, dw = eval_edge_weight(tree.wc[i], t)
-        W, fac = _attenuate(tree.A * w, tree.A * dw, tree.pwhi[i], S)
+        W, fac = _attenuate(w, dw, tree.pwhi[i], S)
         if fac != 0.0 and feat == SEG_INTERIOR:
             ex = P[3] - P[0]
             ey = P[4] - P[1]
@@ -79,7 +80,7 @@ def primitive_term(tree, i, px, py, pz, S, wgs):
         cx, cy, cz, s, t, feat = closest_point_triangle(px, py, pz, P[0], P[1], P[2], P[3], P[4],
                                                        P[5], P[6], P[7], P[8])
         w, dws, dwt = eval_triangle_weight(tree.wc[i], s, t)
-        W, fac = _attenuate(tree.A * w, tree.A, tree.pwhi[i], S)
+        W, fac = _attenuate(w, 1.0, tree.pwhi[i], S)
         if fac != 0.0 and feat <= TRI_BC:
             abx = P[3] - P[0]
             aby = P[4] - P[1]
@@ -150,7 +151,7 @@ def stack_size(tree):
 
 
 @numba.njit(**NJIT)
-def smooth_distance_point(tree, px, py, pz, alpha, beta, S, wgs, stack, dstack):
+def smooth_distance_point(tree, px, py, pz, alpha, beta, S, wgs, stack, dstack, root=0):
     """Smooth distance ``d_hat`` and gradient at one point (Madan & Levin 2022, Alg. 1-2).
 
     Parameters
@@ -169,6 +170,8 @@ def smooth_distance_point(tree, px, py, pz, alpha, beta, S, wgs, stack, dstack):
         Weight-gradient scale: ``1/alpha`` (exact derivative) or ``1/alpha**2`` (paper metric).
     stack : (k,) int64, dstack : (k,) float64
         Scratch space of length ``stack_size(tree)``.
+    root : int
+        Node to start from (0; or an object's root in a forest, see ``concatenate_trees``).
 
     Returns
     -------
@@ -185,8 +188,8 @@ def smooth_distance_point(tree, px, py, pz, alpha, beta, S, wgs, stack, dstack):
     leaves = 0
     lo = tree.lo
     hi = tree.hi
-    d2, cx, cy, cz = box_distance2(px, py, pz, lo, hi, 0)
-    stack[0] = 0
+    d2, cx, cy, cz = box_distance2(px, py, pz, lo, hi, root)
+    stack[0] = root
     dstack[0] = math.sqrt(d2)
     sp = 1
     while sp > 0:
@@ -231,12 +234,13 @@ def smooth_distance_point(tree, px, py, pz, alpha, beta, S, wgs, stack, dstack):
 
 
 @numba.njit(**NJIT)
-def exact_distance_point(tree, px, py, pz, stack, dstack):
+def exact_distance_point(tree, px, py, pz, stack, dstack, root=0):
     """Exact unsigned distance at one point by nearest-first branch and bound.
 
     Returns ``(d, gx, gy, gz, prim, nodes_visited, leaves_visited)``: the distance, the unit
     gradient ``(p - c) / d`` (zero on the geometry), and the closest primitive's index in the
-    mesh numbering (points, then edges, then triangles).
+    mesh numbering (points, then edges, then triangles). ``root`` as in
+    :func:`smooth_distance_point`.
     """
     best = np.inf
     bi = -1
@@ -247,8 +251,8 @@ def exact_distance_point(tree, px, py, pz, stack, dstack):
     leaves = 0
     lo = tree.lo
     hi = tree.hi
-    stack[0] = 0
-    dstack[0] = box_distance2(px, py, pz, lo, hi, 0)[0]
+    stack[0] = root
+    dstack[0] = box_distance2(px, py, pz, lo, hi, root)[0]
     sp = 1
     while sp > 0:
         sp -= 1

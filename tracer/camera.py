@@ -1,0 +1,426 @@
+"""Pinhole camera that reproduces the view of the authors' sphere tracer.
+
+Conventions
+-----------
+The camera follows ``lookAt`` and ``sphereTrace`` of ``abhimadan/smoothdists`` (Madan & Levin
+2022; ``src/camera.cpp``, ``src/sphere_trace.cpp``) exactly:
+
+* ``forward = normalize(dest - origin)``, ``horizontal = normalize(forward x up)``,
+  ``vertical = normalize(horizontal x forward)``. A camera on +z looking at the origin with
+  ``up = +y`` has ``horizontal = +x`` and ``vertical = +y``.
+* The authors' pixel ``(x, y)`` has ``y = 0`` at the **bottom** of the saved PNG. They sample it
+  at ``dx = x / W - 0.5`` and ``dy = y / H - 0.5`` (no half-pixel offset), multiply the
+  **longer** image axis by ``max(W, H) / min(W, H)`` and trace
+  ``normalize(forward + dx * horizontal + dy * vertical)``.
+* Our images are ``(H, W, C)`` arrays whose row 0 is the **top** row, so our ``(row, col)`` is
+  their ``(x, y) = (col, H - 1 - row)``.
+
+The shorter image axis therefore spans ``2 atan(0.5) ~ 53.13`` degrees. Because there is no
+half-pixel offset, the sample for column ``col`` sits at the *left edge* of a pixel of a
+symmetric frustum rather than at its centre, and likewise the sample for row ``row`` sits at
+the *bottom* edge: the whole picture is shifted by half a pixel towards the top-right compared
+with a symmetric pinhole camera (the view direction ``forward`` is hit by the sample at
+``col = W / 2``, ``row = H / 2 - 1``, when those are integers).  :func:`pyvista_camera_params`
+gives the VTK window centre that reproduces this shift.
+"""
+
+from numbers import Integral
+from typing import NamedTuple
+
+import numba
+import numpy as np
+
+from smoothdist._config import NJIT
+
+__all__ = [
+    "Camera",
+    "look_at",
+    "ray_direction",
+    "primary_rays",
+    "project",
+    "pyvista_camera_params",
+    "default_camera_for_bounds",
+]
+
+#: Number of values in :meth:`Camera.as_array`.
+CAMERA_ARRAY_SIZE = 14
+
+#: ``|forward x up| / |up|`` (the sine of the angle between them) below which ``up`` counts as
+#: parallel to the view direction.
+_PARALLEL_TOL = 1e-9
+
+
+class Camera(NamedTuple):
+    """An orthonormal pinhole camera and its image size.
+
+    Build one with :func:`look_at` rather than by hand, so that the frame is orthonormal.
+
+    Attributes
+    ----------
+    origin : (3,) float64 array
+        Eye position, world units.
+    forward : (3,) float64 array
+        Unit view direction.
+    horizontal : (3,) float64 array
+        Unit vector pointing to the right of the image (increasing column).
+    vertical : (3,) float64 array
+        Unit vector pointing to the top of the image (decreasing row).
+    width : int
+        Image width ``W`` in pixels (number of columns).
+    height : int
+        Image height ``H`` in pixels (number of rows).
+    """
+
+    origin: np.ndarray
+    forward: np.ndarray
+    horizontal: np.ndarray
+    vertical: np.ndarray
+    width: int
+    height: int
+
+    @property
+    def scale_x(self):
+        """float: multiplier of the horizontal offset ``dx``; ``W / H`` if ``W >= H``, else 1."""
+        return _scales(float(self.width), float(self.height))[0]
+
+    @property
+    def scale_y(self):
+        """float: multiplier of the vertical offset ``dy``; ``H / W`` if ``H > W``, else 1."""
+        return _scales(float(self.width), float(self.height))[1]
+
+    def fov_deg(self):
+        """Full field of view of the image, in degrees.
+
+        Returns
+        -------
+        (float, float)
+            ``(horizontal_fov, vertical_fov)``, each ``2 atan(0.5 * scale)``; the shorter image
+            axis spans ``2 atan(0.5) ~ 53.13`` degrees. These are the extents of the pixel
+            footprints; the sample rays themselves span one pixel less (see the module notes).
+        """
+        return (
+            float(np.degrees(2.0 * np.arctan(0.5 * self.scale_x))),
+            float(np.degrees(2.0 * np.arctan(0.5 * self.scale_y))),
+        )
+
+    def as_array(self):
+        """Flatten the camera for numba kernels.
+
+        Returns
+        -------
+        (14,) float64 array
+            ``origin[0:3], forward[3:6], horizontal[6:9], vertical[9:12], width[12],
+            height[13]``; read it in kernels with :func:`ray_direction`.
+        """
+        out = np.empty(CAMERA_ARRAY_SIZE, dtype=np.float64)
+        out[0:3] = self.origin
+        out[3:6] = self.forward
+        out[6:9] = self.horizontal
+        out[9:12] = self.vertical
+        out[12] = self.width
+        out[13] = self.height
+        return out
+
+
+def _vector3(value, name):
+    """Return ``value`` as a finite (3,) float64 array or raise ValueError."""
+    try:
+        arr = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be 3 numbers, got {value!r}") from None
+    if arr.shape != (3,):
+        raise ValueError(f"{name} must have shape (3,), got shape {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name} must be finite, got {arr.tolist()}")
+    return arr
+
+
+def _pixels(value, name):
+    """Return ``value`` as a positive Python int or raise ValueError."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, Integral):
+        raise ValueError(f"{name} must be a positive integer, got {value!r}")
+    if value <= 0:
+        raise ValueError(f"{name} must be a positive integer, got {value}")
+    return int(value)
+
+
+def look_at(origin, dest, up, width, height):
+    """Build the authors' ``lookAt`` camera.
+
+    Parameters
+    ----------
+    origin : (3,) array_like of float
+        Eye position, world units.
+    dest : (3,) array_like of float
+        Point the camera looks at; must differ from ``origin``.
+    up : (3,) array_like of float
+        Approximate up direction; any length, not parallel to ``dest - origin``.
+    width, height : int
+        Image size in pixels, both > 0.
+
+    Returns
+    -------
+    Camera
+        ``forward = normalize(dest - origin)``, ``horizontal = normalize(forward x up)``,
+        ``vertical = normalize(horizontal x forward)``.
+
+    Raises
+    ------
+    ValueError
+        For non-finite or wrongly shaped vectors, ``dest == origin``, ``up`` zero or parallel
+        to the view direction, or a size that is not a positive integer.
+
+    Examples
+    --------
+    >>> cam = look_at([0, 0, 3], [0, 0, 0], [0, 1, 0], 64, 48)
+    >>> np.allclose(cam.horizontal, [1, 0, 0]), np.allclose(cam.vertical, [0, 1, 0])
+    (True, True)
+    """
+    origin = _vector3(origin, "origin")
+    dest = _vector3(dest, "dest")
+    up = _vector3(up, "up")
+    width = _pixels(width, "width")
+    height = _pixels(height, "height")
+
+    view = dest - origin
+    view_len = np.linalg.norm(view)
+    if not view_len > 0.0:
+        raise ValueError(f"camera dest must differ from origin, both are {origin.tolist()}")
+    forward = view / view_len
+    up_len = np.linalg.norm(up)
+    if not up_len > 0.0:
+        raise ValueError("camera up must be a non-zero vector")
+    side = np.cross(forward, up)
+    side_len = np.linalg.norm(side)
+    if not side_len > _PARALLEL_TOL * up_len:
+        raise ValueError(
+            f"camera up {up.tolist()} is parallel to the view direction {forward.tolist()}"
+        )
+    horizontal = side / side_len
+    vertical = np.cross(horizontal, forward)
+    vertical /= np.linalg.norm(vertical)
+    return Camera(origin, forward, horizontal, vertical, width, height)
+
+
+@numba.njit(**NJIT)
+def _scales(width, height):
+    """Aspect multipliers ``(scale_x, scale_y)``: the longer axis gets ``max / min``."""
+    if width >= height:
+        return width / height, 1.0
+    return 1.0, height / width
+
+
+@numba.njit(**NJIT)
+def ray_direction(cam, row, col):
+    """Unit direction of the primary ray through one pixel.
+
+    Parameters
+    ----------
+    cam : (14,) float64 array
+        :meth:`Camera.as_array`.
+    row : int
+        Image row, 0 = top.
+    col : int
+        Image column, 0 = left.
+
+    Returns
+    -------
+    (float, float, float)
+        Unit world-space direction ``normalize(forward + dx horizontal + dy vertical)`` with
+        ``dx = scale_x (col / W - 0.5)``, ``dy = scale_y ((H - 1 - row) / H - 0.5)``.
+    """
+    width = cam[12]
+    height = cam[13]
+    sx, sy = _scales(width, height)
+    dx = (col / width - 0.5) * sx
+    dy = ((height - 1.0 - row) / height - 0.5) * sy
+    rx = cam[3] + dx * cam[6] + dy * cam[9]
+    ry = cam[4] + dx * cam[7] + dy * cam[10]
+    rz = cam[5] + dx * cam[8] + dy * cam[11]
+    norm = np.sqrt(rx * rx + ry * ry + rz * rz)
+    return rx / norm, ry / norm, rz / norm
+
+
+def primary_rays(camera):
+    """Unit directions of all primary rays (vectorised :func:`ray_direction`).
+
+    Parameters
+    ----------
+    camera : Camera
+
+    Returns
+    -------
+    (H, W, 3) float64 array
+        ``rays[row, col]`` is the world-space unit direction for image row ``row`` (0 = top)
+        and column ``col``; every ray starts at ``camera.origin``.
+    """
+    width, height = float(camera.width), float(camera.height)
+    sx, sy = _scales(width, height)
+    cols = np.arange(camera.width, dtype=np.float64)
+    rows = np.arange(camera.height, dtype=np.float64)
+    dx = ((cols / width - 0.5) * sx)[None, :, None]
+    dy = (((height - 1.0 - rows) / height - 0.5) * sy)[:, None, None]
+    rays = camera.forward + dx * camera.horizontal + dy * camera.vertical
+    norm = np.sqrt(rays[..., 0] * rays[..., 0] + rays[..., 1] * rays[..., 1]
+                   + rays[..., 2] * rays[..., 2])
+    return rays / norm[..., None]
+
+
+def project(camera, points):
+    """Map world points to fractional pixel coordinates (inverse of :func:`primary_rays`).
+
+    Parameters
+    ----------
+    camera : Camera
+    points : (n, 3) or (3,) array_like of float
+        World positions.
+
+    Returns
+    -------
+    rows : (n,) float64 array
+        Fractional image row (0 = top) in the sampling convention of :func:`ray_direction`:
+        integer values land exactly on sample rays, so ``project(origin + t * rays[r, c])``
+        gives back ``(r, c, t)``. Values outside ``[0, H - 1]`` are off screen.
+    cols : (n,) float64 array
+        Fractional image column (0 = left), same convention.
+    depth_along_ray : (n,) float64 array
+        Distance from ``camera.origin``, i.e. the ``t`` of the unit primary ray through the
+        point (the quantity a sphere tracer's t-buffer stores).
+
+    Points on or behind the camera plane (``(p - origin) . forward <= 0``) get NaN in all three
+    outputs. A (3,) input gives (1,) outputs.
+    """
+    pts = np.asarray(points, dtype=np.float64)
+    if pts.ndim == 1:
+        pts = pts[None, :]
+    if pts.ndim != 2 or pts.shape[1] != 3:
+        raise ValueError(f"points must have shape (n, 3), got shape {np.shape(points)}")
+    width, height = float(camera.width), float(camera.height)
+    sx, sy = _scales(width, height)
+    rel = pts - camera.origin
+    along = rel @ camera.forward
+    right = rel @ camera.horizontal
+    upward = rel @ camera.vertical
+    with np.errstate(divide="ignore", invalid="ignore"):
+        front = along > 0.0
+        dx = np.where(front, right / along, np.nan)
+        dy = np.where(front, upward / along, np.nan)
+        cols = (dx / sx + 0.5) * width
+        rows = height - 1.0 - (dy / sy + 0.5) * height
+        depth = np.where(front, np.linalg.norm(rel, axis=1), np.nan)
+    return rows, cols, depth
+
+
+def pyvista_camera_params(camera, focal_distance=1.0):
+    """Camera settings that make a VTK / pyvista render match this camera.
+
+    Parameters
+    ----------
+    camera : Camera
+    focal_distance : float, default 1.0
+        Distance from the eye to the returned ``focal_point`` along ``forward``; it does not
+        change a perspective image (use the scene's ``|dest - origin|`` for nicer clipping).
+
+    Returns
+    -------
+    dict
+        * ``position`` : (3,) float64, the eye.
+        * ``focal_point`` : (3,) float64, ``origin + focal_distance * forward``.
+        * ``view_up`` : (3,) float64, ``camera.vertical`` (already orthogonal to forward).
+        * ``view_angle`` : float, the **vertical** field of view in degrees,
+          ``2 atan(0.5 scale_y)`` (VTK's ``ViewAngle`` with ``UseHorizontalViewAngle`` off).
+        * ``window_center`` : (float, float), ``(-1 / W, -1 / H)``.
+        * ``window_size`` : (int, int), ``(W, H)`` for ``pyvista.Plotter(window_size=...)``.
+
+    Notes
+    -----
+    The authors sample column ``x`` at ``dx = x / W - 0.5``, so column 0 is at ``-0.5`` and
+    column ``W - 1`` at ``0.5 - 1 / W``: the sample grid is centred on ``dx = -0.5 / W``, not
+    on 0. A rasteriser samples pixel centres of a symmetric frustum, i.e. at
+    ``(x + 0.5) / W - 0.5``. Both grids coincide once VTK's frustum is shifted by half a pixel
+    left and (in their bottom-up ``y``) half a pixel down, which is what
+    ``vtkCamera.SetWindowCenter(-1 / W, -1 / H)`` does (the window centre is in viewport units
+    of ``[-1, 1]``, so half a pixel is ``1 / W``). Apply it with::
+
+        p = pyvista.Plotter(off_screen=True, window_size=params["window_size"])
+        p.camera.position = params["position"]
+        p.camera.focal_point = params["focal_point"]
+        p.camera.up = params["view_up"]
+        p.camera.view_angle = params["view_angle"]
+        p.camera.SetWindowCenter(*params["window_center"])
+
+    Without the window centre the pyvista image is shifted by half a pixel (a sub-pixel
+    error; fine for a visual comparison, not for pixel-exact diffs).
+    """
+    width, height = float(camera.width), float(camera.height)
+    return {
+        "position": np.array(camera.origin, dtype=np.float64),
+        "focal_point": camera.origin + float(focal_distance) * camera.forward,
+        "view_up": np.array(camera.vertical, dtype=np.float64),
+        "view_angle": camera.fov_deg()[1],
+        "window_center": (-1.0 / width, -1.0 / height),
+        "window_size": (camera.width, camera.height),
+    }
+
+
+_AXES = {
+    "+x": (1.0, 0.0, 0.0), "-x": (-1.0, 0.0, 0.0),
+    "+y": (0.0, 1.0, 0.0), "-y": (0.0, -1.0, 0.0),
+    "+z": (0.0, 0.0, 1.0), "-z": (0.0, 0.0, -1.0),
+}
+
+
+def _direction(value, name):
+    """Parse an axis name such as ``"+z"`` or a 3-vector into a unit (3,) float64 array."""
+    if isinstance(value, str):
+        key = value.strip().lower()
+        if key in ("x", "y", "z"):
+            key = "+" + key
+        if key not in _AXES:
+            raise ValueError(f"{name} must be one of {sorted(_AXES)} or a 3-vector, got {value!r}")
+        return np.array(_AXES[key])
+    vec = _vector3(value, name)
+    norm = np.linalg.norm(vec)
+    if norm == 0.0:
+        raise ValueError(f"{name} must be a non-zero vector")
+    return vec / norm
+
+
+def default_camera_for_bounds(lo, hi, axis="+z", up="+y", width=512, height=512):
+    """The paper's automatic camera for a bounding box.
+
+    The eye sits at the box centre plus ``2 * max(hi - lo)`` along ``axis`` and looks at the
+    centre. With the defaults this is the camera of the authors' ``beta_error_test`` (512 x 512,
+    +z, up +y); ``axis="+y", up="+z", width=1920, height=1080`` is ``scene_builder``'s default.
+
+    Parameters
+    ----------
+    lo, hi : (3,) array_like of float
+        Box corners, ``lo <= hi``.
+    axis : {"+x", "-x", "+y", "-y", "+z", "-z"} or (3,) array_like, default "+z"
+        Direction from the centre to the eye.
+    up : {"+x", "-x", "+y", "-y", "+z", "-z"} or (3,) array_like, default "+y"
+        Up direction; must not be parallel to ``axis``.
+    width, height : int, default 512
+        Image size in pixels.
+
+    Returns
+    -------
+    Camera
+
+    Raises
+    ------
+    ValueError
+        For a malformed box, a degenerate (single-point) box, or an invalid axis / up / size.
+    """
+    lo = _vector3(lo, "lo")
+    hi = _vector3(hi, "hi")
+    if np.any(hi < lo):
+        raise ValueError(f"bounds must satisfy lo <= hi, got lo={lo.tolist()} hi={hi.tolist()}")
+    extent = float(np.max(hi - lo))
+    if not extent > 0.0:
+        raise ValueError(f"bounds are a single point {lo.tolist()}; no camera distance")
+    direction = _direction(axis, "axis")
+    up_vec = _direction(up, "up")
+    centre = 0.5 * (lo + hi)
+    return look_at(centre + 2.0 * extent * direction, centre, up_vec, width, height)

@@ -1,0 +1,334 @@
+"""Image and array I/O, false colour and image comparison.
+
+Images are numpy arrays ``(H, W, 3) uint8`` (or ``(H, W)`` grey) with row 0 at the top, which
+is also the top row of the saved PNG. Every writer goes through :func:`atomic_write`, so an
+interrupted render never leaves a truncated file behind.
+"""
+
+import os
+import secrets
+from contextlib import contextmanager
+from pathlib import Path
+from typing import NamedTuple
+
+import numpy as np
+
+__all__ = [
+    "atomic_write",
+    "save_png",
+    "save_npy",
+    "load_png",
+    "false_color",
+    "ImageDiff",
+    "compare_images",
+]
+
+WHITE = (255, 255, 255)
+
+
+def _exists_message(path):
+    return f"{path} already exists; pass --overwrite to replace it"
+
+
+def _create_temp(path):
+    """Create an empty temporary file next to ``path``; return its Path.
+
+    The name is ``.<stem>.tmp-<8 hex><suffix>``: hidden, in the same folder (so that
+    ``os.replace`` is atomic) and with the same suffix (so format sniffing by extension works).
+    The file is created with mode 0o666 minus the umask, like a plain ``open``.
+    """
+    folder = path.parent
+    if not folder.is_dir():
+        raise FileNotFoundError(f"cannot write {path}: folder {folder} does not exist")
+    for _ in range(100):
+        tmp = folder / f".{path.stem}.tmp-{secrets.token_hex(4)}{path.suffix}"
+        try:
+            fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
+        except FileExistsError:
+            continue
+        os.close(fd)
+        return tmp
+    raise FileExistsError(f"cannot create a temporary file next to {path}")
+
+
+@contextmanager
+def atomic_write(path, *, overwrite=True):
+    """Write a file atomically through a temporary file in the same folder.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Final destination. Its folder must exist.
+    overwrite : bool, default True
+        If False, refuse to replace an existing ``path``.
+
+    Yields
+    ------
+    pathlib.Path
+        An empty temporary file ``.<stem>.tmp-XXXXXXXX<suffix>`` next to ``path``; the body
+        writes to it. On normal exit it is moved onto ``path`` (``os.replace``, or an atomic
+        no-clobber ``os.link`` when ``overwrite=False``). On any exception, including
+        ``KeyboardInterrupt``, it is deleted and ``path`` is left untouched.
+
+    Raises
+    ------
+    FileExistsError
+        If ``overwrite=False`` and ``path`` exists (checked before the body runs and again,
+        atomically where the file system allows, when the file is moved into place).
+    FileNotFoundError
+        If the folder of ``path`` does not exist.
+
+    Examples
+    --------
+    >>> with atomic_write("out.txt") as tmp:  # doctest: +SKIP
+    ...     tmp.write_text("done")
+    """
+    path = Path(path)
+    if not overwrite and path.exists():
+        raise FileExistsError(_exists_message(path))
+    tmp = _create_temp(path)
+    try:
+        yield tmp
+        if overwrite:
+            os.replace(tmp, path)
+        else:
+            try:
+                os.link(tmp, path)  # fails if path appeared meanwhile
+            except FileExistsError:
+                raise FileExistsError(_exists_message(path)) from None
+            except OSError:  # hard links unsupported: best effort
+                if path.exists():
+                    raise FileExistsError(_exists_message(path)) from None
+                os.replace(tmp, path)
+    finally:
+        # After a successful os.replace the temporary name is gone; otherwise remove it.
+        try:
+            os.unlink(tmp)
+        except FileNotFoundError:
+            pass
+
+
+def save_png(path, rgb, overwrite=True):
+    """Save an image as PNG, atomically.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Destination; the format is PNG whatever the suffix.
+    rgb : (H, W, 3) or (H, W) uint8 array
+        Colour or grey image, row 0 = top.
+    overwrite : bool, default True
+        If False, raise FileExistsError when ``path`` exists.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+    """
+    from PIL import Image
+
+    arr = np.asarray(rgb)
+    if arr.dtype != np.uint8:
+        raise ValueError(f"image must be uint8, got dtype {arr.dtype}")
+    if not (arr.ndim == 2 or (arr.ndim == 3 and arr.shape[2] == 3)) or 0 in arr.shape:
+        raise ValueError(f"image must have shape (H, W, 3) or (H, W), got shape {arr.shape}")
+    img = Image.fromarray(np.ascontiguousarray(arr))  # infers "RGB" or "L" from the shape
+    path = Path(path)
+    with atomic_write(path, overwrite=overwrite) as tmp:
+        img.save(tmp, format="PNG")
+    return path
+
+
+def save_npy(path, array, overwrite=True):
+    """Save an array in ``.npy`` format, atomically (no pickled objects).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Destination, written as given (no ``.npy`` is appended).
+    array : array_like
+        Any numeric or bool array; object arrays are refused.
+    overwrite : bool, default True
+        If False, raise FileExistsError when ``path`` exists.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+    """
+    arr = np.asarray(array)
+    if arr.dtype.hasobject:
+        raise ValueError("cannot save an object array to .npy (it would need pickle)")
+    path = Path(path)
+    with atomic_write(path, overwrite=overwrite) as tmp:
+        with open(tmp, "wb") as fh:
+            np.save(fh, arr, allow_pickle=False)
+    return path
+
+
+def load_png(path):
+    """Read an image as RGB.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+
+    Returns
+    -------
+    (H, W, 3) uint8 array
+        Row 0 is the top row; grey images are replicated to three channels and alpha is
+        dropped.
+
+    Raises
+    ------
+    FileNotFoundError
+        If ``path`` does not exist.
+    ValueError
+        If the file cannot be decoded as an image.
+    """
+    from PIL import Image, UnidentifiedImageError
+
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"image not found: {path}")
+    try:
+        with Image.open(path) as img:
+            return np.array(img.convert("RGB"), dtype=np.uint8)
+    except (OSError, UnidentifiedImageError) as exc:
+        raise ValueError(f"cannot read image {path}: {exc}") from None
+
+
+def false_color(values, mask=None, cmap="viridis", vmin=None, vmax=None, background=WHITE):
+    """Map a scalar image to colours with a matplotlib colormap.
+
+    Parameters
+    ----------
+    values : (H, W) array_like of float
+        Scalar per pixel (e.g. a t-buffer or an iteration count).
+    mask : (H, W) bool array, optional
+        True where ``values`` is meaningful; other pixels, and non-finite values, get
+        ``background``. None means every finite value.
+    cmap : str or matplotlib.colors.Colormap, default "viridis"
+        Colormap name, looked up in ``matplotlib.colormaps``.
+    vmin, vmax : float, optional
+        Values mapped to the ends of the colormap (values beyond are clipped). Default: the
+        minimum and maximum over the coloured pixels. If ``vmax == vmin`` everything maps to
+        the low end.
+    background : (3,) int in 0..255, default (255, 255, 255)
+        Colour of the masked-out pixels.
+
+    Returns
+    -------
+    (H, W, 3) uint8 array
+    """
+    import matplotlib
+
+    vals = np.asarray(values, dtype=np.float64)
+    if vals.ndim != 2:
+        raise ValueError(f"values must have shape (H, W), got shape {vals.shape}")
+    if mask is None:
+        mask = np.ones(vals.shape, dtype=bool)
+    mask = np.asarray(mask)
+    if mask.shape != vals.shape or mask.dtype != np.bool_:
+        raise ValueError(
+            f"mask must be a bool array of shape {vals.shape}, got {mask.dtype} {mask.shape}"
+        )
+    bg = np.asarray(background)
+    if bg.shape != (3,) or not np.all((bg >= 0) & (bg <= 255)):
+        raise ValueError(f"background must be 3 values in 0..255, got {background!r}")
+    if isinstance(cmap, str):
+        try:
+            colormap = matplotlib.colormaps[cmap]
+        except KeyError:
+            raise ValueError(f"unknown matplotlib colormap {cmap!r}") from None
+    else:
+        colormap = cmap
+
+    show = mask & np.isfinite(vals)
+    shown = vals[show]
+    lo = float(vmin) if vmin is not None else (float(shown.min()) if shown.size else 0.0)
+    hi = float(vmax) if vmax is not None else (float(shown.max()) if shown.size else 1.0)
+    span = hi - lo
+    with np.errstate(invalid="ignore"):
+        unit = (vals - lo) / span if span > 0 else np.zeros_like(vals)
+    unit = np.clip(np.where(show, unit, 0.0), 0.0, 1.0)
+    rgba = colormap(unit, bytes=True)
+    out = np.ascontiguousarray(rgba[..., :3], dtype=np.uint8)
+    out[~show] = bg.astype(np.uint8)
+    return out
+
+
+class ImageDiff(NamedTuple):
+    """Result of :func:`compare_images`; errors are in 0..255 intensity units.
+
+    Attributes
+    ----------
+    mean_abs_error : float
+        Mean of ``|a - b|`` over all pixels and channels.
+    fraction_over : float
+        Fraction of pixels whose largest channel difference exceeds the threshold.
+    max_abs_error : int
+        Largest ``|a - b|`` of any channel.
+    diff : (H, W, 3) uint8 array
+        Heat map of the per-pixel largest channel difference (``inferno``): black where the
+        images agree, brightest at the worst pixel.
+    """
+
+    mean_abs_error: float
+    fraction_over: float
+    max_abs_error: int
+    diff: np.ndarray
+
+
+def _as_image(img, name):
+    if isinstance(img, (str, os.PathLike)):
+        return load_png(img)
+    arr = np.asarray(img)
+    if arr.dtype != np.uint8:
+        raise ValueError(f"{name} must be a uint8 image, got dtype {arr.dtype}")
+    if arr.ndim == 2:
+        arr = arr[..., None]
+    if arr.ndim != 3:
+        raise ValueError(f"{name} must have shape (H, W, C) or (H, W), got shape {arr.shape}")
+    return arr
+
+
+def compare_images(a, b, threshold=16):
+    """Compare two images pixel by pixel.
+
+    Parameters
+    ----------
+    a, b : (H, W, 3) or (H, W) uint8 array, or path to an image file
+        Images of the same shape (paths are read with :func:`load_png`).
+    threshold : int, default 16
+        A pixel counts as different when the largest of its channel differences exceeds this.
+
+    Returns
+    -------
+    ImageDiff
+        ``mean_abs_error`` (the metric of pyvista's ``compare_images(use_vtk=False)`` divided
+        by the channel count), ``fraction_over``, ``max_abs_error`` and a ``diff`` heat map
+        scaled from 0 (black) to ``max(max_abs_error, threshold)``, so that differences below
+        the threshold stay dark.
+
+    Raises
+    ------
+    ValueError
+        If the shapes differ (both are named) or an input is not uint8.
+    """
+    a = _as_image(a, "a")
+    b = _as_image(b, "b")
+    if a.shape != b.shape:
+        raise ValueError(f"image shapes differ: {a.shape} vs {b.shape}")
+    err = np.abs(a.astype(np.int16) - b.astype(np.int16))
+    per_pixel = err.max(axis=2)
+    max_err = int(per_pixel.max()) if per_pixel.size else 0
+    heat = false_color(
+        per_pixel, cmap="inferno", vmin=0.0, vmax=float(max(max_err, threshold, 1))
+    )
+    return ImageDiff(
+        mean_abs_error=float(err.mean()) if err.size else 0.0,
+        fraction_over=float(np.mean(per_pixel > threshold)) if per_pixel.size else 0.0,
+        max_abs_error=max_err,
+        diff=heat,
+    )

@@ -1,0 +1,224 @@
+"""Sphere-tracing kernels: march camera rays against a scene's smooth (or exact-offset) distance.
+
+A scene is one :class:`smoothdist.kernels.TreeData` *forest* (the objects' trees concatenated by
+``smoothdist.kernels.concatenate_trees``), the root node of each object ``roots (k,) int64``,
+and a ``(k, 5)`` float64 parameter table, one row per object: ``alpha, beta, S, wgs, offset``. Objects are combined as the paper combines them: by a second
+LogSumExp with the largest alpha (smooth mode), or by the minimum (exact-offset mode, where each
+object's distance is ``exact - offset``).
+
+Safety (design notes §4): each ray starts where it enters the scene box grown by
+``margin`` (the isosurface can lie at most ``log(A^S N) / alpha`` outside the data, Barnes-Hut
+included, because a far-field term is never closer than the root box), it ends where it leaves
+that box, a step that lands in the negative band is resolved by bisection back to the last
+positive point, and the number of steps is capped.
+"""
+
+import math
+
+import numba
+import numpy as np
+from numba import prange
+
+from smoothdist._config import NJIT, NJIT_PARALLEL
+from smoothdist.kernels import exact_distance_point, smooth_distance_point
+from tracer.camera import ray_direction
+
+MODE_SMOOTH, MODE_EXACT = 0, 1
+#: bisection iterations when a step overshoots into d < 0 (halves the bracket each time)
+BISECT_ITERS = 40
+#: pixels per side of the square tiles handed to threads
+TILE = 8
+#: a prime: tile j of the parallel loop traces tile (j * STRIDE) mod n
+STRIDE = 7919
+
+
+@numba.njit(**NJIT)
+def scene_distance(tree, roots, params, mode, x, y, z, stack, dstack):
+    """Scene distance and gradient at ``(x, y, z)``.
+
+    Returns ``(d, gx, gy, gz, nodes, leaves)``; the gradient is not normalised.
+    """
+    nobj = roots.size
+    if nobj == 1:
+        if mode == MODE_SMOOTH:
+            return smooth_distance_point(tree, x, y, z, params[0, 0], params[0, 1],
+                                         params[0, 2], params[0, 3], stack, dstack, roots[0])
+        d, gx, gy, gz, p, nodes, leaves = exact_distance_point(tree, x, y, z, stack, dstack,
+                                                               roots[0])
+        return d - params[0, 4], gx, gy, gz, nodes, leaves
+    nodes = 0
+    leaves = 0
+    if mode == MODE_EXACT:
+        best = np.inf
+        bgx = 0.0
+        bgy = 0.0
+        bgz = 0.0
+        for k in range(nobj):
+            d, gx, gy, gz, p, nn, ll = exact_distance_point(tree, x, y, z, stack, dstack,
+                                                            roots[k])
+            nodes += nn
+            leaves += ll
+            d -= params[k, 4]
+            if d < best:
+                best = d
+                bgx = gx
+                bgy = gy
+                bgz = gz
+        return best, bgx, bgy, bgz, nodes, leaves
+    # smooth: LogSumExp over objects with the largest alpha, shifted by the smallest d
+    a = params[0, 0]
+    for k in range(1, nobj):
+        a = max(a, params[k, 0])
+    m = np.inf
+    s = 0.0
+    sx = 0.0
+    sy = 0.0
+    sz = 0.0
+    for k in range(nobj):
+        d, gx, gy, gz, nn, ll = smooth_distance_point(tree, x, y, z, params[k, 0],
+                                                      params[k, 1], params[k, 2], params[k, 3],
+                                                      stack, dstack, roots[k])
+        nodes += nn
+        leaves += ll
+        if d < m:
+            f = math.exp(-a * (m - d))
+            s *= f
+            sx *= f
+            sy *= f
+            sz *= f
+            m = d
+        e = math.exp(-a * (d - m))
+        s += e
+        sx += e * gx
+        sy += e * gy
+        sz += e * gz
+    return m - math.log(s) / a, sx / s, sy / s, sz / s, nodes, leaves
+
+
+@numba.njit(**NJIT)
+def ray_box(ox, oy, oz, dx, dy, dz, lo, hi):
+    """Slab test: ``(t_enter, t_exit)`` of the ray with box ``lo..hi``; ``t_enter > t_exit`` misses."""
+    t0 = 0.0
+    t1 = np.inf
+    o = (ox, oy, oz)
+    dd = (dx, dy, dz)
+    for a in range(3):
+        if dd[a] != 0.0:
+            inv = 1.0 / dd[a]
+            ta = (lo[a] - o[a]) * inv
+            tb = (hi[a] - o[a]) * inv
+            if ta > tb:
+                ta, tb = tb, ta
+            t0 = max(t0, ta)
+            t1 = min(t1, tb)
+        elif o[a] < lo[a] or o[a] > hi[a]:
+            return 1.0, 0.0
+    return t0, t1
+
+
+@numba.njit(**NJIT)
+def march_ray(tree, roots, params, mode, ox, oy, oz, dx, dy, dz, lo, hi, eps, max_steps, stack,
+              dstack):
+    """March one ray; returns ``(hit, t, gx, gy, gz, steps, leaves, bisections)``.
+
+    ``hit`` is 1 when ``d <= eps`` was reached inside the box; then ``t`` is the ray parameter
+    and ``g`` the (unnormalised) distance gradient there. Misses return ``t = nan``.
+    """
+    t, t_exit = ray_box(ox, oy, oz, dx, dy, dz, lo, hi)
+    steps = 0
+    leaves = 0
+    bis = 0
+    if t > t_exit:
+        return 0, np.nan, 0.0, 0.0, 0.0, steps, leaves, bis
+    t_prev = t
+    while steps < max_steps:
+        d, gx, gy, gz, nn, ll = scene_distance(tree, roots, params, mode, ox + t * dx, oy + t * dy,
+                                               oz + t * dz, stack, dstack)
+        steps += 1
+        leaves += ll
+        if d <= eps:
+            if d < -eps and t > t_prev:
+                # overshoot into the negative band: bisect [t_prev (d > eps), t (d < -eps)]
+                bis += 1
+                a = t_prev
+                b = t
+                for _ in range(BISECT_ITERS):
+                    mid = 0.5 * (a + b)
+                    dm, mx, my, mz, nn, ll = scene_distance(tree, roots, params, mode, ox + mid * dx,
+                                                            oy + mid * dy, oz + mid * dz, stack,
+                                                            dstack)
+                    steps += 1
+                    leaves += ll
+                    if dm > eps:
+                        a = mid
+                    else:
+                        b = mid
+                        gx = mx
+                        gy = my
+                        gz = mz
+                        if dm >= -eps:
+                            break
+                t = b
+            return 1, t, gx, gy, gz, steps, leaves, bis
+        t_prev = t
+        t += d
+        if t > t_exit:
+            break
+    return 0, np.nan, 0.0, 0.0, 0.0, steps, leaves, bis
+
+
+@numba.njit(**NJIT)
+def _render_tile(tree, roots, params, mode, cam, lo, hi, eps, max_steps, r_lo, r_hi, c_lo, c_hi,
+                 depth_max, hit, tbuf, grad, steps, leaves, bisect):
+    stack = np.empty(depth_max + 4, dtype=np.int64)
+    dstack = np.empty(depth_max + 4)
+    ox = cam[0]
+    oy = cam[1]
+    oz = cam[2]
+    for r in range(r_lo, r_hi):
+        for c in range(c_lo, c_hi):
+            dx, dy, dz = ray_direction(cam, r, c)
+            h, t, gx, gy, gz, st, lv, bs = march_ray(tree, roots, params, mode, ox, oy, oz, dx, dy, dz,
+                                                     lo, hi, eps, max_steps, stack, dstack)
+            hit[r, c] = h == 1
+            tbuf[r, c] = t
+            grad[r, c, 0] = gx
+            grad[r, c, 1] = gy
+            grad[r, c, 2] = gz
+            steps[r, c] = st
+            leaves[r, c] = lv
+            bisect[r, c] = bs
+
+
+@numba.njit(**NJIT_PARALLEL)
+def render_rows(tree, roots, params, mode, cam, lo, hi, eps, max_steps, row0, row1, depth_max,
+                hit, tbuf, grad, steps, leaves, bisect):
+    """Trace rows ``row0 <= r < row1`` of the image into the per-pixel output arrays.
+
+    Outputs are full-image arrays: ``hit (H, W) bool``, ``tbuf (H, W) float64``,
+    ``grad (H, W, 3) float64``, ``steps``, ``leaves``, ``bisect (H, W) int64``. Work is split
+    into ``TILE x TILE`` tiles so that neighbouring rays share cache lines of the tree; a tile
+    is traced by one thread, so the result does not depend on the number of threads. Tiles
+    are visited in a scattered order (``j * STRIDE mod n``) so that the static split of the
+    loop between threads gives each thread a similar mix of empty and busy tiles.
+    """
+    W = int(cam[12])
+    ntx = (W + TILE - 1) // TILE
+    nty = (row1 - row0 + TILE - 1) // TILE
+    n = ntx * nty
+    stride = STRIDE if n % STRIDE != 0 else 1
+    for j in prange(n):
+        tile = (j * stride) % n
+        ty = tile // ntx
+        tx = tile - ty * ntx
+        _render_tile(tree, roots, params, mode, cam, lo, hi, eps, max_steps, row0 + ty * TILE,
+                     min(row1, row0 + (ty + 1) * TILE), tx * TILE, min(W, (tx + 1) * TILE),
+                     depth_max, hit, tbuf, grad, steps, leaves, bisect)
+
+
+@numba.njit(**NJIT)
+def distance_at(tree, roots, params, mode, x, y, z, depth_max):
+    """Scene distance at one point (used to check that the camera is outside the surface)."""
+    stack = np.empty(depth_max + 4, dtype=np.int64)
+    dstack = np.empty(depth_max + 4)
+    return scene_distance(tree, roots, params, mode, x, y, z, stack, dstack)[0]

@@ -1,0 +1,178 @@
+"""Render a :class:`~tracer.scene.Scene`: trace, shade, and collect per-pixel buffers."""
+
+import sys
+import time
+from typing import NamedTuple
+
+import numpy as np
+
+from smoothdist.kernels import concatenate_trees
+from tracer import march
+from tracer.camera import look_at
+from tracer.shading import (load_matcap, shade_headlight, shade_matcap, shade_normals,
+                            view_normals)
+
+
+class RenderError(ValueError):
+    """A scene that cannot be rendered as asked (e.g. camera inside the surface)."""
+
+
+class RenderResult(NamedTuple):
+    """Everything one render produces. Images are ``(H, W, ...)``, row 0 at the top.
+
+    rgb : (H, W, 3) uint8
+    hit : (H, W) bool
+    depth : (H, W) float32
+        Ray parameter ``t`` at the hit (scene units; rays are unit length), NaN on misses.
+    normals : (H, W, 3) float64
+        Unit world-space gradient of the distance at the hit (0 on misses).
+    steps, leaves, bisections : (H, W) int64
+        Distance evaluations, leaves visited (summed over the ray) and negative-band
+        bisections per pixel.
+    seconds : float
+        Wall time of the tracing (shading excluded).
+    camera : tracer.camera.Camera
+    """
+
+    rgb: np.ndarray
+    hit: np.ndarray
+    depth: np.ndarray
+    normals: np.ndarray
+    steps: np.ndarray
+    leaves: np.ndarray
+    bisections: np.ndarray
+    seconds: float
+    camera: object
+
+    def summary(self):
+        """Dict of scalar statistics: size, seconds, hits, mean steps and leaves per pixel."""
+        H, W = self.hit.shape
+        return {"width": W, "height": H, "seconds": round(self.seconds, 4),
+                "hits": int(self.hit.sum()), "hit_fraction": float(self.hit.mean()),
+                "mean_steps": float(self.steps.mean()), "mean_leaves": float(self.leaves.mean()),
+                "bisections": int((self.bisections > 0).sum())}
+
+
+def scene_arrays(scene):
+    """``(tree, roots, params, mode, lo, hi, depth_max)`` for the march kernels.
+
+    The box ``lo..hi`` is the data's bounding box grown by the largest possible isosurface
+    inflation (``log(A^S N) / alpha`` per object; the offset in exact mode) plus twice ``eps``.
+    """
+    trees = [o.field.tree for o in scene.objects]
+    params = np.empty((len(scene.objects), 5))
+    margin = 0.0
+    for k, o in enumerate(scene.objects):
+        alpha, beta, S, wgs = o.field.kernel_args(o.alpha, o.beta, o.alpha_u, scene.gradient)
+        params[k] = (alpha, beta, S, wgs, o.offset)
+        if scene.mode == "exact":
+            margin = max(margin, o.offset)
+        else:
+            margin = max(margin, o.field.inflation(alpha, o.alpha_u))
+    if scene.mode == "smooth" and len(trees) > 1:
+        a = params[:, 0].max()
+        margin += np.log(len(trees)) / a
+    lo, hi = scene.bounds
+    grow = margin + 2 * scene.eps + 1e-9 * scene.diagonal
+    mode = march.MODE_EXACT if scene.mode == "exact" else march.MODE_SMOOTH
+    tree, roots = concatenate_trees(trees) if len(trees) > 1 else (trees[0], np.zeros(1, np.int64))
+    return tree, roots, params, mode, lo - grow, hi + grow, tree.depth
+
+
+def camera_of(scene):
+    """The scene's :class:`~tracer.camera.Camera` (validated)."""
+    return look_at(scene.camera_origin, scene.camera_dest, scene.camera_up, scene.width,
+                   scene.height)
+
+
+def distance_at_camera(scene, arrays=None):
+    """Scene distance at the camera origin (> 0 when the camera is outside the surface)."""
+    tree, roots, params, mode, lo, hi, depth_max = arrays or scene_arrays(scene)
+    o = scene.camera_origin
+    return float(march.distance_at(tree, roots, params, mode, float(o[0]), float(o[1]), float(o[2]),
+                                   depth_max))
+
+
+def render(scene, *, progress=None, band_rows=None):
+    """Trace and shade ``scene``.
+
+    Parameters
+    ----------
+    scene : tracer.scene.Scene
+    progress : callable(done_rows, total_rows, elapsed_s) or None
+        Called after each band of rows.
+    band_rows : int, optional
+        Rows per kernel call (progress granularity); default about 1/16 of the image.
+
+    Raises
+    ------
+    RenderError
+        When the camera is inside the surface (distance <= eps at the camera).
+    """
+    camera = camera_of(scene)
+    arrays = scene_arrays(scene)
+    tree, roots, params, mode, lo, hi, depth_max = arrays
+    d0 = distance_at_camera(scene, arrays)
+    if not d0 > scene.eps:
+        raise RenderError(f"the camera at {np.round(scene.camera_origin, 6).tolist()} is inside "
+                          f"the surface (distance there {d0:.4g} <= eps {scene.eps:.3g}); move "
+                          "camera.origin outside or lower alpha's blur")
+    H, W = scene.height, scene.width
+    hit = np.zeros((H, W), dtype=np.bool_)
+    tbuf = np.full((H, W), np.nan)
+    grad = np.zeros((H, W, 3))
+    steps = np.zeros((H, W), dtype=np.int64)
+    leaves = np.zeros((H, W), dtype=np.int64)
+    bis = np.zeros((H, W), dtype=np.int64)
+    cam = camera.as_array()
+    band = band_rows or max(march.TILE, ((H // 16) // march.TILE) * march.TILE or march.TILE)
+    t0 = time.perf_counter()
+    for r0 in range(0, H, band):
+        r1 = min(H, r0 + band)
+        march.render_rows(tree, roots, params, mode, cam, lo, hi, float(scene.eps),
+                          int(scene.max_steps), r0, r1, depth_max, hit, tbuf, grad, steps,
+                          leaves, bis)
+        if progress is not None:
+            progress(r1, H, time.perf_counter() - t0)
+    seconds = time.perf_counter() - t0
+    norm = np.linalg.norm(grad, axis=2, keepdims=True)
+    normals = np.where(norm > 0, grad / np.where(norm > 0, norm, 1.0), 0.0)
+    rgb = shade(scene, camera, normals, hit)
+    depth = tbuf.astype(np.float32)
+    return RenderResult(rgb=rgb, hit=hit, depth=depth, normals=normals, steps=steps,
+                        leaves=leaves, bisections=bis, seconds=seconds, camera=camera)
+
+
+def shade(scene, camera, normals, hit):
+    """Colour a render with the scene's shading mode; ``(H, W, 3)`` uint8."""
+    nv = view_normals(normals, camera)
+    bg = tuple(scene.background)
+    if scene.shading == "matcap":
+        return shade_matcap(nv, hit, load_matcap(scene.matcap), background=bg)
+    if scene.shading == "headlight":
+        return shade_headlight(nv, hit, background=bg)
+    return shade_normals(nv, hit, background=bg)
+
+
+class ProgressBar:
+    """A dependency-free text progress bar with an ETA, written to ``stream`` (stderr)."""
+
+    def __init__(self, label, stream=None, min_seconds=0.5):
+        self.label = label
+        self.stream = stream or sys.stderr
+        self.min_seconds = min_seconds
+        self.shown = False
+
+    def __call__(self, done, total, elapsed):
+        """Update with ``done`` of ``total`` units after ``elapsed`` seconds."""
+        if elapsed < self.min_seconds and done < total and not self.shown:
+            return
+        self.shown = True
+        frac = done / max(total, 1)
+        eta = elapsed * (1 - frac) / frac if frac > 0 else float("inf")
+        bar = "#" * int(30 * frac)
+        self.stream.write(f"\r{self.label} [{bar:<30}] {100 * frac:5.1f}% "
+                          f"{elapsed:6.1f}s elapsed, ~{eta:5.1f}s left")
+        if done >= total:
+            self.stream.write("\n")
+        self.stream.flush()
