@@ -165,14 +165,21 @@ class ProgressBar:
 
     def __call__(self, done, total, elapsed):
         """Update with ``done`` of ``total`` units after ``elapsed`` seconds."""
-        if elapsed < self.min_seconds and done < total and not self.shown:
+        if elapsed < self.min_seconds and not self.shown:
             return
-        self.shown = True
         frac = done / max(total, 1)
+        tty = getattr(self.stream, "isatty", lambda: False)()
+        if not tty:
+            # logs: one line per quarter instead of carriage-return animation
+            quarter = int(4 * frac)
+            if self.shown and quarter == getattr(self, "_quarter", -1):
+                return
+            self._quarter = quarter
+        self.shown = True
         eta = elapsed * (1 - frac) / frac if frac > 0 else float("inf")
         bar = "#" * int(30 * frac)
-        self.stream.write(f"\r{self.label} [{bar:<30}] {100 * frac:5.1f}% "
+        self.stream.write(f"{chr(13) if tty else ''}{self.label} [{bar:<30}] {100 * frac:5.1f}% "
                           f"{elapsed:6.1f}s elapsed, ~{eta:5.1f}s left")
-        if done >= total:
+        if done >= total or not tty:
             self.stream.write("\n")
         self.stream.flush()

@@ -329,3 +329,42 @@ def merge_meshes(meshes, name="mixed"):
         off += m.V.shape[0]
     return DataMesh(np.concatenate(V), points=np.concatenate(P), edges=np.concatenate(E),
                     triangles=np.concatenate(T), name=name)
+
+
+def scene_from_field(field, *, alpha, alpha_u=None, beta=0.5, camera=None, width=512,
+                     height=512, mode="smooth", eps=None, offset=None, shading="normals",
+                     matcap="", gradient="metric", name="scene", max_steps=1000):
+    """Build a one-object :class:`Scene` in code (no JSON), e.g. for parameter studies.
+
+    Parameters
+    ----------
+    field : smoothdist.SmoothDistanceField
+        The object's data (built once; reuse it across renders).
+    alpha, alpha_u, beta : float
+        As in the scene file (``alpha_u`` defaults to ``alpha``, i.e. no attenuation).
+    camera : (origin, dest, up), optional
+        Three 3-vectors; default: the paper's beta-study camera (bbox centre + 2 x the largest
+        extent along +z, looking at the centre, up +y).
+    """
+    lo, hi = field.bounds
+    if camera is None:
+        c = 0.5 * (lo + hi)
+        camera = (c + np.array([0.0, 0.0, 2.0 * float((hi - lo).max())]), c, np.array([0.0, 1, 0]))
+    origin, dest, up = (np.asarray(v, dtype=float) for v in camera)
+    if mode not in MODES:
+        raise ValueError(f"mode must be one of {MODES}, got {mode!r}")
+    if shading not in SHADINGS:
+        raise ValueError(f"shading must be one of {SHADINGS}, got {shading!r}")
+    alpha = float(alpha)
+    alpha_u = float(alpha_u) if alpha_u is not None else alpha
+    field.kernel_args(alpha, beta, alpha_u, gradient)  # validates alpha, beta, alpha_u
+    obj = SceneObject(name=name, field=field, alpha=alpha, alpha_u=alpha_u, beta=float(beta),
+                      offset=float(offset) if offset is not None else 1.0 / alpha,
+                      matcap=matcap)
+    scene = Scene(path=f"{name}.json", camera_origin=origin, camera_dest=dest, camera_up=up,
+                  objects=[obj], width=int(width), height=int(height), beta=float(beta),
+                  eps=eps, mode=mode, shading=shading, matcap=matcap, max_steps=int(max_steps),
+                  gradient=gradient)
+    if scene.eps is None:
+        scene.eps = 1e-4 * max(scene.diagonal, 1e-12)
+    return scene
