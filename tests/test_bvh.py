@@ -1,0 +1,216 @@
+"""BVH invariants (boxes nest and are tight, every primitive in exactly one leaf, per-node
+weight maxima, balanced depth), the primitive table, leaf_size independence of the results,
+traversal statistics, and tiny meshes (1-2 primitives)."""
+
+import math
+
+import numpy as np
+import pytest
+
+import naive
+from smoothdist import DataMesh, SmoothDistanceField
+from smoothdist.bvh import build_tree
+
+MESHES = ("point_cloud", "circle", "segment_star", "icosphere", "cube", "mixed_mesh",
+          "nonmanifold_mesh", "octopus", "trefoil")
+
+
+def get(request, zoo, name):
+    return zoo[name] if name in zoo else request.getfixturevalue(name)
+
+
+def primitive_vertices(mesh):
+    """List (mesh numbering) of (k, 3) vertex arrays of every primitive."""
+    V = mesh.V
+    out = [V[[p]] for p in mesh.points]
+    out += [V[e] for e in mesh.edges]
+    out += [V[t] for t in mesh.triangles]
+    return out
+
+
+def check_tree(mesh, leaf_size):
+    tree = build_tree(mesh, leaf_size=leaf_size)
+    m = mesh.num_primitives
+    n = tree.lo.shape[0]
+    prims = primitive_vertices(mesh)
+    A, ec, ewhi, tc, twhi = mesh.weight_data()
+    whi_mesh = np.concatenate([np.ones(mesh.points.size), ewhi, twhi])
+    kind_mesh = np.concatenate([np.zeros(mesh.points.size), np.ones(mesh.edges.shape[0]),
+                                np.full(mesh.triangles.shape[0], 2)])
+    for arr in (tree.lo, tree.hi, tree.left, tree.right, tree.start, tree.count, tree.diag,
+                tree.whi, tree.kind, tree.pts, tree.wc, tree.pwhi, tree.orig):
+        assert arr.flags.c_contiguous
+    # primitive table: a permutation of the mesh's primitives, with their data
+    np.testing.assert_array_equal(np.sort(tree.orig), np.arange(m))
+    np.testing.assert_array_equal(tree.kind, kind_mesh[tree.orig])
+    np.testing.assert_array_equal(tree.pwhi, whi_mesh[tree.orig])
+    assert tree.A == A
+    for i in range(m):
+        P = prims[tree.orig[i]]
+        k = P.shape[0]
+        np.testing.assert_array_equal(tree.pts[i, :3 * k], P.ravel())
+        assert np.all(tree.pts[i, 3 * k:] == 0)
+        # wc: coefficients of the raw weight A w~ (A folded in)
+        if k == 2:
+            np.testing.assert_allclose(tree.wc[i, :5], A * ec[tree.orig[i] - mesh.points.size],
+                                       rtol=1e-15, atol=0)
+        if k == 3:
+            j = tree.orig[i] - mesh.points.size - mesh.edges.shape[0]
+            np.testing.assert_allclose(tree.wc[i], A * tc[j], rtol=1e-15, atol=0)
+    # root covers everything
+    assert tree.start[0] == 0 and tree.count[0] == m
+    seen = np.zeros(m, dtype=int)
+    depth = np.zeros(n, dtype=int)
+    reached = np.zeros(n, dtype=bool)
+    reached[0] = True
+    stack = [0]
+    while stack:
+        node = stack.pop()
+        s, c = tree.start[node], tree.count[node]
+        assert c >= 1
+        # box: tight around the node's primitives' vertices
+        X = np.concatenate([prims[tree.orig[i]] for i in range(s, s + c)])
+        np.testing.assert_array_equal(tree.lo[node], X.min(axis=0))
+        np.testing.assert_array_equal(tree.hi[node], X.max(axis=0))
+        assert tree.diag[node] == pytest.approx(np.linalg.norm(tree.hi[node] - tree.lo[node]),
+                                                rel=1e-15, abs=0)
+        # weight bound of the node: the max of its primitives' clamps
+        assert tree.whi[node] == tree.pwhi[s:s + c].max()
+        assert tree.whi[node] >= 1.0
+        L, R = tree.left[node], tree.right[node]
+        if L < 0:
+            assert R < 0
+            assert c <= leaf_size
+            seen[s:s + c] += 1
+            continue
+        assert c > leaf_size
+        # children partition the parent's range, boxes nest
+        assert tree.start[L] == s and tree.start[R] == s + tree.count[L]
+        assert tree.count[L] + tree.count[R] == c
+        assert abs(tree.count[L] - tree.count[R]) <= 1          # object-median split
+        for ch in (L, R):
+            assert not reached[ch], "node reached twice"
+            reached[ch] = True
+            assert np.all(tree.lo[ch] >= tree.lo[node]) and np.all(tree.hi[ch] <= tree.hi[node])
+            depth[ch] = depth[node] + 1
+            stack.append(ch)
+    assert reached.all(), "unreachable nodes"
+    assert np.all(seen == 1), "every primitive must lie in exactly one leaf"
+    assert tree.depth == depth.max()
+    assert tree.depth <= max(0, math.ceil(math.log2(m / leaf_size)))
+    assert SmoothDistanceField(mesh, leaf_size=leaf_size).weight_bound == tree.whi[0]
+    return tree
+
+
+@pytest.mark.parametrize("name", MESHES)
+@pytest.mark.parametrize("leaf_size", [1, 3, 8])
+def test_tree_invariants(request, zoo, name, leaf_size):
+    check_tree(get(request, zoo, name), leaf_size)
+
+
+def test_tree_invariants_bunny(bunny):
+    check_tree(bunny.as_kind("points"), 4)
+
+
+@pytest.mark.parametrize("name", MESHES)
+def test_leaf_size_gives_same_results(request, zoo, name, rng):
+    mesh = get(request, zoo, name)
+    Q = np.concatenate([naive.near_queries(mesh, 300, rng),
+                        naive.far_queries(mesh, 30, rng, 2.0, 1e4)])
+    e = mesh.min_edge_length()
+    alpha = 1.0 / e if e else 50.0 / mesh.diagonal
+    base = SmoothDistanceField(mesh, leaf_size=1)
+    d1, g1 = base.smooth_distance(Q, alpha=alpha, beta=0.0, alpha_u=3 * alpha, gradient="exact")
+    x1 = base.exact_distance(Q, return_closest=True)
+    scale = base.inflation(alpha, 3 * alpha)
+    D = naive.distances_to_primitives(Q, mesh)
+    for leaf_size in (2, 5, 16):
+        f = SmoothDistanceField(mesh, leaf_size=leaf_size)
+        d, g = f.smooth_distance(Q, alpha=alpha, beta=0.0, alpha_u=3 * alpha, gradient="exact")
+        np.testing.assert_allclose(d, d1, rtol=1e-12, atol=1e-12 * scale)
+        np.testing.assert_allclose(g, g1, rtol=1e-12, atol=1e-12)
+        x = f.exact_distance(Q, return_closest=True)
+        np.testing.assert_allclose(x.distance, x1.distance, rtol=1e-12, atol=0)
+        np.testing.assert_allclose(x.gradient, x1.gradient, atol=1e-12)
+        # the closest primitive may differ only in a tie
+        np.testing.assert_allclose(D[np.arange(Q.shape[0]), x.closest], x1.distance,
+                                   rtol=1e-12, atol=1e-13 * mesh.diagonal)
+        # Barnes-Hut with big leaves keeps the bound below the exact sum
+        db = f.smooth_distance(Q, alpha=alpha, beta=0.5, alpha_u=3 * alpha).distance
+        assert np.all(db <= d1 + 1e-12 * (np.abs(d1) + scale))
+
+
+@pytest.mark.parametrize("leaf_size", [0, -1, 1.5, True, "2"])
+def test_bad_leaf_size(icosphere, leaf_size):
+    with pytest.raises(ValueError, match="leaf_size"):
+        SmoothDistanceField(icosphere, leaf_size=leaf_size)
+
+
+@pytest.mark.parametrize("name", ["icosphere", "mixed_mesh", "octopus"])
+def test_stats_beta_zero_visit_everything(request, zoo, name, rng):
+    mesh = get(request, zoo, name)
+    for leaf_size in (1, 4):
+        f = SmoothDistanceField(mesh, leaf_size=leaf_size)
+        Q = naive.near_queries(mesh, 100, rng)
+        _, _, st = f.smooth_distance(Q, alpha=10.0, beta=0.0, return_stats=True)
+        assert np.all(st.leaves_visited == f.num_primitives)
+        assert np.all(st.nodes_visited == f.tree.lo.shape[0])
+        _, _, st = f.smooth_distance(Q, alpha=10.0, method="brute", return_stats=True)
+        assert np.all(st.leaves_visited == f.num_primitives)
+
+
+TINY = {
+    "one_point": (np.array([[0.3, -0.2, 0.5]]), None),
+    "two_points": (np.array([[0.0, 0, 0], [1.0, 0.5, 0]]), None),
+    "one_edge": (np.array([[0.0, 0, 0], [1.0, 0.5, 0.2]]), np.array([[0, 1]])),
+    "one_triangle": (np.array([[0.0, 0, 0], [1.0, 0, 0], [0.2, 0.9, 0.1]]), np.array([[0, 1, 2]])),
+}
+
+
+@pytest.mark.parametrize("name", sorted(TINY))
+def test_tiny_meshes(name, rng):
+    V, F = TINY[name]
+    mesh = DataMesh(V, F)
+    field = SmoothDistanceField(mesh)
+    tree = check_tree(mesh, 1)
+    assert tree.depth == (0 if mesh.num_primitives == 1 else 1)
+    Q = np.concatenate([rng.normal(size=(100, 3)), naive.far_queries(mesh, 10, rng, 10.0, 1e5)
+                        if mesh.diagonal > 0 else rng.normal(size=(10, 3)) * 1e5])
+    for alpha, au in ((0.7, None), (30.0, 90.0)):
+        for beta in (0.0, 0.8):
+            d, g = field.smooth_distance(Q, alpha=alpha, beta=beta, alpha_u=au,
+                                         gradient="exact")
+            dr, gr = naive.smooth_distance(Q, mesh, alpha, au)
+            if beta == 0.0 or mesh.num_primitives == 1:
+                np.testing.assert_allclose(d, dr, rtol=1e-9, atol=1e-12)
+                np.testing.assert_allclose(g, gr, atol=1e-8)
+            else:
+                assert np.all(d <= dr + 1e-12 * np.abs(dr))
+    de, ge, _ = naive.exact_distance(Q, mesh)
+    x = field.exact_distance(Q)
+    np.testing.assert_allclose(x.distance, de, rtol=1e-13)
+    np.testing.assert_allclose(x.gradient, ge, atol=1e-12)
+    if mesh.num_primitives == 1:     # one primitive: a weight-1 term, d_hat = d exactly
+        assert field.weight_bound == 1.0
+        d = field.smooth_distance(Q, alpha=5.0, beta=0.5).distance
+        np.testing.assert_allclose(d, de, rtol=1e-13)
+
+
+@pytest.mark.parametrize("leaf_size", [1, 2])
+def test_barnes_hut_acceptance_rule(leaf_size):
+    """A node (> 1 primitive) is replaced by its far field iff diag(box) < beta * dist(q, box)
+    (the authors' rule, paper Alg. 1): two points, so the root is the only such node."""
+    V = np.array([[0.0, 0.0, 0.0], [0.3, 0.4, 0.0]])          # root box diagonal 0.5
+    field = SmoothDistanceField(V, leaf_size=leaf_size)
+    q = np.array([[0.3, 0.4, 2.0]])                              # box distance 2.0
+    ratio = 0.5 / 2.0
+    for beta, accepted in ((ratio * 1.001, True), (ratio * 0.999, False)):
+        d, g, st = field.smooth_distance(q, alpha=3.0, beta=beta, return_stats=True)
+        if accepted:
+            assert st.nodes_visited[0] == 1 and st.leaves_visited[0] == 1
+            assert d[0] == pytest.approx(2.0 - math.log(2.0) / 3.0, rel=1e-14)
+        else:
+            assert st.leaves_visited[0] == 2
+            assert st.nodes_visited[0] == (3 if leaf_size == 1 else 1)
+            dr = naive.smooth_distance(q, field.mesh, 3.0)[0]
+            assert d[0] == pytest.approx(dr[0], rel=1e-14)
