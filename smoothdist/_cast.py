@@ -9,11 +9,17 @@ import numbers
 
 import numpy as np
 
+#: Largest accepted absolute coordinate. The closest-point kernels multiply dot products of
+#: coordinate differences (fourth powers of lengths), which stay finite in float64 only up to
+#: about 1e75; 1e50 leaves room for queries far outside the data.
+COORD_LIMIT = 1e50
+
 
 def as_points(X, name="Q"):
     """Return ``X`` as a C-contiguous ``(n, 3)`` float64 array of finite values.
 
-    A single point of shape ``(3,)`` is accepted and returned as ``(1, 3)``.
+    A single point of shape ``(3,)`` is accepted and returned as ``(1, 3)``. Coordinates must
+    be finite and at most :data:`COORD_LIMIT` in absolute value.
     """
     try:
         A = np.asarray(X, dtype=np.float64)
@@ -26,6 +32,10 @@ def as_points(X, name="Q"):
     if not np.all(np.isfinite(A)):
         bad = int(np.argmax(~np.all(np.isfinite(A), axis=1)))
         raise ValueError(f"{name} contains NaN or infinite coordinates (first at row {bad})")
+    if A.size and np.abs(A).max() > COORD_LIMIT:
+        bad = int(np.argmax(np.abs(A).max(axis=1) > COORD_LIMIT))
+        raise ValueError(f"{name} has coordinates beyond +-{COORD_LIMIT:.0e} (first at row {bad}): "
+                         "rescale or recentre the data")
     return np.ascontiguousarray(A)
 
 

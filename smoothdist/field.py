@@ -14,6 +14,11 @@ from smoothdist.mesh import DataMesh
 GRADIENTS = ("metric", "exact")
 METHODS = ("bvh", "brute")
 
+#: Smallest accepted ``alpha x L`` (``L`` the bounding-box diagonal, 1 for a single point).
+#: Below it the blur ``1 / alpha`` is 1e12 times the data's size, and ``log(N) / alpha`` and
+#: the metric gradient's ``1 / alpha**2`` would overflow float64 for tiny alpha.
+MIN_ALPHA_SCALE = 1e-12
+
 
 class SmoothDistanceResult(NamedTuple):
     """``distance (q,) float64`` and ``gradient (q, 3) float64``."""
@@ -99,9 +104,23 @@ class SmoothDistanceField:
         """``A``: the largest raw weight of any primitive (>= 1; 1 for point clouds)."""
         return float(self.tree.whi[0])
 
+    def check_alpha(self, alpha, name="alpha"):
+        """Return ``alpha`` as a float after validating it for this data.
+
+        It must be a finite number > 0 with ``alpha x diagonal >= MIN_ALPHA_SCALE`` (the
+        diagonal counts as 1 for a single point); raises ``ValueError`` otherwise. Any larger
+        alpha is accepted (the smooth distance then tends to the exact distance).
+        """
+        alpha = positive(alpha, name)
+        L = self.diagonal if self.diagonal > 0 else 1.0
+        if alpha * L < MIN_ALPHA_SCALE:
+            raise ValueError(f"{name}={alpha:g} is too small for data of size {L:.4g}: "
+                             f"{name} x bbox diagonal must be >= {MIN_ALPHA_SCALE:g}")
+        return alpha
+
     def attenuation(self, alpha, alpha_u=None):
         """``S = min(alpha / alpha_u, 1)`` (1 when ``alpha_u`` is None)."""
-        alpha = positive(alpha, "alpha")
+        alpha = self.check_alpha(alpha)
         if alpha_u is None:
             return 1.0
         return min(alpha / positive(alpha_u, "alpha_u"), 1.0)
@@ -168,7 +187,7 @@ class SmoothDistanceField:
         """
         if isinstance(alpha, str) and alpha == "auto":
             alpha = self.auto_alpha()
-        alpha = positive(alpha, "alpha")
+        alpha = self.check_alpha(alpha)
         beta = non_negative(beta, "beta")
         S = self.attenuation(alpha, alpha_u)
         if gradient not in GRADIENTS:
@@ -213,7 +232,7 @@ class SmoothDistanceField:
 
         Returns ``(alpha, beta, S, wgs)``.
         """
-        alpha = positive(alpha, "alpha")
+        alpha = self.check_alpha(alpha)
         beta = non_negative(beta, "beta")
         if gradient not in GRADIENTS:
             raise ValueError(f"gradient must be one of {GRADIENTS}, got {gradient!r}")
@@ -227,16 +246,12 @@ class SmoothDistanceField:
 
 @numba.njit(**_q.NJIT_PARALLEL)
 def _nearest_other(tree, P):
+    """Distance from each row of ``P (n, 3)`` to the nearest primitive at distance > 0."""
     out = np.empty(P.shape[0])
+    k = tree.depth + 4
     for i in numba.prange(P.shape[0]):
-        # plain scan over all primitives: only used for <= 2000 samples by auto_alpha
-        best = np.inf
-        for j in range(tree.kind.size):
-            dx = tree.pts[j, 0] - P[i, 0]
-            dy = tree.pts[j, 1] - P[i, 1]
-            dz = tree.pts[j, 2] - P[i, 2]
-            d2 = dx * dx + dy * dy + dz * dz
-            if 0.0 < d2 < best:
-                best = d2
-        out[i] = math.sqrt(best)
+        stack = np.empty(k, dtype=np.int64)
+        dstack = np.empty(k)
+        out[i] = _q.exact_distance_point(tree, P[i, 0], P[i, 1], P[i, 2], stack, dstack, 0,
+                                         0.0)[0]
     return out

@@ -12,7 +12,7 @@ import warnings
 import numpy as np
 
 from smoothdist import weights as _weights
-from smoothdist._cast import as_indices, as_points
+from smoothdist._cast import COORD_LIMIT, as_indices, as_points
 
 KIND_POINT, KIND_EDGE, KIND_TRIANGLE = 0, 1, 2
 _KIND_NAMES = {"points": KIND_POINT, "edges": KIND_EDGE, "triangles": KIND_TRIANGLE}
@@ -51,7 +51,10 @@ class DataMesh:
     def __init__(self, V, F=None, *, points=None, edges=None, triangles=None, repair=True,
                  name=None, _quiet_duplicates=False):
         self.name = name or "mesh"
-        V = as_points(V, "V")
+        try:
+            V = as_points(V, "V")
+        except ValueError as exc:
+            raise ValueError(f"{self.name}: {exc}") from None
         if V.shape[0] == 0:
             raise ValueError(f"{self.name}: the mesh has no vertices")
         n = V.shape[0]
@@ -63,15 +66,19 @@ class DataMesh:
                 if Fa.ndim == 1 and Fa.size == 0:
                     Fa = Fa.reshape(0, 3)
                 if Fa.ndim != 2 or Fa.shape[1] not in (1, 2, 3):
-                    raise ValueError(f"F must have shape (m, 1), (m, 2) or (m, 3), got {Fa.shape}")
+                    raise ValueError(f"{self.name}: F must have shape (m, 1), (m, 2) or (m, 3), "
+                                     f"got {Fa.shape}")
                 k = Fa.shape[1]
                 if Fa.shape[0] == 0:
                     raise ValueError(f"{self.name}: F has no rows (an empty mesh)")
                 points, edges, triangles = [(Fa, None, None), (None, Fa, None),
                                             (None, None, Fa)][k - 1]
-        P = as_indices(points if points is not None else [], n, 1, "points").ravel()
-        E = as_indices(edges if edges is not None else [], n, 2, "edges")
-        T = as_indices(triangles if triangles is not None else [], n, 3, "triangles")
+        try:
+            P = as_indices(points if points is not None else [], n, 1, "points").ravel()
+            E = as_indices(edges if edges is not None else [], n, 2, "edges")
+            T = as_indices(triangles if triangles is not None else [], n, 3, "triangles")
+        except ValueError as exc:
+            raise ValueError(f"{self.name}: {exc}") from None
         if P.size + E.shape[0] + T.shape[0] == 0:
             raise ValueError(f"{self.name}: the mesh has no primitives")
         V, P, E, T = _repair(V, P, E, T, repair, self.name, _quiet_duplicates)
@@ -233,10 +240,14 @@ def _compute_weights(n, E, T):
 def _repair(V, P, E, T, repair, name, quiet_duplicates):
     """Merge duplicate vertices, drop degenerate and duplicate primitives (see DataMesh)."""
     notes = []
-    # merge exactly duplicated vertices
-    Vu, inv = np.unique(V, axis=0, return_inverse=True)
-    inv = inv.ravel()
-    if Vu.shape[0] < V.shape[0]:
+    # merge exactly duplicated vertices (a lexsort finds out cheaply whether there are any)
+    order = np.lexsort((V[:, 2], V[:, 1], V[:, 0]))
+    Vs = V[order]
+    has_dups = V.shape[0] > 1 and bool(np.any(np.all(Vs[1:] == Vs[:-1], axis=1)))
+    if has_dups:
+        Vu, inv = np.unique(V, axis=0, return_inverse=True)
+        inv = inv.ravel()
+    if has_dups and Vu.shape[0] < V.shape[0]:
         if not repair:
             raise ValueError(f"{name}: has {V.shape[0] - Vu.shape[0]} duplicated vertices")
         if not quiet_duplicates:
@@ -298,31 +309,51 @@ def read_mesh_file(path):
         raise ValueError(f"mesh file not found: {path}")
     if os.path.isdir(path):
         raise ValueError(f"mesh path is a folder, not a file: {path}")
+    if not os.path.isfile(path):
+        raise ValueError(f"mesh path is not a regular file: {path}")
     ext = os.path.splitext(path)[1].lower()
     if ext not in (".obj", ".off", ".stl", ".ply"):
         raise ValueError(f"unsupported mesh format {ext or '(none)'!r} for {path}: "
                          "use .obj, .off, .stl or .ply")
     try:
         if os.path.getsize(path) == 0:
-            raise ValueError(f"mesh file is empty: {path}")
+            raise _MeshFileError(f"mesh file is empty: {path}")
         if ext == ".obj":
             V, E, T = _read_obj(path)
         else:
             V, E, T = _read_with_trimesh(path, ext)
-    except ValueError:
-        raise
+    except _MeshFileError as exc:
+        raise ValueError(str(exc)) from None
     except PermissionError:
         raise ValueError(f"mesh file is not readable (permission denied): {path}") from None
-    except Exception as exc:  # trimesh raises many kinds of errors on garbage
-        raise ValueError(f"could not read mesh file {path}: {type(exc).__name__}: {exc}") from None
+    except (MemoryError, RecursionError):
+        raise ValueError(f"could not read mesh file {path}: it is too large or malformed") from None
+    except Exception as exc:  # trimesh raises many kinds of errors (ValueError too) on garbage
+        msg = str(exc).strip().splitlines()[0] if str(exc).strip() else "malformed file"
+        raise ValueError(f"could not read mesh file {path}: {type(exc).__name__}: {msg}") from None
     if V.shape[0] == 0:
         raise ValueError(f"mesh file has no vertices: {path}")
     if not np.all(np.isfinite(V)):
         raise ValueError(f"mesh file has NaN or infinite vertex coordinates: {path}")
+    if np.abs(V).max() > COORD_LIMIT:
+        raise ValueError(f"mesh file has coordinates beyond +-{COORD_LIMIT:.0e}: {path} "
+                         "(rescale or recentre the data)")
     return V, E, T, ext == ".stl"
 
 
+class _MeshFileError(Exception):
+    """A malformed mesh file detected by our own readers (message ready for the user)."""
+
+
+#: bytes sniffed at the start of an OBJ file to tell text from binary data
+_SNIFF = 4096
+
+
 def _read_obj(path):
+    with open(path, "rb") as fh:
+        head = fh.read(_SNIFF)
+    if b"\0" in head:
+        raise _MeshFileError(f"{path}: not a text OBJ file (it holds binary data)")
     verts, edges, tris = [], [], []
     with open(path, "r", encoding="utf-8", errors="replace") as fh:
         for lineno, line in enumerate(fh, 1):
@@ -335,6 +366,8 @@ def _read_obj(path):
                     verts.append((float(parts[1]), float(parts[2]), float(parts[3])))
                 elif tag in ("f", "l"):
                     idx = [int(p.split("/")[0]) for p in parts[1:]]
+                    if 0 in idx:
+                        raise ValueError("OBJ vertex indices start at 1, not 0")
                     nv = len(verts)
                     idx = [i - 1 if i > 0 else nv + i for i in idx]
                     if tag == "l":
@@ -346,20 +379,31 @@ def _read_obj(path):
                             raise ValueError("a face needs at least 3 vertices")
                         tris.extend((idx[0], idx[j], idx[j + 1]) for j in range(1, len(idx) - 1))
             except (ValueError, IndexError) as exc:
-                raise ValueError(f"{path}:{lineno}: malformed OBJ record {line.strip()[:60]!r}"
-                                 f" ({exc})") from None
+                raise _MeshFileError(f"{path}:{lineno}: malformed OBJ record "
+                                     f"{line.strip()[:60]!r} ({exc})") from None
     V = np.array(verts, dtype=np.float64).reshape(-1, 3)
     return V, np.array(edges, dtype=np.int64).reshape(-1, 2), np.array(tris, dtype=np.int64).reshape(-1, 3)
 
 
 def _read_with_trimesh(path, ext):
+    import logging
+
     import trimesh
 
-    loaded = trimesh.load(path, process=False, force=None)
+    # trimesh logs its own complaints about malformed files; we report them as one error
+    log = logging.getLogger("trimesh")
+    level = log.level
+    log.setLevel(logging.CRITICAL)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            loaded = trimesh.load(path, process=False, force=None)
+    finally:
+        log.setLevel(level)
     if isinstance(loaded, trimesh.Scene):
         geoms = list(loaded.geometry.values())
         if not geoms:
-            raise ValueError(f"mesh file holds no geometry: {path}")
+            raise _MeshFileError(f"mesh file holds no geometry: {path}")
         loaded = trimesh.util.concatenate(geoms) if len(geoms) > 1 else geoms[0]
     V = np.asarray(getattr(loaded, "vertices", np.zeros((0, 3))), dtype=np.float64).reshape(-1, 3)
     faces = getattr(loaded, "faces", None)

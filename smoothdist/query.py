@@ -234,13 +234,14 @@ def smooth_distance_point(tree, px, py, pz, alpha, beta, S, wgs, stack, dstack, 
 
 
 @numba.njit(**NJIT)
-def exact_distance_point(tree, px, py, pz, stack, dstack, root=0):
+def exact_distance_point(tree, px, py, pz, stack, dstack, root=0, floor=-1.0):
     """Exact unsigned distance at one point by nearest-first branch and bound.
 
     Returns ``(d, gx, gy, gz, prim, nodes_visited, leaves_visited)``: the distance, the unit
     gradient ``(p - c) / d`` (zero on the geometry), and the closest primitive's index in the
     mesh numbering (points, then edges, then triangles). ``root`` as in
-    :func:`smooth_distance_point`.
+    :func:`smooth_distance_point`. Primitives at squared distance ``<= floor`` are ignored
+    (``floor = 0`` finds the nearest *other* point of a point cloud queried at its own points).
     """
     best = np.inf
     bi = -1
@@ -279,7 +280,7 @@ def exact_distance_point(tree, px, py, pz, stack, dstack, root=0):
                                                                  P[8])
                 d2 = (px - cx) ** 2 + (py - cy) ** 2 + (pz - cz) ** 2
                 leaves += 1
-                if d2 < best:
+                if floor < d2 < best:
                     best = d2
                     bi = i
                     bx = cx

@@ -238,10 +238,8 @@ def test_exact_tiny_cloud_is_union_of_offset_spheres():
     assert np.all(np.abs(res.depth[h] - t_ana[h]) <= 1e-4)
 
 
-@pytest.mark.xfail(strict=True, reason="BUG: a single-point scene gets eps = 1e-4 * max(diag, "
-                   "1e-12) = 1e-16 (its bbox diagonal is 0): below the rounding of d - offset, "
-                   "so grazing rays exhaust max_steps and miss (tracer/scene.py default eps)")
 def test_exact_single_point_default_eps():
+    # regression: a zero-size bbox once gave eps = 1e-16, below the rounding of d - offset
     centre, r = np.array([0.2, -0.1, 0.3]), 0.5
     field = SmoothDistanceField(centre[None, :])
     scene = scene_from_field(field, alpha=1.0 / r, mode="exact", offset=r, width=32, height=32,

@@ -6,7 +6,11 @@ import sys
 
 import numpy as np
 
-from tracer.cli import check_outputs
+from tracer.cli import check_outputs, make_parents
+
+#: aim for kernel calls of about this many pixels, so that Ctrl-C / SIGTERM (handled between
+#: calls) stops a render within a second or two even for slow scenes
+BAND_PIXELS = 16384
 
 
 def add_arguments(p):
@@ -39,6 +43,23 @@ def add_arguments(p):
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
 
 
+def band_rows(width, height):
+    """Rows per kernel call: a multiple of the tile size with about :data:`BAND_PIXELS` pixels
+    but at least four tiles per thread (so that threads stay busy), at most the whole image.
+
+    The banding does not change the image: every pixel is traced the same way in any band.
+    """
+    import numba
+
+    from tracer.march import TILE
+
+    threads = numba.get_num_threads()
+    tiles_per_row = max(1, -(-width // TILE))
+    rows = max(BAND_PIXELS // max(width, 1), TILE * -(-4 * threads // tiles_per_row))
+    rows = TILE * max(1, -(-rows // TILE))
+    return min(rows, TILE * max(1, -(-height // TILE)))
+
+
 def run(args):
     """Render; returns the exit status."""
     from tracer.image import false_color, save_npy, save_png
@@ -60,10 +81,11 @@ def run(args):
         if path is not None and not path.lower().endswith(ext):
             raise ValueError(f"{opt} must name a {ext} file, got {path}")
     outputs = [out, args.depth, args.normals, args.steps_png, args.leaves_png, args.stats]
-    check_outputs(outputs, args.overwrite)
+    check_outputs(outputs, args.overwrite, create=False)
     scene = load_scene(args.scene, overrides)
     bar = None if args.quiet else ProgressBar(f"render {name}")
-    result = render(scene, progress=bar)
+    result = render(scene, progress=bar, band_rows=band_rows(scene.width, scene.height))
+    make_parents(outputs)
     written = [save_png(out, result.rgb, overwrite=args.overwrite)]
     if args.depth:
         written.append(save_npy(args.depth, result.depth, overwrite=args.overwrite))

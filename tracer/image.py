@@ -46,9 +46,37 @@ def _create_temp(path):
             fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
         except FileExistsError:
             continue
-        os.close(fd)
+        except PermissionError:
+            raise PermissionError(13, f"cannot write {path}: folder {folder} is not writable") \
+                from None
+        try:
+            os.close(fd)
+        except BaseException:  # e.g. Ctrl-C right here: do not leave the empty file behind
+            _unlink_quietly(tmp)
+            raise
         return tmp
     raise FileExistsError(f"cannot create a temporary file next to {path}")
+
+
+def _unlink_quietly(p):
+    try:
+        os.unlink(p)
+    except FileNotFoundError:
+        pass
+
+
+def _fsync(p):
+    """Flush a written file to disk before it is renamed into place (best effort)."""
+    try:
+        fd = os.open(p, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
 
 
 @contextmanager
@@ -89,6 +117,7 @@ def atomic_write(path, *, overwrite=True):
     tmp = _create_temp(path)
     try:
         yield tmp
+        _fsync(tmp)
         if overwrite:
             os.replace(tmp, path)
         else:

@@ -17,10 +17,18 @@ an object may list ``parts``: ``[{"path": ..., "bvh_type": ..., "scale": s,
 ``"auto"``. Several objects are combined by LogSumExp with the largest alpha (paper Sec. 3.6).
 
 Relative paths resolve against the scene file's folder.
+
+Validation: :func:`load_scene` checks every key, value, camera and referenced file before it
+reads any mesh, and raises :class:`SceneError` (a ``ValueError``) with a one-line message
+``<scene file>: <key> <problem>``. Limits: images up to 64 megapixels, ``max_steps`` up to
+1e6, scene files up to 16 MiB, coordinates up to 1e50 in absolute value. When the data has
+no extent (a single point) the default ``eps`` is ``1e-4 x`` the surface's size
+(``max(1/alpha, offset)``) instead of the bbox diagonal.
 """
 
 import json
 import math
+import numbers
 import os
 from dataclasses import dataclass, field as dc_field
 
@@ -101,49 +109,78 @@ class Scene:
 
 
 # ---------------------------------------------------------------------- validation helpers
+#: largest scene file we agree to parse (a scene is a few hundred bytes of JSON)
+MAX_SCENE_BYTES = 16 * 1024 * 1024
+#: largest image, in pixels (about 150 bytes of buffers per pixel)
+MAX_PIXELS = 64_000_000
+#: largest number of distance evaluations per ray (bounds the time of any render)
+MAX_STEPS = 1_000_000
+
+
 def _err(path, where, msg):
     return SceneError(f"{os.path.basename(path)}: {where} {msg}")
 
 
+def _show(value, limit=60):
+    """A short JSON rendering of a (possibly huge) value for messages."""
+    try:
+        text = json.dumps(value)
+    except (TypeError, ValueError, RecursionError):
+        text = repr(value)
+    return text if len(text) <= limit else text[:limit - 3] + "..."
+
+
 def _number(value, path, where, *, positive=False, non_negative=False, integer=False):
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise _err(path, where, f"must be a number, got {json.dumps(value)}")
-    if not math.isfinite(value):
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+        raise _err(path, where, f"must be a number, got {_show(value)}")
+    try:
+        fvalue = float(value)
+    except OverflowError:
+        raise _err(path, where, f"is too large, got {_show(value)}") from None
+    if not math.isfinite(fvalue):
         raise _err(path, where, f"must be finite, got {value}")
-    if integer and (not float(value).is_integer()):
+    if integer and (not fvalue.is_integer()):
         raise _err(path, where, f"must be an integer, got {value}")
-    if positive and value <= 0:
+    if positive and fvalue <= 0:
         raise _err(path, where, f"must be > 0, got {value}")
-    if non_negative and value < 0:
+    if non_negative and fvalue < 0:
         raise _err(path, where, f"must be >= 0, got {value}")
-    return int(value) if integer else float(value)
+    return int(fvalue) if integer else fvalue
 
 
 def _vec3(value, path, where):
     if not isinstance(value, list) or len(value) != 3:
-        raise _err(path, where, f"must be a list of 3 numbers, got {json.dumps(value)}")
+        raise _err(path, where, f"must be a list of 3 numbers, got {_show(value)}")
     return np.array([_number(v, path, f"{where}[{i}]") for i, v in enumerate(value)])
 
 
 def _choice(value, choices, path, where):
     if not isinstance(value, str) or value not in choices:
-        raise _err(path, where, f"must be one of {', '.join(choices)}; got {json.dumps(value)}")
+        raise _err(path, where, f"must be one of {', '.join(choices)}; got {_show(value)}")
     return value
 
 
 def _keys(d, allowed, path, where):
     if not isinstance(d, dict):
-        raise _err(path, where, f"must be a JSON object, got {type(d).__name__}")
+        raise _err(path, where, f"must be a JSON object, got {_json_type(d)}")
     unknown = sorted(set(d) - allowed)
     if unknown:
         raise _err(path, where, f"has unknown key(s) {', '.join(map(repr, unknown))} "
                                 f"(allowed: {', '.join(sorted(allowed))})")
 
 
+def _json_type(value):
+    names = {dict: "object", list: "list", str: "string", bool: "boolean", int: "number",
+             float: "number", type(None): "null"}
+    return names.get(type(value), type(value).__name__)
+
+
 def _resolve(base, p, path, where):
     if not isinstance(p, str) or not p:
-        raise _err(path, where, f"must be a non-empty file path, got {json.dumps(p)}")
+        raise _err(path, where, f"must be a non-empty file path, got {_show(p)}")
     full = os.path.normpath(os.path.join(base, os.path.expanduser(p)))
+    if os.path.isdir(full):
+        raise _err(path, where, f"is a folder, not a file: {p} (looked for {full})")
     if not os.path.isfile(full):
         raise _err(path, where, f"file not found: {p} (looked for {full})")
     return full
@@ -153,25 +190,48 @@ def _resolve(base, p, path, where):
 def read_scene_json(path):
     """Parse a scene file into a dict, with one-line errors for unreadable or malformed JSON."""
     path = os.fspath(path)
+    name = os.path.basename(path)
     if not os.path.exists(path):
         raise SceneError(f"scene file not found: {path}")
     if os.path.isdir(path):
         raise SceneError(f"scene path is a folder, not a file: {path}")
+    if not os.path.isfile(path):
+        raise SceneError(f"scene path is not a regular file: {path}")
     try:
-        with open(path, "r", encoding="utf-8") as fh:
-            data = json.load(fh)
+        size = os.path.getsize(path)
+        if size == 0:
+            raise SceneError(f"scene file is empty: {path}")
+        if size > MAX_SCENE_BYTES:
+            raise SceneError(f"{name}: is {size} bytes, too large for a scene file "
+                             f"(limit {MAX_SCENE_BYTES})")
+        with open(path, "rb") as fh:
+            raw = fh.read()
+        if b"\0" in raw:
+            raise SceneError(f"{name}: not a text JSON file (it holds binary data)")
+        text = raw.decode("utf-8-sig")
+        if not text.strip():
+            raise SceneError(f"scene file is empty (only white space): {path}")
+        data = json.loads(text)
     except PermissionError:
         raise SceneError(f"scene file is not readable (permission denied): {path}") from None
     except UnicodeDecodeError:
-        raise SceneError(f"{os.path.basename(path)}: not a text (UTF-8) JSON file") from None
+        raise SceneError(f"{name}: not a text (UTF-8) JSON file") from None
     except json.JSONDecodeError as exc:
-        raise SceneError(f"{os.path.basename(path)}: malformed JSON at line {exc.lineno} "
+        raise SceneError(f"{name}: malformed JSON at line {exc.lineno} "
                          f"column {exc.colno}: {exc.msg}") from None
+    except RecursionError:
+        raise SceneError(f"{name}: malformed JSON: nested too deeply") from None
+    except OSError as exc:
+        raise SceneError(f"scene file could not be read: {path}: "
+                         f"{exc.strerror or type(exc).__name__}") from None
     return data
 
 
 def load_scene(path, overrides=None):
     """Read, validate and build a scene.
+
+    Every key is validated (and every referenced file checked to exist) before any mesh is
+    read or any BVH built, so a bad scene fails fast.
 
     Parameters
     ----------
@@ -202,118 +262,186 @@ def load_scene(path, overrides=None):
     dest = _vec3(cam["dest"], path, "camera.dest")
     up = _vec3(cam["up"], path, "camera.up")
 
-    def top(key, default, **kw):
+    def top(key, default, flag=None, **kw):
         if key in overrides and overrides[key] is not None:
-            value, where = overrides[key], f"--{key}"
+            value, where = overrides[key], flag or f"--{key}"
         elif key in data:
             value, where = data[key], key
         else:
             return default
         return _number(value, path, where, **kw)
 
-    width = top("width", 512, positive=True, integer=True)
-    height = top("height", 512, positive=True, integer=True)
-    if width * height > 64_000_000:
-        raise _err(path, "width x height", f"is {width}x{height}: larger than 64 megapixels")
+    width = top("width", 512, "--size width", positive=True, integer=True)
+    height = top("height", 512, "--size height", positive=True, integer=True)
+    if width * height > MAX_PIXELS:
+        raise _err(path, "width x height", f"is {width}x{height}: larger than "
+                                           f"{MAX_PIXELS // 1_000_000} megapixels")
     beta = top("beta", 0.5, non_negative=True)
     eps = top("eps", None, positive=True)
     max_steps = top("max_steps", 1000, positive=True, integer=True)
+    if max_steps > MAX_STEPS:
+        raise _err(path, "max_steps", f"must be at most {MAX_STEPS}, got {max_steps}")
     mode = _choice(overrides.get("mode") or data.get("mode", "smooth"), MODES, path, "mode")
     gradient = _choice(data.get("gradient", "metric"), ("metric", "exact"), path, "gradient")
     bg = data.get("background", [255, 255, 255])
     if (not isinstance(bg, list) or len(bg) != 3
             or not all(isinstance(v, int) and not isinstance(v, bool) and 0 <= v <= 255 for v in bg)):
-        raise _err(path, "background", f"must be [r, g, b] integers 0-255, got {json.dumps(bg)}")
+        raise _err(path, "background", f"must be [r, g, b] integers 0-255, got {_show(bg)}")
+    for key in ("description", "name"):
+        if key in data and not isinstance(data[key], str):
+            raise _err(path, key, f"must be a string, got {_show(data[key])}")
+    # the camera, before any mesh is loaded
+    from tracer.camera import look_at
+
+    try:
+        look_at(origin, dest, up, width, height)
+    except ValueError as exc:
+        raise SceneError(f"{os.path.basename(path)}: {exc}") from None
     objs = data.get("objects")
     if objs is None:
         raise _err(path, "the top level", "is missing the required key 'objects'")
     if not isinstance(objs, list) or not objs:
-        raise _err(path, "objects", "must be a non-empty list of objects")
-    objects = []
-    for i, od in enumerate(objs):
-        where = f"objects[{i}]"
-        _keys(od, _OBJECT_KEYS, path, where)
-        mesh = _object_mesh(od, base, path, where)
-        fld = SmoothDistanceField(mesh)
-        if i == 0 and overrides.get("alpha") is not None:
-            alpha = _number(overrides["alpha"], path, "--alpha", positive=True)
-        elif "alpha" not in od:
-            raise _err(path, where, "is missing the required key 'alpha'")
-        elif od["alpha"] == "auto":
-            alpha = fld.auto_alpha()
-        else:
-            alpha = _number(od["alpha"], path, f"{where}.alpha", positive=True)
-        alpha_u = (_number(od["max_alpha"], path, f"{where}.max_alpha", positive=True)
-                   if "max_alpha" in od else alpha)
-        obeta = (_number(od["beta"], path, f"{where}.beta", non_negative=True)
-                 if "beta" in od and overrides.get("beta") is None else beta)
-        if overrides.get("offset") is not None:
-            offset = _number(overrides["offset"], path, "--offset", non_negative=True)
-        elif "offset" in od:
-            offset = _number(od["offset"], path, f"{where}.offset", non_negative=True)
-        elif "offset" in data:
-            offset = _number(data["offset"], path, "offset", non_negative=True)
-        else:
-            offset = 1.0 / alpha
-        matcap = od.get("matcap", "")
-        if not isinstance(matcap, str):
-            raise _err(path, f"{where}.matcap", f"must be a file path or \"\", got {json.dumps(matcap)}")
-        matcap = _resolve(base, matcap, path, f"{where}.matcap") if matcap else ""
-        name = od.get("name", os.path.basename(od.get("path", f"object{i}")))
-        objects.append(SceneObject(name=str(name), field=fld, alpha=alpha, alpha_u=alpha_u,
-                                   beta=obeta, offset=offset, matcap=matcap))
+        raise _err(path, "objects", f"must be a non-empty list of objects, got {_show(objs)}")
+    specs = [_object_spec(od, i, base, path, data, overrides, beta) for i, od in enumerate(objs)]
     matcap = data.get("matcap", "")
     if not isinstance(matcap, str):
-        raise _err(path, "matcap", f"must be a file path or \"\", got {json.dumps(matcap)}")
+        raise _err(path, "matcap", f"must be a file path or \"\", got {_show(matcap)}")
     matcap = _resolve(base, matcap, path, "matcap") if matcap else ""
     if not matcap:
-        matcap = next((o.matcap for o in objects if o.matcap), "")
+        matcap = next((sp["matcap"] for sp in specs if sp["matcap"]), "")
     default_shading = "matcap" if matcap else "normals"
     shading = _choice(overrides.get("shading") or data.get("shading", default_shading), SHADINGS,
                       path, "shading")
     if shading == "matcap" and not matcap:
         raise _err(path, "shading", "is 'matcap' but no matcap file is given (key 'matcap')")
+    # everything checked: now read the meshes and build the fields
+    objects = [_build_object(sp, path, gradient) for sp in specs]
     desc = data.get("description", "")
     scene = Scene(path=path, camera_origin=origin, camera_dest=dest, camera_up=up,
                   objects=objects, width=width, height=height, beta=beta, eps=eps, mode=mode,
                   shading=shading, matcap=matcap, background=tuple(bg), max_steps=max_steps,
                   gradient=gradient, description=str(desc))
     if scene.eps is None:
-        scene.eps = 1e-4 * max(scene.diagonal, 1e-12)
+        scene.eps = default_eps(scene)
     return scene
 
 
-def _object_mesh(od, base, path, where):
+def default_eps(scene):
+    """``1e-4 x`` the data's bounding-box diagonal (or the largest blur / offset for data of
+    zero extent, such as a single point)."""
+    ref = scene.diagonal
+    if not ref > 0:
+        ref = max(max(1.0 / o.alpha, o.offset) for o in scene.objects)
+    return 1e-4 * max(ref, 1e-12)
+
+
+def _object_spec(od, i, base, path, data, overrides, beta):
+    """Validate one object's keys and files (no mesh is read); return a dict for
+    :func:`_build_object`."""
+    where = f"objects[{i}]"
+    _keys(od, _OBJECT_KEYS, path, where)
     if "path" in od and "parts" in od:
         raise _err(path, where, "has both 'path' and 'parts'; give one")
     if "parts" in od:
         parts = od["parts"]
         if not isinstance(parts, list) or not parts:
-            raise _err(path, f"{where}.parts", "must be a non-empty list")
-        meshes = []
+            raise _err(path, f"{where}.parts", f"must be a non-empty list, got {_show(parts)}")
+        specs = []
         for j, pd in enumerate(parts):
             pw = f"{where}.parts[{j}]"
             _keys(pd, _PART_KEYS, path, pw)
-            meshes.append(_part_mesh(pd, base, path, pw))
-        return merge_meshes(meshes, name=od.get("name", "mixed"))
-    if "path" not in od:
+            specs.append(_part_spec(pd, base, path, pw))
+        merged = True
+    elif "path" not in od:
         raise _err(path, where, "is missing the required key 'path' (or 'parts')")
-    return _part_mesh(od, base, path, where)
+    else:
+        specs = [_part_spec(od, base, path, where)]
+        merged = False
+    if i == 0 and overrides.get("alpha") is not None:
+        alpha, alpha_where = _number(overrides["alpha"], path, "--alpha", positive=True), "--alpha"
+    elif "alpha" not in od:
+        raise _err(path, where, "is missing the required key 'alpha'")
+    elif od["alpha"] == "auto":
+        alpha, alpha_where = "auto", f"{where}.alpha"
+    else:
+        if isinstance(od["alpha"], str):
+            raise _err(path, f"{where}.alpha", f"must be a number or \"auto\", got "
+                                               f"{_show(od['alpha'])}")
+        alpha = _number(od["alpha"], path, f"{where}.alpha", positive=True)
+        alpha_where = f"{where}.alpha"
+    alpha_u = (_number(od["max_alpha"], path, f"{where}.max_alpha", positive=True)
+               if "max_alpha" in od else None)
+    obeta = (_number(od["beta"], path, f"{where}.beta", non_negative=True)
+             if "beta" in od and overrides.get("beta") is None else beta)
+    if overrides.get("offset") is not None:
+        offset = _number(overrides["offset"], path, "--offset", non_negative=True)
+    elif "offset" in od:
+        offset = _number(od["offset"], path, f"{where}.offset", non_negative=True)
+    elif "offset" in data:
+        offset = _number(data["offset"], path, "offset", non_negative=True)
+    else:
+        offset = None
+    matcap = od.get("matcap", "")
+    if not isinstance(matcap, str):
+        raise _err(path, f"{where}.matcap", f"must be a file path or \"\", got {_show(matcap)}")
+    matcap = _resolve(base, matcap, path, f"{where}.matcap") if matcap else ""
+    name = od.get("name", os.path.basename(od.get("path", f"object{i}")))
+    if not isinstance(name, str):
+        raise _err(path, f"{where}.name", f"must be a string, got {_show(name)}")
+    return dict(where=where, parts=specs, merged=merged, merged_name=od.get("name", "mixed"),
+                alpha=alpha, alpha_where=alpha_where, alpha_u=alpha_u, beta=obeta,
+                offset=offset, matcap=matcap, name=name)
 
 
-def _part_mesh(pd, base, path, where):
+def _part_spec(pd, base, path, where):
     full = _resolve(base, pd.get("path"), path, f"{where}.path")
     kind = BVH_TYPES[_choice(pd.get("bvh_type", "mixed"), tuple(BVH_TYPES), path,
                              f"{where}.bvh_type")]
+    scale = _number(pd["scale"], path, f"{where}.scale", positive=True) if "scale" in pd else 1.0
+    shift = _vec3(pd["translate"], path, f"{where}.translate") if "translate" in pd else np.zeros(3)
+    return dict(where=where, full=full, kind=kind, scale=scale, shift=shift)
+
+
+def _build_object(spec, path, gradient):
+    """Read an object's meshes, build its field and check its parameters against the data."""
+    meshes = [_part_mesh(ps, path) for ps in spec["parts"]]
+    if spec["merged"]:
+        try:
+            mesh = merge_meshes(meshes, name=spec["merged_name"])
+        except ValueError as exc:
+            raise _err(path, f"{spec['where']}.parts", f"cannot be merged: {exc}") from None
+    else:
+        mesh = meshes[0]
+    fld = SmoothDistanceField(mesh)
+    alpha = fld.auto_alpha() if spec["alpha"] == "auto" else spec["alpha"]
+    alpha_u = spec["alpha_u"] if spec["alpha_u"] is not None else alpha
+    offset = spec["offset"] if spec["offset"] is not None else 1.0 / alpha
+    try:
+        fld.check_alpha(alpha)
+    except ValueError as exc:
+        raise _err(path, spec["alpha_where"], f"is unusable: {exc}") from None
+    fld.kernel_args(alpha, spec["beta"], alpha_u, gradient)
+    return SceneObject(name=str(spec["name"]), field=fld, alpha=float(alpha),
+                       alpha_u=float(alpha_u), beta=spec["beta"], offset=float(offset),
+                       matcap=spec["matcap"])
+
+
+def _part_mesh(ps, path):
+    full, kind, where = ps["full"], ps["kind"], ps["where"]
     try:
         mesh = smoothdist.load_mesh(full, kind=None if kind == "mixed" else kind)
     except ValueError as exc:
-        raise _err(path, f"{where}.path", f"({os.path.basename(full)}): {exc}") from None
-    scale = _number(pd["scale"], path, f"{where}.scale", positive=True) if "scale" in pd else 1.0
-    shift = _vec3(pd["translate"], path, f"{where}.translate") if "translate" in pd else np.zeros(3)
+        msg = str(exc)
+        name = os.path.basename(full)
+        msg = msg[len(name) + 2:] if msg.startswith(f"{name}: ") else msg
+        raise _err(path, f"{where}.path", f"({name}): {msg}") from None
+    scale, shift = ps["scale"], ps["shift"]
     if scale != 1.0 or np.any(shift):
-        mesh = DataMesh(mesh.V * scale + shift, points=mesh.points, edges=mesh.edges,
-                        triangles=mesh.triangles, name=mesh.name)
+        try:
+            mesh = DataMesh(mesh.V * scale + shift, points=mesh.points, edges=mesh.edges,
+                            triangles=mesh.triangles, name=mesh.name)
+        except ValueError as exc:
+            raise _err(path, f"{where}.scale/translate", f"give unusable data: {exc}") from None
     return mesh
 
 
@@ -346,25 +474,55 @@ def scene_from_field(field, *, alpha, alpha_u=None, beta=0.5, camera=None, width
         Three 3-vectors; default: the paper's beta-study camera (bbox centre + 2 x the largest
         extent along +z, looking at the centre, up +y).
     """
-    lo, hi = field.bounds
-    if camera is None:
-        c = 0.5 * (lo + hi)
-        camera = (c + np.array([0.0, 0.0, 2.0 * float((hi - lo).max())]), c, np.array([0.0, 1, 0]))
-    origin, dest, up = (np.asarray(v, dtype=float) for v in camera)
     if mode not in MODES:
         raise ValueError(f"mode must be one of {MODES}, got {mode!r}")
     if shading not in SHADINGS:
         raise ValueError(f"shading must be one of {SHADINGS}, got {shading!r}")
-    alpha = float(alpha)
-    alpha_u = float(alpha_u) if alpha_u is not None else alpha
-    field.kernel_args(alpha, beta, alpha_u, gradient)  # validates alpha, beta, alpha_u
-    obj = SceneObject(name=name, field=field, alpha=alpha, alpha_u=alpha_u, beta=float(beta),
-                      offset=float(offset) if offset is not None else 1.0 / alpha,
+    alpha_u = alpha if alpha_u is None else alpha_u
+    alpha, beta, _, _ = field.kernel_args(alpha, beta, alpha_u, gradient)  # validates all three
+    alpha_u = float(alpha_u)
+    if offset is not None:
+        offset = _api_number(offset, "offset", non_negative=True)
+    if eps is not None:
+        eps = _api_number(eps, "eps", positive=True)
+    max_steps = int(_api_number(max_steps, "max_steps", positive=True, integer=True))
+    if max_steps > MAX_STEPS:
+        raise ValueError(f"max_steps must be at most {MAX_STEPS}, got {max_steps}")
+    width = int(_api_number(width, "width", positive=True, integer=True))
+    height = int(_api_number(height, "height", positive=True, integer=True))
+    if width * height > MAX_PIXELS:
+        raise ValueError(f"width x height is {width}x{height}: larger than "
+                         f"{MAX_PIXELS // 1_000_000} megapixels")
+    lo, hi = field.bounds
+    if camera is None:
+        c = 0.5 * (lo + hi)
+        # a single point (or identical points) has no extent: back off by the surface's size
+        ext = max(float((hi - lo).max()), field.inflation(alpha, alpha_u),
+                  offset if offset is not None else 1.0 / alpha)
+        camera = (c + np.array([0.0, 0.0, 2.0 * ext]), c, np.array([0.0, 1, 0]))
+    try:
+        origin, dest, up = (np.asarray(v, dtype=float) for v in camera)
+    except (TypeError, ValueError):
+        raise ValueError(f"camera must be (origin, dest, up), three 3-vectors; got {camera!r}") \
+            from None
+    from tracer.camera import look_at
+
+    look_at(origin, dest, up, width, height)  # validates the camera
+    obj = SceneObject(name=name, field=field, alpha=alpha, alpha_u=alpha_u, beta=beta,
+                      offset=offset if offset is not None else 1.0 / alpha,
                       matcap=matcap)
     scene = Scene(path=f"{name}.json", camera_origin=origin, camera_dest=dest, camera_up=up,
-                  objects=[obj], width=int(width), height=int(height), beta=float(beta),
-                  eps=eps, mode=mode, shading=shading, matcap=matcap, max_steps=int(max_steps),
+                  objects=[obj], width=width, height=height, beta=beta,
+                  eps=eps, mode=mode, shading=shading, matcap=matcap, max_steps=max_steps,
                   gradient=gradient)
     if scene.eps is None:
-        scene.eps = 1e-4 * max(scene.diagonal, 1e-12)
+        scene.eps = default_eps(scene)
     return scene
+
+
+def _api_number(value, name, **kw):
+    """:func:`_number` for keyword arguments: a ``ValueError`` naming the argument."""
+    try:
+        return _number(value, "", name, **kw)
+    except SceneError as exc:
+        raise ValueError(str(exc).lstrip(": ")) from None
