@@ -60,9 +60,11 @@ class SmoothDistanceField:
     Notes
     -----
     Distances are unsigned and in scene units. The smooth distance ``d_hat`` (Madan & Levin
-    2022, Eq. 3) always satisfies ``d - log(A**S * N) / alpha <= d_hat <= d`` with ``d`` the
-    exact distance, ``N`` the number of primitives and ``A`` :attr:`weight_bound`; Barnes-Hut
-    (``beta > 0``) only lowers it further.
+    2022, Eq. 3) with ``beta = 0`` satisfies ``d - log(A**S * N) / alpha <= d_hat <= d`` with
+    ``d`` the exact distance, ``N`` the number of primitives and ``A`` :attr:`weight_bound`.
+    Barnes-Hut (``beta > 0``) only lowers it: ``d_hat_beta <= d_hat_0``, and since a far-field
+    term sits at most a factor ``1 + beta`` closer than the primitives it replaces,
+    ``d / (1 + beta) - log(A**S * N) / alpha <= d_hat_beta``.
 
     Examples
     --------
