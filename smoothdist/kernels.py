@@ -13,9 +13,11 @@ Inside a kernel, allocate ``np.empty(tree.depth + 4, np.int64)`` and ``np.empty(
 import numpy as np
 
 from smoothdist.bvh import TreeData, concatenate_trees
-from smoothdist.query import exact_distance_point, smooth_distance_point, stack_size
+from smoothdist.query import (exact_distance_point, logsumexp_accumulate, smooth_distance_point,
+                              stack_size)
 
-__all__ = ["TreeData", "concatenate_trees", "exact_distance_point", "smooth_distance_point", "new_stack", "stack_size"]
+__all__ = ["TreeData", "concatenate_trees", "exact_distance_point", "logsumexp_accumulate",
+           "smooth_distance_point", "new_stack", "stack_size"]
 
 
 def new_stack(tree):

@@ -132,8 +132,15 @@ def primitive_term(tree, i, px, py, pz, S, wgs):
 
 
 @numba.njit(**NJIT)
-def _accumulate(m, s, gx, gy, gz, d, W, vx, vy, vz, alpha):
-    """Add ``W exp(-alpha d)`` (gradient numerator ``exp(-alpha d) v``) to sums shifted by ``m``."""
+def logsumexp_accumulate(m, s, gx, gy, gz, d, W, vx, vy, vz, alpha):
+    """Add one term to a streaming LogSumExp kept relative to a running shift ``m``.
+
+    The sums are ``s = sum W_i exp(-alpha (d_i - m))`` and ``g = sum exp(-alpha (d_i - m)) v_i``
+    with ``m`` the smallest ``d_i`` so far (``inf`` before the first term, with ``s = g = 0``).
+    Returns the updated ``(m, s, gx, gy, gz)``; the result is ``m - log(s) / alpha`` and
+    ``g / s``. Every exponent is <= 0, so nothing overflows and ``s >= W_min`` never underflows
+    to zero (design notes §1).
+    """
     if d < m:
         f = math.exp(-alpha * (m - d))
         s *= f
@@ -203,7 +210,7 @@ def smooth_distance_point(tree, px, py, pz, alpha, beta, S, wgs, stack, dstack, 
             wh = tree.whi[node]
             W = cnt * (wh if (S == 1.0 or wh == 1.0) else math.exp(S * math.log(wh)))
             f = W / bd
-            m, s, gx, gy, gz = _accumulate(m, s, gx, gy, gz, bd, W, f * (px - cx),
+            m, s, gx, gy, gz = logsumexp_accumulate(m, s, gx, gy, gz, bd, W, f * (px - cx),
                                            f * (py - cy), f * (pz - cz), alpha)
             leaves += 1
             continue
@@ -212,7 +219,8 @@ def smooth_distance_point(tree, px, py, pz, alpha, beta, S, wgs, stack, dstack, 
             st = tree.start[node]
             for i in range(st, st + cnt):
                 d, W, vx, vy, vz = primitive_term(tree, i, px, py, pz, S, wgs)
-                m, s, gx, gy, gz = _accumulate(m, s, gx, gy, gz, d, W, vx, vy, vz, alpha)
+                m, s, gx, gy, gz = logsumexp_accumulate(m, s, gx, gy, gz, d, W, vx, vy, vz,
+                                                        alpha)
             leaves += cnt
             continue
         r = tree.right[node]
@@ -324,7 +332,7 @@ def smooth_distance_brute_point(tree, px, py, pz, alpha, S, wgs):
     gz = 0.0
     for i in range(tree.kind.size):
         d, W, vx, vy, vz = primitive_term(tree, i, px, py, pz, S, wgs)
-        m, s, gx, gy, gz = _accumulate(m, s, gx, gy, gz, d, W, vx, vy, vz, alpha)
+        m, s, gx, gy, gz = logsumexp_accumulate(m, s, gx, gy, gz, d, W, vx, vy, vz, alpha)
     return m - math.log(s) / alpha, gx / s, gy / s, gz / s
 
 

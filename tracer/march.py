@@ -20,7 +20,7 @@ import numpy as np
 from numba import prange
 
 from smoothdist._config import NJIT, NJIT_PARALLEL
-from smoothdist.kernels import exact_distance_point, smooth_distance_point
+from smoothdist.kernels import exact_distance_point, logsumexp_accumulate, smooth_distance_point
 from tracer.camera import ray_direction
 
 MODE_SMOOTH, MODE_EXACT = 0, 1
@@ -80,18 +80,7 @@ def scene_distance(tree, roots, params, mode, x, y, z, stack, dstack):
                                                       stack, dstack, roots[k])
         nodes += nn
         leaves += ll
-        if d < m:
-            f = math.exp(-a * (m - d))
-            s *= f
-            sx *= f
-            sy *= f
-            sz *= f
-            m = d
-        e = math.exp(-a * (d - m))
-        s += e
-        sx += e * gx
-        sy += e * gy
-        sz += e * gz
+        m, s, sx, sy, sz = logsumexp_accumulate(m, s, sx, sy, sz, d, 1.0, gx, gy, gz, a)
     return m - math.log(s) / a, sx / s, sy / s, sz / s, nodes, leaves
 
 
