@@ -409,6 +409,7 @@ def add_arguments_ablate_beta(p):
     p.add_argument("--depth-cache", metavar="DIR",
                    help="where the beta = 0 depth buffers (depth_<type>_beta0.npy) and the "
                    "full-size renders are kept for --resume (default: the result folder)")
+    p.add_argument("--note", help="a line of text for report.md (e.g. the machine's load)")
     g = p.add_mutually_exclusive_group()
     g.add_argument("--overwrite", action="store_true",
                    help="start afresh, replacing the folder's earlier results")
@@ -456,12 +457,13 @@ def run_ablate_beta(args):
         mesh = _load(args.mesh, kind) if kind != "points" else mesh_all.as_kind("points")
         fields[kind] = _field(mesh)
     diag = float(np.linalg.norm(np.subtract(*mesh_all.bounds[::-1])))
-    params = {"mesh": os.path.abspath(args.mesh), "mesh_name": os.path.basename(args.mesh),
+    params = {"mesh": str(args.mesh), "mesh_name": os.path.basename(args.mesh),
               "alpha": alpha, "alpha_u": alpha_u, "width": size, "height": size,
               "eps": args.eps if args.eps is not None else 1e-4 * diag,
               "eps_rule": "given" if args.eps is not None else "1e-4 x bbox diagonal",
               "diag": diag, "camera": "bbox centre + 2 x largest extent along +z, looking at "
-              "the centre, up +y (authors' beta_error_test)", "depth_cache": str(cache)}
+              "the centre, up +y (authors' beta_error_test)", "depth_cache": str(cache),
+              "note": args.note or ""}
     rows = []
     if args.resume and csv_path.exists():
         rows = _read_csv(csv_path, ["type", "beta", "alpha", "alpha_u", "width"])
@@ -480,6 +482,8 @@ def run_ablate_beta(args):
             if prev.get("mesh_name") not in (None, params["mesh_name"]):
                 raise CLIError(f"{out} holds results for {prev.get('mesh_name')}, not "
                                f"{params['mesh_name']}; use another folder or --overwrite")
+            if not args.note and prev.get("note"):
+                params["note"] = prev["note"]
         rows = [_typed_beta_row(r) for r in rows]
     out.mkdir(parents=True, exist_ok=True)
     cache.mkdir(parents=True, exist_ok=True)
@@ -616,7 +620,7 @@ def _beta_outputs(out, cache, rows, params, types, grid_betas):
     measured = sorted({r["beta"] for r in rows})
     cols = [b for b in measured if any(_close(b, g) for g in grid_betas)] or measured[:4]
     fig, axes = plt.subplots(len(present), len(cols), squeeze=False,
-                             figsize=(1.9 * len(cols), 2.05 * len(present)))
+                             figsize=(1.9 * len(cols), 2.25 * len(present)))
     for i, k in enumerate(present):
         for j, b in enumerate(cols):
             ax = axes[i][j]
@@ -655,9 +659,10 @@ def _beta_report(rows, params, present):
              "- error: mean |t_β − t_0| over the pixels that both the β render and the β = 0 "
              "render hit, over the bbox diagonal (std: population standard deviation)",
              f"- machine: {m['platform']}, {m['cpu_count']} CPU(s), numba threads "
-             f"{m['numba_threads']}; load average when the report was written "
+             f"{m['numba_threads']}; load average when this report was (re)generated "
              f"{m['load_average']}. Times are wall-clock seconds of the tracing only and "
-             "depend on other load on the machine.", "",
+             "depend on other load on the machine.",
+             *([f"- note: {params['note']}"] if params.get("note") else []), "",
              "![time vs beta](beta_time.png)", "", "![error vs beta](beta_error.png)", "",
              "![renders](beta_grid.png)", "",
              f"## Measured vs reference ({PAPER_BETA_SETUP})", "",

@@ -1,0 +1,247 @@
+"""Tests for tracer.ablation: the paper's parameter studies as sub-commands (tiny sizes).
+
+Everything runs on the small meshes in ``tests/data`` or on meshes written to ``tmp_path``;
+renders are 32 x 32 or smaller, grids 8^3, a few dozen rays.
+"""
+
+import csv
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from smoothdist import DataMesh, SmoothDistanceField
+from tracer import ablation
+from tracer.cli import main
+
+TESTS = Path(__file__).resolve().parent
+OCTOPUS = TESTS / "data" / "octopus_low.obj"
+BETA_ARGS = ["--size", "32", "--betas", "0,0.5,1", "--alpha", "40", "--alpha-u", "300", "-q"]
+BETA_COLUMNS = ["type", "beta", "seconds", "hits", "mean_steps", "mean_leaves", "error_rel_diag",
+                "error_std_rel_diag", "n_both"]
+
+
+def _rows(path):
+    with open(path, newline="", encoding="utf-8") as fh:
+        return list(csv.DictReader(fh))
+
+
+@pytest.fixture(scope="module")
+def beta_run(tmp_path_factory):
+    out = tmp_path_factory.mktemp("beta") / "study"
+    assert main(["ablate-beta", str(OCTOPUS), "-o", str(out), *BETA_ARGS]) == 0
+    return out
+
+
+# ----------------------------------------------------------------------------- ablate-beta
+def test_beta_outputs_exist(beta_run):
+    for name in ("beta_ablation.csv", "beta_params.json", "beta_time.png", "beta_error.png",
+                 "beta_grid.png", "report.md", "depth_points_beta0.npy",
+                 "depth_edges_beta0.npy", "depth_triangles_beta0.npy"):
+        assert (beta_run / name).is_file(), name
+    assert not [p.name for p in beta_run.iterdir() if ".tmp-" in p.name]
+    report = (beta_run / "report.md").read_text(encoding="utf-8")
+    assert "beta_time.png" in report and "699" in report  # the reference numbers are there
+
+
+def test_beta_csv_columns_and_rows(beta_run):
+    rows = _rows(beta_run / "beta_ablation.csv")
+    assert set(BETA_COLUMNS) <= set(rows[0])
+    assert [(r["type"], float(r["beta"])) for r in rows] == [
+        (k, b) for k in ("points", "edges", "triangles") for b in (0.0, 0.5, 1.0)]
+    depth = np.load(beta_run / "depth_edges_beta0.npy")
+    assert depth.shape == (32, 32) and depth.dtype == np.float32
+
+
+@pytest.mark.parametrize("kind", ["points", "edges", "triangles"])
+def test_beta_error_and_leaves(beta_run, kind):
+    rows = [r for r in _rows(beta_run / "beta_ablation.csv") if r["type"] == kind]
+    err = [float(r["error_rel_diag"]) for r in rows]
+    leaves = [float(r["mean_leaves"]) for r in rows]
+    assert err[0] == 0.0 and int(rows[0]["n_both"]) == int(rows[0]["hits"]) > 0
+    assert err[-1] > err[1] >= 0.0           # grows with beta (up to noise in the middle)
+    assert leaves[0] > leaves[1] > leaves[2]  # Barnes-Hut visits fewer leaves as beta grows
+    assert all(int(r["n_both"]) > 0 for r in rows)
+
+
+def test_beta_existing_folder_needs_overwrite(beta_run, capsys):
+    assert main(["ablate-beta", str(OCTOPUS), "-o", str(beta_run), *BETA_ARGS]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error:") and "--overwrite" in err and len(err.strip().splitlines()) == 1
+
+
+def test_beta_resume_skips_rows(beta_run, tmp_path, monkeypatch):
+    import shutil
+
+    import tracer.render
+
+    out = tmp_path / "copy"
+    shutil.copytree(beta_run, out)
+    csv_path = out / "beta_ablation.csv"
+    rows = _rows(csv_path)
+    # drop the last row: resume must render exactly that one, reusing the cached beta = 0 depth
+    with open(csv_path, "w", newline="", encoding="utf-8") as fh:
+        w = csv.DictWriter(fh, fieldnames=list(rows[0]))
+        w.writeheader()
+        w.writerows(rows[:-1])
+    calls = []
+    real = tracer.render.render
+
+    def counting(scene, **kw):
+        if scene.width == 32:  # not the 8 x 8 warm-up render
+            calls.append(scene.beta)
+        return real(scene, **kw)
+
+    monkeypatch.setattr(tracer.render, "render", counting)
+    assert main(["ablate-beta", str(OCTOPUS), "-o", str(out), *BETA_ARGS, "--resume"]) == 0
+    assert calls == [1.0]
+    new = _rows(csv_path)
+    assert len(new) == len(rows)
+    for a, b in zip(rows[:-1], new[:-1]):
+        assert a["seconds"] == b["seconds"]
+    assert np.isclose(float(new[-1]["error_rel_diag"]), float(rows[-1]["error_rel_diag"]))
+    calls.clear()
+    assert main(["ablate-beta", str(OCTOPUS), "-o", str(out), *BETA_ARGS, "--resume"]) == 0
+    assert calls == []
+    # a resume with other parameters is refused
+    args = [a if a != "40" else "41" for a in BETA_ARGS]
+    assert main(["ablate-beta", str(OCTOPUS), "-o", str(out), *args, "--resume"]) == 2
+
+
+def test_beta_interrupt_keeps_completed_rows(tmp_path, monkeypatch):
+    import tracer.render
+
+    real = tracer.render.render
+    calls = []
+
+    def interrupting(scene, **kw):
+        if scene.width == 32:  # not the 8 x 8 warm-up render
+            calls.append(scene.beta)
+        if len(calls) == 3:
+            raise KeyboardInterrupt
+        return real(scene, **kw)
+
+    monkeypatch.setattr(tracer.render, "render", interrupting)
+    out = tmp_path / "cut"
+    assert main(["ablate-beta", str(OCTOPUS), "-o", str(out), *BETA_ARGS,
+                 "--types", "points"]) == 130
+    rows = _rows(out / "beta_ablation.csv")
+    assert [float(r["beta"]) for r in rows] == [0.0, 0.5]
+    assert not [p.name for p in out.iterdir() if ".tmp-" in p.name]
+
+
+def test_beta_bad_input(tmp_path, capsys):
+    assert main(["ablate-beta", str(tmp_path / "missing.obj"), "-o", str(tmp_path / "o")]) == 2
+    assert main(["ablate-beta", str(OCTOPUS), "-o", str(tmp_path / "o"), "--betas", "0,x"]) == 2
+    assert main(["ablate-beta", str(OCTOPUS), "-o", str(tmp_path / "o"), "--types", "quads"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 3 and all(e.startswith("error:") for e in err)
+
+
+# ----------------------------------------------------------------------------- ablate-alpha
+def test_unweighted_field_is_naive_logsumexp(cube):
+    field = SmoothDistanceField(cube)
+    unw = ablation.unweighted_field(field)
+    assert field.weight_bound > 1 and unw.weight_bound == 1.0
+    assert field.tree.wc[:, 0].max() != 1.0 or field.tree.wc[:, 1:].any()  # untouched original
+    Q = np.array([[0.9, 0.2, -0.1], [0.1, 0.7, 0.8], [0.0, 0.0, 1.3]])
+    alpha = 7.0
+    d, _ = unw.smooth_distance(Q, alpha=alpha, beta=0.0)
+    # naive Eq. 2 over exact distances to every triangle, all weights 1
+    V, T = cube.V, cube.triangles
+    per = np.stack([SmoothDistanceField(V[t], [[0, 1, 2]]).exact_distance(Q)[0] for t in T])
+    ref = -np.log(np.exp(-alpha * per).sum(axis=0)) / alpha
+    np.testing.assert_allclose(d, ref, rtol=1e-10, atol=1e-12)
+
+
+def test_ablate_alpha_all_studies(tmp_path):
+    out = tmp_path / "alpha"
+    assert main(["ablate-alpha", "all", "-o", str(out), "--mesh", str(OCTOPUS), "--size", "24",
+                 "-q"]) == 0
+    report = (out / "report.md").read_text(encoding="utf-8")
+    for s in ablation.STUDIES:
+        slug = s.replace("-", "_")
+        assert (out / f"{slug}.png").stat().st_size > 0
+        info = json.loads((out / f"{slug}.json").read_text(encoding="utf-8"))
+        assert info["study"] == s and info["size"] == 24
+        assert f"## {s}" in report and f"({slug}.png)" in report
+    nest = json.loads((out / "underestimate.json").read_text())["nesting"]
+    assert nest["violations_beta_0"] == 0  # higher alpha nests inside lower alpha, exactly
+    # a study's results are not replaced without --overwrite
+    assert main(["ablate-alpha", "metric", "-o", str(out), "--mesh", str(OCTOPUS), "-q"]) == 2
+
+
+def test_ablate_alpha_default_data(tmp_path):
+    out = tmp_path / "alpha"
+    assert main(["ablate-alpha", "metric", "-o", str(out), "--size", "16", "-q"]) == 0
+    info = json.loads((out / "metric.json").read_text())
+    assert info["data"].endswith("torus.obj") and len(info["renders"]) == 2
+
+
+# ----------------------------------------------------------------------------- bench-grid
+def _write_obj(path, V, F=None):
+    lines = [f"v {x:.9g} {y:.9g} {z:.9g}" for x, y, z in V]
+    lines += [f"f {' '.join(str(i + 1) for i in f)}" for f in (F if F is not None else [])]
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+
+
+def test_bench_grid_two_meshes(tmp_path, cube, icosphere):
+    src = tmp_path / "meshes"
+    src.mkdir()
+    _write_obj(src / "cube.obj", cube.V * 3.0 + 5.0, cube.triangles)
+    _write_obj(src / "ico.obj", icosphere.V, icosphere.triangles)
+    (src / "notes.txt").write_text("not a mesh")
+    out = tmp_path / "bench"
+    assert main(["bench-grid", str(src), "-o", str(out), "--grid", "8", "-q"]) == 0
+    rows = _rows(out / "bench_grid.csv")
+    assert list(rows[0]) == ablation.BENCH_FIELDS
+    assert [r["name"] for r in rows] == ["cube", "ico"]
+    cube_row = rows[0]
+    assert int(cube_row["nV"]) == 8 and int(cube_row["nE"]) == 18 and int(cube_row["nF"]) == 12
+    for r in rows:
+        for L in "vef":
+            assert 1.0 <= float(r[f"leaves_{L}"]) and float(r[f"seconds_{L}"]) >= 0.0
+        assert float(r["leaves_v"]) <= int(r["nV"])
+    for name in ("bench_time_vs_leaves.png", "bench_leaf_fraction.png", "bench_grid.json"):
+        assert (out / name).is_file()
+    assert main(["bench-grid", str(src), "-o", str(out), "--grid", "8", "-q"]) == 2
+    assert main(["bench-grid", str(src), "-o", str(out), "--grid", "8", "-q", "--resume"]) == 0
+    assert len(_rows(out / "bench_grid.csv")) == 2
+    assert main(["bench-grid", str(tmp_path / "nowhere"), "-o", str(tmp_path / "b2")]) == 2
+
+
+def test_benchmark_normalisation_and_grid():
+    V = np.array([[0.0, 0, 0], [4, 2, 0], [1, 1, 6]])
+    W = ablation.benchmark_normalise(V)
+    lo, hi = W.min(0), W.max(0)
+    np.testing.assert_allclose(0.5 * (lo + hi), 0.5)
+    np.testing.assert_allclose(np.linalg.norm(hi - lo), 0.5)
+    Q = ablation.voxel_centres(4)
+    assert Q.shape == (64, 3) and Q.min() == 0.125 and Q.max() == 0.875
+
+
+# ----------------------------------------------------------------------------- bh-switch
+def test_bh_switch_summary(tmp_path):
+    rng = np.random.default_rng(3)
+    xy = rng.random((1500, 2)) * [4.0, 2.0]
+    z = 0.2 * np.sin(2 * xy[:, 0]) + 0.02 * rng.random(1500)
+    cloud = tmp_path / "terrain.obj"
+    _write_obj(cloud, np.column_stack([xy, z]))
+    out = tmp_path / "bh"
+    assert main(["bh-switch", str(cloud), "-o", str(out), "--trials", "40", "--seed", "1",
+                 "-q"]) == 0
+    summary = json.loads((out / "bh_switch.json").read_text())
+    assert summary["hits"] > 0 and summary["switch_points"] > 0
+    kept = summary["kept"]
+    assert kept["count"] > 0
+    for k in ("mean_discrepancy", "max_discrepancy", "mean_cosine", "min_cosine"):
+        assert np.isfinite(kept[k]), k
+    assert 0 <= kept["mean_discrepancy"] <= kept["max_discrepancy"]
+    assert -1.0 <= kept["min_cosine"] <= kept["mean_cosine"] <= 1.0 + 1e-12
+    rows = _rows(out / "bh_switch.csv")
+    assert len(rows) == summary["switch_points"]
+    assert sum(int(r["kept"]) for r in rows) == kept["count"]
+    assert all(int(r["leaves_dbeta"]) < int(r["leaves"]) for r in rows if r["kept"] == "1")
+    assert (out / "bh_switch.png").is_file()
+    assert main(["bh-switch", str(cloud), "-o", str(out), "--trials", "4", "-q"]) == 2
