@@ -6,7 +6,6 @@ All shaders take view-space normals from :func:`view_normals`, whose components 
 ``hit`` is False get the ``background`` colour (the authors paint misses white).
 """
 
-from pathlib import Path
 
 import numpy as np
 
@@ -198,14 +197,11 @@ def load_matcap(path):
     ValueError
         If the file is missing or cannot be decoded.
     """
-    from PIL import Image, UnidentifiedImageError
+    from tracer.image import load_png
 
-    path = Path(path)
-    if not path.is_file():
-        raise ValueError(f"matcap file not found: {path}")
     try:
-        with Image.open(path) as img:
-            rgb = np.array(img.convert("RGB"), dtype=np.uint8)
-    except (OSError, UnidentifiedImageError) as exc:
-        raise ValueError(f"cannot read matcap {path}: {exc}") from None
-    return rgb
+        return load_png(path)
+    except FileNotFoundError:
+        raise ValueError(f"matcap file not found: {path}") from None
+    except ValueError as exc:
+        raise ValueError(f"matcap {exc}") from None
