@@ -15,6 +15,15 @@ import numpy as np
 COORD_LIMIT = 1e50
 
 
+def non_finite_rows(A, noun="row", plural=None):
+    """Describe the rows of ``A (n, 3)`` with a NaN or infinite value: their count and the
+    first one, e.g. ``"2 of 10 rows (first: row 3, [nan, 0.0, 1.0])"`` (0-based index)."""
+    bad = ~np.all(np.isfinite(A), axis=1)
+    first = int(np.argmax(bad))
+    return (f"{int(bad.sum())} of {A.shape[0]} {plural or noun + 's'} (first: {noun} {first}, "
+            f"{A[first].tolist()})")
+
+
 def as_points(X, name="Q"):
     """Return ``X`` as a C-contiguous ``(n, 3)`` float64 array of finite values.
 
@@ -30,8 +39,7 @@ def as_points(X, name="Q"):
     if A.ndim != 2 or A.shape[1] != 3:
         raise ValueError(f"{name} must have shape (n, 3), got {A.shape}")
     if not np.all(np.isfinite(A)):
-        bad = int(np.argmax(~np.all(np.isfinite(A), axis=1)))
-        raise ValueError(f"{name} contains NaN or infinite coordinates (first at row {bad})")
+        raise ValueError(f"{name} contains NaN or infinite coordinates: {non_finite_rows(A)}")
     if A.size and np.abs(A).max() > COORD_LIMIT:
         bad = int(np.argmax(np.abs(A).max(axis=1) > COORD_LIMIT))
         raise ValueError(f"{name} has coordinates beyond +-{COORD_LIMIT:.0e} (first at row {bad}): "

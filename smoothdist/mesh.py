@@ -12,7 +12,7 @@ import warnings
 import numpy as np
 
 from smoothdist import weights as _weights
-from smoothdist._cast import COORD_LIMIT, as_indices, as_points
+from smoothdist._cast import COORD_LIMIT, as_indices, as_points, non_finite_rows
 
 KIND_POINT, KIND_EDGE, KIND_TRIANGLE = 0, 1, 2
 _KIND_NAMES = {"points": KIND_POINT, "edges": KIND_EDGE, "triangles": KIND_TRIANGLE}
@@ -298,8 +298,14 @@ def _repair(V, P, E, T, repair, name, quiet_duplicates):
 
 
 # ---------------------------------------------------------------------- file reading
+#: File extensions :func:`read_mesh_file` reads: OBJ with our own reader (it keeps ``l``
+#: records as edges), the others with trimesh (a glTF scene's parts are concatenated; XYZ
+#: is a point cloud).
+MESH_EXTENSIONS = (".obj", ".off", ".stl", ".ply", ".glb", ".gltf", ".xyz")
+
+
 def read_mesh_file(path):
-    """Read ``(V, E, T, is_stl)`` from an OBJ, OFF, STL or PLY file.
+    """Read ``(V, E, T, is_stl)`` from an OBJ, OFF, STL, PLY, glTF or XYZ file.
 
     Raises ``ValueError`` with a one-line message for a missing, unreadable, empty or
     malformed file.
@@ -312,9 +318,9 @@ def read_mesh_file(path):
     if not os.path.isfile(path):
         raise ValueError(f"mesh path is not a regular file: {path}")
     ext = os.path.splitext(path)[1].lower()
-    if ext not in (".obj", ".off", ".stl", ".ply"):
+    if ext not in MESH_EXTENSIONS:
         raise ValueError(f"unsupported mesh format {ext or '(none)'!r} for {path}: "
-                         "use .obj, .off, .stl or .ply")
+                         f"use {', '.join(MESH_EXTENSIONS[:-1])} or {MESH_EXTENSIONS[-1]}")
     try:
         if os.path.getsize(path) == 0:
             raise _MeshFileError(f"mesh file is empty: {path}")
@@ -334,7 +340,8 @@ def read_mesh_file(path):
     if V.shape[0] == 0:
         raise ValueError(f"mesh file has no vertices: {path}")
     if not np.all(np.isfinite(V)):
-        raise ValueError(f"mesh file has NaN or infinite vertex coordinates: {path}")
+        raise ValueError(f"mesh file has NaN or infinite vertex coordinates: {path}: "
+                         f"{non_finite_rows(V, 'vertex', 'vertices')}, 0-based")
     if np.abs(V).max() > COORD_LIMIT:
         raise ValueError(f"mesh file has coordinates beyond +-{COORD_LIMIT:.0e}: {path} "
                          "(rescale or recentre the data)")
@@ -400,12 +407,12 @@ def _read_with_trimesh(path, ext):
             loaded = trimesh.load(path, process=False, force=None)
     finally:
         log.setLevel(level)
-    if isinstance(loaded, trimesh.Scene):
-        geoms = list(loaded.geometry.values())
-        if not geoms:
-            raise _MeshFileError(f"mesh file holds no geometry: {path}")
-        loaded = trimesh.util.concatenate(geoms) if len(geoms) > 1 else geoms[0]
-    V = np.asarray(getattr(loaded, "vertices", np.zeros((0, 3))), dtype=np.float64).reshape(-1, 3)
-    faces = getattr(loaded, "faces", None)
-    T = np.zeros((0, 3), dtype=np.int64) if faces is None else np.asarray(faces, dtype=np.int64).reshape(-1, 3)
-    return V, np.zeros((0, 2), dtype=np.int64), T
+    from smoothdist.convert import trimesh_arrays
+
+    if isinstance(loaded, trimesh.Scene) and not loaded.geometry:
+        raise _MeshFileError(f"mesh file holds no geometry: {path}")
+    V, _, E, T = trimesh_arrays(loaded, os.path.basename(path))
+    V = np.asarray(V, dtype=np.float64).reshape(-1, 3)
+    E = np.zeros((0, 2), dtype=np.int64) if E is None else np.asarray(E, dtype=np.int64)
+    T = np.zeros((0, 3), dtype=np.int64) if T is None else np.asarray(T, dtype=np.int64)
+    return V, E, T

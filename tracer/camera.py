@@ -40,6 +40,8 @@ __all__ = [
     "project",
     "pyvista_camera_params",
     "default_camera_for_bounds",
+    "VIEWS",
+    "frame_box",
 ]
 
 #: Number of values in :meth:`Camera.as_array`.
@@ -424,3 +426,79 @@ def default_camera_for_bounds(lo, hi, axis="+z", up="+y", width=512, height=512)
     up_vec = _direction(up, "up")
     centre = 0.5 * (lo + hi)
     return look_at(centre + 2.0 * extent * direction, centre, up_vec, width, height)
+
+
+#: Named views for :func:`frame_box`: ``name -> (direction from the centre to the eye, up)``.
+#: y is up (the OBJ / graphics convention): ``front`` looks down -z from +z, ``top`` looks
+#: down -y with -z at the top of the image, ``iso`` looks from the (+x, +y, +z) octant.
+VIEWS = {
+    "front": ((0.0, 0.0, 1.0), (0.0, 1.0, 0.0)),
+    "back": ((0.0, 0.0, -1.0), (0.0, 1.0, 0.0)),
+    "left": ((-1.0, 0.0, 0.0), (0.0, 1.0, 0.0)),
+    "right": ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0)),
+    "top": ((0.0, 1.0, 0.0), (0.0, 0.0, -1.0)),
+    "iso": ((1.0, 1.0, 1.0), (0.0, 1.0, 0.0)),
+}
+
+#: Default free border of :func:`frame_box`, as a fraction of the image's half-size.
+FRAME_MARGIN = 0.05
+
+
+def frame_box(lo, hi, view="front", width=512, height=512, margin=FRAME_MARGIN):
+    """A camera from which the whole box ``lo..hi`` is in view, with a small free border.
+
+    The eye looks at the box centre from the named ``view`` direction and is placed at the
+    smallest distance at which all eight corners project inside the image shrunk by
+    ``margin`` (a fraction of its half-size) and one pixel, and at least ``margin x`` the box
+    diagonal outside the box. Anything inside the box (e.g. an isosurface inside the
+    tracer's conservative box) is therefore in view, at any scale and position.
+
+    Parameters
+    ----------
+    lo, hi : (3,) array_like of float
+        Box corners, ``lo <= hi``; the box may be flat but not a single point.
+    view : str or ((3,), (3,))
+        A key of :data:`VIEWS`, or ``(direction from the centre to the eye, up)``.
+    width, height : int
+        Image size in pixels.
+    margin : float
+        Free border as a fraction of the image's half-size, in ``[0, 0.9]``.
+
+    Returns
+    -------
+    (origin, dest, up) : three (3,) float64 arrays, for :func:`look_at` or a scene file.
+    """
+    lo = _vector3(lo, "lo")
+    hi = _vector3(hi, "hi")
+    if np.any(hi < lo):
+        raise ValueError(f"bounds must satisfy lo <= hi, got lo={lo.tolist()} hi={hi.tolist()}")
+    diag = float(np.linalg.norm(hi - lo))
+    if not diag > 0.0:
+        raise ValueError(f"bounds are a single point {lo.tolist()}; nothing to frame")
+    if isinstance(view, str):
+        if view not in VIEWS:
+            raise ValueError(f"view must be one of {', '.join(VIEWS)}; got {view!r}")
+        direction, up = VIEWS[view]
+    else:
+        try:
+            direction, up = view
+        except (TypeError, ValueError):
+            raise ValueError(f"view must be a name or (direction, up), got {view!r}") from None
+    if not 0.0 <= float(margin) <= 0.9:
+        raise ValueError(f"margin must be between 0 and 0.9, got {margin!r}")
+    centre = 0.5 * (lo + hi)
+    direction = _direction(direction, "view direction")
+    up = _direction(up, "view up")
+    cam = look_at(centre + direction, centre, up, width, height)
+    corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
+                        for z in (lo[2], hi[2])]) - centre
+    right = np.abs(corners @ cam.horizontal)
+    upward = np.abs(corners @ cam.vertical)
+    along = corners @ cam.forward
+    # a corner at (right, upward, along) from the centre projects to dx = right / (D + along)
+    # with the eye at distance D; the image spans |dx| <= 0.5 * scale_x (less one pixel)
+    kx = cam.scale_x * max(0.5 * (1.0 - margin) - 1.0 / cam.width, 0.05)
+    ky = cam.scale_y * max(0.5 * (1.0 - margin) - 1.0 / cam.height, 0.05)
+    dist = max(float(np.max(right / kx - along)), float(np.max(upward / ky - along)),
+               float(np.max(-along)) + max(margin, 0.01) * diag)
+    return centre + dist * direction, centre, up

@@ -6,7 +6,10 @@ import sys
 
 import numpy as np
 
-from tracer.cli import check_outputs, make_parents
+from smoothdist.mesh import MESH_EXTENSIONS
+from tracer.camera import VIEWS
+from tracer.cli import CLIError, check_outputs, make_parents
+from tracer.mesh_scene import KINDS
 
 #: aim for kernel calls of about this many pixels, so that Ctrl-C / SIGTERM (handled between
 #: calls) stops a render within a second or two even for slow scenes
@@ -15,12 +18,34 @@ BAND_PIXELS = 16384
 
 def add_arguments(p):
     """Arguments of ``tracer render``."""
-    p.add_argument("scene", help="scene JSON file (the authors' format, or ours)")
-    p.add_argument("-o", "--output", help="output PNG (default: renders/<scene name>.png)")
+    p.add_argument("scene", metavar="PATH",
+                   help="a scene JSON file (the authors' format, or ours; see "
+                   "docs/scene-format.md) or a mesh / point-cloud file "
+                   f"({', '.join(e[1:] for e in MESH_EXTENSIONS)}) to render directly")
+    p.add_argument("-o", "--output", help="output PNG (default: renders/<file name>.png)")
     p.add_argument("--size", nargs=2, type=int, metavar=("W", "H"),
-                   help="image size in pixels (overrides the scene's width/height)")
-    p.add_argument("--beta", type=float, help="Barnes-Hut beta (0 = exact; default: scene's)")
-    p.add_argument("--alpha", type=float, help="alpha of the first object (overrides the scene)")
+                   help="image size in pixels (overrides the scene's width/height; "
+                   "mesh default 512 512)")
+    p.add_argument("--beta", type=float, help="Barnes-Hut beta (0 = exact; default: scene's, "
+                   "0.5 for a mesh)")
+    p.add_argument("--alpha", type=_auto_or_number("--alpha"), metavar="auto|A",
+                   help="alpha of the (first) object, or 'auto': mean surface offset <= 2%% "
+                   "of the bbox diagonal (default for a mesh: auto)")
+    p.add_argument("--alpha-u", type=_auto_or_number("--alpha-u"), metavar="auto|U",
+                   help="alpha_U (attenuation) of the (first) object, or 'auto' = 20 x alpha, "
+                   "which removes ribbing on tubes (default when the scene has no max_alpha)")
+    p.add_argument("--kind", choices=KINDS,
+                   help="mesh file: render its triangles, edges, points, or everything it "
+                   "holds (mixed; the default)")
+    p.add_argument("--view", choices=tuple(VIEWS),
+                   help="camera framing the whole surface from this side (y up; default for "
+                   "a mesh: front); with a scene file it replaces the scene's camera")
+    p.add_argument("--camera", nargs=9, type=float,
+                   metavar=("OX", "OY", "OZ", "DX", "DY", "DZ", "UX", "UY", "UZ"),
+                   help="explicit camera: ORIGIN DEST UP, 9 numbers")
+    p.add_argument("--save-scene", metavar="OUT.json",
+                   help="write the scene file used (camera, alpha, alpha_U, ...) to edit and "
+                   "render again")
     p.add_argument("--mode", choices=("smooth", "exact"),
                    help="smooth distance, or exact distance offset surface")
     p.add_argument("--offset", type=float,
@@ -41,6 +66,41 @@ def add_arguments(p):
     p.add_argument("--threads", type=int, help="number of threads (default: all cores)")
     p.add_argument("--overwrite", action="store_true", help="replace existing output files")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
+
+
+def _auto_or_number(flag):
+    def parse(text):
+        if text == "auto":
+            return "auto"
+        try:
+            return float(text)
+        except ValueError:
+            raise ValueError(f"{flag} must be a number or 'auto', got {text!r}") from None
+    parse.__name__ = flag
+    return parse
+
+
+def input_kind(path):
+    """``"scene"`` or ``"mesh"`` for a render input, from its extension (or a leading ``{``);
+    a one-line ``CLIError`` saying what is accepted for anything else."""
+    path = os.fspath(path)
+    ext = os.path.splitext(path)[1].lower()
+    if ext in MESH_EXTENSIONS:
+        return "mesh"
+    if ext == ".json":
+        return "scene"
+    if os.path.isfile(path):
+        try:
+            with open(path, "rb") as fh:
+                head = fh.read(256).lstrip()
+        except OSError:
+            head = b""
+        if head.startswith(b"{"):
+            return "scene"
+    elif not os.path.exists(path):
+        raise CLIError(f"file not found: {path}")
+    raise CLIError(f"cannot render {path}: not a scene file (.json) or a mesh / point-cloud "
+                   f"file ({', '.join(MESH_EXTENSIONS)})")
 
 
 def band_rows(width, height):
@@ -66,8 +126,12 @@ def run(args):
     from tracer.render import ProgressBar, render
     from tracer.scene import load_scene
 
-    overrides = {"beta": args.beta, "alpha": args.alpha, "mode": args.mode, "eps": args.eps,
-                 "shading": args.shading, "offset": args.offset}
+    source = input_kind(args.scene)
+    if source == "scene" and args.kind:
+        raise CLIError("--kind applies to mesh files; a scene file sets bvh_type per object")
+    overrides = {"beta": args.beta, "alpha": args.alpha, "alpha_u": args.alpha_u,
+                 "mode": args.mode, "eps": args.eps, "shading": args.shading,
+                 "offset": args.offset}
     if args.size:
         overrides["width"], overrides["height"] = args.size
     name = os.path.splitext(os.path.basename(args.scene))[0]
@@ -80,9 +144,17 @@ def run(args):
                            ("--stats", args.stats, ".json")):
         if path is not None and not path.lower().endswith(ext):
             raise ValueError(f"{opt} must name a {ext} file, got {path}")
-    outputs = [out, args.depth, args.normals, args.steps_png, args.leaves_png, args.stats]
+    if args.save_scene is not None and not args.save_scene.lower().endswith(".json"):
+        raise ValueError(f"--save-scene must name a .json file, got {args.save_scene}")
+    outputs = [out, args.depth, args.normals, args.steps_png, args.leaves_png, args.stats,
+               args.save_scene]
     check_outputs(outputs, args.overwrite, create=False)
-    scene = load_scene(args.scene, overrides)
+    if source == "mesh":
+        scene = _mesh_scene(args, overrides)
+    else:
+        scene = load_scene(args.scene, overrides)
+        if args.view or args.camera:
+            _replace_camera(scene, args)
     bar = None if args.quiet else ProgressBar(f"render {name}")
     result = render(scene, progress=bar, band_rows=band_rows(scene.width, scene.height))
     make_parents(outputs)
@@ -100,6 +172,8 @@ def run(args):
         written.append(save_png(args.leaves_png, false_color(result.leaves.astype(float),
                                                              cmap="magma"),
                                 overwrite=args.overwrite))
+    if args.save_scene:
+        written.append(_save_scene(args, scene, source))
     stats = result.summary()
     stats.update(scene=os.path.abspath(args.scene), mode=scene.mode, beta=scene.beta,
                  eps=scene.eps, objects=[{"name": o.name, "alpha": o.alpha, "alpha_u": o.alpha_u,
@@ -113,12 +187,108 @@ def run(args):
                 json.dump(stats, fh, indent=2)
         written.append(args.stats)
     if not args.quiet:
+        from tracer.mesh_scene import describe_parameters
+
         s = stats
         prims = sum(o["primitives"] for o in s["objects"])
         print(f"Rendered {name}: {s['width']}x{s['height']} px, {len(s['objects'])} object(s) "
-              f"with {prims} primitives, {scene.mode} mode, beta {scene.beta:g}, in "
+              f"with {prims} primitives ({describe_parameters(scene)}), "
+              f"{scene.mode} mode, beta {scene.beta:g}, in "
               f"{s['seconds']:.2f} s; {s['hits']} hits ({100 * s['hit_fraction']:.1f}%), "
               f"{s['mean_steps']:.1f} distance evaluations and {s['mean_leaves']:.0f} leaves "
               f"visited per pixel on average. Wrote {', '.join(map(str, written))}.")
     sys.stdout.flush()
     return 0
+
+
+def _camera_arg(args):
+    c = args.camera
+    return (np.array(c[0:3]), np.array(c[3:6]), np.array(c[6:9]))
+
+
+def _mesh_scene(args, overrides):
+    """The scene for a mesh file given on the command line."""
+    from tracer.mesh_scene import mesh_scene
+
+    width, height = args.size or (512, 512)
+    return mesh_scene(args.scene, kind=args.kind,
+                      alpha=args.alpha if args.alpha is not None else "auto",
+                      alpha_u=args.alpha_u if args.alpha_u is not None else "auto",
+                      beta=args.beta if args.beta is not None else 0.5, size=(width, height),
+                      view=args.view or "front",
+                      camera=_camera_arg(args) if args.camera else None,
+                      mode=args.mode or "smooth", offset=args.offset, eps=args.eps,
+                      shading=args.shading or "normals")
+
+
+def _replace_camera(scene, args):
+    """``--view`` / ``--camera`` for a scene file: a new camera (framing the conservative box
+    of every object for ``--view``)."""
+    from tracer.camera import frame_box, look_at
+    from tracer.render import scene_arrays
+
+    if args.camera:
+        origin, dest, up = _camera_arg(args)
+    else:
+        lo, hi = scene_arrays(scene)[4:6]
+        origin, dest, up = frame_box(lo, hi, args.view, scene.width, scene.height)
+    look_at(origin, dest, up, scene.width, scene.height)  # validates
+    scene.camera_origin, scene.camera_dest, scene.camera_up = origin, dest, up
+
+
+def _save_scene(args, scene, source):
+    """Write ``--save-scene``: a scene file that renders the same picture."""
+    from tracer.image import atomic_write
+    from tracer.mesh_scene import scene_dict
+    from tracer.scene import read_scene_json
+
+    if source == "mesh":
+        data = scene_dict(scene, args.save_scene, [args.scene])
+        if args.eps is not None:
+            data["eps"] = scene.eps
+    else:
+        data = _edited_scene(read_scene_json(args.scene), args, scene)
+    make_parents([args.save_scene])
+    with atomic_write(args.save_scene, overwrite=args.overwrite) as tmp:
+        with open(tmp, "w", encoding="utf-8") as fh:
+            json.dump(data, fh, indent=2)
+            fh.write("\n")
+    return args.save_scene
+
+
+def _edited_scene(data, args, scene):
+    """The scene file's dict with the command line's overrides applied and its relative
+    paths rewritten for the folder of ``--save-scene``."""
+    src = os.path.dirname(os.path.abspath(args.scene))
+    dst = os.path.dirname(os.path.abspath(args.save_scene))
+
+    def move(p):
+        if not isinstance(p, str) or not p or os.path.isabs(os.path.expanduser(p)):
+            return p
+        return os.path.relpath(os.path.join(src, p), dst).replace(os.sep, "/")
+
+    data = json.loads(json.dumps(data))
+    if "matcap" in data:
+        data["matcap"] = move(data["matcap"])
+    for od in data["objects"]:
+        for part in [od] + list(od.get("parts", [])):
+            for key in ("path", "matcap"):
+                if key in part:
+                    part[key] = move(part[key])
+    data["camera"] = {k: [float(f"{v:.9g}") for v in np.asarray(vec, dtype=float)]
+                      for k, vec in (("origin", scene.camera_origin), ("dest", scene.camera_dest),
+                                     ("up", scene.camera_up))}
+    first = data["objects"][0]
+    if args.alpha is not None:
+        first["alpha"] = args.alpha
+    if args.alpha_u is not None:
+        first["max_alpha"] = args.alpha_u
+    if args.size:
+        data["width"], data["height"] = args.size
+    for key in ("beta", "mode", "eps", "shading", "offset"):
+        if getattr(args, key) is not None:
+            data[key] = getattr(args, key)
+            if key in ("beta", "offset"):  # the command line overrode per-object values too
+                for od in data["objects"]:
+                    od.pop(key, None)
+    return data

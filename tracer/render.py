@@ -1,5 +1,6 @@
 """Render a :class:`~tracer.scene.Scene`: trace, shade, and collect per-pixel buffers."""
 
+import os
 import sys
 import time
 from typing import NamedTuple
@@ -32,6 +33,8 @@ class RenderResult(NamedTuple):
     seconds : float
         Wall time of the tracing (shading excluded).
     camera : tracer.camera.Camera
+    scene : tracer.scene.Scene or None
+        The scene rendered (its objects hold the alpha and alpha_U used).
     """
 
     rgb: np.ndarray
@@ -43,6 +46,22 @@ class RenderResult(NamedTuple):
     bisections: np.ndarray
     seconds: float
     camera: object
+    scene: object = None
+
+    def save(self, path, *, overwrite=True):
+        """Write the image as PNG (``.png``), or the depth ``(H, W)`` float32 (NaN on misses)
+        or the normals ``(H, W, 3)`` float32 as ``.npy`` (``*depth*.npy`` / ``*normal*.npy``
+        by name), atomically. Returns the path."""
+        from tracer.image import save_npy, save_png
+
+        name = str(path).lower()
+        if name.endswith(".png"):
+            return save_png(path, self.rgb, overwrite=overwrite)
+        if name.endswith(".npy") and "normal" in os.path.basename(name):
+            return save_npy(path, self.normals.astype(np.float32), overwrite=overwrite)
+        if name.endswith(".npy"):
+            return save_npy(path, self.depth, overwrite=overwrite)
+        raise ValueError(f"save: path must end in .png or .npy, got {path}")
 
     def summary(self):
         """Dict of scalar statistics: size, seconds, hits, mean steps and leaves per pixel."""
@@ -140,7 +159,8 @@ def render(scene, *, progress=None, band_rows=None):
     rgb = shade(scene, camera, normals, hit)
     depth = tbuf.astype(np.float32)
     return RenderResult(rgb=rgb, hit=hit, depth=depth, normals=normals, steps=steps,
-                        leaves=leaves, bisections=bis, seconds=seconds, camera=camera)
+                        leaves=leaves, bisections=bis, seconds=seconds, camera=camera,
+                        scene=scene)
 
 
 def shade(scene, camera, normals, hit):

@@ -14,7 +14,13 @@ units; default ``1e-4 x`` the data's bbox diagonal), ``mode`` (``"smooth"`` or `
 ``bvh_type`` may also be ``"mixed"`` (keep all primitives of the file), and instead of ``path``
 an object may list ``parts``: ``[{"path": ..., "bvh_type": ..., "scale": s,
 "translate": [x, y, z]}, ...]`` merged into one mixed mesh (one BVH). ``alpha`` may be
-``"auto"``. Several objects are combined by LogSumExp with the largest alpha (paper Sec. 3.6).
+``"auto"``; ``max_alpha`` (alpha_U) may be ``"auto"``, its default (20 x alpha, see
+``SmoothDistanceField.auto_alpha_u``; the authors' files without it meant no attenuation).
+Several objects are combined by LogSumExp with the largest alpha (paper Sec. 3.6).
+
+The complete reference (every key: type, default, example) is the JSON Schema
+``tracer/scene.schema.json``, rendered as ``docs/scene-format.md``; a test keeps both equal to
+what this loader accepts.
 
 Relative paths resolve against the scene file's folder.
 
@@ -239,7 +245,8 @@ def load_scene(path, overrides=None):
         The scene JSON file.
     overrides : dict, optional
         Values that replace the file's: ``width``, ``height``, ``beta``, ``alpha`` (first
-        object), ``mode``, ``eps``, ``shading``, ``offset``.
+        object; a number or "auto"), ``alpha_u`` (first object's ``max_alpha``; a number or
+        "auto"), ``mode``, ``eps``, ``shading``, ``offset``.
 
     Raises
     ------
@@ -358,7 +365,9 @@ def _object_spec(od, i, base, path, data, overrides, beta):
         specs = [_part_spec(od, base, path, where)]
         merged = False
     if i == 0 and overrides.get("alpha") is not None:
-        alpha, alpha_where = _number(overrides["alpha"], path, "--alpha", positive=True), "--alpha"
+        alpha, alpha_where = overrides["alpha"], "--alpha"
+        if alpha != "auto":
+            alpha = _number(alpha, path, "--alpha", positive=True)
     elif "alpha" not in od:
         raise _err(path, where, "is missing the required key 'alpha'")
     elif od["alpha"] == "auto":
@@ -369,8 +378,14 @@ def _object_spec(od, i, base, path, data, overrides, beta):
                                                f"{_show(od['alpha'])}")
         alpha = _number(od["alpha"], path, f"{where}.alpha", positive=True)
         alpha_where = f"{where}.alpha"
-    alpha_u = (_number(od["max_alpha"], path, f"{where}.max_alpha", positive=True)
-               if "max_alpha" in od else None)
+    if i == 0 and overrides.get("alpha_u") is not None:
+        alpha_u, au_where = overrides["alpha_u"], "--alpha-u"
+    else:
+        alpha_u, au_where = od.get("max_alpha", "auto"), f"{where}.max_alpha"
+    if alpha_u != "auto":
+        if isinstance(alpha_u, str):
+            raise _err(path, au_where, f"must be a number or \"auto\", got {_show(alpha_u)}")
+        alpha_u = _number(alpha_u, path, au_where, positive=True)
     obeta = (_number(od["beta"], path, f"{where}.beta", non_negative=True)
              if "beta" in od and overrides.get("beta") is None else beta)
     if overrides.get("offset") is not None:
@@ -414,7 +429,7 @@ def _build_object(spec, path, gradient):
         mesh = meshes[0]
     fld = SmoothDistanceField(mesh)
     alpha = fld.auto_alpha() if spec["alpha"] == "auto" else spec["alpha"]
-    alpha_u = spec["alpha_u"] if spec["alpha_u"] is not None else alpha
+    alpha_u = fld.auto_alpha_u(alpha) if spec["alpha_u"] == "auto" else spec["alpha_u"]
     offset = spec["offset"] if spec["offset"] is not None else 1.0 / alpha
     try:
         fld.check_alpha(alpha)
@@ -468,16 +483,28 @@ def scene_from_field(field, *, alpha, alpha_u=None, beta=0.5, camera=None, width
     ----------
     field : smoothdist.SmoothDistanceField
         The object's data (built once; reuse it across renders).
-    alpha, alpha_u, beta : float
-        As in the scene file (``alpha_u`` defaults to ``alpha``, i.e. no attenuation).
-    camera : (origin, dest, up), optional
-        Three 3-vectors; default: the paper's beta-study camera (bbox centre + 2 x the largest
-        extent along +z, looking at the centre, up +y).
+    alpha : float or "auto"
+        As in the scene file; ``"auto"`` is ``field.auto_alpha()``.
+    alpha_u : float, "auto" or None
+        As ``max_alpha`` in the scene file; ``"auto"`` is ``field.auto_alpha_u(alpha)`` (no
+        ribbing); None (the default here) is ``alpha``, i.e. no attenuation.
+    beta : float
+        Barnes-Hut parameter.
+    camera : (origin, dest, up), or a view name, optional
+        Three 3-vectors, or a key of :data:`tracer.camera.VIEWS` (``"front"``, ``"iso"``,
+        ...) to frame the whole surface (:func:`tracer.camera.frame_box` of the tracer's
+        conservative box). Default: the paper's beta-study camera (bbox centre + 2 x the
+        largest extent along +z, looking at the centre, up +y), which may crop a blurry
+        surface.
     """
     if mode not in MODES:
         raise ValueError(f"mode must be one of {MODES}, got {mode!r}")
     if shading not in SHADINGS:
         raise ValueError(f"shading must be one of {SHADINGS}, got {shading!r}")
+    if isinstance(alpha, str) and alpha == "auto":
+        alpha = field.auto_alpha()
+    if isinstance(alpha_u, str) and alpha_u == "auto":
+        alpha_u = field.auto_alpha_u(field.check_alpha(alpha))
     alpha_u = alpha if alpha_u is None else alpha_u
     alpha, beta, _, _ = field.kernel_args(alpha, beta, alpha_u, gradient)  # validates all three
     alpha_u = float(alpha_u)
@@ -494,7 +521,13 @@ def scene_from_field(field, *, alpha, alpha_u=None, beta=0.5, camera=None, width
         raise ValueError(f"width x height is {width}x{height}: larger than "
                          f"{MAX_PIXELS // 1_000_000} megapixels")
     lo, hi = field.bounds
-    if camera is None:
+    if isinstance(camera, str):
+        from tracer.camera import frame_box
+
+        grow = (offset if mode == "exact" and offset is not None else
+                1.0 / alpha if mode == "exact" else field.inflation(alpha, alpha_u))
+        camera = frame_box(lo - grow, hi + grow, camera, width, height)
+    elif camera is None:
         c = 0.5 * (lo + hi)
         # a single point (or identical points) has no extent: back off by the surface's size
         ext = max(float((hi - lo).max()), field.inflation(alpha, alpha_u),

@@ -1,0 +1,156 @@
+"""From a user's mesh to an image in one call: :func:`render_mesh` and :func:`mesh_scene`.
+
+``tracer.render_mesh(mesh)`` takes a mesh file path, numpy ``(V, F)`` arrays, a
+``trimesh.Trimesh`` / ``PointCloud`` / ``path.Path3D``, a ``pyvista.PolyData`` or a
+:class:`smoothdist.DataMesh`, picks ``alpha="auto"`` and ``alpha_u="auto"`` (see
+:meth:`smoothdist.SmoothDistanceField.auto_alpha`), frames the whole surface with
+:func:`tracer.camera.frame_box` and returns a :class:`tracer.render.RenderResult` of numpy
+arrays (``rgb``, ``depth``, ``normals``, ``hit``, ``steps``, ...; ``.save(path)``).
+"""
+
+import os
+
+import numpy as np
+
+KINDS = ("triangles", "edges", "points", "mixed")
+
+
+def load_geometry(mesh, F=None, kind=None):
+    """A :class:`smoothdist.DataMesh` from a path or any object ``as_data_mesh`` accepts,
+    reduced to ``kind`` (``"triangles"``, ``"edges"``, ``"points"``; ``"mixed"`` or None keep
+    everything it holds)."""
+    import smoothdist
+    from smoothdist.convert import as_data_mesh
+
+    if kind is not None and kind not in KINDS:
+        raise ValueError(f"kind must be one of {', '.join(KINDS)}; got {kind!r}")
+    if isinstance(mesh, (str, os.PathLike)):
+        if F is not None:
+            raise ValueError("pass F only together with a vertex array, not with a file path")
+        data = smoothdist.load_mesh(mesh)
+    else:
+        data = as_data_mesh(mesh, F)
+    return data.as_kind(kind) if kind not in (None, "mixed") else data
+
+
+def mesh_scene(mesh, F=None, *, kind=None, alpha="auto", alpha_u="auto", beta=0.5,
+               size=(512, 512), view="front", camera=None, mode="smooth", offset=None,
+               eps=None, shading="normals", matcap="", name=None):
+    """A one-object :class:`tracer.scene.Scene` for ``mesh``, camera framing the surface.
+
+    Parameters
+    ----------
+    mesh : path, DataMesh, (n, 3) array_like, or a trimesh / pyvista object
+        The data (see :func:`smoothdist.convert.as_data_mesh`); ``F`` as in ``DataMesh``.
+    kind : {None, "triangles", "edges", "points", "mixed"}
+        Reduce the data to one primitive kind; None or "mixed" keep what it holds.
+    alpha : float or "auto"
+        Sharpness (1 / scene units). ``"auto"``: mean surface offset <= 2 % of the bbox
+        diagonal (:meth:`~smoothdist.SmoothDistanceField.auto_alpha`).
+    alpha_u : float, "auto" or None
+        Attenuation threshold; ``"auto"`` is 20 x alpha (no ribbing); None: no attenuation.
+    beta : float
+        Barnes-Hut parameter (0 = exact, slow on big meshes).
+    size : (int, int)
+        Image ``(width, height)`` in pixels.
+    view : str
+        ``front``, ``back``, ``left``, ``right``, ``top`` or ``iso`` (y up; see
+        :data:`tracer.camera.VIEWS`): the camera frames the tracer's conservative box of the
+        surface (the data's box grown by the largest possible inflation) from there.
+    camera : (origin, dest, up), optional
+        An explicit camera instead of ``view``.
+    mode, offset, eps, shading, matcap :
+        As in :func:`tracer.scene.scene_from_field`.
+    name : str, optional
+        The scene's name (default: the mesh's).
+    """
+    from smoothdist import SmoothDistanceField
+    from tracer.scene import scene_from_field
+
+    data = load_geometry(mesh, F, kind)
+    try:
+        width, height = size
+    except (TypeError, ValueError):
+        raise ValueError(f"size must be (width, height), got {size!r}") from None
+    field = SmoothDistanceField(data)
+    return scene_from_field(field, alpha=alpha, alpha_u=alpha_u, beta=beta,
+                            camera=view if camera is None else camera, width=width,
+                            height=height, mode=mode, eps=eps, offset=offset, shading=shading,
+                            matcap=matcap, name=name or os.path.splitext(data.name)[0])
+
+
+def render_mesh(mesh, F=None, *, kind=None, alpha="auto", alpha_u="auto", beta=0.5,
+                size=(512, 512), view="front", camera=None, mode="smooth", offset=None,
+                eps=None, shading="normals", matcap="", progress=None):
+    """Sphere-trace the smooth-distance surface of ``mesh``; arrays back, nothing written.
+
+    Parameters are those of :func:`mesh_scene`; ``progress`` as in
+    :func:`tracer.render.render`.
+
+    Returns
+    -------
+    tracer.render.RenderResult
+        ``rgb (H, W, 3) uint8``, ``hit (H, W) bool``, ``depth (H, W) float32`` (ray
+        parameter, NaN on misses), ``normals (H, W, 3)``, ``steps (H, W)``, ``leaves``,
+        ``camera``, ``scene`` (``scene.objects[0].alpha`` / ``.alpha_u`` are the values used)
+        and ``save(path)``.
+
+    Examples
+    --------
+    >>> import trimesh, tracer                                   # doctest: +SKIP
+    >>> res = tracer.render_mesh(trimesh.creation.icosphere(), kind="edges", size=(256, 256))
+    >>> res.save("renders/ico.png"); res.depth.shape
+    (256, 256)
+    """
+    from tracer.render import render
+
+    scene = mesh_scene(mesh, F, kind=kind, alpha=alpha, alpha_u=alpha_u, beta=beta, size=size,
+                       view=view, camera=camera, mode=mode, offset=offset, eps=eps,
+                       shading=shading, matcap=matcap)
+    return render(scene, progress=progress)
+
+
+def describe_parameters(scene):
+    """One phrase per object: ``alpha 43.3, alpha_U 866, inflation <= 0.021 (0.6% of the
+    diagonal)`` (the worst-case inflation bound ``log(A^S N) / alpha``)."""
+    diag = scene.diagonal if scene.diagonal > 0 else 1.0
+    parts = []
+    for o in scene.objects:
+        infl = (o.offset if scene.mode == "exact" else o.field.inflation(o.alpha, o.alpha_u))
+        what = "offset" if scene.mode == "exact" else "inflation <="
+        parts.append(f"alpha {o.alpha:.4g}, alpha_U {o.alpha_u:.4g}, {what} {infl:.3g} "
+                     f"({100 * infl / diag:.2g}% of the diagonal)")
+    return "; ".join(parts)
+
+
+def scene_dict(scene, scene_path, source_paths):
+    """A scene-file dict (our JSON format) that reproduces ``scene``.
+
+    ``source_paths`` lists each object's mesh file; paths are written relative to the folder
+    of ``scene_path`` (where the dict will be saved).
+    """
+    base = os.path.dirname(os.path.abspath(scene_path))
+
+    def rel(p):
+        return os.path.relpath(os.path.abspath(p), base).replace(os.sep, "/")
+
+    objs = []
+    for o, src in zip(scene.objects, source_paths):
+        od = {"path": rel(src), "alpha": float(f"{o.alpha:.6g}"),
+              "max_alpha": float(f"{o.alpha_u:.6g}"), "bvh_type": _bvh_type(o.field.mesh.kind)}
+        if scene.mode == "exact":
+            od["offset"] = float(f"{o.offset:.6g}")
+        objs.append(od)
+    out = {"description": f"written by tracer render --save-scene from {os.path.basename(source_paths[0])}",
+           "camera": {k: [float(f"{v:.9g}") for v in np.asarray(vec, dtype=float)]
+                      for k, vec in (("origin", scene.camera_origin), ("dest", scene.camera_dest),
+                                     ("up", scene.camera_up))},
+           "objects": objs, "width": int(scene.width), "height": int(scene.height),
+           "beta": float(scene.beta), "mode": scene.mode, "shading": scene.shading}
+    if scene.matcap:
+        out["matcap"] = rel(scene.matcap)
+    return out
+
+
+def _bvh_type(kind):
+    return {"triangles": "faces"}.get(kind, kind)
