@@ -64,7 +64,7 @@ CATALOGUE = [
      "error: malformed OBJ record"),
     ("file-truncated-ply", "binary PLY cut off after 3000 bytes", "cli",
      "error: could not read mesh file"),
-    ("file-wrong-ext-mesh", "mesh file with extension .xyz", "cli",
+    ("file-wrong-ext-mesh", "mesh file with extension .abc", "cli",
      "error: unsupported mesh format"),
     ("file-wrong-ext-output", "-o out.jpg", "cli", "error: output must be a .png file"),
     ("file-wrong-ext-aov", "--depth depth.png", "cli", "error: --depth must name a .npy file"),
@@ -292,7 +292,7 @@ def _(d, mp):
 
 @setup("file-wrong-ext-mesh")
 def _(d, mp):
-    return [scene(d, mesh_name="tet.xyz")]
+    return [scene(d, mesh_name="tet.abc")]
 
 
 @setup("file-wrong-ext-output")

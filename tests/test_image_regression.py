@@ -494,7 +494,8 @@ def test_compare_cli_writes_outputs(compare_render, tmp_path, capsys):
     assert m["grid"] == 24 and m["size"] == [32, 32]
     for f in ("tracer.png", "pyvista.png", "diff.png"):
         assert load_png(out / f).shape == (32, 32, 3)
-    assert load_png(out / "side_by_side.png").shape == (32, 3 * 32 + 2 * 2, 3)
+    sbs = load_png(out / "side_by_side.png")  # titled panels + colour bar (test_first_minutes)
+    assert sbs.ndim == 3 and sbs.shape[0] > 32 and sbs.shape[1] > 3 * 32
     assert main(["compare", scene, "-o", str(out), "--grid", "24", "--size", "32", "32"]) == 2
     assert "exists" in capsys.readouterr().err
 

@@ -269,7 +269,7 @@ def test_empty_file(tmp_path, ext):
         DataMesh.load(p)
 
 
-@pytest.mark.parametrize("name", ["mesh.xyz", "mesh", "mesh.obj.bak"])
+@pytest.mark.parametrize("name", ["mesh.abc", "mesh", "mesh.obj.bak"])
 def test_unsupported_extension(tmp_path, name):
     p = write(tmp_path / name, "v 0 0 0\n")
     with pytest.raises(ValueError, match="unsupported"):

@@ -476,11 +476,15 @@ def independent_min_edge(mesh):
 
 @pytest.mark.parametrize("name", ["circle", "segment_star", "icosphere", "cube", "mixed_mesh",
                                   "nonmanifold_mesh", "octopus", "trefoil"])
-def test_auto_alpha_is_inverse_min_edge(request, zoo, name, rng):
+def test_paper_alpha_is_inverse_min_edge_and_auto_is_consistent(request, zoo, name, rng):
     mesh = zoo[name] if name in zoo else request.getfixturevalue(name)
     field = field_of(mesh)
     expect = 1.0 / independent_min_edge(mesh)
-    assert field.auto_alpha() == pytest.approx(expect, rel=1e-12)
+    assert field.paper_alpha() == pytest.approx(expect, rel=1e-12)
+    # "auto" is scale-free: the data scaled by 10 gets alpha / 10
+    big = SmoothDistanceField(DataMesh(mesh.V * 10.0, points=mesh.points, edges=mesh.edges,
+                                       triangles=mesh.triangles))
+    assert big.auto_alpha() == pytest.approx(field.auto_alpha() / 10.0, rel=1e-6)
     Q = naive.near_queries(mesh, 50, rng)
     a = field.smooth_distance(Q, alpha="auto", beta=0.0)
     b = field.smooth_distance(Q, alpha=field.auto_alpha(), beta=0.0)
@@ -502,7 +506,7 @@ def test_auto_alpha_points(point_cloud, rng):
     assert np.all(np.isfinite(d)) and np.all(np.isfinite(g))
     # scale invariance: scaling the cloud by 10 divides alpha by 10
     big = SmoothDistanceField(point_cloud.V * 10.0)
-    assert big.auto_alpha() == pytest.approx(a / 10.0, rel=1e-9)
+    assert big.auto_alpha() == pytest.approx(a / 10.0, rel=1e-6)
 
 
 # ----------------------------------------------------------------------------- validation

@@ -75,7 +75,8 @@ Outputs of ``tracer compare SCENE -o DIR``: ``metrics.json``, ``tracer.png`` (th
 by view-space normals whatever the scene's shading, so both pictures use the same colours),
 ``pyvista.png``, ``diff.png`` (pixels both hit: ``|depth difference| / diagonal`` in
 ``inferno`` from 0 (black) to 1 % (pale yellow); only the tracer hit: blue; only pyvista hit:
-green; neither: the background) and ``side_by_side.png`` (tracer | pyvista | diff).
+green; neither: the background) and ``side_by_side.png`` (the three, titled "sphere tracer",
+"pyvista marching cubes" and "difference", with the difference's colour bar and legend).
 
 ``--exact`` compares the exact-offset isosurface ``d - offset = 0`` (``offset`` defaulting to
 ``1 / alpha`` per object) instead of the smooth one, on both sides; scenes whose ``mode`` is
@@ -109,6 +110,7 @@ __all__ = [
     "compare_scene",
     "diff_image",
     "side_by_side",
+    "labelled_side_by_side",
 ]
 
 #: files written into the output folder
@@ -553,6 +555,56 @@ def side_by_side(*images, gap=2):
     return np.concatenate(parts, axis=1)
 
 
+#: titles of the three panels of ``side_by_side.png``
+PANEL_TITLES = ("sphere tracer", "pyvista marching cubes", "difference")
+
+
+def labelled_side_by_side(tracer_rgb, pyvista_rgb, diff, vmax=DIFF_VMAX, panel_px=256):
+    """``side_by_side.png``: the three images titled :data:`PANEL_TITLES`, with a colour bar
+    for the difference (``|depth difference| / diagonal`` in ``inferno``, 0 to ``vmax``) and
+    a legend for the pixels only one side hit. Returns an ``(H', W', 3)`` uint8 array.
+
+    Each panel is shown at least ``panel_px`` pixels wide (nearest-neighbour enlargement of
+    small renders) so that the titles stay readable.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.colors import Normalize
+    from matplotlib.figure import Figure
+    from matplotlib.patches import Patch
+
+    H, W = tracer_rgb.shape[:2]
+    scale = max(1, -(-panel_px // max(W, 1)))
+    dpi = 100.0
+    pw, ph = W * scale / dpi, H * scale / dpi
+    fig = Figure(figsize=(3 * pw + 1.6, ph + 1.0), dpi=dpi)
+    FigureCanvasAgg(fig)
+    left, gap, top = 0.15 / (3 * pw + 1.6), 0.1 / (3 * pw + 1.6), 1.0 - 0.45 / (ph + 1.0)
+    bottom = 0.55 / (ph + 1.0)
+    fw = pw / (3 * pw + 1.6)
+    axes = []
+    for k, (img, title) in enumerate(zip((tracer_rgb, pyvista_rgb, diff), PANEL_TITLES)):
+        ax = fig.add_axes([left + k * (fw + gap), bottom, fw, top - bottom])
+        ax.imshow(np.asarray(img, dtype=np.uint8), interpolation="nearest")
+        ax.set_title(title, fontsize=10)
+        ax.set_xticks([])
+        ax.set_yticks([])
+        axes.append(ax)
+    cax = fig.add_axes([left + 3 * (fw + gap) + 0.01, bottom, 0.12 / (3 * pw + 1.6),
+                        top - bottom])
+    sm = matplotlib.cm.ScalarMappable(norm=Normalize(0.0, 100.0 * vmax), cmap="inferno")
+    cb = fig.colorbar(sm, cax=cax)
+    cb.set_label("|depth difference|, % of diagonal", fontsize=8)
+    cb.ax.tick_params(labelsize=7)
+    fig.legend(handles=[Patch(color=np.array(TRACER_ONLY) / 255, label="only the tracer hit"),
+                        Patch(color=np.array(PYVISTA_ONLY) / 255, label="only pyvista hit")],
+               loc="lower center", ncol=2, fontsize=8, frameon=False)
+    fig.canvas.draw()
+    return np.asarray(fig.canvas.buffer_rgba())[..., :3].copy()
+
+
 class Comparison(NamedTuple):
     """Result of :func:`compare_scene`: ``metrics`` (dict, as written to metrics.json), the
     ``trace`` (RenderResult) and ``pyvista`` (PyvistaRender), the normal-shaded ``tracer_rgb``,
@@ -676,7 +728,7 @@ def run(args):
     row_imgs = (result.tracer_rgb, result.pyvista.rgb, result.diff)
     save_png(paths[1], result.tracer_rgb, overwrite=args.overwrite)
     save_png(paths[2], result.pyvista.rgb, overwrite=args.overwrite)
-    save_png(paths[3], side_by_side(*row_imgs), overwrite=args.overwrite)
+    save_png(paths[3], labelled_side_by_side(*row_imgs), overwrite=args.overwrite)
     save_png(paths[4], result.diff, overwrite=args.overwrite)
     with atomic_write(paths[0], overwrite=args.overwrite) as tmp:
         with open(tmp, "w", encoding="utf-8") as fh:
