@@ -7,7 +7,8 @@ functions and the tracer use to accept whatever a user already holds:
 input                          becomes
 ============================== ==========================================================
 ``DataMesh``                   itself
-``(V, F)`` numpy arrays        as :class:`DataMesh` (``F`` None, ``(m, 2)`` or ``(m, 3)``)
+``V`` and ``F`` numpy arrays   as :class:`DataMesh` (``F`` None, ``(m, 2)`` or ``(m, 3)``),
+                               also as one ``(V, F)`` tuple
 ``trimesh.Trimesh``            its triangles
 ``trimesh.PointCloud``         its vertices as points
 ``trimesh.path.Path3D``        its polylines as edges (curved entities are discretised)
@@ -63,6 +64,9 @@ def as_data_mesh(mesh, F=None, *, name=None, **mesh_kwargs):
         if F is not None:
             raise ValueError("pass F only together with a vertex array, not with a DataMesh")
         return mesh
+    if (F is None and isinstance(mesh, tuple) and len(mesh) == 2
+            and np.ndim(mesh[0]) == 2 and (mesh[1] is None or np.ndim(mesh[1]) == 2)):
+        mesh, F = mesh  # a (V, F) pair
     if not is_foreign_geometry(mesh):
         return DataMesh(mesh, F, name=name, **mesh_kwargs)
     if F is not None:

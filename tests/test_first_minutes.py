@@ -1,0 +1,381 @@
+"""A new user's first five minutes: their own mesh to an image in one command or one call.
+
+* ``tracer.render_mesh`` / ``tracer render MESH`` frame the whole surface (no hit pixel on
+  the image border) at any scale, position and view;
+* trimesh and pyvista objects give the same values as the equivalent numpy arrays;
+* ``alpha="auto"`` keeps the surface's mean offset within 2 % of the bbox diagonal (measured
+  independently, from rendered hit points and exact distances) while point clouds close;
+* ``alpha_u="auto"`` removes the ribbing of tubes (ripple <= 1 % of the offset);
+* the render summary states alpha, alpha_U and the inflation; ``compare`` labels its panels;
+  NaN vertices are reported with their count and the first one.
+"""
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import smoothdist as sd
+import tracer
+from tracer.camera import primary_rays
+from tracer.cli import main
+from tracer.image import load_png
+
+ROOT = Path(__file__).resolve().parents[1]
+DATA = ROOT / "scenes" / "data"
+
+trimesh = pytest.importorskip("trimesh")
+
+
+def icosphere(subdivisions=3):
+    m = trimesh.creation.icosphere(subdivisions)
+    return np.asarray(m.vertices, dtype=float), np.asarray(m.faces, dtype=np.int64)
+
+
+def border_hits(hit):
+    return int(hit[0].sum() + hit[-1].sum() + hit[:, 0].sum() + hit[:, -1].sum())
+
+
+def hit_points(res):
+    """World positions of the hit pixels of a render."""
+    rays = primary_rays(res.camera)[res.hit]
+    return res.camera.origin + res.depth[res.hit].astype(np.float64)[:, None] * rays
+
+
+# ----------------------------------------------------------------------------- framing
+@pytest.mark.parametrize("scale,shift", [(1.0, 0.0), (1e-3, 5e3), (250.0, -40.0)])
+@pytest.mark.parametrize("view", ["front", "iso", "top", "left"])
+def test_render_mesh_frames_the_whole_surface(scale, shift, view):
+    V, F = icosphere(2)
+    res = tracer.render_mesh((V * scale + shift, F), kind="triangles", size=(40, 32),
+                             view=view)
+    assert res.rgb.shape == (32, 40, 3) and res.depth.shape == (32, 40)
+    assert border_hits(res.hit) == 0
+    assert res.hit.mean() > 0.08  # and it is not a speck
+    o = res.scene.objects[0]
+    assert o.alpha == pytest.approx(o.field.auto_alpha())
+    assert o.alpha_u == pytest.approx(20.0 * o.alpha)
+
+
+@pytest.mark.parametrize("kind", ["edges", "points"])
+def test_render_mesh_frames_other_kinds(kind):
+    V, F = icosphere(2)
+    res = tracer.render_mesh((V + [10.0, -3.0, 7.0], F), kind=kind, size=(32, 32), view="iso")
+    assert border_hits(res.hit) == 0 and res.hit.mean() > 0.08
+
+
+def test_render_mesh_result_saves(tmp_path):
+    V, F = icosphere(1)
+    res = tracer.render_mesh((V, F), size=(24, 24))
+    for name in ("a.png", "depth.npy", "normals.npy"):
+        res.save(tmp_path / name)
+    assert load_png(tmp_path / "a.png").shape == (24, 24, 3)
+    np.testing.assert_array_equal(np.load(tmp_path / "depth.npy"), res.depth)
+    assert np.load(tmp_path / "normals.npy").shape == (24, 24, 3)
+    assert res.steps.shape == (24, 24) and res.hit.dtype == bool
+    with pytest.raises(ValueError, match=".png or .npy"):
+        res.save(tmp_path / "a.jpg")
+
+
+def test_cli_renders_a_mesh_file_framed_and_saves_its_scene(tmp_path, capsys):
+    V, F = icosphere(3)
+    stl = tmp_path / "ico.stl"
+    trimesh.Trimesh(V * 3.0 + 100.0, F).export(stl)
+    out, saved = tmp_path / "ico.png", tmp_path / "scenes" / "ico.json"
+    assert main(["render", str(stl), "--size", "40", "40", "-o", str(out),
+                 "--save-scene", str(saved)]) == 0
+    summary = capsys.readouterr().out
+    img = load_png(out)
+    bg = np.all(img == 255, axis=2)
+    assert not (~bg[0]).any() and not (~bg[-1]).any() and not (~bg[:, 0]).any() \
+        and not (~bg[:, -1]).any()
+    assert (~bg).mean() > 0.1
+    # the summary states the parameters "auto" chose, and the saved scene renders the same
+    field = sd.SmoothDistanceField(sd.load_mesh(stl))
+    a = field.auto_alpha()
+    assert f"alpha {a:.4g}, alpha_U {20 * a:.4g}, inflation <= " \
+        f"{field.inflation(a, 20 * a):.3g}" in summary
+    data = json.loads(saved.read_text())
+    assert data["objects"][0]["path"] == "../ico.stl"
+    assert data["objects"][0]["alpha"] == pytest.approx(a, rel=1e-5)
+    out2 = tmp_path / "again.png"
+    assert main(["render", str(saved), "-o", str(out2), "-q"]) == 0
+    assert np.abs(load_png(out2).astype(int) - img).max() <= 2
+
+
+def test_cli_mesh_options(tmp_path, capsys):
+    obj = DATA / "curves" / "trefoil.obj"
+    out = tmp_path / "t.png"
+    args = ["render", str(obj), "--size", "24", "24", "-o", str(out), "--overwrite", "-q"]
+    assert main(args + ["--alpha", "30", "--alpha-u", "90", "--view", "back"]) == 0
+    assert main(args + ["--kind", "points", "--alpha", "auto"]) == 0
+    assert main(args + ["--camera", "0", "0", "3", "0", "0", "0", "0", "1", "0"]) == 0
+    capsys.readouterr()
+    assert main(args + ["--kind", "triangles"]) == 2
+    assert "has no triangles" in capsys.readouterr().err
+    assert main(args + ["--alpha", "sharp"]) == 2
+    assert "--alpha" in capsys.readouterr().err
+    # a scene file takes --view / --camera / --alpha auto too
+    assert main(["render", str(ROOT / "scenes" / "trefoil.json"), "--size", "24", "24", "-o",
+                 str(out), "--overwrite", "-q", "--view", "iso", "--alpha", "auto"]) == 0
+
+
+def test_cli_refuses_a_file_that_is_neither(tmp_path, capsys):
+    txt = tmp_path / "notes.txt"
+    txt.write_text("hello\n")
+    assert main(["render", str(txt)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: cannot render") and ".json" in err and ".obj" in err \
+        and ".ply" in err and "Traceback" not in err
+    assert len(err.strip().splitlines()) == 1
+
+
+# ----------------------------------------------------------------------------- foreign input
+def _same_field(a, b, Q, exact=True):
+    fa, fb = sd.SmoothDistanceField(a), sd.SmoothDistanceField(b)
+    for alpha in (3.0, 40.0):
+        x = fa.smooth_distance(Q, alpha=alpha, beta=0.0)
+        y = fb.smooth_distance(Q, alpha=alpha, beta=0.0)
+        np.testing.assert_allclose(x.distance, y.distance, rtol=1e-12, atol=1e-14)
+        np.testing.assert_allclose(x.gradient, y.gradient, rtol=1e-10, atol=1e-12)
+    if exact:
+        np.testing.assert_allclose(fa.exact_distance(Q).distance, fb.exact_distance(Q).distance,
+                                   rtol=1e-12, atol=1e-15)
+
+
+@pytest.fixture
+def queries():
+    rng = np.random.default_rng(7)
+    return rng.uniform(-1.6, 1.6, size=(60, 3))
+
+
+def test_trimesh_objects_match_arrays(queries):
+    V, F = icosphere(1)
+    tm = trimesh.Trimesh(V, F, process=False)
+    _same_field(tm, sd.DataMesh(V, F), queries)
+    # the module-level functions take the object in place of V (F=None)
+    d1, g1 = sd.smooth_distance(queries, tm, None, alpha=7.0, beta=0.0)
+    d2, g2 = sd.smooth_distance(queries, V, F, alpha=7.0, beta=0.0)
+    np.testing.assert_allclose(d1, d2, rtol=1e-12)
+    np.testing.assert_allclose(sd.exact_distance(queries, tm)[0],
+                               sd.exact_distance(queries, V, F)[0], rtol=1e-12)
+    _same_field(trimesh.PointCloud(V), sd.DataMesh(V), queries)
+    # a polyline as trimesh.path.Path3D: its edges
+    t = np.linspace(0, 2 * np.pi, 40)
+    P = np.stack([np.cos(t), np.sin(t), 0.3 * t], axis=1)
+    path = trimesh.load_path(P)
+    assert type(path).__name__ == "Path3D"
+    E = np.stack([np.arange(39), np.arange(1, 40)], axis=1)
+    _same_field(path, sd.DataMesh(P, E), queries)
+
+
+def test_pyvista_polydata_matches_arrays(queries):
+    pv = pytest.importorskip("pyvista")
+    V, F = icosphere(1)
+    faces = np.hstack([np.full((F.shape[0], 1), 3), F]).ravel()
+    _same_field(pv.PolyData(V, faces=faces), sd.DataMesh(V, F), queries)
+    # quads are fanned into triangles
+    Vq = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0.2]], dtype=float)
+    _same_field(pv.PolyData(Vq, faces=[4, 0, 1, 2, 3]),
+                sd.DataMesh(Vq, [[0, 1, 2], [0, 2, 3]]), queries)
+    # lines (a polyline cell) as edges
+    n = 30
+    P = np.stack([np.linspace(-1, 1, n), np.sin(np.linspace(0, 3, n)), np.zeros(n)], axis=1)
+    E = np.stack([np.arange(n - 1), np.arange(1, n)], axis=1)
+    _same_field(pv.PolyData(P, lines=np.r_[n, np.arange(n)]), sd.DataMesh(P, E), queries)
+    # vertex cells, or no cells at all: a point cloud
+    _same_field(pv.PolyData(V), sd.DataMesh(V), queries)
+    _same_field(pv.PolyData(V, verts=np.hstack([np.ones((len(V), 1), int),
+                                                np.arange(len(V))[:, None]]).ravel()),
+                sd.DataMesh(V), queries)
+    # faces and lines in one PolyData: a mixed mesh
+    mixed = pv.PolyData(V, faces=faces, lines=[3, 0, 5, 9])
+    want = sd.DataMesh(V, triangles=F, edges=[[0, 5], [5, 9]])
+    assert sd.SmoothDistanceField(mixed).mesh.kind == "mixed"
+    _same_field(mixed, want, queries)
+
+
+def test_render_mesh_gives_the_same_image_for_every_input_type():
+    pv = pytest.importorskip("pyvista")
+    V, F = icosphere(2)
+    faces = np.hstack([np.full((F.shape[0], 1), 3), F]).ravel()
+    ref = tracer.render_mesh((V, F), size=(24, 24), view="iso")
+    for obj in (trimesh.Trimesh(V, F, process=False), pv.PolyData(V, faces=faces),
+                sd.DataMesh(V, F)):
+        res = tracer.render_mesh(obj, size=(24, 24), view="iso")
+        np.testing.assert_array_equal(res.hit, ref.hit)
+        np.testing.assert_allclose(res.depth[res.hit], ref.depth[ref.hit], rtol=1e-6)
+    # the positional form render_mesh(V, F) too
+    np.testing.assert_array_equal(tracer.render_mesh(V, F, size=(24, 24), view="iso").hit,
+                                  ref.hit)
+
+
+def test_foreign_input_errors():
+    with pytest.raises(ValueError, match="pass F only"):
+        sd.SmoothDistanceField(trimesh.PointCloud(np.eye(3)), np.array([[0, 1]]))
+    with pytest.raises(ValueError, match="kind must be one of"):
+        tracer.render_mesh(trimesh.PointCloud(np.eye(3)), kind="quads")
+    with pytest.raises(ValueError, match="NaN"):
+        sd.SmoothDistanceField(trimesh.PointCloud(np.array([[0, 0, np.nan], [1, 1, 1.0]])))
+
+
+# ----------------------------------------------------------------------------- alpha="auto"
+#: (file, kind): every shipped mesh in its own kind(s), curves as edges, clouds as points
+SHIPPED = [("bunny.off", "triangles"), ("bunny.off", "edges"),
+           ("meshes/torus.obj", "triangles"), ("meshes/torus.obj", "edges"),
+           ("meshes/octopus_low.obj", "triangles"), ("meshes/octopus_low.obj", "edges"),
+           ("curves/trefoil.obj", "edges"), ("curves/capillary_networks.obj", "edges"),
+           ("pointclouds/scan_guardian_lion_points.ply", "points"),
+           ("pointclouds/lidar_autzen_trim.ply", "points")]
+
+
+def _mean_offset(res):
+    """Mean exact distance from the rendered surface to the data / bbox diagonal."""
+    field = res.scene.objects[0].field
+    return float(field.exact_distance(hit_points(res)).distance.mean()) / field.diagonal
+
+
+@pytest.mark.parametrize("path,kind", SHIPPED)
+def test_auto_alpha_offset_is_within_two_percent_of_the_diagonal(path, kind):
+    for view in ("front", "iso"):
+        res = tracer.render_mesh(DATA / path, kind=kind, size=(40, 40), view=view)
+        assert res.hit.sum() > 20
+        assert _mean_offset(res) <= 0.02, (path, kind, view, _mean_offset(res))
+
+
+@pytest.mark.parametrize("kind", ["triangles", "edges"])
+def test_auto_alpha_on_a_unit_icosphere(kind):
+    """The issue's case: a 642-vertex unit icosphere got alpha 7.23 and a radius of 1.85."""
+    V, F = icosphere(3)
+    res = tracer.render_mesh((V, F), kind=kind, size=(48, 48))
+    assert _mean_offset(res) <= 0.02
+    r = np.linalg.norm(hit_points(res), axis=1)
+    assert r.max() < 1.0 + 0.02 * 2 * np.sqrt(3)
+    # the paper's rule (1 / shortest edge) is what inflated it
+    field = res.scene.objects[0].field
+    assert field.paper_alpha() < 8 and field.auto_alpha() > 5 * field.paper_alpha()
+
+
+@pytest.mark.parametrize("name,data", [
+    ("icosphere-4", None), ("bunny", "bunny.off"), ("torus", "meshes/torus.obj"),
+    ("octopus", "meshes/octopus_low.obj")])
+def test_auto_alpha_point_clouds_close(name, data):
+    """Vertices of closed meshes as point clouds: at alpha="auto" every triangle centroid
+    (the point of the sampled surface farthest from the samples) is inside the surface, so
+    the blobs merge into one closed surface. The offset is then set by the spacing h (about
+    3-4 h), so the 2 % promise holds for clouds with h <= 0.5 % of the diagonal."""
+    if data is None:
+        V, F = icosphere(4)
+    else:
+        mesh = sd.load_mesh(DATA / data)
+        V, F = mesh.V, mesh.triangles
+    field = sd.SmoothDistanceField(V)
+    alpha = field.auto_alpha()
+    d = field.smooth_distance(V[F].mean(axis=1), alpha=alpha, beta=0.5, alpha_u="auto").distance
+    assert np.all(d <= 0), (name, int((d > 0).sum()))
+    res = tracer.render_mesh(field.mesh, size=(40, 40), view="iso")
+    h = field.point_spacing()
+    mean_offset = _mean_offset(res) * field.diagonal
+    assert mean_offset <= 4.0 * h
+    if h <= 0.005 * field.diagonal:  # dense enough for the 2 % promise
+        assert mean_offset <= 0.02 * field.diagonal
+
+
+def test_auto_alpha_dense_clouds_close():
+    """The scanned clouds: the midpoint of a sampled point and its nearest neighbour is inside
+    the surface (neighbouring blobs merge), for at least 99 % of the samples (a stray
+    isolated return stays an isolated blob)."""
+    for path in ("pointclouds/scan_guardian_lion_points.ply", "pointclouds/lidar_autzen_trim.ply"):
+        field = sd.SmoothDistanceField(sd.load_mesh(DATA / path))
+        alpha = field.auto_alpha()
+        rng = np.random.default_rng(3)
+        P = field.mesh.V[rng.choice(field.mesh.V.shape[0], 300, replace=False)]
+        V = field.mesh.V  # nearest other point by brute force
+        mids = []
+        for p in P:
+            d = np.linalg.norm(V - p, axis=1)
+            d[d == 0] = np.inf
+            mids.append(0.5 * (p + V[np.argmin(d)]))
+        dh = field.smooth_distance(np.array(mids), alpha=alpha, beta=0.5).distance
+        assert np.mean(dh <= 0) >= 0.99, (path, int((dh > 0).sum()))
+
+
+# ----------------------------------------------------------------------------- alpha_u="auto"
+def _tube_radius(field, xs, alpha, alpha_u):
+    """Radius of the isosurface around a polyline on the x axis at abscissae ``xs``."""
+    lo, hi = np.zeros_like(xs), np.full_like(xs, 50.0 / alpha)
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        d = field.smooth_distance(np.stack([xs, mid, 0 * xs], axis=1), alpha=alpha, beta=0.0,
+                                  alpha_u=alpha_u).distance
+        lo, hi = np.where(d < 0, mid, lo), np.where(d < 0, hi, mid)
+    return 0.5 * (lo + hi)
+
+
+@pytest.mark.parametrize("alpha_h", [0.3, 0.5, 1.0, 1.5])
+def test_auto_alpha_u_removes_ribbing_on_a_straight_polyline(alpha_h):
+    n, h = 41, 0.37
+    V = np.stack([np.arange(n) * h, np.zeros(n), np.zeros(n)], axis=1)
+    field = sd.SmoothDistanceField(V, np.stack([np.arange(n - 1), np.arange(1, n)], axis=1))
+    xs = np.linspace(18 * h, 22 * h, 161)  # four edges in the middle
+    alpha = alpha_h / h
+    r = _tube_radius(field, xs, alpha, "auto")
+    ripple = (r.max() - r.min()) / r.mean()
+    assert ripple <= 0.01, ripple
+    if alpha_h >= 0.5:  # without attenuation (alpha_U = alpha, S = 1) the tube is ribbed
+        r1 = _tube_radius(field, xs, alpha, alpha)
+        assert (r1.max() - r1.min()) / r1.mean() > 0.04
+
+
+def test_alpha_u_auto_everywhere():
+    V, F = icosphere(1)
+    field = sd.SmoothDistanceField(V, F)
+    assert field.attenuation(10.0, "auto") == pytest.approx(1 / 20)
+    a = field.smooth_distance(V * 1.3, alpha=10.0, alpha_u="auto").distance
+    b = field.smooth_distance(V * 1.3, alpha=10.0, alpha_u=200.0).distance
+    np.testing.assert_array_equal(a, b)
+    from tracer.scene import scene_from_field
+
+    s = scene_from_field(field, alpha="auto", alpha_u="auto", width=8, height=8, camera="iso")
+    assert s.objects[0].alpha == field.auto_alpha()
+    assert s.objects[0].alpha_u == pytest.approx(20 * field.auto_alpha())
+    # scene_from_field keeps None = no attenuation (alpha_u = alpha)
+    assert scene_from_field(field, alpha=5.0, width=8, height=8).objects[0].alpha_u == 5.0
+
+
+# ----------------------------------------------------------------------------- messages
+def test_nan_vertex_messages_name_count_and_first_vertex(tmp_path):
+    V = np.zeros((6, 3))
+    V[:, 0] = np.arange(6)
+    V[2, 1] = np.nan
+    V[4, 2] = np.inf
+    with pytest.raises(ValueError, match=r"2 of 6 rows \(first: row 2, \[2\.0, nan, 0\.0\]\)"):
+        sd.SmoothDistanceField(V)
+    obj = tmp_path / "bad.obj"
+    obj.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv nan 0 0\nv 1 1 inf\nf 1 2 3\n")
+    with pytest.raises(ValueError, match=r"2 of 5 vertices \(first: vertex 3, \[nan"):
+        sd.load_mesh(obj)
+
+
+def test_compare_panels_are_titled_with_a_colour_bar():
+    pytest.importorskip("matplotlib")
+    from matplotlib import colormaps
+
+    from tracer.compare import PANEL_TITLES, labelled_side_by_side
+
+    assert PANEL_TITLES == ("sphere tracer", "pyvista marching cubes", "difference")
+    a = np.full((20, 30, 3), 255, np.uint8)
+    b = a.copy()
+    diff = a.copy()
+    diff[5:10, 5:10] = (0, 190, 70)
+    img = labelled_side_by_side(a, b, diff)
+    assert img.dtype == np.uint8 and img.shape[0] > 20 and img.shape[1] > 90
+    # the colour bar: a column right of the panels running from inferno(0) to inferno(1)
+    right = img[:, int(0.85 * img.shape[1]):].reshape(-1, 3).astype(float)
+    for t in (0.0, 0.5, 1.0):
+        want = np.array(colormaps["inferno"](t)[:3]) * 255
+        assert np.min(np.abs(right - want).sum(axis=1)) < 30, t
+    # title text: dark pixels above the first panel
+    top = img[: img.shape[0] // 6, : img.shape[1] // 3]
+    assert (top.sum(axis=2) < 200).sum() > 20
