@@ -58,6 +58,25 @@ def test_render_mesh_frames_the_whole_surface(scale, shift, view):
     assert o.alpha_u == pytest.approx(20.0 * o.alpha)
 
 
+@pytest.mark.parametrize("view", ["front", "back", "left", "right", "top", "iso"])
+def test_frame_points_keeps_every_ball_in_view(view):
+    from tracer.camera import frame_points, look_at, project
+
+    rng = np.random.default_rng(5)
+    P = rng.normal(size=(50, 3)) * [3.0, 0.2, 1.0] + [1e4, -2.0, 7.0]
+    radius = 0.4
+    W, H = 48, 30
+    cam = look_at(*frame_points(P, radius, view, W, H), W, H)
+    u = rng.normal(size=(50, 200, 3))
+    S = (P[:, None, :] + radius * u / np.linalg.norm(u, axis=2, keepdims=True)).reshape(-1, 3)
+    rows, cols, depth = project(cam, S)
+    assert np.all(depth > 0)
+    assert rows.min() > 0 and rows.max() < H - 1 and cols.min() > 0 and cols.max() < W - 1
+    # and not far inside either: the framing is tight along one image axis
+    assert min(rows.min(), H - 1 - rows.max()) < 0.1 * H or \
+        min(cols.min(), W - 1 - cols.max()) < 0.1 * W
+
+
 @pytest.mark.parametrize("kind", ["edges", "points"])
 def test_render_mesh_frames_other_kinds(kind):
     V, F = icosphere(2)

@@ -42,6 +42,7 @@ __all__ = [
     "default_camera_for_bounds",
     "VIEWS",
     "frame_box",
+    "frame_points",
 ]
 
 #: Number of values in :meth:`Camera.as_array`.
@@ -447,16 +448,35 @@ FRAME_MARGIN = 0.05
 def frame_box(lo, hi, view="front", width=512, height=512, margin=FRAME_MARGIN):
     """A camera from which the whole box ``lo..hi`` is in view, with a small free border.
 
-    The eye looks at the box centre from the named ``view`` direction and is placed at the
-    smallest distance at which all eight corners project inside the image shrunk by
-    ``margin`` (a fraction of its half-size) and one pixel, and at least ``margin x`` the box
-    diagonal outside the box. Anything inside the box (e.g. an isosurface inside the
-    tracer's conservative box) is therefore in view, at any scale and position.
+    :func:`frame_points` of the box's eight corners; the box may be flat but not a single
+    point. Returns ``(origin, dest, up)``.
+    """
+    lo = _vector3(lo, "lo")
+    hi = _vector3(hi, "hi")
+    if np.any(hi < lo):
+        raise ValueError(f"bounds must satisfy lo <= hi, got lo={lo.tolist()} hi={hi.tolist()}")
+    if not np.linalg.norm(hi - lo) > 0.0:
+        raise ValueError(f"bounds are a single point {lo.tolist()}; nothing to frame")
+    corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
+                        for z in (lo[2], hi[2])])
+    return frame_points(corners, 0.0, view, width, height, margin)
+
+
+def frame_points(points, radius, view="front", width=512, height=512, margin=FRAME_MARGIN):
+    """A camera from which every ball of ``radius`` around ``points`` is in view.
+
+    The eye looks at the centre of the points' bounding box from the named ``view``
+    direction and is placed at the smallest distance at which every ball lies inside the
+    view pyramid shrunk by ``margin`` (a fraction of the image's half-size) and one pixel,
+    and the eye lies outside every ball by at least ``margin x`` their extent. A surface
+    known to lie within ``radius`` of the convex hull of ``points`` (the smooth surface lies
+    within its inflation bound of the data's vertices' hull) is therefore wholly in view, at
+    any scale and position.
 
     Parameters
     ----------
-    lo, hi : (3,) array_like of float
-        Box corners, ``lo <= hi``; the box may be flat but not a single point.
+    points : (n, 3) array_like of float
+    radius : float >= 0
     view : str or ((3,), (3,))
         A key of :data:`VIEWS`, or ``(direction from the centre to the eye, up)``.
     width, height : int
@@ -468,13 +488,14 @@ def frame_box(lo, hi, view="front", width=512, height=512, margin=FRAME_MARGIN):
     -------
     (origin, dest, up) : three (3,) float64 arrays, for :func:`look_at` or a scene file.
     """
-    lo = _vector3(lo, "lo")
-    hi = _vector3(hi, "hi")
-    if np.any(hi < lo):
-        raise ValueError(f"bounds must satisfy lo <= hi, got lo={lo.tolist()} hi={hi.tolist()}")
-    diag = float(np.linalg.norm(hi - lo))
-    if not diag > 0.0:
-        raise ValueError(f"bounds are a single point {lo.tolist()}; nothing to frame")
+    P = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    radius = float(radius)
+    if P.shape[0] == 0 or not np.all(np.isfinite(P)) or not (radius >= 0.0):
+        raise ValueError("frame_points needs finite points and a radius >= 0")
+    lo, hi = P.min(axis=0), P.max(axis=0)
+    extent = float(np.linalg.norm(hi - lo)) + 2.0 * radius
+    if not extent > 0.0:
+        raise ValueError(f"nothing to frame: a single point {lo.tolist()} and radius 0")
     if isinstance(view, str):
         if view not in VIEWS:
             raise ValueError(f"view must be one of {', '.join(VIEWS)}; got {view!r}")
@@ -490,15 +511,15 @@ def frame_box(lo, hi, view="front", width=512, height=512, margin=FRAME_MARGIN):
     direction = _direction(direction, "view direction")
     up = _direction(up, "view up")
     cam = look_at(centre + direction, centre, up, width, height)
-    corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
-                        for z in (lo[2], hi[2])]) - centre
-    right = np.abs(corners @ cam.horizontal)
-    upward = np.abs(corners @ cam.vertical)
-    along = corners @ cam.forward
-    # a corner at (right, upward, along) from the centre projects to dx = right / (D + along)
-    # with the eye at distance D; the image spans |dx| <= 0.5 * scale_x (less one pixel)
+    rel = P - centre
+    right = np.abs(rel @ cam.horizontal)
+    upward = np.abs(rel @ cam.vertical)
+    along = rel @ cam.forward
+    # a ball at (right, upward, along) from the centre, eye at distance D: inside the
+    # half-space |x| <= k z of the view pyramid iff right + radius sqrt(1 + k^2) <= k (D + along)
     kx = cam.scale_x * max(0.5 * (1.0 - margin) - 1.0 / cam.width, 0.05)
     ky = cam.scale_y * max(0.5 * (1.0 - margin) - 1.0 / cam.height, 0.05)
-    dist = max(float(np.max(right / kx - along)), float(np.max(upward / ky - along)),
-               float(np.max(-along)) + max(margin, 0.01) * diag)
+    dist = max(float(np.max((right + radius * np.hypot(1.0, kx)) / kx - along)),
+               float(np.max((upward + radius * np.hypot(1.0, ky)) / ky - along)),
+               float(np.max(-along)) + radius + max(margin, 0.01) * extent)
     return centre + dist * direction, centre, up

@@ -222,16 +222,17 @@ def _mesh_scene(args, overrides):
 
 
 def _replace_camera(scene, args):
-    """``--view`` / ``--camera`` for a scene file: a new camera (framing the conservative box
-    of every object for ``--view``)."""
-    from tracer.camera import frame_box, look_at
+    """``--view`` / ``--camera`` for a scene file: a new camera (for ``--view``, framing every
+    object's vertices grown by the tracer's conservative margin, which contains the surface)."""
+    from tracer.camera import frame_points, look_at
     from tracer.render import scene_arrays
 
     if args.camera:
         origin, dest, up = _camera_arg(args)
     else:
-        lo, hi = scene_arrays(scene)[4:6]
-        origin, dest, up = frame_box(lo, hi, args.view, scene.width, scene.height)
+        grow = float(scene.bounds[0][0] - scene_arrays(scene)[4][0])
+        P = np.concatenate([o.field.mesh.used_vertices() for o in scene.objects])
+        origin, dest, up = frame_points(P, grow, args.view, scene.width, scene.height)
     look_at(origin, dest, up, scene.width, scene.height)  # validates
     scene.camera_origin, scene.camera_dest, scene.camera_up = origin, dest, up
 

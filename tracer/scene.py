@@ -492,8 +492,9 @@ def scene_from_field(field, *, alpha, alpha_u=None, beta=0.5, camera=None, width
         Barnes-Hut parameter.
     camera : (origin, dest, up), or a view name, optional
         Three 3-vectors, or a key of :data:`tracer.camera.VIEWS` (``"front"``, ``"iso"``,
-        ...) to frame the whole surface (:func:`tracer.camera.frame_box` of the tracer's
-        conservative box). Default: the paper's beta-study camera (bbox centre + 2 x the
+        ...) to frame the whole surface (:func:`tracer.camera.frame_points`: the data's
+        vertices grown by the inflation bound, which contains the surface). Default: the
+        paper's beta-study camera (bbox centre + 2 x the
         largest extent along +z, looking at the centre, up +y), which may crop a blurry
         surface.
     """
@@ -522,11 +523,13 @@ def scene_from_field(field, *, alpha, alpha_u=None, beta=0.5, camera=None, width
                          f"{MAX_PIXELS // 1_000_000} megapixels")
     lo, hi = field.bounds
     if isinstance(camera, str):
-        from tracer.camera import frame_box
+        from tracer.camera import frame_points
 
+        # the surface lies within its inflation bound (exact mode: the offset) of the data
         grow = (offset if mode == "exact" and offset is not None else
                 1.0 / alpha if mode == "exact" else field.inflation(alpha, alpha_u))
-        camera = frame_box(lo - grow, hi + grow, camera, width, height)
+        camera = frame_points(field.mesh.used_vertices(), grow + 2.0 * (eps or 0.0), camera,
+                              width, height)
     elif camera is None:
         c = 0.5 * (lo + hi)
         # a single point (or identical points) has no extent: back off by the surface's size
