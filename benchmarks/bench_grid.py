@@ -15,7 +15,7 @@ The protocol of the paper's CPU benchmark (Madan & Levin 2022, Sec. 5; the autho
 
 Usage (from the repository root)::
 
-    python benchmarks/bench_grid.py                      # ../shared/data/bunny.off, N = 100
+    python benchmarks/bench_grid.py                      # scenes/data/bunny.off, N = 100
     python benchmarks/bench_grid.py mesh.obj --grid 50 --beta 0.25 --json out.json
 
 The JIT is warmed up on a few queries before timing; compiled kernels are cached on disk.
@@ -38,7 +38,7 @@ import numpy as np  # noqa: E402
 
 from smoothdist import DataMesh, SmoothDistanceField  # noqa: E402
 
-DEFAULT_MESH = REPO / ".." / "shared" / "data" / "bunny.off"
+DEFAULT_MESH = REPO / "scenes" / "data" / "bunny.off"  # the paper's 3,485-vertex bunny
 KINDS = (("V", "points"), ("E", "edges"), ("F", "triangles"))
 
 
@@ -133,7 +133,7 @@ def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("mesh", nargs="?", default=str(DEFAULT_MESH),
-                   help="mesh file (OBJ/OFF/STL/PLY); default ../shared/data/bunny.off")
+                   help="mesh file (OBJ/OFF/STL/PLY); default scenes/data/bunny.off")
     p.add_argument("--grid", type=int, default=100, help="N: N^3 queries (default 100)")
     p.add_argument("--alpha", type=float, default=None,
                    help="alpha (default: 1 / shortest edge of the normalised mesh)")
