@@ -94,7 +94,7 @@ def run(args):
             alpha = args.alpha
         else:
             e = mesh.min_edge_length()
-            alpha = 1.0 / e if e is not None else (alpha_src or field.auto_alpha())
+            alpha = 1.0 / e if e is not None else (alpha_src or field.paper_alpha())
         kw = dict(alpha=alpha, beta=args.beta, alpha_u=args.alpha_u, gradient=args.gradient,
                   return_stats=True)
         # warm up the JIT (and the caches) on a few queries
