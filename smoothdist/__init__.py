@@ -11,13 +11,14 @@ Conventions
 * The smooth distance is conservative: ``d - log(A**S N)/alpha <= d_hat <= d``.
 """
 
+from smoothdist.convert import as_data_mesh
 from smoothdist.field import (ExactDistanceResult, QueryStats, SmoothDistanceField,
                               SmoothDistanceResult)
 from smoothdist.mesh import DataMesh, MeshRepairWarning
 
 __all__ = ["DataMesh", "MeshRepairWarning", "SmoothDistanceField", "SmoothDistanceResult",
            "ExactDistanceResult", "QueryStats", "smooth_distance", "exact_distance",
-           "load_mesh"]
+           "load_mesh", "as_data_mesh"]
 __version__ = "0.1.0"
 
 
@@ -34,16 +35,18 @@ def smooth_distance(Q, V, F=None, *, alpha, beta=0.5, alpha_u=None, gradient="me
     ----------
     Q : (q, 3) array_like of float
         Query points.
-    V : (n, 3) array_like of float
-        Data vertices.
+    V : (n, 3) array_like of float, or a DataMesh / trimesh / pyvista object
+        Data vertices, or a whole mesh (then ``F`` is None; see
+        :func:`smoothdist.convert.as_data_mesh`).
     F : None, (m, 2) or (m, 3) array_like of int
         ``None``: the vertices are a point cloud; ``(m, 2)`` edges; ``(m, 3)`` triangles.
     alpha : float or "auto"
-        Sharpness, 1 / scene units (> 0).
+        Sharpness, 1 / scene units (> 0); ``"auto"``: mean surface offset <= 2 % of the
+        bbox diagonal (:meth:`SmoothDistanceField.auto_alpha`).
     beta : float
         Barnes-Hut parameter (>= 0); 0 is exact.
-    alpha_u : float, optional
-        Attenuation threshold alpha_U; None disables attenuation.
+    alpha_u : float or "auto", optional
+        Attenuation threshold alpha_U; None disables attenuation; ``"auto"`` is 20 x alpha.
     gradient : {"metric", "exact"}
         The paper's alpha-metric weight gradient, or the exact derivative of ``d_hat``.
     return_stats : bool
@@ -68,5 +71,6 @@ def smooth_distance(Q, V, F=None, *, alpha, beta=0.5, alpha_u=None, gradient="me
 
 
 def exact_distance(Q, V, F=None):
-    """Exact unsigned distance ``(d (q,), grad (q, 3))`` from query points to a data mesh."""
+    """Exact unsigned distance ``(d (q,), grad (q, 3))`` from query points to a data mesh
+    (``V``, ``F`` as in :func:`smooth_distance`)."""
     return SmoothDistanceField(V, F).exact_distance(Q)
