@@ -4,7 +4,7 @@
 ``trimesh.Trimesh`` / ``PointCloud`` / ``path.Path3D``, a ``pyvista.PolyData`` or a
 :class:`smoothdist.DataMesh`, picks ``alpha="auto"`` and ``alpha_u="auto"`` (see
 :meth:`smoothdist.SmoothDistanceField.auto_alpha`), frames the whole surface with
-:func:`tracer.camera.frame_box` and returns a :class:`tracer.render.RenderResult` of numpy
+:func:`tracer.camera.frame_points` and returns a :class:`tracer.render.RenderResult` of numpy
 arrays (``rgb``, ``depth``, ``normals``, ``hit``, ``steps``, ...; ``.save(path)``).
 """
 
@@ -55,8 +55,9 @@ def mesh_scene(mesh, F=None, *, kind=None, alpha="auto", alpha_u="auto", beta=0.
         Image ``(width, height)`` in pixels.
     view : str
         ``front``, ``back``, ``left``, ``right``, ``top`` or ``iso`` (y up; see
-        :data:`tracer.camera.VIEWS`): the camera frames the tracer's conservative box of the
-        surface (the data's box grown by the largest possible inflation) from there.
+        :data:`tracer.camera.VIEWS`): the camera frames, from there, the region the surface
+        can occupy (the data's vertices grown by the largest possible inflation;
+        :func:`tracer.camera.frame_points`).
     camera : (origin, dest, up), optional
         An explicit camera instead of ``view``.
     mode, offset, eps, shading, matcap :
@@ -95,12 +96,11 @@ def render_mesh(mesh, F=None, *, kind=None, alpha="auto", alpha_u="auto", beta=0
         ``camera``, ``scene`` (``scene.objects[0].alpha`` / ``.alpha_u`` are the values used)
         and ``save(path)``.
 
-    Examples
-    --------
-    >>> import trimesh, tracer                                   # doctest: +SKIP
-    >>> res = tracer.render_mesh(trimesh.creation.icosphere(), kind="edges", size=(256, 256))
-    >>> res.save("renders/ico.png"); res.depth.shape
-    (256, 256)
+    Example::
+
+        import trimesh, tracer
+        res = tracer.render_mesh(trimesh.creation.icosphere(), kind="edges", size=(256, 256))
+        res.save("renders/ico.png")         # res.rgb, res.depth, res.hit, ... are arrays
     """
     from tracer.render import render
 
