@@ -72,8 +72,46 @@ def check_arguments(args):
     if workers is not None and sched != "local":
         raise CLIError("--workers applies to --scheduler local only")
     if sched not in ("local", "serial"):
-        _split_address(sched)
+        check_reachable(sched)
     return sched, workers
+
+
+def check_reachable(address, timeout=CONNECT_TIMEOUT):
+    """Fail fast, before a study creates any output, when no Dask scheduler answers at
+    ``address``: one-line :class:`CLIError` after at most about ``timeout`` seconds."""
+    import asyncio
+
+    scheme, host, port = _split_address(address)
+    addr = f"{scheme}://{host}:{port}" if ":" not in host else f"{scheme}://[{host}]:{port}"
+
+    async def identity():
+        from distributed.comm import connect
+
+        comm = await connect(addr, timeout=timeout)
+        try:
+            await comm.write({"op": "identity", "reply": True})
+            return await comm.read()
+        finally:
+            comm.abort()
+
+    try:
+        reply = asyncio.run(asyncio.wait_for(identity(), timeout + 1.0))
+    except ImportError:
+        raise CLIError("dask.distributed is not installed (pip install 'distributed'); use "
+                       "--scheduler serial") from None
+    except KeyboardInterrupt:
+        raise
+    except BaseException as exc:  # refused, timed out, or something else answering
+        if isinstance(exc, (TimeoutError, asyncio.TimeoutError)):
+            reason = "no answer"
+        elif isinstance(exc, OSError):
+            reason = _error_line(exc)
+        else:  # e.g. an HTTP proxy answering: its reply is not Dask's protocol
+            reason = "something that is not a Dask scheduler answers there"
+        raise CLIError(f"cannot reach the Dask scheduler at {address}: {reason} (waited at "
+                       f"most {timeout:g} s)") from None
+    if not (isinstance(reply, dict) and reply.get("type") == "Scheduler"):
+        raise CLIError(f"{address} did not answer as a Dask scheduler")
 
 
 def _split_address(address):
@@ -230,7 +268,8 @@ class StudyProgress:
 
 # =============================================================================== running
 def call_task(fn, task, progress=None):
-    """Run ``fn(task)`` and add the runner's columns (worker id, task wall time) to its record.
+    """Run ``fn(task)`` (``fn(task, progress=cb)`` in-process when ``fn`` takes a progress
+    callback) and add the runner's columns (status, worker id, task wall time) to its record.
     This is what executes on a Dask worker."""
     t0 = time.perf_counter()
     if progress is not None and "progress" in inspect.signature(fn).parameters:
@@ -332,9 +371,10 @@ def run_tasks(fn, tasks, *, on_result, on_failure=None, scheduler="local", worke
     client, cluster = connect(mode, workers)
     try:
         nworkers = len(client.scheduler_info().get("workers", {}))
-        info = RunInfo(mode, nworkers, _dashboard(client))
+        info = RunInfo(mode, nworkers, _dashboard(client, local=cluster is not None))
         if not quiet:
-            dash = f"; dashboard {info.dashboard}" if info.dashboard else ""
+            dash = (f"; dashboard {info.dashboard}" if info.dashboard
+                    else "; no dashboard (it needs bokeh: pip install bokeh)")
             prog.log(f"{label}: {len(tasks)} task(s) on {info.describe()} at "
                      f"{client.scheduler.address}{dash}")
         from distributed import as_completed
@@ -378,14 +418,10 @@ def connect(mode, workers=None, timeout=CONNECT_TIMEOUT):
                        "--scheduler serial") from None
     if mode == "local":
         n = workers or cpu_count()
+        # the scheduler's HTTP server (dashboard) on a free local port, never on 0.0.0.0
         kw = dict(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
-                  silence_logs=logging.ERROR, env={"NUMBA_NUM_THREADS": "1"})
-        try:
-            import bokeh  # the dashboard needs it
-
-            kw["dashboard_address"] = "127.0.0.1:0" if bokeh else None
-        except ImportError:
-            kw["dashboard_address"] = None
+                  dashboard_address="127.0.0.1:0", silence_logs=logging.ERROR,
+                  env={"NUMBA_NUM_THREADS": "1"})
         try:
             cluster = LocalCluster(**kw)
         except Exception as exc:
@@ -399,13 +435,22 @@ def connect(mode, workers=None, timeout=CONNECT_TIMEOUT):
     address = f"{scheme}://{host}:{port}" if ":" not in host else f"{scheme}://[{host}]:{port}"
     try:
         client = Client(address, timeout=f"{timeout}s", set_as_default=False)
-    except (OSError, TimeoutError, ValueError) as exc:
+    except KeyboardInterrupt:
+        raise
+    except Exception as exc:
         raise CLIError(f"cannot reach the Dask scheduler at {mode} (no answer within "
                        f"{timeout:g} s): {_error_line(exc)}") from None
     return client, None
 
 
-def _dashboard(client):
+def _dashboard(client, local=True):
+    """The dashboard's URL, or None when the scheduler has none (its pages need bokeh in the
+    scheduler's environment: checked here for a local cluster)."""
+    if local:
+        try:
+            import bokeh  # noqa: F401
+        except ImportError:
+            return None
     try:
         if client.scheduler_info().get("services", {}).get("dashboard"):
             return client.dashboard_link
