@@ -333,7 +333,7 @@ def run_tasks(fn, tasks, *, on_result, on_failure=None, scheduler="local", worke
     (a :class:`StudyProgress`) is created when not given.
     """
     tasks = list(tasks)
-    mode = choose_mode(scheduler, workers, len(tasks), estimate)
+    mode = choose_mode(scheduler, workers, len(tasks), estimate) if tasks else "serial"
     total = sum(float(t.get("weight", 1.0)) for t in tasks)
     prog = progress or StudyProgress(label, total, n_tasks=len(tasks), quiet=quiet)
     t0 = time.perf_counter()
@@ -376,7 +376,8 @@ def run_tasks(fn, tasks, *, on_result, on_failure=None, scheduler="local", worke
             dash = (f"; dashboard {info.dashboard}" if info.dashboard
                     else "; no dashboard (it needs bokeh: pip install bokeh)")
             prog.log(f"{label}: {len(tasks)} task(s) on {info.describe()} at "
-                     f"{client.scheduler.address}{dash}")
+                     f"{client.scheduler.address}{dash}"
+                     + ("; waiting for workers to join" if not nworkers else ""))
         from distributed import as_completed
 
         run = uuid.uuid4().hex[:8]
