@@ -246,3 +246,36 @@ def test_bh_switch_summary(tmp_path):
     assert all(int(r["leaves_dbeta"]) < int(r["leaves"]) for r in rows if r["kept"] == "1")
     assert (out / "bh_switch.png").is_file()
     assert main(["bh-switch", str(cloud), "-o", str(out), "--trials", "4", "-q"]) == 2
+
+
+# ----------------------------------------------------------------------------- defaults
+def test_default_output_folders(tmp_path, monkeypatch):
+    """The README's commands need no -o: results go under renders/ablation/ (cwd-relative)."""
+    monkeypatch.chdir(tmp_path)
+    assert main(["ablate-beta", str(OCTOPUS), *BETA_ARGS, "--types", "points", "--size", "16"]) == 0
+    assert (tmp_path / "renders" / "ablation" / "beta-16" / "beta_ablation.csv").is_file()
+    src = tmp_path / "meshes"
+    src.mkdir()
+    (src / "tri.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+    assert main(["bench-grid", str(src), "--grid", "4", "-q"]) == 0
+    assert (tmp_path / "renders" / "ablation" / "grid-meshes" / "bench_grid.csv").is_file()
+
+
+def test_beta_estimate_is_printed_before_the_renders(tmp_path, capsys, monkeypatch):
+    import tracer.render
+
+    real = tracer.render.render
+    seen = []
+
+    def spying(scene, **kw):
+        if scene.width == 72:  # a full-size render: the estimate must be out already
+            seen.append(capsys.readouterr().out)
+        return real(scene, **kw)
+
+    monkeypatch.setattr(tracer.render, "render", spying)
+    assert main(["ablate-beta", str(OCTOPUS), "-o", str(tmp_path / "b"), "--size", "72",
+                 "--betas", "1", "--types", "points", "--alpha", "40", "--alpha-u", "300",
+                 "--scheduler", "serial"]) == 0
+    assert len(seen) == 2  # beta 0 and beta 1
+    first = seen[0].strip().splitlines()[0]
+    assert first.startswith("estimate (from 8x8 probe renders") and "beta = 0 renders" in first
