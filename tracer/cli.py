@@ -23,10 +23,10 @@ COMMANDS = {
     "render": ("tracer.cli_render", "sphere-trace a scene file to a PNG (and AOVs)"),
     "compare": ("tracer.compare", "compare a render with a pyvista isosurface of the same field"),
     "diff": ("tracer.imagediff", "compare two images; non-zero exit beyond a tolerance"),
-    "ablate-beta": ("tracer.ablation", "the paper's beta ablation: time and error vs beta"),
-    "ablate-alpha": ("tracer.ablation", "the paper's alpha studies as image grids"),
-    "bench-grid": ("tracer.ablation", "the paper's Thingi10K grid benchmark over a folder"),
-    "bh-switch": ("tracer.ablation", "Barnes-Hut near/far switch discontinuity study"),
+    "ablate-beta": ("tracer.studies.beta", "the paper's beta ablation: time and error vs beta"),
+    "ablate-alpha": ("tracer.studies.alpha", "the paper's alpha studies as image grids"),
+    "bench-grid": ("tracer.studies.grid", "the paper's Thingi10K grid benchmark over a folder"),
+    "bh-switch": ("tracer.studies.bh_switch", "Barnes-Hut near/far switch discontinuity study"),
 }
 
 

@@ -1,4 +1,4 @@
-"""Tests for tracer.ablation: the paper's parameter studies as sub-commands (tiny sizes).
+"""Tests for tracer.studies: the paper's parameter studies as sub-commands (tiny sizes).
 
 Everything runs on the small meshes in ``tests/data`` or on meshes written to ``tmp_path``;
 renders are 32 x 32 or smaller, grids 8^3, a few dozen rays.
@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from smoothdist import DataMesh, SmoothDistanceField
-from tracer import ablation
+from tracer.studies import alpha, common, grid, runner
 from tracer.cli import main
 
 TESTS = Path(__file__).resolve().parent
@@ -37,8 +37,9 @@ def beta_run(tmp_path_factory):
 # ----------------------------------------------------------------------------- ablate-beta
 def test_beta_outputs_exist(beta_run):
     for name in ("beta_ablation.csv", "beta_params.json", "beta_time.png", "beta_error.png",
-                 "beta_grid.png", "report.md", "depth_points_beta0.npy",
-                 "depth_edges_beta0.npy", "depth_triangles_beta0.npy"):
+                 "beta_grid.png", "report.md", "cache/depth_points_beta0.npy",
+                 "cache/depth_edges_beta0.npy", "cache/depth_triangles_beta0.npy",
+                 "cache/render_edges_beta0.5.png"):
         assert (beta_run / name).is_file(), name
     assert not [p.name for p in beta_run.iterdir() if ".tmp-" in p.name]
     report = (beta_run / "report.md").read_text(encoding="utf-8")
@@ -50,7 +51,7 @@ def test_beta_csv_columns_and_rows(beta_run):
     assert set(BETA_COLUMNS) <= set(rows[0])
     assert [(r["type"], float(r["beta"])) for r in rows] == [
         (k, b) for k in ("points", "edges", "triangles") for b in (0.0, 0.5, 1.0)]
-    depth = np.load(beta_run / "depth_edges_beta0.npy")
+    depth = np.load(beta_run / "cache" / "depth_edges_beta0.npy")
     assert depth.shape == (32, 32) and depth.dtype == np.float32
 
 
@@ -142,7 +143,7 @@ def test_beta_bad_input(tmp_path, capsys):
 # ----------------------------------------------------------------------------- ablate-alpha
 def test_unweighted_field_is_naive_logsumexp(cube):
     field = SmoothDistanceField(cube)
-    unw = ablation.unweighted_field(field)
+    unw = common.unweighted_field(field)
     assert field.weight_bound > 1 and unw.weight_bound == 1.0
     assert field.tree.wc[:, 0].max() != 1.0 or field.tree.wc[:, 1:].any()  # untouched original
     Q = np.array([[0.9, 0.2, -0.1], [0.1, 0.7, 0.8], [0.0, 0.0, 1.3]])
@@ -160,7 +161,7 @@ def test_ablate_alpha_all_studies(tmp_path):
     assert main(["ablate-alpha", "all", "-o", str(out), "--mesh", str(OCTOPUS), "--size", "24",
                  "-q"]) == 0
     report = (out / "report.md").read_text(encoding="utf-8")
-    for s in ablation.STUDIES:
+    for s in alpha.STUDIES:
         slug = s.replace("-", "_")
         assert (out / f"{slug}.png").stat().st_size > 0
         info = json.loads((out / f"{slug}.json").read_text(encoding="utf-8"))
@@ -195,7 +196,7 @@ def test_bench_grid_two_meshes(tmp_path, cube, icosphere):
     out = tmp_path / "bench"
     assert main(["bench-grid", str(src), "-o", str(out), "--grid", "8", "-q"]) == 0
     rows = _rows(out / "bench_grid.csv")
-    assert list(rows[0]) == ablation.BENCH_FIELDS
+    assert list(rows[0]) == grid.BENCH_FIELDS + runner.META_FIELDS
     assert [r["name"] for r in rows] == ["cube", "ico"]
     cube_row = rows[0]
     assert int(cube_row["nV"]) == 8 and int(cube_row["nE"]) == 18 and int(cube_row["nF"]) == 12
@@ -213,11 +214,11 @@ def test_bench_grid_two_meshes(tmp_path, cube, icosphere):
 
 def test_benchmark_normalisation_and_grid():
     V = np.array([[0.0, 0, 0], [4, 2, 0], [1, 1, 6]])
-    W = ablation.benchmark_normalise(V)
+    W = grid.benchmark_normalise(V)
     lo, hi = W.min(0), W.max(0)
     np.testing.assert_allclose(0.5 * (lo + hi), 0.5)
     np.testing.assert_allclose(np.linalg.norm(hi - lo), 0.5)
-    Q = ablation.voxel_centres(4)
+    Q = grid.voxel_centres(4)
     assert Q.shape == (64, 3) and Q.min() == 0.125 and Q.max() == 0.875
 
 
@@ -245,3 +246,36 @@ def test_bh_switch_summary(tmp_path):
     assert all(int(r["leaves_dbeta"]) < int(r["leaves"]) for r in rows if r["kept"] == "1")
     assert (out / "bh_switch.png").is_file()
     assert main(["bh-switch", str(cloud), "-o", str(out), "--trials", "4", "-q"]) == 2
+
+
+# ----------------------------------------------------------------------------- defaults
+def test_default_output_folders(tmp_path, monkeypatch):
+    """The README's commands need no -o: results go under renders/ablation/ (cwd-relative)."""
+    monkeypatch.chdir(tmp_path)
+    assert main(["ablate-beta", str(OCTOPUS), *BETA_ARGS, "--types", "points", "--size", "16"]) == 0
+    assert (tmp_path / "renders" / "ablation" / "beta-16" / "beta_ablation.csv").is_file()
+    src = tmp_path / "meshes"
+    src.mkdir()
+    (src / "tri.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+    assert main(["bench-grid", str(src), "--grid", "4", "-q"]) == 0
+    assert (tmp_path / "renders" / "ablation" / "grid-meshes" / "bench_grid.csv").is_file()
+
+
+def test_beta_estimate_is_printed_before_the_renders(tmp_path, capsys, monkeypatch):
+    import tracer.render
+
+    real = tracer.render.render
+    seen = []
+
+    def spying(scene, **kw):
+        if scene.width == 72:  # a full-size render: the estimate must be out already
+            seen.append(capsys.readouterr().out)
+        return real(scene, **kw)
+
+    monkeypatch.setattr(tracer.render, "render", spying)
+    assert main(["ablate-beta", str(OCTOPUS), "-o", str(tmp_path / "b"), "--size", "72",
+                 "--betas", "1", "--types", "points", "--alpha", "40", "--alpha-u", "300",
+                 "--scheduler", "serial"]) == 0
+    assert len(seen) == 2  # beta 0 and beta 1
+    first = seen[0].strip().splitlines()[0]
+    assert first.startswith("estimate (from 8x8 probe renders") and "beta = 0 renders" in first

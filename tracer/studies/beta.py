@@ -1,0 +1,391 @@
+"""``tracer ablate-beta``: the beta ablation of Sec. 4.3 (figure "betatest").
+
+Render the mesh's vertices, edges and triangles with the authors' camera at every beta, and
+record the wall time and the isosurface error along each ray against the exact (beta = 0)
+render, relative to the bounding-box diagonal. Protocol of the authors' ``app/beta_error_test``:
+alpha = 200, alpha_U = 1200, beta in {0, 0.1, ..., 1}, camera at the bbox centre + 2 x the
+largest extent along +z looking at the centre (up +y); the error over the pixels that both
+renders hit is ``mean |t_beta - t_0|`` with its population standard deviation.
+
+The study as independent tasks:
+
+* :func:`list_tasks`: one task per (type, beta, tol), a small dict of render parameters (mesh
+  path, type, beta, tol, size, alpha, alpha_u, eps);
+* :func:`render_task`: renders one task (the field is built once per process,
+  :func:`tracer.studies.common.cached_field`) and returns its statistics with the depth buffer
+  and a PNG of the render;
+* :func:`reduce`: the error of every row against its type's beta = 0 depth buffer, then
+  ``beta_ablation.csv``, the plots, the image grid and ``report.md``.
+
+``tol`` is the renderer's tolerance-controlled pruning (0 = off); tasks with ``tol > 0`` are only
+listed when ``--tols`` asks for them and the installed renderer accepts ``render(..., tol=)``.
+"""
+
+import inspect
+import io
+import json
+import os
+import time
+from pathlib import Path
+
+import numpy as np
+
+from tracer.cli import CLIError
+from tracer.studies import runner
+from tracer.studies.common import (TYPES, add_common, beta_tag, cached_field, check_size, close,
+                                   duration, float_list, load_mesh, output_folder, parse_types,
+                                   positive, write_bytes, write_json)
+
+BETA_CSV = "beta_ablation.csv"
+BETA_PARAMS = "beta_params.json"
+BETA_FIELDS = ["type", "beta", "tol", "seconds", "hits", "mean_steps", "mean_leaves",
+               "error_rel_diag", "error_std_rel_diag", "n_both", "error_abs", "error_std_abs",
+               "leaves_per_eval", "hit_fraction", "alpha", "alpha_u", "width", "height", "eps",
+               "diag", "n_primitives", "threads", "key"]
+#: columns that depend on the machine, its load or the scheduler, not on the study's results
+TIMING_FIELDS = ("seconds", "threads", "task_seconds", "worker")
+#: the probe renders at size // PROBE_DIV (at least 8 px) to estimate the study's cost
+PROBE_DIV = 16
+
+
+def default_output(size):
+    return os.path.join("renders", "ablation", f"beta-{size}")
+
+
+def add_arguments(p):
+    """Arguments of ``tracer ablate-beta``."""
+    p.add_argument("mesh", help="data mesh file (the paper uses the Stanford bunny, "
+                   "scenes/data/bunny.off)")
+    p.add_argument("-o", "--output", metavar="DIR",
+                   help="result folder (created; holds beta_ablation.csv, plots, report.md); "
+                   "default renders/ablation/beta-<size>")
+    p.add_argument("--alpha", type=float, default=200.0, help="alpha (default 200, the paper's)")
+    p.add_argument("--alpha-u", type=float, default=1200.0,
+                   help="alpha_U for weight attenuation (default 1200, the paper's)")
+    p.add_argument("--betas", default="0,0.1,0.2,0.3,0.4,0.5,0.6,0.7,0.8,0.9,1.0",
+                   help="comma-separated betas (default 0,0.1,...,1.0); 0, the reference, "
+                   "is always rendered")
+    p.add_argument("--tols", default="0",
+                   help="comma-separated pruning tolerances (default 0: off); values > 0 need "
+                   "a renderer with tolerance-controlled pruning")
+    p.add_argument("--size", type=int, default=256,
+                   help="image width = height in pixels (default 256, the size of the "
+                   "reference timings; the paper's figure uses 512)")
+    p.add_argument("--types", default="points,edges,triangles",
+                   help="data types to study (default points,edges,triangles)")
+    p.add_argument("--eps", type=float, help="hit threshold in scene units (default 1e-4 x "
+                   "the bbox diagonal; the authors' code uses 1e-3)")
+    p.add_argument("--grid-betas", default="0,0.2,0.5,1.0",
+                   help="betas shown in the image grid (default 0,0.2,0.5,1.0; those not "
+                   "measured are skipped)")
+    p.add_argument("--depth-cache", metavar="DIR",
+                   help="where the depth buffers (depth_<type>_beta<b>.npy) and the full-size "
+                   "renders are kept (default: DIR/cache)")
+    p.add_argument("--note", help="a line of text for report.md (e.g. the machine's load)")
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--overwrite", action="store_true",
+                   help="start afresh, replacing the folder's earlier results")
+    g.add_argument("--resume", action="store_true",
+                   help="keep the rows already in the CSV and render the rest; plots and "
+                   "report are then rebuilt")
+    runner.add_arguments(p)
+    add_common(p)
+
+
+# =============================================================================== tasks
+def task_key(kind, beta, tol):
+    return f"{kind}|beta={beta:g}|tol={tol:g}"
+
+
+def file_stem(kind, beta, tol):
+    """``edges_beta0.5`` (``_tol<t>`` appended when tol > 0)."""
+    return f"{kind}_beta{beta_tag(beta)}" + (f"_tol{beta_tag(tol)}" if tol else "")
+
+
+def list_tasks(mesh, types, betas, tols, *, size, alpha, alpha_u, eps):
+    """One task per (type, beta, tol): a dict of render parameters and its ``key``. The
+    reference (beta 0, tol 0) of every type is always included."""
+    betas = sorted(set(betas) | {0.0})
+    tols = sorted(set(tols) | {0.0})
+    mesh = os.path.abspath(mesh)
+    return [{"key": task_key(k, b, t), "mesh": mesh, "type": k, "beta": float(b),
+             "tol": float(t), "size": int(size), "alpha": float(alpha),
+             "alpha_u": float(alpha_u), "eps": None if eps is None else float(eps)}
+            for k in types for t in tols for b in betas]
+
+
+_WARM = set()
+
+
+def _scene(field, task, size=None):
+    from tracer.scene import scene_from_field
+
+    size = size or task["size"]
+    return scene_from_field(field, alpha=task["alpha"], alpha_u=task["alpha_u"],
+                            beta=task["beta"], width=size, height=size, eps=task["eps"],
+                            name=f"{task['type']}-beta{task['beta']:g}")
+
+
+def _render(scene, task, progress=None):
+    from tracer.render import render
+
+    extra = {"tol": task["tol"]} if task.get("tol") else {}
+    return render(scene, progress=progress, **extra)
+
+
+def render_task(task, progress=None):
+    """Render one task; returns its record: the render's statistics, ``depth`` (float32
+    ``(size, size)``, NaN on misses) and ``png`` (the shaded render, PNG bytes)."""
+    import numba
+    from PIL import Image
+
+    field = cached_field(task["mesh"], task["type"])
+    if (task["mesh"], task["type"]) not in _WARM:  # load or compile the kernels, untimed
+        _render(_scene(field, dict(task, beta=1.0), 8), task)
+        _WARM.add((task["mesh"], task["type"]))
+    scene = _scene(field, task)
+    res = _render(scene, task, progress)
+    s = res.summary()
+    lo, hi = field.bounds
+    buf = io.BytesIO()
+    Image.fromarray(res.rgb).save(buf, format="PNG")
+    return {"type": task["type"], "beta": task["beta"], "tol": task["tol"],
+            "seconds": float(res.seconds), "hits": s["hits"], "mean_steps": s["mean_steps"],
+            "mean_leaves": s["mean_leaves"],
+            "leaves_per_eval": float(res.leaves.sum() / max(res.steps.sum(), 1)),
+            "hit_fraction": s["hit_fraction"], "alpha": task["alpha"],
+            "alpha_u": task["alpha_u"], "width": task["size"], "height": task["size"],
+            "eps": float(scene.eps), "diag": float(np.linalg.norm(hi - lo)),
+            "n_primitives": field.num_primitives, "threads": int(numba.get_num_threads()),
+            "depth": res.depth.astype(np.float32), "png": buf.getvalue()}
+
+
+def probe(tasks, probe_size):
+    """Estimated seconds of each task in this process: the task rendered at ``probe_size``
+    pixels, timed, and scaled by the pixel count (the kernels are warmed up first)."""
+    est = []
+    for task in tasks:
+        field = cached_field(task["mesh"], task["type"])
+        if (task["mesh"], task["type"]) not in _WARM:
+            _render(_scene(field, dict(task, beta=1.0), 8), task)
+            _WARM.add((task["mesh"], task["type"]))
+        t0 = time.perf_counter()
+        _render(_scene(field, task, probe_size), task)
+        est.append((time.perf_counter() - t0) * (task["size"] / probe_size) ** 2)
+    return est
+
+
+# =============================================================================== reducer
+def typed_row(r):
+    """A CSV row (strings) with its numbers parsed."""
+    out = dict(r)
+    for k in ("beta", "tol", "seconds", "mean_steps", "mean_leaves", "error_rel_diag",
+              "error_std_rel_diag", "error_abs", "error_std_abs", "leaves_per_eval",
+              "hit_fraction", "alpha", "alpha_u", "eps", "diag", "task_seconds"):
+        try:
+            out[k] = float(r.get(k) or "nan")
+        except (TypeError, ValueError):
+            out[k] = float("nan")
+    if not out["tol"] == out["tol"]:
+        out["tol"] = 0.0
+    for k in ("hits", "n_both", "width", "height", "n_primitives", "threads"):
+        try:
+            out[k] = int(float(r.get(k) or 0))
+        except (TypeError, ValueError):
+            out[k] = 0
+    return out
+
+
+def with_errors(rows, cache):
+    """``rows`` with the error columns computed from the depth buffers in ``cache``: each row
+    against the beta = 0, tol = 0 render of its type, over the pixels both hit."""
+    refs = {}
+    out = []
+    for r in rows:
+        r = dict(r)
+        k = r["type"]
+        if k not in refs:
+            p = cache / f"depth_{file_stem(k, 0.0, 0.0)}.npy"
+            refs[k] = np.load(p).astype(np.float64) if p.exists() else None
+        p = cache / f"depth_{file_stem(k, r['beta'], r['tol'])}.npy"
+        ref = refs[k]
+        err = std = float("nan")
+        n_both = 0
+        if ref is not None and p.exists():
+            depth = np.load(p).astype(np.float64)
+            if depth.shape == ref.shape:
+                both = np.isfinite(depth) & np.isfinite(ref)
+                n_both = int(both.sum())
+                if n_both:
+                    e = np.abs(depth[both] - ref[both])
+                    err, std = float(e.mean()), float(e.std())
+        diag = r["diag"]
+        r.update(error_abs=err, error_std_abs=std, error_rel_diag=err / diag,
+                 error_std_rel_diag=std / diag, n_both=n_both)
+        out.append(r)
+    return out
+
+
+def reduce(out, cache, log, params, types, grid_betas):
+    """Rewrite the CSV (sorted, errors filled in) and write the plots and report; returns the
+    finished rows (dicts with numbers)."""
+    from tracer.studies.plots import beta_outputs
+
+    rows = log.read()
+    ok = [typed_row(r) for r in rows if r["status"] == "ok"]
+    ok = with_errors(ok, cache)
+    ok.sort(key=lambda r: (TYPES.index(r["type"]), r["tol"], r["beta"]))
+    failed = [r for r in rows if r["status"] != "ok"]
+    log.start(ok + failed)
+    if ok:
+        beta_outputs(out, cache, ok, params, types, grid_betas)
+    return ok
+
+
+# =============================================================================== command
+def _supports_tol():
+    from tracer.render import render
+
+    return "tol" in inspect.signature(render).parameters
+
+
+def run(args):
+    """Run the beta ablation; returns the exit status (1 when a task failed)."""
+    sched, workers = runner.check_arguments(args)
+    alpha = positive(args.alpha, "--alpha")
+    alpha_u = positive(args.alpha_u, "--alpha-u")
+    betas = float_list(args.betas, "--betas", non_negative=True)
+    tols = float_list(args.tols, "--tols", non_negative=True)
+    if any(tols) and not _supports_tol():
+        raise CLIError("--tols: this renderer has no tolerance-controlled pruning (render(..., "
+                       "tol=)); use --tols 0")
+    grid_betas = float_list(args.grid_betas, "--grid-betas", non_negative=True)
+    types = parse_types(args.types)
+    size = check_size(args.size)
+    if args.eps is not None:
+        positive(args.eps, "--eps")
+    out = output_folder(args.output or default_output(size))
+    cache = Path(args.depth_cache) if args.depth_cache else out / "cache"
+    csv_path = out / BETA_CSV
+    products = [csv_path, out / BETA_PARAMS, out / "beta_time.png", out / "beta_error.png",
+                out / "beta_grid.png", out / "report.md"]
+    existing = [p for p in products if p.exists()]
+    if existing and not (args.overwrite or args.resume):
+        raise CLIError(f"{out} already holds beta-ablation results ({existing[0].name}); pass "
+                       "--resume to continue them or --overwrite to replace them")
+    mesh_all = load_mesh(args.mesh)
+    for kind in types:  # fail early on a type the mesh cannot provide
+        if kind != "points":
+            load_mesh(args.mesh, kind)
+    diag = float(np.linalg.norm(np.subtract(*mesh_all.bounds[::-1])))
+    params = {"mesh": str(args.mesh), "mesh_name": os.path.basename(args.mesh),
+              "alpha": alpha, "alpha_u": alpha_u, "width": size, "height": size,
+              "eps": args.eps if args.eps is not None else 1e-4 * diag,
+              "eps_rule": "given" if args.eps is not None else "1e-4 x bbox diagonal",
+              "diag": diag, "camera": "bbox centre + 2 x largest extent along +z, looking at "
+              "the centre, up +y (authors' beta_error_test)", "depth_cache": str(cache),
+              "note": args.note or ""}
+    log = runner.TaskLog(csv_path, BETA_FIELDS)
+    rows = []
+    if args.resume and csv_path.exists():
+        rows = log.read(["type", "beta", "alpha", "alpha_u", "width"])
+        for r in rows:
+            if r["status"] == "ok" and not (close(r["alpha"], alpha)
+                                            and close(r["alpha_u"], alpha_u)
+                                            and int(r["width"]) == size):
+                raise CLIError(f"{csv_path} was measured with alpha {r['alpha']}, alpha_u "
+                               f"{r['alpha_u']}, size {r['width']}; rerun with those values or "
+                               "use --overwrite")
+        old = out / BETA_PARAMS
+        if old.exists():
+            try:
+                prev = json.loads(old.read_text(encoding="utf-8"))
+            except ValueError:
+                prev = {}
+            if prev.get("mesh_name") not in (None, params["mesh_name"]):
+                raise CLIError(f"{out} holds results for {prev.get('mesh_name')}, not "
+                               f"{params['mesh_name']}; use another folder or --overwrite")
+            if not args.note and prev.get("note"):
+                params["note"] = prev["note"]
+    out.mkdir(parents=True, exist_ok=True)
+    cache.mkdir(parents=True, exist_ok=True)
+    write_json(out / BETA_PARAMS, params)
+    # a finished task counts only while its depth buffer is still in the cache
+    done = {r["key"] for r in rows if r["status"] == "ok" and (
+        cache / f"depth_{file_stem(r['type'], float(r['beta']), float(r.get('tol') or 0))}.npy"
+    ).exists()}
+    rows = [r for r in rows if r["key"] in done]
+    log.start(rows)
+    tasks = list_tasks(args.mesh, types, betas, tols, size=size, alpha=alpha, alpha_u=alpha_u,
+                       eps=args.eps)
+    todo = [t for t in tasks if t["key"] not in done]
+    label = f"ablate-beta {params['mesh_name']}"
+    say = (lambda s: None) if args.quiet else (lambda s: print(s, flush=True))
+    if done:
+        say(f"resuming: {len(done)} row(s) already in {csv_path}, {len(todo)} render(s) to go")
+    estimate = _estimate(todo, size, sched, workers, say)
+
+    def on_result(task, record):
+        stem = file_stem(task["type"], task["beta"], task["tol"])
+        np.save(cache / f".depth_{stem}.tmp.npy", record.pop("depth"), allow_pickle=False)
+        os.replace(cache / f".depth_{stem}.tmp.npy", cache / f"depth_{stem}.npy")
+        write_bytes(cache / f"render_{stem}.png", record.pop("png"))
+        log.append(dict(record, key=task["key"]))
+
+    def on_failure(task, err):
+        log.append({"key": task["key"], "type": task["type"], "beta": task["beta"],
+                    "tol": task["tol"], "status": "failed", "error": err})
+
+    def line(task, r):
+        return (f"{r['type']:9s} beta {r['beta']:<4g}"
+                + (f" tol {r['tol']:g}" if r["tol"] else "")
+                + f" {r['seconds']:8.2f} s  {r['hits']:7d} hits  {r['mean_leaves']:10.0f} "
+                f"leaves/px")
+
+    info = runner.run_tasks(render_task, todo, on_result=on_result, on_failure=on_failure,
+                            scheduler=sched, workers=workers, estimate=estimate, label=label,
+                            quiet=args.quiet, line=line)
+    ok = reduce(out, cache, log, params, types, grid_betas)
+    say(f"Beta ablation of {params['mesh_name']}: {len(ok)} rows in {csv_path} "
+        f"({len(todo)} render(s) {info.describe()}, {duration(info.seconds)}); wrote "
+        f"beta_time.png, beta_error.png, beta_grid.png and report.md in {out}.")
+    if info.failed:
+        print(f"warning: {len(info.failed)} render(s) failed (see the 'error' column of "
+              f"{csv_path}); rerun with --resume to retry them", flush=True)
+        return 1
+    return 0
+
+
+def _estimate(todo, size, sched, workers, say):
+    """Probe the tasks at a coarse size, set their weights, print the estimate; returns the
+    estimated serial seconds (0 for tiny studies, which are not probed)."""
+    if not todo:
+        return 0.0
+    if size <= 64:
+        for t in todo:
+            t["weight"] = 1.0 / (t["beta"] + 0.05)
+        return 0.0
+    import numba
+
+    p = max(8, size // PROBE_DIV)
+    t0 = time.perf_counter()
+    est = probe(todo, p)
+    for t, e in zip(todo, est):
+        t["weight"] = e
+    total = sum(est)
+    mode = runner.choose_mode(sched, workers, len(todo), total)
+    threads = int(numba.get_num_threads())
+    if mode == "serial":
+        wall, where = total, f"in-process with {threads} thread(s)"
+    else:
+        w = workers or (runner.cpu_count() if mode == "local" else None)
+        # one thread per worker: a task takes ~threads x its in-process time
+        wall = max(max(est) * threads, total * threads / w) if w else None
+        where = f"on {w} worker(s)" if w else f"on the cluster at {mode}"
+    slow = [(t, e) for t, e in zip(todo, est) if t["beta"] == 0.0]
+    parts = ", ".join(f"{t['type']} {duration(e)}" for t, e in slow)
+    say(f"estimate (from {p}x{p} probe renders, {time.perf_counter() - t0:.1f} s): "
+        + (f"beta = 0 renders {duration(sum(e for _, e in slow))} ({parts}); " if slow else "")
+        + f"all {len(todo)} renders {duration(total)} of work in-process"
+        + (f", about {duration(wall)} wall time {where}" if wall is not None else f" ({where})"))
+    return total

@@ -1,0 +1,267 @@
+"""Helpers shared by the studies: argument parsing, mesh loading with a per-process cache,
+atomic CSV/JSON/text output and the machine description written into reports.
+
+Everything here runs both in the process that drives a study and in Dask worker processes;
+nothing imports matplotlib or dask.
+"""
+
+import copy
+import csv
+import functools
+import io
+import json
+import math
+import os
+import platform
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+from tracer.cli import CLIError
+
+#: repository root (``tracer/studies/../..``)
+REPO = Path(__file__).resolve().parents[2]
+#: the paper's three data-mesh types, in its order
+TYPES = ("points", "edges", "triangles")
+#: colours of the paper's beta figure: vertices green, edges orange, triangles purple
+TYPE_COLORS = {"points": "#2ca02c", "edges": "#ff7f0e", "triangles": "#8e44ad"}
+TYPE_LETTER = {"points": "v", "edges": "e", "triangles": "f"}
+
+
+# =============================================================================== arguments
+def float_list(text, name, *, non_negative=False, positive=False):
+    """Parse ``"0,0.1,0.5"`` into a list of floats (one-line errors)."""
+    vals = []
+    for part in str(text).split(","):
+        part = part.strip()
+        if not part:
+            continue
+        try:
+            v = float(part)
+        except ValueError:
+            raise CLIError(f"{name}: {part!r} is not a number") from None
+        if not math.isfinite(v):
+            raise CLIError(f"{name}: {part!r} is not finite")
+        if non_negative and v < 0:
+            raise CLIError(f"{name}: values must be >= 0, got {v:g}")
+        if positive and v <= 0:
+            raise CLIError(f"{name}: values must be > 0, got {v:g}")
+        vals.append(v)
+    if not vals:
+        raise CLIError(f"{name}: give at least one value (comma separated)")
+    return vals
+
+
+def parse_types(text):
+    """``"v,edges,faces"`` -> ``["points", "edges", "triangles"]`` (one-line errors)."""
+    out = []
+    for part in str(text).split(","):
+        part = part.strip()
+        if not part:
+            continue
+        part = {"faces": "triangles", "vertices": "points", "v": "points", "e": "edges",
+                "f": "triangles"}.get(part, part)
+        if part not in TYPES:
+            raise CLIError(f"--types: unknown type {part!r} (choose from {', '.join(TYPES)})")
+        if part not in out:
+            out.append(part)
+    if not out:
+        raise CLIError("--types: give at least one of points, edges, triangles")
+    return out
+
+
+def positive(value, name):
+    if not (math.isfinite(value) and value > 0):
+        raise CLIError(f"{name} must be a finite number > 0, got {value:g}")
+    return value
+
+
+def non_negative_beta(value, name="--beta"):
+    if not (math.isfinite(value) and value >= 0):
+        raise CLIError(f"{name} must be >= 0, got {value:g}")
+    return value
+
+
+def check_size(size):
+    if not 8 <= size <= 8192:
+        raise CLIError(f"--size must be between 8 and 8192 pixels, got {size}")
+    return size
+
+
+def output_folder(path):
+    """``Path(path)``, refusing an existing file that is not a folder."""
+    out = Path(path)
+    if out.exists() and not out.is_dir():
+        raise CLIError(f"output path exists and is not a folder: {out}")
+    return out
+
+
+def add_common(p):
+    """``--threads`` and ``-q`` (every study)."""
+    p.add_argument("--threads", type=int, help="numba threads of in-process work (default: all "
+                   "cores; Dask workers always use one thread each)")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar or log lines")
+    return p
+
+
+# =============================================================================== meshes
+def load_mesh(path, kind=None):
+    """Load a mesh file as a DataMesh (``kind`` as in ``DataMesh.as_kind``), one-line errors
+    (:class:`tracer.cli.CLIError`)."""
+    from smoothdist import DataMesh, MeshRepairWarning
+
+    path = os.fspath(path)
+    if not os.path.exists(path):
+        raise CLIError(f"mesh file not found: {path}")
+    if os.path.isdir(path):
+        raise CLIError(f"mesh path is a folder, not a file: {path}")
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", MeshRepairWarning)
+            mesh = DataMesh.load(path)
+            return mesh.as_kind(kind) if kind is not None else mesh
+    except (ValueError, OSError) as exc:
+        msg = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise CLIError(f"cannot use {path}: {msg}") from None
+
+
+def file_stamp(path):
+    """``(absolute path, mtime_ns, size)``: a cache key that changes when the file does."""
+    st = os.stat(path)
+    return (os.path.abspath(path), st.st_mtime_ns, st.st_size)
+
+
+@functools.lru_cache(maxsize=8)
+def _cached_field(stamp, kind):
+    from smoothdist import SmoothDistanceField
+
+    return SmoothDistanceField(load_mesh(stamp[0], kind))
+
+
+def cached_field(path, kind):
+    """The ``SmoothDistanceField`` of the mesh file ``path`` as ``kind``, built once per
+    process (a small LRU keyed by path, modification time, size and kind): a Dask worker that
+    runs many tasks on one mesh builds its BVH once, and only the path travels with a task."""
+    return _cached_field(file_stamp(path), kind)
+
+
+def field_of(mesh):
+    from smoothdist import SmoothDistanceField
+
+    return SmoothDistanceField(mesh)
+
+
+def unweighted_field(field):
+    """A shallow copy of ``field`` whose every primitive has weight 1 ("weights off").
+
+    The raw weight polynomial ``A w~`` of edges and triangles becomes the constant 1
+    (``wc[:, 0] = 1``, all other coefficients 0; see ``smoothdist.bvh.TreeData`` and
+    ``smoothdist.query.primitive_term``), the per-primitive clamp ``pwhi`` and the node bounds
+    ``whi`` become 1 (so that the Barnes-Hut far field ``count * whi**S`` and the tracer's
+    inflation margin ``log(A**S N) / alpha`` use the unweighted bound), and ``A`` becomes 1.
+    Point clouds are unchanged (their weight is already 1).
+    """
+    t = field.tree
+    wc = np.zeros_like(t.wc)
+    wc[:, 0] = 1.0
+    out = copy.copy(field)
+    out.tree = t._replace(wc=wc, pwhi=np.ones_like(t.pwhi), whi=np.ones_like(t.whi), A=1.0)
+    return out
+
+
+# =============================================================================== output
+def fmt(v, digits=4):
+    if v is None or (isinstance(v, float) and not math.isfinite(v)):
+        return ""
+    if isinstance(v, (int, np.integer)):
+        return str(int(v))
+    return f"{float(v):.{digits}g}"
+
+
+def csv_value(v):
+    """A CSV cell: floats with 8 significant digits, NaN/None as empty."""
+    if isinstance(v, (float, np.floating)):
+        return fmt(float(v), 8)
+    if v is None:
+        return ""
+    return v
+
+
+def write_csv(path, fields, rows):
+    """Atomically (re)write a whole CSV file."""
+    from tracer.image import atomic_write
+
+    buf = io.StringIO()
+    w = csv.DictWriter(buf, fieldnames=fields, extrasaction="ignore", lineterminator="\n")
+    w.writeheader()
+    for r in rows:
+        w.writerow({k: csv_value(v) for k, v in r.items()})
+    with atomic_write(path) as tmp:
+        with open(tmp, "w", encoding="utf-8", newline="") as fh:
+            fh.write(buf.getvalue())
+            fh.flush()
+            os.fsync(fh.fileno())
+
+
+def write_json(path, data):
+    from tracer.image import atomic_write
+
+    with atomic_write(path) as tmp:
+        with open(tmp, "w", encoding="utf-8") as fh:
+            json.dump(data, fh, indent=2, default=_json_default)
+            fh.write("\n")
+
+
+def _json_default(o):
+    if isinstance(o, np.integer):
+        return int(o)
+    if isinstance(o, np.floating):
+        return float(o)
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    if isinstance(o, Path):
+        return str(o)
+    raise TypeError(type(o).__name__)
+
+
+def write_text(path, text):
+    from tracer.image import atomic_write
+
+    with atomic_write(path) as tmp:
+        Path(tmp).write_text(text, encoding="utf-8")
+
+
+def write_bytes(path, data):
+    from tracer.image import atomic_write
+
+    with atomic_write(path) as tmp:
+        Path(tmp).write_bytes(data)
+
+
+def machine_info():
+    import numba
+
+    return {"platform": platform.platform(), "processor": platform.processor() or "",
+            "cpu_count": os.cpu_count(), "numba_threads": int(numba.get_num_threads()),
+            "python": platform.python_version(), "numba": numba.__version__,
+            "load_average": [round(x, 2) for x in os.getloadavg()]
+            if hasattr(os, "getloadavg") else None}
+
+
+def beta_tag(beta):
+    """``0.5`` -> ``"0.5"`` for file names."""
+    return f"{beta:g}".replace("-", "m")
+
+
+def close(a, b, rel=1e-9):
+    return abs(float(a) - float(b)) <= rel * max(1.0, abs(float(a)), abs(float(b)))
+
+
+def duration(s):
+    """``12.3s``, ``4.5min`` or ``1.25h``."""
+    if s < 90:
+        return f"{s:.1f}s"
+    if s < 5400:
+        return f"{s / 60:.1f}min"
+    return f"{s / 3600:.2f}h"

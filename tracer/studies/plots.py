@@ -1,0 +1,351 @@
+"""Plots and reports of the studies (matplotlib, Agg; imported only when a study writes them).
+
+* :func:`beta_outputs`: time and error vs beta (with the reference numbers), the image grid and
+  ``report.md`` of ``tracer ablate-beta``;
+* :func:`panel_grid` and :func:`alpha_report`: the labelled image grids of ``tracer
+  ablate-alpha`` and their report;
+* :func:`bench_plots`: the two scatter plots of ``tracer bench-grid``;
+* :func:`bh_plot`: the histograms of ``tracer bh-switch``.
+
+Figures are saved through :func:`savefig` (atomic, palette PNG when large).
+"""
+
+import io
+import json
+import math
+import os
+from pathlib import Path
+
+import numpy as np
+
+from tracer.studies.common import (TYPE_COLORS, TYPE_LETTER, TYPES, beta_tag, close, fmt,
+                                   machine_info, write_text)
+
+#: reference numbers of the beta study (bunny, alpha 200, alpha_U 1200), measured with the
+#: authors' code at 256 x 256 on 2 cores: seconds and error in % of the bbox diagonal for
+#: points / edges / triangles
+PAPER_BETA = {
+    0.0: {"seconds": (150.0, 670.0, 699.0), "error_pct": (0.0, 0.0, 0.0)},
+    0.5: {"seconds": (3.8, 6.6, 7.6), "error_pct": (2.5, 3.7, 3.4)},
+    1.0: {"seconds": (0.84, 1.14, 1.25), "error_pct": (4.9, 6.5, 6.0)},
+}
+PAPER_BETA_SETUP = "authors' code, 256 x 256 px, 2 cores"
+
+#: the paper's Barnes-Hut switch numbers on its city LiDAR scan (Sec. 4.3)
+PAPER_BH = {"kept_points": 259, "mean_discrepancy": 7.6e-5, "max_discrepancy": 6.6e-3,
+            "mean_cosine": 1.0, "min_cosine": 0.9974}
+
+
+def pyplot():
+    import matplotlib
+
+    matplotlib.use("Agg", force=True)
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def savefig(fig, path, dpi=100, max_bytes=195_000):
+    """Save a matplotlib figure as PNG atomically (see :func:`png_bytes`)."""
+    from tracer.image import atomic_write
+
+    data = png_bytes(fig, dpi, max_bytes)
+    with atomic_write(path) as tmp:
+        Path(tmp).write_bytes(data)
+
+
+def png_bytes(fig, dpi=100, max_bytes=195_000):
+    """A matplotlib figure as PNG bytes; above ``max_bytes`` the image is stored with an
+    adaptive 256-colour palette (committed result images stay small)."""
+    from PIL import Image
+
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=dpi)
+    buf.seek(0)
+    img = Image.open(buf).convert("RGB")
+    data = io.BytesIO()
+    img.save(data, format="PNG", optimize=True)
+    if data.tell() > max_bytes:
+        data = io.BytesIO()
+        img.quantize(colors=256, method=Image.Quantize.MEDIANCUT,
+                     dither=Image.Dither.FLOYDSTEINBERG).save(data, format="PNG", optimize=True)
+    return data.getvalue()
+
+
+def thumb(rgb, size):
+    """Downsample an ``(H, W, 3)`` uint8 image so its longer side is at most ``size``."""
+    from PIL import Image
+
+    H, W = rgb.shape[:2]
+    if max(H, W) <= size:
+        return rgb
+    s = size / max(H, W)
+    img = Image.fromarray(rgb).resize((max(1, round(W * s)), max(1, round(H * s))),
+                                      Image.LANCZOS)
+    return np.asarray(img)
+
+
+def beta_outputs(out, cache, rows, params, types, grid_betas):
+    """Plots, image grid and report of the beta study from its rows (dicts with numbers).
+
+    Rows with ``tol > 0`` (tolerance-controlled pruning) are drawn as extra dotted series in
+    the time and error plots and listed in the report; the image grid shows ``tol = 0``.
+    """
+    plt = pyplot()
+    all_rows = rows
+    extra = [r for r in rows if r.get("tol", 0.0)]
+    rows = [r for r in rows if not r.get("tol", 0.0)]
+    present = [k for k in TYPES if any(r["type"] == k for r in all_rows)]
+
+    def tol_series(ax, k, column, scale=1.0):
+        for t in sorted({r["tol"] for r in extra if r["type"] == k}):
+            rs = sorted((r for r in extra if r["type"] == k and r["tol"] == t),
+                        key=lambda r: r["beta"])
+            ax.plot([r["beta"] for r in rs], [max(scale * r[column], 1e-4) for r in rs], "^:",
+                    color=TYPE_COLORS[k], label=f"{k}, tol {t:g}")
+
+    # ---- time vs beta (log y), like the paper's figure
+    fig, ax = plt.subplots(figsize=(6.4, 4.0))
+    for k in present:
+        rs = sorted((r for r in rows if r["type"] == k), key=lambda r: r["beta"])
+        ax.plot([r["beta"] for r in rs], [max(r["seconds"], 1e-4) for r in rs], "o-",
+                color=TYPE_COLORS[k], label=f"{k} (ours, {params['width']}²)")
+        ref_b = sorted(PAPER_BETA)
+        ax.plot(ref_b, [PAPER_BETA[b]["seconds"][TYPES.index(k)] for b in ref_b], "s--",
+                color=TYPE_COLORS[k], mfc="none", alpha=0.7, label=f"{k} (reference)")
+        tol_series(ax, k, "seconds")
+    ax.set_yscale("log")
+    ax.set_xlabel("β")
+    ax.set_ylabel("render time (s)")
+    ax.set_title(f"{params['mesh_name']}: time vs β (α={params['alpha']:g}, "
+                 f"α_U={params['alpha_u']:g})", fontsize=10)
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=7, ncol=2)
+    fig.tight_layout()
+    savefig(fig, out / "beta_time.png")
+    plt.close(fig)
+    # ---- error (% of diagonal) vs beta
+    fig, ax = plt.subplots(figsize=(6.4, 4.0))
+    for k in present:
+        rs = sorted((r for r in rows if r["type"] == k), key=lambda r: r["beta"])
+        b = np.array([r["beta"] for r in rs])
+        m = 100 * np.array([r["error_rel_diag"] for r in rs])
+        sd = 100 * np.array([r["error_std_rel_diag"] for r in rs])
+        ax.plot(b, m, "o-", color=TYPE_COLORS[k], label=f"{k} (ours)")
+        ax.fill_between(b, np.maximum(m - sd, 0), m + sd, color=TYPE_COLORS[k], alpha=0.12)
+        ref_b = sorted(PAPER_BETA)
+        ax.plot(ref_b, [PAPER_BETA[x]["error_pct"][TYPES.index(k)] for x in ref_b], "s--",
+                color=TYPE_COLORS[k], mfc="none", alpha=0.7, label=f"{k} (reference)")
+        tol_series(ax, k, "error_rel_diag", 100.0)
+    ax.set_xlabel("β")
+    ax.set_ylabel("mean |t_β − t_0| (% of bbox diagonal)")
+    ax.set_title(f"{params['mesh_name']}: isosurface error vs β (band: ±1 std)", fontsize=10)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=7, ncol=2)
+    fig.tight_layout()
+    savefig(fig, out / "beta_error.png")
+    plt.close(fig)
+    # ---- image grid: types x selected betas
+    measured = sorted({r["beta"] for r in rows})
+    cols = [b for b in measured if any(close(b, g) for g in grid_betas)] or measured[:4]
+    fig, axes = plt.subplots(len(present), len(cols), squeeze=False,
+                             figsize=(1.9 * len(cols), 2.25 * len(present)))
+    for i, k in enumerate(present):
+        for j, b in enumerate(cols):
+            ax = axes[i][j]
+            ax.set_xticks([])
+            ax.set_yticks([])
+            r = next((r for r in rows if r["type"] == k and close(r["beta"], b)), None)
+            img_path = cache / f"render_{k}_beta{beta_tag(b)}.png"
+            if r is not None and img_path.exists():
+                from tracer.image import load_png
+
+                ax.imshow(thumb(load_png(img_path), 160), interpolation="lanczos")
+                ax.set_title(f"β={b:g}: {r['seconds']:.3g} s\n"
+                             f"err {100 * r['error_rel_diag']:.2f}%", fontsize=7)
+            else:
+                ax.text(0.5, 0.5, "not available", ha="center", va="center", fontsize=7,
+                        transform=ax.transAxes)
+            if j == 0:
+                ax.set_ylabel(k, fontsize=8)
+    fig.tight_layout(pad=0.4)
+    savefig(fig, out / "beta_grid.png", dpi=100)
+    plt.close(fig)
+    write_text(out / "report.md", beta_report(all_rows, params, present))
+
+
+def beta_report(rows, params, present):
+    m = machine_info()
+    lines = [f"# β ablation: {params['mesh_name']}", "",
+             "Madan & Levin 2022, Sec. 4.3 (figure \"betatest\"); protocol of the authors' "
+             "`app/beta_error_test`. Generated by `python -m tracer ablate-beta`.", "",
+             f"- data: `{params['mesh_name']}` as vertices, edges and triangles; bbox diagonal "
+             f"{params['diag']:.6g}",
+             f"- α = {params['alpha']:g}, α_U = {params['alpha_u']:g}; image "
+             f"{params['width']}×{params['height']} px; eps = {params['eps']:.3g} "
+             f"({params['eps_rule']}; the authors' code uses 1e-3)",
+             f"- camera: {params['camera']}",
+             "- error: mean |t_β − t_0| over the pixels that both the β render and the β = 0 "
+             "render hit, over the bbox diagonal (std: population standard deviation)",
+             f"- machine: {m['platform']}, {m['cpu_count']} CPU(s), numba threads "
+             f"{m['numba_threads']}; load average when this report was (re)generated "
+             f"{m['load_average']}. Times are wall-clock seconds of the tracing only and "
+             "depend on other load on the machine.",
+             *([f"- note: {params['note']}"] if params.get("note") else []), "",
+             "![time vs beta](beta_time.png)", "", "![error vs beta](beta_error.png)", "",
+             "![renders](beta_grid.png)", "",
+             f"## Measured vs reference ({PAPER_BETA_SETUP})", "",
+             "| type | β | tol | time (s) | ref. time (s) | speed-up vs β=0 | ref. speed-up | "
+             "error (% diag) | ref. error (% diag) | error std (% diag) | hits | mean leaves/px "
+             "| leaves/eval |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    for k in present:
+        rs = sorted((r for r in rows if r["type"] == k),
+                    key=lambda r: (r.get("tol", 0.0), r["beta"]))
+        t0 = next((r["seconds"] for r in rs if r["beta"] == 0.0 and not r.get("tol", 0.0)),
+                  float("nan"))
+        ti = TYPES.index(k)
+        for r in rs:
+            ref = None if r.get("tol", 0.0) else next(
+                (v for b, v in PAPER_BETA.items() if close(b, r["beta"])), None)
+            ref_t = ref["seconds"][ti] if ref else None
+            ref_e = ref["error_pct"][ti] if ref else None
+            ref_sp = PAPER_BETA[0.0]["seconds"][ti] / ref_t if ref_t else None
+            lines.append(
+                f"| {k} | {r['beta']:g} | {r.get('tol', 0.0):g} | {r['seconds']:.3g} | {fmt(ref_t, 3) or '–'} | "
+                f"{t0 / r['seconds']:.3g}× | {(f'{ref_sp:.3g}×' if ref_sp else '–')} | "
+                f"{100 * r['error_rel_diag']:.3f} | {fmt(ref_e, 3) or '–'} | "
+                f"{100 * r['error_std_rel_diag']:.3f} | {r['hits']} | {r['mean_leaves']:.0f} | "
+                f"{r['leaves_per_eval']:.1f} |")
+    lines += ["", "The raw numbers are in `beta_ablation.csv`; the parameters in "
+              "`beta_params.json`.", ""]
+    return "\n".join(lines)
+
+
+def panel_grid_png(panels, title, cell=2.3):
+    """Rows of ``(label, rgb)`` panels as one labelled PNG (bytes)."""
+    plt = pyplot()
+    nr = len(panels)
+    nc = max(len(r) for r in panels)
+    fig, axes = plt.subplots(nr, nc, squeeze=False,
+                             figsize=(cell * nc, 1.07 * cell * nr + 0.35))
+    for i, row in enumerate(panels):
+        for j in range(nc):
+            ax = axes[i][j]
+            ax.set_xticks([])
+            ax.set_yticks([])
+            if j < len(row):
+                label, img = row[j]
+                ax.imshow(thumb(img, 256), interpolation="lanczos")
+                ax.set_title(label, fontsize=7)
+            else:
+                ax.axis("off")
+    fig.suptitle(title, fontsize=8)
+    fig.tight_layout(pad=0.4, rect=(0, 0, 1, 1 - 0.3 / (1.07 * cell * nr + 0.35)))
+    data = png_bytes(fig, dpi=100)
+    plt.close(fig)
+    return data
+
+
+def alpha_report(out, studies):
+    """report.md of the alpha studies: one section per <study>.json present in ``out``."""
+    lines = ["# α studies", "",
+             "Madan & Levin 2022, Sec. 3 figures, re-made with `python -m tracer ablate-alpha`. "
+             "Each section lists the parameters; the JSON next to each image has them all "
+             "(and per-render statistics).", ""]
+    for s in studies:
+        p = out / f"{s.replace('-', '_')}.json"
+        if not p.exists():
+            continue
+        try:
+            info = json.loads(p.read_text(encoding="utf-8"))
+        except ValueError:
+            continue
+        lines += [f"## {s} (paper figure \"{info.get('paper_figure', s)}\")", "",
+                  f"{info.get('title', '')}", "", f"![{s}]({info.get('image')})", ""]
+        keep = {k: v for k, v in info.items()
+                if k not in ("renders", "cases", "title", "image", "study")}
+        for k, v in keep.items():
+            lines.append(f"- {k}: {json.dumps(v) if not isinstance(v, str) else v}")
+        if "cases" in info:
+            for c in info["cases"]:
+                lines.append(f"- {c['kind']}: `{c['data']}`, α = {c['alpha']:g}, A = {c['A']:g}")
+        lines.append("")
+    return "\n".join(lines)
+
+
+def _num(v):
+    try:
+        x = float(v)
+    except (TypeError, ValueError):
+        return float("nan")
+    return x
+
+
+def bench_plots(out, rows, params):
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(6.0, 4.2))
+    fig2, ax2 = plt.subplots(figsize=(6.0, 4.2))
+    for kind in TYPES:
+        L = TYPE_LETTER[kind]
+        n = np.array([_num(r.get({"points": "nV", "edges": "nE", "triangles": "nF"}[kind]))
+                      for r in rows])
+        lv = np.array([_num(r.get(f"leaves_{L}")) for r in rows])
+        sec = np.array([_num(r.get(f"seconds_{L}")) for r in rows])
+        ok = np.isfinite(n) & np.isfinite(lv) & np.isfinite(sec) & (n > 0)
+        if not ok.any():
+            continue
+        ax.scatter(lv[ok], sec[ok], s=16, color=TYPE_COLORS[kind], label=kind)
+        ax2.scatter(n[ok], 100 * lv[ok] / n[ok], s=16, color=TYPE_COLORS[kind], label=kind)
+    q = params["grid"] ** 3
+    ax.set_xlabel("mean leaves visited per query")
+    ax.set_ylabel(f"seconds for {q:,} queries")
+    ax.set_title(f"time vs leaves visited (α={params['alpha']:g}, β={params['beta']:g}, "
+                 f"{params['threads']} threads)", fontsize=9)
+    ax2.set_xlabel("mesh size (primitives)")
+    ax2.set_ylabel("leaves visited (% of primitives)")
+    ax2.set_title("fraction of leaves visited vs mesh size", fontsize=9)
+    for a in (ax, ax2):
+        a.set_xscale("log")
+        a.set_yscale("log")
+        a.grid(True, which="both", alpha=0.3)
+        if a.get_legend_handles_labels()[0]:
+            a.legend(fontsize=8)
+    fig.tight_layout()
+    fig2.tight_layout()
+    savefig(fig, out / "bench_time_vs_leaves.png")
+    savefig(fig2, out / "bench_leaf_fraction.png")
+    plt.close(fig)
+    plt.close(fig2)
+
+
+def bh_plot(path, rows, summary):
+    plt = pyplot()
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(8.0, 3.2))
+    kept = [r for r in rows if r["kept"]]
+    other = [r for r in rows if not r["kept"]]
+    for rs, lab, col in ((kept, "kept (β+Δβ visits fewer leaves)", "#1f77b4"),
+                         (other, "other switches", "#bbbbbb")):
+        dd = np.array([r["discrepancy"] for r in rs])
+        cc = np.array([r["cosine"] for r in rs])
+        dd = dd[dd > 0]
+        if dd.size:
+            a1.hist(np.log10(dd), bins=30, color=col, alpha=0.8, label=lab)
+        if cc.size:
+            a2.hist(np.clip(1 - cc, 1e-16, None), bins=np.logspace(-16, 0, 33), color=col,
+                    alpha=0.8, label=lab)
+    a1.axvline(math.log10(PAPER_BH["mean_discrepancy"]), color="k", ls="--", lw=0.8,
+               label="paper mean")
+    a1.set_xlabel("log10 |d̂_β − d̂_{β+Δβ}| (unit diagonal)")
+    a1.set_ylabel("switch points")
+    a2.set_xscale("log")
+    a2.axvline(1 - PAPER_BH["min_cosine"], color="k", ls="--", lw=0.8, label="paper 1 − min cos")
+    a2.set_xlabel("1 − cos(∇d̂_β, ∇d̂_{β+Δβ})")
+    for a in (a1, a2):
+        if a.get_legend_handles_labels()[0]:
+            a.legend(fontsize=6)
+    fig.suptitle(f"Barnes-Hut switch study: {os.path.basename(summary['cloud'])}, "
+                 f"α={summary['alpha']:g}, β={summary['beta']:g}", fontsize=9)
+    fig.tight_layout()
+    savefig(fig, path)
+    plt.close(fig)
