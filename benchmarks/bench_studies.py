@@ -117,7 +117,11 @@ def main(argv=None):
     ap.add_argument("--betas", default="0.5,1")
     ap.add_argument("--size", type=int, default=256)
     ap.add_argument("--mesh", default=str(REPO / "scenes" / "data" / "bunny.off"))
-    ap.add_argument("--folder", default=str(REPO / ".." / "shared" / "data" / "thingi10k"))
+    shared = REPO / ".." / "shared" / "data" / "thingi10k"
+    ap.add_argument("--folder", default=str(shared if shared.is_dir() else
+                                            REPO / "scenes" / "data" / "meshes"),
+                    help="meshes for the grid study (default: ../shared/data/thingi10k "
+                         "where it exists, else the shipped scenes/data/meshes)")
     ap.add_argument("--grid", type=int, default=100)
     ap.add_argument("--trivial", type=int, default=200)
     ap.add_argument("--json")

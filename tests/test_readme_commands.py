@@ -54,6 +54,8 @@ TINY = {
     "tracer bh-switch": ["--trials", "4", "--samples", "11"],
     "benchmarks/bench_render.py": ["--sizes", "8", "--repeat", "1", "--types", "points"],
     "benchmarks/bench_grid.py": ["--grid", "4", "--repeat", "1"],
+    "benchmarks/bench_studies.py": ["--size", "8", "--betas", "1", "--grid", "4",
+                                    "--trivial", "4", "--folder", "scenes/data/meshes"],
 }
 
 SHIM = textwrap.dedent('''\
@@ -80,11 +82,16 @@ PLACEHOLDERS = {
     "scene.json": "scenes/trefoil.json",
     "PATH": "scenes/data/curves/trefoil.obj",
     "DIR": "out/dir",
+    "MESH_DIR": "scenes/data/meshes",
+    "OUT_DIR": "out/grid",
     "A.png": "a.png",
     "B.png": "b.png",
 }
 
 NOT_RUN = {
+    "python -m tracer bench-grid MESH_DIR -o OUT_DIR --scheduler tcp://host:8786 # an existing cluster":
+        "it needs an existing Dask cluster; tests/test_runner.py runs --scheduler ADDRESS "
+        "against a local one",
     "bash .ci/run": "it runs this test suite (CI runs it)",
     "python -m tests.test_image_regression --regen [CASE ...]":
         "it rewrites the repository's baselines; tests/test_image_regression.py tests --regen",
@@ -98,11 +105,7 @@ PYTHON_REWRITES = [
 ]
 
 #: commands that fail until issue 13 lands (the studies' -o defaults); remove after merging
-PENDING = {
-    "python -m tracer ablate-beta scenes/data/bunny.off",
-    "python -m tracer bench-grid [DIR]",
-    "python -m tracer bh-switch",
-}
+PENDING = set()
 
 
 # ----------------------------------------------------------------------------- extraction

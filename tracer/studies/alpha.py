@@ -191,7 +191,7 @@ def _alphas_for(study, alphas, field, override):
         return sorted(alphas)
     d = STUDY_DEFAULTS[study]
     if override:
-        a0 = field.auto_alpha()
+        a0 = field.paper_alpha()
         return [float(f"{a0 * f:.4g}") for f in d["factors"]]
     return list(d["alphas"])
 
@@ -399,7 +399,7 @@ def _study_weights(args, size, alphas):
         if alphas:
             a = alphas[min(i, len(alphas) - 1)]
         elif args.mesh:
-            a = float(f"{field.auto_alpha() * STUDY_DEFAULTS['weights']['factors'][0]:.4g}")
+            a = float(f"{field.paper_alpha() * STUDY_DEFAULTS['weights']['factors'][0]:.4g}")
         else:
             a = default[i]
         kw = dict(alpha=a, beta=args.beta, shading=args.shading)
@@ -453,7 +453,7 @@ def _study_attenuate(args, size, alphas):
     if args.alpha_u is not None:
         alpha_u = args.alpha_u
     elif override:
-        alpha_u = float(f"{field.auto_alpha() * STUDY_DEFAULTS['attenuate']['u_factor']:.4g}")
+        alpha_u = float(f"{field.paper_alpha() * STUDY_DEFAULTS['attenuate']['u_factor']:.4g}")
     else:
         alpha_u = STUDY_DEFAULTS["attenuate"]["alpha_u"]
     unw = unweighted_field(field)
