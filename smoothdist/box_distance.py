@@ -52,6 +52,35 @@ def box_box_distance(qlo, qhi, lo, hi, node):
 
 
 @numba.njit(**NJIT)
+def box_box_offset(qlo, qhi, lo, hi, node):
+    """:func:`box_box_distance` and its gradient for a translation of the query box.
+
+    Returns ``(d, ux, uy, uz)`` (a unit vector, or 0 when the boxes overlap).
+    """
+    g0 = 0.0
+    g1 = 0.0
+    g2 = 0.0
+    for a in range(3):
+        g = lo[node, a] - qhi[a]
+        if g > 0.0:
+            g = -g
+        else:
+            g = qlo[a] - hi[node, a]
+            if g < 0.0:
+                g = 0.0
+        if a == 0:
+            g0 = g
+        elif a == 1:
+            g1 = g
+        else:
+            g2 = g
+    d = math.sqrt(g0 * g0 + g1 * g1 + g2 * g2)
+    if d > 0.0:
+        return d, g0 / d, g1 / d, g2 / d
+    return 0.0, 0.0, 0.0, 0.0
+
+
+@numba.njit(**NJIT)
 def box_lower_bound(kq, Q, qlo, qhi, lo, hi, node, E):
     """Lower bound ``delta`` on the distance from query primitive ``(kq, Q)`` to a node's box.
 

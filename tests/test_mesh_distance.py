@@ -151,6 +151,27 @@ def test_barnes_hut_is_used_far_away():
     assert d <= d0 and np.all(dj <= dj0) and dj.min() >= floor
 
 
+@pytest.mark.parametrize("dname", list(DATA))
+@pytest.mark.parametrize("qname", ["edges", "triangles"])
+def test_tolerance_pruning_stays_conservative(dname, qname):
+    """tol > 0 only lowers d_hat, by at most -log(1 - k tol) / alpha per primitive."""
+    data = DATA[dname]
+    Vq, Fq = QUERY[qname]
+    rng = np.random.default_rng(4)
+    for trial in range(4):
+        R = _rotation(rng)
+        t = rng.normal(size=3) * (0.5 + trial)
+        md = MeshDistance(data, (Vq, Fq), alpha=40.0, alpha_q=20.0, beta=0.5)
+        dj, _ = md.primitive_distances(R, t)
+        for tol in (1e-9, 1e-3):
+            mt = MeshDistance(md.field, (Vq, Fq), alpha=40.0, alpha_q=20.0, beta=0.5, tol=tol)
+            djt, _ = mt.primitive_distances(R, t)
+            k = mt.last_stats[1]
+            assert np.all(djt <= dj + 1e-12)
+            small = k * tol < 0.5
+            assert np.all((dj - djt <= -np.log1p(-k * tol) / 40.0 + 1e-12)[small])
+
+
 @pytest.mark.parametrize("dname", ["points", "edges", "triangles", "mixed"])
 @pytest.mark.parametrize("qname", list(QUERY))
 def test_gradient_matches_finite_differences(dname, qname):
@@ -282,6 +303,7 @@ def test_far_query_is_finite():
     (dict(alpha=0.0), "alpha"),
     (dict(beta=-0.5), "beta"),
     (dict(gradient="nope"), "gradient"),
+    (dict(tol=-1e-3), "tol"),
 ])
 def test_bad_parameters(kwargs, match):
     args = dict(alpha=10.0, alpha_q=10.0)
