@@ -182,7 +182,7 @@ def smooth_distance_primitive(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, s
     far-field term ``count * whi**S * exp(-alpha delta)`` (``delta`` its box-box distance) is at
     most ``tol`` times the sum so far is replaced by that term. It is the same overestimate of
     the subtree's sum as Barnes-Hut's, so ``d_hat`` only decreases, by at most
-    ``log(1 + k tol) / alpha`` for ``k`` such nodes.
+    ``-log(1 - k tol) / alpha`` for ``k`` such nodes (``k tol < 1``).
     """
     qlo = scratch[0:3]
     qhi = scratch[3:6]
