@@ -19,7 +19,8 @@ Method. The squared distance is a convex quadratic in the barycentrics of both s
 is either an intersection (distance 0), an interior stationary point (only possible for two
 segments, or when one side is a point), or lies on the boundary of the parameter domain, i.e. one
 side at a vertex or on an edge. So segment-segment is the interior solution or the best of four
-endpoint-segment pairs; segment-triangle is a crossing or the best of the two endpoint-triangle,
+endpoint-segment pairs (computed by clamping, Ericson 2005 Sec. 5.1.9, when the segments are
+well away from parallel); segment-triangle is a crossing or the best of the two endpoint-triangle,
 three vertex-segment and three interior edge-edge pairs; triangle-triangle an edge-triangle
 crossing or the best of six vertex-triangle and nine interior edge-edge pairs (an edge pair's
 boundary candidates are vertex-edge pairs, which the vertex-triangle pairs dominate). Every candidate's distance is measured between two actual
@@ -161,6 +162,22 @@ def segment_segment(px, py, pz, qx, qy, qz, ax, ay, az, bx, by, bz):
     C = d1x * wx + d1y * wy + d1z * wz
     F = d2x * wx + d2y * wy + d2z * wz
     den = A * E - B * B
+    if A > 0.0 and E > 0.0 and den > NEAR_PARALLEL * A * E:
+        # well-conditioned: the stationary pair, clamped on one side and then the other
+        # (Ericson 2005, Sec. 5.1.9), is the constrained minimum
+        u = min(max((B * F - C * E) / den, 0.0), 1.0)
+        v = (B * u + F) / E
+        if v < 0.0:
+            v = 0.0
+            u = min(max(-C / A, 0.0), 1.0)
+        elif v > 1.0:
+            v = 1.0
+            u = min(max((B - C) / A, 0.0), 1.0)
+        rx = wx + u * d1x - v * d2x
+        ry = wy + u * d1y - v * d2y
+        rz = wz + u * d1z - v * d2z
+        return (rx * rx + ry * ry + rz * rz, rx, ry, rz, u, 0.0, segment_feature(u), v, 0.0,
+                segment_feature(v))
     best = math.inf
     brx = bry = brz = 0.0
     bu = bv = 0.0
@@ -173,9 +190,7 @@ def segment_segment(px, py, pz, qx, qy, qz, ax, ay, az, bx, by, bz):
             rz = wz + u * d1z - v * d2z
             best = rx * rx + ry * ry + rz * rz
             brx, bry, brz, bu, bv = rx, ry, rz, u, v
-            if den > NEAR_PARALLEL * A * E:
-                return (best, brx, bry, brz, bu, 0.0, SEG_INTERIOR, bv, 0.0, SEG_INTERIOR)
-    # boundary of the parameter square: an endpoint of one segment against the other segment
+    # near-parallel or degenerate: also every endpoint of one segment against the other segment
     for k in range(4):
         if k == 0:
             cx, cy, cz, v, f = closest_point_segment(px, py, pz, ax, ay, az, bx, by, bz)
