@@ -27,10 +27,18 @@ def pad(X):
     return out
 
 
-def check_pair(kq, Q, kd, P, rtol=1e-9):
-    """Kernel pair == face-pair reference distance; the returned points and r are consistent."""
+def check_pair(kq, Q, kd, P, rtol=1e-9, sample=True):
+    """Kernel pair == face-pair reference distance; the returned points and r are consistent;
+    and (``sample``) no densely sampled pair of points is closer, the closest nearly as close."""
     c = closest_pair(kq, pad(Q), kd, pad(P))
     d = np.sqrt(c[0])
+    if sample:
+        A = naive_pairs.grid_simplex(Q, 40)
+        B = naive_pairs.grid_simplex(P, 40)
+        sampled = np.sqrt(((A[:, None, :] - B[None, :, :]) ** 2).sum(-1)).min()
+        size = max(np.ptp(Q, axis=0).max(), np.ptp(P, axis=0).max(), 1e-3)
+        assert d <= sampled + 1e-12 * max(1.0, sampled)
+        assert sampled - d <= 0.05 * size
     ref, lam, mu = naive_pairs.closest_pairs(kq, Q[None], kd, P[None])
     scale = max(1.0, np.abs(Q).max(), np.abs(P).max())
     assert d == pytest.approx(ref[0], rel=rtol, abs=1e-12 * scale)
@@ -57,7 +65,7 @@ def test_random_pairs_match_reference(kq, kd, rng):
         sep = [0.0, 0.5, 2.0, 1e3][trial % 4]
         Q = random_simplex(rng, kq, np.zeros(3))
         P = random_simplex(rng, kd, sep * rng.normal(size=3))
-        check_pair(kq, Q, kd, P)
+        check_pair(kq, Q, kd, P, sample=False)
 
 
 @pytest.mark.parametrize("kq, kd", list(itertools.product(KINDS, KINDS)))
