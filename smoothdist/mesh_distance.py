@@ -199,7 +199,8 @@ class MeshDistance:
     def transformed_vertices(self, R=None, t=None):
         """Query vertices ``R x + t``, ``(n, 3)`` float64."""
         Rm, tv = as_rigid_transform(R, t)
-        return np.ascontiguousarray(self.query.V @ Rm.T + tv)
+        # the same finiteness and range checks as any input (a huge t could overflow a kernel)
+        return as_points(self.query.V @ Rm.T + tv, "transformed query vertices")
 
     def _primitive_coords(self, R, t):
         X = self.transformed_vertices(R, t)

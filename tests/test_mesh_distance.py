@@ -340,6 +340,10 @@ def test_bad_data_and_transform():
         md(t=[1.0, 2.0])
     with pytest.raises(ValueError, match="NaN"):
         md(t=[1.0, np.nan, 0.0])
+    with pytest.raises(ValueError, match="transformed query vertices"):
+        md(t=[1e60, 0.0, 0.0])
+    with pytest.raises(ValueError, match="transformed query vertices"):
+        md.exact(t=[0.0, -1e300, 0.0])
 
 
 def test_exported():
