@@ -191,12 +191,12 @@ def test_gradient_matches_finite_differences(dname, qname):
     dj, gj = md.primitive_distances(R, t0)
     qm = as_query_mesh((Vq @ R.T + t0, Fq))
     for j in range(0, qm.kind.size, 3):
-        single = MeshDistance(md.field, (qm.V, qm.index[j:j + 1, :qm.kind[j] + 1]
-                                         if qm.kind[j] else None),
-                              alpha=12.0, alpha_q=9.0, beta=0.0, gradient="exact")
-        if qm.kind[j] == 0:
-            single = MeshDistance(md.field, qm.V[qm.index[j, :1]], alpha=12.0, alpha_q=9.0,
-                                  beta=0.0, gradient="exact")
+        k = qm.kind[j]
+        # primitive j alone, as a one-primitive query mesh over its own vertices
+        Vj = qm.V[qm.index[j, :k + 1]]
+        Fj = None if k == 0 else np.arange(k + 1)[None]
+        single = MeshDistance(md.field, (Vj, Fj), alpha=12.0, alpha_q=9.0, beta=0.0,
+                              gradient="exact")
         fdj = np.array([(single.primitive_distances(t=h * e)[0][0]
                          - single.primitive_distances(t=-h * e)[0][0]) / (2 * h)
                         for e in np.eye(3)])
@@ -243,8 +243,7 @@ def test_rigid_transform_equals_moved_query():
         R = _rotation(rng)
         t = rng.normal(size=3)
         d, G = md(R, t)
-        d2, G2 = mesh_distance(data.V, None, Vq @ R.T + t, Fq, alpha=15.0, alpha_q=10.0) \
-            if False else MeshDistance(md.field, (Vq @ R.T + t, Fq), alpha=15.0, alpha_q=10.0)()
+        d2, G2 = MeshDistance(md.field, (Vq @ R.T + t, Fq), alpha=15.0, alpha_q=10.0)()
         assert d == pytest.approx(d2, rel=1e-12)
         np.testing.assert_allclose(G, G2, rtol=1e-10, atol=1e-14)
     assert md.tree is tree
