@@ -19,9 +19,11 @@ point kernel's projection Jacobian (:func:`smoothdist.query.primitive_term`).
 
 Traversal as for points (:func:`smoothdist.query.smooth_distance_point`): an explicit stack,
 nearest child first by the cheap box-box distance. Barnes-Hut replaces a node by
-``count * whi**S * exp(-alpha delta)`` with ``delta`` from :func:`smoothdist.box_distance.box_lower_bound`,
-a lower bound of the query-box distance, so the far field overestimates the subtree's sum and
-``d_hat_beta <= d_hat_0``. Point queries use the point kernels themselves.
+``count * whi**S * exp(-alpha delta)`` with ``delta`` a lower bound of the query-box distance: the
+box-box distance when that already satisfies ``diag < beta delta``, else
+:func:`smoothdist.box_distance.box_lower_bound` (the paper's halfspace test, done
+conservatively). So the far field overestimates the subtree's sum and ``d_hat_beta <= d_hat_0``.
+Point queries use the point kernels themselves.
 """
 
 import math
@@ -216,8 +218,12 @@ def smooth_distance_primitive(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, s
                 leaves += 1
                 continue
         if cnt > 1 and beta > 0.0 and tree.diag[node] < beta * _point_box(kq, Q, lo, hi, node):
-            # the box distance is at most any vertex's: only then can the node qualify
-            delta, ux, uy, uz = box_lower_bound(kq, Q, qlo, qhi, lo, hi, node, E)
+            # the box distance is at most any vertex's: only then can the node qualify. The
+            # box-box distance bd (a lower bound too) decides most nodes without the finer bound
+            if tree.diag[node] < beta * bd:
+                delta, ux, uy, uz = box_box_offset(qlo, qhi, lo, hi, node)
+            else:
+                delta, ux, uy, uz = box_lower_bound(kq, Q, qlo, qhi, lo, hi, node, E)
             if tree.diag[node] < beta * delta:
                 wh = tree.whi[node]
                 W = cnt * (wh if (S == 1.0 or wh == 1.0) else math.exp(S * math.log(wh)))

@@ -169,7 +169,7 @@ def box_points(lo, hi, res=12):
 
 @pytest.mark.parametrize("kq", KINDS)
 def test_box_lower_bound_never_overestimates(kq, rng):
-    """delta <= dense-sampled primitive-box distance; exact where a corner/edge is identified."""
+    """delta <= dense-sampled primitive-box distance; exact where the paper's test is exact."""
     E = np.zeros(9)
     for trial in range(150):
         lo = rng.normal(size=3)
@@ -187,9 +187,13 @@ def test_box_lower_bound_never_overestimates(kq, rng):
         assert box_box_distance(qlo, qhi, LO, HI, 0) <= delta + 1e-12
         if delta > 0:
             assert np.linalg.norm([ux, uy, uz]) == pytest.approx(1.0)
-        nsep = np.sum((qlo > hi) | (qhi < lo))
-        if nsep >= 2 or kq == 0:
-            assert sampled - delta <= 0.02 * (1 + sampled)       # exact up to the sampling
+        sep = (qlo > hi) | (qhi < lo)
+        nsep = int(sep.sum())
+        # exact (up to the sampling) at a corner, for points, and across a box edge when the
+        # query's extent along the edge lies within the box's
+        j = int(np.flatnonzero(~sep)[0]) if nsep == 2 else 0
+        if nsep == 3 or kq == 0 or (nsep == 2 and lo[j] <= qlo[j] and qhi[j] <= hi[j]):
+            assert sampled - delta <= 0.02 * (1 + sampled)
 
 
 def test_box_bound_authors_failure_cases():
