@@ -31,6 +31,11 @@ from smoothdist.field import SmoothDistanceField
 from smoothdist.mesh import DataMesh
 
 
+#: query meshes with fewer primitives than this run on the calling thread (a parallel launch
+#: costs more than their work, and much more on a busy machine)
+SERIAL_BELOW = {"smooth": 32, "exact": 1024}
+
+
 class QueryMesh(NamedTuple):
     """A validated query mesh: vertices and a primitive table (no repair: vertex numbering kept).
 
@@ -219,9 +224,10 @@ class MeshDistance:
         g = np.empty((m, 3))
         nodes = np.empty(m, dtype=np.int64)
         leaves = np.empty(m, dtype=np.int64)
-        _mq.smooth_distance_primitives(self.field.tree, self.query.kind, pts, self.alpha,
-                                       self.beta, self.S, self.wgs, method == "brute", d, g,
-                                       nodes, leaves, self.tol)
+        kernel = (_mq.smooth_distance_primitives_serial if m < SERIAL_BELOW["smooth"]
+                  else _mq.smooth_distance_primitives)
+        kernel(self.field.tree, self.query.kind, pts, self.alpha, self.beta, self.S, self.wgs,
+               method == "brute", d, g, nodes, leaves, self.tol)
         self.last_stats = (nodes, leaves)
         return d, g
 
@@ -244,10 +250,15 @@ class MeshDistance:
         bound2 = np.inf
         if np.any(self.query.kind > 0):
             # the query's vertices give an upper bound of the minimum: primitives prune with it
-            X = self.transformed_vertices(R, t)[self._used]
-            dv = self.field.exact_distance(X)[0]
-            bound2 = (float(dv.min()) * (1 + 1e-9)) ** 2 + 1e-300
-        _mq.exact_distance_primitives(self.field.tree, self.query.kind, pts, bound2, d, g, prim)
+            X = np.ascontiguousarray(self.transformed_vertices(R, t)[self._used])
+            if X.shape[0] < SERIAL_BELOW["exact"]:
+                dv = float(_mq.nearest_vertex_distance(self.field.tree, X))
+            else:
+                dv = float(self.field.exact_distance(X)[0].min())
+            bound2 = (dv * (1 + 1e-9)) ** 2 + 1e-300
+        kernel = (_mq.exact_distance_primitives_serial if m < SERIAL_BELOW["exact"]
+                  else _mq.exact_distance_primitives)
+        kernel(self.field.tree, self.query.kind, pts, bound2, d, g, prim)
         j = int(np.argmin(d))
         G = np.zeros((self.num_query_vertices, 3))
         k = int(self.query.kind[j]) + 1

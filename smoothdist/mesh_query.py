@@ -208,29 +208,31 @@ def smooth_distance_primitive(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, s
         bd = dstack[sp]
         nodes += 1
         cnt = tree.count[node]
-        if tol > 0.0 and s > 0.0:
+        far = False
+        delta = ux = uy = uz = 0.0
+        if cnt > 1 and beta > 0.0:
+            dg = tree.diag[node]
+            if dg < beta * bd:
+                # the box-box distance (a lower bound) already qualifies the node
+                delta, ux, uy, uz = box_box_offset(qlo, qhi, lo, hi, node)
+                far = True
+            elif dg < beta * _point_box(kq, Q, lo, hi, node):
+                # the box distance is at most any vertex's: only then can the finer bound help
+                delta, ux, uy, uz = box_lower_bound(kq, Q, qlo, qhi, lo, hi, node, E)
+                far = dg < beta * delta
+        if not far and tol > 0.0 and s > 0.0:
             wh = tree.whi[node]
             W = cnt * (wh if (S == 1.0 or wh == 1.0) else math.exp(S * math.log(wh)))
             if W * math.exp(-alpha * (bd - m)) <= tol * s:
                 delta, ux, uy, uz = box_box_offset(qlo, qhi, lo, hi, node)
-                m, s, gx, gy, gz = logsumexp_accumulate(m, s, gx, gy, gz, delta, W, W * ux,
-                                                        W * uy, W * uz, alpha)
-                leaves += 1
-                continue
-        if cnt > 1 and beta > 0.0 and tree.diag[node] < beta * _point_box(kq, Q, lo, hi, node):
-            # the box distance is at most any vertex's: only then can the node qualify. The
-            # box-box distance bd (a lower bound too) decides most nodes without the finer bound
-            if tree.diag[node] < beta * bd:
-                delta, ux, uy, uz = box_box_offset(qlo, qhi, lo, hi, node)
-            else:
-                delta, ux, uy, uz = box_lower_bound(kq, Q, qlo, qhi, lo, hi, node, E)
-            if tree.diag[node] < beta * delta:
-                wh = tree.whi[node]
-                W = cnt * (wh if (S == 1.0 or wh == 1.0) else math.exp(S * math.log(wh)))
-                m, s, gx, gy, gz = logsumexp_accumulate(m, s, gx, gy, gz, delta, W, W * ux,
-                                                        W * uy, W * uz, alpha)
-                leaves += 1
-                continue
+                far = True
+        if far:
+            wh = tree.whi[node]
+            W = cnt * (wh if (S == 1.0 or wh == 1.0) else math.exp(S * math.log(wh)))
+            m, s, gx, gy, gz = logsumexp_accumulate(m, s, gx, gy, gz, delta, W, W * ux, W * uy,
+                                                    W * uz, alpha)
+            leaves += 1
+            continue
         l = tree.left[node]
         if l < 0:
             st = tree.start[node]
@@ -361,6 +363,35 @@ def exact_distance_primitive(tree, kq, Q, stack, dstack, scratch, bound2=np.inf)
     return 0.0, 0.0, 0.0, 0.0, tree.orig[bi], nodes, leaves
 
 
+@numba.njit(**NJIT)
+def _smooth_task(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g, out_nodes,
+                 out_leaves, tol, task, ntasks):
+    """Query primitives ``task, task + ntasks, ...`` of :func:`smooth_distance_primitives`."""
+    k = tree.depth + 4
+    stack = np.empty(k, dtype=np.int64)
+    dstack = np.empty(k)
+    scratch = np.empty(15)
+    for j in range(task, qkind.size, ntasks):
+        kq = qkind[j]
+        Q = qpts[j]
+        nodes = 0
+        leaves = tree.kind.size
+        if brute:
+            d, gx, gy, gz = smooth_distance_brute_primitive(tree, kq, Q, alpha, S, wgs)
+        elif kq == 0:
+            d, gx, gy, gz, nodes, leaves = smooth_distance_point(
+                tree, Q[0], Q[1], Q[2], alpha, beta, S, wgs, stack, dstack)
+        else:
+            d, gx, gy, gz, nodes, leaves = smooth_distance_primitive(
+                tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, tol)
+        out_d[j] = d
+        out_g[j, 0] = gx
+        out_g[j, 1] = gy
+        out_g[j, 2] = gz
+        out_nodes[j] = nodes
+        out_leaves[j] = leaves
+
+
 @numba.njit(**NJIT_PARALLEL)
 def smooth_distance_primitives(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g,
                                out_nodes, out_leaves, tol=0.0):
@@ -370,32 +401,41 @@ def smooth_distance_primitives(tree, qkind, qpts, alpha, beta, S, wgs, brute, ou
     ``out_nodes``, ``out_leaves (m,)``. ``brute`` sums every data primitive (reference).
     ``tol``: see :func:`smooth_distance_primitive` (edge and triangle queries only).
     """
-    n = qkind.size
-    ntasks = min(n, TASKS)
-    k = tree.depth + 4
+    ntasks = min(qkind.size, TASKS)
     for task in prange(ntasks):
-        stack = np.empty(k, dtype=np.int64)
-        dstack = np.empty(k)
-        scratch = np.empty(15)
-        for j in range(task, n, ntasks):
-            kq = qkind[j]
-            Q = qpts[j]
-            nodes = 0
-            leaves = tree.kind.size
-            if brute:
-                d, gx, gy, gz = smooth_distance_brute_primitive(tree, kq, Q, alpha, S, wgs)
-            elif kq == 0:
-                d, gx, gy, gz, nodes, leaves = smooth_distance_point(
-                    tree, Q[0], Q[1], Q[2], alpha, beta, S, wgs, stack, dstack)
-            else:
-                d, gx, gy, gz, nodes, leaves = smooth_distance_primitive(
-                    tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, tol)
-            out_d[j] = d
-            out_g[j, 0] = gx
-            out_g[j, 1] = gy
-            out_g[j, 2] = gz
-            out_nodes[j] = nodes
-            out_leaves[j] = leaves
+        _smooth_task(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g, out_nodes,
+                     out_leaves, tol, task, ntasks)
+
+
+@numba.njit(**NJIT)
+def smooth_distance_primitives_serial(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d,
+                                      out_g, out_nodes, out_leaves, tol=0.0):
+    """:func:`smooth_distance_primitives` on the calling thread (small query meshes)."""
+    _smooth_task(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g, out_nodes,
+                 out_leaves, tol, 0, 1)
+
+
+@numba.njit(**NJIT)
+def _exact_task(tree, qkind, qpts, bound2, out_d, out_g, out_prim, task, ntasks):
+    """Query primitives ``task, task + ntasks, ...`` of :func:`exact_distance_primitives`."""
+    k = tree.depth + 4
+    stack = np.empty(k, dtype=np.int64)
+    dstack = np.empty(k)
+    scratch = np.empty(15)
+    for j in range(task, qkind.size, ntasks):
+        kq = qkind[j]
+        Q = qpts[j]
+        if kq == 0:
+            d, gx, gy, gz, p, nodes, leaves = exact_distance_point(tree, Q[0], Q[1], Q[2],
+                                                                   stack, dstack)
+        else:
+            d, gx, gy, gz, p, nodes, leaves = exact_distance_primitive(tree, kq, Q, stack,
+                                                                       dstack, scratch, bound2)
+        out_d[j] = d
+        out_g[j, 0] = gx
+        out_g[j, 1] = gy
+        out_g[j, 2] = gz
+        out_prim[j] = p
 
 
 @numba.njit(**NJIT_PARALLEL)
@@ -406,25 +446,25 @@ def exact_distance_primitives(tree, qkind, qpts, bound2, out_d, out_g, out_prim)
     the minimum over all query primitives, e.g. from the query vertices); the others get
     ``inf`` and ``-1``. Point queries are always exact.
     """
-    n = qkind.size
-    ntasks = min(n, TASKS)
-    k = tree.depth + 4
+    ntasks = min(qkind.size, TASKS)
     for task in prange(ntasks):
-        stack = np.empty(k, dtype=np.int64)
-        dstack = np.empty(k)
-        scratch = np.empty(15)
-        for j in range(task, n, ntasks):
-            kq = qkind[j]
-            Q = qpts[j]
-            if kq == 0:
-                d, gx, gy, gz, p, nodes, leaves = exact_distance_point(tree, Q[0], Q[1], Q[2],
-                                                                       stack, dstack)
-            else:
-                d, gx, gy, gz, p, nodes, leaves = exact_distance_primitive(tree, kq, Q, stack,
-                                                                           dstack, scratch,
-                                                                           bound2)
-            out_d[j] = d
-            out_g[j, 0] = gx
-            out_g[j, 1] = gy
-            out_g[j, 2] = gz
-            out_prim[j] = p
+        _exact_task(tree, qkind, qpts, bound2, out_d, out_g, out_prim, task, ntasks)
+
+
+@numba.njit(**NJIT)
+def exact_distance_primitives_serial(tree, qkind, qpts, bound2, out_d, out_g, out_prim):
+    """:func:`exact_distance_primitives` on the calling thread (small query meshes)."""
+    _exact_task(tree, qkind, qpts, bound2, out_d, out_g, out_prim, 0, 1)
+
+
+@numba.njit(**NJIT)
+def nearest_vertex_distance(tree, X):
+    """Smallest exact distance from the rows of ``X (n, 3)`` to the data (serial)."""
+    k = tree.depth + 4
+    stack = np.empty(k, dtype=np.int64)
+    dstack = np.empty(k)
+    best = np.inf
+    for i in range(X.shape[0]):
+        d = exact_distance_point(tree, X[i, 0], X[i, 1], X[i, 2], stack, dstack)[0]
+        best = min(best, d)
+    return best

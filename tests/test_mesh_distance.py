@@ -249,6 +249,30 @@ def test_rigid_transform_equals_moved_query():
     assert md.tree is tree
 
 
+@pytest.mark.parametrize("qname", list(QUERY))
+def test_parallel_and_serial_kernels_agree(qname, monkeypatch):
+    """Small query meshes run on the calling thread; the prange kernels give the same bits."""
+    import importlib
+
+    mdmod = importlib.import_module("smoothdist.mesh_distance")   # the module, not the function
+
+    data = DATA["mixed"]
+    Vq, Fq = QUERY[qname]
+    R = _rotation(np.random.default_rng(8))
+    t = np.array([0.4, 1.1, 0.2])
+    out = {}
+    for name, below in (("serial", {"smooth": 10**9, "exact": 10**9}),
+                        ("parallel", {"smooth": 0, "exact": 0})):
+        monkeypatch.setattr(mdmod, "SERIAL_BELOW", below)
+        md = MeshDistance(data, (Vq, Fq), alpha=20.0, alpha_q=10.0, beta=0.5, tol=1e-9)
+        out[name] = (md(R, t), md.exact(R, t), md.primitive_distances(R, t))
+    (d1, G1), (e1, H1), (dj1, gj1) = out["serial"]
+    (d2, G2), (e2, H2), (dj2, gj2) = out["parallel"]
+    assert d1 == d2 and e1 == e2
+    assert np.array_equal(G1, G2) and np.array_equal(H1, H2)
+    assert np.array_equal(dj1, dj2) and np.array_equal(gj1, gj2)
+
+
 def test_mesh_distance_function_matches_object():
     data = DATA["edges"]
     Vq, Fq = QUERY["edges"]
