@@ -15,10 +15,11 @@ from smoothdist.convert import as_data_mesh
 from smoothdist.field import (ExactDistanceResult, QueryStats, SmoothDistanceField,
                               SmoothDistanceResult)
 from smoothdist.mesh import DataMesh, MeshRepairWarning
+from smoothdist.mesh_distance import MeshDistance, combine_distances, mesh_distance
 
 __all__ = ["DataMesh", "MeshRepairWarning", "SmoothDistanceField", "SmoothDistanceResult",
            "ExactDistanceResult", "QueryStats", "smooth_distance", "exact_distance",
-           "load_mesh", "as_data_mesh"]
+           "load_mesh", "as_data_mesh", "MeshDistance", "mesh_distance", "combine_distances"]
 __version__ = "0.1.0"
 
 
