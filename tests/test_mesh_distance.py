@@ -378,7 +378,8 @@ def test_trimesh_and_pyvista_query_meshes_match_arrays():
     """A trimesh or pyvista query mesh gives the arrays' value and per-vertex gradient."""
     trimesh = pytest.importorskip("trimesh")
     pv = pytest.importorskip("pyvista")
-    V, T = make_icosphere(1)
+    ico = make_icosphere(1)
+    V, T = ico.V, ico.triangles
     Vq = 0.4 * V + np.array([2.5, 0.1, -0.2])
     data = DataMesh(V, T)
     ref = MeshDistance(data, (Vq, T), alpha=20.0, alpha_q=20.0, beta=0.0)()
