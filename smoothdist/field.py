@@ -161,7 +161,7 @@ class SmoothDistanceField:
 
     # ------------------------------------------------------------------ queries
     def smooth_distance(self, Q, *, alpha, beta=0.5, alpha_u=None, gradient="metric",
-                        method="bvh", return_stats=False):
+                        method="bvh", return_stats=False, tol=0.0):
         """Smooth distance ``d_hat`` (Eq. 3) and its gradient at query points.
 
         Parameters
@@ -181,6 +181,12 @@ class SmoothDistanceField:
             ``"brute"`` sums every primitive without the tree (slow reference; ignores beta).
         return_stats : bool
             Also return :class:`QueryStats`.
+        tol : float
+            Tolerance-controlled pruning (>= 0; 0 = off): visit nodes nearest-first and
+            replace a subtree by its conservative far field only while the far fields accepted
+            so far stay below ``tol`` times the exact part of the sum. With ``beta=0``,
+            ``d_hat_0 - log(1 + tol) / alpha <= d_hat <= d_hat_0`` (error at most
+            ``tol / alpha``; proof in :func:`smoothdist.query.smooth_distance_point_tol`).
 
         Returns
         -------
@@ -191,6 +197,7 @@ class SmoothDistanceField:
             alpha = self.auto_alpha()
         alpha = self.check_alpha(alpha)
         beta = non_negative(beta, "beta")
+        tol = non_negative(tol, "tol")
         S = self.attenuation(alpha, alpha_u)
         if gradient not in GRADIENTS:
             raise ValueError(f"gradient must be one of {GRADIENTS}, got {gradient!r}")
@@ -205,7 +212,7 @@ class SmoothDistanceField:
         leaves = np.empty(n, dtype=np.int64)
         if n:
             _q.smooth_distance_batch(self.tree, Q, alpha, beta, S, wgs, method == "brute", d, g,
-                                     nodes, leaves)
+                                     nodes, leaves, tol)
         res = SmoothDistanceResult(d, g)
         return (res.distance, res.gradient, QueryStats(nodes, leaves)) if return_stats else res
 

@@ -20,6 +20,10 @@ def add_arguments(p):
     p.add_argument("--size", nargs=2, type=int, metavar=("W", "H"),
                    help="image size in pixels (overrides the scene's width/height)")
     p.add_argument("--beta", type=float, help="Barnes-Hut beta (0 = exact; default: scene's)")
+    p.add_argument("--tol", type=float, metavar="TOL",
+                   help="tolerance-controlled pruning: d_hat within log(1 + TOL)/alpha of the "
+                        "exact sum, never above it (0 = off; default: scene's). With --beta 0 "
+                        "it is the only pruning")
     p.add_argument("--alpha", type=float, help="alpha of the first object (overrides the scene)")
     p.add_argument("--mode", choices=("smooth", "exact"),
                    help="smooth distance, or exact distance offset surface")
@@ -67,7 +71,7 @@ def run(args):
     from tracer.scene import load_scene
 
     overrides = {"beta": args.beta, "alpha": args.alpha, "mode": args.mode, "eps": args.eps,
-                 "shading": args.shading, "offset": args.offset}
+                 "shading": args.shading, "offset": args.offset, "tol": args.tol}
     if args.size:
         overrides["width"], overrides["height"] = args.size
     name = os.path.splitext(os.path.basename(args.scene))[0]
@@ -102,6 +106,7 @@ def run(args):
                                 overwrite=args.overwrite))
     stats = result.summary()
     stats.update(scene=os.path.abspath(args.scene), mode=scene.mode, beta=scene.beta,
+                 tol=scene.tol,
                  eps=scene.eps, objects=[{"name": o.name, "alpha": o.alpha, "alpha_u": o.alpha_u,
                                           "primitives": o.field.num_primitives}
                                          for o in scene.objects])

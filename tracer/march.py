@@ -2,7 +2,8 @@
 
 A scene is one :class:`smoothdist.kernels.TreeData` *forest* (the objects' trees concatenated by
 ``smoothdist.kernels.concatenate_trees``), the root node of each object ``roots (k,) int64``,
-and a ``(k, 5)`` float64 parameter table, one row per object: ``alpha, beta, S, wgs, offset``. Objects are combined as the paper combines them: by a second
+and a ``(k, 6)`` float64 parameter table, one row per object: ``alpha, beta, S, wgs, offset,
+tol`` (``tol``: tolerance-controlled pruning, 0 = off). Objects are combined as the paper combines them: by a second
 LogSumExp with the largest alpha (smooth mode), or by the minimum (exact-offset mode, where each
 object's distance is ``exact - offset``).
 
@@ -20,12 +21,16 @@ import numpy as np
 from numba import prange
 
 from smoothdist._config import NJIT, NJIT_PARALLEL
-from smoothdist.kernels import exact_distance_point, logsumexp_accumulate, smooth_distance_point
+from smoothdist.kernels import exact_distance_point, logsumexp_accumulate
+from smoothdist.query import smooth_distance_point_tol
 from tracer.camera import ray_direction
 
 MODE_SMOOTH, MODE_EXACT = 0, 1
 #: bisection iterations when a step overshoots into d < 0 (halves the bracket each time)
 BISECT_ITERS = 40
+#: tol mode: a sphere-tracing step may under-estimate by up to this fraction of the previous
+#: distance (the evaluation's tolerance is loosened accordingly; 0 disables the relaxation)
+RELAX = 0.25
 #: pixels per side of the square tiles handed to threads
 TILE = 8
 #: a prime: tile j of the parallel loop traces tile (j * STRIDE) mod n
@@ -33,16 +38,22 @@ STRIDE = 7919
 
 
 @numba.njit(**NJIT)
-def scene_distance(tree, roots, params, mode, x, y, z, stack, dstack):
+def scene_distance(tree, roots, params, mode, x, y, z, stack, dstack, slack=0.0):
     """Scene distance and gradient at ``(x, y, z)``.
+
+    ``stack, dstack``: traversal scratch. ``slack >= 0`` (scene units) loosens the
+    tolerance of objects with ``tol > 0`` to ``max(tol, expm1(alpha * slack))``, i.e. lets
+    their ``d_hat`` be up to ``slack`` below the ``tol = 0`` value (never above it).
 
     Returns ``(d, gx, gy, gz, nodes, leaves)``; the gradient is not normalised.
     """
     nobj = roots.size
     if nobj == 1:
         if mode == MODE_SMOOTH:
-            return smooth_distance_point(tree, x, y, z, params[0, 0], params[0, 1],
-                                         params[0, 2], params[0, 3], stack, dstack, roots[0])
+            return smooth_distance_point_tol(tree, x, y, z, params[0, 0], params[0, 1],
+                                             _loosened(params[0, 5], params[0, 0], slack),
+                                             params[0, 2], params[0, 3], stack, dstack,
+                                             roots[0])
         d, gx, gy, gz, p, nodes, leaves = exact_distance_point(tree, x, y, z, stack, dstack,
                                                                roots[0])
         return d - params[0, 4], gx, gy, gz, nodes, leaves
@@ -75,13 +86,25 @@ def scene_distance(tree, roots, params, mode, x, y, z, stack, dstack):
     sy = 0.0
     sz = 0.0
     for k in range(nobj):
-        d, gx, gy, gz, nn, ll = smooth_distance_point(tree, x, y, z, params[k, 0],
-                                                      params[k, 1], params[k, 2], params[k, 3],
-                                                      stack, dstack, roots[k])
+        d, gx, gy, gz, nn, ll = smooth_distance_point_tol(tree, x, y, z, params[k, 0],
+                                                          params[k, 1],
+                                                          _loosened(params[k, 5], params[k, 0],
+                                                                    slack),
+                                                          params[k, 2], params[k, 3], stack,
+                                                          dstack, roots[k])
         nodes += nn
         leaves += ll
         m, s, sx, sy, sz = logsumexp_accumulate(m, s, sx, sy, sz, d, 1.0, gx, gy, gz, a)
     return m - math.log(s) / a, sx / s, sy / s, sz / s, nodes, leaves
+
+
+@numba.njit(**NJIT)
+def _loosened(tol, alpha, slack):
+    """``max(tol, expm1(alpha * slack))`` for ``tol > 0`` (error ``log(1 + tol) / alpha``
+    at most ``slack``); 0 stays 0 (tolerance pruning off)."""
+    if tol > 0.0 and slack > 0.0:
+        return max(tol, math.expm1(min(alpha * slack, 700.0)))
+    return tol
 
 
 @numba.njit(**NJIT)
@@ -107,24 +130,37 @@ def ray_box(ox, oy, oz, dx, dy, dz, lo, hi):
 
 @numba.njit(**NJIT)
 def march_ray(tree, roots, params, mode, ox, oy, oz, dx, dy, dz, lo, hi, eps, max_steps, stack,
-              dstack):
+              dstack, relax=RELAX):
     """March one ray; returns ``(hit, t, gx, gy, gz, steps, leaves, bisections)``.
+
+    ``relax``: for objects with ``tol > 0``, a step may under-estimate the distance by up to
+    ``relax`` x the previous step (cheaper evaluations far from the surface; 0: never).
 
     ``hit`` is 1 when ``d <= eps`` was reached inside the box; then ``t`` is the ray parameter
     and ``g`` the (unnormalised) distance gradient there. Misses return ``t = nan``.
     """
     t, t_exit = ray_box(ox, oy, oz, dx, dy, dz, lo, hi)
+    relaxable = mode == MODE_SMOOTH and params[:, 5].max() > 0.0 and relax > 0.0
     steps = 0
     leaves = 0
     bis = 0
     if t > t_exit:
         return 0, np.nan, 0.0, 0.0, 0.0, steps, leaves, bis
     t_prev = t
+    # relaxed accuracy far from the surface (objects with tol > 0 only): a step may lose up
+    # to relax x the previous distance, never more, and stays safe because d_hat_tol only
+    # under-estimates; a distance <= eps is re-evaluated at the scene's own tol
+    slack = np.inf
     while steps < max_steps:
         d, gx, gy, gz, nn, ll = scene_distance(tree, roots, params, mode, ox + t * dx, oy + t * dy,
-                                               oz + t * dz, stack, dstack)
+                                               oz + t * dz, stack, dstack, slack)
         steps += 1
         leaves += ll
+        if d <= eps and slack > 0.0 and relaxable:
+            d, gx, gy, gz, nn, ll = scene_distance(tree, roots, params, mode, ox + t * dx,
+                                                   oy + t * dy, oz + t * dz, stack, dstack, 0.0)
+            steps += 1
+            leaves += ll
         if d <= eps:
             if d < -eps and t > t_prev:
                 # overshoot into the negative band: bisect [t_prev (d > eps), t (d < -eps)]
@@ -151,6 +187,7 @@ def march_ray(tree, roots, params, mode, ox, oy, oz, dx, dy, dz, lo, hi, eps, ma
             return 1, t, gx, gy, gz, steps, leaves, bis
         t_prev = t
         t += d
+        slack = relax * d if relaxable else 0.0
         if t > t_exit:
             break
     return 0, np.nan, 0.0, 0.0, 0.0, steps, leaves, bis
@@ -158,7 +195,7 @@ def march_ray(tree, roots, params, mode, ox, oy, oz, dx, dy, dz, lo, hi, eps, ma
 
 @numba.njit(**NJIT)
 def _render_tile(tree, roots, params, mode, cam, lo, hi, eps, max_steps, r_lo, r_hi, c_lo, c_hi,
-                 depth_max, hit, tbuf, grad, steps, leaves, bisect):
+                 depth_max, hit, tbuf, grad, steps, leaves, bisect, relax):
     stack = np.empty(depth_max + 4, dtype=np.int64)
     dstack = np.empty(depth_max + 4)
     ox = cam[0]
@@ -168,7 +205,8 @@ def _render_tile(tree, roots, params, mode, cam, lo, hi, eps, max_steps, r_lo, r
         for c in range(c_lo, c_hi):
             dx, dy, dz = ray_direction(cam, r, c)
             h, t, gx, gy, gz, st, lv, bs = march_ray(tree, roots, params, mode, ox, oy, oz, dx, dy, dz,
-                                                     lo, hi, eps, max_steps, stack, dstack)
+                                                     lo, hi, eps, max_steps, stack, dstack,
+                                                     relax)
             hit[r, c] = h == 1
             tbuf[r, c] = t
             grad[r, c, 0] = gx
@@ -181,7 +219,7 @@ def _render_tile(tree, roots, params, mode, cam, lo, hi, eps, max_steps, r_lo, r
 
 @numba.njit(**NJIT_PARALLEL)
 def render_rows(tree, roots, params, mode, cam, lo, hi, eps, max_steps, row0, row1, depth_max,
-                hit, tbuf, grad, steps, leaves, bisect):
+                hit, tbuf, grad, steps, leaves, bisect, relax=RELAX):
     """Trace rows ``row0 <= r < row1`` of the image into the per-pixel output arrays.
 
     Outputs are full-image arrays: ``hit (H, W) bool``, ``tbuf (H, W) float64``,
@@ -202,7 +240,7 @@ def render_rows(tree, roots, params, mode, cam, lo, hi, eps, max_steps, row0, ro
         tx = tile - ty * ntx
         _render_tile(tree, roots, params, mode, cam, lo, hi, eps, max_steps, row0 + ty * TILE,
                      min(row1, row0 + (ty + 1) * TILE), tx * TILE, min(W, (tx + 1) * TILE),
-                     depth_max, hit, tbuf, grad, steps, leaves, bisect)
+                     depth_max, hit, tbuf, grad, steps, leaves, bisect, relax)
 
 
 @numba.njit(**NJIT)
