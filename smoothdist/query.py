@@ -318,6 +318,9 @@ def smooth_distance_point_tol(tree, px, py, pz, alpha, beta, tol, S, wgs, stack,
     wa = wa if (S == 1.0 or wa == 1.0) else math.exp(S * math.log(wa))
     # tol * s_ex * (n_E + n_B) / N, with the constants folded in
     budget = tol / tree.count[root]
+    # nodes closer than ``near`` cannot pass the test whatever their size (it needs at least
+    # wa exp(-alpha (bd - m)) <= tol * s_ex): a cheap pre-check, no exp for those nodes
+    near = np.inf
     nodes = 0
     leaves = 0
     lo = tree.lo
@@ -333,7 +336,7 @@ def smooth_distance_point_tol(tree, px, py, pz, alpha, beta, tol, S, wgs, stack,
         nodes += 1
         cnt = tree.count[node]
         far = False
-        if s_ex > 0.0:
+        if s_ex > 0.0 and bd >= near:
             W = cnt * wa
             allow = budget * s_ex * (n_far + cnt)
             if bd >= m:
@@ -401,6 +404,7 @@ def smooth_distance_point_tol(tree, px, py, pz, alpha, beta, tol, S, wgs, stack,
                 gy += e * vy
                 gz += e * vz
             leaves += cnt
+            near = m + math.log(wa / (tol * s_ex)) / alpha
             continue
         r = tree.right[node]
         dl = math.sqrt(box_distance2(px, py, pz, lo, hi, l)[0])

@@ -249,3 +249,21 @@ def distance_at(tree, roots, params, mode, x, y, z, depth_max):
     stack = np.empty(depth_max + 4, dtype=np.int64)
     dstack = np.empty(depth_max + 4)
     return scene_distance(tree, roots, params, mode, x, y, z, stack, dstack)[0]
+
+
+@numba.njit(**NJIT_PARALLEL)
+def trace_pixels(tree, roots, params, mode, cam, lo, hi, eps, max_steps, rows, cols, depth_max,
+                 hit, tbuf, steps, leaves, relax=RELAX):
+    """Trace only the pixels ``(rows[i], cols[i])`` (e.g. a subsample for an expensive
+    reference render); outputs ``hit, tbuf, steps, leaves`` have the shape of ``rows``."""
+    for i in prange(rows.size):
+        stack = np.empty(depth_max + 4, dtype=np.int64)
+        dstack = np.empty(depth_max + 4)
+        dx, dy, dz = ray_direction(cam, rows[i], cols[i])
+        h, t, gx, gy, gz, st, lv, bs = march_ray(tree, roots, params, mode, cam[0], cam[1],
+                                                 cam[2], dx, dy, dz, lo, hi, eps, max_steps,
+                                                 stack, dstack, relax)
+        hit[i] = h == 1
+        tbuf[i] = t
+        steps[i] = st
+        leaves[i] = lv
