@@ -56,6 +56,8 @@ class SmoothDistanceField:
         Primitives when ``mesh`` is a vertex array.
     leaf_size : int
         Primitives per BVH leaf.
+    progress : callable(done, total, elapsed_s), optional
+        Reports the BVH build (see :func:`smoothdist.bvh.build_tree`), for very large data.
 
     Notes
     -----
@@ -75,7 +77,7 @@ class SmoothDistanceField:
     True
     """
 
-    def __init__(self, mesh, F=None, *, leaf_size=1, **mesh_kwargs):
+    def __init__(self, mesh, F=None, *, leaf_size=1, progress=None, **mesh_kwargs):
         if not isinstance(mesh, DataMesh):
             mesh = DataMesh(mesh, F, **mesh_kwargs)
         elif F is not None:
@@ -83,7 +85,7 @@ class SmoothDistanceField:
         if isinstance(leaf_size, bool) or not isinstance(leaf_size, (int, np.integer)) or leaf_size < 1:
             raise ValueError(f"leaf_size must be an integer >= 1, got {leaf_size!r}")
         self.mesh = mesh
-        self.tree = build_tree(mesh, leaf_size=int(leaf_size))
+        self.tree = build_tree(mesh, leaf_size=int(leaf_size), progress=progress)
 
     # ------------------------------------------------------------------ properties
     @property
