@@ -93,7 +93,7 @@ def distance_at_camera(scene, arrays=None):
                                    depth_max))
 
 
-def render(scene, *, progress=None, band_rows=None, relax=None):
+def render(scene, *, progress=None, band_rows=None, relax=None, omega=None, cone=None):
     """Trace and shade ``scene``.
 
     Parameters
@@ -106,6 +106,12 @@ def render(scene, *, progress=None, band_rows=None, relax=None):
     relax : float, optional
         Scenes with ``tol > 0``: a sphere-tracing step may under-estimate the distance by up
         to ``relax`` x the previous step (default ``tracer.march.RELAX``; 0: never).
+    omega : float, optional
+        Over-relaxation of the sphere-tracing steps (>= 1, with a safe fallback; default
+        ``tracer.march.OMEGA``).
+    cone : bool, optional
+        Seed each tile's rays with a conservative start depth from a cone march (default
+        ``tracer.march.CONE``).
 
     Raises
     ------
@@ -134,7 +140,9 @@ def render(scene, *, progress=None, band_rows=None, relax=None):
         r1 = min(H, r0 + band)
         march.render_rows(tree, roots, params, mode, cam, lo, hi, float(scene.eps),
                           int(scene.max_steps), r0, r1, depth_max, hit, tbuf, grad, steps,
-                          leaves, bis, march.RELAX if relax is None else float(relax))
+                          leaves, bis, march.RELAX if relax is None else float(relax),
+                          march.OMEGA if omega is None else max(1.0, float(omega)),
+                          march.CONE if cone is None else bool(cone))
         if progress is not None:
             progress(r1, H, time.perf_counter() - t0)
     seconds = time.perf_counter() - t0
