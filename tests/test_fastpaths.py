@@ -80,3 +80,14 @@ def test_trace_pixels_equals_render(bunny_points):
     np.testing.assert_array_equal(t.astype(np.float32), full.depth[rows, cols])
     np.testing.assert_array_equal(steps, full.steps[rows, cols])
     assert hit.any()
+
+
+@pytest.mark.parametrize("relax", [0.0, 0.25])
+def test_cone_pass_with_tol_against_plain(bunny_points, relax):
+    """tol scenes: the cone start must not let a loose first evaluation count as a hit (every
+    hit is confirmed at the scene's own tol), with or without relaxed steps."""
+    scene = scene_from_field(bunny_points, alpha=200.0, alpha_u=1200.0, beta=0.0, tol=1e-2,
+                             width=24, height=24, eps=1e-4 * bunny_points.diagonal)
+    plain = render(scene, cone=False, relax=relax)
+    fast = render(scene, cone=True, relax=relax)
+    _check_close(fast, plain, scene.eps, bunny_points.diagonal)

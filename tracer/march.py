@@ -114,6 +114,15 @@ def _loosened(tol, alpha, slack):
 
 
 @numba.njit(**NJIT)
+def _was_loosened(params, slack):
+    """Whether ``slack`` loosened the tolerance of any object (else no re-evaluation)."""
+    for k in range(params.shape[0]):
+        if _loosened(params[k, 5], params[k, 0], slack) != params[k, 5]:
+            return True
+    return False
+
+
+@numba.njit(**NJIT)
 def ray_box(ox, oy, oz, dx, dy, dz, lo, hi):
     """Slab test: ``(t_enter, t_exit)`` of the ray with box ``lo..hi``; ``t_enter > t_exit`` misses."""
     t0 = 0.0
@@ -165,7 +174,7 @@ def march_ray(tree, roots, params, mode, ox, oy, oz, dx, dy, dz, lo, hi, eps, ma
     # relaxed accuracy far from the surface (objects with tol > 0 only): a step may lose up
     # to relax x the previous distance, never more, and stays safe because d_hat_tol only
     # under-estimates; a distance <= eps is re-evaluated at the scene's own tol
-    slack = np.inf
+    slack = np.inf if relaxable else 0.0
     w = omega
     d_prev = 0.0
     step = 0.0
@@ -174,7 +183,7 @@ def march_ray(tree, roots, params, mode, ox, oy, oz, dx, dy, dz, lo, hi, eps, ma
                                                oz + t * dz, stack, dstack, slack)
         steps += 1
         leaves += ll
-        if d <= eps and slack > 0.0 and relaxable:
+        if d <= eps and slack > 0.0 and relaxable and _was_loosened(params, slack):
             d, gx, gy, gz, nn, ll = scene_distance(tree, roots, params, mode, ox + t * dx,
                                                    oy + t * dy, oz + t * dz, stack, dstack, 0.0)
             steps += 1
