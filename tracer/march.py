@@ -230,7 +230,7 @@ def march_ray(tree, roots, params, mode, ox, oy, oz, dx, dy, dz, lo, hi, eps, ma
 
 @numba.njit(**NJIT)
 def cone_start(tree, roots, params, mode, cam, lo, hi, eps, r_lo, r_hi, c_lo, c_hi, stack,
-               dstack):
+               dstack, relax=RELAX):
     """Conservative common start depth for the rays of pixels ``[r_lo, r_hi) x [c_lo, c_hi)``.
 
     Cone marching along the tile's central direction ``u``: every pixel ray ``v`` of the tile
@@ -241,7 +241,9 @@ def cone_start(tree, roots, params, mode, cam, lo, hi, eps, r_lo, r_hi, c_lo, c_
     ``[t, t + D - t delta)`` (the ball of radius ``D`` is, by the same Lipschitz argument as
     sphere tracing, design notes §4). Steps ``t += D - t delta`` start at the camera (outside
     the surface) and stop once the cone is wider than a quarter of ``D`` (or leaves the box).
-    Returns ``(t_start, evaluations, leaves)``.
+    For ``tol > 0`` scenes the evaluations are loosened like the march's (``relax``): an
+    under-estimated ``D`` is still a surface-free radius. Returns ``(t_start, evaluations,
+    leaves)``.
     """
     ux = 0.0
     uy = 0.0
@@ -266,10 +268,14 @@ def cone_start(tree, roots, params, mode, cam, lo, hi, eps, r_lo, r_hi, c_lo, c_
     t = 0.0
     evals = 0
     leaves = 0
+    loose = mode == MODE_SMOOTH and params[:, 5].max() > 0.0 and relax > 0.0
+    slack = np.inf if loose else 0.0
     while evals < CONE_STEPS:
         d, gx, gy, gz, nn, ll = scene_distance(tree, roots, params, mode, cam[0] + t * ux,
                                                cam[1] + t * uy, cam[2] + t * uz, stack,
-                                               dstack)
+                                               dstack, slack)
+        if loose:
+            slack = relax * d
         evals += 1
         leaves += ll
         step = d - t * delta
@@ -302,7 +308,7 @@ def _render_tile(tree, roots, params, mode, cam, lo, hi, eps, max_steps, r_lo, r
                     # the first ray of the tile that meets the box runs the cone pass (and its
                     # work is booked on that pixel)
                     t_min, c_ev, c_lv = cone_start(tree, roots, params, mode, cam, lo, hi, eps,
-                                                   r_lo, r_hi, c_lo, c_hi, stack, dstack)
+                                                   r_lo, r_hi, c_lo, c_hi, stack, dstack, relax)
                     pending = False
             h, t, gx, gy, gz, st, lv, bs = march_ray(tree, roots, params, mode, ox, oy, oz, dx, dy, dz,
                                                      lo, hi, eps, max_steps, stack, dstack,
