@@ -241,6 +241,10 @@ def smooth_distance_point(tree, px, py, pz, alpha, beta, S, wgs, stack, dstack, 
     return m - math.log(s) / alpha, gx * inv, gy * inv, gz * inv, nodes, leaves
 
 
+#: tol mode: largest number of deferred nodes per evaluation (smooth_distance_point_tol)
+DEFER = 256
+
+
 @numba.njit(**NJIT)
 def _shift(m, d, alpha):
     """``(factor, new shift)``: sums relative to ``m`` times ``factor`` are relative to
@@ -292,7 +296,9 @@ def smooth_distance_point_tol(tree, px, py, pz, alpha, beta, tol, S, wgs, stack,
     of evaluated leaves, all >= 0), so ``s_tol = s_ex + E <= (1 + tol) s_0`` and
     ``d_hat_0 - d_hat_tol = log(s_tol / s_0) / alpha <= log(1 + tol) / alpha``. Both steps
     hold for any visiting order; the order only decides how early ``s_ex`` is large enough
-    to accept far nodes (hence the speed). Both sides of the test are relative to the same
+    to accept far nodes (hence the speed; nodes beyond the cheap ``near`` threshold that fail
+    are deferred and re-tested at the end, when the far nodes have left budget unused: about
+    10 % fewer leaves on the bunny). Both sides of the test are relative to the same
     shift, so they rescale together when it moves. No node is accepted before the first
     exact term (``s_ex = 0``).
 
@@ -330,11 +336,23 @@ def smooth_distance_point_tol(tree, px, py, pz, alpha, beta, tol, S, wgs, stack,
     stack[0] = root
     dstack[0] = math.sqrt(d2)
     sp = 1
-    while sp > 0:
-        sp -= 1
-        node = stack[sp]
-        bd = dstack[sp]
-        nodes += 1
+    # nodes that fail the test although beyond ``near`` are deferred (up to DEFER of them)
+    # and re-tested once the stack is empty, with the budget left unused by the far nodes
+    # accepted meanwhile; a deferred node that fails again is opened
+    defer = np.empty(DEFER, dtype=np.int64)
+    ddist = np.empty(DEFER)
+    nd = 0
+    while sp > 0 or nd > 0:
+        retest = sp == 0
+        if retest:
+            nd -= 1
+            node = defer[nd]
+            bd = ddist[nd]
+        else:
+            sp -= 1
+            node = stack[sp]
+            bd = dstack[sp]
+            nodes += 1
         cnt = tree.count[node]
         far = False
         if s_ex > 0.0 and bd >= near:
@@ -365,6 +383,11 @@ def smooth_distance_point_tol(tree, px, py, pz, alpha, beta, tol, S, wgs, stack,
                     gy += e * (fw * (py - cy))
                     gz += e * (fw * (pz - cz))
                 leaves += 1
+                continue
+            if not retest and nd < DEFER:
+                defer[nd] = node
+                ddist[nd] = bd
+                nd += 1
                 continue
         l = tree.left[node]
         if l >= 0 and cnt > 1 and beta > 0.0 and tree.diag[node] < beta * bd:
