@@ -13,10 +13,17 @@ The protocol of the paper's CPU benchmark (Madan & Levin 2022, Sec. 5; the autho
   number of leaves visited (exact primitive evaluations plus Barnes-Hut far-field nodes, the
   authors' ``num_visited``), the mean number of nodes visited and queries per second.
 
+With ``--fcpw``, the exact distance to the triangles (F) is also computed by fcpw
+(https://github.com/rohan-sawhney/fcpw, its CPU closest-point query; ``pip install fcpw``; not a
+dependency of this project, the comparison is skipped when it is not installed) on the same
+grid in the same run, interleaved with ours; the table then gives both CPU times (all
+threads), their ratio, and the largest difference of the distances (fcpw works in float32).
+
 Usage (from the repository root)::
 
     python benchmarks/bench_grid.py                      # scenes/data/bunny.off, N = 100
     python benchmarks/bench_grid.py mesh.obj --grid 50 --beta 0.25 --json out.json
+    python benchmarks/bench_grid.py --fcpw                # exact distance against fcpw
 
 The JIT is warmed up on a few queries before timing; compiled kernels are cached on disk.
 """
@@ -116,6 +123,52 @@ def run(args):
     return rows, nq
 
 
+def fcpw_compare(source, Q, repeat):
+    """Exact distance to the normalised triangles: ours against fcpw, interleaved.
+
+    Returns a dict with both CPU and wall times (best of ``repeat``), the ratio and the
+    largest distance difference, or None when fcpw is not installed.
+    """
+    try:
+        import fcpw
+    except ImportError:
+        print("# fcpw is not installed (pip install fcpw): skipping the comparison",
+              file=sys.stderr)
+        return None
+    mesh = normalise(source.as_kind("triangles"))
+    field = SmoothDistanceField(mesh)
+    scene = fcpw.scene_3D()
+    scene.set_object_count(1)
+    scene.set_object_vertices(np.asfortranarray(mesh.V, dtype=np.float32), 0)
+    scene.set_object_triangles(np.asfortranarray(mesh.triangles, dtype=np.int32), 0)
+    scene.build(fcpw.aggregate_type.bvh_surface_area, True)
+    Qf = np.asfortranarray(Q, dtype=np.float32)
+    radii = np.full(Q.shape[0], np.inf, dtype=np.float32)
+
+    def theirs():
+        inter = fcpw.interaction_3D_list()
+        scene.find_closest_points(Qf, radii, inter)
+        return inter
+
+    def ours():
+        return field.exact_distance(Q)
+
+    field.exact_distance(Q[:64])
+    best = {"ours": (np.inf, np.inf), "fcpw": (np.inf, np.inf)}
+    out = {}
+    for _ in range(repeat):
+        for name, fn in (("fcpw", theirs), ("ours", ours)):
+            c0, t0 = time.process_time(), time.perf_counter()
+            out[name] = fn()
+            cpu, wall = time.process_time() - c0, time.perf_counter() - t0
+            best[name] = min(best[name], (cpu, wall))
+    d_fcpw = np.array([i.d for i in out["fcpw"]])
+    diff = float(np.abs(out["ours"][0] - d_fcpw).max())
+    return dict(ours_cpu=best["ours"][0], ours_wall=best["ours"][1], fcpw_cpu=best["fcpw"][0],
+                fcpw_wall=best["fcpw"][1], ratio_cpu=best["ours"][0] / best["fcpw"][0],
+                max_diff=diff, triangles=field.num_primitives)
+
+
 def markdown(rows):
     head = ("| type | primitives | query | alpha | beta | seconds | mean leaves | mean nodes "
             "| queries/s |")
@@ -146,6 +199,8 @@ def main(argv=None):
     p.add_argument("--repeat", type=int, default=3, help="timed runs, best kept (default 3)")
     p.add_argument("--threads", type=int, default=None, help="numba threads (default: all)")
     p.add_argument("--json", default=None, metavar="OUT", help="also write the rows as JSON")
+    p.add_argument("--fcpw", action="store_true",
+                   help="also time fcpw's exact distance to the triangles (if installed)")
     args = p.parse_args(argv)
     if args.grid < 1 or args.repeat < 1:
         p.error("--grid and --repeat must be >= 1")
@@ -164,6 +219,22 @@ def main(argv=None):
     rows, nq = run(args)
     print()
     print(markdown(rows))
+    if args.fcpw:
+        cmp_ = fcpw_compare(DataMesh.load(Path(args.mesh)), grid(args.grid), args.repeat)
+        if cmp_ is not None:
+            print()
+            print(f"Exact distance to the {cmp_['triangles']:,} triangles, {nq:,} queries, "
+                  f"best of {args.repeat}, interleaved:")
+            print()
+            print("| | CPU s | wall s |")
+            print("|---|---:|---:|")
+            print(f"| ours | {cmp_['ours_cpu']:.3f} | {cmp_['ours_wall']:.3f} |")
+            print(f"| fcpw | {cmp_['fcpw_cpu']:.3f} | {cmp_['fcpw_wall']:.3f} |")
+            print(f"| ratio ours / fcpw | {cmp_['ratio_cpu']:.2f} | "
+                  f"{cmp_['ours_wall'] / cmp_['fcpw_wall']:.2f} |")
+            print()
+            print(f"largest |d_ours - d_fcpw| = {cmp_['max_diff']:.2e}")
+            rows.append(dict(type="F", query="exact_vs_fcpw", **cmp_))
     if args.json:
         meta = dict(mesh=str(Path(args.mesh).resolve()), grid=args.grid, queries=nq,
                     repeat=args.repeat, leaf_size=args.leaf_size, gradient=args.gradient,

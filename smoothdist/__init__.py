@@ -29,7 +29,7 @@ def load_mesh(path, kind=None):
 
 
 def smooth_distance(Q, V, F=None, *, alpha, beta=0.5, alpha_u=None, gradient="metric",
-                    return_stats=False):
+                    return_stats=False, tol=0.0):
     """Smooth distance from query points to a data mesh (Madan & Levin 2022, Eq. 3-4).
 
     Parameters
@@ -52,6 +52,9 @@ def smooth_distance(Q, V, F=None, *, alpha, beta=0.5, alpha_u=None, gradient="me
         The paper's alpha-metric weight gradient, or the exact derivative of ``d_hat``.
     return_stats : bool
         Also return per-query :class:`QueryStats`.
+    tol : float
+        Tolerance-controlled pruning (>= 0; 0 = off); with ``beta=0`` the error is at most
+        ``log(1 + tol) / alpha`` and ``d_hat`` stays below the exact sum's.
 
     Returns
     -------
@@ -68,7 +71,7 @@ def smooth_distance(Q, V, F=None, *, alpha, beta=0.5, alpha_u=None, gradient="me
     """
     field = SmoothDistanceField(V, F)
     return field.smooth_distance(Q, alpha=alpha, beta=beta, alpha_u=alpha_u, gradient=gradient,
-                                 return_stats=return_stats)
+                                 return_stats=return_stats, tol=tol)
 
 
 def exact_distance(Q, V, F=None):

@@ -9,6 +9,8 @@ bounding box (balanced, so the depth is ``ceil(log2(m / leaf_size))`` and a trav
 ``depth + 2`` entries suffices).
 """
 
+import threading
+import time
 from typing import NamedTuple
 
 import numba
@@ -86,6 +88,8 @@ def primitive_table(mesh):
     m = P.size + E.shape[0] + T.shape[0]
     kind = np.empty(m, dtype=np.int64)
     pts = np.zeros((m, 9))
+    # np.zeros maps untouched pages lazily: for a point cloud ``wc`` is never written or read,
+    # so it costs no memory (1 GB for 1e7 points otherwise); build_tree keeps it that way
     wc = np.zeros((m, 13))
     pwhi = np.ones(m)
     p, e = P.size, E.shape[0]
@@ -104,7 +108,7 @@ def primitive_table(mesh):
     return kind, pts, wc, pwhi, A
 
 
-def build_tree(mesh, leaf_size=1):
+def build_tree(mesh, leaf_size=1, progress=None):
     """Build the :class:`TreeData` of a :class:`DataMesh`.
 
     Parameters
@@ -112,34 +116,82 @@ def build_tree(mesh, leaf_size=1):
     mesh : DataMesh
     leaf_size : int
         Largest number of primitives in a leaf (>= 1).
+    progress : callable(done, total, elapsed_s), optional
+        Called about twice a second while the tree is built (``done`` primitives of
+        ``total`` placed in leaves), and once at the end.
+
+    Memory: about ``(9 + 13 + 4) x 8`` bytes per primitive for the primitive table plus 96
+    bytes per node (fewer than ``min(2 m, 4 m / leaf_size)`` nodes), plus transients of the
+    same order during the build. A point cloud needs no weight coefficients and no per-primitive
+    boxes (a point is its own box), which the build exploits.
     """
-    kind, pts, wc, pwhi, A = primitive_table(mesh)
-    nv = np.where(kind == KIND_POINT, 1, np.where(kind == KIND_EDGE, 2, 3))
-    cent = np.zeros((kind.size, 3))
-    plo = np.full((kind.size, 3), np.inf)
-    phi = np.full((kind.size, 3), -np.inf)
-    for j in range(3):
-        use = nv > j
-        Xj = pts[:, 3 * j:3 * j + 3]
-        cent[use] += Xj[use]
-        plo[use] = np.minimum(plo[use], Xj[use])
-        phi[use] = np.maximum(phi[use], Xj[use])
-    cent /= nv[:, None]
-    order, lo, hi, left, right, start, count, depth = _build(cent, plo, phi, int(leaf_size))
-    whi = _node_max(pwhi[order], start, count)
+    points_only = mesh.edges.shape[0] == 0 and mesh.triangles.shape[0] == 0
+    if points_only:
+        # lean path (1e7-point clouds): no primitive table before the build, a point is its
+        # own centroid and box, and no weight coefficients are ever touched
+        cent = plo = phi = np.ascontiguousarray(mesh.V[mesh.points])
+        A = mesh.weight_data()[0]
+        m = cent.shape[0]
+    else:
+        kind, pts, wc, pwhi, A = primitive_table(mesh)
+        nv = np.where(kind == KIND_POINT, 1, np.where(kind == KIND_EDGE, 2, 3))
+        cent = np.zeros((kind.size, 3))
+        plo = np.full((kind.size, 3), np.inf)
+        phi = np.full((kind.size, 3), -np.inf)
+        for j in range(3):
+            use = nv > j
+            Xj = pts[:, 3 * j:3 * j + 3]
+            cent[use] += Xj[use]
+            plo[use] = np.minimum(plo[use], Xj[use])
+            phi[use] = np.maximum(phi[use], Xj[use])
+        cent /= nv[:, None]
+    done = np.zeros(1, dtype=np.int64)
+    if progress is None:
+        built = _build(cent, plo, phi, int(leaf_size), done)
+    else:
+        # the kernel releases the GIL (nogil): run it in a thread and poll its counter
+        box = []
+        worker = threading.Thread(target=lambda: box.append(_build(cent, plo, phi,
+                                                                   int(leaf_size), done)))
+        t0 = time.perf_counter()
+        worker.start()
+        while worker.is_alive():
+            worker.join(0.5)
+            if worker.is_alive():
+                progress(int(done[0]), cent.shape[0], time.perf_counter() - t0)
+        progress(int(done[0]), cent.shape[0], time.perf_counter() - t0)
+        if not box:
+            raise RuntimeError("BVH build failed")
+        built = box[0]
+    order, lo, hi, left, right, start, count, depth = built
     diag = np.sqrt(((hi - lo) ** 2).sum(axis=1))
+    if points_only:
+        pts = np.zeros((m, 9))
+        pts[:, 0:3] = cent[order]
+        del cent, plo, phi
+        kind = np.full(m, KIND_POINT, dtype=np.int64)
+        wc = np.zeros((m, 13))
+        pwhi = np.ones(m)
+        whi = np.ones(lo.shape[0])
+    else:
+        del cent, plo, phi
+        whi = _node_max(pwhi[order], start, count)
+        pts = np.ascontiguousarray(pts[order])
+        wc = np.ascontiguousarray(wc[order])
+        kind = np.ascontiguousarray(kind[order])
+        pwhi = np.ascontiguousarray(pwhi[order])
     return TreeData(lo=lo, hi=hi, left=left, right=right, start=start, count=count, diag=diag,
-                    whi=whi, kind=np.ascontiguousarray(kind[order]),
-                    pts=np.ascontiguousarray(pts[order]), wc=np.ascontiguousarray(wc[order]),
-                    pwhi=np.ascontiguousarray(pwhi[order]), orig=np.ascontiguousarray(order),
-                    A=float(A), depth=int(depth))
+                    whi=whi, kind=kind, pts=pts, wc=wc, pwhi=pwhi,
+                    orig=np.ascontiguousarray(order), A=float(A), depth=int(depth))
 
 
 @numba.njit(**NJIT)
-def _build(cent, plo, phi, leaf_size):
+def _build(cent, plo, phi, leaf_size, done):
     m = cent.shape[0]
     order = np.arange(m)
-    cap = max(1, 2 * m)
+    # object-median splits leave more than leaf_size / 2 primitives in every leaf, so there
+    # are fewer than 2 m / leaf_size leaves and 4 m / leaf_size nodes
+    cap = max(1, min(2 * m, 4 * (m // leaf_size) + 4))
     lo = np.empty((cap, 3))
     hi = np.empty((cap, 3))
     left = np.full(cap, -1, dtype=np.int64)
@@ -200,6 +252,7 @@ def _build(cent, plo, phi, leaf_size):
         start[node] = s
         count[node] = e - s
         if e - s <= leaf_size:
+            done[0] += e - s
             continue
         ext0 = chi0 - clo0
         ext1 = chi1 - clo1

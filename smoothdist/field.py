@@ -66,6 +66,8 @@ class SmoothDistanceField:
         Primitives when ``mesh`` is a vertex array.
     leaf_size : int
         Primitives per BVH leaf.
+    progress : callable(done, total, elapsed_s), optional
+        Reports the BVH build (see :func:`smoothdist.bvh.build_tree`), for very large data.
 
     Notes
     -----
@@ -85,12 +87,12 @@ class SmoothDistanceField:
     True
     """
 
-    def __init__(self, mesh, F=None, *, leaf_size=1, **mesh_kwargs):
+    def __init__(self, mesh, F=None, *, leaf_size=1, progress=None, **mesh_kwargs):
         mesh = as_data_mesh(mesh, F, **mesh_kwargs)
         if isinstance(leaf_size, bool) or not isinstance(leaf_size, (int, np.integer)) or leaf_size < 1:
             raise ValueError(f"leaf_size must be an integer >= 1, got {leaf_size!r}")
         self.mesh = mesh
-        self.tree = build_tree(mesh, leaf_size=int(leaf_size))
+        self.tree = build_tree(mesh, leaf_size=int(leaf_size), progress=progress)
 
     # ------------------------------------------------------------------ properties
     @property
@@ -268,7 +270,7 @@ class SmoothDistanceField:
 
     # ------------------------------------------------------------------ queries
     def smooth_distance(self, Q, *, alpha, beta=0.5, alpha_u=None, gradient="metric",
-                        method="bvh", return_stats=False):
+                        method="bvh", return_stats=False, tol=0.0):
         """Smooth distance ``d_hat`` (Eq. 3) and its gradient at query points.
 
         Parameters
@@ -289,6 +291,12 @@ class SmoothDistanceField:
             ``"brute"`` sums every primitive without the tree (slow reference; ignores beta).
         return_stats : bool
             Also return :class:`QueryStats`.
+        tol : float
+            Tolerance-controlled pruning (>= 0; 0 = off): visit nodes nearest-first and
+            replace a subtree by its conservative far field only while the far fields accepted
+            so far stay below ``tol`` times the exact part of the sum. With ``beta=0``,
+            ``d_hat_0 - log(1 + tol) / alpha <= d_hat <= d_hat_0`` (error at most
+            ``tol / alpha``; proof in :func:`smoothdist.query.smooth_distance_point_tol`).
 
         Returns
         -------
@@ -299,6 +307,7 @@ class SmoothDistanceField:
             alpha = self.auto_alpha()
         alpha = self.check_alpha(alpha)
         beta = non_negative(beta, "beta")
+        tol = non_negative(tol, "tol")
         S = self.attenuation(alpha, alpha_u)
         if gradient not in GRADIENTS:
             raise ValueError(f"gradient must be one of {GRADIENTS}, got {gradient!r}")
@@ -313,7 +322,7 @@ class SmoothDistanceField:
         leaves = np.empty(n, dtype=np.int64)
         if n:
             _q.smooth_distance_batch(self.tree, Q, alpha, beta, S, wgs, method == "brute", d, g,
-                                     nodes, leaves)
+                                     nodes, leaves, tol)
         res = SmoothDistanceResult(d, g)
         return (res.distance, res.gradient, QueryStats(nodes, leaves)) if return_stats else res
 

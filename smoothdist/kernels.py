@@ -8,16 +8,18 @@ Use them with a :class:`~smoothdist.field.SmoothDistanceField`'s ``tree`` and th
                                                          wgs, stack, dstack)
 
 Inside a kernel, allocate ``np.empty(tree.depth + 4, np.int64)`` and ``np.empty(tree.depth + 4)``.
+``smooth_distance_point_tol(tree, x, y, z, alpha, beta, tol, S, wgs, stack, dstack)`` adds
+tolerance-controlled pruning (``tol > 0``; same scratch arrays).
 """
 
 import numpy as np
 
 from smoothdist.bvh import TreeData, concatenate_trees
 from smoothdist.query import (exact_distance_point, logsumexp_accumulate, smooth_distance_point,
-                              stack_size)
+                              smooth_distance_point_tol, stack_size)
 
 __all__ = ["TreeData", "concatenate_trees", "exact_distance_point", "logsumexp_accumulate",
-           "smooth_distance_point", "new_stack", "stack_size"]
+           "smooth_distance_point", "smooth_distance_point_tol", "new_stack", "stack_size"]
 
 
 def new_stack(tree):

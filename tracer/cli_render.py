@@ -46,6 +46,10 @@ def add_arguments(p):
     p.add_argument("--save-scene", metavar="OUT.json",
                    help="write the scene file used (camera, alpha, alpha_U, ...) to edit and "
                    "render again")
+    p.add_argument("--tol", type=float, metavar="TOL",
+                   help="tolerance-controlled pruning: d_hat within log(1 + TOL)/alpha of the "
+                        "exact sum, never above it (0 = off; default: scene's). With --beta 0 "
+                        "it is the only pruning")
     p.add_argument("--mode", choices=("smooth", "exact"),
                    help="smooth distance, or exact distance offset surface")
     p.add_argument("--offset", type=float,
@@ -131,7 +135,7 @@ def run(args):
         raise CLIError("--kind applies to mesh files; a scene file sets bvh_type per object")
     overrides = {"beta": args.beta, "alpha": args.alpha, "alpha_u": args.alpha_u,
                  "mode": args.mode, "eps": args.eps, "shading": args.shading,
-                 "offset": args.offset}
+                 "offset": args.offset, "tol": args.tol}
     if args.size:
         overrides["width"], overrides["height"] = args.size
     name = os.path.splitext(os.path.basename(args.scene))[0]
@@ -176,6 +180,7 @@ def run(args):
         written.append(_save_scene(args, scene, source))
     stats = result.summary()
     stats.update(scene=os.path.abspath(args.scene), mode=scene.mode, beta=scene.beta,
+                 tol=scene.tol,
                  eps=scene.eps, objects=[{"name": o.name, "alpha": o.alpha, "alpha_u": o.alpha_u,
                                           "primitives": o.field.num_primitives}
                                          for o in scene.objects])

@@ -2,7 +2,8 @@
 
 A scene is one :class:`smoothdist.kernels.TreeData` *forest* (the objects' trees concatenated by
 ``smoothdist.kernels.concatenate_trees``), the root node of each object ``roots (k,) int64``,
-and a ``(k, 5)`` float64 parameter table, one row per object: ``alpha, beta, S, wgs, offset``. Objects are combined as the paper combines them: by a second
+and a ``(k, 6)`` float64 parameter table, one row per object: ``alpha, beta, S, wgs, offset,
+tol`` (``tol``: tolerance-controlled pruning, 0 = off). Objects are combined as the paper combines them: by a second
 LogSumExp with the largest alpha (smooth mode), or by the minimum (exact-offset mode, where each
 object's distance is ``exact - offset``).
 
@@ -20,12 +21,22 @@ import numpy as np
 from numba import prange
 
 from smoothdist._config import NJIT, NJIT_PARALLEL
-from smoothdist.kernels import exact_distance_point, logsumexp_accumulate, smooth_distance_point
+from smoothdist.kernels import exact_distance_point, logsumexp_accumulate
+from smoothdist.query import smooth_distance_point_tol
 from tracer.camera import ray_direction
 
 MODE_SMOOTH, MODE_EXACT = 0, 1
 #: bisection iterations when a step overshoots into d < 0 (halves the bracket each time)
 BISECT_ITERS = 40
+#: tol mode: a sphere-tracing step may under-estimate by up to this fraction of the previous
+#: distance (the evaluation's tolerance is loosened accordingly; 0 disables the relaxation)
+RELAX = 0.25
+#: over-relaxation factor of sphere-tracing steps (1: plain sphere tracing); see march_ray
+OMEGA = 1.0
+#: seed each tile's rays with a conservative start depth from a cone march (cone_start)
+CONE = True
+#: largest number of distance evaluations of one tile's cone march
+CONE_STEPS = 64
 #: pixels per side of the square tiles handed to threads
 TILE = 8
 #: a prime: tile j of the parallel loop traces tile (j * STRIDE) mod n
@@ -33,16 +44,22 @@ STRIDE = 7919
 
 
 @numba.njit(**NJIT)
-def scene_distance(tree, roots, params, mode, x, y, z, stack, dstack):
+def scene_distance(tree, roots, params, mode, x, y, z, stack, dstack, slack=0.0):
     """Scene distance and gradient at ``(x, y, z)``.
+
+    ``stack, dstack``: traversal scratch. ``slack >= 0`` (scene units) loosens the
+    tolerance of objects with ``tol > 0`` to ``max(tol, expm1(alpha * slack))``, i.e. lets
+    their ``d_hat`` be up to ``slack`` below the ``tol = 0`` value (never above it).
 
     Returns ``(d, gx, gy, gz, nodes, leaves)``; the gradient is not normalised.
     """
     nobj = roots.size
     if nobj == 1:
         if mode == MODE_SMOOTH:
-            return smooth_distance_point(tree, x, y, z, params[0, 0], params[0, 1],
-                                         params[0, 2], params[0, 3], stack, dstack, roots[0])
+            return smooth_distance_point_tol(tree, x, y, z, params[0, 0], params[0, 1],
+                                             _loosened(params[0, 5], params[0, 0], slack),
+                                             params[0, 2], params[0, 3], stack, dstack,
+                                             roots[0])
         d, gx, gy, gz, p, nodes, leaves = exact_distance_point(tree, x, y, z, stack, dstack,
                                                                roots[0])
         return d - params[0, 4], gx, gy, gz, nodes, leaves
@@ -75,13 +92,34 @@ def scene_distance(tree, roots, params, mode, x, y, z, stack, dstack):
     sy = 0.0
     sz = 0.0
     for k in range(nobj):
-        d, gx, gy, gz, nn, ll = smooth_distance_point(tree, x, y, z, params[k, 0],
-                                                      params[k, 1], params[k, 2], params[k, 3],
-                                                      stack, dstack, roots[k])
+        d, gx, gy, gz, nn, ll = smooth_distance_point_tol(tree, x, y, z, params[k, 0],
+                                                          params[k, 1],
+                                                          _loosened(params[k, 5], params[k, 0],
+                                                                    slack),
+                                                          params[k, 2], params[k, 3], stack,
+                                                          dstack, roots[k])
         nodes += nn
         leaves += ll
         m, s, sx, sy, sz = logsumexp_accumulate(m, s, sx, sy, sz, d, 1.0, gx, gy, gz, a)
     return m - math.log(s) / a, sx / s, sy / s, sz / s, nodes, leaves
+
+
+@numba.njit(**NJIT)
+def _loosened(tol, alpha, slack):
+    """``max(tol, expm1(alpha * slack))`` for ``tol > 0`` (error ``log(1 + tol) / alpha``
+    at most ``slack``); 0 stays 0 (tolerance pruning off)."""
+    if tol > 0.0 and slack > 0.0:
+        return max(tol, math.expm1(min(alpha * slack, 700.0)))
+    return tol
+
+
+@numba.njit(**NJIT)
+def _was_loosened(params, slack):
+    """Whether ``slack`` loosened the tolerance of any object (else no re-evaluation)."""
+    for k in range(params.shape[0]):
+        if _loosened(params[k, 5], params[k, 0], slack) != params[k, 5]:
+            return True
+    return False
 
 
 @numba.njit(**NJIT)
@@ -107,24 +145,55 @@ def ray_box(ox, oy, oz, dx, dy, dz, lo, hi):
 
 @numba.njit(**NJIT)
 def march_ray(tree, roots, params, mode, ox, oy, oz, dx, dy, dz, lo, hi, eps, max_steps, stack,
-              dstack):
+              dstack, relax=RELAX, omega=OMEGA, t_min=0.0):
     """March one ray; returns ``(hit, t, gx, gy, gz, steps, leaves, bisections)``.
+
+    ``omega >= 1``: over-relaxed steps ``t += omega d`` (Keinert et al. 2014) with a safe
+    fallback: when the unbounding spheres of two consecutive points do not overlap
+    (``omega d_prev > d_prev + |d|``) the segment between them is not certified empty, so the
+    ray goes back to the plain step ``t_prev + d_prev`` and continues with ``omega = 1``.
+
+    ``relax``: for objects with ``tol > 0``, a step may under-estimate the distance by up to
+    ``relax`` x the previous step (cheaper evaluations far from the surface; 0: never).
+
+    ``t_min``: a depth before which the ray is known not to meet the surface (the cone pass
+    of :func:`_render_tile`); the march starts at ``max(box entry, t_min)``.
 
     ``hit`` is 1 when ``d <= eps`` was reached inside the box; then ``t`` is the ray parameter
     and ``g`` the (unnormalised) distance gradient there. Misses return ``t = nan``.
     """
     t, t_exit = ray_box(ox, oy, oz, dx, dy, dz, lo, hi)
+    t = max(t, t_min)
+    relaxable = mode == MODE_SMOOTH and params[:, 5].max() > 0.0 and relax > 0.0
     steps = 0
     leaves = 0
     bis = 0
     if t > t_exit:
         return 0, np.nan, 0.0, 0.0, 0.0, steps, leaves, bis
     t_prev = t
+    # relaxed accuracy far from the surface (objects with tol > 0 only): a step may lose up
+    # to relax x the previous distance, never more, and stays safe because d_hat_tol only
+    # under-estimates; a distance <= eps is re-evaluated at the scene's own tol
+    slack = np.inf if relaxable else 0.0
+    w = omega
+    d_prev = 0.0
+    step = 0.0
     while steps < max_steps:
         d, gx, gy, gz, nn, ll = scene_distance(tree, roots, params, mode, ox + t * dx, oy + t * dy,
-                                               oz + t * dz, stack, dstack)
+                                               oz + t * dz, stack, dstack, slack)
         steps += 1
         leaves += ll
+        if d <= eps and slack > 0.0 and relaxable and _was_loosened(params, slack):
+            d, gx, gy, gz, nn, ll = scene_distance(tree, roots, params, mode, ox + t * dx,
+                                                   oy + t * dy, oz + t * dz, stack, dstack, 0.0)
+            steps += 1
+            leaves += ll
+        if w > 1.0 and step > d_prev + abs(d):
+            # the over-relaxed step may have jumped over a surface: redo it plainly
+            w = 1.0
+            t = t_prev + d_prev
+            step = d_prev
+            continue
         if d <= eps:
             if d < -eps and t > t_prev:
                 # overshoot into the negative band: bisect [t_prev (d > eps), t (d < -eps)]
@@ -150,25 +219,102 @@ def march_ray(tree, roots, params, mode, ox, oy, oz, dx, dy, dz, lo, hi, eps, ma
                 t = b
             return 1, t, gx, gy, gz, steps, leaves, bis
         t_prev = t
-        t += d
+        d_prev = d
+        step = w * d
+        t += step
+        slack = relax * d if relaxable else 0.0
         if t > t_exit:
             break
     return 0, np.nan, 0.0, 0.0, 0.0, steps, leaves, bis
 
 
 @numba.njit(**NJIT)
+def cone_start(tree, roots, params, mode, cam, lo, hi, eps, r_lo, r_hi, c_lo, c_hi, stack,
+               dstack, relax=RELAX):
+    """Conservative common start depth for the rays of pixels ``[r_lo, r_hi) x [c_lo, c_hi)``.
+
+    Cone marching along the tile's central direction ``u``: every pixel ray ``v`` of the tile
+    has ``|v - u| <= delta`` (the largest over the four corner rays: the rays of a tile form
+    a spherically convex set, whose farthest point from ``u`` is a corner). A point at
+    parameter ``s`` of ray ``v`` lies within ``|s - t| + t delta`` of the central point at
+    ``t``, so if the scene distance there is ``D``, every ray is surface-free on
+    ``[t, t + D - t delta)`` (the ball of radius ``D`` is, by the same Lipschitz argument as
+    sphere tracing, design notes §4). Steps ``t += D - t delta`` start at the camera (outside
+    the surface) and stop once the cone is wider than a quarter of ``D`` (or leaves the box).
+    For ``tol > 0`` scenes the evaluations are loosened like the march's (``relax``): an
+    under-estimated ``D`` is still a surface-free radius. Returns ``(t_start, evaluations,
+    leaves)``.
+    """
+    ux = 0.0
+    uy = 0.0
+    uz = 0.0
+    for r in (r_lo, r_hi - 1):
+        for c in (c_lo, c_hi - 1):
+            vx, vy, vz = ray_direction(cam, r, c)
+            ux += vx
+            uy += vy
+            uz += vz
+    n = math.sqrt(ux * ux + uy * uy + uz * uz)
+    ux /= n
+    uy /= n
+    uz /= n
+    delta = 0.0
+    for r in (r_lo, r_hi - 1):
+        for c in (c_lo, c_hi - 1):
+            vx, vy, vz = ray_direction(cam, r, c)
+            delta = max(delta, math.sqrt((vx - ux) ** 2 + (vy - uy) ** 2 + (vz - uz) ** 2))
+    delta = delta * 1.0001 + 1e-12
+    t_in, t_out = ray_box(cam[0], cam[1], cam[2], ux, uy, uz, lo, hi)
+    t = 0.0
+    evals = 0
+    leaves = 0
+    loose = mode == MODE_SMOOTH and params[:, 5].max() > 0.0 and relax > 0.0
+    slack = np.inf if loose else 0.0
+    while evals < CONE_STEPS:
+        d, gx, gy, gz, nn, ll = scene_distance(tree, roots, params, mode, cam[0] + t * ux,
+                                               cam[1] + t * uy, cam[2] + t * uz, stack,
+                                               dstack, slack)
+        if loose:
+            slack = relax * d
+        evals += 1
+        leaves += ll
+        step = d - t * delta
+        if step <= 0.25 * d or step <= eps:
+            break
+        t += step
+        if t > t_out:
+            break
+    return t, evals, leaves
+
+
+@numba.njit(**NJIT)
 def _render_tile(tree, roots, params, mode, cam, lo, hi, eps, max_steps, r_lo, r_hi, c_lo, c_hi,
-                 depth_max, hit, tbuf, grad, steps, leaves, bisect):
+                 depth_max, hit, tbuf, grad, steps, leaves, bisect, relax, omega, cone):
     stack = np.empty(depth_max + 4, dtype=np.int64)
     dstack = np.empty(depth_max + 4)
     ox = cam[0]
     oy = cam[1]
     oz = cam[2]
+    t_min = 0.0
+    pending = cone
     for r in range(r_lo, r_hi):
         for c in range(c_lo, c_hi):
             dx, dy, dz = ray_direction(cam, r, c)
+            c_ev = 0
+            c_lv = 0
+            if pending:
+                t_in, t_out = ray_box(ox, oy, oz, dx, dy, dz, lo, hi)
+                if t_in <= t_out:
+                    # the first ray of the tile that meets the box runs the cone pass (and its
+                    # work is booked on that pixel)
+                    t_min, c_ev, c_lv = cone_start(tree, roots, params, mode, cam, lo, hi, eps,
+                                                   r_lo, r_hi, c_lo, c_hi, stack, dstack, relax)
+                    pending = False
             h, t, gx, gy, gz, st, lv, bs = march_ray(tree, roots, params, mode, ox, oy, oz, dx, dy, dz,
-                                                     lo, hi, eps, max_steps, stack, dstack)
+                                                     lo, hi, eps, max_steps, stack, dstack,
+                                                     relax, omega, t_min)
+            st += c_ev
+            lv += c_lv
             hit[r, c] = h == 1
             tbuf[r, c] = t
             grad[r, c, 0] = gx
@@ -181,7 +327,7 @@ def _render_tile(tree, roots, params, mode, cam, lo, hi, eps, max_steps, r_lo, r
 
 @numba.njit(**NJIT_PARALLEL)
 def render_rows(tree, roots, params, mode, cam, lo, hi, eps, max_steps, row0, row1, depth_max,
-                hit, tbuf, grad, steps, leaves, bisect):
+                hit, tbuf, grad, steps, leaves, bisect, relax=RELAX, omega=OMEGA, cone=CONE):
     """Trace rows ``row0 <= r < row1`` of the image into the per-pixel output arrays.
 
     Outputs are full-image arrays: ``hit (H, W) bool``, ``tbuf (H, W) float64``,
@@ -202,7 +348,7 @@ def render_rows(tree, roots, params, mode, cam, lo, hi, eps, max_steps, row0, ro
         tx = tile - ty * ntx
         _render_tile(tree, roots, params, mode, cam, lo, hi, eps, max_steps, row0 + ty * TILE,
                      min(row1, row0 + (ty + 1) * TILE), tx * TILE, min(W, (tx + 1) * TILE),
-                     depth_max, hit, tbuf, grad, steps, leaves, bisect)
+                     depth_max, hit, tbuf, grad, steps, leaves, bisect, relax, omega, cone)
 
 
 @numba.njit(**NJIT)
@@ -211,3 +357,21 @@ def distance_at(tree, roots, params, mode, x, y, z, depth_max):
     stack = np.empty(depth_max + 4, dtype=np.int64)
     dstack = np.empty(depth_max + 4)
     return scene_distance(tree, roots, params, mode, x, y, z, stack, dstack)[0]
+
+
+@numba.njit(**NJIT_PARALLEL)
+def trace_pixels(tree, roots, params, mode, cam, lo, hi, eps, max_steps, rows, cols, depth_max,
+                 hit, tbuf, steps, leaves, relax=RELAX, omega=OMEGA):
+    """Trace only the pixels ``(rows[i], cols[i])`` (e.g. a subsample for an expensive
+    reference render); outputs ``hit, tbuf, steps, leaves`` have the shape of ``rows``."""
+    for i in prange(rows.size):
+        stack = np.empty(depth_max + 4, dtype=np.int64)
+        dstack = np.empty(depth_max + 4)
+        dx, dy, dz = ray_direction(cam, rows[i], cols[i])
+        h, t, gx, gy, gz, st, lv, bs = march_ray(tree, roots, params, mode, cam[0], cam[1],
+                                                 cam[2], dx, dy, dz, lo, hi, eps, max_steps,
+                                                 stack, dstack, relax, omega)
+        hit[i] = h == 1
+        tbuf[i] = t
+        steps[i] = st
+        leaves[i] = lv

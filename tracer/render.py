@@ -79,11 +79,11 @@ def scene_arrays(scene):
     inflation (``log(A^S N) / alpha`` per object; the offset in exact mode) plus twice ``eps``.
     """
     trees = [o.field.tree for o in scene.objects]
-    params = np.empty((len(scene.objects), 5))
+    params = np.empty((len(scene.objects), 6))
     margin = 0.0
     for k, o in enumerate(scene.objects):
         alpha, beta, S, wgs = o.field.kernel_args(o.alpha, o.beta, o.alpha_u, scene.gradient)
-        params[k] = (alpha, beta, S, wgs, o.offset)
+        params[k] = (alpha, beta, S, wgs, o.offset, getattr(scene, "tol", 0.0))
         if scene.mode == "exact":
             margin = max(margin, o.offset)
         else:
@@ -112,7 +112,7 @@ def distance_at_camera(scene, arrays=None):
                                    depth_max))
 
 
-def render(scene, *, progress=None, band_rows=None):
+def render(scene, *, progress=None, band_rows=None, relax=None, omega=None, cone=None):
     """Trace and shade ``scene``.
 
     Parameters
@@ -122,6 +122,15 @@ def render(scene, *, progress=None, band_rows=None):
         Called after each band of rows.
     band_rows : int, optional
         Rows per kernel call (progress granularity); default about 1/16 of the image.
+    relax : float, optional
+        Scenes with ``tol > 0``: a sphere-tracing step may under-estimate the distance by up
+        to ``relax`` x the previous step (default ``tracer.march.RELAX``; 0: never).
+    omega : float, optional
+        Over-relaxation of the sphere-tracing steps (>= 1, with a safe fallback; default
+        ``tracer.march.OMEGA``).
+    cone : bool, optional
+        Seed each tile's rays with a conservative start depth from a cone march (default
+        ``tracer.march.CONE``).
 
     Raises
     ------
@@ -150,7 +159,9 @@ def render(scene, *, progress=None, band_rows=None):
         r1 = min(H, r0 + band)
         march.render_rows(tree, roots, params, mode, cam, lo, hi, float(scene.eps),
                           int(scene.max_steps), r0, r1, depth_max, hit, tbuf, grad, steps,
-                          leaves, bis)
+                          leaves, bis, march.RELAX if relax is None else float(relax),
+                          march.OMEGA if omega is None else max(1.0, float(omega)),
+                          march.CONE if cone is None else bool(cone))
         if progress is not None:
             progress(r1, H, time.perf_counter() - t0)
     seconds = time.perf_counter() - t0

@@ -10,7 +10,9 @@ Extensions (all optional): top level ``width``, ``height``, ``beta``, ``eps`` (a
 units; default ``1e-4 x`` the data's bbox diagonal), ``mode`` (``"smooth"`` or ``"exact"``),
 ``offset`` (exact mode; default ``1/alpha`` per object), ``shading`` (``"normals"``,
 ``"matcap"``, ``"headlight"``), ``matcap``, ``background`` ([r, g, b] 0-255), ``max_steps``,
-``gradient`` (``"metric"`` or ``"exact"``), ``description``. Per object: ``beta``, ``offset``,
+``gradient`` (``"metric"`` or ``"exact"``), ``description``, ``tol`` (tolerance-controlled
+pruning, a number >= 0, default 0 = off; see ``smoothdist.query.smooth_distance_point_tol``).
+Per object: ``beta``, ``offset``,
 ``bvh_type`` may also be ``"mixed"`` (keep all primitives of the file), and instead of ``path``
 an object may list ``parts``: ``[{"path": ..., "bvh_type": ..., "scale": s,
 "translate": [x, y, z]}, ...]`` merged into one mixed mesh (one BVH). ``alpha`` may be
@@ -49,7 +51,7 @@ SHADINGS = ("normals", "matcap", "headlight")
 MODES = ("smooth", "exact")
 
 _TOP_KEYS = {"camera", "objects", "width", "height", "beta", "eps", "mode", "offset", "shading",
-             "matcap", "background", "max_steps", "gradient", "description", "name"}
+             "matcap", "background", "max_steps", "gradient", "description", "name", "tol"}
 _CAMERA_KEYS = {"origin", "dest", "up"}
 _OBJECT_KEYS = {"path", "parts", "alpha", "max_alpha", "bvh_type", "matcap", "beta", "offset",
                 "name", "scale", "translate"}
@@ -94,6 +96,7 @@ class Scene:
     gradient: str = "metric"
     description: str = ""
     extra: dict = dc_field(default_factory=dict)
+    tol: float = 0.0
 
     @property
     def name(self):
@@ -246,7 +249,7 @@ def load_scene(path, overrides=None):
     overrides : dict, optional
         Values that replace the file's: ``width``, ``height``, ``beta``, ``alpha`` (first
         object; a number or "auto"), ``alpha_u`` (first object's ``max_alpha``; a number or
-        "auto"), ``mode``, ``eps``, ``shading``, ``offset``.
+        "auto"), ``mode``, ``eps``, ``shading``, ``offset``, ``tol``.
 
     Raises
     ------
@@ -284,6 +287,7 @@ def load_scene(path, overrides=None):
         raise _err(path, "width x height", f"is {width}x{height}: larger than "
                                            f"{MAX_PIXELS // 1_000_000} megapixels")
     beta = top("beta", 0.5, non_negative=True)
+    tol = top("tol", 0.0, non_negative=True)
     eps = top("eps", None, positive=True)
     max_steps = top("max_steps", 1000, positive=True, integer=True)
     if max_steps > MAX_STEPS:
@@ -327,7 +331,7 @@ def load_scene(path, overrides=None):
     scene = Scene(path=path, camera_origin=origin, camera_dest=dest, camera_up=up,
                   objects=objects, width=width, height=height, beta=beta, eps=eps, mode=mode,
                   shading=shading, matcap=matcap, background=tuple(bg), max_steps=max_steps,
-                  gradient=gradient, description=str(desc))
+                  gradient=gradient, description=str(desc), tol=tol)
     if scene.eps is None:
         scene.eps = default_eps(scene)
     return scene
@@ -476,7 +480,7 @@ def merge_meshes(meshes, name="mixed"):
 
 def scene_from_field(field, *, alpha, alpha_u=None, beta=0.5, camera=None, width=512,
                      height=512, mode="smooth", eps=None, offset=None, shading="normals",
-                     matcap="", gradient="metric", name="scene", max_steps=1000):
+                     matcap="", gradient="metric", name="scene", max_steps=1000, tol=0.0):
     """Build a one-object :class:`Scene` in code (no JSON), e.g. for parameter studies.
 
     Parameters
@@ -497,6 +501,8 @@ def scene_from_field(field, *, alpha, alpha_u=None, beta=0.5, camera=None, width
         paper's beta-study camera (bbox centre + 2 x the
         largest extent along +z, looking at the centre, up +y), which may crop a blurry
         surface.
+    tol : float
+        Tolerance-controlled pruning (>= 0; 0 = off), as the scene key ``tol``.
     """
     if mode not in MODES:
         raise ValueError(f"mode must be one of {MODES}, got {mode!r}")
@@ -513,6 +519,7 @@ def scene_from_field(field, *, alpha, alpha_u=None, beta=0.5, camera=None, width
         offset = _api_number(offset, "offset", non_negative=True)
     if eps is not None:
         eps = _api_number(eps, "eps", positive=True)
+    tol = _api_number(tol, "tol", non_negative=True)
     max_steps = int(_api_number(max_steps, "max_steps", positive=True, integer=True))
     if max_steps > MAX_STEPS:
         raise ValueError(f"max_steps must be at most {MAX_STEPS}, got {max_steps}")
@@ -550,7 +557,7 @@ def scene_from_field(field, *, alpha, alpha_u=None, beta=0.5, camera=None, width
     scene = Scene(path=f"{name}.json", camera_origin=origin, camera_dest=dest, camera_up=up,
                   objects=[obj], width=width, height=height, beta=beta,
                   eps=eps, mode=mode, shading=shading, matcap=matcap, max_steps=max_steps,
-                  gradient=gradient)
+                  gradient=gradient, tol=tol)
     if scene.eps is None:
         scene.eps = default_eps(scene)
     return scene
