@@ -236,7 +236,7 @@ def _scene_field_chunk(scene, Q):
     ds, gs = [], []
     for o in objs:
         dk, gk = o.field.smooth_distance(Q, alpha=o.alpha, beta=o.beta, alpha_u=o.alpha_u,
-                                         gradient=scene.gradient)
+                                         gradient=scene.gradient, tol=scene.tol)
         ds.append(dk)
         gs.append(gk)
     if len(objs) == 1:

@@ -17,11 +17,10 @@ The study as independent tasks:
 * :func:`reduce`: the error of every row against its type's beta = 0 depth buffer, then
   ``beta_ablation.csv``, the plots, the image grid and ``report.md``.
 
-``tol`` is the renderer's tolerance-controlled pruning (0 = off); tasks with ``tol > 0`` are only
-listed when ``--tols`` asks for them and the installed renderer accepts ``render(..., tol=)``.
+``tol`` is the renderer's tolerance-controlled pruning (the scene key ``tol``; 0 = off); tasks
+with ``tol > 0`` are listed when ``--tols`` asks for them.
 """
 
-import inspect
 import io
 import json
 import os
@@ -66,8 +65,8 @@ def add_arguments(p):
                    help="comma-separated betas (default 0,0.1,...,1.0); 0, the reference, "
                    "is always rendered")
     p.add_argument("--tols", default="0",
-                   help="comma-separated pruning tolerances (default 0: off); values > 0 need "
-                   "a renderer with tolerance-controlled pruning")
+                   help="comma-separated tolerances for tolerance-controlled pruning, each a "
+                   "series (default 0: off; e.g. 0,1e-2,3e-3,1e-3); 0 is the plain series")
     p.add_argument("--size", type=int, default=256,
                    help="image width = height in pixels (default 256, the size of the "
                    "reference timings; the paper's figure uses 512)")
@@ -123,14 +122,13 @@ def _scene(field, task, size=None):
     size = size or task["size"]
     return scene_from_field(field, alpha=task["alpha"], alpha_u=task["alpha_u"],
                             beta=task["beta"], width=size, height=size, eps=task["eps"],
-                            name=f"{task['type']}-beta{task['beta']:g}")
+                            tol=task.get("tol", 0.0), name=f"{task['type']}-beta{task['beta']:g}")
 
 
 def _render(scene, task, progress=None):
     from tracer.render import render
 
-    extra = {"tol": task["tol"]} if task.get("tol") else {}
-    return render(scene, progress=progress, **extra)
+    return render(scene, progress=progress)
 
 
 def render_task(task, progress=None):
@@ -243,12 +241,6 @@ def reduce(out, cache, log, params, types, grid_betas):
 
 
 # =============================================================================== command
-def _supports_tol():
-    from tracer.render import render
-
-    return "tol" in inspect.signature(render).parameters
-
-
 def run(args):
     """Run the beta ablation; returns the exit status (1 when a task failed)."""
     sched, workers = runner.check_arguments(args)
@@ -256,9 +248,6 @@ def run(args):
     alpha_u = positive(args.alpha_u, "--alpha-u")
     betas = float_list(args.betas, "--betas", non_negative=True)
     tols = float_list(args.tols, "--tols", non_negative=True)
-    if any(tols) and not _supports_tol():
-        raise CLIError("--tols: this renderer has no tolerance-controlled pruning (render(..., "
-                       "tol=)); use --tols 0")
     grid_betas = float_list(args.grid_betas, "--grid-betas", non_negative=True)
     types = parse_types(args.types)
     size = check_size(args.size)

@@ -21,15 +21,24 @@ import numpy as np
 from tracer.studies.common import (TYPE_COLORS, TYPE_LETTER, TYPES, beta_tag, close, fmt,
                                    machine_info, write_text)
 
-#: reference numbers of the beta study (bunny, alpha 200, alpha_U 1200), measured with the
-#: authors' code at 256 x 256 on 2 cores: seconds and error in % of the bbox diagonal for
-#: points / edges / triangles
-PAPER_BETA = {
-    0.0: {"seconds": (150.0, 670.0, 699.0), "error_pct": (0.0, 0.0, 0.0)},
-    0.5: {"seconds": (3.8, 6.6, 7.6), "error_pct": (2.5, 3.7, 3.4)},
-    1.0: {"seconds": (0.84, 1.14, 1.25), "error_pct": (4.9, 6.5, 6.0)},
-}
-PAPER_BETA_SETUP = "authors' code, 256 x 256 px, 2 cores"
+#: the authors' isosurface error at each beta (bunny, alpha 200, alpha_U 1200, their
+#: ``beta_error_test``), in % of the bbox diagonal for points / edges / triangles. Errors do
+#: not depend on the machine.
+PAPER_BETA_ERROR = {0.0: (0.0, 0.0, 0.0), 0.5: (2.5, 3.7, 3.4), 1.0: (4.9, 6.5, 6.0)}
+
+#: the authors' render times in seconds (points / edges / triangles) by image size and beta,
+#: measured side by side with ours in one run: see :data:`AUTHORS_TIMES_SETUP`. Only shown
+#: next to a study of the same image size; a study of another size shows no reference time.
+AUTHORS_TIMES = {256: {0.5: (1.48, 2.37, 2.63)}, 512: {0.5: (6.33, 9.33, 10.46)}}
+AUTHORS_TIMES_SETUP = ("authors' C++ (beta_error_test) run side by side with ours: quiet 2-core "
+                       "machine, 2 threads each, eps 1e-3 absolute, N x N px")
+
+
+def authors_times(size):
+    """``{beta: (points, edges, triangles) seconds}`` of the authors' renderer at ``size``
+    pixels square, or ``{}`` when no side-by-side measurement exists at that size."""
+    return AUTHORS_TIMES.get(int(size), {})
+
 
 #: the paper's Barnes-Hut switch numbers on its city LiDAR scan (Sec. 4.3)
 PAPER_BH = {"kept_points": 259, "mean_discrepancy": 7.6e-5, "max_discrepancy": 6.6e-3,
@@ -110,9 +119,12 @@ def beta_outputs(out, cache, rows, params, types, grid_betas):
         rs = sorted((r for r in rows if r["type"] == k), key=lambda r: r["beta"])
         ax.plot([r["beta"] for r in rs], [max(r["seconds"], 1e-4) for r in rs], "o-",
                 color=TYPE_COLORS[k], label=f"{k} (ours, {params['width']}²)")
-        ref_b = sorted(PAPER_BETA)
-        ax.plot(ref_b, [PAPER_BETA[b]["seconds"][TYPES.index(k)] for b in ref_b], "s--",
-                color=TYPE_COLORS[k], mfc="none", alpha=0.7, label=f"{k} (reference)")
+        ref = authors_times(params["width"]) if params["width"] == params["height"] else {}
+        if ref:
+            ref_b = sorted(ref)
+            ax.plot(ref_b, [ref[b][TYPES.index(k)] for b in ref_b], "s", color=TYPE_COLORS[k],
+                    mfc="none", ms=8, label=f"{k} (authors' C++, {params['width']}², "
+                    "side by side)")
         tol_series(ax, k, "seconds")
     ax.set_yscale("log")
     ax.set_xlabel("β")
@@ -133,9 +145,9 @@ def beta_outputs(out, cache, rows, params, types, grid_betas):
         sd = 100 * np.array([r["error_std_rel_diag"] for r in rs])
         ax.plot(b, m, "o-", color=TYPE_COLORS[k], label=f"{k} (ours)")
         ax.fill_between(b, np.maximum(m - sd, 0), m + sd, color=TYPE_COLORS[k], alpha=0.12)
-        ref_b = sorted(PAPER_BETA)
-        ax.plot(ref_b, [PAPER_BETA[x]["error_pct"][TYPES.index(k)] for x in ref_b], "s--",
-                color=TYPE_COLORS[k], mfc="none", alpha=0.7, label=f"{k} (reference)")
+        ref_b = sorted(PAPER_BETA_ERROR)
+        ax.plot(ref_b, [PAPER_BETA_ERROR[x][TYPES.index(k)] for x in ref_b], "s--",
+                color=TYPE_COLORS[k], mfc="none", alpha=0.7, label=f"{k} (authors' C++)")
         tol_series(ax, k, "error_rel_diag", 100.0)
     ax.set_xlabel("β")
     ax.set_ylabel("mean |t_β − t_0| (% of bbox diagonal)")
@@ -194,26 +206,30 @@ def beta_report(rows, params, present):
              *([f"- note: {params['note']}"] if params.get("note") else []), "",
              "![time vs beta](beta_time.png)", "", "![error vs beta](beta_error.png)", "",
              "![renders](beta_grid.png)", "",
-             f"## Measured vs reference ({PAPER_BETA_SETUP})", "",
-             "| type | β | tol | time (s) | ref. time (s) | speed-up vs β=0 | ref. speed-up | "
+             "## Measured vs reference", "",
+             f"Reference times: {AUTHORS_TIMES_SETUP}; shown only at the size they were "
+             f"measured ({', '.join(f'{n}²' for n in sorted(AUTHORS_TIMES))}) and only for "
+             "the betas measured. Reference errors: the authors' `beta_error_test`.", "",
+             "| type | β | tol | time (s) | ref. time (s) | speed-up vs β=0 | "
              "error (% diag) | ref. error (% diag) | error std (% diag) | hits | mean leaves/px "
              "| leaves/eval |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for k in present:
         rs = sorted((r for r in rows if r["type"] == k),
                     key=lambda r: (r.get("tol", 0.0), r["beta"]))
         t0 = next((r["seconds"] for r in rs if r["beta"] == 0.0 and not r.get("tol", 0.0)),
                   float("nan"))
         ti = TYPES.index(k)
+        times = authors_times(params["width"]) if params["width"] == params["height"] else {}
         for r in rs:
-            ref = None if r.get("tol", 0.0) else next(
-                (v for b, v in PAPER_BETA.items() if close(b, r["beta"])), None)
-            ref_t = ref["seconds"][ti] if ref else None
-            ref_e = ref["error_pct"][ti] if ref else None
-            ref_sp = PAPER_BETA[0.0]["seconds"][ti] / ref_t if ref_t else None
+            plain = not r.get("tol", 0.0)
+            ref_t = next((v[ti] for b, v in times.items() if close(b, r["beta"])), None) \
+                if plain else None
+            ref_e = next((v[ti] for b, v in PAPER_BETA_ERROR.items() if close(b, r["beta"])),
+                         None) if plain else None
             lines.append(
                 f"| {k} | {r['beta']:g} | {r.get('tol', 0.0):g} | {r['seconds']:.3g} | {fmt(ref_t, 3) or '–'} | "
-                f"{t0 / r['seconds']:.3g}× | {(f'{ref_sp:.3g}×' if ref_sp else '–')} | "
+                f"{t0 / r['seconds']:.3g}× | "
                 f"{100 * r['error_rel_diag']:.3f} | {fmt(ref_e, 3) or '–'} | "
                 f"{100 * r['error_std_rel_diag']:.3f} | {r['hits']} | {r['mean_leaves']:.0f} | "
                 f"{r['leaves_per_eval']:.1f} |")
