@@ -355,3 +355,40 @@ def test_point_cloud_weights_are_one(point_cloud):
     A, ec, ewhi, tc, twhi = point_cloud.weight_data()
     assert A == 1.0 and ec.shape == (0, 5) and tc.shape == (0, 13)
     assert SmoothDistanceField(point_cloud).weight_bound == 1.0
+
+
+@pytest.mark.parametrize("text", [
+    "OFF\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n1 1 0.2\n3 0 1 2\n3 1 3 2\n",
+    "OFF 4 2 0\n# a comment\n0 0 0\n1 0 0 # trailing\n0 1 0\n1 1 0.2\n3 0 1 2 255 0 0\n"
+    "3 1 3 2 0 255 0\n",
+    "OFF\n4 1 0\n0 0 0\n1 0 0\n0 1 0\n1 1 0.2\n4 0 1 3 2\n",
+])
+def test_ascii_off_reader_matches_trimesh(tmp_path, text):
+    """Our ASCII OFF reader (no trimesh import) reads what trimesh reads."""
+    from smoothdist import mesh as mesh_mod
+    p = write(tmp_path / "m.off", text)
+    V, E, T, _ = mesh_mod.read_mesh_file(p)
+    V2, E2, T2 = mesh_mod._read_with_trimesh(os.fspath(p), ".off")
+    np.testing.assert_array_equal(V, V2)
+    np.testing.assert_array_equal(np.sort(np.sort(T, 1), 0), np.sort(np.sort(T2, 1), 0))
+    assert E.shape == (0, 2)
+
+
+def test_ascii_off_reader_on_the_bunny():
+    from smoothdist import mesh as mesh_mod
+    path = os.fspath(Path(__file__).resolve().parents[1] / "scenes" / "data" / "bunny.off")
+    V, E, T, _ = mesh_mod.read_mesh_file(path)
+    V2, E2, T2 = mesh_mod._read_with_trimesh(path, ".off")
+    np.testing.assert_array_equal(V, V2)
+    np.testing.assert_array_equal(T, T2)
+
+
+@pytest.mark.parametrize("text,word", [
+    ("OFF\n3 1 0\n0 0 0\n1 0 0\n", "vertices announced"),
+    ("OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", "faces announced"),
+    ("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1\n", "face 0"),
+    ("OFF\nx 1 0\n", "malformed OFF"),
+])
+def test_malformed_ascii_off(tmp_path, text, word):
+    with pytest.raises(ValueError, match=word):
+        DataMesh.load(write(tmp_path / "bad.off", text))
