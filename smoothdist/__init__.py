@@ -14,10 +14,11 @@ Conventions
 from smoothdist.field import (ExactDistanceResult, QueryStats, SmoothDistanceField,
                               SmoothDistanceResult)
 from smoothdist.mesh import DataMesh, MeshRepairWarning
+from smoothdist.mesh_distance import MeshDistance, combine_distances, mesh_distance
 
 __all__ = ["DataMesh", "MeshRepairWarning", "SmoothDistanceField", "SmoothDistanceResult",
            "ExactDistanceResult", "QueryStats", "smooth_distance", "exact_distance",
-           "load_mesh"]
+           "load_mesh", "MeshDistance", "mesh_distance", "combine_distances"]
 __version__ = "0.1.0"
 
 
