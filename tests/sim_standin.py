@@ -14,7 +14,9 @@ from smoothdist import DataMesh, SmoothDistanceField
 class PointQueryDistance:
     """``md(R, t) -> (d, G)`` and ``md.exact(R, t)`` for a point-cloud query mesh."""
 
-    def __init__(self, data, query, *, alpha, alpha_q, beta=0.5, alpha_u=None):
+    def __init__(self, data, query, *, alpha, alpha_q, beta=0.5, alpha_u=None, gradient="exact"):
+        if isinstance(data, SmoothDistanceField):
+            data = data.mesh
         if not isinstance(data, DataMesh):
             data = DataMesh(*data)
         if not isinstance(query, DataMesh):

@@ -6,8 +6,13 @@ the **query** mesh of a whole-mesh smooth distance ``d_hat(M_data, M_query)`` (p
 parameters, the query body's ``alpha`` is ``alpha_q``. The data body is the static one, else the
 one with more primitives (the cost grows with the number of query primitives). Each pair is
 evaluated **once**, in that orientation, and both bodies' gradients come from that evaluation, so
-the returned gradient is the derivative of the returned value (the authors evaluate each
-orientation and mix them).
+the translation gradient is the derivative of the returned value (the authors evaluate each
+orientation and mix them). The pair distances use the exact derivative of the weights
+(``gradient="exact"``), not the paper's alpha-metric gradient, so that the solver's line search
+sees a gradient consistent with the values. The rotation gradient uses the paper's equal split
+of each query primitive's force over its vertices (Eq. 7-8), i.e. the force acts at the
+primitive's centroid rather than at its closest point: exact for point queries, an
+approximation of the order of the primitive size for edges and triangles.
 
 The scene constraint is the LogSumExp of the pair distances with the largest alpha of the scene
 (paper Sec. 5.5)::
@@ -51,13 +56,15 @@ def mesh_distance_factory():
 class Pair:
     """One data/query body pair and its :class:`smoothdist.MeshDistance`."""
 
-    def __init__(self, i_data, i_query, bodies, beta, factory):
+    def __init__(self, i_data, i_query, bodies, beta, factory, fields):
         self.i, self.j = i_data, i_query
         A, B = bodies[i_data], bodies[i_query]
-        self.md = factory(A.mesh, B.mesh, alpha=A.alpha, alpha_q=B.alpha, beta=beta,
-                          alpha_u=A.alpha_u)
+        if i_data not in fields:
+            fields[i_data] = SmoothDistanceField(A.mesh)
+        fA = fields[i_data]
+        self.md = factory(fA, B.mesh, alpha=A.alpha, alpha_q=B.alpha, beta=beta,
+                          alpha_u=A.alpha_u, gradient="exact")
         self.offset = 1.0 / A.alpha
-        fA = SmoothDistanceField(A.mesh)
         self.inflation = (fA.inflation(A.alpha, A.alpha_u)
                           + math.log(max(B.mesh.num_primitives, 1)) / B.alpha)
         self.radius = A.radius + B.radius
@@ -84,7 +91,8 @@ class ContactConstraint:
         Barnes-Hut parameter of every pair distance.
     mode : {"smooth", "exact"}
     factory : callable, optional
-        ``factory(data_mesh, query_mesh, *, alpha, alpha_q, beta, alpha_u)`` returning an object
+        ``factory(data_field, query_mesh, *, alpha, alpha_q, beta, alpha_u, gradient)`` returning
+        an object
         with ``__call__(R, t)`` and ``exact(R, t)`` -> ``(d, G)`` (the :class:`MeshDistance`
         contract). Default: :func:`mesh_distance_factory`.
     """
@@ -96,6 +104,7 @@ class ContactConstraint:
         self.bodies = bodies
         self.mode = mode
         self.pairs = []
+        fields = {}
         for a in range(len(bodies)):
             for b in range(a + 1, len(bodies)):
                 A, B = bodies[a], bodies[b]
@@ -105,7 +114,7 @@ class ContactConstraint:
                     a_, b_ = b, a
                 else:
                     a_, b_ = a, b
-                self.pairs.append(Pair(a_, b_, bodies, beta, factory))
+                self.pairs.append(Pair(a_, b_, bodies, beta, factory, fields))
         if not self.pairs:
             raise ValueError("the scene needs at least one body that moves and two bodies")
         self.alpha = max(max(bodies[p.i].alpha, bodies[p.j].alpha) for p in self.pairs)

@@ -23,9 +23,10 @@ Jacobian, :func:`tracer.sim.bodies.left_jacobian`) with ``gw`` the world-rotatio
 moving bodies before the solve, so the interior-point tolerances are lengths
 (:mod:`tracer.sim.ipm`):
 
-* ``mu0 = 0.1 s^2`` with ``s`` the length of the unconstrained step in the mass norm,
-* ``mu_min = gap_tol * s`` (the final gap of an active contact is about ``gap_tol``),
-* ``gap_tol = 1e-3 / alpha_scene`` and ``tol = 1e-3 * gap_tol`` unless given.
+* ``mu0 = z_lin max(c_t, 10 gap_tol)`` and ``mu_min = z_lin gap_tol`` with ``z_lin`` the contact
+  force of the linearised problem (:meth:`Integrator._barrier_range`): the first barrier
+  problem keeps the current gap ``c_t``, the last one leaves a gap of about ``gap_tol``,
+* ``gap_tol = 1e-3 / alpha_scene`` and ``tol = 1e-2 * gap_tol`` unless given.
 
 If the unconstrained minimiser is feasible (``c > 0`` there) it *is* the constrained minimiser
 (the energy is convex), and the step takes it with one constraint evaluation and no
@@ -80,7 +81,7 @@ class Integrator:
             raise ValueError("no body moves: mark at least one body as not static")
         self.mbar = float(np.mean([bodies[k].mass for k in self.dyn]))
         self.gap_tol = float(gap_tol) if gap_tol is not None else 1e-3 / constraint.alpha
-        self.tol = float(tol) if tol is not None else 1e-3 * self.gap_tol
+        self.tol = float(tol) if tol is not None else 1e-2 * self.gap_tol
         self.max_iter = int(max_iter)
         self.time = 0.0
         self.on_iterate = None
@@ -107,6 +108,21 @@ class Integrator:
     def current(self):
         """Centres ``(nb, 3)`` and rotations ``(nb, 3, 3)`` of all bodies now."""
         return (np.array([b.x for b in self.bodies]), np.array([b.R for b in self.bodies]))
+
+    def _barrier_range(self, M, q0, qhat, c0, dc0):
+        """``(mu0, mu_min)`` from the multiplier of the linearised problem.
+
+        ``z_lin`` solves ``min 1/2 |q - q^|_M^2`` s.t. ``c0 + grad c0 . (q - q0) >= 0``; the first
+        barrier problem keeps the current gap (``mu0 = z_lin max(c0, 10 gap_tol)``) and the last
+        one leaves a gap of about ``gap_tol`` (``mu_min = z_lin gap_tol``).
+        """
+        w = np.linalg.solve(M, dc0)
+        gw = float(dc0 @ w)
+        z = -(c0 + float(dc0 @ (qhat - q0))) / gw
+        if not z > 0:
+            r = q0 - qhat
+            z = 0.1 * float(np.sqrt(r @ M @ r)) / np.sqrt(gw)
+        return z * max(c0, 10 * self.gap_tol), z * self.gap_tol
 
     # ---------------------------------------------------------------- one step
     def step(self):
@@ -139,14 +155,11 @@ class Integrator:
         if c_hat > 0:
             q, iters, conv, c_end, min_c = qhat, 0, True, c_hat, c_hat
         else:
-            r = q0 - qhat
-            s = float(np.sqrt(r @ M @ r))
-            cb = None
-            if self.on_iterate is not None:
-                cb = self.on_iterate
+            c0, dc0 = self.constraint_at(q0, X0, R0)
+            mu0, mu_min = self._barrier_range(M, q0, qhat, c0, dc0)
             res = ipm.solve(q0, energy, lambda q: M, lambda q: self.constraint_at(q, X0, R0),
-                            mu0=0.1 * s * s, mu_min=min(self.gap_tol * s, 0.1 * s * s),
-                            tol=self.tol, max_iter=self.max_iter, on_iterate=cb)
+                            mu0=mu0, mu_min=mu_min, tol=self.tol, max_iter=self.max_iter,
+                            on_iterate=self.on_iterate, start=(c0, dc0))
             q, iters, conv, c_end, min_c = res.x, res.iterations, res.converged, res.c, \
                 min(res.min_c, c_hat if c_hat > 0 else np.inf)
         for i, k in enumerate(self.dyn):

@@ -22,10 +22,15 @@ slack variable, so that **every iterate is feasible**, ``c(x_k) > 0``):
    matrix SPD (the paper replaces the whole block by the identity). The SPD system is solved by
    Cholesky (``scipy.linalg.cho_factor``).
 3. Backtracking line search (halving) on the barrier merit ``phi = E - mu log c``: a trial point
-   is accepted only if ``c > 0`` there (feasibility) and Armijo's sufficient decrease holds.
+   is accepted only if ``c > 0`` there (feasibility) and Armijo's sufficient decrease holds;
+   when no trial within ``max_backtracks`` halvings satisfies Armijo (the constraint gradient
+   of edge and triangle meshes is approximate in rotation), the longest feasible trial that
+   lowers the merit at all is taken; when there is none, ``mu`` is lowered, and at ``mu_min``
+   the solve ends there (stationary to the accuracy of the gradient).
    The dual step uses the fraction-to-boundary rule (``tau = 0.995``) and is kept inside
    ``[mu / (kappa c), kappa mu / c]`` (``kappa = 1e10``, as in IPOPT).
-4. A subproblem is solved when the accepted step is shorter than ``max(tol, 0.1 sqrt(mu))`` in
+4. The solve also ends at ``mu_min`` when an accepted step lowers the merit by less than
+   ``1e-9`` of its value. A subproblem is solved when the accepted step is shorter than ``max(tol, 0.3 sqrt(mu))`` in
    the ``H`` norm; then ``mu <- max(sigma mu, mu_min)``. The solve ends when ``mu = mu_min`` and
    the step is below ``tol``. At the end ``c ~ mu_min / z`` when the contact is active.
 
@@ -62,7 +67,7 @@ class IPMResult(NamedTuple):
 
 
 def solve(x0, energy, hessian, constraint, *, mu0, mu_min, tol, sigma=0.2, max_iter=100,
-          max_backtracks=40, on_iterate=None):
+          max_backtracks=5, on_iterate=None, start=None):
     """Minimise ``energy`` subject to ``constraint >= 0`` from a feasible ``x0``.
 
     Parameters
@@ -76,10 +81,12 @@ def solve(x0, energy, hessian, constraint, *, mu0, mu_min, tol, sigma=0.2, max_i
         First and last barrier parameter, step tolerance (see module notes).
     on_iterate : callable(x, c), optional
         Called at every accepted iterate (tests check feasibility through it).
+    start : (c, grad), optional
+        The constraint at ``x0`` when the caller has it already.
     """
     x = np.array(x0, dtype=float)
-    c, dc = constraint(x)
-    evals = 1
+    c, dc = start if start is not None else constraint(x)
+    evals = 0 if start is not None else 1
     if not (math.isfinite(c) and c > 0):
         raise InfeasibleStart(f"the start is not feasible: constraint value {c:.6g} <= 0")
     mu = max(float(mu0), float(mu_min))
@@ -98,6 +105,7 @@ def solve(x0, energy, hessian, constraint, *, mu0, mu_min, tol, sigma=0.2, max_i
         slope = float(-rhs @ dx)
         step = 1.0
         accepted = False
+        fallback = None
         for _ in range(max_backtracks):
             xn = x + step * dx
             cn, dcn = constraint(xn)
@@ -109,17 +117,34 @@ def solve(x0, energy, hessian, constraint, *, mu0, mu_min, tol, sigma=0.2, max_i
                 if phin <= phi0 + ARMIJO * step * slope + 1e-13 * abs(phi0):
                     accepted = True
                     break
+                if fallback is None and phin < phi0:
+                    fallback = (step, xn, cn, dcn, phin)
             step *= 0.5
+        if not accepted and fallback is not None:
+            # the gradient may be approximate (see tracer.sim.constraint): take the longest
+            # feasible trial that lowered the merit at all
+            step, xn, cn, dcn, phin = fallback
+            accepted = True
         it += 1
         if not accepted:
-            break                           # no progress possible at this mu: keep x
+            # no progress possible at this mu (the merit is flat to the accuracy of the
+            # constraint's gradient): tighten mu, or stop at mu_min with the feasible x
+            if mu <= mu_min:
+                converged = True
+                break
+            mu = max(sigma * mu, mu_min)
+            z = min(max(z, mu / (KAPPA * c)), KAPPA * mu / c)
+            continue
         x, c, dc = xn, cn, dcn
         if on_iterate is not None:
             on_iterate(x, c)
+        if mu <= mu_min and phi0 - phin <= 1e-9 * abs(phi0):
+            converged = True                # the merit no longer changes: done
+            break
         az = 1.0 if dz >= 0 else min(1.0, TAU * z / -dz)
         z = min(max(z + az * dz, mu / (KAPPA * c)), KAPPA * mu / c)
         length = step * math.sqrt(max(float(dx @ H @ dx), 0.0))
-        if length <= max(tol, 0.1 * math.sqrt(mu)):
+        if length <= max(tol, 0.3 * math.sqrt(mu)):
             if mu <= mu_min and length <= tol:
                 converged = True
                 break
