@@ -6,9 +6,10 @@ and a ``(k, 5)`` float64 parameter table, one row per object: ``alpha, beta, S, 
 The table may carry 12 more columns, ``(k, 17)``: a rigid transform per object, ``R`` (row-major
 3x3, columns 5-13) and ``t`` (columns 14-16); object ``k`` is then evaluated at its local point
 ``R^T (p - t)`` and its gradient rotated back by ``R`` (rigid bodies drawn at their poses without
-rebuilding a tree). With 5 columns nothing is transformed. Objects are combined as the paper combines them: by a second
-LogSumExp with the largest alpha (smooth mode), or by the minimum (exact-offset mode, where each
-object's distance is ``exact - offset``).
+rebuilding a tree). With 5 columns nothing is transformed.
+Objects are combined as the paper combines them: by a second LogSumExp with the largest alpha
+(smooth mode), or by the minimum (exact-offset mode, where each object's distance is
+``exact - offset``).
 
 Safety (design notes §4): each ray starts where it enters the scene box grown by
 ``margin`` (the isosurface can lie at most ``log(A^S N) / alpha`` outside the data, Barnes-Hut

@@ -118,6 +118,7 @@ class ContactConstraint:
         if not self.pairs:
             raise ValueError("the scene needs at least one body that moves and two bodies")
         self.alpha = max(max(bodies[p.i].alpha, bodies[p.j].alpha) for p in self.pairs)
+        self.alpha_min = min(min(bodies[p.i].alpha, bodies[p.j].alpha) for p in self.pairs)
         self.evaluations = 0
 
     def _pair(self, p, X, Rs, exact):

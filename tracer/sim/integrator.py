@@ -26,7 +26,11 @@ moving bodies before the solve, so the interior-point tolerances are lengths
 * ``mu0 = z_lin max(c_t, 10 gap_tol)`` and ``mu_min = z_lin gap_tol`` with ``z_lin`` the contact
   force of the linearised problem (:meth:`Integrator._barrier_range`): the first barrier
   problem keeps the current gap ``c_t``, the last one leaves a gap of about ``gap_tol``,
-* ``gap_tol = 1e-3 / alpha_scene`` and ``tol = 1e-2 * gap_tol`` unless given.
+* ``gap_tol = 1e-2 / alpha_min`` (the smallest alpha of a body in contact: the blur of the
+  softest surface) and ``tol = 1e-2 * gap_tol`` unless given. The gap must stay above the
+  jumps of the Barnes-Hut approximation (switching a node between near and far field makes the
+  smooth distance jump by up to about ``1e-2 / alpha``; the paper's Sec. 4.4 study); a gap
+  below them makes line searches fail. Scenes with large, coarse data (LiDAR) set ``gap_tol``.
 
 If the unconstrained minimiser is feasible (``c > 0`` there) it *is* the constrained minimiser
 (the energy is convex), and the step takes it with one constraint evaluation and no
@@ -80,7 +84,7 @@ class Integrator:
         if not self.dyn:
             raise ValueError("no body moves: mark at least one body as not static")
         self.mbar = float(np.mean([bodies[k].mass for k in self.dyn]))
-        self.gap_tol = float(gap_tol) if gap_tol is not None else 1e-3 / constraint.alpha
+        self.gap_tol = float(gap_tol) if gap_tol is not None else 1e-2 / constraint.alpha_min
         self.tol = float(tol) if tol is not None else 1e-2 * self.gap_tol
         self.max_iter = int(max_iter)
         self.time = 0.0

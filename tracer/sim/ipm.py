@@ -30,9 +30,9 @@ slack variable, so that **every iterate is feasible**, ``c(x_k) > 0``):
    The dual step uses the fraction-to-boundary rule (``tau = 0.995``) and is kept inside
    ``[mu / (kappa c), kappa mu / c]`` (``kappa = 1e10``, as in IPOPT).
 4. The solve also ends at ``mu_min`` when an accepted step lowers the merit by less than
-   ``1e-9`` of its value. A subproblem is solved when the accepted step is shorter than ``max(tol, 0.3 sqrt(mu))`` in
-   the ``H`` norm; then ``mu <- max(sigma mu, mu_min)``. The solve ends when ``mu = mu_min`` and
-   the step is below ``tol``. At the end ``c ~ mu_min / z`` when the contact is active.
+   ``1e-12`` of its value. A subproblem is solved when the accepted step is shorter than
+   ``max(tol, 0.3 sqrt(mu))`` in the ``H`` norm; then ``mu <- max(sigma mu, mu_min)``. The solve
+   ends when ``mu = mu_min`` and the step is below ``tol``. At the end ``c ~ mu_min / z`` when the contact is active.
 
 Lengths: with ``H`` scaled to unit mass (the integrator divides by the mean mass), ``sqrt(dx^T H
 dx)`` is a length, ``mu`` a squared length and ``z`` a length, so the tolerances are geometric.
@@ -138,7 +138,7 @@ def solve(x0, energy, hessian, constraint, *, mu0, mu_min, tol, sigma=0.2, max_i
         x, c, dc = xn, cn, dcn
         if on_iterate is not None:
             on_iterate(x, c)
-        if mu <= mu_min and phi0 - phin <= 1e-9 * abs(phi0):
+        if mu <= mu_min and phi0 - phin <= 1e-12 * abs(phi0):
             converged = True                # the merit no longer changes: done
             break
         az = 1.0 if dz >= 0 else min(1.0, TAU * z / -dz)

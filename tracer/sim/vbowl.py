@@ -10,7 +10,8 @@ the point starts just above the left arm, sliding down it.
 
 ``python -m tracer.sim.vbowl -o renders/sim`` writes ``vbowl.png`` (trajectories and kinetic
 energy) and ``vbowl.json`` (per run: final position, kinetic energy at the end, largest x
-reached, time the point first passed x = 0, solver iterations).
+reached, time the point first passed x = 0, time it left the bowl (the run stops there),
+solver iterations).
 """
 
 import argparse
@@ -55,6 +56,8 @@ def run(bowl, mode, steps=STEPS, dt=DT):
         xs.append(p.x[0])
         ys.append(p.x[1])
         ke.append(0.5 * p.mass * float(p.v @ p.v))
+        if abs(p.x[0]) > 1.1 * spec["half_width"]:
+            break                                          # it rolled out of the bowl
     return {"t": np.array(t), "x": np.array(xs), "y": np.array(ys), "ke": np.array(ke),
             "iterations": iters, "V": v.world_vertices()}
 
@@ -67,6 +70,8 @@ def summary(r):
             "max_kinetic_energy": round(float(r["ke"].max()), 5),
             "max_x": round(float(r["x"].max()), 4),
             "first_crossing_time": None if crossed.size == 0 else round(float(r["t"][crossed[0]]), 3),
+            "left_the_bowl_at": (round(float(r["t"][-1]), 3)
+                                 if abs(r["x"][-1]) > r["V"][:, 0].max() else None),
             "ipm_iterations": int(r["iterations"])}
 
 
@@ -90,6 +95,7 @@ def plot(results, path):
         ax.set_aspect("equal")
         ax.set_title(f"{bowl} bowl: trajectory")
         ax.set_xlim(-1.3, 1.3)
+        ax.set_ylim(-0.1, V[:, 1].max() + 0.3)
         ax2.set_title(f"{bowl} bowl: kinetic energy")
         ax2.set_xlabel("time (s)")
         ax2.set_ylabel("J (unit mass)")
