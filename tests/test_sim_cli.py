@@ -106,6 +106,11 @@ BAD = [
     ({"bodies": [{"primitive": {"type": "point"}, "alpha": 1, "rotation": [[2, 0, 0], [0, 1, 0],
                                                                         [0, 0, 1]]},
                  {"primitive": {"type": "point"}, "alpha": 1}]}, "rotation must be a rotation"),
+    ({"bodies": [{"primitive": {"type": "point"}, "alpha": 1, "crop": [[0, 0, 0], [0, 1, 1]]},
+                 {"primitive": {"type": "point"}, "alpha": 1}]}, "bodies[0].crop must have"),
+    ({"bodies": [{"primitive": {"type": "sphere_points"}, "alpha": 1,
+                  "crop": [[5, 5, 5], [6, 6, 6]]},
+                 {"primitive": {"type": "point"}, "alpha": 1}]}, "crop keeps no primitive"),
     ({"bodies": [{"primitive": {"type": "point"}, "alpha": 1, "static": True},
                  {"primitive": {"type": "point"}, "alpha": 1, "static": True}]}, "all static"),
 ]

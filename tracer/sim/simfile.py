@@ -28,6 +28,8 @@ Format (keys not listed are refused; lengths in scene units, times in seconds)::
           "kind": "triangles",           "points" | "edges" | "triangles" | "mixed" (default:
                                          what the file holds)
           "scale": 1.0,                  uniform scale of the file's coordinates
+          "crop": [[x0, y0, z0], [x1, y1, z1]],  keep only primitives inside this box (file
+                                         coordinates, before scale; e.g. a window of a scan)
           "alpha": 200,                  smooth-distance sharpness (> 0)          required
           "alpha_u": 400,                attenuation threshold alpha_U (default: alpha)
           "density": 1.0,                per volume (closed triangles), area (open), length
@@ -66,7 +68,7 @@ _TOP = {"name", "description", "dt", "steps", "gravity", "beta", "constraint", "
         "camera", "bodies"}
 _CAMERA = {"origin", "dest", "up", "width", "height", "fps", "every", "shading", "matcap",
            "background"}
-_BODY = {"name", "mesh", "primitive", "kind", "scale", "alpha", "alpha_u", "density",
+_BODY = {"name", "mesh", "primitive", "kind", "scale", "crop", "alpha", "alpha_u", "density",
          "position", "rotation", "velocity", "angular_velocity", "static"}
 KINDS = ("points", "edges", "triangles", "mixed")
 #: default number of rendered frames when ``camera.every`` is not given
@@ -207,6 +209,15 @@ def _body_spec(bd, i, base, path):
         spec["primitive"] = prim
     spec["kind"] = _choice(bd["kind"], KINDS, path, f"{where}.kind") if "kind" in bd else None
     spec["scale"] = _number(bd.get("scale", 1.0), path, f"{where}.scale", positive=True)
+    spec["crop"] = None
+    if "crop" in bd:
+        c = bd["crop"]
+        if not isinstance(c, list) or len(c) != 2:
+            raise _err(path, f"{where}.crop", f"must be [[x0, y0, z0], [x1, y1, z1]], got {_show(c)}")
+        lo, hi = _vec3(c[0], path, f"{where}.crop[0]"), _vec3(c[1], path, f"{where}.crop[1]")
+        if not (lo < hi).all():
+            raise _err(path, f"{where}.crop", "must have its first corner below the second")
+        spec["crop"] = (lo, hi)
     spec["alpha"] = _number(bd["alpha"], path, f"{where}.alpha", positive=True)
     spec["alpha_u"] = _number(bd.get("alpha_u", spec["alpha"]), path, f"{where}.alpha_u",
                               positive=True)
@@ -233,6 +244,8 @@ def _build_body(spec, i, path):
             mesh = primitives.make(spec["primitive"])
             if spec["kind"] is not None:
                 mesh = mesh.as_kind(spec["kind"])
+        if spec["crop"] is not None:
+            mesh = _crop(mesh, *spec["crop"])
         if spec["scale"] != 1.0:
             mesh = DataMesh(mesh.V * spec["scale"], points=mesh.points, edges=mesh.edges,
                             triangles=mesh.triangles, name=mesh.name, repair=False)
@@ -245,6 +258,21 @@ def _build_body(spec, i, path):
         raise
     except (ValueError, OSError, RuntimeError) as exc:
         raise _err(path, where, f"cannot be built: {str(exc).splitlines()[0]}") from None
+
+
+def _crop(mesh, lo, hi):
+    """The primitives of ``mesh`` whose vertices all lie in the box ``lo..hi``."""
+    inside = np.all((mesh.V >= lo) & (mesh.V <= hi), axis=1)
+    P = mesh.points[inside[mesh.points]]
+    E = mesh.edges[inside[mesh.edges].all(axis=1)]
+    T = mesh.triangles[inside[mesh.triangles].all(axis=1)]
+    if P.size + len(E) + len(T) == 0:
+        raise ValueError("crop keeps no primitive")
+    used = np.unique(np.concatenate([P, E.ravel(), T.ravel()]))
+    remap = np.full(mesh.V.shape[0], -1)
+    remap[used] = np.arange(used.size)
+    return DataMesh(mesh.V[used], points=remap[P], edges=remap[E], triangles=remap[T],
+                    name=mesh.name, repair=False)
 
 
 def load_simulation(path):
