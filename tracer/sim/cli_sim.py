@@ -62,7 +62,8 @@ def run_simulate(args):
     if args.resume and not os.path.exists(traj):
         raise CLIError(f"--resume: nothing to resume, {traj} does not exist")
     sim = load_simulation(args.sim)
-    con, _ = run.build(sim)
+    built = run.build(sim)
+    con = built[0]
     if not args.resume:
         run.check_initial_state(sim, con)
     created = not os.path.isdir(out)
@@ -70,7 +71,8 @@ def run_simulate(args):
     try:
         bar = None if args.quiet else ProgressBar("simulate")
         frames = run.simulate(sim, traj, steps=args.steps, resume=args.resume,
-                              overwrite=args.overwrite or args.resume, progress=bar)
+                              overwrite=args.overwrite or args.resume, progress=bar,
+                              built=built)
     except BaseException:
         if created and not os.listdir(out):
             os.rmdir(out)

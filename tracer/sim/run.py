@@ -133,15 +133,16 @@ def restore(sim, data, frame=-1):
 
 
 def simulate(sim, out_path, *, steps=None, resume=False, overwrite=False, progress=None,
-             factory=None, checkpoint_seconds=20.0):
+             factory=None, checkpoint_seconds=20.0, built=None):
     """Run ``sim`` and write its trajectory to ``out_path``; returns the frames dict.
 
     ``steps`` overrides the file's step count. With ``resume`` an existing trajectory is
     continued from its last frame up to ``steps`` in total. ``progress(done, total, elapsed)``
-    is called after each step.
+    is called after each step. ``built``: the ``(constraint, integrator)`` of :func:`build`
+    when the caller has them already.
     """
     steps = sim.steps if steps is None else int(steps)
-    con, integ = build(sim, factory)
+    con, integ = built if built is not None else build(sim, factory)
     frames = {k: [] for k in FRAME_KEYS}
     if resume and os.path.exists(out_path):
         data = load_trajectory(out_path)

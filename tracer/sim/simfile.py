@@ -205,7 +205,7 @@ def _body_spec(bd, i, base, path):
             if isinstance(v, list):
                 [_number(x, path, f"{where}.primitive.{k}[{j}]") for j, x in enumerate(v)]
             else:
-                _number(v, path, f"{where}.primitive.{k}", positive=True)
+                _number(v, path, f"{where}.primitive.{k}", non_negative=True)
         spec["primitive"] = prim
     spec["kind"] = _choice(bd["kind"], KINDS, path, f"{where}.kind") if "kind" in bd else None
     spec["scale"] = _number(bd.get("scale", 1.0), path, f"{where}.scale", positive=True)
