@@ -10,8 +10,10 @@ above it, or neither. With ``k`` separated axes:
 
 * ``k = 3``: every point of the primitive has the same closest box point, a corner, so the box
   distance is exactly the corner-to-primitive distance;
-* ``k = 2``: every point's closest box point lies on one box edge, so the distance is exactly the
-  box-edge-to-primitive (segment) distance;
+* ``k = 2``: every point's closest box point lies on one box edge (along the free axis ``j``). We
+  return the distance in the plane across ``j`` from the edge to the projected primitive (a 2D
+  point-segment or point-triangle distance): a lower bound, and the exact box distance whenever
+  the planar minimiser lies within the edge's extent along ``j``, which is the usual case;
 * ``k = 1``: the closest box points lie on one face. We do not compute the face distance; we return
   the gap along the separated axis, and for triangles the larger of it and the gap along the
   triangle's normal (both are distances between parallel planes that separate the two sets, so
@@ -29,7 +31,7 @@ import math
 import numba
 
 from smoothdist._config import NJIT
-from smoothdist.closest_pair import closest_pair
+from smoothdist.closest_pair import closest_pair, point_segment, point_triangle
 
 
 @numba.njit(**NJIT)
@@ -52,6 +54,35 @@ def box_box_distance(qlo, qhi, lo, hi, node):
 
 
 @numba.njit(**NJIT)
+def box_box_offset(qlo, qhi, lo, hi, node):
+    """:func:`box_box_distance` and its gradient for a translation of the query box.
+
+    Returns ``(d, ux, uy, uz)`` (a unit vector, or 0 when the boxes overlap).
+    """
+    g0 = 0.0
+    g1 = 0.0
+    g2 = 0.0
+    for a in range(3):
+        g = lo[node, a] - qhi[a]
+        if g > 0.0:
+            g = -g
+        else:
+            g = qlo[a] - hi[node, a]
+            if g < 0.0:
+                g = 0.0
+        if a == 0:
+            g0 = g
+        elif a == 1:
+            g1 = g
+        else:
+            g2 = g
+    d = math.sqrt(g0 * g0 + g1 * g1 + g2 * g2)
+    if d > 0.0:
+        return d, g0 / d, g1 / d, g2 / d
+    return 0.0, 0.0, 0.0, 0.0
+
+
+@numba.njit(**NJIT)
 def box_lower_bound(kq, Q, qlo, qhi, lo, hi, node, E):
     """Lower bound ``delta`` on the distance from query primitive ``(kq, Q)`` to a node's box.
 
@@ -66,7 +97,7 @@ def box_lower_bound(kq, Q, qlo, qhi, lo, hi, node, E):
     lo, hi : (n, 3) float64, node : int
         The BVH node boxes and the node.
     E : (9,) float64
-        Scratch space (holds the box corner or edge).
+        Scratch space (the box corner, or the query projected across the box edge).
 
     Returns
     -------
@@ -102,23 +133,41 @@ def box_lower_bound(kq, Q, qlo, qhi, lo, hi, node, E):
         # a point: the gap vector is the exact offset from the box
         d = math.sqrt(gap2)
         return d, g0 / d, g1 / d, g2 / d
-    if nsep >= 2:
-        # the box corner (k = 3) or edge (k = 2) whose points are closest to the whole query
-        for a in range(3):
-            g = g0 if a == 0 else (g1 if a == 1 else g2)
-            if g < 0.0:
-                E[a] = lo[node, a]
-                E[3 + a] = lo[node, a]
-            elif g > 0.0:
-                E[a] = hi[node, a]
-                E[3 + a] = hi[node, a]
-            else:
-                E[a] = lo[node, a]
-                E[3 + a] = hi[node, a]
-        c = closest_pair(kq, Q, 0 if nsep == 3 else 1, E)
+    if nsep == 3:
+        # every query point's closest box point is one corner: the exact distance to it
+        E[0] = lo[node, 0] if g0 < 0.0 else hi[node, 0]
+        E[1] = lo[node, 1] if g1 < 0.0 else hi[node, 1]
+        E[2] = lo[node, 2] if g2 < 0.0 else hi[node, 2]
+        c = closest_pair(kq, Q, 0, E)
         d = math.sqrt(c[0])
         if d > 0.0:
             return d, c[1] / d, c[2] / d, c[3] / d
+        return 0.0, 0.0, 0.0, 0.0
+    if nsep == 2:
+        # every query point's closest box point is on one box edge, along the free axis j: the
+        # distance in the plane across j (to the edge's corner point) is a lower bound, exact
+        # when the planar minimiser lies within the edge's extent along j (the common case)
+        j = 0 if g0 == 0.0 else (1 if g1 == 0.0 else 2)
+        for v in range(kq + 1):
+            for a in range(3):
+                E[3 * v + a] = 0.0 if a == j else Q[3 * v + a]
+        P0 = lo[node, 0] if g0 < 0.0 else hi[node, 0]
+        P1 = lo[node, 1] if g1 < 0.0 else hi[node, 1]
+        P2 = lo[node, 2] if g2 < 0.0 else hi[node, 2]
+        if j == 0:
+            P0 = 0.0
+        elif j == 1:
+            P1 = 0.0
+        else:
+            P2 = 0.0
+        if kq == 1:
+            c = point_segment(P0, P1, P2, E[0], E[1], E[2], E[3], E[4], E[5])
+        else:
+            c = point_triangle(P0, P1, P2, E[0], E[1], E[2], E[3], E[4], E[5], E[6], E[7], E[8])
+        d = math.sqrt(c[0])
+        if d > 0.0:
+            # c's r points from the query to the box: the query moves away along -r
+            return d, -c[1] / d, -c[2] / d, -c[3] / d
         return 0.0, 0.0, 0.0, 0.0
     # k = 1: the gap along the separated axis ...
     best = math.sqrt(gap2)

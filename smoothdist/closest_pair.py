@@ -19,9 +19,11 @@ Method. The squared distance is a convex quadratic in the barycentrics of both s
 is either an intersection (distance 0), an interior stationary point (only possible for two
 segments, or when one side is a point), or lies on the boundary of the parameter domain, i.e. one
 side at a vertex or on an edge. So segment-segment is the interior solution or the best of four
-endpoint-segment pairs; segment-triangle is an intersection or the best of two endpoint-triangle
-and three segment-edge pairs; triangle-triangle an edge-triangle intersection or the best of six
-vertex-triangle and nine edge-edge pairs. Every candidate's distance is measured between two actual
+endpoint-segment pairs (computed by clamping, Ericson 2005 Sec. 5.1.9, when the segments are
+well away from parallel); segment-triangle is a crossing or the best of the two endpoint-triangle,
+three vertex-segment and three interior edge-edge pairs; triangle-triangle an edge-triangle
+crossing or the best of six vertex-triangle and nine interior edge-edge pairs (an edge pair's
+boundary candidates are vertex-edge pairs, which the vertex-triangle pairs dominate). Every candidate's distance is measured between two actual
 points of the primitives, so rounding can only overestimate by an ulp-level amount, never report a
 pair that does not exist.
 
@@ -160,6 +162,22 @@ def segment_segment(px, py, pz, qx, qy, qz, ax, ay, az, bx, by, bz):
     C = d1x * wx + d1y * wy + d1z * wz
     F = d2x * wx + d2y * wy + d2z * wz
     den = A * E - B * B
+    if A > 0.0 and E > 0.0 and den > NEAR_PARALLEL * A * E:
+        # well-conditioned: the stationary pair, clamped on one side and then the other
+        # (Ericson 2005, Sec. 5.1.9), is the constrained minimum
+        u = min(max((B * F - C * E) / den, 0.0), 1.0)
+        v = (B * u + F) / E
+        if v < 0.0:
+            v = 0.0
+            u = min(max(-C / A, 0.0), 1.0)
+        elif v > 1.0:
+            v = 1.0
+            u = min(max((B - C) / A, 0.0), 1.0)
+        rx = wx + u * d1x - v * d2x
+        ry = wy + u * d1y - v * d2y
+        rz = wz + u * d1z - v * d2z
+        return (rx * rx + ry * ry + rz * rz, rx, ry, rz, u, 0.0, segment_feature(u), v, 0.0,
+                segment_feature(v))
     best = math.inf
     brx = bry = brz = 0.0
     bu = bv = 0.0
@@ -172,9 +190,7 @@ def segment_segment(px, py, pz, qx, qy, qz, ax, ay, az, bx, by, bz):
             rz = wz + u * d1z - v * d2z
             best = rx * rx + ry * ry + rz * rz
             brx, bry, brz, bu, bv = rx, ry, rz, u, v
-            if den > NEAR_PARALLEL * A * E:
-                return (best, brx, bry, brz, bu, 0.0, SEG_INTERIOR, bv, 0.0, SEG_INTERIOR)
-    # boundary of the parameter square: an endpoint of one segment against the other segment
+    # near-parallel or degenerate: also every endpoint of one segment against the other segment
     for k in range(4):
         if k == 0:
             cx, cy, cz, v, f = closest_point_segment(px, py, pz, ax, ay, az, bx, by, bz)
@@ -205,6 +221,58 @@ def segment_segment(px, py, pz, qx, qy, qz, ax, ay, az, bx, by, bz):
             best = d2
             brx, bry, brz, bu, bv = rx, ry, rz, u, v
     return (best, brx, bry, brz, bu, 0.0, segment_feature(bu), bv, 0.0, segment_feature(bv))
+
+
+@numba.njit(**NJIT)
+def segment_segment_interior(px, py, pz, qx, qy, qz, ax, ay, az, bx, by, bz):
+    """The interior stationary pair of segments ``pq`` and ``ab``, if there is one.
+
+    Returns ``(found, d2, rx, ry, rz, u, v)`` with ``0 < u, v < 1``. When the segments are part of
+    triangles whose vertex-simplex pairs are also checked, this is all an edge pair adds: its
+    boundary candidates are vertex-edge pairs, dominated by the vertex-triangle ones.
+    """
+    d1x = qx - px
+    d1y = qy - py
+    d1z = qz - pz
+    d2x = bx - ax
+    d2y = by - ay
+    d2z = bz - az
+    wx = px - ax
+    wy = py - ay
+    wz = pz - az
+    A = d1x * d1x + d1y * d1y + d1z * d1z
+    E = d2x * d2x + d2y * d2y + d2z * d2z
+    B = d1x * d2x + d1y * d2y + d1z * d2z
+    C = d1x * wx + d1y * wy + d1z * wz
+    F = d2x * wx + d2y * wy + d2z * wz
+    den = A * E - B * B
+    if den > 0.0 and den > 1e-30 * A * E:
+        u = (B * F - C * E) / den
+        v = (A * F - B * C) / den
+        if 0.0 < u < 1.0 and 0.0 < v < 1.0:
+            rx = wx + u * d1x - v * d2x
+            ry = wy + u * d1y - v * d2y
+            rz = wz + u * d1z - v * d2z
+            return True, rx * rx + ry * ry + rz * rz, rx, ry, rz, u, v
+    return False, math.inf, 0.0, 0.0, 0.0, 0.0, 0.0
+
+
+@numba.njit(**NJIT)
+def _plane_sides(px, py, pz, qx, qy, qz, rx_, ry_, rz_, ax, ay, az, bx, by, bz, cx, cy, cz):
+    """True if ``p, q, r`` all lie strictly on one side of the plane of ``abc`` (no crossing)."""
+    abx = bx - ax
+    aby = by - ay
+    abz = bz - az
+    acx = cx - ax
+    acy = cy - ay
+    acz = cz - az
+    nx = aby * acz - abz * acy
+    ny = abz * acx - abx * acz
+    nz = abx * acy - aby * acx
+    s0 = nx * (px - ax) + ny * (py - ay) + nz * (pz - az)
+    s1 = nx * (qx - ax) + ny * (qy - ay) + nz * (qz - az)
+    s2 = nx * (rx_ - ax) + ny * (ry_ - ay) + nz * (rz_ - az)
+    return (s0 > 0.0 and s1 > 0.0 and s2 > 0.0) or (s0 < 0.0 and s1 < 0.0 and s2 < 0.0)
 
 
 @numba.njit(**NJIT)
@@ -242,7 +310,11 @@ def segment_crosses_triangle(px, py, pz, qx, qy, qz, ax, ay, az, bx, by, bz, cx,
 
 @numba.njit(**NJIT)
 def segment_triangle(px, py, pz, qx, qy, qz, ax, ay, az, bx, by, bz, cx, cy, cz):
-    """Segment ``pq`` (query) against triangle ``abc`` (degenerate either side allowed)."""
+    """Segment ``pq`` (query) against triangle ``abc`` (degenerate either side allowed).
+
+    Candidates: a crossing (distance 0); each endpoint against the triangle; each triangle vertex
+    against the segment; each triangle edge against the segment at an interior stationary pair.
+    """
     if not triangle_is_degenerate(ax, ay, az, bx, by, bz, cx, cy, cz):
         hit, u, s, t = segment_crosses_triangle(px, py, pz, qx, qy, qz, ax, ay, az, bx, by, bz,
                                                 cx, cy, cz)
@@ -258,14 +330,31 @@ def segment_triangle(px, py, pz, qx, qy, qz, ax, ay, az, bx, by, bz, cx, cy, cz)
             best = c[0]
             out = (c[0], c[1], c[2], c[3], float(k), 0.0, SEG_A if k == 0 else SEG_B,
                    c[7], c[8], c[9])
-    # the segment against the triangle's edges
+    # the triangle's vertices against the segment
+    for k in range(3):
+        if k == 0:
+            ex, ey, ez, ds, dt, df = ax, ay, az, 0.0, 0.0, TRI_A
+        elif k == 1:
+            ex, ey, ez, ds, dt, df = bx, by, bz, 1.0, 0.0, TRI_B
+        else:
+            ex, ey, ez, ds, dt, df = cx, cy, cz, 0.0, 1.0, TRI_C
+        gx, gy, gz, u, f = closest_point_segment(ex, ey, ez, px, py, pz, qx, qy, qz)
+        rx = gx - ex
+        ry = gy - ey
+        rz = gz - ez
+        d2 = rx * rx + ry * ry + rz * rz
+        if d2 < best:
+            best = d2
+            out = (d2, rx, ry, rz, u, 0.0, f, ds, dt, df)
+    # the segment against the triangle's edges, interior pairs only
     for e in range(3):
         ux, uy, uz, vx, vy, vz = _edge_vertices(e, ax, ay, az, bx, by, bz, cx, cy, cz)
-        c = segment_segment(px, py, pz, qx, qy, qz, ux, uy, uz, vx, vy, vz)
-        if c[0] < best:
-            best = c[0]
-            s, t, f = triangle_edge_point(e, c[7])
-            out = (c[0], c[1], c[2], c[3], c[4], 0.0, c[6], s, t, f)
+        found, d2, rx, ry, rz, u, v = segment_segment_interior(px, py, pz, qx, qy, qz, ux, uy,
+                                                               uz, vx, vy, vz)
+        if found and d2 < best:
+            best = d2
+            s, t, f = triangle_edge_point(e, v)
+            out = (d2, rx, ry, rz, u, 0.0, SEG_INTERIOR, s, t, f)
     return out
 
 
@@ -292,11 +381,16 @@ def segment_point(px, py, pz, qx, qy, qz, ax, ay, az):
 
 @numba.njit(**NJIT)
 def triangle_triangle(px, py, pz, qx, qy, qz, rx_, ry_, rz_, ax, ay, az, bx, by, bz, cx, cy, cz):
-    """Triangle ``pqr`` (query) against triangle ``abc`` (degenerate either side allowed)."""
+    """Triangle ``pqr`` (query) against triangle ``abc`` (degenerate either side allowed).
+
+    Candidates: an edge of one crossing the other (distance 0; skipped when the first lies
+    strictly on one side of the second's plane); each vertex against the other triangle; each
+    edge pair at an interior stationary pair.
+    """
     qdeg = triangle_is_degenerate(px, py, pz, qx, qy, qz, rx_, ry_, rz_)
     ddeg = triangle_is_degenerate(ax, ay, az, bx, by, bz, cx, cy, cz)
-    # an edge of one triangle crossing the other: distance 0
-    if not ddeg:
+    if not ddeg and not _plane_sides(px, py, pz, qx, qy, qz, rx_, ry_, rz_, ax, ay, az, bx, by,
+                                     bz, cx, cy, cz):
         for e in range(3):
             ux, uy, uz, vx, vy, vz = _edge_vertices(e, px, py, pz, qx, qy, qz, rx_, ry_, rz_)
             hit, u, s, t = segment_crosses_triangle(ux, uy, uz, vx, vy, vz, ax, ay, az, bx, by,
@@ -304,7 +398,8 @@ def triangle_triangle(px, py, pz, qx, qy, qz, rx_, ry_, rz_, ax, ay, az, bx, by,
             if hit:
                 qs, qt, qf = triangle_edge_point(e, u)
                 return 0.0, 0.0, 0.0, 0.0, qs, qt, qf, s, t, TRI_INTERIOR
-    if not qdeg:
+    if not qdeg and not _plane_sides(ax, ay, az, bx, by, bz, cx, cy, cz, px, py, pz, qx, qy, qz,
+                                     rx_, ry_, rz_):
         for e in range(3):
             ux, uy, uz, vx, vy, vz = _edge_vertices(e, ax, ay, az, bx, by, bz, cx, cy, cz)
             hit, u, s, t = segment_crosses_triangle(ux, uy, uz, vx, vy, vz, px, py, pz, qx, qy,
@@ -337,17 +432,18 @@ def triangle_triangle(px, py, pz, qx, qy, qz, rx_, ry_, rz_, ax, ay, az, bx, by,
         if c[0] < best:
             best = c[0]
             out = (c[0], -c[1], -c[2], -c[3], c[7], c[8], c[9], ds, dt, df)
-    # edges against edges
+    # edges against edges, interior pairs only
     for e in range(3):
         ux, uy, uz, vx, vy, vz = _edge_vertices(e, px, py, pz, qx, qy, qz, rx_, ry_, rz_)
         for f in range(3):
             gx, gy, gz, hx, hy, hz = _edge_vertices(f, ax, ay, az, bx, by, bz, cx, cy, cz)
-            c = segment_segment(ux, uy, uz, vx, vy, vz, gx, gy, gz, hx, hy, hz)
-            if c[0] < best:
-                best = c[0]
-                qs, qt, qf = triangle_edge_point(e, c[4])
-                ds, dt, df = triangle_edge_point(f, c[7])
-                out = (c[0], c[1], c[2], c[3], qs, qt, qf, ds, dt, df)
+            found, d2, rx, ry, rz, u, v = segment_segment_interior(ux, uy, uz, vx, vy, vz, gx, gy,
+                                                                   gz, hx, hy, hz)
+            if found and d2 < best:
+                best = d2
+                qs, qt, qf = triangle_edge_point(e, u)
+                ds, dt, df = triangle_edge_point(f, v)
+                out = (d2, rx, ry, rz, qs, qt, qf, ds, dt, df)
     return out
 
 

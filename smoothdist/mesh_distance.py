@@ -26,9 +26,14 @@ from typing import NamedTuple
 import numpy as np
 
 from smoothdist import mesh_query as _mq
-from smoothdist._cast import as_indices, as_points, positive
+from smoothdist._cast import as_indices, as_points, non_negative, positive
 from smoothdist.field import SmoothDistanceField
 from smoothdist.mesh import DataMesh
+
+
+#: query meshes with fewer primitives than this run on the calling thread (a parallel launch
+#: costs more than their work, and much more on a busy machine)
+SERIAL_BELOW = {"smooth": 32, "exact": 1024}
 
 
 class QueryMesh(NamedTuple):
@@ -150,6 +155,11 @@ class MeshDistance:
         the paper's alpha-metric, or the exact derivative of the value.
     leaf_size : int
         BVH leaf size when the tree is built here.
+    tol : float
+        Optional pruning tolerance (>= 0, default 0 = the paper's algorithm): a BVH node whose
+        far-field term is below ``tol`` times the running sum is replaced by that term. Still
+        conservative (``d_hat`` only decreases, by at most ``-log(1 - k tol) / alpha`` per query
+        primitive for ``k`` such nodes); applies to edge and triangle queries.
 
     Calling the object, ``d, G = md(R, t)``, returns the smooth distance (float) and the
     gradient ``G (n_query_vertices, 3)`` with respect to the transformed query vertices
@@ -166,14 +176,16 @@ class MeshDistance:
     """
 
     def __init__(self, data, query, *, alpha, alpha_q, beta=0.5, alpha_u=None,
-                 gradient="metric", leaf_size=1):
+                 gradient="metric", leaf_size=1, tol=0.0):
         self.field = _as_field(data, leaf_size)
+        self.tol = non_negative(tol, "tol")
         self.alpha, self.beta, self.S, self.wgs = self.field.kernel_args(alpha, beta, alpha_u,
                                                                          gradient)
         self.alpha_q = positive(alpha_q, "alpha_q")
         self.alpha_u = alpha_u
         self.gradient = gradient
         self.query = as_query_mesh(query)
+        self._used = np.unique(self.query.index)
         self.last_stats = None
 
     @property
@@ -192,7 +204,8 @@ class MeshDistance:
     def transformed_vertices(self, R=None, t=None):
         """Query vertices ``R x + t``, ``(n, 3)`` float64."""
         Rm, tv = as_rigid_transform(R, t)
-        return np.ascontiguousarray(self.query.V @ Rm.T + tv)
+        # the same finiteness and range checks as any input (a huge t could overflow a kernel)
+        return as_points(self.query.V @ Rm.T + tv, "transformed query vertices")
 
     def _primitive_coords(self, R, t):
         X = self.transformed_vertices(R, t)
@@ -211,9 +224,10 @@ class MeshDistance:
         g = np.empty((m, 3))
         nodes = np.empty(m, dtype=np.int64)
         leaves = np.empty(m, dtype=np.int64)
-        _mq.smooth_distance_primitives(self.field.tree, self.query.kind, pts, self.alpha,
-                                       self.beta, self.S, self.wgs, method == "brute", d, g,
-                                       nodes, leaves)
+        kernel = (_mq.smooth_distance_primitives_serial if m < SERIAL_BELOW["smooth"]
+                  else _mq.smooth_distance_primitives)
+        kernel(self.field.tree, self.query.kind, pts, self.alpha, self.beta, self.S, self.wgs,
+               method == "brute", d, g, nodes, leaves, self.tol)
         self.last_stats = (nodes, leaves)
         return d, g
 
@@ -233,7 +247,18 @@ class MeshDistance:
         d = np.empty(m)
         g = np.empty((m, 3))
         prim = np.empty(m, dtype=np.int64)
-        _mq.exact_distance_primitives(self.field.tree, self.query.kind, pts, d, g, prim)
+        bound2 = np.inf
+        if np.any(self.query.kind > 0):
+            # the query's vertices give an upper bound of the minimum: primitives prune with it
+            X = np.ascontiguousarray(self.transformed_vertices(R, t)[self._used])
+            if X.shape[0] < SERIAL_BELOW["exact"]:
+                dv = float(_mq.nearest_vertex_distance(self.field.tree, X))
+            else:
+                dv = float(self.field.exact_distance(X)[0].min())
+            bound2 = (dv * (1 + 1e-9)) ** 2 + 1e-300
+        kernel = (_mq.exact_distance_primitives_serial if m < SERIAL_BELOW["exact"]
+                  else _mq.exact_distance_primitives)
+        kernel(self.field.tree, self.query.kind, pts, bound2, d, g, prim)
         j = int(np.argmin(d))
         G = np.zeros((self.num_query_vertices, 3))
         k = int(self.query.kind[j]) + 1
@@ -270,14 +295,14 @@ def split_to_vertices(d, g, query, alpha_q):
 
 
 def mesh_distance(V_data, F_data, V_query, F_query, *, alpha, alpha_q, beta=0.5, alpha_u=None,
-                  gradient="metric"):
+                  gradient="metric", tol=0.0):
     """Smooth distance between a query mesh and a data mesh (Madan & Levin 2022, Eq. 6-8).
 
     Parameters
     ----------
     V_data : (n, 3) array_like;  F_data : None, (m, 2) or (m, 3) array_like of int
     V_query : (k, 3) array_like; F_query : None, (l, 2) or (l, 3) array_like of int
-    alpha, alpha_q, beta, alpha_u, gradient
+    alpha, alpha_q, beta, alpha_u, gradient, tol
         As in :class:`MeshDistance`.
 
     Returns
@@ -288,7 +313,7 @@ def mesh_distance(V_data, F_data, V_query, F_query, *, alpha, alpha_q, beta=0.5,
         Its gradient with respect to every query vertex (the paper's equal split).
     """
     md = MeshDistance((V_data, F_data), (V_query, F_query), alpha=alpha, alpha_q=alpha_q,
-                      beta=beta, alpha_u=alpha_u, gradient=gradient)
+                      beta=beta, alpha_u=alpha_u, gradient=gradient, tol=tol)
     return md()
 
 

@@ -19,9 +19,11 @@ point kernel's projection Jacobian (:func:`smoothdist.query.primitive_term`).
 
 Traversal as for points (:func:`smoothdist.query.smooth_distance_point`): an explicit stack,
 nearest child first by the cheap box-box distance. Barnes-Hut replaces a node by
-``count * whi**S * exp(-alpha delta)`` with ``delta`` from :func:`smoothdist.box_distance.box_lower_bound`,
-a lower bound of the query-box distance, so the far field overestimates the subtree's sum and
-``d_hat_beta <= d_hat_0``. Point queries use the point kernels themselves.
+``count * whi**S * exp(-alpha delta)`` with ``delta`` a lower bound of the query-box distance: the
+box-box distance when that already satisfies ``diag < beta delta``, else
+:func:`smoothdist.box_distance.box_lower_bound` (the paper's halfspace test, done
+conservatively). So the far field overestimates the subtree's sum and ``d_hat_beta <= d_hat_0``.
+Point queries use the point kernels themselves.
 """
 
 import math
@@ -31,15 +33,16 @@ import numpy as np
 from numba import prange
 
 from smoothdist._config import NJIT, NJIT_PARALLEL
-from smoothdist.box_distance import box_box_distance, box_lower_bound
+from smoothdist.box_distance import box_box_distance, box_box_offset, box_lower_bound
 from smoothdist.closest_pair import closest_pair
 from smoothdist.closest_point import (SEG_INTERIOR, TRI_AB, TRI_AC, TRI_BC, TRI_INTERIOR)
 from smoothdist.query import (_attenuate, exact_distance_point, logsumexp_accumulate,
                               smooth_distance_point)
 from smoothdist.weights import eval_edge_weight, eval_triangle_weight
 
-#: query primitives handled by one parallel task
-CHUNK = 16
+#: number of parallel tasks; task ``c`` takes query primitives ``c, c + TASKS, ...`` so that the
+#: expensive ones (near the data, usually contiguous in a mesh) are spread over all threads
+TASKS = 64
 
 
 @numba.njit(**NJIT)
@@ -169,12 +172,19 @@ def query_box(kq, Q, qlo, qhi):
 
 
 @numba.njit(**NJIT)
-def smooth_distance_primitive(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch):
+def smooth_distance_primitive(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch,
+                              tol=0.0):
     """Smooth distance ``d_hat(g)`` and its translation gradient for an edge or triangle query.
 
     ``Q (9,)`` the query's vertices, ``kq`` 1 or 2; ``scratch (15,)`` float64 work space; other
     arguments as :func:`smoothdist.query.smooth_distance_point`. Returns
     ``(d_hat, gx, gy, gz, nodes_visited, leaves_visited)``.
+
+    ``tol > 0`` adds a second far-field rule (design notes §3, not in the paper): a node whose
+    far-field term ``count * whi**S * exp(-alpha delta)`` (``delta`` its box-box distance) is at
+    most ``tol`` times the sum so far is replaced by that term. It is the same overestimate of
+    the subtree's sum as Barnes-Hut's, so ``d_hat`` only decreases, by at most
+    ``-log(1 - k tol) / alpha`` for ``k`` such nodes (``k tol < 1``).
     """
     qlo = scratch[0:3]
     qhi = scratch[3:6]
@@ -198,16 +208,31 @@ def smooth_distance_primitive(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, s
         bd = dstack[sp]
         nodes += 1
         cnt = tree.count[node]
-        if cnt > 1 and beta > 0.0 and tree.diag[node] < beta * _point_box(Q, lo, hi, node):
-            # the box distance is at most the first vertex's: only then can the node qualify
-            delta, ux, uy, uz = box_lower_bound(kq, Q, qlo, qhi, lo, hi, node, E)
-            if tree.diag[node] < beta * delta:
-                wh = tree.whi[node]
-                W = cnt * (wh if (S == 1.0 or wh == 1.0) else math.exp(S * math.log(wh)))
-                m, s, gx, gy, gz = logsumexp_accumulate(m, s, gx, gy, gz, delta, W, W * ux,
-                                                        W * uy, W * uz, alpha)
-                leaves += 1
-                continue
+        far = False
+        delta = ux = uy = uz = 0.0
+        if cnt > 1 and beta > 0.0:
+            dg = tree.diag[node]
+            if dg < beta * bd:
+                # the box-box distance (a lower bound) already qualifies the node
+                delta, ux, uy, uz = box_box_offset(qlo, qhi, lo, hi, node)
+                far = True
+            elif dg < beta * _point_box(kq, Q, lo, hi, node):
+                # the box distance is at most any vertex's: only then can the finer bound help
+                delta, ux, uy, uz = box_lower_bound(kq, Q, qlo, qhi, lo, hi, node, E)
+                far = dg < beta * delta
+        if not far and tol > 0.0 and s > 0.0:
+            wh = tree.whi[node]
+            W = cnt * (wh if (S == 1.0 or wh == 1.0) else math.exp(S * math.log(wh)))
+            if W * math.exp(-alpha * (bd - m)) <= tol * s:
+                delta, ux, uy, uz = box_box_offset(qlo, qhi, lo, hi, node)
+                far = True
+        if far:
+            wh = tree.whi[node]
+            W = cnt * (wh if (S == 1.0 or wh == 1.0) else math.exp(S * math.log(wh)))
+            m, s, gx, gy, gz = logsumexp_accumulate(m, s, gx, gy, gz, delta, W, W * ux, W * uy,
+                                                    W * uz, alpha)
+            leaves += 1
+            continue
         l = tree.left[node]
         if l < 0:
             st = tree.start[node]
@@ -236,16 +261,19 @@ def smooth_distance_primitive(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, s
 
 
 @numba.njit(**NJIT)
-def _point_box(Q, lo, hi, node):
-    """Distance from the query's first vertex to a node box (an upper bound of the query's)."""
-    d2 = 0.0
-    for a in range(3):
-        v = Q[a]
-        if v < lo[node, a]:
-            d2 += (lo[node, a] - v) ** 2
-        elif v > hi[node, a]:
-            d2 += (v - hi[node, a]) ** 2
-    return math.sqrt(d2)
+def _point_box(kq, Q, lo, hi, node):
+    """Smallest distance from a query vertex to a node box (an upper bound of the query's)."""
+    best = np.inf
+    for j in range(kq + 1):
+        d2 = 0.0
+        for a in range(3):
+            v = Q[3 * j + a]
+            if v < lo[node, a]:
+                d2 += (lo[node, a] - v) ** 2
+            elif v > hi[node, a]:
+                d2 += (v - hi[node, a]) ** 2
+        best = min(best, d2)
+    return math.sqrt(best)
 
 
 @numba.njit(**NJIT)
@@ -263,19 +291,20 @@ def smooth_distance_brute_primitive(tree, kq, Q, alpha, S, wgs):
 
 
 @numba.njit(**NJIT)
-def exact_distance_primitive(tree, kq, Q, stack, dstack, scratch):
+def exact_distance_primitive(tree, kq, Q, stack, dstack, scratch, bound2=np.inf):
     """Exact distance from an edge or triangle query to the data by branch and bound.
 
     Prunes with the distance between the query's and the node's boxes (a lower bound for the whole
     query, unlike the authors' first-vertex distance). Returns
     ``(d, ux, uy, uz, prim, nodes_visited, leaves_visited)``: the distance, the unit translation
-    gradient ``r / d`` (0 on contact) and the closest primitive (mesh numbering).
+    gradient ``r / d`` (0 on contact) and the closest primitive (mesh numbering). Only pairs at
+    squared distance ``< bound2`` are considered; with none, ``d = inf`` and ``prim = -1``.
     """
     qlo = scratch[0:3]
     qhi = scratch[3:6]
     query_box(kq, Q, qlo, qhi)
-    best = np.inf
-    bi = 0
+    best = bound2
+    bi = -1
     brx = 0.0
     bry = 0.0
     brz = 0.0
@@ -326,69 +355,116 @@ def exact_distance_primitive(tree, kq, Q, stack, dstack, scratch):
                 stack[sp] = r
                 dstack[sp] = dr
                 sp += 1
+    if bi < 0:
+        return np.inf, 0.0, 0.0, 0.0, -1, nodes, leaves
     d = math.sqrt(best)
     if d > 0.0:
         return d, brx / d, bry / d, brz / d, tree.orig[bi], nodes, leaves
     return 0.0, 0.0, 0.0, 0.0, tree.orig[bi], nodes, leaves
 
 
+@numba.njit(**NJIT)
+def _smooth_task(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g, out_nodes,
+                 out_leaves, tol, task, ntasks):
+    """Query primitives ``task, task + ntasks, ...`` of :func:`smooth_distance_primitives`."""
+    k = tree.depth + 4
+    stack = np.empty(k, dtype=np.int64)
+    dstack = np.empty(k)
+    scratch = np.empty(15)
+    for j in range(task, qkind.size, ntasks):
+        kq = qkind[j]
+        Q = qpts[j]
+        nodes = 0
+        leaves = tree.kind.size
+        if brute:
+            d, gx, gy, gz = smooth_distance_brute_primitive(tree, kq, Q, alpha, S, wgs)
+        elif kq == 0:
+            d, gx, gy, gz, nodes, leaves = smooth_distance_point(
+                tree, Q[0], Q[1], Q[2], alpha, beta, S, wgs, stack, dstack)
+        else:
+            d, gx, gy, gz, nodes, leaves = smooth_distance_primitive(
+                tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, tol)
+        out_d[j] = d
+        out_g[j, 0] = gx
+        out_g[j, 1] = gy
+        out_g[j, 2] = gz
+        out_nodes[j] = nodes
+        out_leaves[j] = leaves
+
+
 @numba.njit(**NJIT_PARALLEL)
 def smooth_distance_primitives(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g,
-                               out_nodes, out_leaves):
+                               out_nodes, out_leaves, tol=0.0):
     """``d_hat`` and translation gradient of every query primitive, in parallel.
 
     ``qkind (m,)`` int64, ``qpts (m, 9)`` float64; fills ``out_d (m,)``, ``out_g (m, 3)``,
     ``out_nodes``, ``out_leaves (m,)``. ``brute`` sums every data primitive (reference).
+    ``tol``: see :func:`smooth_distance_primitive` (edge and triangle queries only).
     """
-    n = qkind.size
-    nchunks = (n + CHUNK - 1) // CHUNK
+    ntasks = min(qkind.size, TASKS)
+    for task in prange(ntasks):
+        _smooth_task(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g, out_nodes,
+                     out_leaves, tol, task, ntasks)
+
+
+@numba.njit(**NJIT)
+def smooth_distance_primitives_serial(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d,
+                                      out_g, out_nodes, out_leaves, tol=0.0):
+    """:func:`smooth_distance_primitives` on the calling thread (small query meshes)."""
+    _smooth_task(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g, out_nodes,
+                 out_leaves, tol, 0, 1)
+
+
+@numba.njit(**NJIT)
+def _exact_task(tree, qkind, qpts, bound2, out_d, out_g, out_prim, task, ntasks):
+    """Query primitives ``task, task + ntasks, ...`` of :func:`exact_distance_primitives`."""
     k = tree.depth + 4
-    for ch in prange(nchunks):
-        stack = np.empty(k, dtype=np.int64)
-        dstack = np.empty(k)
-        scratch = np.empty(15)
-        for j in range(ch * CHUNK, min(n, (ch + 1) * CHUNK)):
-            kq = qkind[j]
-            Q = qpts[j]
-            nodes = 0
-            leaves = tree.kind.size
-            if brute:
-                d, gx, gy, gz = smooth_distance_brute_primitive(tree, kq, Q, alpha, S, wgs)
-            elif kq == 0:
-                d, gx, gy, gz, nodes, leaves = smooth_distance_point(
-                    tree, Q[0], Q[1], Q[2], alpha, beta, S, wgs, stack, dstack)
-            else:
-                d, gx, gy, gz, nodes, leaves = smooth_distance_primitive(
-                    tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch)
-            out_d[j] = d
-            out_g[j, 0] = gx
-            out_g[j, 1] = gy
-            out_g[j, 2] = gz
-            out_nodes[j] = nodes
-            out_leaves[j] = leaves
+    stack = np.empty(k, dtype=np.int64)
+    dstack = np.empty(k)
+    scratch = np.empty(15)
+    for j in range(task, qkind.size, ntasks):
+        kq = qkind[j]
+        Q = qpts[j]
+        if kq == 0:
+            d, gx, gy, gz, p, nodes, leaves = exact_distance_point(tree, Q[0], Q[1], Q[2],
+                                                                   stack, dstack)
+        else:
+            d, gx, gy, gz, p, nodes, leaves = exact_distance_primitive(tree, kq, Q, stack,
+                                                                       dstack, scratch, bound2)
+        out_d[j] = d
+        out_g[j, 0] = gx
+        out_g[j, 1] = gy
+        out_g[j, 2] = gz
+        out_prim[j] = p
 
 
 @numba.njit(**NJIT_PARALLEL)
-def exact_distance_primitives(tree, qkind, qpts, out_d, out_g, out_prim):
-    """Exact distance, unit translation gradient and closest data primitive per query primitive."""
-    n = qkind.size
-    nchunks = (n + CHUNK - 1) // CHUNK
+def exact_distance_primitives(tree, qkind, qpts, bound2, out_d, out_g, out_prim):
+    """Exact distance, unit translation gradient and closest data primitive per query primitive.
+
+    Edge and triangle queries only look for pairs closer than ``sqrt(bound2)`` (an upper bound of
+    the minimum over all query primitives, e.g. from the query vertices); the others get
+    ``inf`` and ``-1``. Point queries are always exact.
+    """
+    ntasks = min(qkind.size, TASKS)
+    for task in prange(ntasks):
+        _exact_task(tree, qkind, qpts, bound2, out_d, out_g, out_prim, task, ntasks)
+
+
+@numba.njit(**NJIT)
+def exact_distance_primitives_serial(tree, qkind, qpts, bound2, out_d, out_g, out_prim):
+    """:func:`exact_distance_primitives` on the calling thread (small query meshes)."""
+    _exact_task(tree, qkind, qpts, bound2, out_d, out_g, out_prim, 0, 1)
+
+
+@numba.njit(**NJIT)
+def nearest_vertex_distance(tree, X):
+    """Smallest exact distance from the rows of ``X (n, 3)`` to the data (serial)."""
     k = tree.depth + 4
-    for ch in prange(nchunks):
-        stack = np.empty(k, dtype=np.int64)
-        dstack = np.empty(k)
-        scratch = np.empty(15)
-        for j in range(ch * CHUNK, min(n, (ch + 1) * CHUNK)):
-            kq = qkind[j]
-            Q = qpts[j]
-            if kq == 0:
-                d, gx, gy, gz, p, nodes, leaves = exact_distance_point(tree, Q[0], Q[1], Q[2],
-                                                                       stack, dstack)
-            else:
-                d, gx, gy, gz, p, nodes, leaves = exact_distance_primitive(tree, kq, Q, stack,
-                                                                           dstack, scratch)
-            out_d[j] = d
-            out_g[j, 0] = gx
-            out_g[j, 1] = gy
-            out_g[j, 2] = gz
-            out_prim[j] = p
+    stack = np.empty(k, dtype=np.int64)
+    dstack = np.empty(k)
+    best = np.inf
+    for i in range(X.shape[0]):
+        d = exact_distance_point(tree, X[i, 0], X[i, 1], X[i, 2], stack, dstack)[0]
+        best = min(best, d)
+    return best

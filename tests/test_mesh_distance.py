@@ -151,6 +151,27 @@ def test_barnes_hut_is_used_far_away():
     assert d <= d0 and np.all(dj <= dj0) and dj.min() >= floor
 
 
+@pytest.mark.parametrize("dname", list(DATA))
+@pytest.mark.parametrize("qname", ["edges", "triangles"])
+def test_tolerance_pruning_stays_conservative(dname, qname):
+    """tol > 0 only lowers d_hat, by at most -log(1 - k tol) / alpha per primitive."""
+    data = DATA[dname]
+    Vq, Fq = QUERY[qname]
+    rng = np.random.default_rng(4)
+    for trial in range(4):
+        R = _rotation(rng)
+        t = rng.normal(size=3) * (0.5 + trial)
+        md = MeshDistance(data, (Vq, Fq), alpha=40.0, alpha_q=20.0, beta=0.5)
+        dj, _ = md.primitive_distances(R, t)
+        for tol in (1e-9, 1e-3):
+            mt = MeshDistance(md.field, (Vq, Fq), alpha=40.0, alpha_q=20.0, beta=0.5, tol=tol)
+            djt, _ = mt.primitive_distances(R, t)
+            k = mt.last_stats[1]
+            assert np.all(djt <= dj + 1e-12)
+            small = k * tol < 0.5
+            assert np.all((dj - djt <= -np.log1p(-k * tol) / 40.0 + 1e-12)[small])
+
+
 @pytest.mark.parametrize("dname", ["points", "edges", "triangles", "mixed"])
 @pytest.mark.parametrize("qname", list(QUERY))
 def test_gradient_matches_finite_differences(dname, qname):
@@ -170,12 +191,12 @@ def test_gradient_matches_finite_differences(dname, qname):
     dj, gj = md.primitive_distances(R, t0)
     qm = as_query_mesh((Vq @ R.T + t0, Fq))
     for j in range(0, qm.kind.size, 3):
-        single = MeshDistance(md.field, (qm.V, qm.index[j:j + 1, :qm.kind[j] + 1]
-                                         if qm.kind[j] else None),
-                              alpha=12.0, alpha_q=9.0, beta=0.0, gradient="exact")
-        if qm.kind[j] == 0:
-            single = MeshDistance(md.field, qm.V[qm.index[j, :1]], alpha=12.0, alpha_q=9.0,
-                                  beta=0.0, gradient="exact")
+        k = qm.kind[j]
+        # primitive j alone, as a one-primitive query mesh over its own vertices
+        Vj = qm.V[qm.index[j, :k + 1]]
+        Fj = None if k == 0 else np.arange(k + 1)[None]
+        single = MeshDistance(md.field, (Vj, Fj), alpha=12.0, alpha_q=9.0, beta=0.0,
+                              gradient="exact")
         fdj = np.array([(single.primitive_distances(t=h * e)[0][0]
                          - single.primitive_distances(t=-h * e)[0][0]) / (2 * h)
                         for e in np.eye(3)])
@@ -222,11 +243,34 @@ def test_rigid_transform_equals_moved_query():
         R = _rotation(rng)
         t = rng.normal(size=3)
         d, G = md(R, t)
-        d2, G2 = mesh_distance(data.V, None, Vq @ R.T + t, Fq, alpha=15.0, alpha_q=10.0) \
-            if False else MeshDistance(md.field, (Vq @ R.T + t, Fq), alpha=15.0, alpha_q=10.0)()
+        d2, G2 = MeshDistance(md.field, (Vq @ R.T + t, Fq), alpha=15.0, alpha_q=10.0)()
         assert d == pytest.approx(d2, rel=1e-12)
         np.testing.assert_allclose(G, G2, rtol=1e-10, atol=1e-14)
     assert md.tree is tree
+
+
+@pytest.mark.parametrize("qname", list(QUERY))
+def test_parallel_and_serial_kernels_agree(qname, monkeypatch):
+    """Small query meshes run on the calling thread; the prange kernels give the same bits."""
+    import importlib
+
+    mdmod = importlib.import_module("smoothdist.mesh_distance")   # the module, not the function
+
+    data = DATA["mixed"]
+    Vq, Fq = QUERY[qname]
+    R = _rotation(np.random.default_rng(8))
+    t = np.array([0.4, 1.1, 0.2])
+    out = {}
+    for name, below in (("serial", {"smooth": 10**9, "exact": 10**9}),
+                        ("parallel", {"smooth": 0, "exact": 0})):
+        monkeypatch.setattr(mdmod, "SERIAL_BELOW", below)
+        md = MeshDistance(data, (Vq, Fq), alpha=20.0, alpha_q=10.0, beta=0.5, tol=1e-9)
+        out[name] = (md(R, t), md.exact(R, t), md.primitive_distances(R, t))
+    (d1, G1), (e1, H1), (dj1, gj1) = out["serial"]
+    (d2, G2), (e2, H2), (dj2, gj2) = out["parallel"]
+    assert d1 == d2 and e1 == e2
+    assert np.array_equal(G1, G2) and np.array_equal(H1, H2)
+    assert np.array_equal(dj1, dj2) and np.array_equal(gj1, gj2)
 
 
 def test_mesh_distance_function_matches_object():
@@ -282,6 +326,7 @@ def test_far_query_is_finite():
     (dict(alpha=0.0), "alpha"),
     (dict(beta=-0.5), "beta"),
     (dict(gradient="nope"), "gradient"),
+    (dict(tol=-1e-3), "tol"),
 ])
 def test_bad_parameters(kwargs, match):
     args = dict(alpha=10.0, alpha_q=10.0)
@@ -318,6 +363,10 @@ def test_bad_data_and_transform():
         md(t=[1.0, 2.0])
     with pytest.raises(ValueError, match="NaN"):
         md(t=[1.0, np.nan, 0.0])
+    with pytest.raises(ValueError, match="transformed query vertices"):
+        md(t=[1e60, 0.0, 0.0])
+    with pytest.raises(ValueError, match="transformed query vertices"):
+        md.exact(t=[0.0, -1e300, 0.0])
 
 
 def test_exported():
