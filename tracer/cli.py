@@ -27,6 +27,8 @@ COMMANDS = {
     "ablate-alpha": ("tracer.studies.alpha", "the paper's alpha studies as image grids"),
     "bench-grid": ("tracer.studies.grid", "the paper's Thingi10K grid benchmark over a folder"),
     "bh-switch": ("tracer.studies.bh_switch", "Barnes-Hut near/far switch discontinuity study"),
+    "simulate": ("tracer.sim.cli_sim", "simulate rigid bodies with one smooth-distance constraint"),
+    "animate": ("tracer.sim.cli_sim", "render a simulated trajectory to PNG frames, MP4 and GIF"),
 }
 
 

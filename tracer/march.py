@@ -3,9 +3,13 @@
 A scene is one :class:`smoothdist.kernels.TreeData` *forest* (the objects' trees concatenated by
 ``smoothdist.kernels.concatenate_trees``), the root node of each object ``roots (k,) int64``,
 and a ``(k, 6)`` float64 parameter table, one row per object: ``alpha, beta, S, wgs, offset,
-tol`` (``tol``: tolerance-controlled pruning, 0 = off). Objects are combined as the paper combines them: by a second
-LogSumExp with the largest alpha (smooth mode), or by the minimum (exact-offset mode, where each
-object's distance is ``exact - offset``).
+tol`` (``tol``: tolerance-controlled pruning, 0 = off). The table may carry 12 more columns,
+``(k, 18)``: a rigid transform per object, ``R`` (row-major 3x3, columns 6-14) and ``t``
+(columns 15-17); object ``k`` is then evaluated at its local point ``R^T (p - t)`` and its
+gradient rotated back by ``R`` (rigid bodies drawn at their poses without rebuilding a tree).
+With 6 columns nothing is transformed. Objects are combined as the paper combines them: by a
+second LogSumExp with the largest alpha (smooth mode), or by the minimum (exact-offset mode,
+where each object's distance is ``exact - offset``).
 
 Safety (design notes §4): each ray starts where it enters the scene box grown by
 ``margin`` (the isosurface can lie at most ``log(A^S N) / alpha`` outside the data, Barnes-Hut
@@ -54,6 +58,8 @@ def scene_distance(tree, roots, params, mode, x, y, z, stack, dstack, slack=0.0)
     Returns ``(d, gx, gy, gz, nodes, leaves)``; the gradient is not normalised.
     """
     nobj = roots.size
+    if params.shape[1] >= 18:
+        return _scene_distance_posed(tree, roots, params, mode, x, y, z, stack, dstack, slack)
     if nobj == 1:
         if mode == MODE_SMOOTH:
             return smooth_distance_point_tol(tree, x, y, z, params[0, 0], params[0, 1],
@@ -120,6 +126,50 @@ def _was_loosened(params, slack):
         if _loosened(params[k, 5], params[k, 0], slack) != params[k, 5]:
             return True
     return False
+
+
+@numba.njit(**NJIT)
+def _scene_distance_posed(tree, roots, params, mode, x, y, z, stack, dstack, slack):
+    """:func:`scene_distance` with object ``k`` posed by ``params[k, 6:18]`` (``R``, ``t``)."""
+    nodes = 0
+    leaves = 0
+    a = params[0, 0]
+    for k in range(1, roots.size):
+        a = max(a, params[k, 0])
+    m = np.inf
+    s = 0.0
+    sx = 0.0
+    sy = 0.0
+    sz = 0.0
+    for k in range(roots.size):
+        R = params[k, 6:15]
+        px = x - params[k, 15]
+        py = y - params[k, 16]
+        pz = z - params[k, 17]
+        lx = R[0] * px + R[3] * py + R[6] * pz
+        ly = R[1] * px + R[4] * py + R[7] * pz
+        lz = R[2] * px + R[5] * py + R[8] * pz
+        if mode == MODE_SMOOTH:
+            d, hx, hy, hz, nn, ll = smooth_distance_point_tol(
+                tree, lx, ly, lz, params[k, 0], params[k, 1],
+                _loosened(params[k, 5], params[k, 0], slack), params[k, 2], params[k, 3], stack,
+                dstack, roots[k])
+        else:
+            d, hx, hy, hz, p, nn, ll = exact_distance_point(tree, lx, ly, lz, stack, dstack,
+                                                            roots[k])
+            d -= params[k, 4]
+        nodes += nn
+        leaves += ll
+        gx = R[0] * hx + R[1] * hy + R[2] * hz
+        gy = R[3] * hx + R[4] * hy + R[5] * hz
+        gz = R[6] * hx + R[7] * hy + R[8] * hz
+        if mode == MODE_SMOOTH:
+            m, s, sx, sy, sz = logsumexp_accumulate(m, s, sx, sy, sz, d, 1.0, gx, gy, gz, a)
+        elif d < m:
+            m, sx, sy, sz = d, gx, gy, gz
+    if mode == MODE_SMOOTH:
+        return m - math.log(s) / a, sx / s, sy / s, sz / s, nodes, leaves
+    return m, sx, sy, sz, nodes, leaves
 
 
 @numba.njit(**NJIT)

@@ -72,11 +72,14 @@ class RenderResult(NamedTuple):
                 "bisections": int((self.bisections > 0).sum())}
 
 
-def scene_arrays(scene):
+def scene_arrays(scene, transforms=None):
     """``(tree, roots, params, mode, lo, hi, depth_max)`` for the march kernels.
 
     The box ``lo..hi`` is the data's bounding box grown by the largest possible isosurface
     inflation (``log(A^S N) / alpha`` per object; the offset in exact mode) plus twice ``eps``.
+    ``transforms`` (optional): per object a rigid pose ``(R (3, 3), t (3,))``; object ``k`` is
+    drawn at ``R_k x + t_k`` (``params`` gets the 12 pose columns of :mod:`tracer.march`, and
+    the box is the union of the posed, grown object boxes).
     """
     trees = [o.field.tree for o in scene.objects]
     params = np.empty((len(scene.objects), 6))
@@ -95,7 +98,32 @@ def scene_arrays(scene):
     grow = margin + 2 * scene.eps + 1e-9 * scene.diagonal
     mode = march.MODE_EXACT if scene.mode == "exact" else march.MODE_SMOOTH
     tree, roots = concatenate_trees(trees) if len(trees) > 1 else (trees[0], np.zeros(1, np.int64))
+    if transforms is not None:
+        params, lo, hi = _posed(scene, transforms, params, grow)
+        return tree, roots, params, mode, lo, hi, tree.depth
     return tree, roots, params, mode, lo - grow, hi + grow, tree.depth
+
+
+def _posed(scene, transforms, params, grow):
+    """Pose columns appended to ``params`` and the world box of the posed, grown objects."""
+    if len(transforms) != len(scene.objects):
+        raise ValueError(f"{len(transforms)} transforms for {len(scene.objects)} objects")
+    cols, los, his = [], [], []
+    for o, (R, t) in zip(scene.objects, transforms):
+        R = np.asarray(R, dtype=np.float64).reshape(3, 3)
+        t = np.asarray(t, dtype=np.float64).reshape(3)
+        if not (np.isfinite(R).all() and np.isfinite(t).all()) or \
+                not np.allclose(R @ R.T, np.eye(3), atol=1e-6) or np.linalg.det(R) <= 0:
+            raise ValueError("each transform needs a finite rotation matrix R and translation t")
+        cols.append(np.concatenate([R.ravel(), t]))
+        lo, hi = o.field.bounds
+        corners = np.array([[(hi if i >> a & 1 else lo)[a] + (grow if i >> a & 1 else -grow)
+                             for a in range(3)] for i in range(8)])
+        world = corners @ R.T + t
+        los.append(world.min(axis=0))
+        his.append(world.max(axis=0))
+    params = np.ascontiguousarray(np.hstack([params, np.array(cols)]))
+    return params, np.min(los, axis=0), np.max(his, axis=0)
 
 
 def camera_of(scene):
@@ -112,12 +140,15 @@ def distance_at_camera(scene, arrays=None):
                                    depth_max))
 
 
-def render(scene, *, progress=None, band_rows=None, relax=None, omega=None, cone=None):
+def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None, omega=None,
+           cone=None):
     """Trace and shade ``scene``.
 
     Parameters
     ----------
     scene : tracer.scene.Scene
+    transforms : list of (R (3, 3), t (3,)), optional
+        A rigid pose per object (see :func:`scene_arrays`); the trees are not rebuilt.
     progress : callable(done_rows, total_rows, elapsed_s) or None
         Called after each band of rows.
     band_rows : int, optional
@@ -138,7 +169,7 @@ def render(scene, *, progress=None, band_rows=None, relax=None, omega=None, cone
         When the camera is inside the surface (distance <= eps at the camera).
     """
     camera = camera_of(scene)
-    arrays = scene_arrays(scene)
+    arrays = scene_arrays(scene, transforms)
     tree, roots, params, mode, lo, hi, depth_max = arrays
     d0 = distance_at_camera(scene, arrays)
     if not d0 > scene.eps:

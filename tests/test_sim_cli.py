@@ -1,0 +1,161 @@
+"""``tracer simulate`` / ``tracer animate``: outputs, resume, and one-line errors with no output."""
+
+import json
+import os
+
+import numpy as np
+import pytest
+
+from tracer.cli import main
+from tracer.sim.simfile import SimFileError, load_simulation
+
+
+def _sim(tmp_path, **changes):
+    spec = {
+        "name": "tiny",
+        "dt": 0.01,
+        "steps": 6,
+        "gravity": [0, 0, -9.81],
+        "camera": {"origin": [0, -3, 1.0], "dest": [0, 0, 0.2], "up": [0, 0, 1], "width": 32,
+                   "height": 24, "every": 3},
+        "bodies": [
+            {"name": "floor", "primitive": {"type": "plane", "size": [2, 2], "resolution": 2},
+             "alpha": 20, "static": True},
+            {"name": "ball", "primitive": {"type": "sphere_points", "radius": 0.2, "count": 20},
+             "alpha": 20, "position": [0, 0, 0.4], "velocity": [0.2, 0, -2.0]},
+        ],
+    }
+    for k, v in changes.items():
+        if v is None:
+            spec.pop(k)
+        else:
+            spec[k] = v
+    p = tmp_path / "tiny.json"
+    p.write_text(json.dumps(spec))
+    return p, spec
+
+
+def _error_line(capsys):
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("error: "), err
+    return err[0]
+
+
+def test_simulate_writes_the_required_trajectory(tmp_path, capsys):
+    sim, _ = _sim(tmp_path)
+    out = tmp_path / "run"
+    assert main(["simulate", str(sim), "-o", str(out), "--no-render", "-q"]) == 0
+    z = np.load(out / "trajectory.npz")
+    F, B = 7, 2
+    assert z["rotations"].shape == (F, B, 3, 3)
+    assert z["translations"].shape == (F, B, 3)
+    assert z["time"].shape == (F,) and z["min_exact_distance"].shape == (F,)
+    np.testing.assert_allclose(z["time"], 0.01 * np.arange(F), atol=1e-12)
+    assert (z["min_exact_distance"] > 0).all()
+    assert z["ipm_iterations"][1:].sum() > 0          # it made contact
+    # translations place the primitive's own coordinates: frame 0 is the file's position
+    np.testing.assert_allclose(z["translations"][0, 1], [0, 0, 0.4], atol=1e-12)
+    assert not (out / "frames").exists()
+
+
+def test_resume_continues_exactly(tmp_path):
+    sim, _ = _sim(tmp_path)
+    a, b = tmp_path / "a", tmp_path / "b"
+    assert main(["simulate", str(sim), "-o", str(a), "--no-render", "-q"]) == 0
+    assert main(["simulate", str(sim), "-o", str(b), "--no-render", "-q", "--steps", "3"]) == 0
+    assert main(["simulate", str(sim), "-o", str(b), "--no-render", "-q", "--resume"]) == 0
+    za, zb = np.load(a / "trajectory.npz"), np.load(b / "trajectory.npz")
+    for k in ("rotations", "centers", "velocities", "time"):
+        np.testing.assert_array_equal(za[k], zb[k])
+
+
+def test_simulate_renders_frames_mp4_and_gif_and_animate_rerenders(tmp_path):
+    sim, _ = _sim(tmp_path, steps=3)
+    out = tmp_path / "run"
+    assert main(["simulate", str(sim), "-o", str(out), "-q"]) == 0
+    frames = sorted(os.listdir(out / "frames"))
+    assert frames == ["frame_00000.png", "frame_00001.png"]
+    assert (out / "tiny.mp4").stat().st_size > 0 and (out / "tiny.gif").stat().st_size > 0
+    import imageio.v3 as iio
+
+    gif = iio.imread(out / "tiny.gif", index=None)
+    assert gif.shape[0] == 2 and gif.shape[1:3] == (24, 32)
+    movie = tmp_path / "m" / "movie.mp4"
+    assert main(["animate", str(out / "trajectory.npz"), "-o", str(movie), "-q"]) == 0
+    assert movie.stat().st_size > 0 and (tmp_path / "m" / "movie.gif").exists()
+    a = iio.imread(out / "frames" / "frame_00001.png")
+    b = iio.imread(tmp_path / "m" / "movie_frames" / "frame_00001.png")
+    np.testing.assert_array_equal(a, b)
+
+
+BAD = [
+    ({"dt": 0}, "dt must be > 0"),
+    ({"steps": 2.5}, "steps must be an integer"),
+    ({"camera": None}, "missing the required key 'camera'"),
+    ({"gravity": [0, 1]}, "gravity must be a list of 3 numbers"),
+    ({"constraint": "hard"}, "constraint must be one of smooth, exact"),
+    ({"bodies": [{"primitive": {"type": "point"}, "alpha": 1}]}, "at least 2 bodies"),
+    ({"bodies": [{"primitive": {"type": "point"}, "alpha": 0},
+                 {"primitive": {"type": "point"}, "alpha": 1}]}, "bodies[0].alpha must be > 0"),
+    ({"bodies": [{"primitive": {"type": "point"}, "alpha": 1, "alhpa": 2},
+                 {"primitive": {"type": "point"}, "alpha": 1}]}, "unknown key(s) 'alhpa'"),
+    ({"bodies": [{"mesh": "nope.obj", "alpha": 1},
+                 {"primitive": {"type": "point"}, "alpha": 1}]}, "bodies[0].mesh file not found"),
+    ({"bodies": [{"primitive": {"type": "cube"}, "alpha": 1},
+                 {"primitive": {"type": "point"}, "alpha": 1}]}, "bodies[0].primitive.type"),
+    ({"bodies": [{"primitive": {"type": "point"}, "alpha": 1, "rotation": [[2, 0, 0], [0, 1, 0],
+                                                                        [0, 0, 1]]},
+                 {"primitive": {"type": "point"}, "alpha": 1}]}, "rotation must be a rotation"),
+    ({"bodies": [{"primitive": {"type": "point"}, "alpha": 1, "crop": [[0, 0, 0], [0, 1, 1]]},
+                 {"primitive": {"type": "point"}, "alpha": 1}]}, "bodies[0].crop must have"),
+    ({"bodies": [{"primitive": {"type": "sphere_points"}, "alpha": 1,
+                  "crop": [[5, 5, 5], [6, 6, 6]]},
+                 {"primitive": {"type": "point"}, "alpha": 1}]}, "crop keeps no primitive"),
+    ({"bodies": [{"primitive": {"type": "point"}, "alpha": 1, "static": True},
+                 {"primitive": {"type": "point"}, "alpha": 1, "static": True}]}, "all static"),
+]
+
+
+@pytest.mark.parametrize("changes,message", BAD)
+def test_bad_simulation_files_give_one_line_and_no_output(tmp_path, capsys, changes, message):
+    sim, _ = _sim(tmp_path, **changes)
+    out = tmp_path / "out"
+    assert main(["simulate", str(sim), "-o", str(out), "--no-render"]) == 2
+    line = _error_line(capsys)
+    assert message in line and "tiny.json" in line
+    assert not out.exists()
+    with pytest.raises(SimFileError):
+        load_simulation(sim)
+
+
+def test_malformed_json_and_missing_file(tmp_path, capsys):
+    p = tmp_path / "broken.json"
+    p.write_text('{"dt": 0.01,')
+    assert main(["simulate", str(p), "-o", str(tmp_path / "o")]) == 2
+    assert "malformed JSON at line 1" in _error_line(capsys)
+    assert main(["simulate", str(tmp_path / "none.json"), "-o", str(tmp_path / "o")]) == 2
+    assert "simulation file not found" in _error_line(capsys)
+    assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("z", [0.0, 0.21])
+def test_overlapping_initial_state_is_refused(tmp_path, capsys, z):
+    """Geometry intersecting (z = 0) or only the smooth surfaces overlapping (z = 0.21)."""
+    sim, spec = _sim(tmp_path)
+    spec["bodies"][1]["position"] = [0, 0, z]
+    sim.write_text(json.dumps(spec))
+    out = tmp_path / "out"
+    assert main(["simulate", str(sim), "-o", str(out)]) == 2
+    line = _error_line(capsys)
+    assert "overlap in the initial state" in line
+    assert not out.exists()
+
+
+def test_existing_output_is_kept_without_resume_or_overwrite(tmp_path, capsys):
+    sim, _ = _sim(tmp_path, steps=1)
+    out = tmp_path / "run"
+    assert main(["simulate", str(sim), "-o", str(out), "--no-render", "-q"]) == 0
+    before = (out / "trajectory.npz").read_bytes()
+    assert main(["simulate", str(sim), "-o", str(out), "--no-render", "-q"]) == 2
+    assert "output exists" in _error_line(capsys)
+    assert (out / "trajectory.npz").read_bytes() == before

@@ -1,0 +1,9 @@
+"""Rigid-body contact with one smooth-distance constraint (Madan & Levin 2022, Sec. 5.5).
+
+Modules: :mod:`~tracer.sim.bodies` (bodies and mass properties), :mod:`~tracer.sim.primitives`
+(generated geometry), :mod:`~tracer.sim.constraint` (the scene's single constraint),
+:mod:`~tracer.sim.ipm` (primal-dual interior point), :mod:`~tracer.sim.integrator` (the time
+step), :mod:`~tracer.sim.simfile` (simulation files), :mod:`~tracer.sim.run` (trajectories),
+:mod:`~tracer.sim.animate` (frames, MP4, GIF), :mod:`~tracer.sim.cli_sim` (``tracer simulate``
+and ``tracer animate``), :mod:`~tracer.sim.vbowl` (the paper's 2D V-bowl study).
+"""

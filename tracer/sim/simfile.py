@@ -1,0 +1,324 @@
+"""Simulation files: a JSON description of rigid bodies, gravity, time step and camera.
+
+Format (keys not listed are refused; lengths in scene units, times in seconds)::
+
+    {
+      "name": "bunnies",                 optional label
+      "description": "...",              optional
+      "dt": 0.005,                       time step h (> 0)                        required
+      "steps": 400,                      number of steps (integer > 0)            required
+      "gravity": [0, 0, -9.81],          default [0, 0, -9.81]
+      "beta": 0.5,                       Barnes-Hut parameter of every pair, default 0.5
+      "constraint": "smooth",            "smooth" (LSE of pair smooth distances) or "exact"
+      "gap_tol": 1e-5,                   optional interior-point gap tolerance (scene units)
+      "camera": {                        required (used when rendering)
+        "origin": [x, y, z], "dest": [x, y, z], "up": [x, y, z],
+        "width": 200, "height": 160,     image size (default 200 x 160)
+        "fps": 25,                       movie frame rate (default 25)
+        "every": 4,                      render every N-th step (default: about 80 frames)
+        "shading": "normals",            "normals" | "headlight" | "matcap"
+        "matcap": "path.png",            with shading "matcap"
+        "background": [255, 255, 255]
+      },
+      "bodies": [                        at least two
+        {
+          "name": "bunny",               default "body<i>"
+          "mesh": "../data/bunny.off",   a mesh file (relative to this file), or
+          "primitive": {"type": "icosphere", "radius": 0.5},   (tracer.sim.primitives)
+          "kind": "triangles",           "points" | "edges" | "triangles" | "mixed" (default:
+                                         what the file holds)
+          "scale": 1.0,                  uniform scale of the file's coordinates
+          "crop": [[x0, y0, z0], [x1, y1, z1]],  keep only primitives inside this box (file
+                                         coordinates, before scale; e.g. a window of a scan)
+          "alpha": 200,                  smooth-distance sharpness (> 0)          required
+          "alpha_u": 400,                attenuation threshold alpha_U (default: alpha)
+          "density": 1.0,                per volume (closed triangles), area (open), length
+                                         (edges) or per point (tracer.sim.bodies)
+          "position": [x, y, z],         the file's vertex p is placed at R p + position
+          "rotation": [[..], [..], [..]] a 3x3 rotation matrix (rows), or [rx, ry, rz] a
+                                         rotation vector in radians (default identity)
+          "velocity": [vx, vy, vz],      of the centre of mass (default 0)
+          "angular_velocity": [..],      world axes, rad/s (default 0)
+          "static": false                static bodies never move
+        }
+      ]
+    }
+
+The authors' simulator (``sims/*.json``) names these ``timestep``, ``num_steps``, ``objects``,
+``is_dynamic``, ``max_alpha``, ``bvh_type`` and ``init_state``; we use one flat object per body.
+
+:func:`load_simulation` validates every key and value (and that every referenced file exists)
+before it reads any mesh, and raises :class:`SimFileError` (a ``ValueError``) with a one-line
+message ``<file>: <key> <problem>``. Bodies that already overlap are refused later, by
+:func:`tracer.sim.run.check_initial_state`.
+"""
+
+import os
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from smoothdist import DataMesh
+from tracer.scene import (SHADINGS, SceneError, _choice, _keys, _number, _resolve, _show, _vec3,
+                          read_scene_json)
+from tracer.sim import primitives
+from tracer.sim.bodies import Body, rotation_matrix
+
+_TOP = {"name", "description", "dt", "steps", "gravity", "beta", "constraint", "gap_tol",
+        "camera", "bodies"}
+_CAMERA = {"origin", "dest", "up", "width", "height", "fps", "every", "shading", "matcap",
+           "background"}
+_BODY = {"name", "mesh", "primitive", "kind", "scale", "crop", "alpha", "alpha_u", "density",
+         "position", "rotation", "velocity", "angular_velocity", "static"}
+KINDS = ("points", "edges", "triangles", "mixed")
+#: default number of rendered frames when ``camera.every`` is not given
+DEFAULT_FRAMES = 80
+
+
+class SimFileError(SceneError):
+    """A simulation file that cannot be used; the message names the file and the bad key."""
+
+
+@dataclass
+class Camera:
+    """Rendering settings of a simulation."""
+
+    origin: np.ndarray
+    dest: np.ndarray
+    up: np.ndarray
+    width: int = 200
+    height: int = 160
+    fps: float = 25.0
+    every: int = 1
+    shading: str = "normals"
+    matcap: str = ""
+    background: tuple = (255, 255, 255)
+
+
+@dataclass
+class Simulation:
+    """A loaded simulation file: bodies at their initial state and the run's settings."""
+
+    path: str
+    name: str
+    bodies: list
+    dt: float
+    steps: int
+    gravity: np.ndarray
+    beta: float
+    constraint: str
+    camera: Camera
+    gap_tol: float = None
+    spec: dict = field(default_factory=dict)
+
+
+def _err(path, where, msg):
+    return SimFileError(f"{os.path.basename(path)}: {where} {msg}")
+
+
+def _wrap(exc):
+    return SimFileError(str(exc).replace("scene file", "simulation file")
+                        .replace("scene path", "simulation path"))
+
+
+def read_simulation_json(path):
+    """Parse the file into a dict (one-line :class:`SimFileError` on unreadable/malformed JSON)."""
+    try:
+        return read_scene_json(path)
+    except SceneError as exc:
+        raise _wrap(exc) from None
+
+
+def _rotation(value, path, where):
+    if isinstance(value, list) and len(value) == 3 and all(isinstance(r, list) for r in value):
+        rows = [_vec3(r, path, f"{where}[{i}]") for i, r in enumerate(value)]
+        R = np.array(rows)
+        if not np.allclose(R @ R.T, np.eye(3), atol=1e-6) or np.linalg.det(R) <= 0:
+            raise _err(path, where, "must be a rotation matrix (orthonormal rows, det +1)")
+        return R
+    if isinstance(value, list) and len(value) == 3:
+        return rotation_matrix(_vec3(value, path, where))
+    raise _err(path, where, f"must be a 3x3 rotation matrix or a rotation vector [rx, ry, rz], "
+                            f"got {_show(value)}")
+
+
+def _camera(cd, path):
+    _keys(cd, _CAMERA, path, "camera")
+    for k in ("origin", "dest", "up"):
+        if k not in cd:
+            raise _err(path, "camera", f"is missing the required key {k!r}")
+    cam = Camera(origin=_vec3(cd["origin"], path, "camera.origin"),
+                 dest=_vec3(cd["dest"], path, "camera.dest"),
+                 up=_vec3(cd["up"], path, "camera.up"))
+    for k in ("width", "height", "every"):
+        if k in cd:
+            setattr(cam, k, _number(cd[k], path, f"camera.{k}", positive=True, integer=True))
+    if cam.width * cam.height > 4_000_000:
+        raise _err(path, "camera.width", f"x height is {cam.width}x{cam.height}: too large for "
+                                         "an animation (limit 4 megapixels)")
+    if "fps" in cd:
+        cam.fps = _number(cd["fps"], path, "camera.fps", positive=True)
+    if "shading" in cd:
+        cam.shading = _choice(cd["shading"], SHADINGS, path, "camera.shading")
+    if "matcap" in cd:
+        cam.matcap = _resolve(os.path.dirname(os.path.abspath(path)), cd["matcap"], path,
+                              "camera.matcap")
+    if cam.shading == "matcap" and not cam.matcap:
+        raise _err(path, "camera.shading", "is 'matcap' but camera.matcap is not given")
+    if "background" in cd:
+        bg = _vec3(cd["background"], path, "camera.background")
+        if ((bg < 0) | (bg > 255)).any():
+            raise _err(path, "camera.background", f"must hold values 0-255, got {cd['background']}")
+        cam.background = tuple(int(v) for v in bg)
+    from tracer.camera import look_at
+
+    try:
+        look_at(cam.origin, cam.dest, cam.up, cam.width, cam.height)
+    except ValueError as exc:
+        raise _err(path, "camera", str(exc)) from None
+    return cam
+
+
+def _body_spec(bd, i, base, path):
+    where = f"bodies[{i}]"
+    _keys(bd, _BODY, path, where)
+    if "alpha" not in bd:
+        raise _err(path, where, "is missing the required key 'alpha'")
+    if ("mesh" in bd) == ("primitive" in bd):
+        raise _err(path, where, "needs exactly one of 'mesh' (a file) or 'primitive'")
+    spec = {"name": bd.get("name", f"body{i}")}
+    if not isinstance(spec["name"], str) or not spec["name"]:
+        raise _err(path, f"{where}.name", f"must be a non-empty string, got {_show(bd['name'])}")
+    if "mesh" in bd:
+        spec["mesh"] = _resolve(base, bd["mesh"], path, f"{where}.mesh")
+    else:
+        prim = bd["primitive"]
+        if not isinstance(prim, dict) or not isinstance(prim.get("type"), str):
+            raise _err(path, f"{where}.primitive", "must be an object with a 'type' "
+                       f"({', '.join(sorted(primitives.GENERATORS))})")
+        if prim["type"] not in primitives.GENERATORS:
+            raise _err(path, f"{where}.primitive.type", f"must be one of "
+                       f"{', '.join(sorted(primitives.GENERATORS))}; got {_show(prim['type'])}")
+        for k, v in prim.items():
+            if k == "type":
+                continue
+            if isinstance(v, list):
+                [_number(x, path, f"{where}.primitive.{k}[{j}]") for j, x in enumerate(v)]
+            else:
+                _number(v, path, f"{where}.primitive.{k}", non_negative=True)
+        spec["primitive"] = prim
+    spec["kind"] = _choice(bd["kind"], KINDS, path, f"{where}.kind") if "kind" in bd else None
+    spec["scale"] = _number(bd.get("scale", 1.0), path, f"{where}.scale", positive=True)
+    spec["crop"] = None
+    if "crop" in bd:
+        c = bd["crop"]
+        if not isinstance(c, list) or len(c) != 2:
+            raise _err(path, f"{where}.crop", f"must be [[x0, y0, z0], [x1, y1, z1]], got {_show(c)}")
+        lo, hi = _vec3(c[0], path, f"{where}.crop[0]"), _vec3(c[1], path, f"{where}.crop[1]")
+        if not (lo < hi).all():
+            raise _err(path, f"{where}.crop", "must have its first corner below the second")
+        spec["crop"] = (lo, hi)
+    spec["alpha"] = _number(bd["alpha"], path, f"{where}.alpha", positive=True)
+    spec["alpha_u"] = _number(bd.get("alpha_u", spec["alpha"]), path, f"{where}.alpha_u",
+                              positive=True)
+    spec["density"] = _number(bd.get("density", 1.0), path, f"{where}.density", positive=True)
+    spec["position"] = _vec3(bd.get("position", [0, 0, 0]), path, f"{where}.position")
+    spec["rotation"] = (_rotation(bd["rotation"], path, f"{where}.rotation") if "rotation" in bd
+                        else np.eye(3))
+    spec["velocity"] = _vec3(bd.get("velocity", [0, 0, 0]), path, f"{where}.velocity")
+    spec["angular_velocity"] = _vec3(bd.get("angular_velocity", [0, 0, 0]), path,
+                                     f"{where}.angular_velocity")
+    static = bd.get("static", False)
+    if not isinstance(static, bool):
+        raise _err(path, f"{where}.static", f"must be true or false, got {_show(static)}")
+    spec["static"] = static
+    return spec
+
+
+def _build_body(spec, i, path):
+    where = f"bodies[{i}]"
+    try:
+        if "mesh" in spec:
+            mesh = DataMesh.load(spec["mesh"], kind=spec["kind"])
+        else:
+            mesh = primitives.make(spec["primitive"])
+            if spec["kind"] is not None:
+                mesh = mesh.as_kind(spec["kind"])
+        if spec["crop"] is not None:
+            mesh = _crop(mesh, *spec["crop"])
+        if spec["scale"] != 1.0:
+            mesh = DataMesh(mesh.V * spec["scale"], points=mesh.points, edges=mesh.edges,
+                            triangles=mesh.triangles, name=mesh.name, repair=False)
+        return Body.from_mesh(mesh, name=spec["name"], alpha=spec["alpha"],
+                              alpha_u=spec["alpha_u"], density=spec["density"],
+                              position=spec["position"], rotation=spec["rotation"],
+                              velocity=spec["velocity"],
+                              angular_velocity=spec["angular_velocity"], static=spec["static"])
+    except SceneError:
+        raise
+    except (ValueError, OSError, RuntimeError) as exc:
+        raise _err(path, where, f"cannot be built: {str(exc).splitlines()[0]}") from None
+
+
+def _crop(mesh, lo, hi):
+    """The primitives of ``mesh`` whose vertices all lie in the box ``lo..hi``."""
+    inside = np.all((mesh.V >= lo) & (mesh.V <= hi), axis=1)
+    P = mesh.points[inside[mesh.points]]
+    E = mesh.edges[inside[mesh.edges].all(axis=1)]
+    T = mesh.triangles[inside[mesh.triangles].all(axis=1)]
+    if P.size + len(E) + len(T) == 0:
+        raise ValueError("crop keeps no primitive")
+    used = np.unique(np.concatenate([P, E.ravel(), T.ravel()]))
+    remap = np.full(mesh.V.shape[0], -1)
+    remap[used] = np.arange(used.size)
+    return DataMesh(mesh.V[used], points=remap[P], edges=remap[E], triangles=remap[T],
+                    name=mesh.name, repair=False)
+
+
+def load_simulation(path):
+    """Read, validate and build a simulation file into a :class:`Simulation`."""
+    path = os.fspath(path)
+    data = read_simulation_json(path)
+    try:
+        if not isinstance(data, dict):
+            raise _err(path, "the top level", "must be a JSON object")
+        _keys(data, _TOP, path, "the top level")
+        for k in ("dt", "steps", "camera", "bodies"):
+            if k not in data:
+                raise _err(path, "the top level", f"is missing the required key {k!r}")
+        dt = _number(data["dt"], path, "dt", positive=True)
+        steps = _number(data["steps"], path, "steps", positive=True, integer=True)
+        if steps > 10_000_000:
+            raise _err(path, "steps", f"must be at most 10000000, got {steps}")
+        gravity = _vec3(data.get("gravity", [0, 0, -9.81]), path, "gravity")
+        beta = _number(data.get("beta", 0.5), path, "beta", non_negative=True)
+        constraint = _choice(data.get("constraint", "smooth"), ("smooth", "exact"), path,
+                             "constraint")
+        gap_tol = (_number(data["gap_tol"], path, "gap_tol", positive=True)
+                   if "gap_tol" in data else None)
+        name = data.get("name", os.path.splitext(os.path.basename(path))[0])
+        if not isinstance(name, str):
+            raise _err(path, "name", f"must be a string, got {_show(name)}")
+        if "description" in data and not isinstance(data["description"], str):
+            raise _err(path, "description", "must be a string")
+        camera = _camera(data["camera"], path)
+        if "every" not in data["camera"]:
+            camera.every = max(1, steps // DEFAULT_FRAMES)
+        bodies = data["bodies"]
+        if not isinstance(bodies, list) or len(bodies) < 2:
+            raise _err(path, "bodies", f"must be a list of at least 2 bodies, got {_show(bodies)}")
+        base = os.path.dirname(os.path.abspath(path))
+        specs = [_body_spec(bd, i, base, path) for i, bd in enumerate(bodies)]
+        if all(s["static"] for s in specs):
+            raise _err(path, "bodies", "are all static: nothing would move")
+        names = [s["name"] for s in specs]
+        if len(set(names)) != len(names):
+            raise _err(path, "bodies", f"have duplicate names {names}")
+        built = [_build_body(s, i, path) for i, s in enumerate(specs)]
+    except SimFileError:
+        raise
+    except SceneError as exc:
+        raise _wrap(exc) from None
+    return Simulation(path=path, name=name, bodies=built, dt=dt, steps=steps, gravity=gravity,
+                      beta=beta, constraint=constraint, camera=camera, gap_tol=gap_tol,
+                      spec=data)
