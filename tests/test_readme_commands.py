@@ -54,6 +54,15 @@ TINY = {
     "tracer bh-switch": ["--trials", "4", "--samples", "11"],
     "benchmarks/bench_render.py": ["--sizes", "8", "--repeat", "1", "--types", "points"],
     "benchmarks/bench_grid.py": ["--grid", "4", "--repeat", "1"],
+    "benchmarks/bench_mesh_distance.py": ["--repeat", "1", "--case", "ring-toss"],
+    "examples/mesh_distance_demo.py": ["--size", "16", "--out", "out/demo"],
+    "benchmarks/bench_authors.py": ["--sizes", "8", "--repeat", "1", "--types", "points"],
+    "benchmarks/bench_tol.py": ["--size", "8", "--types", "points", "--tol", "0.01",
+                                "--stride", "4", "--repeat", "1"],
+    "benchmarks/bench_scale.py": ["--points", "20000", "--size", "8"],
+    "benchmarks/bench_sim.py": ["--steps", "3"],
+    "tracer simulate": ["--size", "16", "12", "--steps", "3"],
+    "tracer animate": ["--size", "16", "12"],
     "benchmarks/bench_studies.py": ["--size", "8", "--betas", "1", "--grid", "4",
                                     "--trivial", "4", "--folder", "scenes/data/meshes"],
 }
@@ -83,12 +92,17 @@ PLACEHOLDERS = {
     "PATH": "scenes/data/curves/trefoil.obj",
     "DIR": "out/dir",
     "MESH_DIR": "scenes/data/meshes",
+    "SIM.json": "scenes/simulations/ball_on_plane.json",
+    "DIR/trajectory.npz": "out/dir/trajectory.npz",
     "OUT_DIR": "out/grid",
     "A.png": "a.png",
     "B.png": "b.png",
 }
 
 NOT_RUN = {
+    "python benchmarks/bench_authors.py --authors-bin PATH":
+        "it needs the authors' renderer built outside the repository "
+        "(../shared/tools/authors-bench); the same script without --authors-bin is run",
     "python -m tracer bench-grid MESH_DIR -o OUT_DIR --scheduler tcp://host:8786 # an existing cluster":
         "it needs an existing Dask cluster; tests/test_runner.py runs --scheduler ADDRESS "
         "against a local one",

@@ -86,6 +86,13 @@ def test_simulate_renders_frames_mp4_and_gif_and_animate_rerenders(tmp_path):
     a = iio.imread(out / "frames" / "frame_00001.png")
     b = iio.imread(tmp_path / "m" / "movie_frames" / "frame_00001.png")
     np.testing.assert_array_equal(a, b)
+    small = tmp_path / "small.mp4"
+    assert main(["animate", str(out / "trajectory.npz"), "-o", str(small), "--size", "16", "12",
+                 "-q"]) == 0
+    assert iio.imread(tmp_path / "small_frames" / "frame_00001.png").shape[:2] == (12, 16)
+    assert main(["animate", str(out / "trajectory.npz"), "-o", str(tmp_path / "x.mp4"),
+                 "--size", "0", "12", "-q"]) == 2
+    assert not (tmp_path / "x.mp4").exists()
 
 
 BAD = [

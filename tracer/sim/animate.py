@@ -20,14 +20,16 @@ from tracer.render import ProgressBar, render
 from tracer.scene import Scene, SceneObject, default_eps
 
 
-def body_scene(sim):
-    """A :class:`~tracer.scene.Scene` with one object per body (body coordinates)."""
+def body_scene(sim, size=None):
+    """A :class:`~tracer.scene.Scene` with one object per body (body coordinates);
+    ``size (W, H)`` overrides the camera's image size."""
     cam = sim.camera
+    width, height = (cam.width, cam.height) if size is None else (int(size[0]), int(size[1]))
     objs = [SceneObject(name=b.name, field=SmoothDistanceField(b.mesh), alpha=b.alpha,
                         alpha_u=b.alpha_u, beta=sim.beta, offset=1.0 / b.alpha)
             for b in sim.bodies]
     scene = Scene(path=sim.path, camera_origin=cam.origin, camera_dest=cam.dest,
-                  camera_up=cam.up, objects=objs, width=cam.width, height=cam.height,
+                  camera_up=cam.up, objects=objs, width=width, height=height,
                   beta=sim.beta, shading=cam.shading, matcap=cam.matcap,
                   background=cam.background)
     scene.eps = default_eps(scene)
@@ -42,9 +44,11 @@ def frame_indices(n_frames, every):
     return idx
 
 
-def render_frames(sim, traj, frames_dir, *, every=None, progress=None, overwrite=True):
-    """Render the trajectory's frames to ``frames_dir/frame_NNNNN.png``; returns the images."""
-    scene = body_scene(sim)
+def render_frames(sim, traj, frames_dir, *, every=None, progress=None, overwrite=True,
+                  size=None):
+    """Render the trajectory's frames to ``frames_dir/frame_NNNNN.png``; returns the images.
+    ``size (W, H)``: frame size in pixels (default: the simulation camera's)."""
+    scene = body_scene(sim, size)
     every = sim.camera.every if every is None else every
     idx = frame_indices(len(traj["time"]), every)
     os.makedirs(frames_dir, exist_ok=True)
@@ -94,11 +98,12 @@ def _even(im):
     return np.ascontiguousarray(im[:H - H % 2, :W - W % 2])
 
 
-def animate(sim, traj, out_dir, *, movie_name=None, every=None, quiet=False, overwrite=True):
+def animate(sim, traj, out_dir, *, movie_name=None, every=None, quiet=False, overwrite=True,
+            size=None):
     """Frames, MP4 and GIF of a trajectory into ``out_dir``; returns the written paths."""
     bar = None if quiet else ProgressBar("render")
     images = render_frames(sim, traj, os.path.join(out_dir, "frames"), every=every,
-                           progress=bar, overwrite=overwrite)
+                           progress=bar, overwrite=overwrite, size=size)
     name = movie_name or sim.name
     fps = sim.camera.fps
     mp4 = os.path.join(out_dir, f"{name}.mp4")

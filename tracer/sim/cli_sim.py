@@ -24,6 +24,8 @@ def add_arguments_simulate(p):
     p.add_argument("--resume", action="store_true",
                    help="continue DIR/trajectory.npz from its last frame")
     p.add_argument("--every", type=int, help="render every N-th step (default: the file's)")
+    p.add_argument("--size", nargs=2, type=int, metavar=("W", "H"),
+                   help="frame size in pixels (default: the file's camera size)")
     p.add_argument("--overwrite", action="store_true", help="replace existing outputs")
     p.add_argument("--threads", type=int, help="numba threads (default: all cores)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
@@ -36,6 +38,8 @@ def add_arguments_animate(p):
     p.add_argument("--sim", metavar="SIM.json", help="the simulation file (default: the one "
                    "recorded in the trajectory)")
     p.add_argument("--every", type=int, help="render every N-th frame (default: the file's)")
+    p.add_argument("--size", nargs=2, type=int, metavar=("W", "H"),
+                   help="frame size in pixels (default: the file's camera size)")
     p.add_argument("--overwrite", action="store_true", help="replace existing outputs")
     p.add_argument("--threads", type=int, help="numba threads (default: all cores)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
@@ -46,6 +50,11 @@ def _positive(value, name):
         raise CLIError(f"{name} must be >= 1, got {value}")
 
 
+def _check_size(size):
+    if size is not None and (min(size) < 1 or max(size) > 8192):
+        raise CLIError(f"--size must be two integers in 1..8192, got {size[0]} {size[1]}")
+
+
 def run_simulate(args):
     from tracer.render import ProgressBar
     from tracer.sim import animate, run
@@ -53,6 +62,7 @@ def run_simulate(args):
 
     _positive(args.steps, "--steps")
     _positive(args.every, "--every")
+    _check_size(args.size)
     out = args.out
     traj = os.path.join(out, "trajectory.npz")
     if os.path.exists(out) and not os.path.isdir(out):
@@ -85,7 +95,7 @@ def run_simulate(args):
         return 0
     data = run.load_trajectory(traj)
     mp4, gif = animate.animate(sim, data, out, every=args.every, quiet=args.quiet,
-                               overwrite=True)
+                               overwrite=True, size=args.size)
     if not args.quiet:
         print(f"wrote {os.path.join(out, 'frames')}/, {mp4}, {gif}", file=sys.stderr)
     return 0
@@ -96,6 +106,7 @@ def run_animate(args):
     from tracer.sim.simfile import load_simulation
 
     _positive(args.every, "--every")
+    _check_size(args.size)
     if not args.out.endswith(".mp4"):
         raise CLIError(f"output must be a .mp4 file, got {args.out}")
     stem = args.out[:-4]
@@ -116,7 +127,8 @@ def run_animate(args):
 
     os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
     images = animate.render_frames(sim, data, stem + "_frames", every=args.every,
-                                   progress=None if args.quiet else ProgressBar("render"))
+                                   progress=None if args.quiet else ProgressBar("render"),
+                                   size=args.size)
     animate.write_mp4(args.out, images, sim.camera.fps)
     animate.write_gif(gif, images, sim.camera.fps)
     if not args.quiet:
