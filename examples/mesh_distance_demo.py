@@ -144,6 +144,7 @@ def run(size, out_dir, gallery=None, alpha=200.0, alpha_q=200.0):
         with open(tmp, "w") as fh:
             json.dump(info, fh, indent=1)
     if gallery:
+        os.makedirs(os.path.dirname(os.path.abspath(gallery)), exist_ok=True)
         _figure(rgb, gallery, floor, info)
     return info
 

@@ -3,7 +3,7 @@
 How: the commands are extracted from the README itself -- every line of its ```bash blocks
 (continuation lines joined), every inline code span that starts with ``python `` or
 ``bash `` or ``for ``, and every ```python block -- and run one by one, in README order, in a
-scratch folder holding a copy of ``scenes/`` and ``benchmarks/`` (so nothing is written into
+scratch folder holding a copy of ``scenes/``, ``benchmarks/`` and ``examples/`` (so nothing is written into
 the repository), with this checkout on PYTHONPATH.
 
 What is changed on the way is listed here, explicitly, so that a reader can check that the
@@ -168,6 +168,7 @@ def concrete(cmd):
     for old, new in SETUP_REWRITES:
         cmd = cmd.replace(old, new)
     cmd = re.sub(r"\s*\[[^\[\]]*\]", "", cmd)  # [optional] parts of a synopsis
+    cmd = re.sub(r"\s+#\s.*$", "", cmd)  # a trailing shell comment
     tokens = cmd.split(" ")
     for i, tok in enumerate(tokens):
         if tok in PLACEHOLDERS:
@@ -193,6 +194,7 @@ def workspace(tmp_path_factory):
     work.mkdir()
     shutil.copytree(ROOT / "scenes", work / "scenes")
     shutil.copytree(ROOT / "benchmarks", work / "benchmarks")
+    shutil.copytree(ROOT / "examples", work / "examples")
     bindir = base / "bin"
     bindir.mkdir()
     for name in ("python", "python3"):
