@@ -95,6 +95,30 @@ def test_simulate_renders_frames_mp4_and_gif_and_animate_rerenders(tmp_path):
     assert not (tmp_path / "x.mp4").exists()
 
 
+
+def test_animate_frames_on_a_dask_cluster_equal_the_serial_frames(tmp_path):
+    """Frames are independent tasks: a 2-worker local cluster renders the same PNGs."""
+    pytest.importorskip("distributed")
+    sim, _ = _sim(tmp_path, steps=4)
+    out = tmp_path / "run"
+    assert main(["simulate", str(sim), "-o", str(out), "--no-render", "-q"]) == 0
+    traj = str(out / "trajectory.npz")
+    assert main(["animate", traj, "-o", str(tmp_path / "s.mp4"), "--every", "1",
+                 "--scheduler", "serial", "-q"]) == 0
+    assert main(["animate", traj, "-o", str(tmp_path / "d.mp4"), "--every", "1",
+                 "--workers", "2", "-q"]) == 0
+    import imageio.v3 as iio
+
+    names = sorted(os.listdir(tmp_path / "s_frames"))
+    assert len(names) == 5 and names == sorted(os.listdir(tmp_path / "d_frames"))
+    for n in names:
+        np.testing.assert_array_equal(iio.imread(tmp_path / "s_frames" / n),
+                                      iio.imread(tmp_path / "d_frames" / n))
+    assert (tmp_path / "d.mp4").stat().st_size > 0 and (tmp_path / "d.gif").stat().st_size > 0
+    assert main(["animate", traj, "-o", str(tmp_path / "x.mp4"), "--scheduler", "serial",
+                 "--workers", "2", "-q"]) == 2
+
+
 BAD = [
     ({"dt": 0}, "dt must be > 0"),
     ({"steps": 2.5}, "steps must be an integer"),

@@ -4,6 +4,8 @@
 ``--no-render``, ``DIR/frames/frame_NNNNN.png``, ``DIR/<name>.mp4`` and ``DIR/<name>.gif``.
 ``animate`` renders an existing trajectory (its simulation file is found through the path stored
 in the trajectory, or ``--sim``) to ``movie.mp4``, ``movie.gif`` and ``movie_frames/``.
+Frames are independent tasks (:mod:`tracer.studies.frames`): ``--scheduler``/``--workers`` run
+them on a Dask cluster as the studies do (a short movie stays in this process).
 
 Bad input (a malformed or invalid simulation file, bodies that overlap at the start, an
 existing output without ``--overwrite``/``--resume``) is one ``error: ...`` line, exit status 2,
@@ -28,6 +30,7 @@ def add_arguments_simulate(p):
                    help="frame size in pixels (default: the file's camera size)")
     p.add_argument("--overwrite", action="store_true", help="replace existing outputs")
     p.add_argument("--threads", type=int, help="numba threads (default: all cores)")
+    _add_scheduler(p)
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
 
 
@@ -42,12 +45,19 @@ def add_arguments_animate(p):
                    help="frame size in pixels (default: the file's camera size)")
     p.add_argument("--overwrite", action="store_true", help="replace existing outputs")
     p.add_argument("--threads", type=int, help="numba threads (default: all cores)")
+    _add_scheduler(p)
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
 
 
 def _positive(value, name):
     if value is not None and value < 1:
         raise CLIError(f"{name} must be >= 1, got {value}")
+
+
+def _add_scheduler(p):
+    from tracer.studies import runner
+
+    runner.add_arguments(p)
 
 
 def _check_size(size):
@@ -57,12 +67,14 @@ def _check_size(size):
 
 def run_simulate(args):
     from tracer.render import ProgressBar
-    from tracer.sim import animate, run
+    from tracer.sim import run
     from tracer.sim.simfile import load_simulation
+    from tracer.studies.frames import render_movie
 
     _positive(args.steps, "--steps")
     _positive(args.every, "--every")
     _check_size(args.size)
+    scheduler, workers = _check_scheduler(args)
     out = args.out
     traj = os.path.join(out, "trajectory.npz")
     if os.path.exists(out) and not os.path.isdir(out):
@@ -94,19 +106,32 @@ def run_simulate(args):
     if args.no_render:
         return 0
     data = run.load_trajectory(traj)
-    mp4, gif = animate.animate(sim, data, out, every=args.every, quiet=args.quiet,
-                               overwrite=True, size=args.size)
+    mp4 = os.path.join(out, f"{sim.name}.mp4")
+    gif = os.path.join(out, f"{sim.name}.gif")
+    render_movie(args.sim, traj, os.path.join(out, "frames"), mp4, gif,
+                 n_frames=len(data["time"]),
+                 every=sim.camera.every if args.every is None else args.every,
+                 fps=sim.camera.fps, size=args.size, scheduler=scheduler, workers=workers,
+                 quiet=args.quiet)
     if not args.quiet:
         print(f"wrote {os.path.join(out, 'frames')}/, {mp4}, {gif}", file=sys.stderr)
     return 0
 
 
+def _check_scheduler(args):
+    from tracer.studies import runner
+
+    return runner.check_arguments(args)
+
+
 def run_animate(args):
-    from tracer.sim import animate, run
+    from tracer.sim import run
     from tracer.sim.simfile import load_simulation
+    from tracer.studies import frames
 
     _positive(args.every, "--every")
     _check_size(args.size)
+    scheduler, workers = _check_scheduler(args)
     if not args.out.endswith(".mp4"):
         raise CLIError(f"output must be a .mp4 file, got {args.out}")
     stem = args.out[:-4]
@@ -123,14 +148,12 @@ def run_animate(args):
     names = [str(n) for n in data["names"]]
     if names != [b.name for b in sim.bodies]:
         raise CLIError(f"the trajectory's bodies {names} do not match {sim_path}")
-    from tracer.render import ProgressBar
-
     os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
-    images = animate.render_frames(sim, data, stem + "_frames", every=args.every,
-                                   progress=None if args.quiet else ProgressBar("render"),
-                                   size=args.size)
-    animate.write_mp4(args.out, images, sim.camera.fps)
-    animate.write_gif(gif, images, sim.camera.fps)
+    frames.render_movie(sim_path, args.trajectory, stem + "_frames", args.out, gif,
+                        n_frames=len(data["time"]),
+                        every=sim.camera.every if args.every is None else args.every,
+                        fps=sim.camera.fps, size=args.size, scheduler=scheduler,
+                        workers=workers, quiet=args.quiet)
     if not args.quiet:
         print(f"wrote {args.out}, {gif}, {stem}_frames/", file=sys.stderr)
     return 0

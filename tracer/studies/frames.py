@@ -1,0 +1,98 @@
+"""The frames of a simulated trajectory as independent tasks (``tracer simulate`` / ``animate``).
+
+* :func:`list_tasks`: one task per rendered frame, a small dict (simulation file and trajectory
+  by path, frame number, output PNG path, image size);
+* :func:`frame_task`: renders one frame with every body at its pose and writes its PNG
+  (atomically); returns a small record. A worker process loads the simulation and the
+  trajectory by path and builds every body's tree **once** (cached, keyed by path, modification
+  time and size), so only the task dict travels through the scheduler;
+* :func:`render_movie`: runs the tasks through :func:`tracer.studies.runner.run_tasks` (in this
+  process, on a local Dask cluster or on an existing one) and reduces the PNGs, in frame order,
+  to an MP4 and a GIF.
+
+The first frame is rendered in this process before the others are handed out: it warms the
+kernels and its time gives the estimate that decides whether a local cluster is worth starting.
+Renders are deterministic across thread counts, so the frames are the same whatever runs them.
+"""
+
+import functools
+import os
+
+import numpy as np
+
+from tracer.studies.common import file_stamp
+
+
+def list_tasks(sim_path, traj_path, frames_dir, indices, size=None):
+    """One task per frame index in ``indices``; frame ``n`` of the movie is
+    ``frames_dir/frame_NNNNN.png`` (``n`` its position in ``indices``)."""
+    size = None if size is None else [int(size[0]), int(size[1])]
+    return [{"key": f"frame={int(f)}", "weight": 1.0, "sim": os.path.abspath(sim_path),
+             "trajectory": os.path.abspath(traj_path), "frame": int(f), "index": n,
+             "png": os.path.abspath(os.path.join(frames_dir, f"frame_{n:05d}.png")),
+             "size": size}
+            for n, f in enumerate(indices)]
+
+
+@functools.lru_cache(maxsize=4)
+def _scene(sim_stamp, size):
+    from tracer.sim.animate import body_scene
+    from tracer.sim.simfile import load_simulation
+
+    sim = load_simulation(sim_stamp[0])
+    return sim, body_scene(sim, size)
+
+
+@functools.lru_cache(maxsize=4)
+def _poses(traj_stamp):
+    from tracer.sim.run import load_trajectory
+
+    data = load_trajectory(traj_stamp[0])
+    return np.asarray(data["rotations"]), np.asarray(data["centers"])
+
+
+def frame_task(task):
+    """Render ``task["frame"]`` of the trajectory; write ``task["png"]``; return a record."""
+    from tracer.image import save_png
+    from tracer.render import render
+
+    size = tuple(task["size"]) if task.get("size") else None
+    sim, scene = _scene(file_stamp(task["sim"]), size)
+    rotations, centers = _poses(file_stamp(task["trajectory"]))
+    f = task["frame"]
+    poses = [(rotations[f, k], centers[f, k]) for k in range(len(sim.bodies))]
+    res = render(scene, transforms=poses)
+    save_png(task["png"], res.rgb, overwrite=True)
+    return {"index": task["index"], "frame": f, "png": task["png"],
+            "seconds": float(res.seconds), "hits": int(res.hit.sum())}
+
+
+def render_movie(sim_path, traj_path, frames_dir, mp4, gif, *, n_frames, every, fps, size=None,
+                 scheduler="local", workers=None, quiet=False):
+    """Render every ``every``-th frame (and the last) of the trajectory to ``frames_dir``, then
+    write ``mp4`` and ``gif``. Returns the runner's :class:`~tracer.studies.runner.RunInfo`.
+
+    Raises :class:`tracer.cli.CLIError` when a frame could not be rendered (nothing of the
+    movie is written then)."""
+    from PIL import Image
+
+    from tracer.cli import CLIError
+    from tracer.sim.animate import frame_indices, write_gif, write_mp4
+    from tracer.studies.runner import run_tasks
+
+    tasks = list_tasks(sim_path, traj_path, frames_dir, frame_indices(n_frames, every), size)
+    os.makedirs(frames_dir, exist_ok=True)
+    done = {0: frame_task(tasks[0])}
+    failed = []
+    info = run_tasks(frame_task, tasks[1:],
+                     on_result=lambda t, r: done.__setitem__(t["index"], r),
+                     on_failure=lambda t, err: failed.append((t["key"], err)),
+                     scheduler=scheduler, workers=workers, label="render frames",
+                     estimate=done[0]["seconds"] * (len(tasks) - 1), quiet=quiet)
+    if failed:
+        raise CLIError(f"{len(failed)} frame(s) could not be rendered; first {failed[0][0]}: "
+                       f"{failed[0][1]}")
+    images = [np.asarray(Image.open(done[n]["png"]).convert("RGB")) for n in range(len(tasks))]
+    write_mp4(mp4, images, fps)
+    write_gif(gif, images, fps)
+    return info
