@@ -192,27 +192,6 @@ def cases():
     }
 
 
-def place(md, start, direction, gap):
-    """Translation ``start + s * direction`` (largest s) whose exact gap is ``gap`` (bisection)."""
-    u = np.asarray(direction, float) / np.linalg.norm(direction)
-    lo = 0.0
-    if md.exact(t=start)[0] <= gap:
-        raise RuntimeError("the start placement is already closer than the gap")
-    hi = 0.1
-    while md.exact(t=start + hi * u)[0] > gap:
-        lo = hi
-        hi *= 2.0
-        if hi > 1e3:
-            raise RuntimeError("never reached the data")
-    for _ in range(60):
-        mid = 0.5 * (lo + hi)
-        if md.exact(t=start + mid * u)[0] > gap:
-            lo = mid
-        else:
-            hi = mid
-    return start + lo * u
-
-
 def time_call(f, repeat):
     T = []
     for _ in range(repeat):
@@ -225,7 +204,8 @@ def time_call(f, repeat):
 def run_case(name, spec, repeat, beta, tol=0.0, placement=None):
     data, query, alpha, alpha_q, start, direction, paper_ms = spec
     md = MeshDistance(data, query, alpha=alpha, alpha_q=alpha_q, beta=beta, tol=tol)
-    t = place(md, start, direction, 1.0 / alpha) if placement is None else np.asarray(placement)
+    t = (md.translation_at_gap(1.0 / alpha, direction, start) if placement is None
+         else np.asarray(placement))
     d, G = md(t=t)                                   # warm-up (JIT, caches)
     md.exact(t=t)
     best, med = time_call(lambda: md(t=t), repeat)

@@ -42,30 +42,6 @@ def sphere(radius, subdivisions=2):
     return np.asarray(ico.vertices), np.asarray(ico.faces)
 
 
-def place_with_gap(md, start, direction, gap):
-    """Translation along ``direction`` from ``start`` at which the exact gap equals ``gap``."""
-    u = np.asarray(direction, float) / np.linalg.norm(direction)
-    if md.exact(t=start)[0] <= gap:
-        raise ValueError("the query starts closer than the requested gap")
-    # walk in steps no longer than the gap's distance so far (never jumps through the data)
-    lo = 0.0
-    while True:
-        step = max(md.exact(t=start + lo * u)[0] - gap, 0.0) + 1e-9
-        hi = lo + step
-        if md.exact(t=start + hi * u)[0] <= gap or step < 1e-7:
-            break
-        lo = hi
-        if lo > 1e3:
-            raise ValueError("the query never approaches the data along that direction")
-    for _ in range(60):
-        mid = 0.5 * (lo + hi)
-        if md.exact(t=start + mid * u)[0] > gap:
-            lo = mid
-        else:
-            hi = mid
-    return start + lo * u
-
-
 def vertex_values_at(points, V, F, values):
     """Interpolate per-vertex ``values`` at the closest points of ``points`` on mesh ``(V, F)``."""
     field = SmoothDistanceField(V, F)
@@ -88,7 +64,7 @@ def run(size, out_dir, gallery=None, alpha=200.0, alpha_q=200.0):
     bunny = DataMesh.load(BUNNY)
     Vs, Fs = sphere(0.035)
     md = MeshDistance(bunny, (Vs, Fs), alpha=alpha, alpha_q=alpha_q, beta=0.5)
-    t = place_with_gap(md, np.array([0.25, 0.085, 0.01]), [-1.0, 0.0, 0.0], 0.004)
+    t = md.translation_at_gap(0.004, [-1.0, 0.0, 0.0], start=[0.25, 0.085, 0.01])
     d, G = md(t=t)
     de, _ = md.exact(t=t)
     gnorm = np.linalg.norm(G, axis=1)

@@ -390,3 +390,22 @@ def test_trimesh_and_pyvista_query_meshes_match_arrays():
         d, G = MeshDistance(data, obj, alpha=20.0, alpha_q=20.0, beta=0.0)()
         assert d == pytest.approx(ref[0], rel=1e-12)
         np.testing.assert_allclose(G, ref[1], rtol=1e-10, atol=1e-14)
+
+
+def test_translation_at_gap_stops_before_thin_data():
+    """Placing a query just off contact never jumps through thin data (a single triangle)."""
+    V = np.array([[-1.0, -1.0, 0.0], [1.0, -1.0, 0.0], [0.0, 1.0, 0.0]])
+    data = DataMesh(V, np.array([[0, 1, 2]]))
+    q = (np.array([[0.0, 0.0, 0.0], [0.1, 0.0, 0.0]]), np.array([[0, 1]]))
+    md = MeshDistance(data, q, alpha=50.0, alpha_q=50.0)
+    t = md.translation_at_gap(1e-3, [0.0, 0.1, -1.0], start=[0.0, -0.2, 5.0])
+    assert md.exact(t=t)[0] == pytest.approx(1e-3, rel=1e-9)
+    assert t[2] > 0.0                       # still on the starting side of the triangle
+    with pytest.raises(ValueError, match="starts closer"):
+        md.translation_at_gap(10.0, [0.0, 0.0, -1.0], start=[0.0, 0.0, 5.0])
+    with pytest.raises(ValueError, match="never comes within"):
+        md.translation_at_gap(1e-3, [0.0, 0.0, 1.0], start=[0.0, 0.0, 5.0])
+    with pytest.raises(ValueError, match="direction"):
+        md.translation_at_gap(1e-3, [0.0, 0.0, 0.0])
+    with pytest.raises(ValueError, match="gap"):
+        md.translation_at_gap(-1.0, [0.0, 0.0, -1.0], start=[0.0, 0.0, 5.0])

@@ -50,7 +50,7 @@ def test_place_reaches_the_gap():
     V, E = bench.bowl_edges()
     Vq, Eq = bench.icosphere_edges()
     md = MeshDistance((V, E), (Vq, Eq), alpha=50.0, alpha_q=50.0)
-    t = bench.place(md, np.array([0.0, 0.5, 0.0]), np.array([0.0, -1.0, 0.0]), 0.02)
+    t = md.translation_at_gap(0.02, np.array([0.0, -1.0, 0.0]), np.array([0.0, 0.5, 0.0]))
     assert md.exact(t=t)[0] == pytest.approx(0.02, abs=1e-9)
 
 

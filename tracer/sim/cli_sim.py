@@ -25,13 +25,7 @@ def add_arguments_simulate(p):
     p.add_argument("--no-render", action="store_true", help="write the trajectory only")
     p.add_argument("--resume", action="store_true",
                    help="continue DIR/trajectory.npz from its last frame")
-    p.add_argument("--every", type=int, help="render every N-th step (default: the file's)")
-    p.add_argument("--size", nargs=2, type=int, metavar=("W", "H"),
-                   help="frame size in pixels (default: the file's camera size)")
-    p.add_argument("--overwrite", action="store_true", help="replace existing outputs")
-    p.add_argument("--threads", type=int, help="numba threads (default: all cores)")
-    _add_scheduler(p)
-    p.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
+    _add_render_arguments(p, "step")
 
 
 def add_arguments_animate(p):
@@ -40,13 +34,7 @@ def add_arguments_animate(p):
                    "(a GIF and a frames folder are written next to it)")
     p.add_argument("--sim", metavar="SIM.json", help="the simulation file (default: the one "
                    "recorded in the trajectory)")
-    p.add_argument("--every", type=int, help="render every N-th frame (default: the file's)")
-    p.add_argument("--size", nargs=2, type=int, metavar=("W", "H"),
-                   help="frame size in pixels (default: the file's camera size)")
-    p.add_argument("--overwrite", action="store_true", help="replace existing outputs")
-    p.add_argument("--threads", type=int, help="numba threads (default: all cores)")
-    _add_scheduler(p)
-    p.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
+    _add_render_arguments(p, "frame")
 
 
 def _positive(value, name):
@@ -54,10 +42,17 @@ def _positive(value, name):
         raise CLIError(f"{name} must be >= 1, got {value}")
 
 
-def _add_scheduler(p):
+def _add_render_arguments(p, unit):
+    """Options shared by simulate and animate: which frames, their size, where they render."""
     from tracer.studies import runner
 
+    p.add_argument("--every", type=int, help=f"render every N-th {unit} (default: the file's)")
+    p.add_argument("--size", nargs=2, type=int, metavar=("W", "H"),
+                   help="frame size in pixels (default: the file's camera size)")
+    p.add_argument("--overwrite", action="store_true", help="replace existing outputs")
+    p.add_argument("--threads", type=int, help="numba threads (default: all cores)")
     runner.add_arguments(p)
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
 
 
 def _check_size(size):
