@@ -37,7 +37,7 @@ from smoothdist.box_distance import box_box_distance, box_box_offset, box_lower_
 from smoothdist.closest_pair import closest_pair
 from smoothdist.closest_point import (SEG_INTERIOR, TRI_AB, TRI_AC, TRI_BC, TRI_INTERIOR)
 from smoothdist.query import (_attenuate, exact_distance_point, logsumexp_accumulate,
-                              smooth_distance_point)
+                              push_nearest_first, smooth_distance_point)
 from smoothdist.weights import eval_edge_weight, eval_triangle_weight
 
 #: number of parallel tasks; task ``c`` takes query primitives ``c, c + TASKS, ...`` so that the
@@ -245,17 +245,7 @@ def smooth_distance_primitive(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, s
         r = tree.right[node]
         dl = box_box_distance(qlo, qhi, lo, hi, l)
         dr = box_box_distance(qlo, qhi, lo, hi, r)
-        if dl <= dr:
-            stack[sp] = r
-            dstack[sp] = dr
-            stack[sp + 1] = l
-            dstack[sp + 1] = dl
-        else:
-            stack[sp] = l
-            dstack[sp] = dl
-            stack[sp + 1] = r
-            dstack[sp + 1] = dr
-        sp += 2
+        sp = push_nearest_first(stack, dstack, sp, l, dl, r, dr)
     inv = 1.0 / s
     return m - math.log(s) / alpha, gx * inv, gy * inv, gz * inv, nodes, leaves
 

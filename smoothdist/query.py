@@ -132,6 +132,23 @@ def primitive_term(tree, i, px, py, pz, S, wgs):
 
 
 @numba.njit(**NJIT)
+def push_nearest_first(stack, dstack, sp, l, dl, r, dr):
+    """Push child nodes ``l`` and ``r`` (box distances ``dl``, ``dr``) onto the traversal
+    stack so that the nearer one is popped first; returns the new stack size."""
+    if dl <= dr:
+        stack[sp] = r
+        dstack[sp] = dr
+        stack[sp + 1] = l
+        dstack[sp + 1] = dl
+    else:
+        stack[sp] = l
+        dstack[sp] = dl
+        stack[sp + 1] = r
+        dstack[sp + 1] = dr
+    return sp + 2
+
+
+@numba.njit(**NJIT)
 def logsumexp_accumulate(m, s, gx, gy, gz, d, W, vx, vy, vz, alpha):
     """Add one term to a streaming LogSumExp kept relative to a running shift ``m``.
 
@@ -226,17 +243,7 @@ def smooth_distance_point(tree, px, py, pz, alpha, beta, S, wgs, stack, dstack, 
         r = tree.right[node]
         dl = math.sqrt(box_distance2(px, py, pz, lo, hi, l)[0])
         dr = math.sqrt(box_distance2(px, py, pz, lo, hi, r)[0])
-        if dl <= dr:
-            stack[sp] = r
-            dstack[sp] = dr
-            stack[sp + 1] = l
-            dstack[sp + 1] = dl
-        else:
-            stack[sp] = l
-            dstack[sp] = dl
-            stack[sp + 1] = r
-            dstack[sp + 1] = dr
-        sp += 2
+        sp = push_nearest_first(stack, dstack, sp, l, dl, r, dr)
     inv = 1.0 / s
     return m - math.log(s) / alpha, gx * inv, gy * inv, gz * inv, nodes, leaves
 
@@ -433,17 +440,7 @@ def smooth_distance_point_tol(tree, px, py, pz, alpha, beta, tol, S, wgs, stack,
         r = tree.right[node]
         dl = math.sqrt(box_distance2(px, py, pz, lo, hi, l)[0])
         dr = math.sqrt(box_distance2(px, py, pz, lo, hi, r)[0])
-        if dl <= dr:
-            stack[sp] = r
-            dstack[sp] = dr
-            stack[sp + 1] = l
-            dstack[sp + 1] = dl
-        else:
-            stack[sp] = l
-            dstack[sp] = dl
-            stack[sp + 1] = r
-            dstack[sp + 1] = dr
-        sp += 2
+        sp = push_nearest_first(stack, dstack, sp, l, dl, r, dr)
     inv = 1.0 / s
     return m - math.log(s) / alpha, gx * inv, gy * inv, gz * inv, nodes, leaves
 
