@@ -48,11 +48,15 @@ def test_beta_outputs_exist(beta_run):
     assert "6.33" not in report and "1.48" not in report and "side by side" in report
 
 
-def test_authors_reference_times_only_at_their_size():
+def test_authors_reference_times_only_at_their_size_and_eps():
     from tracer.studies import plots
-    assert plots.authors_times(256)[0.5] == (1.48, 2.37, 2.63)
-    assert plots.authors_times(512)[0.5] == (6.33, 9.33, 10.46)
-    assert plots.authors_times(32) == {}
+    def p(n, eps=1e-3, h=None):
+        return {"width": n, "height": h or n, "eps": eps}
+    assert plots.authors_times(p(256))[0.5] == (1.48, 2.37, 2.63)
+    assert plots.authors_times(p(512))[0.5] == (6.33, 9.33, 10.46)
+    assert plots.authors_times(p(32)) == {}
+    assert plots.authors_times(p(512, eps=2.5e-5)) == {}   # our eps: not the same measurement
+    assert plots.authors_times(p(512, h=256)) == {}
 
 
 def test_beta_tol_series(tmp_path):

@@ -28,16 +28,21 @@ PAPER_BETA_ERROR = {0.0: (0.0, 0.0, 0.0), 0.5: (2.5, 3.7, 3.4), 1.0: (4.9, 6.5, 
 
 #: the authors' render times in seconds (points / edges / triangles) by image size and beta,
 #: measured side by side with ours in one run: see :data:`AUTHORS_TIMES_SETUP`. Only shown
-#: next to a study of the same image size; a study of another size shows no reference time.
+#: next to a study of the same image size and the same eps; any other study shows none.
 AUTHORS_TIMES = {256: {0.5: (1.48, 2.37, 2.63)}, 512: {0.5: (6.33, 9.33, 10.46)}}
+#: the hit threshold of those measurements (absolute scene units, the authors' value)
+AUTHORS_EPS = 1e-3
 AUTHORS_TIMES_SETUP = ("authors' C++ (beta_error_test) run side by side with ours: quiet 2-core "
                        "machine, 2 threads each, eps 1e-3 absolute, N x N px")
 
 
-def authors_times(size):
-    """``{beta: (points, edges, triangles) seconds}`` of the authors' renderer at ``size``
-    pixels square, or ``{}`` when no side-by-side measurement exists at that size."""
-    return AUTHORS_TIMES.get(int(size), {})
+def authors_times(params):
+    """``{beta: (points, edges, triangles) seconds}`` of the authors' renderer for a study with
+    ``params`` (``width``, ``height``, ``eps``), or ``{}`` unless a side-by-side measurement
+    exists at that square size *and* eps."""
+    if params["width"] != params["height"] or not close(float(params["eps"]), AUTHORS_EPS):
+        return {}
+    return AUTHORS_TIMES.get(int(params["width"]), {})
 
 
 #: the paper's Barnes-Hut switch numbers on its city LiDAR scan (Sec. 4.3)
@@ -100,6 +105,15 @@ def beta_outputs(out, cache, rows, params, types, grid_betas):
     Rows with ``tol > 0`` (tolerance-controlled pruning) are drawn as extra dotted series in
     the time and error plots and listed in the report; the image grid shows ``tol = 0``.
     """
+    present = beta_plots(out, rows, params)
+    plain = [r for r in rows if not r.get("tol", 0.0)]
+    beta_grid(out, cache, plain, present, grid_betas)
+    write_text(out / "report.md", beta_report(rows, params, present))
+
+
+def beta_plots(out, rows, params):
+    """``beta_time.png`` and ``beta_error.png`` from the study's rows; returns the types
+    present. Needs only the rows (the CSV), not the renders."""
     plt = pyplot()
     all_rows = rows
     extra = [r for r in rows if r.get("tol", 0.0)]
@@ -119,7 +133,7 @@ def beta_outputs(out, cache, rows, params, types, grid_betas):
         rs = sorted((r for r in rows if r["type"] == k), key=lambda r: r["beta"])
         ax.plot([r["beta"] for r in rs], [max(r["seconds"], 1e-4) for r in rs], "o-",
                 color=TYPE_COLORS[k], label=f"{k} (ours, {params['width']}²)")
-        ref = authors_times(params["width"]) if params["width"] == params["height"] else {}
+        ref = authors_times(params)
         if ref:
             ref_b = sorted(ref)
             ax.plot(ref_b, [ref[b][TYPES.index(k)] for b in ref_b], "s", color=TYPE_COLORS[k],
@@ -157,7 +171,12 @@ def beta_outputs(out, cache, rows, params, types, grid_betas):
     fig.tight_layout()
     savefig(fig, out / "beta_error.png")
     plt.close(fig)
-    # ---- image grid: types x selected betas
+    return present
+
+
+def beta_grid(out, cache, rows, present, grid_betas):
+    """``beta_grid.png``: the cached renders, types x selected betas (``tol = 0`` rows)."""
+    plt = pyplot()
     measured = sorted({r["beta"] for r in rows})
     cols = [b for b in measured if any(close(b, g) for g in grid_betas)] or measured[:4]
     fig, axes = plt.subplots(len(present), len(cols), squeeze=False,
@@ -183,7 +202,6 @@ def beta_outputs(out, cache, rows, params, types, grid_betas):
     fig.tight_layout(pad=0.4)
     savefig(fig, out / "beta_grid.png", dpi=100)
     plt.close(fig)
-    write_text(out / "report.md", beta_report(all_rows, params, present))
 
 
 def beta_report(rows, params, present):
@@ -207,8 +225,9 @@ def beta_report(rows, params, present):
              "![time vs beta](beta_time.png)", "", "![error vs beta](beta_error.png)", "",
              "![renders](beta_grid.png)", "",
              "## Measured vs reference", "",
-             f"Reference times: {AUTHORS_TIMES_SETUP}; shown only at the size they were "
-             f"measured ({', '.join(f'{n}²' for n in sorted(AUTHORS_TIMES))}) and only for "
+             f"Reference times: {AUTHORS_TIMES_SETUP}; shown only for a study at the size "
+             f"({', '.join(f'{n}²' for n in sorted(AUTHORS_TIMES))}) and eps "
+             f"({AUTHORS_EPS:g}) they were measured at, and only for "
              "the betas measured. Reference errors: the authors' `beta_error_test`.", "",
              "| type | β | tol | time (s) | ref. time (s) | speed-up vs β=0 | "
              "error (% diag) | ref. error (% diag) | error std (% diag) | hits | mean leaves/px "
@@ -220,7 +239,7 @@ def beta_report(rows, params, present):
         t0 = next((r["seconds"] for r in rs if r["beta"] == 0.0 and not r.get("tol", 0.0)),
                   float("nan"))
         ti = TYPES.index(k)
-        times = authors_times(params["width"]) if params["width"] == params["height"] else {}
+        times = authors_times(params)
         for r in rs:
             plain = not r.get("tol", 0.0)
             ref_t = next((v[ti] for b, v in times.items() if close(b, r["beta"])), None) \
