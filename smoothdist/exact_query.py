@@ -5,8 +5,8 @@ The smooth-distance kernels need the balanced object-median tree of :mod:`smooth
 (its node diameters and weight bounds drive Barnes-Hut); exact branch and bound only needs
 tight boxes and few nodes. :class:`ExactTree` is that second tree. It is built from a
 :class:`~smoothdist.bvh.TreeData`'s primitive table by :func:`build_exact_tree`, and
-:class:`~smoothdist.field.SmoothDistanceField` builds it lazily the first time exact distance
-is requested.
+:class:`~smoothdist.field.SmoothDistanceField` builds it lazily, once its exact-distance calls
+have asked for about one query per primitive (:data:`smoothdist.field.EXACT_TREE_AFTER`).
 
 Layout
 ------
@@ -19,10 +19,16 @@ the leaf's primitives are ``start : start + count`` of the reordered primitive t
 parent), so a traversal walks mostly forward through memory. ``root`` is ``0`` or a leaf code
 (a table of at most ``leaf_size`` primitives is one leaf).
 
-Memory: 112 bytes per inner node (boxes in float64) plus ``8 (3 k + 1) + 1`` bytes per
-primitive for the reordered table, ``k`` the largest vertex count present (3 with triangles).
-The build leaves 0.58 inner nodes per triangle or edge and 0.33 per point on the paper's bunny:
-about 146 bytes per triangle, 122 per edge, 70 per point (a 1e7-point cloud: 0.7 GB).
+Memory: 112 bytes per inner node (boxes in float64) plus, per primitive, the reordered
+coordinates (``24 k`` bytes, ``k`` the largest vertex count present), a kind byte, the original
+index (8 bytes) and, with edges or triangles, a precomputed Gram matrix (24 bytes). The build
+leaves 0.58 inner nodes per triangle or edge and 0.33 per point on the paper's bunny: about
+170 bytes per triangle, 146 per edge, 70 per point (a 1e7-point cloud: 0.7 GB).
+
+The hot loop computes squared distances only (:func:`primitive_d2`); the closest point, the
+distance and the gradient are computed once per query, for the winner, by the routines of
+:mod:`smoothdist.closest_point` that the plain kernel uses, so whenever both pick the same
+primitive they return the same bits.
 """
 
 import math
@@ -34,6 +40,7 @@ from numba import prange
 
 from smoothdist._config import NJIT, NJIT_PARALLEL
 from smoothdist.closest_point import closest_point_segment, closest_point_triangle
+from smoothdist.mesh import KIND_TRIANGLE
 
 #: queries handled by one parallel task (one stack and one seed chain each)
 CHUNK = 64
@@ -56,6 +63,10 @@ class ExactTree(NamedTuple):
         0 point, 1 edge, 2 triangle, in tree order.
     pts : (m, 3 k) float64
         Vertex coordinates in tree order (``k`` = largest vertex count present).
+    gram : (m, 3) float64
+        ``(|b - a|^2, (b - a).(c - a), |c - a|^2)`` of every edge ``ab`` and triangle ``abc``
+        (unused entries 0; ``(0, 3)`` for a point cloud): the squared-distance routines'
+        precomputed Gram matrix.
     orig : (m,) int64
         Index of each primitive in the mesh numbering.
     depth : int
@@ -68,6 +79,7 @@ class ExactTree(NamedTuple):
     root_box: np.ndarray
     kind: np.ndarray
     pts: np.ndarray
+    gram: np.ndarray
     orig: np.ndarray
     depth: int
 
@@ -101,9 +113,18 @@ def build_exact_tree(tree, leaf_size=4, bins=16, node_cost=1.0):
     cent /= nv[:, None]
     order, box, child, root, root_box, depth = _build_sah(cent, plo, phi, kind, leaf_size, int(bins),
                                                         float(node_cost))
+    pts = np.ascontiguousarray(pts[order])
+    gram = np.zeros((m if width >= 6 else 0, 3))
+    if width >= 6:
+        ab = pts[:, 3:6] - pts[:, 0:3]
+        gram[:, 0] = (ab * ab).sum(axis=1)
+        if width == 9:
+            ac = pts[:, 6:9] - pts[:, 0:3]
+            tri = kind[order] == KIND_TRIANGLE
+            gram[tri, 1] = (ab[tri] * ac[tri]).sum(axis=1)
+            gram[tri, 2] = (ac[tri] * ac[tri]).sum(axis=1)
     return ExactTree(box=box, child=child, root=int(root), root_box=root_box,
-                     kind=kind[order].astype(np.int8),
-                     pts=np.ascontiguousarray(pts[order]),
+                     kind=kind[order].astype(np.int8), pts=pts, gram=gram,
                      orig=np.ascontiguousarray(tree.orig[order]), depth=int(depth))
 
 
@@ -323,20 +344,108 @@ def _box_d2(px, py, pz, box, k, o):
 
 
 @numba.njit(**NJIT)
-def primitive_d2(kind, pts, i, px, py, pz):
-    """Squared distance from ``p`` to primitive ``i`` of an :class:`ExactTree`'s table."""
-    P = pts[i]
+def _triangle_d2(px, py, pz, P, G, i):
+    """Squared distance from ``p`` to triangle ``i`` (rows of ``P`` and ``G`` as in
+    :class:`ExactTree`): the Voronoi-region method of
+    :func:`smoothdist.closest_point.closest_point_triangle`, with the six dot products it
+    needs reduced to two per query (``d1 = ab.ap``, ``d2 = ac.ap``; ``ab.bp = d1 - |ab|^2``
+    and so on from the Gram matrix)."""
+    ax = P[i, 0]
+    ay = P[i, 1]
+    az = P[i, 2]
+    abx = P[i, 3] - ax
+    aby = P[i, 4] - ay
+    abz = P[i, 5] - az
+    acx = P[i, 6] - ax
+    acy = P[i, 7] - ay
+    acz = P[i, 8] - az
+    apx = px - ax
+    apy = py - ay
+    apz = pz - az
+    d1 = abx * apx + aby * apy + abz * apz
+    d2 = acx * apx + acy * apy + acz * apz
+    if d1 <= 0.0 and d2 <= 0.0:                      # vertex a
+        return apx * apx + apy * apy + apz * apz
+    g_ab = G[i, 1]
+    d3 = d1 - G[i, 0]
+    d4 = d2 - g_ab
+    if d3 >= 0.0 and d4 <= d3:                       # vertex b
+        x = apx - abx
+        y = apy - aby
+        z = apz - abz
+        return x * x + y * y + z * z
+    vc = d1 * d4 - d3 * d2
+    if vc <= 0.0 and d1 >= 0.0 and d3 <= 0.0:        # edge ab
+        v = d1 / (d1 - d3)
+        x = apx - v * abx
+        y = apy - v * aby
+        z = apz - v * abz
+        return x * x + y * y + z * z
+    d5 = d1 - g_ab
+    d6 = d2 - G[i, 2]
+    if d6 >= 0.0 and d5 <= d6:                       # vertex c
+        x = apx - acx
+        y = apy - acy
+        z = apz - acz
+        return x * x + y * y + z * z
+    vb = d5 * d2 - d1 * d6
+    if vb <= 0.0 and d2 >= 0.0 and d6 <= 0.0:        # edge ac
+        w = d2 / (d2 - d6)
+        x = apx - w * acx
+        y = apy - w * acy
+        z = apz - w * acz
+        return x * x + y * y + z * z
+    va = d3 * d6 - d5 * d4
+    if va <= 0.0 and (d4 - d3) >= 0.0 and (d5 - d6) >= 0.0:   # edge bc
+        w = (d4 - d3) / ((d4 - d3) + (d5 - d6))
+        x = apx - abx - w * (acx - abx)
+        y = apy - aby - w * (acy - aby)
+        z = apz - abz - w * (acz - abz)
+        return x * x + y * y + z * z
+    denom = 1.0 / (va + vb + vc)                     # interior
+    v = vb * denom
+    w = vc * denom
+    x = apx - v * abx - w * acx
+    y = apy - v * aby - w * acy
+    z = apz - v * abz - w * acz
+    return x * x + y * y + z * z
+
+
+@numba.njit(**NJIT)
+def _segment_d2(px, py, pz, P, G, i):
+    """Squared distance from ``p`` to segment ``i`` (``G[i, 0] = |ab|^2``)."""
+    abx = P[i, 3] - P[i, 0]
+    aby = P[i, 4] - P[i, 1]
+    abz = P[i, 5] - P[i, 2]
+    apx = px - P[i, 0]
+    apy = py - P[i, 1]
+    apz = pz - P[i, 2]
+    num = abx * apx + aby * apy + abz * apz
+    if num <= 0.0:
+        return apx * apx + apy * apy + apz * apz
+    den = G[i, 0]
+    t = 1.0 if num >= den else num / den
+    x = apx - t * abx
+    y = apy - t * aby
+    z = apz - t * abz
+    return x * x + y * y + z * z
+
+
+@numba.njit(**NJIT)
+def primitive_d2(kind, pts, gram, i, px, py, pz):
+    """Squared distance from ``p`` to primitive ``i`` of an :class:`ExactTree`'s table.
+
+    Agrees with the closest point of :func:`primitive_closest` to rounding (it is only used
+    to choose the closest primitive; the result is recomputed from that closest point)."""
     k = kind[i]
     if k == 2:
-        cx, cy, cz, s, t, f = closest_point_triangle(px, py, pz, P[0], P[1], P[2], P[3], P[4],
-                                                     P[5], P[6], P[7], P[8])
-    elif k == 1:
-        cx, cy, cz, t, f = closest_point_segment(px, py, pz, P[0], P[1], P[2], P[3], P[4], P[5])
-    else:
-        cx = P[0]
-        cy = P[1]
-        cz = P[2]
-    return (px - cx) ** 2 + (py - cy) ** 2 + (pz - cz) ** 2
+        return _triangle_d2(px, py, pz, pts, gram, i)
+    if k == 1:
+        return _segment_d2(px, py, pz, pts, gram, i)
+    x = px - pts[i, 0]
+    y = py - pts[i, 1]
+    z = pz - pts[i, 2]
+    return x * x + y * y + z * z
 
 
 @numba.njit(**NJIT)
@@ -368,6 +477,7 @@ def exact_tree_point(et, px, py, pz, stack, dstack, seed=-1):
     """
     kind = et.kind
     pts = et.pts
+    gram = et.gram
     box = et.box
     child = et.child
     best = np.inf
@@ -375,7 +485,7 @@ def exact_tree_point(et, px, py, pz, stack, dstack, seed=-1):
     leaves = 0
     nodes = 0
     if seed >= 0:
-        best = primitive_d2(kind, pts, seed, px, py, pz)
+        best = primitive_d2(kind, pts, gram, seed, px, py, pz)
         bi = seed
         leaves += 1
     rb = et.root_box
@@ -395,7 +505,13 @@ def exact_tree_point(et, px, py, pz, stack, dstack, seed=-1):
             c = -1 - code
             st = c >> 4
             for i in range(st, st + (c & 15)):
-                d2 = primitive_d2(kind, pts, i, px, py, pz)
+                k = kind[i]
+                if k == 2:
+                    d2 = _triangle_d2(px, py, pz, pts, gram, i)
+                elif k == 1:
+                    d2 = _segment_d2(px, py, pz, pts, gram, i)
+                else:
+                    d2 = (px - pts[i, 0]) ** 2 + (py - pts[i, 1]) ** 2 + (pz - pts[i, 2]) ** 2
                 leaves += 1
                 if d2 < best:
                     best = d2

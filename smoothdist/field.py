@@ -110,7 +110,7 @@ class SmoothDistanceField:
         """The :class:`~smoothdist.exact_query.ExactTree` that answers exact distance queries.
 
         Built on first access and kept (binned SAH, leaves of up to 4 primitives; about
-        1.5 us and 146 bytes per triangle, 70 per point, see :mod:`smoothdist.exact_query`).
+        1.5 us and 170 bytes per triangle, 70 per point, see :mod:`smoothdist.exact_query`).
         :meth:`exact_distance` builds it once its calls have asked for
         :data:`EXACT_TREE_AFTER` queries per primitive (the build then pays for itself) and
         searches the smooth-distance tree with :func:`smoothdist.query.exact_distance_point`
