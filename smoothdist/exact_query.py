@@ -111,8 +111,8 @@ def build_exact_tree(tree, leaf_size=4, bins=16, node_cost=1.0):
             phi[use] = np.maximum(phi[use], Xj)
             cent[use] += Xj
     cent /= nv[:, None]
-    order, box, child, root, root_box, depth = _build_sah(cent, plo, phi, kind, leaf_size, int(bins),
-                                                        float(node_cost))
+    order, box, child, root, root_box, depth = _build_sah(cent, plo, phi, kind, leaf_size,
+                                                          int(bins), float(node_cost))
     pts = np.ascontiguousarray(pts[order])
     gram = np.zeros((m if width >= 6 else 0, 3))
     if width >= 6:

@@ -13,7 +13,7 @@ import naive
 from smoothdist import DataMesh, SmoothDistanceField
 from smoothdist import field as field_mod
 from smoothdist import query
-from smoothdist.exact_query import MAX_LEAF, build_exact_tree, exact_tree_batch
+from smoothdist.exact_query import MAX_LEAF, build_exact_tree, exact_tree_batch, primitive_d2
 
 ROOT = Path(__file__).resolve().parents[1]
 ZOO = ("point_cloud", "circle", "segment_star", "icosphere", "cube", "mixed_mesh",
@@ -345,3 +345,23 @@ def test_bad_leaf_size(octopus):
     for bad in (0, MAX_LEAF + 1):
         with pytest.raises(ValueError, match="leaf_size"):
             build_exact_tree(field.tree, leaf_size=bad)
+
+
+@pytest.mark.filterwarnings("ignore::smoothdist.MeshRepairWarning")   # merged duplicates
+def test_squared_distance_routines_match_brute_force():
+    """primitive_d2 (two dot products per triangle, from the Gram matrix) against numpy's
+    closest points, for every primitive of a fuzzed soup and queries near, on and far away."""
+    rng = np.random.default_rng(7)
+    mesh = random_mixed(rng, 10, 30, 60)
+    field = SmoothDistanceField(mesh)
+    et = field.exact_tree
+    Q = np.concatenate([naive.near_queries(mesh, 60, rng),
+                        naive.sample_on_primitives(mesh, 20, rng),
+                        naive.far_queries(mesh, 10, rng, 2.0, 1e4), mesh.V[:20]])
+    D = naive.distances_to_primitives(Q, mesh)[:, et.orig]         # tree order
+    got = np.array([[primitive_d2(et.kind, et.pts, et.gram, i, *q) for i in range(et.kind.size)]
+                    for q in Q])
+    # rounding: relative to the distance, plus a few ulps of the coordinates' magnitude
+    scale = np.abs(Q).max(axis=1)[:, None] + np.abs(mesh.V).max()
+    err = np.abs(np.sqrt(got) - D)
+    assert np.all(err <= 1e-12 * D + 1e-13 * scale), err.max()
