@@ -46,6 +46,9 @@ from smoothdist.mesh import KIND_TRIANGLE
 CHUNK = 64
 #: largest leaf (the leaf code keeps the count in 4 bits)
 MAX_LEAF = 15
+#: from this depth on the build splits at the object median instead (balanced: the depth stays
+#: below ``SAH_DEPTH + log2(m)``, whatever the data, e.g. points at x = 2^-k)
+SAH_DEPTH = 48
 
 
 class ExactTree(NamedTuple):
@@ -112,7 +115,7 @@ def build_exact_tree(tree, leaf_size=4, bins=16, node_cost=1.0):
             cent[use] += Xj
     cent /= nv[:, None]
     order, box, child, root, root_box, depth = _build_sah(cent, plo, phi, kind, leaf_size,
-                                                          int(bins), float(node_cost))
+                                                          int(bins), float(node_cost), SAH_DEPTH)
     pts = np.ascontiguousarray(pts[order])
     gram = np.zeros((m if width >= 6 else 0, 3))
     if width >= 6:
@@ -154,7 +157,7 @@ def _leaf_code(s, e):
 
 
 @numba.njit(**NJIT)
-def _build_sah(cent, plo, phi, kind, leaf_size, nbins, node_cost):
+def _build_sah(cent, plo, phi, kind, leaf_size, nbins, node_cost, sah_depth):
     m = cent.shape[0]
     order = np.arange(m)
     cap = max(1, m)
@@ -296,6 +299,20 @@ def _build_sah(cent, plo, phi, kind, leaf_size, nbins, node_cost):
             depth = d + 1
         if best_axis < 0:
             # no centroid spread (coincident centroids): split the range in half
+            mid = (s + e) // 2
+        elif d >= sah_depth:
+            # deep already (very uneven data): object median on the widest centroid axis
+            a = 0
+            for c in range(1, 3):
+                if cbox[3 + c] - cbox[c] > cbox[3 + a] - cbox[a]:
+                    a = c
+            sub = order[s:e].copy()
+            keys = np.empty(cnt)
+            for k in range(cnt):
+                keys[k] = cent[sub[k], a]
+            idx = np.argsort(keys, kind="mergesort")
+            for k in range(cnt):
+                order[s + k] = sub[idx[k]]
             mid = (s + e) // 2
         else:
             a = best_axis

@@ -365,3 +365,18 @@ def test_squared_distance_routines_match_brute_force():
     scale = np.abs(Q).max(axis=1)[:, None] + np.abs(mesh.V).max()
     err = np.abs(np.sqrt(got) - D)
     assert np.all(err <= 1e-12 * D + 1e-13 * scale), err.max()
+
+
+def test_depth_stays_bounded_on_uneven_data(rng):
+    """Points at x = 2^-k make every binned split cut off one point: past SAH_DEPTH the build
+    splits at the median, so the depth stays small and the queries exact."""
+    from smoothdist.exact_query import SAH_DEPTH
+    k = np.arange(300)
+    V = np.stack([2.0 ** -k, 0.5 * 2.0 ** -k, np.zeros(k.size)], axis=1)
+    V = np.concatenate([V, rng.random((30, 3))])
+    mesh = DataMesh(V, name="geometric")
+    field = SmoothDistanceField(mesh)
+    et = check_tree(field)
+    assert SAH_DEPTH < et.depth <= SAH_DEPTH + 10
+    Q = np.concatenate([naive.near_queries(mesh, 200, rng), V[:40] * 1.001])
+    check_exact(field, et, Q)
