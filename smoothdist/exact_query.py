@@ -502,9 +502,11 @@ def exact_tree_point(et, px, py, pz, stack, dstack, seed=-1):
     leaves = 0
     nodes = 0
     if seed >= 0:
-        best = primitive_d2(kind, pts, gram, seed, px, py, pz)
-        bi = seed
+        d2 = primitive_d2(kind, pts, gram, seed, px, py, pz)
         leaves += 1
+        if d2 < best:
+            best = d2
+            bi = seed
     rb = et.root_box
     dx = max(rb[0] - px, 0.0, px - rb[3])
     dy = max(rb[1] - py, 0.0, py - rb[4])
