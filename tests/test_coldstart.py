@@ -170,3 +170,73 @@ def test_a_plain_render_is_lean(tmp_path):
                  "tracer.march.trace_pixels", "smoothdist.query.smooth_distance_point_tol",
                  "smoothdist.query.exact_distance_point"):
         assert name not in sigs, sigs.get(name)
+
+
+# ----------------------------------------------------------------------------- BVH build
+def reference_build(cent, plo, phi, leaf_size):
+    """The build's specification in plain numpy: depth-first, nodes numbered in pairs as
+    their parent is split, object-median split on the longest centroid axis, the node's
+    primitives ordered by ``np.argsort(kind="stable")`` along it."""
+    m = len(cent)
+    order = np.arange(m)
+    nodes = {}
+    stack = [(0, 0, m)]
+    n_nodes = 1
+    while stack:
+        node, s, e = stack.pop()
+        idx = order[s:e]
+        box = (plo[idx].min(axis=0), phi[idx].max(axis=0))
+        left = right = -1
+        if e - s > leaf_size:
+            ext = cent[idx].max(axis=0) - cent[idx].min(axis=0)
+            axis = 0
+            if ext[1] > ext[0] and ext[1] >= ext[2]:
+                axis = 1
+            elif ext[2] > ext[0] and ext[2] > ext[1]:
+                axis = 2
+            order[s:e] = idx[np.argsort(cent[idx, axis], kind="stable")]
+            left, right = n_nodes, n_nodes + 1
+            n_nodes += 2
+            stack += [(right, (s + e) // 2, e), (left, s, (s + e) // 2)]
+        nodes[node] = (box[0], box[1], left, right, s, e - s)
+    cols = list(zip(*(nodes[i] for i in range(n_nodes))))
+    return order, np.array(cols[0]), np.array(cols[1]), *(np.array(c) for c in cols[2:])
+
+
+@pytest.mark.parametrize("case", ["grid_points", "bunny_triangles", "bunny_edges"])
+@pytest.mark.parametrize("leaf_size", [1, 3])
+def test_build_matches_its_specification(bunny, case, leaf_size):
+    from smoothdist.bvh import build_tree
+
+    if case == "grid_points":  # many equal coordinates: the sort's stability matters
+        g = np.arange(7.0)
+        mesh = DataMesh(np.stack(np.meshgrid(g, g, g * 0.5), -1).reshape(-1, 3))
+    else:
+        mesh = bunny.as_kind(case.split("_")[1])
+    tree = build_tree(mesh, leaf_size=leaf_size)
+    k = 3 if case == "bunny_triangles" else (2 if case == "bunny_edges" else 1)
+    # the primitives in the mesh's own order: tree.pts rows put back by tree.orig
+    pts = np.empty_like(tree.pts)
+    pts[tree.orig] = tree.pts
+    X = pts[:, :3 * k].reshape(-1, k, 3)
+    ref = reference_build(X.mean(axis=1), X.min(axis=1), X.max(axis=1), leaf_size)
+    got = (tree.orig, tree.lo, tree.hi, tree.left, tree.right, tree.start, tree.count)
+    for name, a, b in zip(("order", "lo", "hi", "left", "right", "start", "count"), got, ref):
+        np.testing.assert_array_equal(a, b, err_msg=name)
+
+
+def test_stable_sort_of_the_build():
+    from smoothdist.bvh import _sort_by_key
+
+    rng = np.random.default_rng(3)
+    for n in (0, 1, 15, 16, 17, 33, 100, 1000):
+        for keys in (rng.random(n), rng.integers(0, 4, n) * 1.0, -np.arange(n) * 1.0,
+                     np.where(rng.random(n) < 0.5, 0.0, -0.0)):
+            s, e = (n // 5, n - n // 7) if n > 10 else (0, n)
+            k = keys.copy()
+            items = np.arange(n, dtype=np.int64)
+            _sort_by_key(k, items, np.empty(n), np.empty(n, dtype=np.int64), s, e)
+            ref = np.arange(n)
+            ref[s:e] = s + np.argsort(keys[s:e], kind="stable")
+            np.testing.assert_array_equal(items, ref)
+            np.testing.assert_array_equal(k, keys[ref])
