@@ -223,8 +223,10 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
                         scene=scene)
 
 
-#: largest number of tiles a thread takes at once (a chunk is at most 1/16 of its share)
-CHUNK_TILES = 16
+#: largest number of tiles a thread takes at once (a chunk is at most 1/16 of its share;
+#: a kernel call costs about 3 microseconds, and small chunks leave little idle time at the
+#: end of a render)
+CHUNK_TILES = 4
 #: seconds between progress reports while tracing
 REPORT_SECONDS = 0.25
 
