@@ -147,12 +147,12 @@ def build_tree(mesh, leaf_size=1, progress=None):
         cent /= nv[:, None]
     done = np.zeros(1, dtype=np.int64)
     if progress is None:
-        built = _build(cent, plo, phi, int(leaf_size), done)
+        built = _run_build(cent, plo, phi, int(leaf_size), done)
     else:
         # the kernel releases the GIL (nogil): run it in a thread and poll its counter
         box = []
-        worker = threading.Thread(target=lambda: box.append(_build(cent, plo, phi,
-                                                                   int(leaf_size), done)))
+        worker = threading.Thread(target=lambda: box.append(_run_build(cent, plo, phi,
+                                                                       int(leaf_size), done)))
         t0 = time.perf_counter()
         worker.start()
         while worker.is_alive():
@@ -185,23 +185,35 @@ def build_tree(mesh, leaf_size=1, progress=None):
                     orig=np.ascontiguousarray(order), A=float(A), depth=int(depth))
 
 
-@numba.njit(**NJIT)
-def _build(cent, plo, phi, leaf_size, done):
+def _run_build(cent, plo, phi, leaf_size, done):
+    """``(order, lo, hi, left, right, start, count, depth)`` of the tree over the primitives'
+    centroids ``cent`` and boxes ``plo, phi`` (``done[0]`` counts the primitives placed)."""
     m = cent.shape[0]
-    order = np.arange(m)
     # object-median splits leave more than leaf_size / 2 primitives in every leaf, so there
-    # are fewer than 2 m / leaf_size leaves and 4 m / leaf_size nodes
+    # are fewer than 2 m / leaf_size leaves and 4 m / leaf_size nodes. The arrays are made
+    # here, so that the kernel compiles none of numpy's constructors (a cold-start cost)
     cap = max(1, min(2 * m, 4 * (m // leaf_size) + 4))
-    lo = np.empty((cap, 3))
-    hi = np.empty((cap, 3))
-    left = np.full(cap, -1, dtype=np.int64)
-    right = np.full(cap, -1, dtype=np.int64)
-    start = np.zeros(cap, dtype=np.int64)
-    count = np.zeros(cap, dtype=np.int64)
-    st_node = np.empty(256, dtype=np.int64)
-    st_s = np.empty(256, dtype=np.int64)
-    st_e = np.empty(256, dtype=np.int64)
-    st_d = np.empty(256, dtype=np.int64)
+    order = np.arange(m, dtype=np.int64)
+    nodes = (np.empty((cap, 3)), np.empty((cap, 3)), np.full(cap, -1, dtype=np.int64),
+             np.full(cap, -1, dtype=np.int64), np.zeros(cap, dtype=np.int64),
+             np.zeros(cap, dtype=np.int64))
+    n_nodes, depth = _build(cent, plo, phi, leaf_size, done, order, *nodes, np.empty(m),
+                            np.empty(m), np.empty(m, dtype=np.int64),
+                            np.empty((4, 256), dtype=np.int64))
+    return (order,) + tuple(a[:n_nodes].copy() for a in nodes) + (depth,)
+
+
+@numba.njit(**NJIT)
+def _build(cent, plo, phi, leaf_size, done, order, lo, hi, left, right, start, count, keys,
+           kbuf, obuf, stacks):
+    """Build into the given arrays (``order`` starts as ``0..m-1``; node arrays hold at least
+    the number of nodes; ``keys, kbuf, obuf (m,)`` and ``stacks (4, 256)`` are scratch);
+    returns ``(number of nodes, depth)``."""
+    m = cent.shape[0]
+    st_node = stacks[0]
+    st_s = stacks[1]
+    st_e = stacks[2]
+    st_d = stacks[3]
     st_node[0] = 0
     st_s[0] = 0
     st_e[0] = m
@@ -262,13 +274,9 @@ def _build(cent, plo, phi, leaf_size, done):
             axis = 1
         elif ext2 > ext0 and ext2 > ext1:
             axis = 2
-        sub = order[s:e].copy()
-        keys = np.empty(e - s)
-        for k in range(e - s):
-            keys[k] = cent[sub[k], axis]
-        idx = np.argsort(keys, kind="mergesort")
-        for k in range(e - s):
-            order[s + k] = sub[idx[k]]
+        for k in range(s, e):
+            keys[k] = cent[order[k], axis]
+        _sort_by_key(keys, order, kbuf, obuf, s, e)
         mid = (s + e) // 2
         l = n_nodes
         r = n_nodes + 1
@@ -285,8 +293,54 @@ def _build(cent, plo, phi, leaf_size, done):
         st_e[sp] = mid
         st_d[sp] = d + 1
         sp += 1
-    return (order, lo[:n_nodes].copy(), hi[:n_nodes].copy(), left[:n_nodes].copy(),
-            right[:n_nodes].copy(), start[:n_nodes].copy(), count[:n_nodes].copy(), depth)
+    return n_nodes, depth
+
+
+#: runs of this many keys are insertion-sorted before the merge passes of _sort_by_key
+SORT_RUN = 16
+
+
+@numba.njit(**NJIT)
+def _sort_by_key(keys, items, kbuf, ibuf, s, e):
+    """Sort ``keys[s:e]`` ascending and ``items[s:e]`` along, stably (equal keys keep their
+    order, as ``np.argsort(kind="stable")``; keys are finite). ``kbuf``, ``ibuf``: scratch
+    arrays at least as long. A bottom-up merge sort over insertion-sorted runs, written out
+    here because numba's own ``argsort`` takes about a second to compile.
+    """
+    for r in range(s, e, SORT_RUN):
+        for i in range(r + 1, min(e, r + SORT_RUN)):
+            k = keys[i]
+            it = items[i]
+            j = i - 1
+            while j >= r and keys[j] > k:
+                keys[j + 1] = keys[j]
+                items[j + 1] = items[j]
+                j -= 1
+            keys[j + 1] = k
+            items[j + 1] = it
+    src_k, src_i, dst_k, dst_i = keys, items, kbuf, ibuf
+    width = SORT_RUN
+    while width < e - s:
+        for a in range(s, e, 2 * width):
+            mid = min(e, a + width)
+            b = min(e, a + 2 * width)
+            i = a
+            j = mid
+            for o in range(a, b):
+                if j >= b or (i < mid and not src_k[j] < src_k[i]):
+                    dst_k[o] = src_k[i]
+                    dst_i[o] = src_i[i]
+                    i += 1
+                else:
+                    dst_k[o] = src_k[j]
+                    dst_i[o] = src_i[j]
+                    j += 1
+        src_k, src_i, dst_k, dst_i = dst_k, dst_i, src_k, src_i
+        width *= 2
+    if src_k is not keys:
+        for o in range(s, e):
+            keys[o] = src_k[o]
+            items[o] = src_i[o]
 
 
 @numba.njit(**NJIT)

@@ -11,11 +11,6 @@ from tracer.camera import VIEWS
 from tracer.cli import CLIError, check_outputs, make_parents
 from tracer.mesh_scene import KINDS
 
-#: aim for kernel calls of about this many pixels, so that Ctrl-C / SIGTERM (handled between
-#: calls) stops a render within a second or two even for slow scenes
-BAND_PIXELS = 16384
-
-
 def add_arguments(p):
     """Arguments of ``tracer render``."""
     p.add_argument("scene", metavar="PATH",
@@ -107,23 +102,6 @@ def input_kind(path):
                    f"file ({', '.join(MESH_EXTENSIONS)})")
 
 
-def band_rows(width, height):
-    """Rows per kernel call: a multiple of the tile size with about :data:`BAND_PIXELS` pixels
-    but at least four tiles per thread (so that threads stay busy), at most the whole image.
-
-    The banding does not change the image: every pixel is traced the same way in any band.
-    """
-    import numba
-
-    from tracer.march import TILE
-
-    threads = numba.get_num_threads()
-    tiles_per_row = max(1, -(-width // TILE))
-    rows = max(BAND_PIXELS // max(width, 1), TILE * -(-4 * threads // tiles_per_row))
-    rows = TILE * max(1, -(-rows // TILE))
-    return min(rows, TILE * max(1, -(-height // TILE)))
-
-
 def run(args):
     """Render; returns the exit status."""
     from tracer.image import false_color, save_npy, save_png
@@ -160,7 +138,7 @@ def run(args):
         if args.view or args.camera:
             _replace_camera(scene, args)
     bar = None if args.quiet else ProgressBar(f"render {name}")
-    result = render(scene, progress=bar, band_rows=band_rows(scene.width, scene.height))
+    result = render(scene, progress=bar)
     make_parents(outputs)
     written = [save_png(out, result.rgb, overwrite=args.overwrite)]
     if args.depth:

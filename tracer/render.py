@@ -2,11 +2,13 @@
 
 import os
 import sys
+import threading
 import time
 from typing import NamedTuple
 
 import numpy as np
 
+from smoothdist._config import PARALLEL
 from smoothdist.kernels import concatenate_trees
 from tracer import march
 from tracer.camera import look_at
@@ -126,6 +128,17 @@ def _posed(scene, transforms, params, grow):
     return params, np.min(los, axis=0), np.max(his, axis=0)
 
 
+def kernel_roots(roots, params, mode):
+    """The ``roots`` argument for :mod:`tracer.march`: one unposed object in smooth mode
+    without tolerance pruning is passed as its root node (an int), which selects the kernels'
+    lean path (:func:`tracer.march.scene_distance`; same values, far less code to compile);
+    anything else as the ``(k,)`` array."""
+    if (mode == march.MODE_SMOOTH and roots.size == 1 and params.shape[1] == 6
+            and not params[0, 5] > 0.0):
+        return int(roots[0])
+    return roots
+
+
 def camera_of(scene):
     """The scene's :class:`~tracer.camera.Camera` (validated)."""
     return look_at(scene.camera_origin, scene.camera_dest, scene.camera_up, scene.width,
@@ -136,8 +149,8 @@ def distance_at_camera(scene, arrays=None):
     """Scene distance at the camera origin (> 0 when the camera is outside the surface)."""
     tree, roots, params, mode, lo, hi, depth_max = arrays or scene_arrays(scene)
     o = scene.camera_origin
-    return float(march.distance_at(tree, roots, params, mode, float(o[0]), float(o[1]), float(o[2]),
-                                   depth_max))
+    return float(march.distance_at(tree, kernel_roots(roots, params, mode), params, mode,
+                                   float(o[0]), float(o[1]), float(o[2]), depth_max))
 
 
 def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None, omega=None,
@@ -149,10 +162,11 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
     scene : tracer.scene.Scene
     transforms : list of (R (3, 3), t (3,)), optional
         A rigid pose per object (see :func:`scene_arrays`); the trees are not rebuilt.
-    progress : callable(done_rows, total_rows, elapsed_s) or None
-        Called after each band of rows.
+    progress : callable(done_pixels, total_pixels, elapsed_s) or None
+        Called a few times a second while tracing, and at the end.
     band_rows : int, optional
-        Rows per kernel call (progress granularity); default about 1/16 of the image.
+        Trace the image in bands of this many rows, one after the other (default: one band;
+        the image does not depend on it when it is a multiple of ``tracer.march.TILE``).
     relax : float, optional
         Scenes with ``tol > 0``: a sphere-tracing step may under-estimate the distance by up
         to ``relax`` x the previous step (default ``tracer.march.RELAX``; 0: never).
@@ -184,17 +198,21 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
     leaves = np.zeros((H, W), dtype=np.int64)
     bis = np.zeros((H, W), dtype=np.int64)
     cam = camera.as_array()
-    band = band_rows or max(march.TILE, ((H // 16) // march.TILE) * march.TILE or march.TILE)
+    args = (tree, kernel_roots(roots, params, mode), params, mode, cam, lo, hi,
+            float(scene.eps), int(scene.max_steps))
+    options = (march.RELAX if relax is None else float(relax),
+               march.OMEGA if omega is None else max(1.0, float(omega)),
+               march.CONE if cone is None else bool(cone))
+    band = band_rows or H
     t0 = time.perf_counter()
     for r0 in range(0, H, band):
         r1 = min(H, r0 + band)
-        march.render_rows(tree, roots, params, mode, cam, lo, hi, float(scene.eps),
-                          int(scene.max_steps), r0, r1, depth_max, hit, tbuf, grad, steps,
-                          leaves, bis, march.RELAX if relax is None else float(relax),
-                          march.OMEGA if omega is None else max(1.0, float(omega)),
-                          march.CONE if cone is None else bool(cone))
+        report = None
         if progress is not None:
-            progress(r1, H, time.perf_counter() - t0)
+            def report(done, r0=r0):
+                progress(r0 * W + done, H * W, time.perf_counter() - t0)
+        trace_tiles(args, r0, r1, depth_max, (hit, tbuf, grad, steps, leaves, bis), options,
+                    report)
     seconds = time.perf_counter() - t0
     norm = np.linalg.norm(grad, axis=2, keepdims=True)
     normals = np.where(norm > 0, grad / np.where(norm > 0, norm, 1.0), 0.0)
@@ -203,6 +221,84 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
     return RenderResult(rgb=rgb, hit=hit, depth=depth, normals=normals, steps=steps,
                         leaves=leaves, bisections=bis, seconds=seconds, camera=camera,
                         scene=scene)
+
+
+#: largest number of tiles a thread takes at once (a chunk is at most 1/16 of its share;
+#: a kernel call costs about 3 microseconds, and small chunks leave little idle time at the
+#: end of a render)
+CHUNK_TILES = 4
+#: seconds between progress reports while tracing
+REPORT_SECONDS = 0.25
+
+
+def render_threads():
+    """Threads that trace a render: numba's thread count (``numba.set_num_threads``,
+    ``tracer render --threads``), 1 with ``SMOOTHDIST_PARALLEL=0``."""
+    import numba
+
+    return numba.get_num_threads() if PARALLEL else 1
+
+
+def trace_tiles(args, row0, row1, depth_max, outputs, options, report=None, threads=None):
+    """Trace image rows ``row0 <= r < row1`` into ``outputs``.
+
+    ``args = (tree, roots, params, mode, cam, lo, hi, eps, max_steps)`` and ``outputs =
+    (hit, tbuf, grad, steps, leaves, bisect)`` as for :func:`tracer.march.render_rows`,
+    ``options = (relax, omega, cone)``. ``threads`` Python threads (default
+    :func:`render_threads`) take chunks of tiles from a shared counter and trace them with
+    the serial, GIL-free kernel :func:`tracer.march.render_tiles`, so that a thread that
+    drew cheap tiles takes more; every tile is traced by one thread start to finish, so the
+    result does not depend on the number of threads or the chunking (it equals
+    ``render_rows``'). ``report(done_pixels)`` is called from the calling thread a few times
+    a second and at the end. Ctrl-C (KeyboardInterrupt) stops the workers after their
+    current chunk and is re-raised.
+    """
+    from tracer.march import TILE, render_tiles
+
+    W = int(args[4][12])
+    n = -(-W // TILE) * -(-(row1 - row0) // TILE)
+    threads = max(1, min(threads or render_threads(), n))
+    chunk = max(1, min(CHUNK_TILES, n // (16 * threads)))
+    pixels = W * (row1 - row0)
+    lock = threading.Lock()
+    state = {"next": 0, "done": 0, "error": None, "stop": False}
+
+    def work():
+        try:
+            while True:
+                with lock:
+                    j = state["next"]
+                    if j >= n or state["stop"]:
+                        return
+                    state["next"] = j + chunk
+                render_tiles(*args, row0, row1, depth_max, *outputs, *options, j, j + chunk)
+                with lock:
+                    state["done"] += min(chunk, n - j)
+        except BaseException as exc:  # handed to the calling thread
+            with lock:
+                state["error"] = exc
+                state["stop"] = True
+
+    workers = [threading.Thread(target=work, name=f"trace-{i}", daemon=True)
+               for i in range(threads)]
+    try:
+        for t in workers:
+            t.start()
+        for t in workers:
+            while t.is_alive():
+                t.join(REPORT_SECONDS)
+                if report is not None and t.is_alive() and state["done"]:
+                    report(pixels * state["done"] // n)
+    except BaseException:
+        with lock:
+            state["stop"] = True
+        for t in workers:
+            t.join()
+        raise
+    if state["error"] is not None:
+        raise state["error"]
+    if report is not None:
+        report(pixels)
 
 
 def shade(scene, camera, normals, hit):

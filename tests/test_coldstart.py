@@ -1,0 +1,242 @@
+"""What keeps the first render short, checked as behaviour (never as time).
+
+* The lean path (one unposed object in smooth mode without ``tol``, its root passed to the
+  march kernels as an int, ``tracer.render.kernel_roots``) gives bit-identical images, depths,
+  normals and counters to the general path (the ``(k,)`` roots array) for points, edges,
+  triangles and mixed meshes, with and without Barnes-Hut and attenuation, and both weight
+  gradients; every other scene (exact mode, several objects, poses, ``tol > 0``) keeps the
+  general path.
+* Tiles traced by Python threads over the serial kernel ``march.render_tiles``
+  (``tracer.render.trace_tiles``) equal the ``prange`` kernel ``march.render_rows`` bit for
+  bit, for any number of threads, bands and chunk size.
+* A plain ``tracer render`` of the default scene imports none of matplotlib, pyvista,
+  trimesh, dask, imageio and compiles (or loads) only the lean kernels, one signature each.
+"""
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from smoothdist import DataMesh, SmoothDistanceField
+from tracer import march, render as render_mod
+from tracer.render import camera_of, kernel_roots, render, scene_arrays, trace_tiles
+from tracer.scene import load_scene, scene_from_field
+
+ROOT = Path(__file__).resolve().parents[1]
+SCENES = ROOT / "scenes"
+BUNNY = SCENES / "data" / "bunny.off"
+SIZE = {"width": 24, "height": 20}
+
+
+def trace(scene, roots=None, threads=None, band=None, kernel="tiles"):
+    """All per-pixel outputs of tracing ``scene`` (``roots`` overrides the kernel roots)."""
+    tree, sroots, params, mode, lo, hi, depth_max = scene_arrays(scene)
+    roots = kernel_roots(sroots, params, mode) if roots is None else roots
+    H, W = scene.height, scene.width
+    out = (np.zeros((H, W), dtype=np.bool_), np.full((H, W), np.nan), np.zeros((H, W, 3)),
+           np.zeros((H, W), dtype=np.int64), np.zeros((H, W), dtype=np.int64),
+           np.zeros((H, W), dtype=np.int64))
+    args = (tree, roots, params, mode, camera_of(scene).as_array(), lo, hi, float(scene.eps),
+            int(scene.max_steps))
+    options = (march.RELAX, march.OMEGA, march.CONE)
+    band = band or H
+    for r0 in range(0, H, band):
+        r1 = min(H, r0 + band)
+        if kernel == "rows":
+            march.render_rows(*args, r0, r1, depth_max, *out, *options)
+        else:
+            trace_tiles(args, r0, r1, depth_max, out, options, threads=threads)
+    return [np.ascontiguousarray(a).tobytes() for a in out]
+
+
+@pytest.fixture(scope="module")
+def bunny():
+    return DataMesh.load(BUNNY)
+
+
+@pytest.mark.parametrize("kind", ["points", "edges", "triangles"])
+@pytest.mark.parametrize("beta,alpha_u,gradient", [(0.5, 1200.0, "metric"),
+                                                   (0.0, None, "metric"),
+                                                   (0.5, None, "exact")])
+def test_lean_path_equals_general_path(bunny, kind, beta, alpha_u, gradient):
+    field = SmoothDistanceField(bunny.as_kind(kind))
+    scene = scene_from_field(field, alpha=200.0, alpha_u=alpha_u, beta=beta, width=24,
+                             height=20, gradient=gradient)
+    tree, roots, params, mode, lo, hi, depth_max = scene_arrays(scene)
+    lean = kernel_roots(roots, params, mode)
+    assert isinstance(lean, int) and lean == roots[0]
+    assert trace(scene, roots=lean) == trace(scene, roots=roots)
+    # the camera check and a bisection-only call use the slack-less specialisation
+    o = [float(v) for v in scene.camera_origin]
+    for p in (o, [float(v) for v in tree.pts[0, :3] + 1e-3]):
+        assert march.distance_at(tree, lean, params, mode, *p, depth_max) == \
+            march.distance_at(tree, roots, params, mode, *p, depth_max)
+
+
+def test_lean_path_on_a_mixed_mesh():
+    scene = load_scene(SCENES / "mixed.json", SIZE)
+    assert len(scene.objects) == 1 and scene.mode == "smooth"
+    tree, roots, params, mode, *_ = scene_arrays(scene)
+    assert isinstance(kernel_roots(roots, params, mode), int)
+    assert trace(scene) == trace(scene, roots=roots)
+
+
+@pytest.mark.parametrize("name,overrides", [("capillary_exact", {}), ("two_objects", {}),
+                                            ("bunny_points", {"tol": 0.01})])
+def test_other_scenes_keep_the_general_path(name, overrides):
+    scene = load_scene(SCENES / f"{name}.json", {**SIZE, **overrides})
+    tree, roots, params, mode, *_ = scene_arrays(scene)
+    assert kernel_roots(roots, params, mode) is roots
+
+
+def test_posed_scenes_keep_the_general_path():
+    scene = load_scene(SCENES / "bunny_points.json", SIZE)
+    R = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+    tree, roots, params, mode, *_ = scene_arrays(scene, transforms=[(R, np.zeros(3))])
+    assert params.shape[1] == 18 and kernel_roots(roots, params, mode) is roots
+
+
+@pytest.mark.parametrize("name", ["bunny_triangles", "two_objects", "capillary_exact",
+                                  "trefoil"])
+def test_threaded_tiles_equal_the_prange_kernel(name):
+    scene = load_scene(SCENES / f"{name}.json", SIZE)
+    ref = trace(scene, kernel="rows")
+    for threads in (1, 2, 3):
+        assert trace(scene, threads=threads) == ref, f"{threads} threads"
+    assert trace(scene, threads=2, band=8) == ref, "bands of 8 rows"
+
+
+def test_chunk_size_does_not_change_the_image(monkeypatch):
+    scene = load_scene(SCENES / "bunny_edges.json", SIZE)
+    ref = trace(scene, kernel="rows")
+    monkeypatch.setattr(render_mod, "CHUNK_TILES", 1)
+    assert trace(scene, threads=2) == ref
+
+
+def test_progress_reaches_the_total():
+    scene = load_scene(SCENES / "bunny_points.json", SIZE)
+    calls = []
+    render(scene, progress=lambda done, total, t: calls.append((done, total)))
+    assert calls and calls[-1] == (24 * 20, 24 * 20)
+    assert all(0 < d <= t for d, t in calls) and calls == sorted(calls)
+
+
+def test_a_failing_worker_raises_in_the_caller(monkeypatch):
+    def broken(*args):
+        raise RuntimeError("kernel failed")
+
+    monkeypatch.setattr(march, "render_tiles", broken)
+    scene = load_scene(SCENES / "bunny_points.json", SIZE)
+    with pytest.raises(RuntimeError, match="kernel failed"):
+        render(scene)
+
+
+PLAIN_RENDER = r"""
+import json, sys
+from numba.core.dispatcher import Dispatcher
+import tracer.cli
+rc = tracer.cli.main(["render", sys.argv[1], "--size", "16", "12", "-o", sys.argv[2], "-q"])
+sigs = {f"{name}.{attr}": [[str(t) for t in s] for s in obj.signatures]
+        for name, mod in list(sys.modules.items()) if name.split(".")[0] in ("smoothdist", "tracer")
+        for attr, obj in vars(mod).items() if isinstance(obj, Dispatcher) and obj.signatures}
+print(json.dumps({"rc": rc, "modules": sorted(sys.modules), "signatures": sigs}))
+"""
+
+
+def test_a_plain_render_is_lean(tmp_path):
+    env = dict(os.environ)
+    env["PYTHONPATH"] = str(ROOT) + os.pathsep + env.get("PYTHONPATH", "")
+    env.pop("MPLBACKEND", None)
+    p = subprocess.run([sys.executable, "-c", PLAIN_RENDER, str(SCENES / "bunny_triangles.json"),
+                        str(tmp_path / "x.png")], env=env, cwd=tmp_path, capture_output=True,
+                       text=True, timeout=300)
+    assert p.returncode == 0, p.stderr
+    report = json.loads(p.stdout.strip().splitlines()[-1])
+    assert report["rc"] == 0 and (tmp_path / "x.png").is_file()
+    heavy = {"matplotlib", "pyvista", "trimesh", "dask", "distributed", "imageio", "vtk"}
+    assert not heavy & {m.split(".")[0] for m in report["modules"]}
+    sigs = report["signatures"]
+    # the march kernels ran with an int root (the lean path), one specialisation each
+    for name in ("tracer.march.render_tiles", "tracer.march.distance_at"):
+        assert len(sigs[name]) == 1, sigs[name]
+        assert sigs[name][0][1] == "int64", sigs[name]
+    # nothing of the general path was compiled or loaded
+    for name in ("tracer.march.render_rows", "tracer.march._scene_distance_posed",
+                 "tracer.march.trace_pixels", "smoothdist.query.smooth_distance_point_tol",
+                 "smoothdist.query.exact_distance_point"):
+        assert name not in sigs, sigs.get(name)
+
+
+# ----------------------------------------------------------------------------- BVH build
+def reference_build(cent, plo, phi, leaf_size):
+    """The build's specification in plain numpy: depth-first, nodes numbered in pairs as
+    their parent is split, object-median split on the longest centroid axis, the node's
+    primitives ordered by ``np.argsort(kind="stable")`` along it."""
+    m = len(cent)
+    order = np.arange(m)
+    nodes = {}
+    stack = [(0, 0, m)]
+    n_nodes = 1
+    while stack:
+        node, s, e = stack.pop()
+        idx = order[s:e]
+        box = (plo[idx].min(axis=0), phi[idx].max(axis=0))
+        left = right = -1
+        if e - s > leaf_size:
+            ext = cent[idx].max(axis=0) - cent[idx].min(axis=0)
+            axis = 0
+            if ext[1] > ext[0] and ext[1] >= ext[2]:
+                axis = 1
+            elif ext[2] > ext[0] and ext[2] > ext[1]:
+                axis = 2
+            order[s:e] = idx[np.argsort(cent[idx, axis], kind="stable")]
+            left, right = n_nodes, n_nodes + 1
+            n_nodes += 2
+            stack += [(right, (s + e) // 2, e), (left, s, (s + e) // 2)]
+        nodes[node] = (box[0], box[1], left, right, s, e - s)
+    cols = list(zip(*(nodes[i] for i in range(n_nodes))))
+    return order, np.array(cols[0]), np.array(cols[1]), *(np.array(c) for c in cols[2:])
+
+
+@pytest.mark.parametrize("case", ["grid_points", "bunny_triangles", "bunny_edges"])
+@pytest.mark.parametrize("leaf_size", [1, 3])
+def test_build_matches_its_specification(bunny, case, leaf_size):
+    from smoothdist.bvh import build_tree
+
+    if case == "grid_points":  # many equal coordinates: the sort's stability matters
+        g = np.arange(7.0)
+        mesh = DataMesh(np.stack(np.meshgrid(g, g, g * 0.5), -1).reshape(-1, 3))
+    else:
+        mesh = bunny.as_kind(case.split("_")[1])
+    tree = build_tree(mesh, leaf_size=leaf_size)
+    k = 3 if case == "bunny_triangles" else (2 if case == "bunny_edges" else 1)
+    # the primitives in the mesh's own order: tree.pts rows put back by tree.orig
+    pts = np.empty_like(tree.pts)
+    pts[tree.orig] = tree.pts
+    X = pts[:, :3 * k].reshape(-1, k, 3)
+    ref = reference_build(X.mean(axis=1), X.min(axis=1), X.max(axis=1), leaf_size)
+    got = (tree.orig, tree.lo, tree.hi, tree.left, tree.right, tree.start, tree.count)
+    for name, a, b in zip(("order", "lo", "hi", "left", "right", "start", "count"), got, ref):
+        np.testing.assert_array_equal(a, b, err_msg=name)
+
+
+def test_stable_sort_of_the_build():
+    from smoothdist.bvh import _sort_by_key
+
+    rng = np.random.default_rng(3)
+    for n in (0, 1, 15, 16, 17, 33, 100, 1000):
+        for keys in (rng.random(n), rng.integers(0, 4, n) * 1.0, -np.arange(n) * 1.0,
+                     np.where(rng.random(n) < 0.5, 0.0, -0.0)):
+            s, e = (n // 5, n - n // 7) if n > 10 else (0, n)
+            k = keys.copy()
+            items = np.arange(n, dtype=np.int64)
+            _sort_by_key(k, items, np.empty(n), np.empty(n, dtype=np.int64), s, e)
+            ref = np.arange(n)
+            ref[s:e] = s + np.argsort(keys[s:e], kind="stable")
+            np.testing.assert_array_equal(items, ref)
+            np.testing.assert_array_equal(k, keys[ref])
