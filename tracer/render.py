@@ -141,7 +141,7 @@ def distance_at_camera(scene, arrays=None):
 
 
 def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None, omega=None,
-           cone=None):
+           cone=None, newton=None):
     """Trace and shade ``scene``.
 
     Parameters
@@ -162,6 +162,10 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
     cone : bool, optional
         Seed each tile's rays with a conservative start depth from a cone march (default
         ``tracer.march.CONE``).
+    newton : float, optional
+        Newton steps along the ray once the distance is below ``newton x eps`` (at most 1 % of
+        the scene box diagonal; 0: plain sphere tracing; default ``tracer.march.NEWTON``); see
+        :func:`tracer.march.march_ray`.
 
     Raises
     ------
@@ -185,6 +189,8 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
     bis = np.zeros((H, W), dtype=np.int64)
     cam = camera.as_array()
     band = band_rows or max(march.TILE, ((H // 16) // march.TILE) * march.TILE or march.TILE)
+    newton_at = march.newton_distance(scene.eps, lo, hi,
+                                      march.NEWTON if newton is None else max(0.0, float(newton)))
     t0 = time.perf_counter()
     for r0 in range(0, H, band):
         r1 = min(H, r0 + band)
@@ -192,7 +198,8 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
                           int(scene.max_steps), r0, r1, depth_max, hit, tbuf, grad, steps,
                           leaves, bis, march.RELAX if relax is None else float(relax),
                           march.OMEGA if omega is None else max(1.0, float(omega)),
-                          march.CONE if cone is None else bool(cone))
+                          march.CONE if cone is None else bool(cone),
+                          newton_at)
         if progress is not None:
             progress(r1, H, time.perf_counter() - t0)
     seconds = time.perf_counter() - t0
