@@ -334,7 +334,11 @@ def smooth_distance_point_tol(tree, px, py, pz, alpha, beta, tol, S, wgs, stack,
     budget = tol / tree.count[root]
     # nodes closer than ``near`` cannot pass the test whatever their size (it needs at least
     # wa exp(-alpha (bd - m)) <= tol * s_ex): a cheap pre-check, no exp for those nodes
+    # (kept lazily: recomputed when s_ex has doubled since, so it is at most log(2)/alpha
+    # short of its exact value, which only costs a few exponentials; s_ref is s_ex then,
+    # rescaled with the shift like s_ex)
     near = np.inf
+    s_ref = 0.0
     nodes = 0
     leaves = 0
     lo = tree.lo
@@ -381,6 +385,7 @@ def smooth_distance_point_tol(tree, px, py, pz, alpha, beta, tol, S, wgs, stack,
                 gz *= f
                 s_ex *= f
                 e_far *= f
+                s_ref *= f
                 e = math.exp(-alpha * (bd - m))
                 s += W * e
                 e_far += W * e
@@ -409,6 +414,7 @@ def smooth_distance_point_tol(tree, px, py, pz, alpha, beta, tol, S, wgs, stack,
             gz *= f
             s_ex *= f
             e_far *= f
+            s_ref *= f
             e = math.exp(-alpha * (bd - m))
             fw = W / bd
             s += W * e
@@ -421,13 +427,16 @@ def smooth_distance_point_tol(tree, px, py, pz, alpha, beta, tol, S, wgs, stack,
             st = tree.start[node]
             for i in range(st, st + cnt):
                 d, W, vx, vy, vz = primitive_term(tree, i, px, py, pz, S, wgs)
-                f, m = _shift(m, d, alpha)
-                s *= f
-                gx *= f
-                gy *= f
-                gz *= f
-                s_ex *= f
-                e_far *= f
+                if d < m:
+                    f = math.exp(-alpha * (m - d))
+                    s *= f
+                    gx *= f
+                    gy *= f
+                    gz *= f
+                    s_ex *= f
+                    e_far *= f
+                    s_ref *= f
+                    m = d
                 e = math.exp(-alpha * (d - m))
                 s += W * e
                 s_ex += W * e
@@ -435,7 +444,9 @@ def smooth_distance_point_tol(tree, px, py, pz, alpha, beta, tol, S, wgs, stack,
                 gy += e * vy
                 gz += e * vz
             leaves += cnt
-            near = m + math.log(wa / (tol * s_ex)) / alpha
+            if s_ex >= 2.0 * s_ref:
+                s_ref = s_ex
+                near = m + math.log(wa / (tol * s_ex)) / alpha
             continue
         r = tree.right[node]
         dl = math.sqrt(box_distance2(px, py, pz, lo, hi, l)[0])

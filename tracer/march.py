@@ -306,7 +306,7 @@ def march_ray(tree, roots, params, mode, ox, oy, oz, dx, dy, dz, lo, hi, eps, ma
                                                oz + t * dz, stack, dstack, slack)
         steps += 1
         leaves += ll
-        if d <= near and slack > 0.0 and relaxable and _was_loosened(params, slack):
+        if d <= eps and slack > 0.0 and relaxable and _was_loosened(params, slack):
             d, gx, gy, gz, nn, ll = scene_distance(tree, roots, params, mode, ox + t * dx,
                                                    oy + t * dy, oz + t * dz, stack, dstack, 0.0)
             steps += 1
@@ -336,7 +336,9 @@ def march_ray(tree, roots, params, mode, ox, oy, oz, dx, dy, dz, lo, hi, eps, ma
                 step = min(d / sd, NEWTON_CAP * d)
                 w = 1.0
         t += step
-        slack = relax * d if relaxable else 0.0
+        # near the surface the next point is evaluated at full accuracy at once (a loosened
+        # value there would mostly fall below eps and be evaluated again)
+        slack = relax * d if (relaxable and d > near) else 0.0
         if t > t_exit:
             break
     return 0, np.nan, 0.0, 0.0, 0.0, steps, leaves, bis
