@@ -212,6 +212,7 @@ def smooth_distance_point(tree, px, py, pz, alpha, beta, S, wgs, stack, dstack, 
     leaves = 0
     lo = tree.lo
     hi = tree.hi
+    sa = S / alpha
     d2, cx, cy, cz = box_distance2(px, py, pz, lo, hi, root)
     stack[0] = root
     dstack[0] = math.sqrt(d2)
@@ -224,11 +225,11 @@ def smooth_distance_point(tree, px, py, pz, alpha, beta, S, wgs, stack, dstack, 
         cnt = tree.count[node]
         if cnt > 1 and tree.diag[node] < beta * bd:
             d2, cx, cy, cz = box_distance2(px, py, pz, lo, hi, node)
-            wh = tree.whi[node]
-            W = cnt * (wh if (S == 1.0 or wh == 1.0) else math.exp(S * math.log(wh)))
-            f = W / bd
-            m, s, gx, gy, gz = logsumexp_accumulate(m, s, gx, gy, gz, bd, W, f * (px - cx),
-                                           f * (py - cy), f * (pz - cz), alpha)
+            # count * whi**S * exp(-alpha bd) as count * exp(-alpha (bd - S log(whi) / alpha))
+            f = cnt / bd
+            m, s, gx, gy, gz = logsumexp_accumulate(m, s, gx, gy, gz, bd - sa * tree.lwhi[node],
+                                                    cnt, f * (px - cx), f * (py - cy),
+                                                    f * (pz - cz), alpha)
             leaves += 1
             continue
         l = tree.left[node]
@@ -403,11 +404,11 @@ def smooth_distance_point_tol(tree, px, py, pz, alpha, beta, tol, S, wgs, stack,
                 continue
         l = tree.left[node]
         if l >= 0 and cnt > 1 and beta > 0.0 and tree.diag[node] < beta * bd:
-            # Barnes-Hut far field (outside the tol budget)
+            # Barnes-Hut far field (outside the tol budget), count * whi**S * exp(-alpha bd)
             d2, cx, cy, cz = box_distance2(px, py, pz, lo, hi, node)
-            wh = tree.whi[node]
-            W = cnt * (wh if (S == 1.0 or wh == 1.0) else math.exp(S * math.log(wh)))
-            f, m = _shift(m, bd, alpha)
+            W = float(cnt)
+            db = bd - S * tree.lwhi[node] / alpha
+            f, m = _shift(m, db, alpha)
             s *= f
             gx *= f
             gy *= f
@@ -415,7 +416,7 @@ def smooth_distance_point_tol(tree, px, py, pz, alpha, beta, tol, S, wgs, stack,
             s_ex *= f
             e_far *= f
             s_ref *= f
-            e = math.exp(-alpha * (bd - m))
+            e = math.exp(-alpha * (db - m))
             fw = W / bd
             s += W * e
             gx += e * (fw * (px - cx))
