@@ -35,6 +35,9 @@ BISECT_ITERS = 40
 #: tol mode: a sphere-tracing step may under-estimate by up to this fraction of the previous
 #: distance (the evaluation's tolerance is loosened accordingly; 0 disables the relaxation)
 RELAX = 0.25
+#: tol mode: loosened evaluations (far from the surface) also use Barnes-Hut with at least
+#: this beta (conservative, so still safe); 0 disables
+FAR_BETA = 0.25
 #: over-relaxation factor of sphere-tracing steps (1: plain sphere tracing); see march_ray
 OMEGA = 1.0
 #: Newton steps along the ray once ``d <= NEWTON x eps`` (0: plain sphere tracing), but never
@@ -70,7 +73,8 @@ def scene_distance(tree, roots, params, mode, x, y, z, stack, dstack, slack=0.0)
         return _scene_distance_posed(tree, roots, params, mode, x, y, z, stack, dstack, slack)
     if nobj == 1:
         if mode == MODE_SMOOTH:
-            return smooth_distance_point_tol(tree, x, y, z, params[0, 0], params[0, 1],
+            return smooth_distance_point_tol(tree, x, y, z, params[0, 0],
+                                             _far_beta(params[0, 1], params[0, 5], slack),
                                              _loosened(params[0, 5], params[0, 0], slack),
                                              params[0, 2], params[0, 3], stack, dstack,
                                              roots[0])
@@ -107,7 +111,8 @@ def scene_distance(tree, roots, params, mode, x, y, z, stack, dstack, slack=0.0)
     sz = 0.0
     for k in range(nobj):
         d, gx, gy, gz, nn, ll = smooth_distance_point_tol(tree, x, y, z, params[k, 0],
-                                                          params[k, 1],
+                                                          _far_beta(params[k, 1], params[k, 5],
+                                                                    slack),
                                                           _loosened(params[k, 5], params[k, 0],
                                                                     slack),
                                                           params[k, 2], params[k, 3], stack,
@@ -125,6 +130,16 @@ def _loosened(tol, alpha, slack):
     if tol > 0.0 and slack > 0.0:
         return max(tol, math.expm1(min(alpha * slack, 700.0)))
     return tol
+
+
+@numba.njit(**NJIT)
+def _far_beta(beta, tol, slack):
+    """Barnes-Hut parameter of a loosened evaluation (``tol > 0``, ``slack > 0``): at least
+    ``FAR_BETA``. The conservative far field only lowers ``d_hat`` (never above the
+    ``beta = 0`` value), so a sphere-tracing step stays safe; it is only shorter."""
+    if tol > 0.0 and slack > 0.0:
+        return max(beta, FAR_BETA)
+    return beta
 
 
 @numba.njit(**NJIT)
@@ -159,7 +174,7 @@ def _scene_distance_posed(tree, roots, params, mode, x, y, z, stack, dstack, sla
         lz = R[2] * px + R[5] * py + R[8] * pz
         if mode == MODE_SMOOTH:
             d, hx, hy, hz, nn, ll = smooth_distance_point_tol(
-                tree, lx, ly, lz, params[k, 0], params[k, 1],
+                tree, lx, ly, lz, params[k, 0], _far_beta(params[k, 1], params[k, 5], slack),
                 _loosened(params[k, 5], params[k, 0], slack), params[k, 2], params[k, 3], stack,
                 dstack, roots[k])
         else:
