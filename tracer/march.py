@@ -74,7 +74,8 @@ def scene_distance(tree, roots, params, mode, x, y, z, stack, dstack, slack=0.0)
     if nobj == 1:
         if mode == MODE_SMOOTH:
             return smooth_distance_point_tol(tree, x, y, z, params[0, 0],
-                                             _far_beta(params[0, 1], params[0, 5], slack),
+                                             _far_beta(params[0, 1], params[0, 5], params[0, 0],
+                                                       slack),
                                              _loosened(params[0, 5], params[0, 0], slack),
                                              params[0, 2], params[0, 3], stack, dstack,
                                              roots[0])
@@ -112,7 +113,7 @@ def scene_distance(tree, roots, params, mode, x, y, z, stack, dstack, slack=0.0)
     for k in range(nobj):
         d, gx, gy, gz, nn, ll = smooth_distance_point_tol(tree, x, y, z, params[k, 0],
                                                           _far_beta(params[k, 1], params[k, 5],
-                                                                    slack),
+                                                                    params[k, 0], slack),
                                                           _loosened(params[k, 5], params[k, 0],
                                                                     slack),
                                                           params[k, 2], params[k, 3], stack,
@@ -133,11 +134,13 @@ def _loosened(tol, alpha, slack):
 
 
 @numba.njit(**NJIT)
-def _far_beta(beta, tol, slack):
-    """Barnes-Hut parameter of a loosened evaluation (``tol > 0``, ``slack > 0``): at least
-    ``FAR_BETA``. The conservative far field only lowers ``d_hat`` (never above the
-    ``beta = 0`` value), so a sphere-tracing step stays safe; it is only shorter."""
-    if tol > 0.0 and slack > 0.0:
+def _far_beta(beta, tol, alpha, slack):
+    """Barnes-Hut parameter of an evaluation whose ``tol`` is loosened by ``slack`` (see
+    :func:`_loosened`): at least ``FAR_BETA``. The conservative far field only lowers
+    ``d_hat`` (never above the ``beta = 0`` value), so a sphere-tracing step stays safe; it
+    is only shorter. Unloosened evaluations (``_was_loosened`` false: a hit is accepted as
+    it is) keep their own beta."""
+    if _loosened(tol, alpha, slack) != tol:
         return max(beta, FAR_BETA)
     return beta
 
@@ -174,7 +177,8 @@ def _scene_distance_posed(tree, roots, params, mode, x, y, z, stack, dstack, sla
         lz = R[2] * px + R[5] * py + R[8] * pz
         if mode == MODE_SMOOTH:
             d, hx, hy, hz, nn, ll = smooth_distance_point_tol(
-                tree, lx, ly, lz, params[k, 0], _far_beta(params[k, 1], params[k, 5], slack),
+                tree, lx, ly, lz, params[k, 0],
+                _far_beta(params[k, 1], params[k, 5], params[k, 0], slack),
                 _loosened(params[k, 5], params[k, 0], slack), params[k, 2], params[k, 3], stack,
                 dstack, roots[k])
         else:
