@@ -55,7 +55,7 @@ def reference_depths(scene, stride):
     leaves = np.zeros(rows.size, dtype=np.int64)
     march.trace_pixels(tree, roots, params, mode, camera_of(scene).as_array(), lo, hi,
                        float(scene.eps), int(scene.max_steps), rows, cols, depth_max, hit, t,
-                       steps, leaves, 0.0)
+                       steps, leaves, 0.0, march.OMEGA, march.newton_distance(scene.eps, lo, hi))
     return rows, cols, hit, t
 
 

@@ -36,6 +36,9 @@ class TreeData(NamedTuple):
     whi : (n,) float64
         Largest raw weight ``A w~`` (before attenuation) of any primitive below the node (>= 1):
         the Barnes-Hut far field uses ``count * whi**S`` so that it bounds every replaced term.
+    lwhi : (n,) float64
+        ``log(whi)`` (so that the far field ``count * whi**S * exp(-alpha d)`` costs one
+        exponential).
 
     Primitive arrays, ``m`` primitives, in tree order:
 
@@ -68,6 +71,7 @@ class TreeData(NamedTuple):
     count: np.ndarray
     diag: np.ndarray
     whi: np.ndarray
+    lwhi: np.ndarray
     kind: np.ndarray
     pts: np.ndarray
     wc: np.ndarray
@@ -181,7 +185,7 @@ def build_tree(mesh, leaf_size=1, progress=None):
         kind = np.ascontiguousarray(kind[order])
         pwhi = np.ascontiguousarray(pwhi[order])
     return TreeData(lo=lo, hi=hi, left=left, right=right, start=start, count=count, diag=diag,
-                    whi=whi, kind=kind, pts=pts, wc=wc, pwhi=pwhi,
+                    whi=whi, lwhi=np.log(whi), kind=kind, pts=pts, wc=wc, pwhi=pwhi,
                     orig=np.ascontiguousarray(order), A=float(A), depth=int(depth))
 
 
@@ -378,7 +382,8 @@ def concatenate_trees(trees):
 
     forest = TreeData(lo=cat("lo"), hi=cat("hi"), left=shifted("left", node_off),
                       right=shifted("right", node_off), start=shifted("start", prim_off),
-                      count=cat("count"), diag=cat("diag"), whi=cat("whi"), kind=cat("kind"),
+                      count=cat("count"), diag=cat("diag"), whi=cat("whi"), lwhi=cat("lwhi"),
+                      kind=cat("kind"),
                       pts=cat("pts"), wc=cat("wc"), pwhi=cat("pwhi"), orig=cat("orig"),
                       A=float(max(t.A for t in trees)), depth=int(max(t.depth for t in trees)))
     return forest, np.asarray(node_off, dtype=np.int64)

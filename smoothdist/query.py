@@ -212,6 +212,7 @@ def smooth_distance_point(tree, px, py, pz, alpha, beta, S, wgs, stack, dstack, 
     leaves = 0
     lo = tree.lo
     hi = tree.hi
+    sa = S / alpha
     d2, cx, cy, cz = box_distance2(px, py, pz, lo, hi, root)
     stack[0] = root
     dstack[0] = math.sqrt(d2)
@@ -224,11 +225,11 @@ def smooth_distance_point(tree, px, py, pz, alpha, beta, S, wgs, stack, dstack, 
         cnt = tree.count[node]
         if cnt > 1 and tree.diag[node] < beta * bd:
             d2, cx, cy, cz = box_distance2(px, py, pz, lo, hi, node)
-            wh = tree.whi[node]
-            W = cnt * (wh if (S == 1.0 or wh == 1.0) else math.exp(S * math.log(wh)))
-            f = W / bd
-            m, s, gx, gy, gz = logsumexp_accumulate(m, s, gx, gy, gz, bd, W, f * (px - cx),
-                                           f * (py - cy), f * (pz - cz), alpha)
+            # count * whi**S * exp(-alpha bd) as count * exp(-alpha (bd - S log(whi) / alpha))
+            f = cnt / bd
+            m, s, gx, gy, gz = logsumexp_accumulate(m, s, gx, gy, gz, bd - sa * tree.lwhi[node],
+                                                    cnt, f * (px - cx), f * (py - cy),
+                                                    f * (pz - cz), alpha)
             leaves += 1
             continue
         l = tree.left[node]
@@ -334,7 +335,11 @@ def smooth_distance_point_tol(tree, px, py, pz, alpha, beta, tol, S, wgs, stack,
     budget = tol / tree.count[root]
     # nodes closer than ``near`` cannot pass the test whatever their size (it needs at least
     # wa exp(-alpha (bd - m)) <= tol * s_ex): a cheap pre-check, no exp for those nodes
+    # (kept lazily: recomputed when s_ex has doubled since, so it is at most log(2)/alpha
+    # short of its exact value, which only costs a few exponentials; s_ref is s_ex then,
+    # rescaled with the shift like s_ex)
     near = np.inf
+    s_ref = 0.0
     nodes = 0
     leaves = 0
     lo = tree.lo
@@ -381,6 +386,7 @@ def smooth_distance_point_tol(tree, px, py, pz, alpha, beta, tol, S, wgs, stack,
                 gz *= f
                 s_ex *= f
                 e_far *= f
+                s_ref *= f
                 e = math.exp(-alpha * (bd - m))
                 s += W * e
                 e_far += W * e
@@ -398,18 +404,19 @@ def smooth_distance_point_tol(tree, px, py, pz, alpha, beta, tol, S, wgs, stack,
                 continue
         l = tree.left[node]
         if l >= 0 and cnt > 1 and beta > 0.0 and tree.diag[node] < beta * bd:
-            # Barnes-Hut far field (outside the tol budget)
+            # Barnes-Hut far field (outside the tol budget), count * whi**S * exp(-alpha bd)
             d2, cx, cy, cz = box_distance2(px, py, pz, lo, hi, node)
-            wh = tree.whi[node]
-            W = cnt * (wh if (S == 1.0 or wh == 1.0) else math.exp(S * math.log(wh)))
-            f, m = _shift(m, bd, alpha)
+            W = float(cnt)
+            db = bd - S * tree.lwhi[node] / alpha
+            f, m = _shift(m, db, alpha)
             s *= f
             gx *= f
             gy *= f
             gz *= f
             s_ex *= f
             e_far *= f
-            e = math.exp(-alpha * (bd - m))
+            s_ref *= f
+            e = math.exp(-alpha * (db - m))
             fw = W / bd
             s += W * e
             gx += e * (fw * (px - cx))
@@ -421,13 +428,16 @@ def smooth_distance_point_tol(tree, px, py, pz, alpha, beta, tol, S, wgs, stack,
             st = tree.start[node]
             for i in range(st, st + cnt):
                 d, W, vx, vy, vz = primitive_term(tree, i, px, py, pz, S, wgs)
-                f, m = _shift(m, d, alpha)
-                s *= f
-                gx *= f
-                gy *= f
-                gz *= f
-                s_ex *= f
-                e_far *= f
+                if d < m:
+                    f = math.exp(-alpha * (m - d))
+                    s *= f
+                    gx *= f
+                    gy *= f
+                    gz *= f
+                    s_ex *= f
+                    e_far *= f
+                    s_ref *= f
+                    m = d
                 e = math.exp(-alpha * (d - m))
                 s += W * e
                 s_ex += W * e
@@ -435,7 +445,9 @@ def smooth_distance_point_tol(tree, px, py, pz, alpha, beta, tol, S, wgs, stack,
                 gy += e * vy
                 gz += e * vz
             leaves += cnt
-            near = m + math.log(wa / (tol * s_ex)) / alpha
+            if s_ex >= 2.0 * s_ref:
+                s_ref = s_ex
+                near = m + math.log(wa / (tol * s_ex)) / alpha
             continue
         r = tree.right[node]
         dl = math.sqrt(box_distance2(px, py, pz, lo, hi, l)[0])

@@ -214,3 +214,51 @@ def test_barnes_hut_acceptance_rule(leaf_size):
             assert st.nodes_visited[0] == (3 if leaf_size == 1 else 1)
             dr = naive.smooth_distance(q, field.mesh, 3.0)[0]
             assert d[0] == pytest.approx(dr[0], rel=1e-14)
+
+
+def _barnes_hut_numpy(tree, terms, q, alpha, beta, S):
+    """Value of the Barnes-Hut smooth distance at one query by a plain Python traversal of the
+    tree's arrays: far field ``count * whi**S * exp(-alpha * box distance)`` (written with
+    ``whi ** S``, independently of the kernel's ``lwhi``), every other primitive by its naive
+    term (``terms``: :class:`naive.Terms` of this query)."""
+    W = terms.weights(S)[0][0]
+    D = terms.D[0]
+    parts = []
+    stack = [0]
+    while stack:
+        n = stack.pop()
+        bd = np.linalg.norm(q - np.clip(q, tree.lo[n], tree.hi[n]))
+        if tree.count[n] > 1 and tree.diag[n] < beta * bd:
+            parts.append((bd, tree.count[n] * tree.whi[n] ** S))
+        elif tree.left[n] < 0:
+            for i in range(tree.start[n], tree.start[n] + tree.count[n]):
+                j = tree.orig[i]
+                parts.append((D[j], W[j]))
+        else:
+            stack += [tree.left[n], tree.right[n]]
+    d, w = np.array(parts).T
+    m = d.min()
+    return m - math.log(np.sum(w * np.exp(-alpha * (d - m)))) / alpha
+
+
+@pytest.mark.parametrize("name", ["icosphere", "mixed_mesh", "segment_star"])
+def test_barnes_hut_far_field_against_numpy(request, zoo, name, rng):
+    """The kernel folds ``whi**S`` into the exponent (``TreeData.lwhi = log(whi)``); values
+    equal a numpy traversal that multiplies ``count * whi**S`` in, for weighted primitives,
+    with attenuation (S < 1), to 1e-12; ``lwhi`` is ``log(whi)`` also in a forest."""
+    mesh = zoo[name]
+    field = SmoothDistanceField(mesh)
+    tree = field.tree
+    np.testing.assert_array_equal(tree.lwhi, np.log(tree.whi))
+    assert tree.whi.max() > 1.0                      # weighted: the fold matters
+    from smoothdist.kernels import concatenate_trees
+    forest, roots = concatenate_trees([tree, tree])
+    np.testing.assert_array_equal(forest.lwhi, np.log(forest.whi))
+    lo, hi = field.bounds
+    Q = lo + (hi - lo) * rng.uniform(-0.5, 1.5, size=(12, 3))
+    alpha, alpha_u, beta = 40.0 / field.diagonal, 200.0 / field.diagonal, 0.5
+    S = alpha / alpha_u
+    d, g = field.smooth_distance(Q, alpha=alpha, alpha_u=alpha_u, beta=beta)
+    for k, q in enumerate(Q):
+        ref = _barnes_hut_numpy(tree, naive.Terms(q[None], mesh), q, alpha, beta, S)
+        assert d[k] == pytest.approx(ref, rel=1e-12, abs=1e-12 * field.diagonal)

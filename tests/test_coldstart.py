@@ -43,7 +43,7 @@ def trace(scene, roots=None, threads=None, band=None, kernel="tiles"):
            np.zeros((H, W), dtype=np.int64))
     args = (tree, roots, params, mode, camera_of(scene).as_array(), lo, hi, float(scene.eps),
             int(scene.max_steps))
-    options = (march.RELAX, march.OMEGA, march.CONE)
+    options = (march.RELAX, march.OMEGA, march.CONE, march.newton_distance(scene.eps, lo, hi))
     band = band or H
     for r0 in range(0, H, band):
         r1 = min(H, r0 + band)

@@ -398,9 +398,11 @@ def test_multi_object_logsumexp(two_clouds):
         assert single.hit.sum() > 30
         missing = single.hit & ~multi.hit
         assert missing.sum() <= 2 and not missing[~boundary_band(single.hit)].any()
-        # the combined distance is lower, so the combined surface is not farther away
+        # the combined distance is lower, so the combined surface is not farther away (up to
+        # the hit tolerance: a hit is a point with |d| <= eps, on either side of the surface)
         common = single.hit & multi.hit
-        assert np.all(multi.depth[common] <= single.depth[common] + 1e-5)
+        eps = _two_sphere_scene([f]).eps
+        assert np.all(multi.depth[common] <= single.depth[common] + 3 * eps)
 
 
 def test_camera_inside_the_surface_raises():

@@ -37,8 +37,19 @@ BISECT_ITERS = 40
 #: tol mode: a sphere-tracing step may under-estimate by up to this fraction of the previous
 #: distance (the evaluation's tolerance is loosened accordingly; 0 disables the relaxation)
 RELAX = 0.25
+#: tol mode: loosened evaluations (far from the surface) also use Barnes-Hut with at least
+#: this beta (conservative, so still safe); 0 disables
+FAR_BETA = 0.25
 #: over-relaxation factor of sphere-tracing steps (1: plain sphere tracing); see march_ray
 OMEGA = 1.0
+#: Newton steps along the ray once ``d <= NEWTON x eps`` (0: plain sphere tracing), but never
+#: from farther than ``NEWTON_FAR`` x the scene box diagonal; see march_ray and newton_distance
+NEWTON = 100.0
+NEWTON_FAR = 0.01
+#: a Newton step is at most this many times the sphere-tracing step ``d``
+NEWTON_CAP = 4.0
+#: rays meeting the surface at a smaller cosine (relative to ``|g|``) keep sphere steps
+NEWTON_COS = 0.2
 #: seed each tile's rays with a conservative start depth from a cone march (cone_start)
 CONE = True
 #: largest number of distance evaluations of one tile's cone march
@@ -72,7 +83,9 @@ def scene_distance(tree, roots, params, mode, x, y, z, stack, dstack, slack=0.0)
         return _scene_distance_posed(tree, roots, params, mode, x, y, z, stack, dstack, slack)
     if nobj == 1:
         if mode == MODE_SMOOTH:
-            return smooth_distance_point_tol(tree, x, y, z, params[0, 0], params[0, 1],
+            return smooth_distance_point_tol(tree, x, y, z, params[0, 0],
+                                             _far_beta(params[0, 1], params[0, 5], params[0, 0],
+                                                       slack),
                                              _loosened(params[0, 5], params[0, 0], slack),
                                              params[0, 2], params[0, 3], stack, dstack,
                                              roots[0])
@@ -109,7 +122,8 @@ def scene_distance(tree, roots, params, mode, x, y, z, stack, dstack, slack=0.0)
     sz = 0.0
     for k in range(nobj):
         d, gx, gy, gz, nn, ll = smooth_distance_point_tol(tree, x, y, z, params[k, 0],
-                                                          params[k, 1],
+                                                          _far_beta(params[k, 1], params[k, 5],
+                                                                    params[k, 0], slack),
                                                           _loosened(params[k, 5], params[k, 0],
                                                                     slack),
                                                           params[k, 2], params[k, 3], stack,
@@ -127,6 +141,18 @@ def _loosened(tol, alpha, slack):
     if tol > 0.0 and slack > 0.0:
         return max(tol, math.expm1(min(alpha * slack, 700.0)))
     return tol
+
+
+@numba.njit(**NJIT)
+def _far_beta(beta, tol, alpha, slack):
+    """Barnes-Hut parameter of an evaluation whose ``tol`` is loosened by ``slack`` (see
+    :func:`_loosened`): at least ``FAR_BETA``. The conservative far field only lowers
+    ``d_hat`` (never above the ``beta = 0`` value), so a sphere-tracing step stays safe; it
+    is only shorter. Unloosened evaluations (``_was_loosened`` false: a hit is accepted as
+    it is) keep their own beta."""
+    if _loosened(tol, alpha, slack) != tol:
+        return max(beta, FAR_BETA)
+    return beta
 
 
 @numba.njit(**NJIT)
@@ -161,7 +187,8 @@ def _scene_distance_posed(tree, roots, params, mode, x, y, z, stack, dstack, sla
         lz = R[2] * px + R[5] * py + R[8] * pz
         if mode == MODE_SMOOTH:
             d, hx, hy, hz, nn, ll = smooth_distance_point_tol(
-                tree, lx, ly, lz, params[k, 0], params[k, 1],
+                tree, lx, ly, lz, params[k, 0],
+                _far_beta(params[k, 1], params[k, 5], params[k, 0], slack),
                 _loosened(params[k, 5], params[k, 0], slack), params[k, 2], params[k, 3], stack,
                 dstack, roots[k])
         else:
@@ -180,6 +207,13 @@ def _scene_distance_posed(tree, roots, params, mode, x, y, z, stack, dstack, sla
     if mode == MODE_SMOOTH:
         return m - math.log(s) / a, sx / s, sy / s, sz / s, nodes, leaves
     return m, sx, sy, sz, nodes, leaves
+
+
+def newton_distance(eps, lo, hi, newton=NEWTON):
+    """Distance below which rays take Newton steps: ``min(newton x eps, NEWTON_FAR x |hi - lo|)``
+    (scene units; ``lo, hi`` the scene box; ``newton = 0``: never)."""
+    diag = float(np.linalg.norm(np.asarray(hi, dtype=np.float64) - np.asarray(lo, dtype=np.float64)))
+    return max(0.0, min(float(newton) * float(eps), NEWTON_FAR * diag))
 
 
 @numba.njit(**NJIT)
@@ -204,8 +238,50 @@ def ray_box(ox, oy, oz, dx, dy, dz, lo, hi):
 
 
 @numba.njit(**NJIT)
+def _false_position(tree, roots, params, mode, ox, oy, oz, dx, dy, dz, a, fa, b, fb, gx, gy,
+                    gz, eps, stack, dstack):
+    """Root of ``d(t)`` in the bracket ``d(a) = fa > eps``, ``d(b) = fb < -eps``.
+
+    Illinois false position (the kept end's value is halved when the same end is kept twice),
+    falling back to the midpoint when the interpolate is not inside the bracket. Stops at the
+    first point with ``|d| <= eps``; after ``BISECT_ITERS`` evaluations it returns the inner
+    end ``b`` (``d < -eps``). Returns ``(t, gx, gy, gz, evaluations, leaves)``; the gradient is
+    that of the returned point (``g`` as given if ``b`` is never moved).
+    """
+    side = 0
+    evals = 0
+    leaves = 0
+    for _ in range(BISECT_ITERS):
+        x = (a * fb - b * fa) / (fb - fa)
+        if not (a < x < b):
+            x = 0.5 * (a + b)
+        dm, mx, my, mz, nn, ll = scene_distance(tree, roots, params, mode, ox + x * dx,
+                                                oy + x * dy, oz + x * dz, stack, dstack, 0.0)
+        evals += 1
+        leaves += ll
+        if dm > eps:
+            a = x
+            fa = dm
+            if side == 1:
+                fb *= 0.5
+            side = 1
+        else:
+            b = x
+            fb = dm
+            gx = mx
+            gy = my
+            gz = mz
+            if dm >= -eps:
+                break
+            if side == -1:
+                fa *= 0.5
+            side = -1
+    return b, gx, gy, gz, evals, leaves
+
+
+@numba.njit(**NJIT)
 def march_ray(tree, roots, params, mode, ox, oy, oz, dx, dy, dz, lo, hi, eps, max_steps, stack,
-              dstack, relax=RELAX, omega=OMEGA, t_min=0.0):
+              dstack, relax=RELAX, omega=OMEGA, t_min=0.0, newton=0.0):
     """March one ray; returns ``(hit, t, gx, gy, gz, steps, leaves, bisections)``.
 
     ``omega >= 1``: over-relaxed steps ``t += omega d`` (Keinert et al. 2014) with a safe
@@ -219,8 +295,22 @@ def march_ray(tree, roots, params, mode, ox, oy, oz, dx, dy, dz, lo, hi, eps, ma
     ``t_min``: a depth before which the ray is known not to meet the surface (the cone pass
     of :func:`_render_tile`); the march starts at ``max(box entry, t_min)``.
 
-    ``hit`` is 1 when ``d <= eps`` was reached inside the box; then ``t`` is the ray parameter
-    and ``g`` the (unnormalised) distance gradient there. Misses return ``t = nan``.
+    ``newton >= 0`` (scene units, see :func:`newton_distance`): once ``d <= newton`` (at full
+    accuracy), the ray takes Newton
+    steps on ``d(t)`` along the ray, ``h = d / -(g . dir)`` capped at ``NEWTON_CAP x d``,
+    instead of sphere-tracing steps ``h = d`` (0: never). Sphere tracing converges
+    linearly near a surface it meets at an angle (the distance to the surface shrinks by
+    about ``1 - cos`` per step, so a tight ``eps`` costs many steps); Newton converges
+    quadratically and usually lands within ``eps`` in one or two steps. Smooth mode only: the
+    exact-offset field of a point cloud is a union of spheres, kinked everywhere. A Newton step that
+    ends inside (``d < -eps``) is resolved by false position in the bracket. Grazing rays
+    (``-(g . dir) < NEWTON_COS |g|``) keep sphere steps. What is given up: a Newton step is
+    not certified surface-free beyond ``d``, so a sliver thinner than ``NEWTON_CAP x
+    newton`` right in front of the hit can be stepped over.
+
+    ``hit`` is 1 when ``|d| <= eps`` was reached inside the box (``d < -eps`` only after
+    ``BISECT_ITERS`` bracketing steps); then ``t`` is the ray parameter and ``g`` the
+    (unnormalised) distance gradient there. Misses return ``t = nan``.
     """
     t, t_exit = ray_box(ox, oy, oz, dx, dy, dz, lo, hi)
     t = max(t, t_min)
@@ -233,8 +323,10 @@ def march_ray(tree, roots, params, mode, ox, oy, oz, dx, dy, dz, lo, hi, eps, ma
     t_prev = t
     # relaxed accuracy far from the surface (objects with tol > 0 only): a step may lose up
     # to relax x the previous distance, never more, and stays safe because d_hat_tol only
-    # under-estimates; a distance <= eps is re-evaluated at the scene's own tol
+    # under-estimates; a distance <= max(eps, newton) is re-evaluated at the scene's own
+    # tol before it counts as a hit or takes a Newton step
     slack = np.inf if relaxable else 0.0
+    near = max(eps, newton)
     w = omega
     d_prev = 0.0
     step = 0.0
@@ -256,33 +348,26 @@ def march_ray(tree, roots, params, mode, ox, oy, oz, dx, dy, dz, lo, hi, eps, ma
             continue
         if d <= eps:
             if d < -eps and t > t_prev:
-                # overshoot into the negative band: bisect [t_prev (d > eps), t (d < -eps)]
+                # overshoot into the negative band: find the root in [t_prev (d > eps), t]
                 bis += 1
-                a = t_prev
-                b = t
-                for _ in range(BISECT_ITERS):
-                    mid = 0.5 * (a + b)
-                    dm, mx, my, mz, nn, ll = scene_distance(tree, roots, params, mode, ox + mid * dx,
-                                                            oy + mid * dy, oz + mid * dz, stack,
-                                                            dstack)
-                    steps += 1
-                    leaves += ll
-                    if dm > eps:
-                        a = mid
-                    else:
-                        b = mid
-                        gx = mx
-                        gy = my
-                        gz = mz
-                        if dm >= -eps:
-                            break
-                t = b
+                t, gx, gy, gz, ev, lv = _false_position(tree, roots, params, mode, ox, oy, oz,
+                                                        dx, dy, dz, t_prev, d_prev, t, d, gx,
+                                                        gy, gz, eps, stack, dstack)
+                steps += ev
+                leaves += lv
             return 1, t, gx, gy, gz, steps, leaves, bis
         t_prev = t
         d_prev = d
         step = w * d
+        if d <= near and newton > 0.0 and mode == MODE_SMOOTH:
+            sd = -(gx * dx + gy * dy + gz * dz)
+            if sd > NEWTON_COS * math.sqrt(gx * gx + gy * gy + gz * gz):
+                step = min(d / sd, NEWTON_CAP * d)
+                w = 1.0
         t += step
-        slack = relax * d if relaxable else 0.0
+        # near the surface the next point is evaluated at full accuracy at once (a loosened
+        # value there would mostly fall below eps and be evaluated again)
+        slack = relax * d if (relaxable and d > near) else 0.0
         if t > t_exit:
             break
     return 0, np.nan, 0.0, 0.0, 0.0, steps, leaves, bis
@@ -349,7 +434,8 @@ def cone_start(tree, roots, params, mode, cam, lo, hi, eps, r_lo, r_hi, c_lo, c_
 
 @numba.njit(**NJIT)
 def _render_tile(tree, roots, params, mode, cam, lo, hi, eps, max_steps, r_lo, r_hi, c_lo, c_hi,
-                 depth_max, hit, tbuf, grad, steps, leaves, bisect, relax, omega, cone):
+                 depth_max, hit, tbuf, grad, steps, leaves, bisect, relax, omega, cone,
+                 newton):
     stack = np.empty(depth_max + 4, dtype=np.int64)
     dstack = np.empty(depth_max + 4)
     ox = cam[0]
@@ -372,7 +458,7 @@ def _render_tile(tree, roots, params, mode, cam, lo, hi, eps, max_steps, r_lo, r
                     pending = False
             h, t, gx, gy, gz, st, lv, bs = march_ray(tree, roots, params, mode, ox, oy, oz, dx, dy, dz,
                                                      lo, hi, eps, max_steps, stack, dstack,
-                                                     relax, omega, t_min)
+                                                     relax, omega, t_min, newton)
             st += c_ev
             lv += c_lv
             hit[r, c] = h == 1
@@ -387,7 +473,8 @@ def _render_tile(tree, roots, params, mode, cam, lo, hi, eps, max_steps, r_lo, r
 
 @numba.njit(**NJIT_PARALLEL)
 def render_rows(tree, roots, params, mode, cam, lo, hi, eps, max_steps, row0, row1, depth_max,
-                hit, tbuf, grad, steps, leaves, bisect, relax=RELAX, omega=OMEGA, cone=CONE):
+                hit, tbuf, grad, steps, leaves, bisect, relax=RELAX, omega=OMEGA, cone=CONE,
+                newton=0.0):
     """Trace rows ``row0 <= r < row1`` of the image into the per-pixel output arrays.
 
     Outputs are full-image arrays: ``hit (H, W) bool``, ``tbuf (H, W) float64``,
@@ -408,7 +495,8 @@ def render_rows(tree, roots, params, mode, cam, lo, hi, eps, max_steps, row0, ro
         tx = tile - ty * ntx
         _render_tile(tree, roots, params, mode, cam, lo, hi, eps, max_steps, row0 + ty * TILE,
                      min(row1, row0 + (ty + 1) * TILE), tx * TILE, min(W, (tx + 1) * TILE),
-                     depth_max, hit, tbuf, grad, steps, leaves, bisect, relax, omega, cone)
+                     depth_max, hit, tbuf, grad, steps, leaves, bisect, relax, omega, cone,
+                     newton)
 
 
 @numba.njit(**NJIT)
@@ -416,12 +504,12 @@ def distance_at(tree, roots, params, mode, x, y, z, depth_max):
     """Scene distance at one point (used to check that the camera is outside the surface)."""
     stack = np.empty(depth_max + 4, dtype=np.int64)
     dstack = np.empty(depth_max + 4)
-    return scene_distance(tree, roots, params, mode, x, y, z, stack, dstack)[0]
+    return scene_distance(tree, roots, params, mode, x, y, z, stack, dstack, 0.0)[0]
 
 
 @numba.njit(**NJIT_PARALLEL)
 def trace_pixels(tree, roots, params, mode, cam, lo, hi, eps, max_steps, rows, cols, depth_max,
-                 hit, tbuf, steps, leaves, relax=RELAX, omega=OMEGA):
+                 hit, tbuf, steps, leaves, relax=RELAX, omega=OMEGA, newton=0.0):
     """Trace only the pixels ``(rows[i], cols[i])`` (e.g. a subsample for an expensive
     reference render); outputs ``hit, tbuf, steps, leaves`` have the shape of ``rows``."""
     for i in prange(rows.size):
@@ -430,7 +518,7 @@ def trace_pixels(tree, roots, params, mode, cam, lo, hi, eps, max_steps, rows, c
         dx, dy, dz = ray_direction(cam, rows[i], cols[i])
         h, t, gx, gy, gz, st, lv, bs = march_ray(tree, roots, params, mode, cam[0], cam[1],
                                                  cam[2], dx, dy, dz, lo, hi, eps, max_steps,
-                                                 stack, dstack, relax, omega)
+                                                 stack, dstack, relax, omega, 0.0, newton)
         hit[i] = h == 1
         tbuf[i] = t
         steps[i] = st
@@ -467,10 +555,10 @@ def _borrowed(typingctx, value):
 
 @numba.njit(**NJIT)
 def render_tiles(tree, roots, params, mode, cam, lo, hi, eps, max_steps, row0, row1, depth_max,
-                 hit, tbuf, grad, steps, leaves, bisect, relax, omega, cone, j0, j1):
+                 hit, tbuf, grad, steps, leaves, bisect, relax, omega, cone, newton, j0, j1):
     """Trace tiles ``j0 <= j < j1`` of :func:`render_rows`' tile order for rows
     ``row0 <= r < row1``, in the calling thread (same arguments and outputs as
-    ``render_rows``; ``relax, omega, cone`` are required here).
+    ``render_rows``; ``relax, omega, cone, newton`` are required here).
 
     Serial and ``nogil``: ``tracer.render`` runs it from a few Python threads that take
     chunks of tiles as they finish (the tiles, hence the pixels, are exactly those of
@@ -494,4 +582,5 @@ def render_tiles(tree, roots, params, mode, cam, lo, hi, eps, max_steps, row0, r
         tx = tile - ty * ntx
         _render_tile(tree, roots, params, mode, cam, lo, hi, eps, max_steps, row0 + ty * TILE,
                      min(row1, row0 + (ty + 1) * TILE), tx * TILE, min(W, (tx + 1) * TILE),
-                     depth_max, hit, tbuf, grad, steps, leaves, bisect, relax, omega, cone)
+                     depth_max, hit, tbuf, grad, steps, leaves, bisect, relax, omega, cone,
+                     newton)

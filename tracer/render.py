@@ -154,7 +154,7 @@ def distance_at_camera(scene, arrays=None):
 
 
 def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None, omega=None,
-           cone=None):
+           cone=None, newton=None):
     """Trace and shade ``scene``.
 
     Parameters
@@ -176,6 +176,10 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
     cone : bool, optional
         Seed each tile's rays with a conservative start depth from a cone march (default
         ``tracer.march.CONE``).
+    newton : float, optional
+        Newton steps along the ray once the distance is below ``newton x eps`` (at most 1 % of
+        the scene box diagonal; 0: plain sphere tracing; default ``tracer.march.NEWTON``); see
+        :func:`tracer.march.march_ray`.
 
     Raises
     ------
@@ -202,7 +206,9 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
             float(scene.eps), int(scene.max_steps))
     options = (march.RELAX if relax is None else float(relax),
                march.OMEGA if omega is None else max(1.0, float(omega)),
-               march.CONE if cone is None else bool(cone))
+               march.CONE if cone is None else bool(cone),
+               march.newton_distance(scene.eps, lo, hi,
+                                     march.NEWTON if newton is None else max(0.0, float(newton))))
     band = band_rows or H
     t0 = time.perf_counter()
     for r0 in range(0, H, band):
@@ -244,7 +250,7 @@ def trace_tiles(args, row0, row1, depth_max, outputs, options, report=None, thre
 
     ``args = (tree, roots, params, mode, cam, lo, hi, eps, max_steps)`` and ``outputs =
     (hit, tbuf, grad, steps, leaves, bisect)`` as for :func:`tracer.march.render_rows`,
-    ``options = (relax, omega, cone)``. ``threads`` Python threads (default
+    ``options = (relax, omega, cone, newton)``. ``threads`` Python threads (default
     :func:`render_threads`) take chunks of tiles from a shared counter and trace them with
     the serial, GIL-free kernel :func:`tracer.march.render_tiles`, so that a thread that
     drew cheap tiles takes more; every tile is traced by one thread start to finish, so the

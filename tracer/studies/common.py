@@ -166,7 +166,8 @@ def unweighted_field(field):
     wc = np.zeros_like(t.wc)
     wc[:, 0] = 1.0
     out = copy.copy(field)
-    out.tree = t._replace(wc=wc, pwhi=np.ones_like(t.pwhi), whi=np.ones_like(t.whi), A=1.0)
+    out.tree = t._replace(wc=wc, pwhi=np.ones_like(t.pwhi), whi=np.ones_like(t.whi),
+                          lwhi=np.zeros_like(t.lwhi), A=1.0)
     return out
 
 
