@@ -313,9 +313,9 @@ def smooth_distance_point_tol(tree, px, py, pz, alpha, beta, tol, S, wgs, stack,
     hold for any visiting order; the order only decides how early ``s_ex`` is large enough
     to accept far nodes (hence the speed; with ``DEFER > 0``, nodes beyond the cheap ``near``
     threshold that fail are deferred and re-tested at the end, when the far nodes have left
-    budget unused: about 10 % fewer leaves on the bunny, but more time, so it is off). Both sides of the test are relative to the same
-    shift, so they rescale together when it moves. No node is accepted before the first
-    exact term (``s_ex = 0``).
+    budget unused: about 10 % fewer leaves on the bunny, but more time, so it is off). Both
+    sides of the test are relative to the same shift, so they rescale together when it
+    moves. No node is accepted before the first exact term (``s_ex = 0``).
 
     With ``beta > 0`` as well, nodes passing the Barnes-Hut test are added to the sum but not
     to ``E`` or ``s_ex``: then ``d_hat <= d_hat_0`` still holds, the error bound only for the
@@ -435,16 +435,14 @@ def smooth_distance_point_tol(tree, px, py, pz, alpha, beta, tol, S, wgs, stack,
             st = tree.start[node]
             for i in range(st, st + cnt):
                 d, W, vx, vy, vz = primitive_term(tree, i, px, py, pz, S, wgs)
-                if d < m:
-                    f = math.exp(-alpha * (m - d))
-                    s *= f
-                    gx *= f
-                    gy *= f
-                    gz *= f
-                    s_ex *= f
-                    e_far *= f
-                    s_ref *= f
-                    m = d
+                f, m = _shift(m, d, alpha)
+                s *= f
+                gx *= f
+                gy *= f
+                gz *= f
+                s_ex *= f
+                e_far *= f
+                s_ref *= f
                 e = math.exp(-alpha * (d - m))
                 s += W * e
                 s_ex += W * e

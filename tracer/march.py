@@ -213,7 +213,8 @@ def _scene_distance_posed(tree, roots, params, mode, x, y, z, stack, dstack, sla
 def newton_distance(eps, lo, hi, newton=NEWTON):
     """Distance below which rays take Newton steps: ``min(newton x eps, NEWTON_FAR x |hi - lo|)``
     (scene units; ``lo, hi`` the scene box; ``newton = 0``: never)."""
-    diag = float(np.linalg.norm(np.asarray(hi, dtype=np.float64) - np.asarray(lo, dtype=np.float64)))
+    diag = float(np.linalg.norm(np.asarray(hi, dtype=np.float64)
+                                - np.asarray(lo, dtype=np.float64)))
     return max(0.0, min(float(newton) * float(eps), NEWTON_FAR * diag))
 
 
@@ -296,18 +297,17 @@ def march_ray(tree, roots, params, mode, ox, oy, oz, dx, dy, dz, lo, hi, eps, ma
     ``t_min``: a depth before which the ray is known not to meet the surface (the cone pass
     of :func:`_render_tile`); the march starts at ``max(box entry, t_min)``.
 
-    ``newton >= 0`` (scene units, see :func:`newton_distance`): once ``d <= newton`` (at full
-    accuracy), the ray takes Newton
-    steps on ``d(t)`` along the ray, ``h = d / -(g . dir)`` capped at ``NEWTON_CAP x d``,
-    instead of sphere-tracing steps ``h = d`` (0: never). Sphere tracing converges
-    linearly near a surface it meets at an angle (the distance to the surface shrinks by
-    about ``1 - cos`` per step, so a tight ``eps`` costs many steps); Newton converges
-    quadratically and usually lands within ``eps`` in one or two steps. Smooth mode only: the
-    exact-offset field of a point cloud is a union of spheres, kinked everywhere. A Newton step that
-    ends inside (``d < -eps``) is resolved by false position in the bracket. Grazing rays
-    (``-(g . dir) < NEWTON_COS |g|``) keep sphere steps. What is given up: a Newton step is
-    not certified surface-free beyond ``d``, so a sliver thinner than ``NEWTON_CAP x
-    newton`` right in front of the hit can be stepped over.
+    ``newton >= 0`` (scene units, see :func:`newton_distance`): once ``d <= newton``, the ray
+    takes Newton steps on ``d(t)`` along the ray, ``h = d / -(g . dir)`` capped at
+    ``NEWTON_CAP x d``, instead of sphere-tracing steps ``h = d`` (0: never). Sphere tracing
+    converges linearly near a surface it meets at an angle (the distance to the surface
+    shrinks by about ``1 - cos`` per step, so a tight ``eps`` costs many steps); Newton
+    converges quadratically and usually lands within ``eps`` in one or two steps. Smooth mode
+    only: the exact-offset field of a point cloud is a union of spheres, kinked everywhere. A
+    Newton step that ends inside (``d < -eps``) is resolved by false position in the bracket.
+    Grazing rays (``-(g . dir) < NEWTON_COS |g|``) keep sphere steps. What is given up: a
+    Newton step is not certified surface-free beyond ``d``, so a sliver thinner than
+    ``NEWTON_CAP x newton`` right in front of the hit can be stepped over.
 
     ``hit`` is 1 when ``|d| <= eps`` was reached inside the box (``d < -eps`` only after
     ``BISECT_ITERS`` bracketing steps); then ``t`` is the ray parameter and ``g`` the
@@ -324,8 +324,8 @@ def march_ray(tree, roots, params, mode, ox, oy, oz, dx, dy, dz, lo, hi, eps, ma
     t_prev = t
     # relaxed accuracy far from the surface (objects with tol > 0 only): a step may lose up
     # to relax x the previous distance, never more, and stays safe because d_hat_tol only
-    # under-estimates; a distance <= max(eps, newton) is re-evaluated at the scene's own
-    # tol before it counts as a hit or takes a Newton step
+    # under-estimates; a distance <= eps is re-evaluated at the scene's own tol before it
+    # counts as a hit (a Newton step may start from a loosened value: it is only shorter)
     slack = np.inf if relaxable else 0.0
     near = max(eps, newton)
     w = omega
