@@ -13,7 +13,11 @@ Optional extra columns (ours only, against the same authors' beta 0.5 time):
 
 * ``--our-eps``: ours at our default eps (1e-4 of the bbox diagonal, 40x tighter);
 * ``--tol T``: ours at beta 0 with tolerance-controlled pruning ``tol = T`` and our default
-  eps (its accuracy against beta 0 is measured by ``benchmarks/bench_tol.py``).
+  eps (its accuracy against beta 0 is measured by ``benchmarks/bench_tol.py``);
+* ``--authors-beta0`` (with ``--authors-bin`` and ``--tol``): the authors' beta 0 render as
+  well, once per size (minutes at 512²), and the ratio of our ``tol`` render to it: the
+  comparison at the same accuracy class (their beta 0 is exact up to their eps, 1e-3
+  absolute; ours is within ``log(1 + T) / alpha`` of beta 0, at a 40x tighter eps).
 
 The authors' renderer is not part of this project. Build it yourself from their public
 repository (MIT) for this comparison only: see the project's notes, or in short: their
@@ -28,6 +32,7 @@ Usage::
     python benchmarks/bench_authors.py --authors-bin ~/authors-bench/build/beta_error_test
     python benchmarks/bench_authors.py --sizes 256 --repeat 1          # ours + published
     python benchmarks/bench_authors.py --authors-bin BIN --our-eps --tol 3e-3
+    python benchmarks/bench_authors.py --authors-bin BIN --sizes 256 --tol 3e-3 --authors-beta0
 """
 
 import argparse
@@ -139,6 +144,9 @@ def main(argv=None):
                    help="also time ours at our default eps (1e-4 x bbox diagonal)")
     p.add_argument("--tol", type=float, default=None, metavar="T",
                    help="also time ours at beta 0 with tol T, at our default eps")
+    p.add_argument("--authors-beta0", action="store_true",
+                   help="with --authors-bin and --tol: also time the authors' beta 0 render "
+                        "(once per size) and compare our tol render with it")
     args = p.parse_args(argv)
     if args.repeat < 1 or any(s < 1 for s in args.sizes):
         p.error("--repeat and --sizes must be >= 1")
@@ -148,6 +156,8 @@ def main(argv=None):
         p.error(f"--threads must be between 1 and {numba.config.NUMBA_NUM_THREADS}")
     if args.tol is not None and args.tol <= 0:
         p.error("--tol must be > 0")
+    if args.authors_beta0 and not (args.authors_bin and args.tol is not None):
+        p.error("--authors-beta0 needs --authors-bin and --tol")
     numba.set_num_threads(args.threads)
 
     full = smoothdist.load_mesh(MESH)
@@ -183,6 +193,12 @@ def main(argv=None):
             if ours_tol:
                 row["ours_tol"] = best(ours_tol, kind)[0]
             rows.append(row)
+        if args.authors_beta0:
+            # once per size: their beta 0 render is O(N) per evaluation (minutes at 512²)
+            zero = run_authors(args.authors_bin, size, beta=0.0)
+            for row in rows[-len(args.types):]:
+                row["authors0"] = zero[row["type"]]
+            print(f"# {size}^2 authors' beta 0 done ({load()})", file=sys.stderr, flush=True)
 
     src = "measured now, same machine" if args.authors_bin else "published (see note)"
     head = ["type", "size", f"authors s ({src})", "ours s", "ratio"]
@@ -190,6 +206,8 @@ def main(argv=None):
         head += ["ours s, eps 1e-4 diag", "ratio"]
     if args.tol is not None:
         head += [f"ours s, beta 0 tol {args.tol:g}, eps 1e-4 diag", "ratio"]
+    if args.authors_beta0:
+        head += ["authors s, beta 0 (one run)", "ours tol / authors beta 0"]
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * 2 + "---:|" * (len(head) - 2)]
     for r in rows:
         a = r["authors"]
@@ -201,6 +219,8 @@ def main(argv=None):
             vals += [cell(r["ours_eps"]), ratio(r["ours_eps"])]
         if args.tol is not None:
             vals += [cell(r["ours_tol"]), ratio(r["ours_tol"])]
+        if args.authors_beta0:
+            vals += [cell(r["authors0"]), f"{r['ours_tol'] / r['authors0']:.3f}"]
         lines.append("| " + " | ".join(vals) + " |")
     print(f"Bunny, alpha {ALPHA:g}, alpha_U {ALPHA_U:g}, beta {BETA:g}, eps {EPS:g} (absolute) "
           f"unless stated; {args.threads} threads each; best of {args.repeat}; ratio = ours / "
