@@ -15,7 +15,9 @@ first of ``$NUMBA_CACHE_DIR/<subpath>`` (if the variable is set), ``pkg/__pycach
 ``<user cache dir>/numba/<subpath>`` that it can create and write to, where ``<subpath>`` is
 ``pkg_<sha1 of the absolute path of pkg>``. Only those directories are touched, only ``*.nbi``,
 ``*.nbc`` and the digest file in them. File-system errors (read-only installs, another process
-clearing the same directory) are ignored: the guard never makes an import fail.
+clearing the same directory) are ignored: the guard never makes an import fail. Not covered: a
+process started before the edit that is still compiling new signatures can save old code after
+the clear; custom ``NUMBA_CACHE_LOCATOR_CLASSES`` locations.
 """
 
 import hashlib
