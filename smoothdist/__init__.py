@@ -11,6 +11,11 @@ Conventions
 * The smooth distance is conservative: ``d - log(A**S N)/alpha <= d_hat <= d``.
 """
 
+from smoothdist._cache_guard import guard_once as _guard_kernel_cache
+
+# before any kernel module is imported: drop numba caches compiled from other sources
+_guard_kernel_cache()
+
 from smoothdist.convert import as_data_mesh
 from smoothdist.field import (ExactDistanceResult, QueryStats, SmoothDistanceField,
                               SmoothDistanceResult)
