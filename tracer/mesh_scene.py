@@ -128,8 +128,11 @@ def scene_dict(scene, scene_path, source_paths):
     """A scene-file dict (our JSON format) that reproduces ``scene``.
 
     ``source_paths`` lists each object's mesh file; paths are written relative to the folder
-    of ``scene_path`` (where the dict will be saved).
+    of ``scene_path`` (where the dict will be saved). ``tol`` and ``newton`` are written when
+    they are not the defaults.
     """
+    from tracer.march import NEWTON
+
     base = os.path.dirname(os.path.abspath(scene_path))
 
     def rel(p):
@@ -150,8 +153,6 @@ def scene_dict(scene, scene_path, source_paths):
            "beta": float(scene.beta), "mode": scene.mode, "shading": scene.shading}
     if scene.matcap:
         out["matcap"] = rel(scene.matcap)
-    from tracer.march import NEWTON
-
     if scene.tol:
         out["tol"] = float(scene.tol)
     if scene.newton != NEWTON:
