@@ -9,7 +9,14 @@
   isosurface, closer to a 1000x tighter plain render than plain sphere tracing at the same eps,
   and fewer evaluations;
 * ``march.trace_pixels`` (a pixel subsample) equals the full render at those pixels.
+* the scene key ``newton`` and ``tracer render --newton N`` / ``--no-newton`` reach the march:
+  ``"newton": 0`` renders exactly what ``render(scene, newton=0)`` does (and not the
+  default), the flag overrides the file, ``--save-scene`` keeps the value, exact-offset
+  scenes accept the key and do not change, and bad values are one-line errors.
 """
+
+import json
+import math
 
 import numpy as np
 import pytest
@@ -17,8 +24,10 @@ import pytest
 from smoothdist import DataMesh, SmoothDistanceField
 from tracer import march
 from tracer.camera import primary_rays
+from tracer.cli import main
+from tracer.image import load_png
 from tracer.render import camera_of, render, scene_arrays
-from tracer.scene import scene_from_field
+from tracer.scene import SceneError, load_scene, scene_from_field
 from test_tol import BUNNY
 
 
@@ -140,3 +149,148 @@ def test_cone_pass_with_tol_against_plain(bunny_points, relax):
     plain = render(scene, cone=False, relax=relax)
     fast = render(scene, cone=True, relax=relax)
     _check_close(fast, plain, scene.eps, bunny_points.diagonal)
+
+
+# ----------------------------------------------------------------------------- scene key, CLI
+def _newton_scene(tmp_path, name="s", **extra):
+    """A 24x24 scene file of the bunny's points (``extra``: top-level keys)."""
+    data = {"camera": {"origin": [0, 0.11, 0.31], "dest": [0, 0.11, 0], "up": [0, 1, 0]},
+            "objects": [{"path": str(BUNNY), "alpha": 200, "max_alpha": 1200,
+                         "bvh_type": "points"}],
+            "width": 24, "height": 24, **extra}
+    p = tmp_path / f"{name}.json"
+    p.write_text(json.dumps(data))
+    return p
+
+
+def test_scene_key_newton_is_parsed_and_validated(tmp_path, bunny_points):
+    assert load_scene(_newton_scene(tmp_path)).newton == march.NEWTON
+    assert load_scene(_newton_scene(tmp_path, newton=0)).newton == 0.0
+    assert load_scene(_newton_scene(tmp_path, newton=12.5)).newton == 12.5
+    assert load_scene(_newton_scene(tmp_path, newton=12.5), {"newton": 0.0}).newton == 0.0
+    for bad, word in ((-1, ">= 0"), (math.nan, "finite"), ("off", "must be a number"),
+                      (False, "must be a number"), (True, "must be a number"),
+                      (None, "must be a number"), ([100], "must be a number")):
+        with pytest.raises(SceneError, match="newton") as info:
+            load_scene(_newton_scene(tmp_path, newton=bad))
+        assert word in str(info.value) and "\n" not in str(info.value), str(info.value)
+        assert str(info.value).startswith("s.json: newton ")
+    with pytest.raises(SceneError, match="--newton must be >= 0"):
+        load_scene(_newton_scene(tmp_path), {"newton": -2.0})
+    # the API: the same checks, and the default
+    assert scene_from_field(bunny_points, alpha=200.0, width=8, height=8).newton == march.NEWTON
+    assert scene_from_field(bunny_points, alpha=200.0, width=8, height=8, newton=0).newton == 0
+    for bad in (-1.0, math.nan, "0", True):
+        with pytest.raises(ValueError, match="newton"):
+            scene_from_field(bunny_points, alpha=200.0, width=8, height=8, newton=bad)
+
+
+def test_scene_key_newton_reaches_the_march(tmp_path):
+    default = load_scene(_newton_scene(tmp_path, "default"))
+    off = load_scene(_newton_scene(tmp_path, "off", newton=0))
+    ref_off = render(default, newton=0.0)
+    ref_on = render(default)
+    r_off = render(off)
+    # "newton": 0 is exactly plain sphere tracing ...
+    np.testing.assert_array_equal(r_off.depth, ref_off.depth)
+    np.testing.assert_array_equal(r_off.steps, ref_off.steps)
+    np.testing.assert_array_equal(r_off.rgb, ref_off.rgb)
+    # ... which is not the default (so the key is not ignored)
+    assert r_off.hit.sum() >= 40
+    assert not np.array_equal(r_off.depth, ref_on.depth, equal_nan=True)
+    assert ref_on.steps.sum() < r_off.steps.sum()
+    # render()'s explicit argument overrides the scene's value
+    np.testing.assert_array_equal(render(off, newton=march.NEWTON).depth, ref_on.depth)
+    # a value between: the scene's value is used, not the default
+    some = load_scene(_newton_scene(tmp_path, "some", newton=3))
+    np.testing.assert_array_equal(render(some).depth, render(default, newton=3.0).depth)
+
+
+def test_scene_key_newton_in_exact_mode(tmp_path):
+    """Exact-offset scenes accept the key; Newton steps are smooth-mode only, so every value
+    renders the same image."""
+    kw = dict(mode="exact", offset=0.004)
+    base = render(load_scene(_newton_scene(tmp_path, "exact", **kw)))
+    assert base.hit.sum() >= 40
+    for value in (0, 7):
+        other = load_scene(_newton_scene(tmp_path, f"exact{value}", newton=value, **kw))
+        assert other.newton == value
+        res = render(other)
+        np.testing.assert_array_equal(res.depth, base.depth)
+        np.testing.assert_array_equal(res.steps, base.steps)
+
+
+def test_cli_no_newton_equals_the_scene_key(tmp_path, capsys):
+    default = _newton_scene(tmp_path, "default")
+    off = _newton_scene(tmp_path, "off", newton=0)
+
+    def run(scene, name, *extra):
+        assert main(["render", str(scene), "-o", str(tmp_path / f"{name}.png"), "--depth",
+                     str(tmp_path / f"{name}.npy"), "-q", *extra]) == 0
+        return load_png(tmp_path / f"{name}.png"), np.load(tmp_path / f"{name}.npy")
+
+    key_rgb, key_depth = run(off, "key")
+    for name, extra in (("flag", ["--no-newton"]), ("zero", ["--newton", "0"])):
+        rgb, depth = run(default, name, *extra)
+        np.testing.assert_array_equal(depth, key_depth)
+        np.testing.assert_array_equal(rgb, key_rgb)
+    # the flag overrides the file, both ways
+    _, on_depth = run(default, "on")
+    assert not np.array_equal(on_depth, key_depth, equal_nan=True)
+    np.testing.assert_array_equal(run(off, "on2", "--newton", str(march.NEWTON))[1], on_depth)
+    # --save-scene keeps the flag's value; the saved scene renders the same image
+    saved = tmp_path / "saved.json"
+    run(default, "save", "--no-newton", "--stats", str(tmp_path / "st.json"),
+        "--save-scene", str(saved))
+    assert json.loads(saved.read_text())["newton"] == 0
+    assert json.loads((tmp_path / "st.json").read_text())["newton"] == 0
+    np.testing.assert_array_equal(run(saved, "resaved")[1], key_depth)
+    # the help states the default the loader uses
+    with pytest.raises(SystemExit):
+        main(["render", "--help"])
+    assert f"else {march.NEWTON:g})" in " ".join(capsys.readouterr().out.split())
+
+
+def test_cli_newton_with_a_mesh_file(tmp_path):
+    """A mesh file on the command line: --no-newton and --tol reach the scene, and
+    --save-scene writes them."""
+    out = tmp_path / "m.png"
+    saved = tmp_path / "m.json"
+    assert main(["render", str(BUNNY), "--kind", "points", "--size", "16", "16", "-o",
+                 str(out), "--no-newton", "--tol", "0.01", "--save-scene", str(saved),
+                 "--stats", str(tmp_path / "m_stats.json"), "-q"]) == 0
+    data = json.loads(saved.read_text())
+    assert data["newton"] == 0 and data["tol"] == 0.01
+    stats = json.loads((tmp_path / "m_stats.json").read_text())
+    assert stats["newton"] == 0 and stats["tol"] == 0.01
+    # the default is not written: the saved scene stays valid if the default changes
+    assert main(["render", str(BUNNY), "--kind", "points", "--size", "16", "16", "-o",
+                 str(tmp_path / "d.png"), "--save-scene", str(tmp_path / "d.json"), "-q"]) == 0
+    assert "newton" not in json.loads((tmp_path / "d.json").read_text())
+
+
+@pytest.mark.parametrize("extra,word", [
+    (["--newton", "-1"], "--newton must be >= 0"),
+    (["--newton", "nan"], "--newton must be finite"),
+    (["--newton", "x"], "--newton"),
+    (["--newton", "5", "--no-newton"], "not allowed with"),
+])
+def test_cli_newton_errors(tmp_path, capsys, extra, word):
+    out = tmp_path / "bad.png"
+    assert main(["render", str(_newton_scene(tmp_path)), "-o", str(out), "-q", *extra]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error:") and word in err, err
+    assert len(err.strip().splitlines()) == 1 and not out.exists()
+
+
+def test_cli_bad_newton_in_the_scene_file(tmp_path, capsys):
+    out = tmp_path / "bad.png"
+    scene = _newton_scene(tmp_path, "bad", newton=-3)
+    assert main(["render", str(scene), "-o", str(out), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert err.strip() == "error: bad.json: newton must be >= 0, got -3" and not out.exists()
+    # a boolean is refused with a hint
+    scene = _newton_scene(tmp_path, "bad", newton=False)
+    assert main(["render", str(scene), "-o", str(out), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert "0 turns Newton steps off" in err and len(err.strip().splitlines()) == 1

@@ -94,7 +94,7 @@ def _fingerprint(scene):
                                    offset=o.offset, matcap=o.matcap, V=m.V.tolist(),
                                    P=m.points.tolist(), E=m.edges.tolist(),
                                    T=m.triangles.tolist()))
-    for k in ("tol",):  # keys other changes add to Scene / SceneObject
+    for k in ("tol", "newton"):  # keys other changes add to Scene / SceneObject
         if hasattr(scene, k):
             out[k] = getattr(scene, k)
     return out
@@ -176,6 +176,8 @@ def test_shipped_scenes_are_valid(schema):
     (lambda d: d.update(width=0), "width"),
     (lambda d: d.update(width=1.5), "width"),
     (lambda d: d.update(beta=-1), "beta"),
+    (lambda d: d.update(newton=-1), "newton"),
+    (lambda d: d.update(newton=False), "newton"),
     (lambda d: d.update(mode="fuzzy"), "mode"),
     (lambda d: d.update(alhpa=3), "unknown key"),
     (lambda d: d["camera"].pop("up"), "up"),

@@ -45,6 +45,14 @@ def add_arguments(p):
                    help="tolerance-controlled pruning: d_hat within log(1 + TOL)/alpha of the "
                         "exact sum, never above it (0 = off; default: scene's). With --beta 0 "
                         "it is the only pruning")
+    newton = p.add_mutually_exclusive_group()
+    newton.add_argument("--newton", type=float, metavar="N",
+                        help="smooth mode: Newton steps along the ray once the distance is "
+                        "below N x eps (at most 1%% of the bbox diagonal; default: scene's, "
+                        "else 100)")
+    newton.add_argument("--no-newton", dest="newton", action="store_const", const=0.0,
+                        help="plain sphere tracing (= --newton 0): a Newton step can step over "
+                        "a sliver thinner than 4 x N x eps, e.g. fine relief at grazing angles")
     p.add_argument("--mode", choices=("smooth", "exact"),
                    help="smooth distance, or exact distance offset surface")
     p.add_argument("--offset", type=float,
@@ -113,7 +121,7 @@ def run(args):
         raise CLIError("--kind applies to mesh files; a scene file sets bvh_type per object")
     overrides = {"beta": args.beta, "alpha": args.alpha, "alpha_u": args.alpha_u,
                  "mode": args.mode, "eps": args.eps, "shading": args.shading,
-                 "offset": args.offset, "tol": args.tol}
+                 "offset": args.offset, "tol": args.tol, "newton": args.newton}
     if args.size:
         overrides["width"], overrides["height"] = args.size
     name = os.path.splitext(os.path.basename(args.scene))[0]
@@ -158,7 +166,7 @@ def run(args):
         written.append(_save_scene(args, scene, source))
     stats = result.summary()
     stats.update(scene=os.path.abspath(args.scene), mode=scene.mode, beta=scene.beta,
-                 tol=scene.tol,
+                 tol=scene.tol, newton=scene.newton,
                  eps=scene.eps, objects=[{"name": o.name, "alpha": o.alpha, "alpha_u": o.alpha_u,
                                           "primitives": o.field.num_primitives}
                                          for o in scene.objects])
@@ -201,7 +209,8 @@ def _mesh_scene(args, overrides):
                       view=args.view or "front",
                       camera=_camera_arg(args) if args.camera else None,
                       mode=args.mode or "smooth", offset=args.offset, eps=args.eps,
-                      shading=args.shading or "normals")
+                      shading=args.shading or "normals",
+                      tol=args.tol if args.tol is not None else 0.0, newton=args.newton)
 
 
 def _replace_camera(scene, args):
@@ -269,7 +278,7 @@ def _edited_scene(data, args, scene):
         first["max_alpha"] = args.alpha_u
     if args.size:
         data["width"], data["height"] = args.size
-    for key in ("beta", "mode", "eps", "shading", "offset"):
+    for key in ("beta", "mode", "eps", "shading", "offset", "tol", "newton"):
         if getattr(args, key) is not None:
             data[key] = getattr(args, key)
             if key in ("beta", "offset"):  # the command line overrode per-object values too

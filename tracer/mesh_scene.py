@@ -35,7 +35,7 @@ def load_geometry(mesh, F=None, kind=None):
 
 def mesh_scene(mesh, F=None, *, kind=None, alpha="auto", alpha_u="auto", beta=0.5,
                size=(512, 512), view="front", camera=None, mode="smooth", offset=None,
-               eps=None, shading="normals", matcap="", name=None):
+               eps=None, shading="normals", matcap="", name=None, tol=0.0, newton=None):
     """A one-object :class:`tracer.scene.Scene` for ``mesh``, camera framing the surface.
 
     Parameters
@@ -60,7 +60,7 @@ def mesh_scene(mesh, F=None, *, kind=None, alpha="auto", alpha_u="auto", beta=0.
         :func:`tracer.camera.frame_points`).
     camera : (origin, dest, up), optional
         An explicit camera instead of ``view``.
-    mode, offset, eps, shading, matcap :
+    mode, offset, eps, shading, matcap, tol, newton :
         As in :func:`tracer.scene.scene_from_field`.
     name : str, optional
         The scene's name (default: the mesh's).
@@ -77,7 +77,8 @@ def mesh_scene(mesh, F=None, *, kind=None, alpha="auto", alpha_u="auto", beta=0.
     return scene_from_field(field, alpha=alpha, alpha_u=alpha_u, beta=beta,
                             camera=view if camera is None else camera, width=width,
                             height=height, mode=mode, eps=eps, offset=offset, shading=shading,
-                            matcap=matcap, name=name or os.path.splitext(data.name)[0])
+                            matcap=matcap, name=name or os.path.splitext(data.name)[0], tol=tol,
+                            newton=newton)
 
 
 def render_mesh(mesh, F=None, *, kind=None, alpha="auto", alpha_u="auto", beta=0.5,
@@ -127,8 +128,11 @@ def scene_dict(scene, scene_path, source_paths):
     """A scene-file dict (our JSON format) that reproduces ``scene``.
 
     ``source_paths`` lists each object's mesh file; paths are written relative to the folder
-    of ``scene_path`` (where the dict will be saved).
+    of ``scene_path`` (where the dict will be saved). ``tol`` and ``newton`` are written when
+    they are not the defaults.
     """
+    from tracer.march import NEWTON
+
     base = os.path.dirname(os.path.abspath(scene_path))
 
     def rel(p):
@@ -149,6 +153,10 @@ def scene_dict(scene, scene_path, source_paths):
            "beta": float(scene.beta), "mode": scene.mode, "shading": scene.shading}
     if scene.matcap:
         out["matcap"] = rel(scene.matcap)
+    if scene.tol:
+        out["tol"] = float(scene.tol)
+    if scene.newton != NEWTON:
+        out["newton"] = float(scene.newton)
     return out
 
 

@@ -178,7 +178,8 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
         ``tracer.march.CONE``).
     newton : float, optional
         Newton steps along the ray once the distance is below ``newton x eps`` (at most 1 % of
-        the scene box diagonal; 0: plain sphere tracing; default ``tracer.march.NEWTON``); see
+        the scene box diagonal; 0: plain sphere tracing; default: the scene's ``newton``,
+        ``tracer.march.NEWTON`` unless the scene file sets it); see
         :func:`tracer.march.march_ray`.
 
     Raises
@@ -208,7 +209,7 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
                march.OMEGA if omega is None else max(1.0, float(omega)),
                march.CONE if cone is None else bool(cone),
                march.newton_distance(scene.eps, lo, hi,
-                                     march.NEWTON if newton is None else max(0.0, float(newton))))
+                                     max(0.0, float(scene.newton if newton is None else newton))))
     band = band_rows or H
     t0 = time.perf_counter()
     for r0 in range(0, H, band):

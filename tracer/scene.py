@@ -11,7 +11,10 @@ units; default ``1e-4 x`` the data's bbox diagonal), ``mode`` (``"smooth"`` or `
 ``offset`` (exact mode; default ``1/alpha`` per object), ``shading`` (``"normals"``,
 ``"matcap"``, ``"headlight"``), ``matcap``, ``background`` ([r, g, b] 0-255), ``max_steps``,
 ``gradient`` (``"metric"`` or ``"exact"``), ``description``, ``tol`` (tolerance-controlled
-pruning, a number >= 0, default 0 = off; see ``smoothdist.query.smooth_distance_point_tol``).
+pruning, a number >= 0, default 0 = off; see ``smoothdist.query.smooth_distance_point_tol``),
+``newton`` (smooth mode: Newton steps along the ray once the distance is below ``newton x eps``,
+a number >= 0, default ``tracer.march.NEWTON``; 0 = plain sphere tracing; see
+``tracer.march.march_ray``).
 Per object: ``beta``, ``offset``,
 ``bvh_type`` may also be ``"mixed"`` (keep all primitives of the file), and instead of ``path``
 an object may list ``parts``: ``[{"path": ..., "bvh_type": ..., "scale": s,
@@ -44,6 +47,7 @@ import numpy as np
 
 import smoothdist
 from smoothdist import DataMesh, SmoothDistanceField
+from tracer.march import NEWTON
 
 BVH_TYPES = {"faces": "triangles", "triangles": "triangles", "edges": "edges",
              "points": "points", "mixed": "mixed"}
@@ -51,7 +55,8 @@ SHADINGS = ("normals", "matcap", "headlight")
 MODES = ("smooth", "exact")
 
 _TOP_KEYS = {"camera", "objects", "width", "height", "beta", "eps", "mode", "offset", "shading",
-             "matcap", "background", "max_steps", "gradient", "description", "name", "tol"}
+             "matcap", "background", "max_steps", "gradient", "description", "name", "tol",
+             "newton"}
 _CAMERA_KEYS = {"origin", "dest", "up"}
 _OBJECT_KEYS = {"path", "parts", "alpha", "max_alpha", "bvh_type", "matcap", "beta", "offset",
                 "name", "scale", "translate"}
@@ -97,6 +102,7 @@ class Scene:
     description: str = ""
     extra: dict = dc_field(default_factory=dict)
     tol: float = 0.0
+    newton: float = NEWTON
 
     @property
     def name(self):
@@ -249,7 +255,7 @@ def load_scene(path, overrides=None):
     overrides : dict, optional
         Values that replace the file's: ``width``, ``height``, ``beta``, ``alpha`` (first
         object; a number or "auto"), ``alpha_u`` (first object's ``max_alpha``; a number or
-        "auto"), ``mode``, ``eps``, ``shading``, ``offset``, ``tol``.
+        "auto"), ``mode``, ``eps``, ``shading``, ``offset``, ``tol``, ``newton``.
 
     Raises
     ------
@@ -288,6 +294,10 @@ def load_scene(path, overrides=None):
                                            f"{MAX_PIXELS // 1_000_000} megapixels")
     beta = top("beta", 0.5, non_negative=True)
     tol = top("tol", 0.0, non_negative=True)
+    if isinstance(data.get("newton"), bool) and overrides.get("newton") is None:
+        raise _err(path, "newton", f"must be a number (a multiple of eps; 0 turns Newton steps "
+                                   f"off), got {_show(data['newton'])}")
+    newton = top("newton", NEWTON, non_negative=True)
     eps = top("eps", None, positive=True)
     max_steps = top("max_steps", 1000, positive=True, integer=True)
     if max_steps > MAX_STEPS:
@@ -331,7 +341,7 @@ def load_scene(path, overrides=None):
     scene = Scene(path=path, camera_origin=origin, camera_dest=dest, camera_up=up,
                   objects=objects, width=width, height=height, beta=beta, eps=eps, mode=mode,
                   shading=shading, matcap=matcap, background=tuple(bg), max_steps=max_steps,
-                  gradient=gradient, description=str(desc), tol=tol)
+                  gradient=gradient, description=str(desc), tol=tol, newton=newton)
     if scene.eps is None:
         scene.eps = default_eps(scene)
     return scene
@@ -480,7 +490,8 @@ def merge_meshes(meshes, name="mixed"):
 
 def scene_from_field(field, *, alpha, alpha_u=None, beta=0.5, camera=None, width=512,
                      height=512, mode="smooth", eps=None, offset=None, shading="normals",
-                     matcap="", gradient="metric", name="scene", max_steps=1000, tol=0.0):
+                     matcap="", gradient="metric", name="scene", max_steps=1000, tol=0.0,
+                     newton=None):
     """Build a one-object :class:`Scene` in code (no JSON), e.g. for parameter studies.
 
     Parameters
@@ -503,6 +514,9 @@ def scene_from_field(field, *, alpha, alpha_u=None, beta=0.5, camera=None, width
         surface.
     tol : float
         Tolerance-controlled pruning (>= 0; 0 = off), as the scene key ``tol``.
+    newton : float, optional
+        Smooth mode: Newton steps once the distance is below ``newton x eps`` (>= 0; 0 =
+        plain sphere tracing; default ``tracer.march.NEWTON``), as the scene key ``newton``.
     """
     if mode not in MODES:
         raise ValueError(f"mode must be one of {MODES}, got {mode!r}")
@@ -520,6 +534,7 @@ def scene_from_field(field, *, alpha, alpha_u=None, beta=0.5, camera=None, width
     if eps is not None:
         eps = _api_number(eps, "eps", positive=True)
     tol = _api_number(tol, "tol", non_negative=True)
+    newton = NEWTON if newton is None else _api_number(newton, "newton", non_negative=True)
     max_steps = int(_api_number(max_steps, "max_steps", positive=True, integer=True))
     if max_steps > MAX_STEPS:
         raise ValueError(f"max_steps must be at most {MAX_STEPS}, got {max_steps}")
@@ -557,7 +572,7 @@ def scene_from_field(field, *, alpha, alpha_u=None, beta=0.5, camera=None, width
     scene = Scene(path=f"{name}.json", camera_origin=origin, camera_dest=dest, camera_up=up,
                   objects=[obj], width=width, height=height, beta=beta,
                   eps=eps, mode=mode, shading=shading, matcap=matcap, max_steps=max_steps,
-                  gradient=gradient, tol=tol)
+                  gradient=gradient, tol=tol, newton=newton)
     if scene.eps is None:
         scene.eps = default_eps(scene)
     return scene
