@@ -294,3 +294,13 @@ def test_cli_bad_newton_in_the_scene_file(tmp_path, capsys):
     assert main(["render", str(scene), "-o", str(out), "-q"]) == 2
     err = capsys.readouterr().err
     assert "0 turns Newton steps off" in err and len(err.strip().splitlines()) == 1
+
+
+def test_render_refuses_a_bad_newton_or_relax_argument(tmp_path):
+    """The API's ``newton=`` / ``relax=`` overrides are validated like the scene key (they
+    used to be clamped to 0 without a word)."""
+    scene = load_scene(_newton_scene(tmp_path))
+    for name in ("newton", "relax"):
+        for bad in (-1.0, math.nan, math.inf, "100", True):
+            with pytest.raises(ValueError, match=f"{name} must be a finite number >= 0"):
+                render(scene, **{name: bad})

@@ -1,5 +1,6 @@
 """Render a :class:`~tracer.scene.Scene`: trace, shade, and collect per-pixel buffers."""
 
+import math
 import os
 import sys
 import threading
@@ -187,6 +188,11 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
     RenderError
         When the camera is inside the surface (distance <= eps at the camera).
     """
+    for name, value in (("newton", newton), ("relax", relax)):
+        if value is not None and not (isinstance(value, (int, float, np.number))
+                                      and not isinstance(value, bool)
+                                      and math.isfinite(value) and value >= 0):
+            raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
     camera = camera_of(scene)
     arrays = scene_arrays(scene, transforms)
     tree, roots, params, mode, lo, hi, depth_max = arrays
