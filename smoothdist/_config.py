@@ -7,13 +7,17 @@ may hard-code ``fastmath=`` or ``parallel=`` (``tests/test_policy.py`` greps for
   which fastmath is allowed to break.
 * ``CACHE`` is on, so a fresh process loads compiled kernels from ``__pycache__``.
 * ``PARALLEL`` may be switched off with ``SMOOTHDIST_PARALLEL=0`` (serial reference runs).
+  Those runs do not use the on-disk cache: numba's cache index is keyed on the signature,
+  the machine and the bytecode, not on ``parallel=``, so they would load the parallel
+  kernels compiled by an earlier run (and store serial ones that a later parallel run
+  would load).
 """
 
 import os
 
 FASTMATH = False
-CACHE = True
 PARALLEL = os.environ.get("SMOOTHDIST_PARALLEL", "1") != "0"
+CACHE = PARALLEL
 
 #: keyword arguments for small scalar kernels called from other kernels
 NJIT = dict(cache=CACHE, fastmath=FASTMATH, nogil=True)

@@ -247,3 +247,26 @@ def test_guard_once_runs_once_and_can_be_switched_off(monkeypatch):
     monkeypatch.setattr(cache_guard, "guard", broken)
     monkeypatch.setattr(cache_guard, "_done", False)
     cache_guard.guard_once()  # warns, does not raise
+
+
+def test_serial_runs_do_not_load_the_parallel_kernels(tmp_path):
+    """``SMOOTHDIST_PARALLEL=0`` after a parallel run compiles serial kernels: numba's cache
+    index does not key on ``parallel=``, so a cached parallel kernel would be loaded."""
+    code = (
+        "import numpy as np\n"
+        "from smoothdist import DataMesh, SmoothDistanceField\n"
+        "import smoothdist.query as q\n"
+        "f = SmoothDistanceField(DataMesh(np.random.default_rng(0).random((50, 3))))\n"
+        "f.smooth_distance(np.zeros((3, 3)), alpha=20.0, beta=0.5)\n"
+        "k = q.smooth_distance_batch\n"
+        "print(k.targetoptions['parallel'], sum(k.stats.cache_hits.values()))\n")
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"))
+    env.pop("SMOOTHDIST_PARALLEL", None)
+    runs = []
+    for serial in (False, False, True):
+        e = dict(env, SMOOTHDIST_PARALLEL="0") if serial else env
+        out = subprocess.run([sys.executable, "-c", code], env=e, capture_output=True,
+                             text=True, check=True).stdout.split()
+        runs.append(out)
+    assert runs[0] == ["True", "0"] and runs[1] == ["True", "1"]   # the parallel cache works
+    assert runs[2] == ["False", "0"]                               # not loaded by a serial run
