@@ -304,3 +304,22 @@ def test_render_refuses_a_bad_newton_or_relax_argument(tmp_path):
         for bad in (-1.0, math.nan, math.inf, "100", True):
             with pytest.raises(ValueError, match=f"{name} must be a finite number >= 0"):
                 render(scene, **{name: bad})
+
+
+@pytest.mark.parametrize("option, value, message", [
+    ("--beta", "-1", "--beta must be a finite number >= 0"),
+    ("--tol", "-1", "--tol must be >= 0"),
+    ("--newton", "-1", "--newton must be >= 0"),
+    ("--offset", "-1", "--offset must be >= 0"),
+    ("--alpha", "-1", "--alpha must be a finite number > 0"),
+    ("--alpha-u", "-1", "--alpha-u must be a finite number > 0"),
+    ("--eps", "nan", "--eps must be finite"),
+])
+def test_cli_bad_option_with_a_mesh_file_names_the_option(tmp_path, capsys, option, value,
+                                                          message):
+    """A mesh file on the command line reports a bad option by its flag, as a scene file does."""
+    out = tmp_path / "bad.png"
+    assert main(["render", str(BUNNY), option, value, "-o", str(out), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"error: {message}") and len(err.strip().splitlines()) == 1, err
+    assert not out.exists()

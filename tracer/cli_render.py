@@ -140,7 +140,7 @@ def run(args):
                args.save_scene]
     check_outputs(outputs, args.overwrite, create=False)
     if source == "mesh":
-        scene = _mesh_scene(args, overrides)
+        scene = _mesh_scene(args)
     else:
         scene = load_scene(args.scene, overrides)
         if args.view or args.camera:
@@ -197,8 +197,25 @@ def _camera_arg(args):
     return (np.array(c[0:3]), np.array(c[3:6]), np.array(c[6:9]))
 
 
-def _mesh_scene(args, overrides):
+#: API parameter names of ``mesh_scene`` and the options that set them (error messages name
+#: the option, as the scene-file path's ``--eps must be > 0`` does)
+_OPTION_OF = {"alpha_u": "--alpha-u", "alpha": "--alpha", "beta": "--beta", "eps": "--eps",
+              "tol": "--tol", "newton": "--newton", "offset": "--offset"}
+
+
+def _mesh_scene(args):
     """The scene for a mesh file given on the command line."""
+    try:
+        return _build_mesh_scene(args)
+    except ValueError as exc:
+        msg = str(exc)
+        for name, option in _OPTION_OF.items():
+            if msg.startswith(name + " ") and getattr(args, name, None) is not None:
+                raise CLIError(option + msg[len(name):]) from None
+        raise
+
+
+def _build_mesh_scene(args):
     from tracer.mesh_scene import mesh_scene
 
     width, height = args.size or (512, 512)
