@@ -254,10 +254,6 @@ def smooth_distance_point(tree, px, py, pz, alpha, beta, S, wgs, stack, dstack, 
     return m - math.log(s) / alpha, gx * inv, gy * inv, gz * inv, nodes, leaves
 
 
-#: tol mode: largest number of deferred nodes per evaluation (smooth_distance_point_tol).
-#: 0 (no deferral): deferring up to 256 nodes visited 9-10 % fewer leaves on the bunny's tol
-#: renders but took 3-13 % more wall time (128², tol 3e-3, two alternating quiet runs)
-DEFER = 0
 #: tol mode: a node with at most this many primitives that is not accepted is evaluated
 #: primitive by primitive (they are contiguous in tree order) instead of being descended
 TOL_LEAF = 8
@@ -270,6 +266,14 @@ def _shift(m, d, alpha):
     if d < m:
         return math.exp(-alpha * (m - d)), d
     return 1.0, m
+
+
+@numba.njit(**NJIT)
+def _shift_sums(m, d, alpha, s, gx, gy, gz, s_ex, e_far, s_ref):
+    """The tol kernel's running sums re-expressed relative to ``min(m, d)`` (see
+    :func:`_shift`); returns ``(m, s, gx, gy, gz, s_ex, e_far, s_ref)``."""
+    f, m = _shift(m, d, alpha)
+    return m, s * f, gx * f, gy * f, gz * f, s_ex * f, e_far * f, s_ref * f
 
 
 @numba.njit(**NJIT)
@@ -314,9 +318,9 @@ def smooth_distance_point_tol(tree, px, py, pz, alpha, beta, tol, S, wgs, stack,
     of evaluated leaves, all >= 0), so ``s_tol = s_ex + E <= (1 + tol) s_0`` and
     ``d_hat_0 - d_hat_tol = log(s_tol / s_0) / alpha <= log(1 + tol) / alpha``. Both steps
     hold for any visiting order; the order only decides how early ``s_ex`` is large enough
-    to accept far nodes (hence the speed; with ``DEFER > 0``, nodes beyond the cheap ``near``
-    threshold that fail are deferred and re-tested at the end, when the far nodes have left
-    budget unused: about 10 % fewer leaves on the bunny, but more time, so it is off). Both
+    to accept far nodes (hence the speed; deferring nodes that fail and re-testing them at
+    the end, when the far nodes have left budget unused, visited about 10 % fewer leaves on
+    the bunny but took 3-13 % more time, and was removed). Both
     sides of the test are relative to the same shift, so they rescale together when it
     moves. No node is accepted before the first exact term (``s_ex = 0``).
 
@@ -363,31 +367,17 @@ def smooth_distance_point_tol(tree, px, py, pz, alpha, beta, tol, S, wgs, stack,
     stack[0] = root
     dstack[0] = math.sqrt(d2)
     sp = 1
-    # nodes that fail the test although beyond ``near`` are deferred (up to DEFER of them)
-    # and re-tested once the stack is empty, with the budget left unused by the far nodes
-    # accepted meanwhile; a deferred node that fails again is opened
-    defer = np.empty(DEFER, dtype=np.int64)
-    ddist = np.empty(DEFER)
-    nd = 0
-    while sp > 0 or nd > 0:
-        retest = sp == 0
-        if retest:
-            nd -= 1
-            node = defer[nd]
-            bd = ddist[nd]
-        else:
-            sp -= 1
-            node = stack[sp]
-            bd = dstack[sp]
-            nodes += 1
+    while sp > 0:
+        sp -= 1
+        node = stack[sp]
+        bd = dstack[sp]
+        nodes += 1
         cnt = tree.count[node]
-        far = False
         if s_ex > 0.0 and bd >= near:
             W = cnt * wa
             allow = budget * s_ex * (n_far + cnt)
             if bd >= m:
-                u = W * math.exp(-alpha * (bd - m))
-                far = e_far + u <= allow
+                far = e_far + W * math.exp(-alpha * (bd - m)) <= allow
             else:
                 f = math.exp(-alpha * (m - bd))
                 far = e_far * f + W <= allow * f
@@ -397,14 +387,8 @@ def smooth_distance_point_tol(tree, px, py, pz, alpha, beta, tol, S, wgs, stack,
                     n_ref = n_far
                     near = m + math.log(wa / (budget * s_ex * (n_ref + 1))) / alpha
                 d2, cx, cy, cz = box_distance2(px, py, pz, lo, hi, node)
-                f, m = _shift(m, bd, alpha)
-                s *= f
-                gx *= f
-                gy *= f
-                gz *= f
-                s_ex *= f
-                e_far *= f
-                s_ref *= f
+                m, s, gx, gy, gz, s_ex, e_far, s_ref = _shift_sums(m, bd, alpha, s, gx, gy, gz,
+                                                                   s_ex, e_far, s_ref)
                 e = math.exp(-alpha * (bd - m))
                 s += W * e
                 e_far += W * e
@@ -415,25 +399,14 @@ def smooth_distance_point_tol(tree, px, py, pz, alpha, beta, tol, S, wgs, stack,
                     gz += e * (fw * (pz - cz))
                 leaves += 1
                 continue
-            if not retest and nd < DEFER:
-                defer[nd] = node
-                ddist[nd] = bd
-                nd += 1
-                continue
         l = tree.left[node]
         if l >= 0 and cnt > 1 and beta > 0.0 and tree.diag[node] < beta * bd:
             # Barnes-Hut far field (outside the tol budget), count * whi**S * exp(-alpha bd)
             d2, cx, cy, cz = box_distance2(px, py, pz, lo, hi, node)
             W = float(cnt)
             db = bd - S * tree.lwhi[node] / alpha
-            f, m = _shift(m, db, alpha)
-            s *= f
-            gx *= f
-            gy *= f
-            gz *= f
-            s_ex *= f
-            e_far *= f
-            s_ref *= f
+            m, s, gx, gy, gz, s_ex, e_far, s_ref = _shift_sums(m, db, alpha, s, gx, gy, gz,
+                                                               s_ex, e_far, s_ref)
             e = math.exp(-alpha * (db - m))
             fw = W / bd
             s += W * e
@@ -446,14 +419,8 @@ def smooth_distance_point_tol(tree, px, py, pz, alpha, beta, tol, S, wgs, stack,
             st = tree.start[node]
             for i in range(st, st + cnt):
                 d, W, vx, vy, vz = primitive_term(tree, i, px, py, pz, S, wgs)
-                f, m = _shift(m, d, alpha)
-                s *= f
-                gx *= f
-                gy *= f
-                gz *= f
-                s_ex *= f
-                e_far *= f
-                s_ref *= f
+                m, s, gx, gy, gz, s_ex, e_far, s_ref = _shift_sums(m, d, alpha, s, gx, gy, gz,
+                                                                   s_ex, e_far, s_ref)
                 e = math.exp(-alpha * (d - m))
                 s += W * e
                 s_ex += W * e

@@ -472,6 +472,27 @@ def _render_tile(tree, roots, params, mode, cam, lo, hi, eps, max_steps, r_lo, r
             bisect[r, c] = bs
 
 
+@numba.njit(**NJIT)
+def _tile_grid(cam, row0, row1):
+    """Tiles of rows ``row0 <= r < row1``: ``(image width, tiles per row, number of tiles,
+    stride of the scattered visiting order)``."""
+    W = int(cam[12])
+    ntx = (W + TILE - 1) // TILE
+    n = ntx * ((row1 - row0 + TILE - 1) // TILE)
+    return W, ntx, n, (STRIDE if n % STRIDE != 0 else 1)
+
+
+@numba.njit(**NJIT)
+def _tile_rect(j, n, stride, ntx, row0, row1, W):
+    """Pixel rectangle ``(r_lo, r_hi, c_lo, c_hi)`` of the ``j``-th tile visited (tile
+    ``j * stride mod n``, see :func:`render_rows`)."""
+    tile = (j * stride) % n
+    ty = tile // ntx
+    tx = tile - ty * ntx
+    return (row0 + ty * TILE, min(row1, row0 + (ty + 1) * TILE), tx * TILE,
+            min(W, (tx + 1) * TILE))
+
+
 @numba.njit(**NJIT_PARALLEL)
 def render_rows(tree, roots, params, mode, cam, lo, hi, eps, max_steps, row0, row1, depth_max,
                 hit, tbuf, grad, steps, leaves, bisect, relax=RELAX, omega=OMEGA, cone=CONE,
@@ -485,19 +506,12 @@ def render_rows(tree, roots, params, mode, cam, lo, hi, eps, max_steps, row0, ro
     are visited in a scattered order (``j * STRIDE mod n``) so that the static split of the
     loop between threads gives each thread a similar mix of empty and busy tiles.
     """
-    W = int(cam[12])
-    ntx = (W + TILE - 1) // TILE
-    nty = (row1 - row0 + TILE - 1) // TILE
-    n = ntx * nty
-    stride = STRIDE if n % STRIDE != 0 else 1
+    W, ntx, n, stride = _tile_grid(cam, row0, row1)
     for j in prange(n):
-        tile = (j * stride) % n
-        ty = tile // ntx
-        tx = tile - ty * ntx
-        _render_tile(tree, roots, params, mode, cam, lo, hi, eps, max_steps, row0 + ty * TILE,
-                     min(row1, row0 + (ty + 1) * TILE), tx * TILE, min(W, (tx + 1) * TILE),
-                     depth_max, hit, tbuf, grad, steps, leaves, bisect, relax, omega, cone,
-                     newton)
+        r_lo, r_hi, c_lo, c_hi = _tile_rect(j, n, stride, ntx, row0, row1, W)
+        _render_tile(tree, roots, params, mode, cam, lo, hi, eps, max_steps, r_lo, r_hi, c_lo,
+                     c_hi, depth_max, hit, tbuf, grad, steps, leaves, bisect, relax, omega,
+                     cone, newton)
 
 
 @numba.njit(**NJIT)
@@ -567,21 +581,14 @@ def render_tiles(tree, roots, params, mode, cam, lo, hi, eps, max_steps, row0, r
     and parameters are passed down as borrowed views (:func:`_borrowed`), as ``prange``
     would.
     """
-    W = int(cam[12])
-    ntx = (W + TILE - 1) // TILE
-    nty = (row1 - row0 + TILE - 1) // TILE
-    n = ntx * nty
-    stride = STRIDE if n % STRIDE != 0 else 1
+    W, ntx, n, stride = _tile_grid(cam, row0, row1)
     tree = _borrowed(tree)
     params = _borrowed(params)
     cam = _borrowed(cam)
     lo = _borrowed(lo)
     hi = _borrowed(hi)
     for j in range(j0, min(j1, n)):
-        tile = (j * stride) % n
-        ty = tile // ntx
-        tx = tile - ty * ntx
-        _render_tile(tree, roots, params, mode, cam, lo, hi, eps, max_steps, row0 + ty * TILE,
-                     min(row1, row0 + (ty + 1) * TILE), tx * TILE, min(W, (tx + 1) * TILE),
-                     depth_max, hit, tbuf, grad, steps, leaves, bisect, relax, omega, cone,
-                     newton)
+        r_lo, r_hi, c_lo, c_hi = _tile_rect(j, n, stride, ntx, row0, row1, W)
+        _render_tile(tree, roots, params, mode, cam, lo, hi, eps, max_steps, r_lo, r_hi, c_lo,
+                     c_hi, depth_max, hit, tbuf, grad, steps, leaves, bisect, relax, omega,
+                     cone, newton)
