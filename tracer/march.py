@@ -305,9 +305,13 @@ def march_ray(tree, roots, params, mode, ox, oy, oz, dx, dy, dz, lo, hi, eps, ma
     converges quadratically and usually lands within ``eps`` in one or two steps. Smooth mode
     only: the exact-offset field of a point cloud is a union of spheres, kinked everywhere. A
     Newton step that ends inside (``d < -eps``) is resolved by false position in the bracket.
-    Grazing rays (``-(g . dir) < NEWTON_COS |g|``) keep sphere steps. What is given up: a
-    Newton step is not certified surface-free beyond ``d``, so a sliver thinner than
-    ``NEWTON_CAP x newton`` right in front of the hit can be stepped over.
+    Grazing rays (``-(g . dir) < NEWTON_COS |g|``) keep sphere steps. A Newton step longer
+    than ``d`` is not certified surface-free beyond ``d``: when the spheres at its two ends do
+    not overlap and it lands outside (``d >= -eps``) where ``d`` grows along the ray, it may
+    have stepped over a thin shell (the zero set around a triangle sheet at high alpha is
+    one), so it is undone, and the ray goes on with plain sphere steps. What is left: a step
+    that crosses a whole shell *and* lands where ``d`` falls again (approaching a second
+    surface within ``NEWTON_CAP x newton``) is not detected.
 
     ``hit`` is 1 when ``|d| <= eps`` was reached inside the box (``d < -eps`` only after
     ``BISECT_ITERS`` bracketing steps); then ``t`` is the ray parameter and ``g`` the
@@ -331,6 +335,9 @@ def march_ray(tree, roots, params, mode, ox, oy, oz, dx, dy, dz, lo, hi, eps, ma
     w = omega
     d_prev = 0.0
     step = 0.0
+    # Newton steps stay on until one is undone (see the check below), then plain steps
+    newton_on = newton > 0.0 and mode == MODE_SMOOTH
+    newton_step = False
     while steps < max_steps:
         d, gx, gy, gz, nn, ll = scene_distance(tree, roots, params, mode, ox + t * dx, oy + t * dy,
                                                oz + t * dz, stack, dstack, slack)
@@ -347,6 +354,18 @@ def march_ray(tree, roots, params, mode, ox, oy, oz, dx, dy, dz, lo, hi, eps, ma
             t = t_prev + d_prev
             step = d_prev
             continue
+        if newton_step:
+            newton_step = False
+            if (step > d_prev + abs(d) and d >= -eps
+                    and gx * dx + gy * dy + gz * dz > 0.0):
+                # the Newton step left the part of the ray the sphere at t_prev certifies and
+                # landed where d grows along the ray: d had a minimum in the uncertified gap,
+                # and a thin shell there may have been stepped over. Undo it; plain steps
+                # from here on (a surface is only crossed, or landed on from its front side)
+                newton_on = False
+                t = t_prev + d_prev
+                step = d_prev
+                continue
         if d <= eps:
             if d < -eps and t > t_prev:
                 # overshoot into the negative band: find the root in [t_prev (d > eps), t]
@@ -360,11 +379,12 @@ def march_ray(tree, roots, params, mode, ox, oy, oz, dx, dy, dz, lo, hi, eps, ma
         t_prev = t
         d_prev = d
         step = w * d
-        if d <= near and newton > 0.0 and mode == MODE_SMOOTH:
+        if d <= near and newton_on:
             sd = -(gx * dx + gy * dy + gz * dz)
             if sd > NEWTON_COS * math.sqrt(gx * gx + gy * gy + gz * gz):
                 step = min(d / sd, NEWTON_CAP * d)
                 w = 1.0
+                newton_step = step > d
         t += step
         # near the surface the next point is evaluated at full accuracy at once (a loosened
         # value there would mostly fall below eps and be evaluated again)
