@@ -36,7 +36,13 @@ def _module_of(obj):
 
 
 def is_foreign_geometry(obj):
-    """True for a trimesh or pyvista object that :func:`as_data_mesh` converts."""
+    """True for a trimesh or pyvista object that :func:`as_data_mesh` converts.
+
+    Arrays are never foreign geometry: numpy subclasses that these libraries hand out
+    (``trimesh.caching.TrackedArray``, ``pyvista.pyvista_ndarray``) and array-likes such as
+    lists are vertex or index arrays."""
+    if isinstance(obj, (np.ndarray, list, tuple)):
+        return False
     return _module_of(obj) in ("trimesh", "pyvista", "vtkmodules")
 
 

@@ -398,3 +398,49 @@ def test_compare_panels_are_titled_with_a_colour_bar():
     # title text: dark pixels above the first panel
     top = img[: img.shape[0] // 6, : img.shape[1] // 3]
     assert (top.sum(axis=2) < 200).sum() > 20
+
+
+def test_array_subclasses_and_lists_are_arrays(queries):
+    """trimesh's ``TrackedArray`` and pyvista's ``pyvista_ndarray`` are numpy arrays, lists are
+    array-likes: every entry point takes them as ``V, F`` (issue 22: they were refused as
+    foreign geometry)."""
+    pv = pytest.importorskip("pyvista")
+    tm = trimesh.creation.icosphere(subdivisions=1)
+    V, F = np.array(tm.vertices), np.array(tm.faces)
+    assert type(tm.vertices).__name__ == "TrackedArray"
+    for Vx, Fx in ((tm.vertices, tm.faces), (V.tolist(), F.tolist())):
+        d, g = sd.smooth_distance(queries, Vx, Fx, alpha=7.0, beta=0.0)
+        np.testing.assert_allclose(d, sd.smooth_distance(queries, V, F, alpha=7.0,
+                                                         beta=0.0)[0], rtol=1e-12)
+        np.testing.assert_allclose(sd.exact_distance(queries, Vx, Fx)[0],
+                                   sd.exact_distance(queries, V, F)[0], rtol=1e-12)
+        _same_field(sd.SmoothDistanceField(Vx, Fx).mesh, sd.DataMesh(V, F), queries)
+        shifted = np.asarray(Vx) + [0.0, 0.0, 3.0]
+        a = sd.MeshDistance((Vx, Fx), (shifted, Fx), alpha=7.0, alpha_q=7.0)()
+        b = sd.MeshDistance((V, F), (shifted, F), alpha=7.0, alpha_q=7.0)()
+        assert a[0] == pytest.approx(b[0], rel=1e-12)
+        assert sd.mesh_distance(Vx, Fx, shifted, Fx, alpha=7.0, alpha_q=7.0)[0] == \
+            pytest.approx(b[0], rel=1e-12)
+    sphere = pv.Sphere(theta_resolution=8, phi_resolution=8)
+    assert type(sphere.points).__name__ == "pyvista_ndarray"
+    np.testing.assert_allclose(sd.exact_distance(queries, sphere.points)[0],
+                               sd.exact_distance(queries, np.array(sphere.points))[0])
+    res = tracer.render_mesh(tm.vertices, tm.faces, size=(16, 16))
+    np.testing.assert_array_equal(res.hit, tracer.render_mesh(V, F, size=(16, 16)).hit)
+
+
+def test_render_mesh_progress_takes_booleans_and_callables(capsys):
+    """``progress=False`` raised ``TypeError: 'bool' object is not callable`` (issue 22)."""
+    V, F = icosphere(1)
+    ref = tracer.render_mesh(V, F, size=(16, 16))
+    assert capsys.readouterr().err == ""
+    np.testing.assert_array_equal(tracer.render_mesh(V, F, size=(16, 16), progress=False).hit,
+                                  ref.hit)
+    assert capsys.readouterr().err == ""
+    tracer.render_mesh(V, F, size=(16, 16), progress=True)
+    assert "100.0%" in capsys.readouterr().err
+    calls = []
+    tracer.render_mesh(V, F, size=(16, 16), progress=lambda *a: calls.append(a))
+    assert calls and calls[-1][0] == calls[-1][1] == 256
+    with pytest.raises(TypeError, match="progress must be"):
+        tracer.render_mesh(V, F, size=(16, 16), progress="yes")
