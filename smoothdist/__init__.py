@@ -20,7 +20,7 @@ from smoothdist.convert import as_data_mesh
 from smoothdist.field import (ExactDistanceResult, QueryStats, SmoothDistanceField,
                               SmoothDistanceResult)
 from smoothdist.mesh import DataMesh, MeshRepairWarning
-from smoothdist.mesh_distance import MeshDistance, combine_distances, mesh_distance
+from smoothdist.whole_mesh import MeshDistance, combine_distances, mesh_distance
 
 __all__ = ["DataMesh", "MeshRepairWarning", "SmoothDistanceField", "SmoothDistanceResult",
            "ExactDistanceResult", "QueryStats", "smooth_distance", "exact_distance",

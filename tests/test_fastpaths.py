@@ -339,7 +339,7 @@ def _thin_shell_cases():
 
 @pytest.mark.parametrize("index", [0, 1, 2])
 def test_newton_steps_never_step_over_a_thin_shell(index):
-    from tracer.mesh_scene import mesh_scene
+    from tracer.from_mesh import mesh_scene
 
     name, mesh, alpha, view = _thin_shell_cases()[index]
     scene = mesh_scene(mesh, alpha=alpha, size=(96, 96), view=view)

@@ -7,7 +7,7 @@ from conftest import make_circle, make_cube, make_icosphere, make_mixed, make_no
 import naive_pairs
 import smoothdist
 from smoothdist import DataMesh, MeshDistance, combine_distances, mesh_distance
-from smoothdist.mesh_distance import as_query_mesh
+from smoothdist.whole_mesh import as_query_mesh
 
 
 def _rotation(rng):
@@ -254,7 +254,7 @@ def test_parallel_and_serial_kernels_agree(qname, monkeypatch):
     """Small query meshes run on the calling thread; the prange kernels give the same bits."""
     import importlib
 
-    mdmod = importlib.import_module("smoothdist.mesh_distance")   # the module, not the function
+    mdmod = importlib.import_module("smoothdist.whole_mesh")   # the module, not the function
 
     data = DATA["mixed"]
     Vq, Fq = QUERY[qname]

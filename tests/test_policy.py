@@ -127,3 +127,24 @@ def test_the_checks_catch_violations():
                                     "@nb.njit(**q.NJIT_PARALLEL)\ndef f():\n    pass\n"))
     # a numba.prange loop or a "parallel" variable in a comparison is not an option
     assert not keyword_uses("if parallel == 1:\n    pass\n")
+
+
+@pytest.mark.parametrize("package", ["smoothdist", "tracer", "tracer.sim", "tracer.studies"])
+def test_no_public_name_shadows_a_submodule(package):
+    """``tracer.mesh_scene`` was a function until its module was imported, then the module
+    (issue 22); ``smoothdist.mesh_distance`` likewise. A name a package exports (``__all__``,
+    lazily or not) must not also be one of its submodules, and stays the same object after
+    every submodule is imported."""
+    import importlib
+    import pkgutil
+
+    pkg = importlib.import_module(package)
+    submodules = {m.name for m in pkgutil.iter_modules(pkg.__path__)}
+    exported = set(getattr(pkg, "__all__", ()))
+    assert not exported & submodules, sorted(exported & submodules)
+    before = {name: getattr(pkg, name) for name in exported}
+    for name in submodules - {"__main__"}:
+        importlib.import_module(f"{package}.{name}")
+    for name, obj in before.items():
+        assert getattr(pkg, name) is obj, name
+        assert not isinstance(obj, type(pkg)), name

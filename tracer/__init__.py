@@ -7,8 +7,8 @@ light.
 """
 
 _LAZY = {
-    "render_mesh": "tracer.mesh_scene",
-    "mesh_scene": "tracer.mesh_scene",
+    "render_mesh": "tracer.from_mesh",
+    "mesh_scene": "tracer.from_mesh",
     "scene_from_field": "tracer.scene",
     "load_scene": "tracer.scene",
 }

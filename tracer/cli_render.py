@@ -9,7 +9,7 @@ import numpy as np
 from smoothdist.mesh import MESH_EXTENSIONS
 from tracer.camera import VIEWS
 from tracer.cli import CLIError, check_outputs, make_parents
-from tracer.mesh_scene import KINDS
+from tracer.from_mesh import KINDS
 
 def add_arguments(p):
     """Arguments of ``tracer render``."""
@@ -178,7 +178,7 @@ def run(args):
                 json.dump(stats, fh, indent=2)
         written.append(args.stats)
     if not args.quiet:
-        from tracer.mesh_scene import describe_parameters
+        from tracer.from_mesh import describe_parameters
 
         s = stats
         prims = sum(o["primitives"] for o in s["objects"])
@@ -216,7 +216,7 @@ def _mesh_scene(args):
 
 
 def _build_mesh_scene(args):
-    from tracer.mesh_scene import mesh_scene
+    from tracer.from_mesh import mesh_scene
 
     width, height = args.size or (512, 512)
     return mesh_scene(args.scene, kind=args.kind,
@@ -249,7 +249,7 @@ def _replace_camera(scene, args):
 def _save_scene(args, scene, source):
     """Write ``--save-scene``: a scene file that renders the same picture."""
     from tracer.image import atomic_write
-    from tracer.mesh_scene import scene_dict
+    from tracer.from_mesh import scene_dict
     from tracer.scene import read_scene_json
 
     if source == "mesh":
