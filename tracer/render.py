@@ -163,8 +163,10 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
     scene : tracer.scene.Scene
     transforms : list of (R (3, 3), t (3,)), optional
         A rigid pose per object (see :func:`scene_arrays`); the trees are not rebuilt.
-    progress : callable(done_pixels, total_pixels, elapsed_s) or None
-        Called a few times a second while tracing, and at the end.
+    progress : bool, callable(done_pixels, total_pixels, elapsed_s) or None
+        A callable is called a few times a second while tracing, and at the end; ``True``
+        shows a text progress bar on stderr (:class:`ProgressBar`); ``None`` or ``False``:
+        none.
     band_rows : int, optional
         Trace the image in bands of this many rows, one after the other (default: one band;
         the image does not depend on it when it is a multiple of ``tracer.march.TILE``).
@@ -193,6 +195,7 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
                                       and not isinstance(value, bool)
                                       and math.isfinite(value) and value >= 0):
             raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
+    progress = _progress_callback(progress, scene)
     camera = camera_of(scene)
     arrays = scene_arrays(scene, transforms)
     tree, roots, params, mode, lo, hi, depth_max = arrays
@@ -234,6 +237,18 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
     return RenderResult(rgb=rgb, hit=hit, depth=depth, normals=normals, steps=steps,
                         leaves=leaves, bisections=bis, seconds=seconds, camera=camera,
                         scene=scene)
+
+
+def _progress_callback(progress, scene):
+    """``render``'s ``progress`` argument as a callable or None (see :func:`render`)."""
+    if progress is None or progress is False:
+        return None
+    if progress is True:
+        return ProgressBar(f"render {getattr(scene, 'name', '') or 'scene'}", min_seconds=0.0)
+    if callable(progress):
+        return progress
+    raise TypeError(f"progress must be True, False, None or a callable(done, total, "
+                    f"elapsed_s), got {progress!r}")
 
 
 #: largest number of tiles a thread takes at once (a chunk is at most 1/16 of its share;
