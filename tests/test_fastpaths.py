@@ -28,7 +28,9 @@ from tracer.cli import main
 from tracer.image import load_png
 from tracer.render import camera_of, render, scene_arrays
 from tracer.scene import SceneError, load_scene, scene_from_field
-from test_tol import BUNNY
+from test_tol import BUNNY, ROOT
+
+SCENES = ROOT / "scenes"
 
 
 @pytest.fixture(scope="module")
@@ -307,22 +309,41 @@ def test_render_refuses_a_bad_newton_or_relax_argument(tmp_path):
 
 
 @pytest.mark.parametrize("option, value, message", [
-    ("--beta", "-1", "--beta must be a finite number >= 0"),
+    ("--beta", "-1", "--beta must be >= 0"),
     ("--tol", "-1", "--tol must be >= 0"),
     ("--newton", "-1", "--newton must be >= 0"),
     ("--offset", "-1", "--offset must be >= 0"),
-    ("--alpha", "-1", "--alpha must be a finite number > 0"),
-    ("--alpha-u", "-1", "--alpha-u must be a finite number > 0"),
+    ("--alpha", "-1", "--alpha must be > 0"),
+    ("--alpha-u", "-1", "--alpha-u must be > 0"),
     ("--eps", "nan", "--eps must be finite"),
 ])
 def test_cli_bad_option_with_a_mesh_file_names_the_option(tmp_path, capsys, option, value,
                                                           message):
-    """A mesh file on the command line reports a bad option by its flag, as a scene file does."""
+    """A mesh file on the command line reports a bad option by its flag, as a scene file does,
+    also when the output exists already (the option is the real error, issue 22)."""
     out = tmp_path / "bad.png"
     assert main(["render", str(BUNNY), option, value, "-o", str(out), "-q"]) == 2
     err = capsys.readouterr().err
     assert err.startswith(f"error: {message}") and len(err.strip().splitlines()) == 1, err
     assert not out.exists()
+    out.write_bytes(b"keep me")
+    for source in (BUNNY, SCENES / "bunny_points.json"):
+        assert main(["render", str(source), option, value, "-o", str(out), "-q"]) == 2
+        err = capsys.readouterr().err
+        assert err.startswith(f"error: {message}"), err
+        assert out.read_bytes() == b"keep me"
+
+
+@pytest.mark.parametrize("size", [["0", "0"], ["16", "-3"]])
+def test_cli_bad_size_is_reported_before_an_existing_output(tmp_path, capsys, size):
+    out = tmp_path / "x.png"
+    out.write_bytes(b"keep me")
+    for source in (BUNNY, SCENES / "bunny_points.json"):
+        assert main(["render", str(source), "--size", *size, "-o", str(out), "-q"]) == 2
+        err = capsys.readouterr().err.strip()
+        which = "width" if size[0] == "0" else "height"
+        assert err.startswith(f"error: --size {which} must be > 0"), err
+        assert out.read_bytes() == b"keep me"
 
 
 def _thin_shell_cases():

@@ -51,8 +51,8 @@ def add_arguments(p):
                         "below N x eps (at most 1%% of the bbox diagonal; default: scene's, "
                         "else 100)")
     newton.add_argument("--no-newton", dest="newton", action="store_const", const=0.0,
-                        help="plain sphere tracing (= --newton 0): a Newton step can step over "
-                        "a sliver thinner than 4 x N x eps, e.g. fine relief at grazing angles")
+                        help="plain sphere tracing (= --newton 0); the images agree, Newton "
+                        "steps only save distance evaluations")
     p.add_argument("--mode", choices=("smooth", "exact"),
                    help="smooth distance, or exact distance offset surface")
     p.add_argument("--offset", type=float,
@@ -87,6 +87,33 @@ def _auto_or_number(flag):
     return parse
 
 
+#: numeric options and what they must be: (flag, attribute, lower bound, bound included)
+_NUMBERS = (("--alpha", "alpha", 0.0, False), ("--alpha-u", "alpha_u", 0.0, False),
+            ("--beta", "beta", 0.0, True), ("--eps", "eps", 0.0, False),
+            ("--tol", "tol", 0.0, True), ("--newton", "newton", 0.0, True),
+            ("--offset", "offset", 0.0, True))
+
+
+def check_options(args):
+    """The command line's numbers, checked before any file is read or any output looked at
+    (so ``--size 0 0`` is reported as such, not as an existing output). One-line
+    :class:`CLIError` naming the flag; the scene and mesh loaders check them again."""
+    import math
+
+    if args.size:
+        for what, v in zip(("width", "height"), args.size):
+            if v <= 0:
+                raise CLIError(f"--size {what} must be > 0, got {v}")
+    for flag, attr, low, closed in _NUMBERS:
+        v = getattr(args, attr, None)
+        if v is None or v == "auto":
+            continue
+        if not math.isfinite(v):
+            raise CLIError(f"{flag} must be finite, got {v}")
+        if v < low or (v == low and not closed):
+            raise CLIError(f"{flag} must be {'>=' if closed else '>'} {low:g}, got {v}")
+
+
 def input_kind(path):
     """``"scene"`` or ``"mesh"`` for a render input, from its extension (or a leading ``{``);
     a one-line ``CLIError`` saying what is accepted for anything else."""
@@ -117,6 +144,7 @@ def run(args):
     from tracer.scene import load_scene
 
     source = input_kind(args.scene)
+    check_options(args)
     if source == "scene" and args.kind:
         raise CLIError("--kind applies to mesh files; a scene file sets bvh_type per object")
     overrides = {"beta": args.beta, "alpha": args.alpha, "alpha_u": args.alpha_u,
