@@ -24,6 +24,7 @@ from tracer.image import load_png
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT / "scenes" / "data"
+SCENES = ROOT / "scenes"
 
 trimesh = pytest.importorskip("trimesh")
 
@@ -220,9 +221,10 @@ def test_render_mesh_gives_the_same_image_for_every_input_type():
     V, F = icosphere(2)
     faces = np.hstack([np.full((F.shape[0], 1), 3), F]).ravel()
     ref = tracer.render_mesh((V, F), size=(24, 24), view="iso")
+    # (up="auto" would turn the view for trimesh and pyvista objects: z up there)
     for obj in (trimesh.Trimesh(V, F, process=False), pv.PolyData(V, faces=faces),
                 sd.DataMesh(V, F)):
-        res = tracer.render_mesh(obj, size=(24, 24), view="iso")
+        res = tracer.render_mesh(obj, size=(24, 24), view="iso", up="y")
         np.testing.assert_array_equal(res.hit, ref.hit)
         np.testing.assert_allclose(res.depth[res.hit], ref.depth[ref.hit], rtol=1e-6)
     # the positional form render_mesh(V, F) too
@@ -444,3 +446,62 @@ def test_render_mesh_progress_takes_booleans_and_callables(capsys):
     assert calls and calls[-1][0] == calls[-1][1] == 256
     with pytest.raises(TypeError, match="progress must be"):
         tracer.render_mesh(V, F, size=(16, 16), progress="yes")
+
+
+# ----------------------------------------------------------------------------- up axis
+def _extent(hit):
+    rows, cols = np.nonzero(hit)
+    return np.ptp(rows) + 1, np.ptp(cols) + 1
+
+
+def test_up_axis_turns_the_named_views():
+    from tracer.camera import VIEWS, view_vectors
+
+    for view in VIEWS:
+        d, u = view_vectors(view, "y")
+        np.testing.assert_array_equal(d, VIEWS[view][0])
+        for up, axis in (("x", 0), ("y", 1), ("z", 2)):
+            d, u = view_vectors(view, up)
+            # the same view of a world turned so that y goes to ``up``: angles are kept
+            d0, u0 = map(np.asarray, VIEWS[view])
+            assert np.dot(d, u) == pytest.approx(np.dot(d0, u0))
+            assert np.dot(u, np.eye(3)[axis]) == pytest.approx(u0[1])
+    np.testing.assert_allclose(view_vectors("front", "z")[0], [0, -1, 0])  # from -y, as Blender
+    np.testing.assert_allclose(view_vectors("top", "z")[0], [0, 0, 1])
+    with pytest.raises(ValueError, match="up must be one of"):
+        view_vectors("front", "w")
+
+
+def test_a_z_up_capsule_is_seen_from_the_side():
+    """trimesh's capsule runs along z: seen end-on with y up (a disc), from the side with z
+    up (three times taller than wide). ``up="auto"`` picks z for trimesh objects and STL
+    files (issue 22), y for arrays."""
+    from tracer.from_mesh import guess_up
+
+    cap = trimesh.creation.capsule(height=1.0, radius=0.15)
+    h_y, w_y = _extent(tracer.render_mesh(cap, size=(48, 48), up="y").hit)
+    h_z, w_z = _extent(tracer.render_mesh(cap, size=(48, 48), up="z").hit)
+    assert abs(h_y - w_y) <= 2
+    assert h_z > 2.5 * w_z
+    np.testing.assert_array_equal(tracer.render_mesh(cap, size=(48, 48)).hit,
+                                  tracer.render_mesh(cap, size=(48, 48), up="z").hit)
+    assert guess_up(cap) == "z" and guess_up(np.asarray(cap.vertices)) == "y"
+    assert guess_up("a/b.STL") == "z" and guess_up("x.ply") == "z" and guess_up("x.obj") == "y"
+    with pytest.raises(ValueError, match="up must be one of"):
+        tracer.render_mesh(cap, size=(8, 8), up="down")
+
+
+def test_cli_up_axis(tmp_path, capsys):
+    cap = trimesh.creation.capsule(height=1.0, radius=0.15)
+    cap.export(tmp_path / "cap.stl")
+    cap.export(tmp_path / "cap.obj")
+    assert main(["render", str(tmp_path / "cap.stl"), "--size", "32", "32",
+                 "-o", str(tmp_path / "a.png")]) == 0
+    assert "view front with z up (guessed; --up to change)" in capsys.readouterr().out
+    assert main(["render", str(tmp_path / "cap.obj"), "--size", "32", "32", "--up", "z",
+                 "-o", str(tmp_path / "b.png")]) == 0
+    assert "view front with z up," in capsys.readouterr().out
+    np.testing.assert_array_equal(load_png(tmp_path / "a.png"), load_png(tmp_path / "b.png"))
+    assert main(["render", str(SCENES / "torus.json"), "--up", "z",
+                 "-o", str(tmp_path / "c.png")]) == 2
+    assert "--up applies to a --view" in capsys.readouterr().err

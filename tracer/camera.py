@@ -40,9 +40,11 @@ __all__ = [
     "project",
     "pyvista_camera_params",
     "default_camera_for_bounds",
+    "UP_AXES",
     "VIEWS",
     "frame_box",
     "frame_points",
+    "view_vectors",
 ]
 
 #: Number of values in :meth:`Camera.as_array`.
@@ -441,6 +443,31 @@ VIEWS = {
     "iso": ((1.0, 1.0, 1.0), (0.0, 1.0, 0.0)),
 }
 
+#: World up axes a named view can be turned to (:func:`view_vectors`).
+UP_AXES = ("x", "y", "z")
+#: Rotations that take the y-up views to an x- or z-up world (right-handed; for z up,
+#: ``front`` looks along +y from -y with x to the right, as in Blender, and ``top`` looks
+#: down -z).
+_UP_ROTATIONS = {
+    "x": np.array([[0.0, 1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]),
+    "y": np.eye(3),
+    "z": np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]]),
+}
+
+
+def view_vectors(view, up="y"):
+    """``(direction from the centre to the eye, image up)`` of the named ``view`` (a key of
+    :data:`VIEWS`) in a world whose up axis is ``up`` (``"x"``, ``"y"`` or ``"z"``): the
+    y-up definitions of :data:`VIEWS` rotated so that y goes to ``up``."""
+    if view not in VIEWS:
+        raise ValueError(f"view must be one of {', '.join(VIEWS)}; got {view!r}")
+    if up not in _UP_ROTATIONS:
+        raise ValueError(f"up must be one of {', '.join(UP_AXES)}; got {up!r}")
+    R = _UP_ROTATIONS[up]
+    direction, upv = VIEWS[view]
+    return R @ np.asarray(direction), R @ np.asarray(upv)
+
+
 #: Default free border of :func:`frame_box`, as a fraction of the image's half-size.
 FRAME_MARGIN = 0.05
 
@@ -462,7 +489,8 @@ def frame_box(lo, hi, view="front", width=512, height=512, margin=FRAME_MARGIN):
     return frame_points(corners, 0.0, view, width, height, margin)
 
 
-def frame_points(points, radius, view="front", width=512, height=512, margin=FRAME_MARGIN):
+def frame_points(points, radius, view="front", width=512, height=512, margin=FRAME_MARGIN,
+                 up="y"):
     """A camera from which every ball of ``radius`` around ``points`` is in view.
 
     The eye looks at the centre of the points' bounding box from the named ``view``
@@ -483,6 +511,8 @@ def frame_points(points, radius, view="front", width=512, height=512, margin=FRA
         Image size in pixels.
     margin : float
         Free border as a fraction of the image's half-size, in ``[0, 0.9]``.
+    up : {"x", "y", "z"}
+        The world's up axis for a named ``view`` (:func:`view_vectors`).
 
     Returns
     -------
@@ -497,9 +527,7 @@ def frame_points(points, radius, view="front", width=512, height=512, margin=FRA
     if not extent > 0.0:
         raise ValueError(f"nothing to frame: a single point {lo.tolist()} and radius 0")
     if isinstance(view, str):
-        if view not in VIEWS:
-            raise ValueError(f"view must be one of {', '.join(VIEWS)}; got {view!r}")
-        direction, up = VIEWS[view]
+        direction, up = view_vectors(view, up)
     else:
         try:
             direction, up = view

@@ -7,7 +7,7 @@ import sys
 import numpy as np
 
 from smoothdist.mesh import MESH_EXTENSIONS
-from tracer.camera import VIEWS
+from tracer.camera import UP_AXES, VIEWS
 from tracer.cli import CLIError, check_outputs, make_parents
 from tracer.from_mesh import KINDS
 
@@ -33,8 +33,11 @@ def add_arguments(p):
                    help="mesh file: render its triangles, edges, points, or everything it "
                    "holds (mixed; the default)")
     p.add_argument("--view", choices=tuple(VIEWS),
-                   help="camera framing the whole surface from this side (y up; default for "
-                   "a mesh: front); with a scene file it replaces the scene's camera")
+                   help="camera framing the whole surface from this side (default for a mesh: "
+                   "front); with a scene file it replaces the scene's camera")
+    p.add_argument("--up", choices=("auto",) + UP_AXES,
+                   help="the data's up axis for --view (mesh files: auto = z for .stl and "
+                   ".ply, y otherwise; scene files: y)")
     p.add_argument("--camera", nargs=9, type=float,
                    metavar=("OX", "OY", "OZ", "DX", "DY", "DZ", "UX", "UY", "UZ"),
                    help="explicit camera: ORIGIN DEST UP, 9 numbers")
@@ -147,6 +150,8 @@ def run(args):
     check_options(args)
     if source == "scene" and args.kind:
         raise CLIError("--kind applies to mesh files; a scene file sets bvh_type per object")
+    if source == "scene" and args.up and not args.view:
+        raise CLIError("--up applies to a --view; a scene file's camera sets its own up")
     overrides = {"beta": args.beta, "alpha": args.alpha, "alpha_u": args.alpha_u,
                  "mode": args.mode, "eps": args.eps, "shading": args.shading,
                  "offset": args.offset, "tol": args.tol, "newton": args.newton}
@@ -210,9 +215,15 @@ def run(args):
 
         s = stats
         prims = sum(o["primitives"] for o in s["objects"])
+        view = ""
+        if source == "mesh" and not args.camera:
+            from tracer.from_mesh import resolve_up
+
+            view = (f", view {args.view or 'front'} with {resolve_up(args.scene, args.up)} up"
+                    + ("" if args.up not in (None, "auto") else " (guessed; --up to change)"))
         print(f"Rendered {name}: {s['width']}x{s['height']} px, {len(s['objects'])} object(s) "
               f"with {prims} primitives ({describe_parameters(scene)}), "
-              f"{scene.mode} mode, beta {scene.beta:g}, in "
+              f"{scene.mode} mode, beta {scene.beta:g}{view}, in "
               f"{s['seconds']:.2f} s; {s['hits']} hits ({100 * s['hit_fraction']:.1f}%), "
               f"{s['mean_steps']:.1f} distance evaluations and {s['mean_leaves']:.0f} leaves "
               f"visited per pixel on average. Wrote {', '.join(map(str, written))}.")
@@ -251,7 +262,7 @@ def _build_mesh_scene(args):
                       alpha=args.alpha if args.alpha is not None else "auto",
                       alpha_u=args.alpha_u if args.alpha_u is not None else "auto",
                       beta=args.beta if args.beta is not None else 0.5, size=(width, height),
-                      view=args.view or "front",
+                      view=args.view or "front", up=args.up or "auto",
                       camera=_camera_arg(args) if args.camera else None,
                       mode=args.mode or "smooth", offset=args.offset, eps=args.eps,
                       shading=args.shading or "normals",
@@ -269,7 +280,8 @@ def _replace_camera(scene, args):
     else:
         grow = float(scene.bounds[0][0] - scene_arrays(scene)[4][0])
         P = np.concatenate([o.field.mesh.used_vertices() for o in scene.objects])
-        origin, dest, up = frame_points(P, grow, args.view, scene.width, scene.height)
+        origin, dest, up = frame_points(P, grow, args.view, scene.width, scene.height,
+                                        up=args.up if args.up not in (None, "auto") else "y")
     look_at(origin, dest, up, scene.width, scene.height)  # validates
     scene.camera_origin, scene.camera_dest, scene.camera_up = origin, dest, up
 

@@ -33,9 +33,38 @@ def load_geometry(mesh, F=None, kind=None):
     return data.as_kind(kind) if kind not in (None, "mixed") else data
 
 
+#: file formats whose data are z-up by convention (3D printing; scanners and lidar)
+Z_UP_EXTENSIONS = (".stl", ".ply")
+#: libraries whose objects are z-up by convention (their own viewers show z up)
+Z_UP_LIBRARIES = ("trimesh", "pyvista", "vtkmodules")
+
+
+def guess_up(mesh):
+    """The up axis ``up="auto"`` picks for ``mesh``: ``"z"`` for STL and PLY files and for
+    trimesh / pyvista objects (z-up conventions), ``"y"`` for everything else (OBJ, OFF,
+    numpy arrays, :class:`smoothdist.DataMesh`: the graphics convention)."""
+    if isinstance(mesh, (str, os.PathLike)):
+        return "z" if os.path.splitext(os.fspath(mesh))[1].lower() in Z_UP_EXTENSIONS else "y"
+    if isinstance(mesh, (np.ndarray, list, tuple)):
+        return "y"
+    return "z" if type(mesh).__module__.split(".")[0] in Z_UP_LIBRARIES else "y"
+
+
+def resolve_up(mesh, up):
+    """``up`` checked (``"x"``, ``"y"``, ``"z"``), or :func:`guess_up` for ``"auto"`` / None."""
+    from tracer.camera import UP_AXES
+
+    if up is None or up == "auto":
+        return guess_up(mesh)
+    if up not in UP_AXES:
+        raise ValueError(f"up must be one of auto, {', '.join(UP_AXES)}; got {up!r}")
+    return up
+
+
 def mesh_scene(mesh, F=None, *, kind=None, alpha="auto", alpha_u="auto", beta=0.5,
                size=(512, 512), view="front", camera=None, mode="smooth", offset=None,
-               eps=None, shading="normals", matcap="", name=None, tol=0.0, newton=None):
+               eps=None, shading="normals", matcap="", name=None, tol=0.0, newton=None,
+               up="auto"):
     """A one-object :class:`tracer.scene.Scene` for ``mesh``, camera framing the surface.
 
     Parameters
@@ -54,10 +83,13 @@ def mesh_scene(mesh, F=None, *, kind=None, alpha="auto", alpha_u="auto", beta=0.
     size : (int, int)
         Image ``(width, height)`` in pixels.
     view : str
-        ``front``, ``back``, ``left``, ``right``, ``top`` or ``iso`` (y up; see
-        :data:`tracer.camera.VIEWS`): the camera frames, from there, the region the surface
-        can occupy (the data's vertices grown by the largest possible inflation;
-        :func:`tracer.camera.frame_points`).
+        ``front``, ``back``, ``left``, ``right``, ``top`` or ``iso`` (see
+        :data:`tracer.camera.VIEWS`, turned to ``up``): the camera frames, from there, the
+        region the surface can occupy (the data's vertices grown by the largest possible
+        inflation; :func:`tracer.camera.frame_points`).
+    up : {"auto", "x", "y", "z"}
+        The data's up axis for ``view``. ``"auto"`` (:func:`guess_up`): z for STL and PLY
+        files and for trimesh / pyvista objects, y otherwise (OBJ, OFF, arrays).
     camera : (origin, dest, up), optional
         An explicit camera instead of ``view``.
     mode, offset, eps, shading, matcap, tol, newton :
@@ -68,6 +100,7 @@ def mesh_scene(mesh, F=None, *, kind=None, alpha="auto", alpha_u="auto", beta=0.
     from smoothdist import SmoothDistanceField
     from tracer.scene import scene_from_field
 
+    up = resolve_up(mesh, up)
     data = load_geometry(mesh, F, kind)
     try:
         width, height = size
@@ -78,12 +111,12 @@ def mesh_scene(mesh, F=None, *, kind=None, alpha="auto", alpha_u="auto", beta=0.
                             camera=view if camera is None else camera, width=width,
                             height=height, mode=mode, eps=eps, offset=offset, shading=shading,
                             matcap=matcap, name=name or os.path.splitext(data.name)[0], tol=tol,
-                            newton=newton)
+                            newton=newton, up=up)
 
 
 def render_mesh(mesh, F=None, *, kind=None, alpha="auto", alpha_u="auto", beta=0.5,
                 size=(512, 512), view="front", camera=None, mode="smooth", offset=None,
-                eps=None, shading="normals", matcap="", progress=None):
+                eps=None, shading="normals", matcap="", progress=None, up="auto"):
     """Sphere-trace the smooth-distance surface of ``mesh``; arrays back, nothing written.
 
     Parameters are those of :func:`mesh_scene`; ``progress`` as in
@@ -107,7 +140,7 @@ def render_mesh(mesh, F=None, *, kind=None, alpha="auto", alpha_u="auto", beta=0
 
     scene = mesh_scene(mesh, F, kind=kind, alpha=alpha, alpha_u=alpha_u, beta=beta, size=size,
                        view=view, camera=camera, mode=mode, offset=offset, eps=eps,
-                       shading=shading, matcap=matcap)
+                       shading=shading, matcap=matcap, up=up)
     return render(scene, progress=progress)
 
 

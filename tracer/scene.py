@@ -491,7 +491,7 @@ def merge_meshes(meshes, name="mixed"):
 def scene_from_field(field, *, alpha, alpha_u=None, beta=0.5, camera=None, width=512,
                      height=512, mode="smooth", eps=None, offset=None, shading="normals",
                      matcap="", gradient="metric", name="scene", max_steps=1000, tol=0.0,
-                     newton=None):
+                     newton=None, up="y"):
     """Build a one-object :class:`Scene` in code (no JSON), e.g. for parameter studies.
 
     Parameters
@@ -517,6 +517,8 @@ def scene_from_field(field, *, alpha, alpha_u=None, beta=0.5, camera=None, width
     newton : float, optional
         Smooth mode: Newton steps once the distance is below ``newton x eps`` (>= 0; 0 =
         plain sphere tracing; default ``tracer.march.NEWTON``), as the scene key ``newton``.
+    up : {"x", "y", "z"}
+        The data's up axis, for a view name ``camera`` (:func:`tracer.camera.view_vectors`).
     """
     if mode not in MODES:
         raise ValueError(f"mode must be one of {MODES}, got {mode!r}")
@@ -551,7 +553,7 @@ def scene_from_field(field, *, alpha, alpha_u=None, beta=0.5, camera=None, width
         grow = (offset if mode == "exact" and offset is not None else
                 1.0 / alpha if mode == "exact" else field.inflation(alpha, alpha_u))
         camera = frame_points(field.mesh.used_vertices(), grow + 2.0 * (eps or 0.0), camera,
-                              width, height)
+                              width, height, up=up)
     elif camera is None:
         c = 0.5 * (lo + hi)
         # a single point (or identical points) has no extent: back off by the surface's size
