@@ -25,6 +25,15 @@ MIN_ALPHA_SCALE = 1e-12
 AUTO_OFFSET = 0.01
 #: probe points used to estimate the offset for ``alpha="auto"``
 AUTO_PROBES = 256
+#: point clouds, ``alpha="auto"``: gaps are probed around this many sampled points, between
+#: neighbours within this many median spacings, and the closing alpha is bisected in this
+#: many steps (to within 2 ** (1 / 2 ** steps), 4 % for 4); see
+#: :meth:`SmoothDistanceField.closing_alpha`
+AUTO_GAP_SAMPLES = 2000
+AUTO_GAP_RADIUS = 8.0
+AUTO_GAP_STEPS = 4
+#: ... and this fraction of the gaps probed may stay open (a scan's widest few: real holes)
+AUTO_GAP_OPEN = 5e-4
 #: ``alpha_u="auto"`` is this times alpha (see :meth:`SmoothDistanceField.auto_alpha_u`)
 AUTO_ALPHA_U_FACTOR = 20.0
 #: :meth:`SmoothDistanceField.exact_distance` switches to :attr:`SmoothDistanceField.exact_tree`
@@ -182,7 +191,9 @@ class SmoothDistanceField:
         gap scales like ``1 / alpha``). Smaller alphas give smoother surfaces, so the
         smallest one that meets the target is chosen. Point clouds are capped at
         :meth:`paper_alpha` ``= 1 / median spacing``, beyond which neighbouring blobs stop
-        merging into one surface. The result is cached.
+        merging into one surface, and then lowered until the widest gaps between sampled
+        points are closed too (:meth:`closing_alpha`: random samples of a surface have gaps
+        several median spacings wide). The result is cached.
         """
         cached = getattr(self, "_auto_alpha_value", None)
         if cached is not None:
@@ -205,9 +216,56 @@ class SmoothDistanceField:
                 alpha *= 1.1
             value = float(alpha)
             if self.mesh.points.size >= 2:
-                value = min(value, 1.0 / self.point_spacing())
+                value = self.closing_alpha(min(value, 1.0 / self.point_spacing()))
         self._auto_alpha_value = value
         return value
+
+    def closing_alpha(self, alpha, samples=AUTO_GAP_SAMPLES, seed=0):
+        """The largest alpha ``<= alpha`` at which a point cloud's gaps are closed.
+
+        Probes are the centres of the gaps (local maxima of the distance to the cloud, the
+        circumcentres of empty non-obtuse triangles) between up to ``samples`` sampled points
+        and their neighbours within ``AUTO_GAP_RADIUS`` median spacings
+        (:func:`smoothdist.spacing.gap_probes`); the cloud is closed at an alpha where
+        ``d_hat <= 0`` (beta 0.5, ``alpha_u="auto"``) at every probe. ``alpha`` itself when
+        it closes them, else a bisection in ``log alpha`` (``d_hat`` falls with alpha, so
+        the closed alphas are an interval). A random sample of a surface needs about 0.6-0.8
+        of ``1 / median spacing``: its widest gaps are 2-3 median spacings across, where an
+        even sample's are 1.5-2. Meshes without points: ``alpha``.
+        """
+        from smoothdist.spacing import gap_probes, local_smooth_distance
+
+        pts = self.mesh.V[self.mesh.points]
+        if pts.shape[0] < 3:
+            return float(alpha)
+        rng = np.random.default_rng(seed)
+        pick = pts if pts.shape[0] <= samples else pts[rng.choice(pts.shape[0], samples,
+                                                                   replace=False)]
+        probes, radii = gap_probes(self.tree, np.ascontiguousarray(pick),
+                                   AUTO_GAP_RADIUS * self.point_spacing())
+        if probes.shape[0]:  # gap centres: no sample closer than the triangle's corners
+            probes = probes[self.exact_distance(probes).distance >= (1.0 - 1e-9) * radii]
+
+        radius = AUTO_GAP_RADIUS * self.point_spacing()
+
+        def closed(a):
+            return bool(np.mean(local_smooth_distance(self.tree, probes, a, radius) > 0.0)
+                        <= AUTO_GAP_OPEN)
+
+        hi = float(alpha)
+        if probes.shape[0] == 0 or closed(hi):
+            return hi
+        lo = hi
+        for _ in range(20):
+            lo *= 0.5
+            if closed(lo):
+                break
+        else:
+            return lo
+        for _ in range(AUTO_GAP_STEPS):  # keep lo closed, hi open
+            mid = math.sqrt(lo * hi)
+            lo, hi = (mid, hi) if closed(mid) else (lo, mid)
+        return lo
 
     def auto_alpha_u(self, alpha):
         """``alpha_u="auto"``: ``AUTO_ALPHA_U_FACTOR x alpha`` (attenuation ``S = 1/20``).

@@ -505,3 +505,62 @@ def test_cli_up_axis(tmp_path, capsys):
     assert main(["render", str(SCENES / "torus.json"), "--up", "z",
                  "-o", str(tmp_path / "c.png")]) == 2
     assert "--up applies to a --view" in capsys.readouterr().err
+
+
+def test_auto_alpha_closes_a_random_surface_sample():
+    """3,000 points of ``trimesh.sample.sample_surface`` on an ellipsoid: random samples have
+    gaps 3-4 median spacings wide, and "auto" capped at 1 / median spacing left holes there
+    (issue 22). Every point of the true surface (20,000 independent samples) must be inside
+    at the exact sum (beta 0), for random and even samples alike."""
+    ell = trimesh.creation.icosphere(subdivisions=4)
+    ell.apply_scale([1.0, 0.6, 0.4])
+    surface = trimesh.sample.sample_surface(ell, 20000, seed=99)[0]
+    for seed in (0, 2):
+        for X in (trimesh.sample.sample_surface(ell, 3000, seed=seed)[0],
+                  trimesh.sample.sample_surface_even(ell, 3000, seed=seed)[0]):
+            field = sd.SmoothDistanceField(X)
+            alpha = field.auto_alpha()
+            d = field.smooth_distance(surface, alpha=alpha, beta=0.0).distance
+            assert np.all(d <= 0), (seed, alpha, int((d > 0).sum()))
+            # the old cap (1 / median spacing) leaves the random sample open
+            if X.shape[0] == 3000 and alpha < 0.9 / field.point_spacing():
+                d_old = field.smooth_distance(surface, alpha=1.0 / field.point_spacing(),
+                                              beta=0.0).distance
+                assert np.any(d_old > 0)
+
+
+def test_gap_probes_and_local_bound_against_numpy():
+    """``spacing.points_within`` against brute force; ``local_smooth_distance`` bounds the
+    exact sum from above and equals it when the radius covers the cloud; gap probes are
+    circumcentres (equidistant from three samples, none closer)."""
+    from smoothdist.spacing import gap_probes, local_smooth_distance, points_within
+
+    rng = np.random.default_rng(5)
+    X = rng.normal(size=(400, 3))
+    X[:, 2] *= 0.05  # a noisy sheet
+    field = sd.SmoothDistanceField(X)
+    Q = rng.normal(size=(50, 3))
+    r = 0.6
+    nb, count = points_within(field.tree, Q, r, 400)
+    for q, row, n in zip(Q, nb, count):
+        dist = np.linalg.norm(X - q, axis=1)
+        want = np.sort(dist[(dist > 0) & (dist <= r)])
+        got = np.sort(np.linalg.norm(row[:n] - q, axis=1))
+        np.testing.assert_allclose(got, want, rtol=1e-12)
+    for alpha in (2.0, 20.0):
+        full = field.smooth_distance(Q, alpha=alpha, beta=0.0).distance
+        local = local_smooth_distance(field.tree, Q, alpha, r)
+        assert np.all(local >= full - 1e-12)
+        np.testing.assert_allclose(local_smooth_distance(field.tree, Q, alpha, 100.0, 512),
+                                   full, rtol=1e-10, atol=1e-12)
+    probes, radii = gap_probes(field.tree, X[:100], 4 * field.point_spacing())
+    assert probes.shape[0] > 100
+    D = np.linalg.norm(probes[:, None, :] - X[None, :, :], axis=2)
+    nearest = np.sort(D, axis=1)[:, :3]
+    # a candidate whose circle holds no sample (a gap centre) is equidistant from its three
+    # nearest samples, at its circumradius
+    empty = field.exact_distance(probes).distance >= (1 - 1e-9) * radii
+    assert empty.sum() > 50
+    assert np.all(nearest[:, 0] <= radii * (1 + 1e-9))
+    np.testing.assert_allclose(nearest[empty], np.repeat(radii[empty, None], 3, axis=1),
+                               rtol=1e-9)
