@@ -380,29 +380,35 @@ def run_tasks(fn, tasks, *, on_result, on_failure=None, scheduler="local", worke
                      + ("; waiting for workers to join" if not nworkers else ""))
         from distributed import as_completed
 
-        run = uuid.uuid4().hex[:8]
-        futures, index = [], {}
-        # heaviest first (Dask runs higher priority first), so that the long tasks overlap
-        order = sorted(range(len(tasks)), key=lambda i: -float(tasks[i].get("weight", 1.0)))
-        for rank, i in enumerate(order):
-            fut = client.submit(call_task, fn, tasks[i], key=f"{label.split()[0]}-{run}-{i}",
-                                pure=False, retries=retries, priority=len(tasks) - rank)
-            futures.append(fut)
-            index[fut.key] = i
-        try:
-            for fut in as_completed(futures):
-                task = tasks[index[fut.key]]
-                try:
-                    record = fut.result()
-                except CLIError:  # bad input: stop the study
-                    raise
-                except Exception as exc:  # the task raised (after its retries) or was lost
-                    bad(task, _error_line(exc))
-                    continue
-                ok(task, record)
-        except BaseException:
-            client.cancel(futures)
-            raise
+        # Our client is not the process's default client (a user's own client stays the
+        # default), and a separate process has none: whatever looks a client up
+        # (as_completed, Future.result) must find ours, the current one in this block.
+        with client.as_current():
+            run = uuid.uuid4().hex[:8]
+            futures, index = [], {}
+            # heaviest first (Dask runs higher priority first), so that the long tasks overlap
+            order = sorted(range(len(tasks)),
+                           key=lambda i: -float(tasks[i].get("weight", 1.0)))
+            for rank, i in enumerate(order):
+                fut = client.submit(call_task, fn, tasks[i],
+                                    key=f"{label.split()[0]}-{run}-{i}", pure=False,
+                                    retries=retries, priority=len(tasks) - rank)
+                futures.append(fut)
+                index[fut.key] = i
+            try:
+                for fut in as_completed(futures, loop=client.loop):
+                    task = tasks[index[fut.key]]
+                    try:
+                        record = fut.result()
+                    except CLIError:  # bad input: stop the study
+                        raise
+                    except Exception as exc:  # the task raised (after its retries) or was lost
+                        bad(task, _error_line(exc))
+                        continue
+                    ok(task, record)
+            except BaseException:
+                client.cancel(futures)
+                raise
         info.seconds = time.perf_counter() - t0
         return info
     finally:
@@ -427,8 +433,8 @@ def connect(mode, workers=None, timeout=CONNECT_TIMEOUT):
             cluster = LocalCluster(**kw)
         except Exception as exc:
             raise CLIError(f"cannot start a local Dask cluster: {_error_line(exc)}") from None
-        try:
-            return Client(cluster), cluster
+        try:  # not the default client either: see run_tasks
+            return Client(cluster, set_as_default=False), cluster
         except BaseException:
             cluster.close()
             raise
