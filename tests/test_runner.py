@@ -163,6 +163,37 @@ def test_dask_rows_equal_serial_rows(cluster, tmp_path):
                                   np.load(dask / "cache" / "depth_edges_beta1.npy"))
 
 
+def test_dask_needs_no_default_client_and_keeps_the_users(cluster, monkeypatch):
+    """``python -m tracer ... --scheduler ADDRESS`` runs in a process with no Dask client: the
+    runner's own client is not made the default (a user's stays the default), so it must be
+    used explicitly. Here the process's default clients are hidden, as in that process
+    (``No clients found`` before the fix; tests/test_dask_cluster.py runs the real thing)."""
+    import weakref
+
+    import distributed
+    import distributed.client
+
+    monkeypatch.setattr(distributed.client, "_global_clients", weakref.WeakValueDictionary())
+    with pytest.raises(ValueError, match="No clients found"):
+        distributed.default_client()
+    tasks = [{"key": f"t{i}", "x": i} for i in range(4)]
+    got, failed, info = _collect(square, tasks, scheduler=cluster)
+    assert not failed and [got[f"t{i}"]["y"] for i in range(4)] == [0, 1, 4, 9]
+    assert info.workers == 2
+    with pytest.raises(ValueError, match="No clients found"):  # none was left behind
+        distributed.default_client()
+    # a user's own default client is the default again after the study (while the study
+    # waits for its results, its own client is the current one: the callbacks see that one)
+    with distributed.Client(cluster, set_as_default=True) as user:
+        seen = []
+        got, failed, _ = _collect(
+            square, tasks, scheduler=cluster,
+            line=lambda t, r: seen.append(distributed.default_client()) or "")
+        assert not failed and len(got) == 4
+        assert distributed.default_client() is user
+        assert seen and all(c is not user for c in seen)  # the study's client while it ran
+
+
 def test_dask_killed_worker_and_failing_task(cluster, tmp_path):
     tasks = [{"key": f"k{i}", "x": i, "marker": str(tmp_path / f"m{i}"), "kill": i == 1}
              for i in range(4)]
@@ -206,3 +237,27 @@ def test_dask_grid_broken_mesh_and_resume(cluster, tmp_path):
         assert again[f] == rows[f]
     assert again["octopus.obj"]["nF"] == rows["octopus.obj"]["nF"]
     assert again["octopus.obj"]["leaves_f"] == rows["octopus.obj"]["leaves_f"]
+
+
+def test_tracer_debug_shows_the_traceback_behind_an_error_line(monkeypatch, capsys, tmp_path):
+    """A study's ``ValueError`` (Dask's 'No clients found' was one) is reported as one
+    ``error:`` line; ``TRACER_DEBUG=1`` shows where it came from (issue 22: it showed none)."""
+    from tracer.cli import main
+    from tracer.studies import grid
+
+    def boom(*args, **kwargs):
+        raise ValueError("boom")
+
+    monkeypatch.setattr(grid.runner, "run_tasks", boom)
+    argv = ["bench-grid", "-o", str(tmp_path / "out"), "--grid", "2", "-q",
+            "--scheduler", "serial"]
+    monkeypatch.delenv("TRACER_DEBUG", raising=False)
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.strip() == "error: boom"
+    monkeypatch.setenv("TRACER_DEBUG", "1")
+    argv[2] = str(tmp_path / "out2")
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "Traceback (most recent call last)" in err and "boom" in err
+    assert err.strip().splitlines()[-1] == "error: boom"

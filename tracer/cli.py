@@ -107,8 +107,9 @@ def main(argv=None):
     """Entry point; returns the exit status.
 
     Exit status: 0 success, 2 bad input (one ``error:`` line on stderr), 130 interrupted
-    (SIGINT or SIGTERM), 3 an unexpected internal error (one line; set ``TRACER_DEBUG=1`` to
-    see the traceback).
+    (SIGINT or SIGTERM), 3 an unexpected internal error (one line). ``TRACER_DEBUG=1`` shows
+    the traceback behind an internal error, and behind an ``error:`` line that came from a
+    ``ValueError`` or ``OSError``.
     """
     old_int = _install(signal.SIGINT, signal.default_int_handler)
     old_term = _install(signal.SIGTERM, _on_sigterm)
@@ -120,6 +121,10 @@ def main(argv=None):
         print("\ninterrupted: stopped; no partial output file was left behind", file=sys.stderr)
         return 130
     except (CLIError, ValueError, OSError) as exc:
+        if os.environ.get("TRACER_DEBUG") and not isinstance(exc, CLIError):
+            import traceback  # where a ValueError or OSError came from (a library, a bug)
+
+            traceback.print_exc()
         print(f"error: {_one_line(exc)}", file=sys.stderr)
         return 2
     except MemoryError:
