@@ -107,8 +107,8 @@ NOT_RUN = {
         "it needs the authors' renderer built outside the repository "
         "(../shared/tools/authors-bench); the same script without --authors-bin is run",
     "python -m tracer bench-grid MESH_DIR -o OUT_DIR --scheduler tcp://host:8786 # an existing cluster":
-        "it needs an existing Dask cluster; tests/test_runner.py runs --scheduler ADDRESS "
-        "against a local one",
+        "it needs an existing Dask cluster; tests/test_dask_cluster.py starts one with the "
+        "dask command line and runs this command against it",
     "bash .ci/run": "it runs this test suite (CI runs it)",
     "python -m tests.test_image_regression --regen [CASE ...]":
         "it rewrites the repository's baselines; tests/test_image_regression.py tests --regen",

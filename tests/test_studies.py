@@ -37,7 +37,7 @@ def beta_run(tmp_path_factory):
 # ----------------------------------------------------------------------------- ablate-beta
 def test_beta_outputs_exist(beta_run):
     for name in ("beta_ablation.csv", "beta_params.json", "beta_time.png", "beta_error.png",
-                 "beta_grid.png", "report.md", "cache/depth_points_beta0.npy",
+                 "beta_grid.png", "beta_diff.png", "report.md", "cache/depth_points_beta0.npy",
                  "cache/depth_edges_beta0.npy", "cache/depth_triangles_beta0.npy",
                  "cache/render_edges_beta0.5.png"):
         assert (beta_run / name).is_file(), name
@@ -248,6 +248,24 @@ def test_bench_grid_two_meshes(tmp_path, cube, icosphere):
     assert main(["bench-grid", str(tmp_path / "nowhere"), "-o", str(tmp_path / "b2")]) == 2
 
 
+def test_bench_grid_without_a_folder_uses_the_shipped_meshes(tmp_path, monkeypatch, capsys):
+    """No DIR: the three meshes in scenes/data/meshes (not a Thingi10K folder users lack),
+    whatever the working directory; the help names that default."""
+    shipped = common.REPO / "scenes" / "data" / "meshes"
+    names = sorted(p.name for p in grid.mesh_files(shipped))
+    assert len(names) == 3
+    monkeypatch.chdir(tmp_path)
+    assert main(["bench-grid", "-o", "out", "--grid", "4", "-q", "--scheduler", "serial"]) == 0
+    rows = _rows(tmp_path / "out" / "bench_grid.csv")
+    assert sorted(r["file"] for r in rows) == names
+    assert all(r["status"] == "ok" for r in rows), rows
+    params = json.loads((tmp_path / "out" / "bench_grid.json").read_text())
+    assert Path(params["folder"]) == shipped.resolve()
+    with pytest.raises(SystemExit):
+        main(["bench-grid", "--help"])
+    assert "scenes/data/meshes" in " ".join(capsys.readouterr().out.split())
+
+
 def test_benchmark_normalisation_and_grid():
     V = np.array([[0.0, 0, 0], [4, 2, 0], [1, 1, 6]])
     W = grid.benchmark_normalise(V)
@@ -315,3 +333,72 @@ def test_beta_estimate_is_printed_before_the_renders(tmp_path, capsys, monkeypat
     assert len(seen) == 2  # beta 0 and beta 1
     first = seen[0].strip().splitlines()[0]
     assert first.startswith("estimate (from 8x8 probe renders") and "beta = 0 renders" in first
+
+
+def test_beta_estimate_is_printed_at_small_sizes(tmp_path, capsys):
+    """--size 64 and below printed no estimate (and estimated 0 s): now every size does."""
+    assert main(["ablate-beta", str(OCTOPUS), "-o", str(tmp_path / "b"), "--size", "64",
+                 "--betas", "0.5,1", "--types", "points", "--alpha", "40", "--alpha-u", "300",
+                 "--scheduler", "serial"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    est = [ln for ln in lines if ln.startswith("estimate (from 8x8 probe renders")]
+    assert len(est) == 1, lines
+    assert "beta = 0 renders" in est[0] and "all 3 renders" in est[0]
+    assert "in-process with" in est[0]
+
+
+def test_beta_study_estimated_above_the_threshold_is_not_run_in_process(tmp_path, capsys,
+                                                                         monkeypatch):
+    """A 64² study whose probes say 72 s (the bunny's beta = 0 renders are that slow) is not
+    judged small enough for in-process: --scheduler local asks for its cluster (stubbed)."""
+    from tracer.cli import CLIError
+    from tracer.studies import beta
+
+    def fake_probe(tasks, probe_size):
+        assert probe_size == 8
+        return [70.0 if t["beta"] == 0 else 1.0 for t in tasks]
+
+    def no_cluster(mode, workers=None, **kw):
+        raise CLIError(f"stub: a {mode} cluster was asked for")
+
+    monkeypatch.setattr(beta, "probe", fake_probe)
+    monkeypatch.setattr(runner, "connect", no_cluster)
+    monkeypatch.setattr(runner, "cpu_count", lambda: 2)
+    # the estimator on its own
+    tasks = beta.list_tasks(str(OCTOPUS), ["points"], [0.5, 1.0], [0.0], size=64, alpha=40.0,
+                            alpha_u=300.0, eps=None)
+    said = []
+    total = beta._estimate(tasks, 64, "local", None, said.append)
+    assert total == 72.0 > runner.LOCAL_MIN_SECONDS
+    assert [t["weight"] for t in tasks] == [70.0, 1.0, 1.0]
+    assert runner.choose_mode("local", None, len(tasks), total) == "local"
+    # one thread per worker: the 70 s render takes longer there than in-process
+    assert len(said) == 1 and "all 3 renders 72.0s of work in-process" in said[0], said
+    assert said[0].endswith("wall time on 2 worker(s)"), said
+    # and the command: it goes for the local cluster instead of rendering in this process
+    assert main(["ablate-beta", str(OCTOPUS), "-o", str(tmp_path / "b"), "--size", "64",
+                 "--betas", "0.5,1", "--types", "points", "--alpha", "40", "--alpha-u",
+                 "300"]) == 2
+    assert "stub: a local cluster was asked for" in capsys.readouterr().err
+
+
+def test_beta_difference_heat_map_has_a_colour_bar(beta_run):
+    """beta_diff.png: the per-pixel |t_beta - t_0| maps, with a colour bar stating its units."""
+    from tracer.studies import beta, plots
+
+    rows = [beta.typed_row(r) for r in _rows(beta_run / "beta_ablation.csv")]
+    params = json.loads((beta_run / "beta_params.json").read_text())
+    fig = plots.beta_diff_figure(beta_run / "cache", rows, list(common.TYPES),
+                                 [0.0, 0.2, 0.5, 1.0], params)
+    try:
+        bars = [ax for ax in fig.axes if ax.get_label() == "<colorbar>"]
+        assert len(bars) == 1 and len(fig.axes) == 3 * 2 + 1  # 3 types x betas 0.5, 1; bar
+        assert "% of bbox diagonal" in bars[0].get_ylabel()
+        images = [im for ax in fig.axes for im in ax.get_images()]
+        assert len(images) == 6
+        lo, hi = images[0].norm.vmin, images[0].norm.vmax
+        assert lo == 0.0 and hi > 0.0 and bars[0].get_ylim() == (lo, hi)
+    finally:
+        plots.pyplot().close(fig)
+    assert (beta_run / "beta_diff.png").is_file()
+    assert "beta_diff.png" in (beta_run / "report.md").read_text(encoding="utf-8")

@@ -15,7 +15,8 @@ The study as independent tasks:
   :func:`tracer.studies.common.cached_field`) and returns its statistics with the depth buffer
   and a PNG of the render;
 * :func:`reduce`: the error of every row against its type's beta = 0 depth buffer, then
-  ``beta_ablation.csv``, the plots, the image grid and ``report.md``.
+  ``beta_ablation.csv``, the plots, the image grid, the heat maps of the per-pixel depth
+  difference to beta = 0 (``beta_diff.png``, with its colour bar) and ``report.md``.
 
 ``tol`` is the renderer's tolerance-controlled pruning (the scene key ``tol``; 0 = off); tasks
 with ``tol > 0`` are listed when ``--tols`` asks for them.
@@ -45,6 +46,13 @@ BETA_FIELDS = ["type", "beta", "tol", "seconds", "hits", "mean_steps", "mean_lea
 TIMING_FIELDS = ("seconds", "threads", "task_seconds", "worker")
 #: the probe renders at size // PROBE_DIV (at least 8 px) to estimate the study's cost
 PROBE_DIV = 16
+#: a coarse probe spends more time per pixel than the full-size render (more sphere-tracing
+#: steps per pixel, a fixed cost per render, few tiles to share between threads): its
+#: per-pixel time is divided by (size / probe size) ** PROBE_BIAS_EXP. Calibrated on the bunny
+#: (alpha 200, alpha_U 1200, 2 threads): at 64² the 8x8 probes of the beta = 0 renders took
+#: 1.7-1.9 x the full renders' time per pixel, about 8 ** 0.25; the beta = 0 renders' steps per
+#: pixel fall from 5.4 at 8² to 4.3 at 32², 3.5 at 64² and 2.8 at 128².
+PROBE_BIAS_EXP = 0.25
 
 
 def default_output(size):
@@ -160,7 +168,8 @@ def render_task(task, progress=None):
 
 def probe(tasks, probe_size):
     """Estimated seconds of each task in this process: the task rendered at ``probe_size``
-    pixels, timed, and scaled by the pixel count (the kernels are warmed up first)."""
+    pixels, timed, and scaled by the pixel count and the probe's bias
+    (:data:`PROBE_BIAS_EXP`; the kernels are warmed up first)."""
     est = []
     for task in tasks:
         field = cached_field(task["mesh"], task["type"])
@@ -169,7 +178,8 @@ def probe(tasks, probe_size):
             _WARM.add((task["mesh"], task["type"]))
         t0 = time.perf_counter()
         _render(_scene(field, task, probe_size), task)
-        est.append((time.perf_counter() - t0) * (task["size"] / probe_size) ** 2)
+        ratio = task["size"] / probe_size
+        est.append((time.perf_counter() - t0) * ratio ** (2 - PROBE_BIAS_EXP))
     return est
 
 
@@ -257,7 +267,7 @@ def run(args):
     cache = Path(args.depth_cache) if args.depth_cache else out / "cache"
     csv_path = out / BETA_CSV
     products = [csv_path, out / BETA_PARAMS, out / "beta_time.png", out / "beta_error.png",
-                out / "beta_grid.png", out / "report.md"]
+                out / "beta_grid.png", out / "beta_diff.png", out / "report.md"]
     existing = [p for p in products if p.exists()]
     if existing and not (args.overwrite or args.resume):
         raise CLIError(f"{out} already holds beta-ablation results ({existing[0].name}); pass "
@@ -337,7 +347,9 @@ def run(args):
     ok = reduce(out, cache, log, params, types, grid_betas)
     say(f"Beta ablation of {params['mesh_name']}: {len(ok)} rows in {csv_path} "
         f"({len(todo)} render(s) {info.describe()}, {duration(info.seconds)}); wrote "
-        f"beta_time.png, beta_error.png, beta_grid.png and report.md in {out}.")
+        f"beta_time.png, beta_error.png, beta_grid.png"
+        + (", beta_diff.png" if (out / "beta_diff.png").exists() else "")
+        + f" and report.md in {out}.")
     if info.failed:
         print(f"warning: {len(info.failed)} render(s) failed (see the 'error' column of "
               f"{csv_path}); rerun with --resume to retry them", flush=True)
@@ -346,13 +358,10 @@ def run(args):
 
 
 def _estimate(todo, size, sched, workers, say):
-    """Probe the tasks at a coarse size, set their weights, print the estimate; returns the
-    estimated serial seconds (0 for tiny studies, which are not probed)."""
+    """Probe the tasks at a coarse size (:func:`probe`: ``size // PROBE_DIV``, at least 8 px),
+    set their weights, print the estimate (at every size); returns the estimated serial
+    seconds, from which ``--scheduler local`` decides whether to start a cluster."""
     if not todo:
-        return 0.0
-    if size <= 64:
-        for t in todo:
-            t["weight"] = 1.0 / (t["beta"] + 0.05)
         return 0.0
     import numba
 

@@ -33,14 +33,15 @@ BENCH_FIELDS = ["name", "nV", "leaves_v", "seconds_v", "nE", "leaves_e", "second
 COUNT = {"points": "nV", "edges": "nE", "triangles": "nF"}
 #: a-priori seconds per query and type, for choosing in-process vs a cluster
 SECONDS_PER_QUERY = 1e-6
-DEFAULT_FOLDER = REPO / ".." / "shared" / "data" / "thingi10k"
+#: the folder used when none is given: the three small meshes the repository ships
+DEFAULT_FOLDER = REPO / "scenes" / "data" / "meshes"
 
 
 def add_arguments(p):
     """Arguments of ``tracer bench-grid``."""
     p.add_argument("folder", nargs="?", metavar="DIR",
-                   help="folder of meshes (.obj, .off, .stl, .ply; default "
-                   "../shared/data/thingi10k next to the repository)")
+                   help="folder of meshes (.obj, .off, .stl, .ply; default: the three small "
+                   "meshes shipped in scenes/data/meshes; the paper uses Thingi10K)")
     p.add_argument("-o", "--output", metavar="OUT",
                    help="result folder: bench_grid.csv, bench_grid.json and the two plots "
                    "(default renders/ablation/grid-<name of DIR>)")
@@ -172,7 +173,7 @@ def run(args):
     folder = Path(args.folder) if args.folder else DEFAULT_FOLDER
     if not folder.is_dir():
         raise CLIError(f"mesh folder not found: {folder.resolve() if not args.folder else folder}"
-                       " (give the Thingi10K folder as DIR)")
+                       " (give a folder of meshes as DIR, e.g. the Thingi10K meshes)")
     files = mesh_files(folder)
     if not files:
         raise CLIError(f"no mesh files ({', '.join(MESH_EXTS)}) in {folder}")

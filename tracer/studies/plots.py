@@ -1,7 +1,8 @@
 """Plots and reports of the studies (matplotlib, Agg; imported only when a study writes them).
 
-* :func:`beta_outputs`: time and error vs beta (with the reference numbers), the image grid and
-  ``report.md`` of ``tracer ablate-beta``;
+* :func:`beta_outputs`: time and error vs beta (with the reference numbers), the image grid,
+  the per-pixel depth-difference heat maps (:func:`beta_diff_figure`) and ``report.md`` of
+  ``tracer ablate-beta``;
 * :func:`panel_grid` and :func:`alpha_report`: the labelled image grids of ``tracer
   ablate-alpha`` and their report;
 * :func:`bench_plots`: the two scatter plots of ``tracer bench-grid``;
@@ -108,7 +109,8 @@ def beta_outputs(out, cache, rows, params, types, grid_betas):
     present = beta_plots(out, rows, params)
     plain = [r for r in rows if not r.get("tol", 0.0)]
     beta_grid(out, cache, plain, present, grid_betas)
-    write_text(out / "report.md", beta_report(rows, params, present))
+    diff = beta_diff(out, cache, plain, present, grid_betas, params)
+    write_text(out / "report.md", beta_report(rows, params, present, diff=diff))
 
 
 def beta_plots(out, rows, params):
@@ -204,7 +206,92 @@ def beta_grid(out, cache, rows, present, grid_betas):
     plt.close(fig)
 
 
-def beta_report(rows, params, present):
+#: colour map of the depth-difference heat maps; pixels not hit by both renders are grey
+DIFF_CMAP = "inferno"
+DIFF_LABEL = "|t_β − t_0| per pixel (% of bbox diagonal)"
+
+
+def beta_diff_figure(cache, rows, present, grid_betas, params):
+    """The heat maps of ``beta_diff.png`` as a matplotlib figure, or None when no render with
+    beta > 0 and its type's beta = 0 depth buffer are in ``cache``.
+
+    One panel per type (rows) and selected beta > 0 (columns; the betas of the image grid): the
+    per-pixel depth difference ``|t_beta - t_0|`` to the type's beta = 0 render over the bbox
+    diagonal, in %, where both renders hit (grey elsewhere); the mean of a panel is the study's
+    ``error_rel_diag``. All panels share one colour scale, shown by the colour bar (0 to the
+    largest 99.5th percentile of the panels; larger values take the top colour).
+    """
+    plt = pyplot()
+    import matplotlib
+
+    measured = sorted({r["beta"] for r in rows if r["beta"] > 0})
+    cols = [b for b in measured if any(close(b, g) for g in grid_betas)] or measured[:3]
+    maps = {}
+    for k in present:
+        ref_path = cache / f"depth_{k}_beta{beta_tag(0.0)}.npy"
+        if not ref_path.exists():
+            continue
+        ref = np.load(ref_path).astype(np.float64)
+        for b in cols:
+            r = next((r for r in rows if r["type"] == k and close(r["beta"], b)), None)
+            path = cache / f"depth_{k}_beta{beta_tag(b)}.npy"
+            if r is None or not path.exists():
+                continue
+            depth = np.load(path).astype(np.float64)
+            if depth.shape != ref.shape:
+                continue
+            both = np.isfinite(depth) & np.isfinite(ref)
+            err = np.full(depth.shape, np.nan)
+            err[both] = 100.0 * np.abs(depth[both] - ref[both]) / float(r["diag"])
+            maps[k, b] = (err, r)
+    if not maps:
+        return None
+    values = [e[np.isfinite(e)] for e, _ in maps.values()]
+    values = [v for v in values if v.size]
+    vmax = max((float(np.percentile(v, 99.5)) for v in values), default=0.0)
+    vmax = vmax if vmax > 0 else 1e-6
+    over = any(float(v.max()) > vmax for v in values)
+    types = [k for k in present if any(key[0] == k for key in maps)]
+    cmap = matplotlib.colormaps[DIFF_CMAP].with_extremes(bad="#d9d9d9")
+    norm = matplotlib.colors.Normalize(0.0, vmax)
+    fig, axes = plt.subplots(len(types), len(cols), squeeze=False, layout="constrained",
+                             figsize=(1.9 * len(cols) + 1.2, 2.25 * len(types) + 0.4))
+    for i, k in enumerate(types):
+        for j, b in enumerate(cols):
+            ax = axes[i][j]
+            ax.set_xticks([])
+            ax.set_yticks([])
+            if (k, b) in maps:
+                err, r = maps[k, b]
+                ax.imshow(err, cmap=cmap, norm=norm, interpolation="nearest")
+                ax.set_title(f"β={b:g}: mean {100 * r['error_rel_diag']:.2f}%", fontsize=7)
+            else:
+                ax.text(0.5, 0.5, "not available", ha="center", va="center", fontsize=7,
+                        transform=ax.transAxes)
+            if j == 0:
+                ax.set_ylabel(k, fontsize=8)
+    cb = fig.colorbar(matplotlib.cm.ScalarMappable(norm=norm, cmap=cmap), ax=axes,
+                      extend="max" if over else "neither", shrink=0.9)
+    cb.set_label(DIFF_LABEL, fontsize=8)
+    cb.ax.tick_params(labelsize=7)
+    fig.suptitle(f"{params['mesh_name']}: depth difference to β = 0 (grey: not hit by both)",
+                 fontsize=8)
+    return fig
+
+
+def beta_diff(out, cache, rows, present, grid_betas, params):
+    """Write ``beta_diff.png`` (:func:`beta_diff_figure`); returns whether it was written (a
+    heat map of an earlier run is removed when there is nothing to show)."""
+    fig = beta_diff_figure(cache, rows, present, grid_betas, params)
+    if fig is None:
+        (out / "beta_diff.png").unlink(missing_ok=True)
+        return False
+    savefig(fig, out / "beta_diff.png", dpi=100)
+    pyplot().close(fig)
+    return True
+
+
+def beta_report(rows, params, present, diff=False):
     m = machine_info()
     lines = [f"# β ablation: {params['mesh_name']}", "",
              "Madan & Levin 2022, Sec. 4.3 (figure \"betatest\"); protocol of the authors' "
@@ -224,6 +311,7 @@ def beta_report(rows, params, present):
              *([f"- note: {params['note']}"] if params.get("note") else []), "",
              "![time vs beta](beta_time.png)", "", "![error vs beta](beta_error.png)", "",
              "![renders](beta_grid.png)", "",
+             *(["![depth difference to beta = 0](beta_diff.png)", ""] if diff else []),
              "## Measured vs reference", "",
              f"Reference times: {AUTHORS_TIMES_SETUP}; shown only for a study at the size "
              f"({', '.join(f'{n}²' for n in sorted(AUTHORS_TIMES))}) and eps "
