@@ -564,3 +564,48 @@ def test_gap_probes_and_local_bound_against_numpy():
     assert np.all(nearest[:, 0] <= radii * (1 + 1e-9))
     np.testing.assert_allclose(nearest[empty], np.repeat(radii[empty, None], 3, axis=1),
                                rtol=1e-9)
+
+
+def _torus_ripple(field, alpha, alpha_u):
+    """Spread of the isosurface's offset from the analytic torus (R 1, r 0.3) along its
+    normals, over 6 x 40 points of the outer half, relative to the mean offset (beta 0)."""
+    u, v = np.meshgrid(np.linspace(0, 2 * np.pi, 40, endpoint=False), np.linspace(-0.5, 0.5, 6))
+    u, v = u.ravel(), v.ravel()
+    n = np.stack([np.cos(u) * np.cos(v), np.sin(u) * np.cos(v), np.sin(v)], axis=1)
+    base = np.stack([np.cos(u), np.sin(u), 0 * u], axis=1) + 0.3 * n
+    lo, hi = np.zeros(len(u)), np.full(len(u), 0.3)
+    for _ in range(30):
+        mid = 0.5 * (lo + hi)
+        d = field.smooth_distance(base + mid[:, None] * n, alpha=alpha, beta=0.0,
+                                  alpha_u=alpha_u).distance
+        lo, hi = np.where(d < 0, mid, lo), np.where(d < 0, hi, mid)
+    t = 0.5 * (lo + hi)
+    return (t.max() - t.min()) / t.mean()
+
+
+def test_alpha_u_off_evens_out_a_coarse_tessellation(tmp_path, capsys):
+    """The pleats "auto" shows on a coarse triangle mesh (issue 22): without attenuation
+    (``alpha_u="off"``, ``--alpha-u off``: alpha_U = alpha) the paper's weights even the
+    tessellation out; the README's troubleshooting advice, measured."""
+    torus = trimesh.creation.torus(1.0, 0.3)
+    field = sd.SmoothDistanceField(torus)
+    a = field.auto_alpha()
+    auto, off = _torus_ripple(field, a, "auto"), _torus_ripple(field, a, a)
+    assert off < 0.6 * auto, (off, auto)
+    res = tracer.render_mesh(torus, alpha_u="off", size=(16, 16))
+    assert res.scene.objects[0].alpha_u == res.scene.objects[0].alpha
+    torus.export(tmp_path / "t.obj")
+    out = tmp_path / "t.png"
+    assert main(["render", str(tmp_path / "t.obj"), "--alpha-u", "off", "--size", "16", "16",
+                 "-o", str(out), "--save-scene", str(tmp_path / "t.json")]) == 0
+    saved = json.loads((tmp_path / "t.json").read_text())["objects"][0]
+    assert saved["max_alpha"] == pytest.approx(saved["alpha"])
+    # a scene file too, and --save-scene writes the number, not "off"
+    assert main(["render", str(SCENES / "torus.json"), "--alpha-u", "off", "--size", "16",
+                 "16", "-o", str(tmp_path / "s.png"), "--save-scene",
+                 str(tmp_path / "s.json")]) == 0
+    saved = json.loads((tmp_path / "s.json").read_text())["objects"][0]
+    assert saved["max_alpha"] == pytest.approx(saved["alpha"])
+    assert main(["render", str(SCENES / "torus.json"), "--alpha-u", "of",
+                 "-o", str(tmp_path / "x.png")]) == 2
+    capsys.readouterr()

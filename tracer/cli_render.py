@@ -26,9 +26,12 @@ def add_arguments(p):
     p.add_argument("--alpha", type=_auto_or_number("--alpha"), metavar="auto|A",
                    help="alpha of the (first) object, or 'auto': mean surface offset <= 2%% "
                    "of the bbox diagonal (default for a mesh: auto)")
-    p.add_argument("--alpha-u", type=_auto_or_number("--alpha-u"), metavar="auto|U",
+    p.add_argument("--alpha-u", type=_auto_or_number("--alpha-u", "off"),
+                   metavar="auto|off|U",
                    help="alpha_U (attenuation) of the (first) object, or 'auto' = 20 x alpha, "
-                   "which removes ribbing on tubes (default when the scene has no max_alpha)")
+                   "which removes ribbing on tubes (default when the scene has no max_alpha), "
+                   "or 'off' = alpha (no attenuation: the paper's weights even out an uneven "
+                   "triangle tessellation that 'auto' shows as pleats)")
     p.add_argument("--kind", choices=KINDS,
                    help="mesh file: render its triangles, edges, points, or everything it "
                    "holds (mixed; the default)")
@@ -78,14 +81,17 @@ def add_arguments(p):
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
 
 
-def _auto_or_number(flag):
+def _auto_or_number(flag, *words):
+    words = ("auto",) + words
+
     def parse(text):
-        if text == "auto":
-            return "auto"
+        if text in words:
+            return text
         try:
             return float(text)
         except ValueError:
-            raise ValueError(f"{flag} must be a number or 'auto', got {text!r}") from None
+            raise ValueError(f"{flag} must be a number or {' or '.join(map(repr, words))}, "
+                             f"got {text!r}") from None
     parse.__name__ = flag
     return parse
 
@@ -109,7 +115,7 @@ def check_options(args):
                 raise CLIError(f"--size {what} must be > 0, got {v}")
     for flag, attr, low, closed in _NUMBERS:
         v = getattr(args, attr, None)
-        if v is None or v == "auto":
+        if v is None or v in ("auto", "off"):
             continue
         if not math.isfinite(v):
             raise CLIError(f"{flag} must be finite, got {v}")
@@ -332,7 +338,8 @@ def _edited_scene(data, args, scene):
     if args.alpha is not None:
         first["alpha"] = args.alpha
     if args.alpha_u is not None:
-        first["max_alpha"] = args.alpha_u
+        first["max_alpha"] = (args.alpha_u if args.alpha_u != "off"
+                              else float(f"{scene.objects[0].alpha_u:.6g}"))
     if args.size:
         data["width"], data["height"] = args.size
     for key in ("beta", "mode", "eps", "shading", "offset", "tol", "newton"):

@@ -396,7 +396,9 @@ def _object_spec(od, i, base, path, data, overrides, beta):
         alpha_u, au_where = overrides["alpha_u"], "--alpha-u"
     else:
         alpha_u, au_where = od.get("max_alpha", "auto"), f"{where}.max_alpha"
-    if alpha_u != "auto":
+    if alpha_u == "off" and au_where == "--alpha-u":
+        pass  # no attenuation: alpha_U = alpha, once alpha is known (the command line only)
+    elif alpha_u != "auto":
         if isinstance(alpha_u, str):
             raise _err(path, au_where, f"must be a number or \"auto\", got {_show(alpha_u)}")
         alpha_u = _number(alpha_u, path, au_where, positive=True)
@@ -443,7 +445,8 @@ def _build_object(spec, path, gradient):
         mesh = meshes[0]
     fld = SmoothDistanceField(mesh)
     alpha = fld.auto_alpha() if spec["alpha"] == "auto" else spec["alpha"]
-    alpha_u = fld.auto_alpha_u(alpha) if spec["alpha_u"] == "auto" else spec["alpha_u"]
+    alpha_u = (fld.auto_alpha_u(alpha) if spec["alpha_u"] == "auto" else
+               alpha if spec["alpha_u"] == "off" else spec["alpha_u"])
     offset = spec["offset"] if spec["offset"] is not None else 1.0 / alpha
     try:
         fld.check_alpha(alpha)
@@ -500,9 +503,9 @@ def scene_from_field(field, *, alpha, alpha_u=None, beta=0.5, camera=None, width
         The object's data (built once; reuse it across renders).
     alpha : float or "auto"
         As in the scene file; ``"auto"`` is ``field.auto_alpha()``.
-    alpha_u : float, "auto" or None
+    alpha_u : float, "auto", "off" or None
         As ``max_alpha`` in the scene file; ``"auto"`` is ``field.auto_alpha_u(alpha)`` (no
-        ribbing); None (the default here) is ``alpha``, i.e. no attenuation.
+        ribbing); None (the default here) or ``"off"`` is ``alpha``, i.e. no attenuation.
     beta : float
         Barnes-Hut parameter.
     camera : (origin, dest, up), or a view name, optional
@@ -528,7 +531,8 @@ def scene_from_field(field, *, alpha, alpha_u=None, beta=0.5, camera=None, width
         alpha = field.auto_alpha()
     if isinstance(alpha_u, str) and alpha_u == "auto":
         alpha_u = field.auto_alpha_u(field.check_alpha(alpha))
-    alpha_u = alpha if alpha_u is None else alpha_u
+    alpha_u = alpha if alpha_u is None or (isinstance(alpha_u, str) and alpha_u == "off") \
+        else alpha_u
     alpha, beta, _, _ = field.kernel_args(alpha, beta, alpha_u, gradient)  # validates all three
     alpha_u = float(alpha_u)
     if offset is not None:
