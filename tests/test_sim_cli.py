@@ -190,3 +190,63 @@ def test_existing_output_is_kept_without_resume_or_overwrite(tmp_path, capsys):
     assert main(["simulate", str(sim), "-o", str(out), "--no-render", "-q"]) == 2
     assert "output exists" in _error_line(capsys)
     assert (out / "trajectory.npz").read_bytes() == before
+
+
+def test_auto_alpha_keeps_a_thin_body_close_to_the_floor(tmp_path, capsys):
+    """``"alpha": "auto"`` in a simulation file (issue 22: refused before). Each drawn surface
+    lies within a few percent of the thinnest body's thickness of its mesh, so a small ball
+    resting on a plane shows no visible gap; the summary reports the gap. At the file's
+    alpha 20 the same ball floats far above it (the reason for the rule)."""
+    from tracer.sim import run
+    from tracer.sim.bodies import AUTO_THICKNESS_OFFSET, thickness
+    from smoothdist import SmoothDistanceField
+
+    bodies = [
+        {"name": "floor", "primitive": {"type": "plane", "size": [2, 2], "resolution": 2},
+         "alpha": "auto", "static": True},
+        {"name": "ball", "primitive": {"type": "icosphere", "radius": 0.1, "subdivisions": 1},
+         "alpha": "auto", "position": [0, 0, 0.13]},
+    ]
+    sim_path, spec = _sim(tmp_path, bodies=bodies, steps=25)
+    sim = load_simulation(sim_path)
+    length = AUTO_THICKNESS_OFFSET * min(thickness(b.mesh) for b in sim.bodies)
+    assert length == pytest.approx(AUTO_THICKNESS_OFFSET * 0.2, rel=0.05)
+    for b in sim.bodies:
+        assert b.alpha_u == b.alpha  # "off" by default, as for numbers
+        off = SmoothDistanceField(b.mesh).offset_estimate(b.alpha, alpha_u=b.alpha)
+        assert off <= length * 1.001
+    out = tmp_path / "run"
+    assert main(["simulate", str(sim_path), "-o", str(out), "--no-render"]) == 0
+    err = capsys.readouterr().err
+    assert "at the end floor and ball are" in err and "visible gap of" in err
+    z = np.load(out / "trajectory.npz")
+    assert z["ipm_iterations"][1:].sum() > 0  # it touched the floor
+    gap = run.closest_gap(sim, run.build(sim)[0], z["centers"][-1], z["rotations"][-1])
+    assert abs(gap["visible"]) <= 0.05 * gap["thickness"], gap
+    # the same ball at alpha 20: its drawn surfaces float a visible fraction of it apart
+    for b in bodies:
+        b["alpha"] = 20
+    (tmp_path / "a20").mkdir()
+    sim20 = load_simulation(_sim(tmp_path / "a20", bodies=bodies)[0])
+    drawn = sum(SmoothDistanceField(b.mesh).offset_estimate(20, alpha_u=20)
+                for b in sim20.bodies)
+    assert drawn > 0.3 * 0.2
+
+
+def test_default_frame_size_is_640_by_360(tmp_path):
+    cam = {"origin": [0, -3, 1.0], "dest": [0, 0, 0.2], "up": [0, 0, 1]}
+    sim, _ = _sim(tmp_path, camera=cam)
+    loaded = load_simulation(sim)
+    assert (loaded.camera.width, loaded.camera.height) == (640, 360)
+
+
+@pytest.mark.parametrize("bad, message", [
+    ("automatic", 'bodies[1].alpha must be a number or "auto"'),
+    (-1, "bodies[1].alpha must be > 0"),
+])
+def test_sim_alpha_values(tmp_path, bad, message):
+    sim, spec = _sim(tmp_path)
+    spec["bodies"][1]["alpha"] = bad
+    sim.write_text(json.dumps(spec))
+    with pytest.raises(SimFileError, match=message.replace("[", r"\[").replace("]", r"\]")):
+        load_simulation(sim)

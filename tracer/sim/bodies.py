@@ -128,6 +128,47 @@ def skew(w):
     return np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]])
 
 
+#: ``"alpha": "auto"`` in a simulation file: the body's rendered surface lies on average at
+#: most this fraction of its thickness (smallest extent) from its mesh (see :func:`auto_alpha`)
+AUTO_THICKNESS_OFFSET = 0.03
+
+
+def thickness(mesh):
+    """The body's smallest bounding-box extent, ignoring flat directions (a plane's 0): the
+    length its smooth surface's offset is compared with."""
+    ext = np.ptp(mesh.V, axis=0) if mesh.V.shape[0] else np.zeros(3)
+    diag = float(np.linalg.norm(ext))
+    solid = ext[ext > 1e-6 * diag]
+    return float(solid.min()) if solid.size else max(diag, 1.0)
+
+
+def auto_alpha(mesh, length, alpha_u="off"):
+    """``"alpha": "auto"`` of a simulated body (1 / length).
+
+    The library's ``alpha="auto"`` (mean surface offset <= 2 % of the body's diagonal) is
+    raised until the estimated mean offset of the body's surface
+    (:meth:`smoothdist.SmoothDistanceField.offset_estimate`, which over-estimates it at high
+    alpha) is at most ``length``; a simulation file passes :data:`AUTO_THICKNESS_OFFSET` x
+    the :func:`thickness` of its thinnest body, so that no drawn surface floats a visible
+    fraction of a body above another (a capsule of radius 0.15 on a plane, both at alpha 40,
+    rests 0.14 above it). Point clouds keep the library's value (their closure alpha: higher
+    alphas open holes between the points). ``alpha_u``: ``"off"`` (no attenuation, the
+    simulator's default) or ``"auto"``.
+    """
+    from smoothdist import SmoothDistanceField
+
+    field = SmoothDistanceField(mesh)
+    a = field.auto_alpha()
+    if mesh.kind == "points":
+        return a
+    for _ in range(12):
+        off = field.offset_estimate(a, alpha_u=a if alpha_u == "off" else "auto")
+        if off <= length:
+            break
+        a *= 1.05 * off / length
+    return float(a)
+
+
 @dataclass
 class Body:
     """One rigid body.

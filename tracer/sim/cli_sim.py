@@ -96,8 +96,9 @@ def run_simulate(args):
         raise
     d = min(frames["min_exact_distance"])
     if not args.quiet:
-        print(f"wrote {traj}: {len(frames['time'])} frames, minimum exact distance {d:.4g}",
-              file=sys.stderr)
+        gap = run.closest_gap(sim, con, frames["centers"][-1], frames["rotations"][-1])
+        print(f"wrote {traj}: {len(frames['time'])} frames, minimum exact distance {d:.4g}; "
+              f"{run.describe_gap(gap)}", file=sys.stderr)
     if args.no_render:
         return 0
     data = run.load_trajectory(traj)

@@ -174,3 +174,48 @@ def simulate(sim, out_path, *, steps=None, resume=False, overwrite=False, progre
             progress(s + 1 - done, steps - done, now - t0)
     save_trajectory(out_path, sim, frames, overwrite=overwrite or not first_write)
     return frames
+
+
+def closest_gap(sim, con, centers, rotations):
+    """How far apart the closest pair of bodies is at a pose, and how it looks.
+
+    ``centers (B, 3)``, ``rotations (B, 3, 3)``: a frame of the trajectory. Returns a dict:
+    ``a``, ``b`` (body names), ``exact`` (exact distance between their meshes), ``drawn``
+    (estimated mean offsets of the two bodies' rendered surfaces from their meshes,
+    :meth:`smoothdist.SmoothDistanceField.offset_estimate`), ``visible`` (``exact`` minus
+    both offsets: the gap a render shows; negative when the drawn surfaces overlap) and
+    ``thickness`` (the smaller body's :func:`tracer.sim.bodies.thickness`). None without pairs.
+    """
+    from smoothdist import SmoothDistanceField
+    from tracer.sim.bodies import thickness
+
+    X = np.asarray(centers, dtype=float)
+    Rs = np.asarray(rotations, dtype=float)
+    best = None
+    for p in con.pairs:
+        R, t = p.relative(X, Rs)
+        d = float(p.md.exact(R, t)[0])
+        if best is None or d < best[0]:
+            best = (d, p.i, p.j)
+    if best is None:
+        return None
+    d, i, j = best
+    offsets = []
+    for k in (i, j):
+        b = sim.bodies[k]
+        offsets.append(SmoothDistanceField(b.mesh).offset_estimate(b.alpha, alpha_u=b.alpha_u,
+                                                                   beta=sim.beta))
+    return {"a": sim.bodies[i].name, "b": sim.bodies[j].name, "exact": d,
+            "drawn": tuple(offsets), "visible": d - sum(offsets),
+            "thickness": min(thickness(sim.bodies[k].mesh) for k in (i, j))}
+
+
+def describe_gap(gap):
+    """One sentence for :func:`closest_gap`'s dict."""
+    if gap is None:
+        return ""
+    return (f"at the end {gap['a']} and {gap['b']} are {gap['exact']:.4g} apart (exact); their "
+            f"drawn surfaces lie about {gap['drawn'][0]:.3g} and {gap['drawn'][1]:.3g} outside "
+            f"them, a visible gap of {gap['visible']:.3g} "
+            f"({100 * gap['visible'] / gap['thickness']:.2g}% of the thinner body, "
+            f"{gap['thickness']:.3g} thick)")

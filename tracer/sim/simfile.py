@@ -13,7 +13,7 @@ Format (keys not listed are refused; lengths in scene units, times in seconds)::
       "gap_tol": 1e-5,                   optional interior-point gap tolerance (scene units)
       "camera": {                        required (used when rendering)
         "origin": [x, y, z], "dest": [x, y, z], "up": [x, y, z],
-        "width": 200, "height": 160,     image size (default 200 x 160)
+        "width": 640, "height": 360,     image size (default 640 x 360)
         "fps": 25,                       movie frame rate (default 25)
         "every": 4,                      render every N-th step (default: about 80 frames)
         "shading": "normals",            "normals" | "headlight" | "matcap"
@@ -30,8 +30,10 @@ Format (keys not listed are refused; lengths in scene units, times in seconds)::
           "scale": 1.0,                  uniform scale of the file's coordinates
           "crop": [[x0, y0, z0], [x1, y1, z1]],  keep only primitives inside this box (file
                                          coordinates, before scale; e.g. a window of a scan)
-          "alpha": 200,                  smooth-distance sharpness (> 0)          required
-          "alpha_u": 400,                attenuation threshold alpha_U (default: alpha)
+          "alpha": 200,                  smooth-distance sharpness (> 0), or "auto"
+                                         (tracer.sim.bodies.auto_alpha)        required
+          "alpha_u": 400,                attenuation threshold alpha_U, "auto" (20 x alpha)
+                                         or "off" (= alpha, the default)
           "density": 1.0,                per volume (closed triangles), area (open), length
                                          (edges) or per point (tracer.sim.bodies)
           "position": [x, y, z],         the file's vertex p is placed at R p + position
@@ -62,7 +64,8 @@ from smoothdist import DataMesh
 from tracer.scene import (SHADINGS, SceneError, _choice, _keys, _number, _resolve, _show, _vec3,
                           read_scene_json)
 from tracer.sim import primitives
-from tracer.sim.bodies import Body, rotation_matrix
+from tracer.sim.bodies import (AUTO_THICKNESS_OFFSET, Body, auto_alpha, rotation_matrix,
+                               thickness)
 
 _TOP = {"name", "description", "dt", "steps", "gravity", "beta", "constraint", "gap_tol",
         "camera", "bodies"}
@@ -86,8 +89,8 @@ class Camera:
     origin: np.ndarray
     dest: np.ndarray
     up: np.ndarray
-    width: int = 200
-    height: int = 160
+    width: int = 640
+    height: int = 360
     fps: float = 25.0
     every: int = 1
     shading: str = "normals"
@@ -218,9 +221,13 @@ def _body_spec(bd, i, base, path):
         if not (lo < hi).all():
             raise _err(path, f"{where}.crop", "must have its first corner below the second")
         spec["crop"] = (lo, hi)
-    spec["alpha"] = _number(bd["alpha"], path, f"{where}.alpha", positive=True)
-    spec["alpha_u"] = _number(bd.get("alpha_u", spec["alpha"]), path, f"{where}.alpha_u",
-                              positive=True)
+    for key, words in (("alpha", ("auto",)), ("alpha_u", ("auto", "off"))):
+        value = bd.get(key, "off" if key == "alpha_u" else None)
+        if isinstance(value, str) and value not in words:
+            raise _err(path, f"{where}.{key}", f"must be a number or "
+                       f"{' or '.join(chr(34) + w + chr(34) for w in words)}, got {_show(value)}")
+        spec[key] = value if value in words else _number(value, path, f"{where}.{key}",
+                                                         positive=True)
     spec["density"] = _number(bd.get("density", 1.0), path, f"{where}.density", positive=True)
     spec["position"] = _vec3(bd.get("position", [0, 0, 0]), path, f"{where}.position")
     spec["rotation"] = (_rotation(bd["rotation"], path, f"{where}.rotation") if "rotation" in bd
@@ -235,7 +242,8 @@ def _body_spec(bd, i, base, path):
     return spec
 
 
-def _build_body(spec, i, path):
+def _body_mesh(spec, i, path):
+    """The body's mesh in file coordinates (loaded or generated, reduced, cropped, scaled)."""
     where = f"bodies[{i}]"
     try:
         if "mesh" in spec:
@@ -249,8 +257,28 @@ def _build_body(spec, i, path):
         if spec["scale"] != 1.0:
             mesh = DataMesh(mesh.V * spec["scale"], points=mesh.points, edges=mesh.edges,
                             triangles=mesh.triangles, name=mesh.name, repair=False)
-        return Body.from_mesh(mesh, name=spec["name"], alpha=spec["alpha"],
-                              alpha_u=spec["alpha_u"], density=spec["density"],
+        return mesh
+    except SceneError:
+        raise
+    except (ValueError, OSError, RuntimeError) as exc:
+        raise _err(path, where, f"cannot be built: {str(exc).splitlines()[0]}") from None
+
+
+def _build_body(spec, i, path, mesh, length):
+    """The :class:`Body` of ``spec``; ``"auto"`` alphas aim at an offset of ``length``."""
+    where = f"bodies[{i}]"
+    try:
+        alpha, alpha_u = spec["alpha"], spec["alpha_u"]
+        if alpha == "auto":
+            alpha = auto_alpha(mesh, length, "auto" if alpha_u == "auto" else "off")
+        if alpha_u == "auto":
+            from smoothdist import SmoothDistanceField
+
+            alpha_u = SmoothDistanceField(mesh).auto_alpha_u(alpha)
+        elif alpha_u == "off":
+            alpha_u = alpha
+        return Body.from_mesh(mesh, name=spec["name"], alpha=alpha,
+                              alpha_u=alpha_u, density=spec["density"],
                               position=spec["position"], rotation=spec["rotation"],
                               velocity=spec["velocity"],
                               angular_velocity=spec["angular_velocity"], static=spec["static"])
@@ -314,7 +342,11 @@ def load_simulation(path):
         names = [s["name"] for s in specs]
         if len(set(names)) != len(names):
             raise _err(path, "bodies", f"have duplicate names {names}")
-        built = [_build_body(s, i, path) for i, s in enumerate(specs)]
+        meshes = [_body_mesh(s, i, path) for i, s in enumerate(specs)]
+        # "auto" alphas: each drawn surface within a few percent of the thinnest body
+        length = AUTO_THICKNESS_OFFSET * min(thickness(m) for m in meshes)
+        built = [_build_body(s, i, path, m, length) for i, (s, m) in
+                 enumerate(zip(specs, meshes))]
     except SimFileError:
         raise
     except SceneError as exc:
