@@ -48,12 +48,12 @@ def reference_depths(scene, stride):
     rr, cc = np.meshgrid(np.arange(stride // 2, H, stride), np.arange(stride // 2, W, stride),
                          indexing="ij")
     rows, cols = rr.ravel().astype(np.int64), cc.ravel().astype(np.int64)
-    tree, roots, params, mode, lo, hi, depth_max = scene_arrays(scene)
+    tree, roots, params, mode, lo, hi, depth_max, tol = scene_arrays(scene)
     hit = np.zeros(rows.size, dtype=np.bool_)
     t = np.full(rows.size, np.nan)
     steps = np.zeros(rows.size, dtype=np.int64)
     leaves = np.zeros(rows.size, dtype=np.int64)
-    march.trace_pixels(tree, roots, params, mode, camera_of(scene).as_array(), lo, hi,
+    march.trace_pixels(tree, roots, params, mode, tol, camera_of(scene).as_array(), lo, hi,
                        float(scene.eps), int(scene.max_steps), rows, cols, depth_max, hit, t,
                        steps, leaves, 0.0, march.OMEGA, march.newton_distance(scene.eps, lo, hi))
     return rows, cols, hit, t

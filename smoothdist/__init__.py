@@ -16,10 +16,10 @@ from smoothdist._cache_guard import guard_once as _guard_kernel_cache
 # before any kernel module is imported: drop numba caches compiled from other sources
 _guard_kernel_cache()
 
-from smoothdist.convert import as_data_mesh
 from smoothdist.field import (ExactDistanceResult, QueryStats, SmoothDistanceField,
                               SmoothDistanceResult)
-from smoothdist.mesh import DataMesh, MeshRepairWarning
+from smoothdist.mesh import DataMesh, MeshRepairWarning, as_data_mesh
+from smoothdist.query import DEFAULT_TOL as _DEFAULT_TOL
 from smoothdist.whole_mesh import MeshDistance, combine_distances, mesh_distance
 
 __all__ = ["DataMesh", "MeshRepairWarning", "SmoothDistanceField", "SmoothDistanceResult",
@@ -34,7 +34,7 @@ def load_mesh(path, kind=None):
 
 
 def smooth_distance(Q, V, F=None, *, alpha, beta=0.5, alpha_u=None, gradient="metric",
-                    return_stats=False, tol=0.0):
+                    return_stats=False, tol=_DEFAULT_TOL):
     """Smooth distance from query points to a data mesh (Madan & Levin 2022, Eq. 3-4).
 
     Parameters
@@ -43,7 +43,7 @@ def smooth_distance(Q, V, F=None, *, alpha, beta=0.5, alpha_u=None, gradient="me
         Query points.
     V : (n, 3) array_like of float, or a DataMesh / trimesh / pyvista object
         Data vertices, or a whole mesh (then ``F`` is None; see
-        :func:`smoothdist.convert.as_data_mesh`).
+        :func:`smoothdist.as_data_mesh`).
     F : None, (m, 2) or (m, 3) array_like of int
         ``None``: the vertices are a point cloud; ``(m, 2)`` edges; ``(m, 3)`` triangles.
     alpha : float or "auto"

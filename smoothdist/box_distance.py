@@ -21,9 +21,9 @@ above it, or neither. With ``k`` separated axes:
 * ``k = 0``: the primitive's bounding box overlaps the node's, and the bound is 0.
 
 The authors' code gets this wrong in three ways (it picks the lower x face for a primitive above the
-box, and uses the nearest *vertex* for ``k = 1``), and both overestimate; see the reference digest,
-section 11, items 2-3. :func:`box_lower_bound` returns the bound and its gradient with respect to a
-rigid translation of the query (the far-field term's gradient direction).
+box, and uses the nearest *vertex* for ``k = 1``), and both overestimate; see
+docs/authors-code.md §11, items 2-3. :func:`box_lower_bound` returns the bound and its gradient
+with respect to a rigid translation of the query (the far-field term's gradient direction).
 """
 
 import math

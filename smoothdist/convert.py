@@ -1,14 +1,13 @@
-"""Geometry from other libraries: trimesh and pyvista objects as :class:`DataMesh`.
+"""Geometry from other libraries: trimesh and pyvista objects as vertex and index arrays.
 
-:func:`as_data_mesh` is what :class:`~smoothdist.SmoothDistanceField`, the module-level
-functions and the tracer use to accept whatever a user already holds:
+This module only converts; :func:`smoothdist.mesh.as_data_mesh` (also
+``smoothdist.as_data_mesh``), the one door every mesh comes in through, builds the
+:class:`~smoothdist.mesh.DataMesh` from what it returns. Nothing here imports
+:mod:`smoothdist.mesh`. What each object becomes (:func:`foreign_arrays`):
 
 ============================== ==========================================================
-input                          becomes
+object                         arrays
 ============================== ==========================================================
-``DataMesh``                   itself
-``V`` and ``F`` numpy arrays   as :class:`DataMesh` (``F`` None, ``(m, 2)`` or ``(m, 3)``),
-                               also as one ``(V, F)`` tuple
 ``trimesh.Trimesh``            its triangles
 ``trimesh.PointCloud``         its vertices as points
 ``trimesh.path.Path3D``        its polylines as edges (curved entities are discretised)
@@ -26,9 +25,7 @@ class comes from, so that plain numpy users do not pay for importing them.
 
 import numpy as np
 
-from smoothdist.mesh import DataMesh
-
-__all__ = ["as_data_mesh", "is_foreign_geometry", "trimesh_arrays", "pyvista_arrays"]
+__all__ = ["is_foreign_geometry", "foreign_arrays", "trimesh_arrays", "pyvista_arrays"]
 
 
 def _module_of(obj):
@@ -36,7 +33,7 @@ def _module_of(obj):
 
 
 def is_foreign_geometry(obj):
-    """True for a trimesh or pyvista object that :func:`as_data_mesh` converts.
+    """True for a trimesh or pyvista object that :func:`foreign_arrays` converts.
 
     Arrays are never foreign geometry: numpy subclasses that these libraries hand out
     (``trimesh.caching.TrackedArray``, ``pyvista.pyvista_ndarray``) and array-likes such as
@@ -46,44 +43,12 @@ def is_foreign_geometry(obj):
     return _module_of(obj) in ("trimesh", "pyvista", "vtkmodules")
 
 
-def as_data_mesh(mesh, F=None, *, name=None, **mesh_kwargs):
-    """Return ``mesh`` (and ``F``) as a :class:`DataMesh`.
-
-    Parameters
-    ----------
-    mesh : DataMesh, (n, 3) array_like, or a trimesh / pyvista object
-        See the module docstring for what each object becomes.
-    F : None, (m, 2) or (m, 3) array_like of int
-        Primitives when ``mesh`` is a vertex array; must be None otherwise.
-    name : str, optional
-        Label used in messages (default: the object's class name).
-    **mesh_kwargs
-        Passed to :class:`DataMesh` (e.g. ``repair=False``).
-
-    Raises
-    ------
-    ValueError
-        For an object that holds no usable geometry, ``F`` given with an object, or input
-        :class:`DataMesh` rejects (NaN vertices, bad indices, ...).
-    """
-    if isinstance(mesh, DataMesh):
-        if F is not None:
-            raise ValueError("pass F only together with a vertex array, not with a DataMesh")
-        return mesh
-    if (F is None and isinstance(mesh, tuple) and len(mesh) == 2
-            and np.ndim(mesh[0]) == 2 and (mesh[1] is None or np.ndim(mesh[1]) == 2)):
-        mesh, F = mesh  # a (V, F) pair
-    if not is_foreign_geometry(mesh):
-        return DataMesh(mesh, F, name=name, **mesh_kwargs)
-    if F is not None:
-        raise ValueError(f"pass F only together with a vertex array, not with a "
-                         f"{type(mesh).__name__}")
-    name = name or type(mesh).__name__
-    if _module_of(mesh) == "trimesh":
-        V, P, E, T = trimesh_arrays(mesh, name)
-    else:
-        V, P, E, T = pyvista_arrays(mesh, name)
-    return DataMesh(V, points=P, edges=E, triangles=T, name=name, **mesh_kwargs)
+def foreign_arrays(obj, name):
+    """``(V, points, edges, triangles)`` of a trimesh or pyvista object (None for absent
+    kinds; ``obj`` must satisfy :func:`is_foreign_geometry`)."""
+    if _module_of(obj) == "trimesh":
+        return trimesh_arrays(obj, name)
+    return pyvista_arrays(obj, name)
 
 
 # ---------------------------------------------------------------------- trimesh

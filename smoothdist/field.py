@@ -9,8 +9,8 @@ import numpy as np
 from smoothdist import query as _q
 from smoothdist._cast import as_points, non_negative, positive
 from smoothdist.bvh import build_tree
-from smoothdist.convert import as_data_mesh
 from smoothdist.exact_query import build_exact_tree, exact_tree_batch
+from smoothdist.mesh import as_data_mesh
 
 GRADIENTS = ("metric", "exact")
 METHODS = ("bvh", "brute")
@@ -75,7 +75,7 @@ class SmoothDistanceField:
     mesh : DataMesh, (n, 3) array_like, or a trimesh / pyvista object
         The data mesh, or vertex positions (then ``F`` as in :class:`DataMesh`), or a
         ``trimesh.Trimesh`` / ``PointCloud`` / ``path.Path3D`` or ``pyvista.PolyData``
-        (converted by :func:`smoothdist.convert.as_data_mesh`).
+        (converted by :func:`smoothdist.mesh.as_data_mesh`).
     F : (m, k) array_like of int, optional
         Primitives when ``mesh`` is a vertex array.
     leaf_size : int
@@ -349,7 +349,7 @@ class SmoothDistanceField:
 
     # ------------------------------------------------------------------ queries
     def smooth_distance(self, Q, *, alpha, beta=0.5, alpha_u=None, gradient="metric",
-                        method="bvh", return_stats=False, tol=0.0):
+                        method="bvh", return_stats=False, tol=_q.DEFAULT_TOL):
         """Smooth distance ``d_hat`` (Eq. 3) and its gradient at query points.
 
         Parameters

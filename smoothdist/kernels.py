@@ -9,17 +9,24 @@ Use them with a :class:`~smoothdist.field.SmoothDistanceField`'s ``tree`` and th
 
 Inside a kernel, allocate ``np.empty(tree.depth + 4, np.int64)`` and ``np.empty(tree.depth + 4)``.
 ``smooth_distance_point_tol(tree, x, y, z, alpha, beta, tol, S, wgs, stack, dstack)`` adds
-tolerance-controlled pruning (``tol > 0``; same scratch arrays).
+tolerance-controlled pruning (``tol > 0``; same scratch arrays; ``DEFAULT_TOL`` = 0 is off).
+
+Your own kernels take the package's compilation policy from here, so that they are compiled
+(and cached) like these: decorate them ``@numba.njit(**NJIT)``, or
+``@numba.njit(**NJIT_PARALLEL)`` for batch loops over ``prange``; ``PARALLEL`` is false under
+``SMOOTHDIST_PARALLEL=0`` (see :mod:`smoothdist._config`).
 """
 
 import numpy as np
 
+from smoothdist._config import NJIT, NJIT_PARALLEL, PARALLEL
 from smoothdist.bvh import TreeData, concatenate_trees
-from smoothdist.query import (exact_distance_point, logsumexp_accumulate, smooth_distance_point,
-                              smooth_distance_point_tol, stack_size)
+from smoothdist.query import (DEFAULT_TOL, exact_distance_point, logsumexp_accumulate,
+                              smooth_distance_point, smooth_distance_point_tol, stack_size)
 
 __all__ = ["TreeData", "concatenate_trees", "exact_distance_point", "logsumexp_accumulate",
-           "smooth_distance_point", "smooth_distance_point_tol", "new_stack", "stack_size"]
+           "smooth_distance_point", "smooth_distance_point_tol", "new_stack", "stack_size",
+           "DEFAULT_TOL", "NJIT", "NJIT_PARALLEL", "PARALLEL"]
 
 
 def new_stack(tree):

@@ -4,6 +4,10 @@ A :class:`DataMesh` holds ``V (n, 3) float64`` and three index arrays: ``points 
 ``edges (e, 2)`` and ``triangles (t, 3)`` (int64). It validates and repairs its input, computes
 the valences and the per-primitive weight polynomials of Madan & Levin 2022 (Sec. 3.3, App. C),
 and loads OBJ (``f`` and ``l`` records), OFF, STL and PLY files.
+
+:func:`as_data_mesh` is the one door for every mesh: a DataMesh, ``(V, F)`` arrays, or trimesh /
+pyvista objects (converted to arrays by :mod:`smoothdist.convert`, which imports nothing from
+here).
 """
 
 import os
@@ -13,6 +17,7 @@ import numpy as np
 
 from smoothdist import weights as _weights
 from smoothdist._cast import COORD_LIMIT, as_indices, as_points, non_finite_rows
+from smoothdist.convert import foreign_arrays, is_foreign_geometry, trimesh_arrays
 
 KIND_POINT, KIND_EDGE, KIND_TRIANGLE = 0, 1, 2
 _KIND_NAMES = {"points": KIND_POINT, "edges": KIND_EDGE, "triangles": KIND_TRIANGLE}
@@ -192,6 +197,58 @@ class DataMesh:
         return self._weights
 
 
+# ---------------------------------------------------------------------- the one door
+def as_data_mesh(mesh, F=None, *, name=None, **mesh_kwargs):
+    """Return ``mesh`` (and ``F``) as a :class:`DataMesh`: the one door every mesh comes in
+    through (:class:`~smoothdist.SmoothDistanceField`, the module-level functions, the
+    tracer; also ``smoothdist.as_data_mesh``).
+
+    ============================== ======================================================
+    input                          becomes
+    ============================== ======================================================
+    ``DataMesh``                   itself
+    ``V`` and ``F`` arrays         ``DataMesh(V, F)`` (``F`` None, ``(m, 2)`` or
+                                   ``(m, 3)``), also as one ``(V, F)`` tuple; array
+                                   subclasses and lists are arrays
+    a trimesh or pyvista object    its geometry, converted by
+                                   :func:`smoothdist.convert.foreign_arrays` (see
+                                   :mod:`smoothdist.convert` for what each becomes)
+    ============================== ======================================================
+
+    Parameters
+    ----------
+    mesh : DataMesh, (n, 3) array_like, or a trimesh / pyvista object
+        See the table above.
+    F : None, (m, 2) or (m, 3) array_like of int
+        Primitives when ``mesh`` is a vertex array; must be None otherwise.
+    name : str, optional
+        Label used in messages (default: the object's class name).
+    **mesh_kwargs
+        Passed to :class:`DataMesh` (e.g. ``repair=False``).
+
+    Raises
+    ------
+    ValueError
+        For an object that holds no usable geometry, ``F`` given with an object, or input
+        :class:`DataMesh` rejects (NaN vertices, bad indices, ...).
+    """
+    if isinstance(mesh, DataMesh):
+        if F is not None:
+            raise ValueError("pass F only together with a vertex array, not with a DataMesh")
+        return mesh
+    if (F is None and isinstance(mesh, tuple) and len(mesh) == 2
+            and np.ndim(mesh[0]) == 2 and (mesh[1] is None or np.ndim(mesh[1]) == 2)):
+        mesh, F = mesh  # a (V, F) pair
+    if not is_foreign_geometry(mesh):
+        return DataMesh(mesh, F, name=name, **mesh_kwargs)
+    if F is not None:
+        raise ValueError(f"pass F only together with a vertex array, not with a "
+                         f"{type(mesh).__name__}")
+    name = name or type(mesh).__name__
+    V, P, E, T = foreign_arrays(mesh, name)
+    return DataMesh(V, points=P, edges=E, triangles=T, name=name, **mesh_kwargs)
+
+
 # ---------------------------------------------------------------------- helpers
 def unique_edges(T):
     """Unique undirected edges ``(e, 2)`` int64 of triangles ``T (t, 3)``, sorted per row."""
@@ -333,6 +390,8 @@ def read_mesh_file(path):
             V, E, T = _read_with_trimesh(path, ext)
     except _MeshFileError as exc:
         raise ValueError(str(exc)) from None
+    except ImportError:
+        raise
     except PermissionError:
         raise ValueError(f"mesh file is not readable (permission denied): {path}") from None
     except (MemoryError, RecursionError):
@@ -443,7 +502,12 @@ def _read_off(path):
 def _read_with_trimesh(path, ext):
     import logging
 
-    import trimesh
+    try:
+        import trimesh
+    except ImportError:
+        raise ImportError(f"reading {ext} files needs trimesh (pip install trimesh, or "
+                          f"'smoothdist[tracer]'); OBJ and ASCII OFF files are read without "
+                          f"it") from None
 
     # trimesh logs its own complaints about malformed files; we report them as one error
     log = logging.getLogger("trimesh")
@@ -455,8 +519,6 @@ def _read_with_trimesh(path, ext):
             loaded = trimesh.load(path, process=False, force=None)
     finally:
         log.setLevel(level)
-    from smoothdist.convert import trimesh_arrays
-
     if isinstance(loaded, trimesh.Scene) and not loaded.geometry:
         raise _MeshFileError(f"mesh file holds no geometry: {path}")
     V, _, E, T = trimesh_arrays(loaded, os.path.basename(path))

@@ -36,7 +36,7 @@ from smoothdist._config import NJIT, NJIT_PARALLEL
 from smoothdist.box_distance import box_box_distance, box_box_offset, box_lower_bound
 from smoothdist.closest_pair import closest_pair
 from smoothdist.closest_point import (SEG_INTERIOR, TRI_AB, TRI_AC, TRI_BC, TRI_INTERIOR)
-from smoothdist.query import (_attenuate, exact_distance_point, logsumexp_accumulate,
+from smoothdist.query import (DEFAULT_TOL, _attenuate, exact_distance_point, logsumexp_accumulate,
                               push_nearest_first, smooth_distance_point)
 from smoothdist.weights import eval_edge_weight, eval_triangle_weight
 
@@ -173,17 +173,17 @@ def query_box(kq, Q, qlo, qhi):
 
 @numba.njit(**NJIT)
 def smooth_distance_primitive(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch,
-                              tol=0.0):
+                              tol=DEFAULT_TOL):
     """Smooth distance ``d_hat(g)`` and its translation gradient for an edge or triangle query.
 
     ``Q (9,)`` the query's vertices, ``kq`` 1 or 2; ``scratch (15,)`` float64 work space; other
     arguments as :func:`smoothdist.query.smooth_distance_point`. Returns
     ``(d_hat, gx, gy, gz, nodes_visited, leaves_visited)``.
 
-    ``tol > 0`` adds a second far-field rule (design notes §3, not in the paper): a node whose
-    far-field term ``count * whi**S * exp(-alpha delta)`` (``delta`` its box-box distance) is at
-    most ``tol`` times the sum so far is replaced by that term. It is the same overestimate of
-    the subtree's sum as Barnes-Hut's, so ``d_hat`` only decreases, by at most
+    ``tol > 0`` adds a second far-field rule (docs/design-notes.md §3, not in the paper): a
+    node whose far-field term ``count * whi**S * exp(-alpha delta)`` (``delta`` its box-box
+    distance) is at most ``tol`` times the sum so far is replaced by that term. It is the same
+    overestimate of the subtree's sum as Barnes-Hut's, so ``d_hat`` only decreases, by at most
     ``-log(1 - k tol) / alpha`` for ``k`` such nodes (``k tol < 1``).
     """
     qlo = scratch[0:3]
@@ -384,7 +384,7 @@ def _smooth_task(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g, ou
 
 @numba.njit(**NJIT_PARALLEL)
 def smooth_distance_primitives(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g,
-                               out_nodes, out_leaves, tol=0.0):
+                               out_nodes, out_leaves, tol=DEFAULT_TOL):
     """``d_hat`` and translation gradient of every query primitive, in parallel.
 
     ``qkind (m,)`` int64, ``qpts (m, 9)`` float64; fills ``out_d (m,)``, ``out_g (m, 3)``,
@@ -399,7 +399,7 @@ def smooth_distance_primitives(tree, qkind, qpts, alpha, beta, S, wgs, brute, ou
 
 @numba.njit(**NJIT)
 def smooth_distance_primitives_serial(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d,
-                                      out_g, out_nodes, out_leaves, tol=0.0):
+                                      out_g, out_nodes, out_leaves, tol=DEFAULT_TOL):
     """:func:`smooth_distance_primitives` on the calling thread (small query meshes)."""
     _smooth_task(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g, out_nodes,
                  out_leaves, tol, 0, 1)

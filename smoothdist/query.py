@@ -10,7 +10,7 @@ Three layers, as in the rest of the package:
 Conventions: distances are unsigned, in scene units; gradients are with respect to the query
 point. The smooth sum is accumulated in float64 relative to a running shift ``m`` (the smallest
 distance seen so far), so ``d_hat = m - log(s) / alpha`` is finite for every finite query
-(design notes §1).
+(docs/design-notes.md §1).
 """
 
 import math
@@ -156,7 +156,7 @@ def logsumexp_accumulate(m, s, gx, gy, gz, d, W, vx, vy, vz, alpha):
     with ``m`` the smallest ``d_i`` so far (``inf`` before the first term, with ``s = g = 0``).
     Returns the updated ``(m, s, gx, gy, gz)``; the result is ``m - log(s) / alpha`` and
     ``g / s``. Every exponent is <= 0, so nothing overflows and ``s >= W_min`` never underflows
-    to zero (design notes §1).
+    to zero (docs/design-notes.md §1).
     """
     if d < m:
         f = math.exp(-alpha * (m - d))
@@ -254,6 +254,10 @@ def smooth_distance_point(tree, px, py, pz, alpha, beta, S, wgs, stack, dstack, 
     return m - math.log(s) / alpha, gx * inv, gy * inv, gz * inv, nodes, leaves
 
 
+#: ``tol`` when none is given: tolerance-controlled pruning off. The one definition of that
+#: default (the library's functions, ``tracer.render.scene_arrays``; ``smoothdist.kernels``
+#: exports it)
+DEFAULT_TOL = 0.0
 #: tol mode: a node with at most this many primitives that is not accepted is evaluated
 #: primitive by primitive (they are contiguous in tree order) instead of being descended
 TOL_LEAF = 8
@@ -289,14 +293,14 @@ def smooth_distance_point_tol(tree, px, py, pz, alpha, beta, tol, S, wgs, stack,
 
     so the error is at most ``log(1 + tol) / alpha <= tol / alpha`` (scene units).
 
-    Rule (design notes §3, with one shared budget instead of one per node, so that the bound
-    does not grow with the number of accepted nodes). Nodes are visited nearest-child-first
-    (a depth-first stack whose nearer child is popped first), so the first leaves evaluated
-    are those closest to ``p`` and the exact part of the sum grows early. Let ``N`` be the
-    number of primitives below the root, ``s_ex`` the sum of the exact terms evaluated so
-    far, ``E`` the sum of the far fields accepted so far and ``n_E`` the number of primitives
-    below them (sums relative to the same running shift). A popped node ``B`` with ``n_B``
-    primitives and box distance ``delta_B`` has the far-field bound
+    Rule (docs/design-notes.md §3, with one shared budget instead of one per node, so that the
+    bound does not grow with the number of accepted nodes). Nodes are visited
+    nearest-child-first (a depth-first stack whose nearer child is popped first), so the first
+    leaves evaluated are those closest to ``p`` and the exact part of the sum grows early. Let
+    ``N`` be the number of primitives below the root, ``s_ex`` the sum of the exact terms
+    evaluated so far, ``E`` the sum of the far fields accepted so far and ``n_E`` the number of
+    primitives below them (sums relative to the same running shift). A popped node ``B`` with
+    ``n_B`` primitives and box distance ``delta_B`` has the far-field bound
     ``U_B = n_B A^S exp(-alpha delta_B)`` (the Barnes-Hut over-estimate, with ``A`` the
     largest raw weight of the tree); it is added *instead of* being opened if
 
@@ -537,7 +541,7 @@ def smooth_distance_brute_point(tree, px, py, pz, alpha, S, wgs):
 
 @numba.njit(**NJIT_PARALLEL)
 def smooth_distance_batch(tree, Q, alpha, beta, S, wgs, brute, out_d, out_g, out_nodes,
-                          out_leaves, tol=0.0):
+                          out_leaves, tol=DEFAULT_TOL):
     """Fill ``out_d (q,)``, ``out_g (q, 3)``, ``out_nodes``, ``out_leaves (q,)`` for ``Q (q, 3)``.
 
     ``tol > 0``: tolerance-controlled pruning (:func:`smooth_distance_point_tol`).

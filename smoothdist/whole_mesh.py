@@ -27,9 +27,10 @@ import numpy as np
 
 from smoothdist import mesh_query as _mq
 from smoothdist._cast import as_indices, as_points, non_negative, positive
-from smoothdist.convert import as_data_mesh, is_foreign_geometry
+from smoothdist.convert import is_foreign_geometry
 from smoothdist.field import SmoothDistanceField
-from smoothdist.mesh import DataMesh
+from smoothdist.mesh import DataMesh, as_data_mesh
+from smoothdist.query import DEFAULT_TOL
 
 
 #: query meshes with fewer primitives than this run on the calling thread (a parallel launch
@@ -179,7 +180,7 @@ class MeshDistance:
     """
 
     def __init__(self, data, query, *, alpha, alpha_q, beta=0.5, alpha_u=None,
-                 gradient="metric", leaf_size=1, tol=0.0):
+                 gradient="metric", leaf_size=1, tol=DEFAULT_TOL):
         self.field = _as_field(data, leaf_size)
         self.tol = non_negative(tol, "tol")
         self.alpha, self.beta, self.S, self.wgs = self.field.kernel_args(alpha, beta, alpha_u,
@@ -338,7 +339,7 @@ def split_to_vertices(d, g, query, alpha_q):
 
 
 def mesh_distance(V_data, F_data, V_query, F_query, *, alpha, alpha_q, beta=0.5, alpha_u=None,
-                  gradient="metric", tol=0.0):
+                  gradient="metric", tol=DEFAULT_TOL):
     """Smooth distance between a query mesh and a data mesh (Madan & Levin 2022, Eq. 6-8).
 
     Parameters

@@ -21,7 +21,8 @@ def tilted_camera():
     return look_at([1.5, -2.0, 3.0], [0.2, 0.4, -0.1], [0.3, 1.0, 0.2], 24, 10)
 
 
-def test_digest_example_frame():
+def test_authors_example_frame():
+    """docs/authors-code.md §7: on +z looking at the origin, up +y."""
     cam = look_at([0, 0, 3], [0, 0, 0], [0, 1, 0], 64, 48)
     npt.assert_allclose(cam.forward, [0, 0, -1])
     npt.assert_allclose(cam.horizontal, [1, 0, 0])
@@ -102,7 +103,8 @@ def test_longer_axis_is_scaled(width, height):
         assert h_fov == pytest.approx(53.130102354)
         assert v_fov == pytest.approx(np.degrees(2 * np.arctan(0.5 * ratio)))
     if (width, height) == (1920, 1080):
-        assert h_fov == pytest.approx(83.3, abs=0.05)   # the digest's figure
+        # the authors' camera (docs/authors-code.md §7)
+        assert h_fov == pytest.approx(83.3, abs=0.05)
     # the ray through the left-most column really is scaled
     ray = primary_rays(cam)[height // 2 - 1, 0]
     assert np.dot(ray, cam.horizontal) / np.dot(ray, cam.forward) == pytest.approx(

@@ -197,7 +197,8 @@ def test_box_lower_bound_never_overestimates(kq, rng):
 
 
 def test_box_bound_authors_failure_cases():
-    """The three overestimates of the authors' halfspace test (reference digest §11, 2-3)."""
+    """The three overestimates of the authors' halfspace test (docs/authors-code.md §11,
+    items 2-3)."""
     E = np.zeros(9)
     LO, HI = _node_box([0, 0, 0], [1, 1, 1])
     # a segment entirely above the box on x and y (k = 2): the authors use the lower x face

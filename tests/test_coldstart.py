@@ -35,14 +35,14 @@ SIZE = {"width": 24, "height": 20}
 
 def trace(scene, roots=None, threads=None, band=None, kernel="tiles"):
     """All per-pixel outputs of tracing ``scene`` (``roots`` overrides the kernel roots)."""
-    tree, sroots, params, mode, lo, hi, depth_max = scene_arrays(scene)
-    roots = kernel_roots(sroots, params, mode) if roots is None else roots
+    tree, sroots, params, mode, lo, hi, depth_max, tol = scene_arrays(scene)
+    roots = kernel_roots(sroots, params, mode, tol) if roots is None else roots
     H, W = scene.height, scene.width
     out = (np.zeros((H, W), dtype=np.bool_), np.full((H, W), np.nan), np.zeros((H, W, 3)),
            np.zeros((H, W), dtype=np.int64), np.zeros((H, W), dtype=np.int64),
            np.zeros((H, W), dtype=np.int64))
-    args = (tree, roots, params, mode, camera_of(scene).as_array(), lo, hi, float(scene.eps),
-            int(scene.max_steps))
+    args = (tree, roots, params, mode, tol, camera_of(scene).as_array(), lo, hi,
+            float(scene.eps), int(scene.max_steps))
     options = (march.RELAX, march.OMEGA, march.CONE, march.newton_distance(scene.eps, lo, hi))
     band = band or H
     for r0 in range(0, H, band):
@@ -67,22 +67,22 @@ def test_lean_path_equals_general_path(bunny, kind, beta, alpha_u, gradient):
     field = SmoothDistanceField(bunny.as_kind(kind))
     scene = scene_from_field(field, alpha=200.0, alpha_u=alpha_u, beta=beta, width=24,
                              height=20, gradient=gradient)
-    tree, roots, params, mode, lo, hi, depth_max = scene_arrays(scene)
-    lean = kernel_roots(roots, params, mode)
+    tree, roots, params, mode, lo, hi, depth_max, tol = scene_arrays(scene)
+    lean = kernel_roots(roots, params, mode, tol)
     assert isinstance(lean, int) and lean == roots[0]
     assert trace(scene, roots=lean) == trace(scene, roots=roots)
     # the camera check and a bisection-only call use the slack-less specialisation
     o = [float(v) for v in scene.camera_origin]
     for p in (o, [float(v) for v in tree.pts[0, :3] + 1e-3]):
-        assert march.distance_at(tree, lean, params, mode, *p, depth_max) == \
-            march.distance_at(tree, roots, params, mode, *p, depth_max)
+        assert march.distance_at(tree, lean, params, mode, tol, *p, depth_max) == \
+            march.distance_at(tree, roots, params, mode, tol, *p, depth_max)
 
 
 def test_lean_path_on_a_mixed_mesh():
     scene = load_scene(SCENES / "mixed.json", SIZE)
     assert len(scene.objects) == 1 and scene.mode == "smooth"
-    tree, roots, params, mode, *_ = scene_arrays(scene)
-    assert isinstance(kernel_roots(roots, params, mode), int)
+    tree, roots, params, mode, *_, tol = scene_arrays(scene)
+    assert isinstance(kernel_roots(roots, params, mode, tol), int)
     assert trace(scene) == trace(scene, roots=roots)
 
 
@@ -90,15 +90,16 @@ def test_lean_path_on_a_mixed_mesh():
                                             ("bunny_points", {"tol": 0.01})])
 def test_other_scenes_keep_the_general_path(name, overrides):
     scene = load_scene(SCENES / f"{name}.json", {**SIZE, **overrides})
-    tree, roots, params, mode, *_ = scene_arrays(scene)
-    assert kernel_roots(roots, params, mode) is roots
+    tree, roots, params, mode, *_, tol = scene_arrays(scene)
+    assert kernel_roots(roots, params, mode, tol) is roots
 
 
 def test_posed_scenes_keep_the_general_path():
     scene = load_scene(SCENES / "bunny_points.json", SIZE)
     R = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
-    tree, roots, params, mode, *_ = scene_arrays(scene, transforms=[(R, np.zeros(3))])
-    assert params.shape[1] == 18 and kernel_roots(roots, params, mode) is roots
+    tree, roots, params, mode, *_, tol = scene_arrays(scene, transforms=[(R, np.zeros(3))])
+    assert params.shape[1] == march.P_COLUMNS_POSED
+    assert kernel_roots(roots, params, mode, tol) is roots
 
 
 @pytest.mark.parametrize("name", ["bunny_triangles", "two_objects", "capillary_exact",

@@ -49,7 +49,7 @@ def _check_close(fast, plain, eps, diag):
     assert both.sum() >= 40
     cos = np.abs(np.einsum("ij,ij->i", plain.normals[both], primary_rays(plain.camera)[both]))
     # a hit stops anywhere in the band d_hat <= eps (eps / cos deep along the ray), from
-    # either side; Barnes-Hut's small jumps (design notes §4) widen it: 4 eps / cos
+    # either side; Barnes-Hut's small jumps (docs/design-notes.md §4) widen it: 4 eps / cos
     allowed = 4.0 * eps / np.maximum(cos, 0.05) + 1e-6 * diag
     d = np.abs(fast.depth[both].astype(float) - plain.depth[both].astype(float))
     assert np.all(d <= allowed), d.max()
@@ -97,13 +97,13 @@ def test_newton_steps_against_plain(request, bunny_points, case):
     fast = render(scene)
     assert fast.steps.sum() < plain.steps.sum()
     # every hit is a point of the band |d| <= eps (Newton lands on either side)
-    tree, roots, params, mode, lo, hi, depth_max = scene_arrays(scene)
+    tree, roots, params, mode, lo, hi, depth_max, tol = scene_arrays(scene)
     cam = camera_of(scene)
     rays = primary_rays(cam)
     rr, cc = np.nonzero(fast.hit)
     for r, c in list(zip(rr, cc))[::7]:
         p = cam.origin + float(fast.depth[r, c]) * rays[r, c]
-        d = march.distance_at(tree, roots, params, mode, p[0], p[1], p[2], depth_max)
+        d = march.distance_at(tree, roots, params, mode, tol, p[0], p[1], p[2], depth_max)
         assert abs(d) <= eps * (1 + 1e-3) + 1e-6 * field.diagonal, (r, c, d / eps)
     # against a plain render with a 1000x tighter eps: at least as close as plain sphere
     # tracing at the same eps (which stops up to eps / cos before the surface); on a
@@ -125,14 +125,14 @@ def test_newton_steps_against_plain(request, bunny_points, case):
 def test_trace_pixels_equals_render(bunny_points):
     scene = _scene(bunny_points, size=24)
     full = render(scene, cone=False)
-    tree, roots, params, mode, lo, hi, depth_max = scene_arrays(scene)
+    tree, roots, params, mode, lo, hi, depth_max, tol = scene_arrays(scene)
     rows = np.array([0, 5, 11, 12, 23], dtype=np.int64)
     cols = np.array([3, 12, 12, 7, 23], dtype=np.int64)
     hit = np.zeros(5, dtype=np.bool_)
     t = np.full(5, np.nan)
     steps = np.zeros(5, dtype=np.int64)
     leaves = np.zeros(5, dtype=np.int64)
-    march.trace_pixels(tree, roots, params, mode, camera_of(scene).as_array(), lo, hi,
+    march.trace_pixels(tree, roots, params, mode, tol, camera_of(scene).as_array(), lo, hi,
                        float(scene.eps), int(scene.max_steps), rows, cols, depth_max, hit, t,
                        steps, leaves, march.RELAX, march.OMEGA,
                        march.newton_distance(scene.eps, lo, hi))

@@ -3,7 +3,7 @@
 * values and gradients against the brute-force numpy reference in ``naive.py`` (beta = 0),
   for every primitive kind, mixed meshes and real meshes, for several alpha and alpha_u,
   including far queries (1e3-1e6 bounding-box diagonals) at alpha * diag = 1e4;
-* the conservative bounds ``d - log(A^S N)/alpha <= d_hat <= d`` (design notes §2) on
+* the conservative bounds ``d - log(A^S N)/alpha <= d_hat <= d`` (docs/design-notes.md §2) on
   thousands of queries, and their Barnes-Hut variant;
 * Barnes-Hut: below the exact sum, monotone in beta, fewer leaves for larger beta,
   ``beta = 0`` equal to ``method="brute"`` and to the reference;

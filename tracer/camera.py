@@ -30,7 +30,7 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
-from smoothdist._config import NJIT
+from smoothdist.kernels import NJIT
 
 __all__ = [
     "Camera",

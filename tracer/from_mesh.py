@@ -12,6 +12,8 @@ import os
 
 import numpy as np
 
+from smoothdist.kernels import DEFAULT_TOL
+
 KINDS = ("triangles", "edges", "points", "mixed")
 
 
@@ -20,7 +22,6 @@ def load_geometry(mesh, F=None, kind=None):
     reduced to ``kind`` (``"triangles"``, ``"edges"``, ``"points"``; ``"mixed"`` or None keep
     everything it holds)."""
     import smoothdist
-    from smoothdist.convert import as_data_mesh
 
     if kind is not None and kind not in KINDS:
         raise ValueError(f"kind must be one of {', '.join(KINDS)}; got {kind!r}")
@@ -29,7 +30,7 @@ def load_geometry(mesh, F=None, kind=None):
             raise ValueError("pass F only together with a vertex array, not with a file path")
         data = smoothdist.load_mesh(mesh)
     else:
-        data = as_data_mesh(mesh, F)
+        data = smoothdist.as_data_mesh(mesh, F)
     return data.as_kind(kind) if kind not in (None, "mixed") else data
 
 
@@ -63,14 +64,14 @@ def resolve_up(mesh, up):
 
 def mesh_scene(mesh, F=None, *, kind=None, alpha="auto", alpha_u="auto", beta=0.5,
                size=(512, 512), view="front", camera=None, mode="smooth", offset=None,
-               eps=None, shading="normals", matcap="", name=None, tol=0.0, newton=None,
+               eps=None, shading="normals", matcap="", name=None, tol=DEFAULT_TOL, newton=None,
                up="auto"):
     """A one-object :class:`tracer.scene.Scene` for ``mesh``, camera framing the surface.
 
     Parameters
     ----------
     mesh : path, DataMesh, (n, 3) array_like, or a trimesh / pyvista object
-        The data (see :func:`smoothdist.convert.as_data_mesh`); ``F`` as in ``DataMesh``.
+        The data (see :func:`smoothdist.as_data_mesh`); ``F`` as in ``DataMesh``.
     kind : {None, "triangles", "edges", "points", "mixed"}
         Reduce the data to one primitive kind; None or "mixed" keep what it holds.
     alpha : float or "auto"

@@ -2,16 +2,33 @@
 
 A scene is one :class:`smoothdist.kernels.TreeData` *forest* (the objects' trees concatenated by
 ``smoothdist.kernels.concatenate_trees``), the root node of each object ``roots (k,) int64``,
-and a ``(k, 6)`` float64 parameter table, one row per object: ``alpha, beta, S, wgs, offset,
-tol`` (``tol``: tolerance-controlled pruning, 0 = off). The table may carry 12 more columns,
-``(k, 18)``: a rigid transform per object, ``R`` (row-major 3x3, columns 6-14) and ``t``
-(columns 15-17); object ``k`` is then evaluated at its local point ``R^T (p - t)`` and its
-gradient rotated back by ``R`` (rigid bodies drawn at their poses without rebuilding a tree).
-With 6 columns nothing is transformed. Objects are combined as the paper combines them: by a
-second LogSumExp with the largest alpha (smooth mode), or by the minimum (exact-offset mode,
-where each object's distance is ``exact - offset``).
+a ``(k, P_COLUMNS)`` float64 parameter table ``params``, one row per object, the scene's
+``mode`` (:data:`MODE_SMOOTH` or :data:`MODE_EXACT`) and its ``tol``: one scalar for the whole
+scene, the tolerance-controlled pruning of every object (0 = off, the default
+``smoothdist.kernels.DEFAULT_TOL``; see ``smoothdist.kernels.smooth_distance_point_tol``).
+The columns of ``params`` (built by ``tracer.render.scene_arrays``; the kernels read them by
+these names only):
 
-Safety (design notes §4): each ray starts where it enters the scene box grown by
+=================== ======= =============================================================
+column              index   meaning
+=================== ======= =============================================================
+:data:`P_ALPHA`     0       alpha, the sharpness (1 / scene units)
+:data:`P_BETA`      1       Barnes-Hut beta (>= 0; 0 exact)
+:data:`P_S`         2       attenuation exponent ``S = min(alpha / alpha_U, 1)``
+:data:`P_WGS`       3       weight-gradient scale (``1/alpha**2`` metric, ``1/alpha`` exact)
+:data:`P_OFFSET`    4       exact-offset mode: the object's distance is ``exact - offset``
+:data:`P_R`         5-13    posed tables only: rotation ``R``, row-major 3x3
+:data:`P_T`         14-16   posed tables only: translation ``t``
+=================== ======= =============================================================
+
+An unposed table has :data:`P_COLUMNS` (5) columns; a posed one :data:`P_COLUMNS_POSED` (17):
+object ``k`` is then evaluated at its local point ``R^T (p - t)`` and its gradient rotated
+back by ``R`` (rigid bodies drawn at their poses without rebuilding a tree). Objects are
+combined as the paper combines them: by a second LogSumExp with the largest alpha (smooth
+mode), or by the minimum (exact-offset mode, where each object's distance is
+``exact - offset``).
+
+Safety (docs/design-notes.md §4): each ray starts where it enters the scene box grown by
 ``margin`` (the isosurface can lie at most ``log(A^S N) / alpha`` outside the data, Barnes-Hut
 included, because a far-field term is never closer than the root box), it ends where it leaves
 that box, a step that lands in the negative band is resolved by bisection back to the last
@@ -26,12 +43,21 @@ from numba import prange
 from numba.core import types as nbtypes
 from numba.extending import intrinsic
 
-from smoothdist._config import NJIT, NJIT_PARALLEL
-from smoothdist.kernels import exact_distance_point, logsumexp_accumulate
-from smoothdist.query import smooth_distance_point, smooth_distance_point_tol
+from smoothdist.kernels import (NJIT, NJIT_PARALLEL, exact_distance_point, logsumexp_accumulate,
+                                smooth_distance_point, smooth_distance_point_tol)
 from tracer.camera import ray_direction
 
 MODE_SMOOTH, MODE_EXACT = 0, 1
+#: columns of the per-object parameter table ``params`` (see the module docstring); numba
+#: compiles these module-level ints in as constants
+P_ALPHA, P_BETA, P_S, P_WGS, P_OFFSET = 0, 1, 2, 3, 4
+#: columns of an unposed table
+P_COLUMNS = 5
+#: posed tables: ``R`` (row-major 3x3) in columns ``P_R .. P_R + 8``, ``t`` in ``P_T .. P_T + 2``
+P_R = P_COLUMNS
+P_T = P_R + 9
+#: columns of a posed table
+P_COLUMNS_POSED = P_T + 3
 #: bisection iterations when a step overshoots into d < 0 (halves the bracket each time)
 BISECT_ITERS = 40
 #: tol mode: a sphere-tracing step may under-estimate by up to this fraction of the previous
@@ -62,12 +88,13 @@ STRIDE = 7919
 
 
 @numba.njit(**NJIT)
-def scene_distance(tree, roots, params, mode, x, y, z, stack, dstack, slack=0.0):
+def scene_distance(tree, roots, params, mode, tol, x, y, z, stack, dstack, slack=0.0):
     """Scene distance and gradient at ``(x, y, z)``.
 
-    ``stack, dstack``: traversal scratch. ``slack >= 0`` (scene units) loosens the
-    tolerance of objects with ``tol > 0`` to ``max(tol, expm1(alpha * slack))``, i.e. lets
-    their ``d_hat`` be up to ``slack`` below the ``tol = 0`` value (never above it).
+    ``tol``: the scene's tolerance-controlled pruning (0 = off). ``stack, dstack``: traversal
+    scratch. ``slack >= 0`` (scene units) loosens a tolerance ``tol > 0`` to
+    ``max(tol, expm1(alpha * slack))`` per object, i.e. lets each object's ``d_hat`` be up to
+    ``slack`` below the ``tol = 0`` value (never above it).
 
     Returns ``(d, gx, gy, gz, nodes, leaves)``; the gradient is not normalised.
 
@@ -77,22 +104,22 @@ def scene_distance(tree, roots, params, mode, x, y, z, stack, dstack, slack=0.0)
     at compile time), which is what keeps the first render of such a scene short.
     """
     if isinstance(roots, int):
-        return smooth_distance_point(tree, x, y, z, params[0, 0], params[0, 1], params[0, 2],
-                                     params[0, 3], stack, dstack, roots)
+        return smooth_distance_point(tree, x, y, z, params[0, P_ALPHA], params[0, P_BETA],
+                                     params[0, P_S], params[0, P_WGS], stack, dstack, roots)
     nobj = roots.size
-    if params.shape[1] >= 18:
-        return _scene_distance_posed(tree, roots, params, mode, x, y, z, stack, dstack, slack)
+    if params.shape[1] >= P_COLUMNS_POSED:
+        return _scene_distance_posed(tree, roots, params, mode, tol, x, y, z, stack, dstack,
+                                     slack)
     if nobj == 1:
         if mode == MODE_SMOOTH:
-            return smooth_distance_point_tol(tree, x, y, z, params[0, 0],
-                                             _far_beta(params[0, 1], params[0, 5], params[0, 0],
-                                                       slack),
-                                             _loosened(params[0, 5], params[0, 0], slack),
-                                             params[0, 2], params[0, 3], stack, dstack,
-                                             roots[0])
+            alpha = params[0, P_ALPHA]
+            return smooth_distance_point_tol(tree, x, y, z, alpha,
+                                             _far_beta(params[0, P_BETA], tol, alpha, slack),
+                                             _loosened(tol, alpha, slack), params[0, P_S],
+                                             params[0, P_WGS], stack, dstack, roots[0])
         d, gx, gy, gz, p, nodes, leaves = exact_distance_point(tree, x, y, z, stack, dstack,
                                                                roots[0])
-        return d - params[0, 4], gx, gy, gz, nodes, leaves
+        return d - params[0, P_OFFSET], gx, gy, gz, nodes, leaves
     nodes = 0
     leaves = 0
     if mode == MODE_EXACT:
@@ -105,7 +132,7 @@ def scene_distance(tree, roots, params, mode, x, y, z, stack, dstack, slack=0.0)
                                                             roots[k])
             nodes += nn
             leaves += ll
-            d -= params[k, 4]
+            d -= params[k, P_OFFSET]
             if d < best:
                 best = d
                 bgx = gx
@@ -113,22 +140,22 @@ def scene_distance(tree, roots, params, mode, x, y, z, stack, dstack, slack=0.0)
                 bgz = gz
         return best, bgx, bgy, bgz, nodes, leaves
     # smooth: LogSumExp over objects with the largest alpha, shifted by the smallest d
-    a = params[0, 0]
+    a = params[0, P_ALPHA]
     for k in range(1, nobj):
-        a = max(a, params[k, 0])
+        a = max(a, params[k, P_ALPHA])
     m = np.inf
     s = 0.0
     sx = 0.0
     sy = 0.0
     sz = 0.0
     for k in range(nobj):
-        d, gx, gy, gz, nn, ll = smooth_distance_point_tol(tree, x, y, z, params[k, 0],
-                                                          _far_beta(params[k, 1], params[k, 5],
-                                                                    params[k, 0], slack),
-                                                          _loosened(params[k, 5], params[k, 0],
-                                                                    slack),
-                                                          params[k, 2], params[k, 3], stack,
-                                                          dstack, roots[k])
+        alpha = params[k, P_ALPHA]
+        d, gx, gy, gz, nn, ll = smooth_distance_point_tol(tree, x, y, z, alpha,
+                                                          _far_beta(params[k, P_BETA], tol,
+                                                                    alpha, slack),
+                                                          _loosened(tol, alpha, slack),
+                                                          params[k, P_S], params[k, P_WGS],
+                                                          stack, dstack, roots[k])
         nodes += nn
         leaves += ll
         m, s, sx, sy, sz = logsumexp_accumulate(m, s, sx, sy, sz, d, 1.0, gx, gy, gz, a)
@@ -157,45 +184,46 @@ def _far_beta(beta, tol, alpha, slack):
 
 
 @numba.njit(**NJIT)
-def _was_loosened(params, slack):
+def _was_loosened(params, tol, slack):
     """Whether ``slack`` loosened the tolerance of any object (else no re-evaluation)."""
     for k in range(params.shape[0]):
-        if _loosened(params[k, 5], params[k, 0], slack) != params[k, 5]:
+        if _loosened(tol, params[k, P_ALPHA], slack) != tol:
             return True
     return False
 
 
 @numba.njit(**NJIT)
-def _scene_distance_posed(tree, roots, params, mode, x, y, z, stack, dstack, slack):
-    """:func:`scene_distance` with object ``k`` posed by ``params[k, 6:18]`` (``R``, ``t``)."""
+def _scene_distance_posed(tree, roots, params, mode, tol, x, y, z, stack, dstack, slack):
+    """:func:`scene_distance` with object ``k`` posed by ``params[k, P_R:P_COLUMNS_POSED]``
+    (``R``, ``t``)."""
     nodes = 0
     leaves = 0
-    a = params[0, 0]
+    a = params[0, P_ALPHA]
     for k in range(1, roots.size):
-        a = max(a, params[k, 0])
+        a = max(a, params[k, P_ALPHA])
     m = np.inf
     s = 0.0
     sx = 0.0
     sy = 0.0
     sz = 0.0
     for k in range(roots.size):
-        R = params[k, 6:15]
-        px = x - params[k, 15]
-        py = y - params[k, 16]
-        pz = z - params[k, 17]
+        R = params[k, P_R:P_R + 9]
+        px = x - params[k, P_T]
+        py = y - params[k, P_T + 1]
+        pz = z - params[k, P_T + 2]
         lx = R[0] * px + R[3] * py + R[6] * pz
         ly = R[1] * px + R[4] * py + R[7] * pz
         lz = R[2] * px + R[5] * py + R[8] * pz
         if mode == MODE_SMOOTH:
+            alpha = params[k, P_ALPHA]
             d, hx, hy, hz, nn, ll = smooth_distance_point_tol(
-                tree, lx, ly, lz, params[k, 0],
-                _far_beta(params[k, 1], params[k, 5], params[k, 0], slack),
-                _loosened(params[k, 5], params[k, 0], slack), params[k, 2], params[k, 3], stack,
-                dstack, roots[k])
+                tree, lx, ly, lz, alpha, _far_beta(params[k, P_BETA], tol, alpha, slack),
+                _loosened(tol, alpha, slack), params[k, P_S], params[k, P_WGS], stack, dstack,
+                roots[k])
         else:
             d, hx, hy, hz, p, nn, ll = exact_distance_point(tree, lx, ly, lz, stack, dstack,
                                                             roots[k])
-            d -= params[k, 4]
+            d -= params[k, P_OFFSET]
         nodes += nn
         leaves += ll
         gx = R[0] * hx + R[1] * hy + R[2] * hz
@@ -240,7 +268,7 @@ def ray_box(ox, oy, oz, dx, dy, dz, lo, hi):
 
 
 @numba.njit(**NJIT)
-def _false_position(tree, roots, params, mode, ox, oy, oz, dx, dy, dz, a, fa, b, fb, gx, gy,
+def _false_position(tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, a, fa, b, fb, gx, gy,
                     gz, eps, stack, dstack):
     """Root of ``d(t)`` in the bracket ``d(a) = fa > eps``, ``d(b) = fb < -eps``.
 
@@ -257,7 +285,7 @@ def _false_position(tree, roots, params, mode, ox, oy, oz, dx, dy, dz, a, fa, b,
         x = (a * fb - b * fa) / (fb - fa)
         if not (a < x < b):
             x = 0.5 * (a + b)
-        dm, mx, my, mz, nn, ll = scene_distance(tree, roots, params, mode, ox + x * dx,
+        dm, mx, my, mz, nn, ll = scene_distance(tree, roots, params, mode, tol, ox + x * dx,
                                                 oy + x * dy, oz + x * dz, stack, dstack, 0.0)
         evals += 1
         leaves += ll
@@ -282,8 +310,8 @@ def _false_position(tree, roots, params, mode, ox, oy, oz, dx, dy, dz, a, fa, b,
 
 
 @numba.njit(**NJIT)
-def march_ray(tree, roots, params, mode, ox, oy, oz, dx, dy, dz, lo, hi, eps, max_steps, stack,
-              dstack, relax=RELAX, omega=OMEGA, t_min=0.0, newton=0.0):
+def march_ray(tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, lo, hi, eps, max_steps,
+              stack, dstack, relax=RELAX, omega=OMEGA, t_min=0.0, newton=0.0):
     """March one ray; returns ``(hit, t, gx, gy, gz, steps, leaves, bisections)``.
 
     ``omega >= 1``: over-relaxed steps ``t += omega d`` (Keinert et al. 2014) with a safe
@@ -291,7 +319,7 @@ def march_ray(tree, roots, params, mode, ox, oy, oz, dx, dy, dz, lo, hi, eps, ma
     (``omega d_prev > d_prev + |d|``) the segment between them is not certified empty, so the
     ray goes back to the plain step ``t_prev + d_prev`` and continues with ``omega = 1``.
 
-    ``relax``: for objects with ``tol > 0``, a step may under-estimate the distance by up to
+    ``relax``: for scenes with ``tol > 0``, a step may under-estimate the distance by up to
     ``relax`` x the previous step (cheaper evaluations far from the surface; 0: never).
 
     ``t_min``: a depth before which the ray is known not to meet the surface (the cone pass
@@ -319,14 +347,14 @@ def march_ray(tree, roots, params, mode, ox, oy, oz, dx, dy, dz, lo, hi, eps, ma
     """
     t, t_exit = ray_box(ox, oy, oz, dx, dy, dz, lo, hi)
     t = max(t, t_min)
-    relaxable = mode == MODE_SMOOTH and params[:, 5].max() > 0.0 and relax > 0.0
+    relaxable = mode == MODE_SMOOTH and tol > 0.0 and relax > 0.0
     steps = 0
     leaves = 0
     bis = 0
     if t > t_exit:
         return 0, np.nan, 0.0, 0.0, 0.0, steps, leaves, bis
     t_prev = t
-    # relaxed accuracy far from the surface (objects with tol > 0 only): a step may lose up
+    # relaxed accuracy far from the surface (scenes with tol > 0 only): a step may lose up
     # to relax x the previous distance, never more, and stays safe because d_hat_tol only
     # under-estimates; a distance <= eps is re-evaluated at the scene's own tol before it
     # counts as a hit (a Newton step may start from a loosened value: it is only shorter)
@@ -339,12 +367,12 @@ def march_ray(tree, roots, params, mode, ox, oy, oz, dx, dy, dz, lo, hi, eps, ma
     newton_on = newton > 0.0 and mode == MODE_SMOOTH
     newton_step = False
     while steps < max_steps:
-        d, gx, gy, gz, nn, ll = scene_distance(tree, roots, params, mode, ox + t * dx, oy + t * dy,
-                                               oz + t * dz, stack, dstack, slack)
+        d, gx, gy, gz, nn, ll = scene_distance(tree, roots, params, mode, tol, ox + t * dx,
+                                               oy + t * dy, oz + t * dz, stack, dstack, slack)
         steps += 1
         leaves += ll
-        if d <= eps and slack > 0.0 and relaxable and _was_loosened(params, slack):
-            d, gx, gy, gz, nn, ll = scene_distance(tree, roots, params, mode, ox + t * dx,
+        if d <= eps and slack > 0.0 and relaxable and _was_loosened(params, tol, slack):
+            d, gx, gy, gz, nn, ll = scene_distance(tree, roots, params, mode, tol, ox + t * dx,
                                                    oy + t * dy, oz + t * dz, stack, dstack, 0.0)
             steps += 1
             leaves += ll
@@ -370,7 +398,7 @@ def march_ray(tree, roots, params, mode, ox, oy, oz, dx, dy, dz, lo, hi, eps, ma
             if d < -eps and t > t_prev:
                 # overshoot into the negative band: find the root in [t_prev (d > eps), t]
                 bis += 1
-                t, gx, gy, gz, ev, lv = _false_position(tree, roots, params, mode, ox, oy, oz,
+                t, gx, gy, gz, ev, lv = _false_position(tree, roots, params, mode, tol, ox, oy, oz,
                                                         dx, dy, dz, t_prev, d_prev, t, d, gx,
                                                         gy, gz, eps, stack, dstack)
                 steps += ev
@@ -395,7 +423,7 @@ def march_ray(tree, roots, params, mode, ox, oy, oz, dx, dy, dz, lo, hi, eps, ma
 
 
 @numba.njit(**NJIT)
-def cone_start(tree, roots, params, mode, cam, lo, hi, eps, r_lo, r_hi, c_lo, c_hi, stack,
+def cone_start(tree, roots, params, mode, tol, cam, lo, hi, eps, r_lo, r_hi, c_lo, c_hi, stack,
                dstack, relax=RELAX):
     """Conservative common start depth for the rays of pixels ``[r_lo, r_hi) x [c_lo, c_hi)``.
 
@@ -405,8 +433,9 @@ def cone_start(tree, roots, params, mode, cam, lo, hi, eps, r_lo, r_hi, c_lo, c_
     parameter ``s`` of ray ``v`` lies within ``|s - t| + t delta`` of the central point at
     ``t``, so if the scene distance there is ``D``, every ray is surface-free on
     ``[t, t + D - t delta)`` (the ball of radius ``D`` is, by the same Lipschitz argument as
-    sphere tracing, design notes §4). Steps ``t += D - t delta`` start at the camera (outside
-    the surface) and stop once the cone is wider than a quarter of ``D`` (or leaves the box).
+    sphere tracing, docs/design-notes.md §4). Steps ``t += D - t delta`` start at the camera
+    (outside the surface) and stop once the cone is wider than a quarter of ``D`` (or leaves
+    the box).
     For ``tol > 0`` scenes the evaluations are loosened like the march's (``relax``): an
     under-estimated ``D`` is still a surface-free radius. Returns ``(t_start, evaluations,
     leaves)``.
@@ -434,10 +463,10 @@ def cone_start(tree, roots, params, mode, cam, lo, hi, eps, r_lo, r_hi, c_lo, c_
     t = 0.0
     evals = 0
     leaves = 0
-    loose = mode == MODE_SMOOTH and params[:, 5].max() > 0.0 and relax > 0.0
+    loose = mode == MODE_SMOOTH and tol > 0.0 and relax > 0.0
     slack = np.inf if loose else 0.0
     while evals < CONE_STEPS:
-        d, gx, gy, gz, nn, ll = scene_distance(tree, roots, params, mode, cam[0] + t * ux,
+        d, gx, gy, gz, nn, ll = scene_distance(tree, roots, params, mode, tol, cam[0] + t * ux,
                                                cam[1] + t * uy, cam[2] + t * uz, stack,
                                                dstack, slack)
         if loose:
@@ -454,8 +483,8 @@ def cone_start(tree, roots, params, mode, cam, lo, hi, eps, r_lo, r_hi, c_lo, c_
 
 
 @numba.njit(**NJIT)
-def _render_tile(tree, roots, params, mode, cam, lo, hi, eps, max_steps, r_lo, r_hi, c_lo, c_hi,
-                 depth_max, hit, tbuf, grad, steps, leaves, bisect, relax, omega, cone,
+def _render_tile(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, r_lo, r_hi, c_lo,
+                 c_hi, depth_max, hit, tbuf, grad, steps, leaves, bisect, relax, omega, cone,
                  newton):
     stack = np.empty(depth_max + 4, dtype=np.int64)
     dstack = np.empty(depth_max + 4)
@@ -474,12 +503,13 @@ def _render_tile(tree, roots, params, mode, cam, lo, hi, eps, max_steps, r_lo, r
                 if t_in <= t_out:
                     # the first ray of the tile that meets the box runs the cone pass (and its
                     # work is booked on that pixel)
-                    t_min, c_ev, c_lv = cone_start(tree, roots, params, mode, cam, lo, hi, eps,
-                                                   r_lo, r_hi, c_lo, c_hi, stack, dstack, relax)
+                    t_min, c_ev, c_lv = cone_start(tree, roots, params, mode, tol, cam, lo, hi,
+                                                   eps, r_lo, r_hi, c_lo, c_hi, stack, dstack,
+                                                   relax)
                     pending = False
-            h, t, gx, gy, gz, st, lv, bs = march_ray(tree, roots, params, mode, ox, oy, oz, dx, dy, dz,
-                                                     lo, hi, eps, max_steps, stack, dstack,
-                                                     relax, omega, t_min, newton)
+            h, t, gx, gy, gz, st, lv, bs = march_ray(tree, roots, params, mode, tol, ox, oy, oz,
+                                                     dx, dy, dz, lo, hi, eps, max_steps, stack,
+                                                     dstack, relax, omega, t_min, newton)
             st += c_ev
             lv += c_lv
             hit[r, c] = h == 1
@@ -514,9 +544,9 @@ def _tile_rect(j, n, stride, ntx, row0, row1, W):
 
 
 @numba.njit(**NJIT_PARALLEL)
-def render_rows(tree, roots, params, mode, cam, lo, hi, eps, max_steps, row0, row1, depth_max,
-                hit, tbuf, grad, steps, leaves, bisect, relax=RELAX, omega=OMEGA, cone=CONE,
-                newton=0.0):
+def render_rows(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, row0, row1,
+                depth_max, hit, tbuf, grad, steps, leaves, bisect, relax=RELAX, omega=OMEGA,
+                cone=CONE, newton=0.0):
     """Trace rows ``row0 <= r < row1`` of the image into the per-pixel output arrays.
 
     Outputs are full-image arrays: ``hit (H, W) bool``, ``tbuf (H, W) float64``,
@@ -529,29 +559,29 @@ def render_rows(tree, roots, params, mode, cam, lo, hi, eps, max_steps, row0, ro
     W, ntx, n, stride = _tile_grid(cam, row0, row1)
     for j in prange(n):
         r_lo, r_hi, c_lo, c_hi = _tile_rect(j, n, stride, ntx, row0, row1, W)
-        _render_tile(tree, roots, params, mode, cam, lo, hi, eps, max_steps, r_lo, r_hi, c_lo,
-                     c_hi, depth_max, hit, tbuf, grad, steps, leaves, bisect, relax, omega,
-                     cone, newton)
+        _render_tile(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, r_lo, r_hi,
+                     c_lo, c_hi, depth_max, hit, tbuf, grad, steps, leaves, bisect, relax,
+                     omega, cone, newton)
 
 
 @numba.njit(**NJIT)
-def distance_at(tree, roots, params, mode, x, y, z, depth_max):
+def distance_at(tree, roots, params, mode, tol, x, y, z, depth_max):
     """Scene distance at one point (used to check that the camera is outside the surface)."""
     stack = np.empty(depth_max + 4, dtype=np.int64)
     dstack = np.empty(depth_max + 4)
-    return scene_distance(tree, roots, params, mode, x, y, z, stack, dstack, 0.0)[0]
+    return scene_distance(tree, roots, params, mode, tol, x, y, z, stack, dstack, 0.0)[0]
 
 
 @numba.njit(**NJIT_PARALLEL)
-def trace_pixels(tree, roots, params, mode, cam, lo, hi, eps, max_steps, rows, cols, depth_max,
-                 hit, tbuf, steps, leaves, relax=RELAX, omega=OMEGA, newton=0.0):
+def trace_pixels(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, rows, cols,
+                 depth_max, hit, tbuf, steps, leaves, relax=RELAX, omega=OMEGA, newton=0.0):
     """Trace only the pixels ``(rows[i], cols[i])`` (e.g. a subsample for an expensive
     reference render); outputs ``hit, tbuf, steps, leaves`` have the shape of ``rows``."""
     for i in prange(rows.size):
         stack = np.empty(depth_max + 4, dtype=np.int64)
         dstack = np.empty(depth_max + 4)
         dx, dy, dz = ray_direction(cam, rows[i], cols[i])
-        h, t, gx, gy, gz, st, lv, bs = march_ray(tree, roots, params, mode, cam[0], cam[1],
+        h, t, gx, gy, gz, st, lv, bs = march_ray(tree, roots, params, mode, tol, cam[0], cam[1],
                                                  cam[2], dx, dy, dz, lo, hi, eps, max_steps,
                                                  stack, dstack, relax, omega, 0.0, newton)
         hit[i] = h == 1
@@ -589,8 +619,9 @@ def _borrowed(typingctx, value):
 
 
 @numba.njit(**NJIT)
-def render_tiles(tree, roots, params, mode, cam, lo, hi, eps, max_steps, row0, row1, depth_max,
-                 hit, tbuf, grad, steps, leaves, bisect, relax, omega, cone, newton, j0, j1):
+def render_tiles(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, row0, row1,
+                 depth_max, hit, tbuf, grad, steps, leaves, bisect, relax, omega, cone, newton,
+                 j0, j1):
     """Trace tiles ``j0 <= j < j1`` of :func:`render_rows`' tile order for rows
     ``row0 <= r < row1``, in the calling thread (same arguments and outputs as
     ``render_rows``; ``relax, omega, cone, newton`` are required here).
@@ -609,6 +640,6 @@ def render_tiles(tree, roots, params, mode, cam, lo, hi, eps, max_steps, row0, r
     hi = _borrowed(hi)
     for j in range(j0, min(j1, n)):
         r_lo, r_hi, c_lo, c_hi = _tile_rect(j, n, stride, ntx, row0, row1, W)
-        _render_tile(tree, roots, params, mode, cam, lo, hi, eps, max_steps, r_lo, r_hi, c_lo,
-                     c_hi, depth_max, hit, tbuf, grad, steps, leaves, bisect, relax, omega,
-                     cone, newton)
+        _render_tile(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, r_lo, r_hi,
+                     c_lo, c_hi, depth_max, hit, tbuf, grad, steps, leaves, bisect, relax,
+                     omega, cone, newton)

@@ -9,8 +9,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from smoothdist._config import PARALLEL
-from smoothdist.kernels import concatenate_trees
+from smoothdist.kernels import DEFAULT_TOL, PARALLEL, concatenate_trees
 from tracer import march
 from tracer.camera import look_at
 from tracer.shading import (load_matcap, shade_headlight, shade_matcap, shade_normals,
@@ -75,67 +74,106 @@ class RenderResult(NamedTuple):
                 "bisections": int((self.bisections > 0).sum())}
 
 
+class SceneArrays(NamedTuple):
+    """A scene as the march kernels take it (:func:`scene_arrays`).
+
+    The kernels' leading arguments are ``tree, roots, params, mode, tol`` (see
+    :mod:`tracer.march`). ``tol`` comes last here so that positions 0-6 are those of the
+    7-tuple this used to be (``[4:6]`` is still ``lo, hi``).
+
+    tree : smoothdist.kernels.TreeData
+        The objects' trees, concatenated into one forest when there are several.
+    roots : (k,) int64
+        Root node of each object.
+    params : (k, tracer.march.P_COLUMNS) or (k, tracer.march.P_COLUMNS_POSED) float64
+        The per-object parameter table, columns ``tracer.march.P_*``.
+    mode : int
+        ``tracer.march.MODE_SMOOTH`` or ``MODE_EXACT``.
+    lo, hi : (3,) float64
+        The grown scene box the rays march in.
+    depth_max : int
+        Depth of the forest (scratch stacks hold ``depth_max + 4`` entries).
+    tol : float
+        The scene's tolerance-controlled pruning (0 = off), one scalar for all objects.
+    """
+
+    tree: object
+    roots: np.ndarray
+    params: np.ndarray
+    mode: int
+    lo: np.ndarray
+    hi: np.ndarray
+    depth_max: int
+    tol: float
+
+
 def scene_arrays(scene, transforms=None):
-    """``(tree, roots, params, mode, lo, hi, depth_max)`` for the march kernels.
+    """The :class:`SceneArrays` ``(tree, roots, params, mode, lo, hi, depth_max, tol)`` for the
+    march kernels.
 
     The box ``lo..hi`` is the data's bounding box grown by the largest possible isosurface
     inflation (``log(A^S N) / alpha`` per object; the offset in exact mode) plus twice ``eps``.
     ``transforms`` (optional): per object a rigid pose ``(R (3, 3), t (3,))``; object ``k`` is
-    drawn at ``R_k x + t_k`` (``params`` gets the 12 pose columns of :mod:`tracer.march`, and
-    the box is the union of the posed, grown object boxes).
+    drawn at ``R_k x + t_k`` (``params`` gets the 12 pose columns ``P_R``, ``P_T`` of
+    :mod:`tracer.march`, and the box is the union of the posed, grown object boxes).
     """
     trees = [o.field.tree for o in scene.objects]
-    params = np.empty((len(scene.objects), 6))
+    params = np.empty((len(scene.objects), march.P_COLUMNS))
+    columns = [march.P_ALPHA, march.P_BETA, march.P_S, march.P_WGS, march.P_OFFSET]
     margin = 0.0
     for k, o in enumerate(scene.objects):
         alpha, beta, S, wgs = o.field.kernel_args(o.alpha, o.beta, o.alpha_u, scene.gradient)
-        params[k] = (alpha, beta, S, wgs, o.offset, getattr(scene, "tol", 0.0))
+        params[k, columns] = (alpha, beta, S, wgs, o.offset)
         if scene.mode == "exact":
             margin = max(margin, o.offset)
         else:
             margin = max(margin, o.field.inflation(alpha, o.alpha_u))
     if scene.mode == "smooth" and len(trees) > 1:
-        a = params[:, 0].max()
+        a = params[:, march.P_ALPHA].max()
         margin += np.log(len(trees)) / a
+    tol = float(getattr(scene, "tol", DEFAULT_TOL))
     lo, hi = scene.bounds
     grow = margin + 2 * scene.eps + 1e-9 * scene.diagonal
     mode = march.MODE_EXACT if scene.mode == "exact" else march.MODE_SMOOTH
     tree, roots = concatenate_trees(trees) if len(trees) > 1 else (trees[0], np.zeros(1, np.int64))
     if transforms is not None:
         params, lo, hi = _posed(scene, transforms, params, grow)
-        return tree, roots, params, mode, lo, hi, tree.depth
-    return tree, roots, params, mode, lo - grow, hi + grow, tree.depth
+        return SceneArrays(tree, roots, params, mode, lo, hi, tree.depth, tol)
+    return SceneArrays(tree, roots, params, mode, lo - grow, hi + grow, tree.depth, tol)
 
 
 def _posed(scene, transforms, params, grow):
-    """Pose columns appended to ``params`` and the world box of the posed, grown objects."""
+    """``params`` with the pose columns ``P_R``, ``P_T`` filled in, and the world box of the
+    posed, grown objects."""
     if len(transforms) != len(scene.objects):
         raise ValueError(f"{len(transforms)} transforms for {len(scene.objects)} objects")
-    cols, los, his = [], [], []
-    for o, (R, t) in zip(scene.objects, transforms):
+    posed = np.empty((params.shape[0], march.P_COLUMNS_POSED))
+    posed[:, :march.P_COLUMNS] = params
+    los, his = [], []
+    for k, (o, (R, t)) in enumerate(zip(scene.objects, transforms)):
         R = np.asarray(R, dtype=np.float64).reshape(3, 3)
         t = np.asarray(t, dtype=np.float64).reshape(3)
         if not (np.isfinite(R).all() and np.isfinite(t).all()) or \
                 not np.allclose(R @ R.T, np.eye(3), atol=1e-6) or np.linalg.det(R) <= 0:
             raise ValueError("each transform needs a finite rotation matrix R and translation t")
-        cols.append(np.concatenate([R.ravel(), t]))
+        posed[k, march.P_R:march.P_R + 9] = R.ravel()
+        posed[k, march.P_T:march.P_T + 3] = t
         lo, hi = o.field.bounds
         corners = np.array([[(hi if i >> a & 1 else lo)[a] + (grow if i >> a & 1 else -grow)
                              for a in range(3)] for i in range(8)])
         world = corners @ R.T + t
         los.append(world.min(axis=0))
         his.append(world.max(axis=0))
-    params = np.ascontiguousarray(np.hstack([params, np.array(cols)]))
-    return params, np.min(los, axis=0), np.max(his, axis=0)
+    return posed, np.min(los, axis=0), np.max(his, axis=0)
 
 
-def kernel_roots(roots, params, mode):
+def kernel_roots(roots, params, mode, tol):
     """The ``roots`` argument for :mod:`tracer.march`: one unposed object in smooth mode
-    without tolerance pruning is passed as its root node (an int), which selects the kernels'
-    lean path (:func:`tracer.march.scene_distance`; same values, far less code to compile);
-    anything else as the ``(k,)`` array."""
-    if (mode == march.MODE_SMOOTH and roots.size == 1 and params.shape[1] == 6
-            and not params[0, 5] > 0.0):
+    without tolerance pruning (``tol`` 0) is passed as its root node (an int), which selects
+    the kernels' lean path (:func:`tracer.march.scene_distance`; same values, far less code
+    to compile); anything else as the ``(k,)`` array."""
+    if (mode == march.MODE_SMOOTH and roots.size == 1 and params.shape[1] == march.P_COLUMNS
+            and not tol > 0.0):
         return int(roots[0])
     return roots
 
@@ -148,10 +186,10 @@ def camera_of(scene):
 
 def distance_at_camera(scene, arrays=None):
     """Scene distance at the camera origin (> 0 when the camera is outside the surface)."""
-    tree, roots, params, mode, lo, hi, depth_max = arrays or scene_arrays(scene)
+    tree, roots, params, mode, lo, hi, depth_max, tol = arrays or scene_arrays(scene)
     o = scene.camera_origin
-    return float(march.distance_at(tree, kernel_roots(roots, params, mode), params, mode,
-                                   float(o[0]), float(o[1]), float(o[2]), depth_max))
+    return float(march.distance_at(tree, kernel_roots(roots, params, mode, tol), params, mode,
+                                   tol, float(o[0]), float(o[1]), float(o[2]), depth_max))
 
 
 def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None, omega=None,
@@ -198,7 +236,7 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
     progress = _progress_callback(progress, scene)
     camera = camera_of(scene)
     arrays = scene_arrays(scene, transforms)
-    tree, roots, params, mode, lo, hi, depth_max = arrays
+    tree, roots, params, mode, lo, hi, depth_max, tol = arrays
     d0 = distance_at_camera(scene, arrays)
     if not d0 > scene.eps:
         raise RenderError(f"the camera at {np.round(scene.camera_origin, 6).tolist()} is inside "
@@ -212,7 +250,7 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
     leaves = np.zeros((H, W), dtype=np.int64)
     bis = np.zeros((H, W), dtype=np.int64)
     cam = camera.as_array()
-    args = (tree, kernel_roots(roots, params, mode), params, mode, cam, lo, hi,
+    args = (tree, kernel_roots(roots, params, mode, tol), params, mode, tol, cam, lo, hi,
             float(scene.eps), int(scene.max_steps))
     options = (march.RELAX if relax is None else float(relax),
                march.OMEGA if omega is None else max(1.0, float(omega)),
@@ -270,7 +308,7 @@ def render_threads():
 def trace_tiles(args, row0, row1, depth_max, outputs, options, report=None, threads=None):
     """Trace image rows ``row0 <= r < row1`` into ``outputs``.
 
-    ``args = (tree, roots, params, mode, cam, lo, hi, eps, max_steps)`` and ``outputs =
+    ``args = (tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps)`` and ``outputs =
     (hit, tbuf, grad, steps, leaves, bisect)`` as for :func:`tracer.march.render_rows`,
     ``options = (relax, omega, cone, newton)``. ``threads`` Python threads (default
     :func:`render_threads`) take chunks of tiles from a shared counter and trace them with
@@ -283,7 +321,8 @@ def trace_tiles(args, row0, row1, depth_max, outputs, options, report=None, thre
     """
     from tracer.march import TILE, render_tiles
 
-    W = int(args[4][12])
+    cam = args[5]
+    W = int(cam[12])
     n = -(-W // TILE) * -(-(row1 - row0) // TILE)
     threads = max(1, min(threads or render_threads(), n))
     chunk = max(1, min(CHUNK_TILES, n // (16 * threads)))
