@@ -6,7 +6,7 @@ numba thread each, started inside the timed region, as a user's run pays for it)
 
 * ``beta``: the beta study's renders of the three data types at the given betas (default
   0.5 and 1: beta = 0 takes minutes) of the bunny at 256 x 256, through
-  :func:`tracer.studies.runner.run_tasks` with :func:`tracer.studies.beta.render_task`;
+  :func:`tracer.runner.run_tasks` with :func:`tracer.studies.beta.render_task`;
 * ``grid``: the grid study (``tracer bench-grid``) over a folder of meshes, default
   ``../shared/data/thingi10k``, N = 100;
 * ``overhead``: ``--trivial`` no-op tasks; wall time per task once the cluster is up.
@@ -32,7 +32,8 @@ if str(REPO) not in sys.path:
     sys.path.insert(0, str(REPO))
 
 from tracer.cli import main as tracer_main  # noqa: E402
-from tracer.studies import beta, runner  # noqa: E402
+from tracer import runner  # noqa: E402
+from tracer.studies import beta  # noqa: E402
 
 MODES = (("serial", "serial", None), ("local-1", "local", 1), ("local-2", "local", 2))
 

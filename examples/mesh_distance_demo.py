@@ -27,7 +27,8 @@ import numpy as np  # noqa: E402
 
 from smoothdist import DataMesh, MeshDistance, SmoothDistanceField  # noqa: E402
 from tracer.camera import primary_rays  # noqa: E402
-from tracer.image import atomic_write, save_png  # noqa: E402
+from tracer.image import save_png  # noqa: E402
+from tracer.outputs import atomic_write  # noqa: E402
 from tracer.render import render  # noqa: E402
 from tracer.scene import Scene, SceneObject  # noqa: E402
 

@@ -31,9 +31,10 @@ import pytest
 
 import smoothdist
 import smoothdist.mesh
-import tracer.scene
+import tracer.validate
 from smoothdist import DataMesh, MeshRepairWarning, SmoothDistanceField
-from tracer.image import atomic_write, save_npy, save_png
+from tracer.image import save_npy, save_png
+from tracer.outputs import atomic_write
 from tracer.render import RenderResult, render
 from tracer.scene import load_scene, scene_from_field
 
@@ -600,7 +601,7 @@ def deny_open(*args, **kwargs):
 @setup("file-unreadable-scene-api")
 def _(d, mp):
     p = scene(d)
-    mp.setattr(tracer.scene, "open", deny_open, raising=False)
+    mp.setattr(tracer.validate, "open", deny_open, raising=False)
     return lambda: load_scene(p)
 
 

@@ -6,13 +6,13 @@ import pytest
 
 from tracer.image import (
     ImageDiff,
-    atomic_write,
     compare_images,
     false_color,
     load_png,
     save_npy,
     save_png,
 )
+from tracer.outputs import atomic_write
 
 
 @pytest.fixture

@@ -1,4 +1,4 @@
-"""Tests for tracer.studies.runner: per-task results, retries, resume, and Dask execution.
+"""Tests for tracer.runner: per-task results, retries, resume, and Dask execution.
 
 The in-process tests are instant. The Dask tests share one 2-worker LocalCluster (module scope:
 starting one costs seconds) and reach it through ``--scheduler ADDRESS``, exactly as a user's
@@ -15,8 +15,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tracer.cli import CLIError, main
-from tracer.studies import beta, grid, runner
+from tracer import runner
+from tracer.cli import main
+from tracer.outputs import CLIError
+from tracer.studies import beta, grid
 
 TESTS = Path(__file__).resolve().parent
 OCTOPUS = TESTS / "data" / "octopus_low.obj"

@@ -12,7 +12,8 @@ import numpy as np
 import pytest
 
 from smoothdist import DataMesh, SmoothDistanceField
-from tracer.studies import alpha, common, grid, runner
+from tracer import runner
+from tracer.studies import alpha, common, grid
 from tracer.cli import main
 
 TESTS = Path(__file__).resolve().parent
@@ -351,7 +352,7 @@ def test_beta_study_estimated_above_the_threshold_is_not_run_in_process(tmp_path
                                                                          monkeypatch):
     """A 64² study whose probes say 72 s (the bunny's beta = 0 renders are that slow) is not
     judged small enough for in-process: --scheduler local asks for its cluster (stubbed)."""
-    from tracer.cli import CLIError
+    from tracer.outputs import CLIError
     from tracer.studies import beta
 
     def fake_probe(tasks, probe_size):

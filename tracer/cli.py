@@ -6,34 +6,41 @@ traceback; warnings, e.g. mesh repairs, are single ``warning: ...`` lines), an i
 file: outputs are written to a temporary file and renamed. Existing outputs are kept unless
 ``--overwrite`` is given.
 
-Sub-commands live in their own modules; each exposes ``add_arguments(parser)`` and
-``run(args) -> int`` and is imported only when used, so that ``tracer render`` does not pay
-for importing pyvista or matplotlib.
+This module only dispatches. Every sub-command is a module listed in :data:`COMMANDS` that
+exposes
+
+* ``HELP = "..."``: its one-line help, on one line at the module's top level (``tracer --help``
+  reads it from the module's source, without importing the module);
+* ``add_arguments(parser)``: its options;
+* ``run(args) -> int``: the command itself (its exit status).
+
+A command's module is imported only when that command runs, so that ``tracer render`` does not
+pay for importing pyvista or matplotlib. The error class, option checks and output helpers the
+commands share are in :mod:`tracer.outputs`.
 """
 
 import argparse
 import importlib
+import importlib.util
 import os
 import signal
 import sys
 import warnings
 
-#: name -> (module, one-line help)
+from tracer.outputs import CLIError
+
+#: command name -> the module that implements it (see the module docstring)
 COMMANDS = {
-    "render": ("tracer.cli_render", "sphere-trace a scene file to a PNG (and AOVs)"),
-    "compare": ("tracer.compare", "compare a render with a pyvista isosurface of the same field"),
-    "diff": ("tracer.imagediff", "compare two images; non-zero exit beyond a tolerance"),
-    "ablate-beta": ("tracer.studies.beta", "the paper's beta ablation: time and error vs beta"),
-    "ablate-alpha": ("tracer.studies.alpha", "the paper's alpha studies as image grids"),
-    "bench-grid": ("tracer.studies.grid", "the paper's Thingi10K grid benchmark over a folder"),
-    "bh-switch": ("tracer.studies.bh_switch", "Barnes-Hut near/far switch discontinuity study"),
-    "simulate": ("tracer.sim.cli_sim", "simulate rigid bodies with one smooth-distance constraint"),
-    "animate": ("tracer.sim.cli_sim", "render a simulated trajectory to PNG frames, MP4 and GIF"),
+    "render": "tracer.cli_render",
+    "compare": "tracer.compare",
+    "diff": "tracer.imagediff",
+    "ablate-beta": "tracer.studies.beta",
+    "ablate-alpha": "tracer.studies.alpha",
+    "bench-grid": "tracer.studies.grid",
+    "bh-switch": "tracer.studies.bh_switch",
+    "simulate": "tracer.sim.cli_simulate",
+    "animate": "tracer.sim.cli_animate",
 }
-
-
-class CLIError(Exception):
-    """A user-facing error: printed as one line, exit status 2."""
 
 
 class _Parser(argparse.ArgumentParser):
@@ -44,15 +51,36 @@ class _Parser(argparse.ArgumentParser):
 
 
 def _available():
+    """``{name: module spec}`` of the commands whose module exists."""
     out = {}
-    for name, (mod, helptext) in COMMANDS.items():
+    for name, mod in COMMANDS.items():
         try:
             spec = importlib.util.find_spec(mod)
         except (ImportError, ValueError):
             spec = None
         if spec is not None:
-            out[name] = (mod, helptext)
+            out[name] = spec
     return out
+
+
+def _help(spec):
+    """A command module's ``HELP``, read from its source without importing the module.
+
+    The module is imported instead when its source cannot be read or its ``HELP`` is not one
+    line ``HELP = "..."`` (a plain double-quoted string)."""
+    try:
+        with open(spec.origin, encoding="utf-8") as fh:
+            for line in fh:
+                if line.startswith("HELP = "):
+                    text = line[len("HELP = "):].strip()
+                    inner = text[1:-1]
+                    if len(text) >= 2 and text[0] == text[-1] == '"' and not (
+                            '"' in inner or "\\" in inner):
+                        return inner
+                    break
+    except (OSError, TypeError, UnicodeDecodeError):  # TypeError: no source file (origin None)
+        pass
+    return importlib.import_module(spec.name).HELP
 
 
 def build_parser(only=None):
@@ -66,14 +94,16 @@ def build_parser(only=None):
         prog="tracer", description="Render and study smooth-distance isosurfaces "
         "(Madan & Levin 2022).")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
-    for name, (mod, helptext) in _available().items():
-        p = sub.add_parser(name, help=helptext, description=helptext)
-        p.set_defaults(_module=mod, _name=name)
+    for name, spec in _available().items():
         if only is not None and name != only:
+            helptext = _help(spec)
+            sub.add_parser(name, help=helptext, description=helptext).set_defaults(
+                _module=spec.name)
             continue
-        module = importlib.import_module(mod)
-        adder = getattr(module, "add_arguments_" + name.replace("-", "_"), None) or module.add_arguments
-        adder(p)
+        module = importlib.import_module(spec.name)
+        p = sub.add_parser(name, help=module.HELP, description=module.HELP)
+        p.set_defaults(_module=spec.name)
+        module.add_arguments(p)
     return parser
 
 
@@ -94,6 +124,25 @@ def _one_line(exc):
         return f"{exc.strerror}{name}"
     text = str(exc).strip()
     return text.splitlines()[0] if text else type(exc).__name__
+
+
+#: optional packages and the extra of ``pyproject.toml`` that installs each
+EXTRA_OF = {"PIL": ("pillow", "tracer"), "trimesh": ("trimesh", "tracer"),
+            "scipy": ("scipy", "sim"), "imageio": ("imageio", "sim"),
+            "imageio_ffmpeg": ("imageio-ffmpeg", "sim"), "matplotlib": ("matplotlib", "studies"),
+            "distributed": ("distributed", "studies"), "dask": ("distributed", "studies"),
+            "pyvista": ("pyvista", "studies"), "vtk": ("pyvista", "studies"),
+            "vtkmodules": ("pyvista", "studies")}
+
+
+def _missing_package(exc):
+    """One line for an ImportError: which package this command needs and how to install it."""
+    name = (getattr(exc, "name", None) or "").split(".")[0]
+    if name in EXTRA_OF:
+        package, extra = EXTRA_OF[name]
+        return (f"this command needs {package}, which is not installed (pip install "
+                f"'smoothdist[{extra}]', or 'smoothdist[all]' for every command)")
+    return f"{_one_line(exc)} (pip install 'smoothdist[all]' installs every optional package)"
 
 
 def _install(signum, handler):
@@ -117,6 +166,13 @@ def main(argv=None):
     warnings.showwarning = _show_warning
     try:
         return _run(argv)
+    except ImportError as exc:
+        if os.environ.get("TRACER_DEBUG"):
+            import traceback
+
+            traceback.print_exc()
+        print(f"error: {_missing_package(exc)}", file=sys.stderr)
+        return 2
     except KeyboardInterrupt:
         print("\ninterrupted: stopped; no partial output file was left behind", file=sys.stderr)
         return 130
@@ -162,48 +218,7 @@ def _run(argv):
             raise CLIError(f"--threads must be between 1 and {numba.config.NUMBA_NUM_THREADS}, "
                            f"got {args.threads}")
         numba.set_num_threads(args.threads)
-    module = importlib.import_module(args._module)
-    runner = getattr(module, "run_" + args._name.replace("-", "_"), None) or module.run
-    return int(runner(args) or 0)
-
-
-def check_outputs(paths, overwrite, create=True):
-    """Check output paths before any work is done.
-
-    Refuses (CLIError) an output that is a folder, that exists while ``overwrite`` is false,
-    that is given twice, or whose folder cannot be created or written. With ``create`` the
-    missing parent folders are made now; otherwise call :func:`make_parents` just before
-    writing, so that a failed run leaves no empty folders behind.
-    """
-    seen = {}
-    for p in paths:
-        if p is None:
-            continue
-        key = os.path.realpath(p)
-        if key in seen:
-            raise CLIError(f"the same file is given for two outputs: {p}")
-        seen[key] = p
-        if os.path.isdir(p):
-            raise CLIError(f"output path is a folder: {p}")
-        if os.path.exists(p) and not overwrite:
-            raise CLIError(f"output exists: {p} (pass --overwrite to replace it)")
-        parent = os.path.dirname(os.path.abspath(p))
-        probe = parent
-        while not os.path.exists(probe):
-            probe = os.path.dirname(probe)
-        if not os.path.isdir(probe):
-            raise CLIError(f"cannot write {p}: {probe} is a file, not a folder")
-        if not os.access(probe, os.W_OK | os.X_OK):
-            raise CLIError(f"cannot write {p}: folder {probe} is not writable")
-    if create:
-        make_parents(paths)
-
-
-def make_parents(paths):
-    """Create the parent folders of the given output paths (``None`` entries are skipped)."""
-    for p in paths:
-        if p is not None:
-            os.makedirs(os.path.dirname(os.path.abspath(p)), exist_ok=True)
+    return int(importlib.import_module(args._module).run(args) or 0)
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -8,8 +8,11 @@ import numpy as np
 
 from smoothdist.mesh import MESH_EXTENSIONS
 from tracer.camera import UP_AXES, VIEWS
-from tracer.cli import CLIError, check_outputs, make_parents
 from tracer.from_mesh import KINDS
+from tracer.outputs import CLIError, atomic_write, check_outputs, make_parents
+
+HELP = "sphere-trace a scene file to a PNG (and AOVs)"
+
 
 def add_arguments(p):
     """Arguments of ``tracer render``."""
@@ -210,8 +213,6 @@ def run(args):
                                           "primitives": o.field.num_primitives}
                                          for o in scene.objects])
     if args.stats:
-        from tracer.image import atomic_write
-
         with atomic_write(args.stats, overwrite=args.overwrite) as tmp:
             with open(tmp, "w", encoding="utf-8") as fh:
                 json.dump(stats, fh, indent=2)
@@ -294,7 +295,6 @@ def _replace_camera(scene, args):
 
 def _save_scene(args, scene, source):
     """Write ``--save-scene``: a scene file that renders the same picture."""
-    from tracer.image import atomic_write
     from tracer.from_mesh import scene_dict
     from tracer.scene import read_scene_json
 

@@ -95,7 +95,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from tracer.cli import CLIError, check_outputs
+from tracer.outputs import CLIError, atomic_write, check_outputs
 
 __all__ = [
     "OUTPUT_FILES",
@@ -112,6 +112,9 @@ __all__ = [
     "side_by_side",
     "labelled_side_by_side",
 ]
+
+#: the command's one-line help (``tracer compare``)
+HELP = "compare a render with a pyvista isosurface of the same field"
 
 #: files written into the output folder
 OUTPUT_FILES = ("metrics.json", "tracer.png", "pyvista.png", "side_by_side.png", "diff.png")
@@ -423,7 +426,7 @@ def render_isosurface(surface, camera, background=(255, 255, 255), focal_distanc
 
     Raises
     ------
-    tracer.cli.CLIError
+    tracer.outputs.CLIError
         ``VTK cannot render off-screen here: ...`` when VTK fails.
     """
     from tracer.camera import primary_rays, pyvista_camera_params
@@ -700,7 +703,7 @@ def add_arguments(p):
 
 def run(args):
     """Compare; returns the exit status (0, or 2 with one ``error:`` line)."""
-    from tracer.image import atomic_write, save_png
+    from tracer.image import save_png
     from tracer.scene import load_scene
 
     if not 2 <= args.grid <= 512:

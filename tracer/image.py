@@ -1,20 +1,20 @@
 """Image and array I/O, false colour and image comparison.
 
 Images are numpy arrays ``(H, W, 3) uint8`` (or ``(H, W)`` grey) with row 0 at the top, which
-is also the top row of the saved PNG. Every writer goes through :func:`atomic_write`, so an
-interrupted render never leaves a truncated file behind.
+is also the top row of the saved PNG. Every writer goes through
+:func:`tracer.outputs.atomic_write`, so an interrupted render never leaves a truncated file
+behind.
 """
 
 import os
-import secrets
-from contextlib import contextmanager
 from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
 
+from tracer.outputs import atomic_write
+
 __all__ = [
-    "atomic_write",
     "save_png",
     "save_npy",
     "load_png",
@@ -24,117 +24,6 @@ __all__ = [
 ]
 
 WHITE = (255, 255, 255)
-
-
-def _exists_message(path):
-    return f"{path} already exists; pass --overwrite to replace it"
-
-
-def _create_temp(path):
-    """Create an empty temporary file next to ``path``; return its Path.
-
-    The name is ``.<stem>.tmp-<8 hex><suffix>``: hidden, in the same folder (so that
-    ``os.replace`` is atomic) and with the same suffix (so format sniffing by extension works).
-    The file is created with mode 0o666 minus the umask, like a plain ``open``.
-    """
-    folder = path.parent
-    if not folder.is_dir():
-        raise FileNotFoundError(f"cannot write {path}: folder {folder} does not exist")
-    for _ in range(100):
-        tmp = folder / f".{path.stem}.tmp-{secrets.token_hex(4)}{path.suffix}"
-        try:
-            fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
-        except FileExistsError:
-            continue
-        except PermissionError:
-            raise PermissionError(13, f"cannot write {path}: folder {folder} is not writable") \
-                from None
-        try:
-            os.close(fd)
-        except BaseException:  # e.g. Ctrl-C right here: do not leave the empty file behind
-            _unlink_quietly(tmp)
-            raise
-        return tmp
-    raise FileExistsError(f"cannot create a temporary file next to {path}")
-
-
-def _unlink_quietly(p):
-    try:
-        os.unlink(p)
-    except FileNotFoundError:
-        pass
-
-
-def _fsync(p):
-    """Flush a written file to disk before it is renamed into place (best effort)."""
-    try:
-        fd = os.open(p, os.O_RDONLY)
-    except OSError:
-        return
-    try:
-        os.fsync(fd)
-    except OSError:
-        pass
-    finally:
-        os.close(fd)
-
-
-@contextmanager
-def atomic_write(path, *, overwrite=True):
-    """Write a file atomically through a temporary file in the same folder.
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        Final destination. Its folder must exist.
-    overwrite : bool, default True
-        If False, refuse to replace an existing ``path``.
-
-    Yields
-    ------
-    pathlib.Path
-        An empty temporary file ``.<stem>.tmp-XXXXXXXX<suffix>`` next to ``path``; the body
-        writes to it. On normal exit it is moved onto ``path`` (``os.replace``, or an atomic
-        no-clobber ``os.link`` when ``overwrite=False``). On any exception, including
-        ``KeyboardInterrupt``, it is deleted and ``path`` is left untouched.
-
-    Raises
-    ------
-    FileExistsError
-        If ``overwrite=False`` and ``path`` exists (checked before the body runs and again,
-        atomically where the file system allows, when the file is moved into place).
-    FileNotFoundError
-        If the folder of ``path`` does not exist.
-
-    Examples
-    --------
-    >>> with atomic_write("out.txt") as tmp:  # doctest: +SKIP
-    ...     tmp.write_text("done")
-    """
-    path = Path(path)
-    if not overwrite and path.exists():
-        raise FileExistsError(_exists_message(path))
-    tmp = _create_temp(path)
-    try:
-        yield tmp
-        _fsync(tmp)
-        if overwrite:
-            os.replace(tmp, path)
-        else:
-            try:
-                os.link(tmp, path)  # fails if path appeared meanwhile
-            except FileExistsError:
-                raise FileExistsError(_exists_message(path)) from None
-            except OSError:  # hard links unsupported: best effort
-                if path.exists():
-                    raise FileExistsError(_exists_message(path)) from None
-                os.replace(tmp, path)
-    finally:
-        # After a successful os.replace the temporary name is gone; otherwise remove it.
-        try:
-            os.unlink(tmp)
-        except FileNotFoundError:
-            pass
 
 
 def save_png(path, rgb, overwrite=True):

@@ -21,9 +21,11 @@ import math
 import sys
 from typing import NamedTuple
 
-from tracer.cli import CLIError, check_outputs
+from tracer.outputs import CLIError, check_outputs
 
-__all__ = ["DiffVerdict", "check_images", "add_arguments", "run"]
+__all__ = ["DiffVerdict", "check_images", "HELP", "add_arguments", "run"]
+
+HELP = "compare two images; non-zero exit beyond a tolerance"
 
 
 class DiffVerdict(NamedTuple):

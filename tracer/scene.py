@@ -37,9 +37,6 @@ no extent (a single point) the default ``eps`` is ``1e-4 x`` the surface's size
 (``max(1/alpha, offset)``) instead of the bbox diagonal.
 """
 
-import json
-import math
-import numbers
 import os
 from dataclasses import dataclass, field as dc_field
 
@@ -48,6 +45,8 @@ import numpy as np
 import smoothdist
 from smoothdist import DataMesh, SmoothDistanceField
 from tracer.march import NEWTON
+from tracer.validate import (SceneError, check_keys, choice, file_error, number, read_json,
+                             resolve_path, show, vec3)
 
 BVH_TYPES = {"faces": "triangles", "triangles": "triangles", "edges": "edges",
              "points": "points", "mixed": "mixed"}
@@ -61,10 +60,6 @@ _CAMERA_KEYS = {"origin", "dest", "up"}
 _OBJECT_KEYS = {"path", "parts", "alpha", "max_alpha", "bvh_type", "matcap", "beta", "offset",
                 "name", "scale", "translate"}
 _PART_KEYS = {"path", "bvh_type", "scale", "translate"}
-
-
-class SceneError(ValueError):
-    """A scene file that cannot be used; the message names the file and the bad key."""
 
 
 @dataclass
@@ -123,123 +118,18 @@ class Scene:
         return float(np.linalg.norm(hi - lo))
 
 
-# ---------------------------------------------------------------------- validation helpers
-#: largest scene file we agree to parse (a scene is a few hundred bytes of JSON)
-MAX_SCENE_BYTES = 16 * 1024 * 1024
+# ---------------------------------------------------------------------- limits
 #: largest image, in pixels (about 150 bytes of buffers per pixel)
 MAX_PIXELS = 64_000_000
 #: largest number of distance evaluations per ray (bounds the time of any render)
 MAX_STEPS = 1_000_000
 
 
-def _err(path, where, msg):
-    return SceneError(f"{os.path.basename(path)}: {where} {msg}")
-
-
-def _show(value, limit=60):
-    """A short JSON rendering of a (possibly huge) value for messages."""
-    try:
-        text = json.dumps(value)
-    except (TypeError, ValueError, RecursionError):
-        text = repr(value)
-    return text if len(text) <= limit else text[:limit - 3] + "..."
-
-
-def _number(value, path, where, *, positive=False, non_negative=False, integer=False):
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
-        raise _err(path, where, f"must be a number, got {_show(value)}")
-    try:
-        fvalue = float(value)
-    except OverflowError:
-        raise _err(path, where, f"is too large, got {_show(value)}") from None
-    if not math.isfinite(fvalue):
-        raise _err(path, where, f"must be finite, got {value}")
-    if integer and (not fvalue.is_integer()):
-        raise _err(path, where, f"must be an integer, got {value}")
-    if positive and fvalue <= 0:
-        raise _err(path, where, f"must be > 0, got {value}")
-    if non_negative and fvalue < 0:
-        raise _err(path, where, f"must be >= 0, got {value}")
-    return int(fvalue) if integer else fvalue
-
-
-def _vec3(value, path, where):
-    if not isinstance(value, list) or len(value) != 3:
-        raise _err(path, where, f"must be a list of 3 numbers, got {_show(value)}")
-    return np.array([_number(v, path, f"{where}[{i}]") for i, v in enumerate(value)])
-
-
-def _choice(value, choices, path, where):
-    if not isinstance(value, str) or value not in choices:
-        raise _err(path, where, f"must be one of {', '.join(choices)}; got {_show(value)}")
-    return value
-
-
-def _keys(d, allowed, path, where):
-    if not isinstance(d, dict):
-        raise _err(path, where, f"must be a JSON object, got {_json_type(d)}")
-    unknown = sorted(set(d) - allowed)
-    if unknown:
-        raise _err(path, where, f"has unknown key(s) {', '.join(map(repr, unknown))} "
-                                f"(allowed: {', '.join(sorted(allowed))})")
-
-
-def _json_type(value):
-    names = {dict: "object", list: "list", str: "string", bool: "boolean", int: "number",
-             float: "number", type(None): "null"}
-    return names.get(type(value), type(value).__name__)
-
-
-def _resolve(base, p, path, where):
-    if not isinstance(p, str) or not p:
-        raise _err(path, where, f"must be a non-empty file path, got {_show(p)}")
-    full = os.path.normpath(os.path.join(base, os.path.expanduser(p)))
-    if os.path.isdir(full):
-        raise _err(path, where, f"is a folder, not a file: {p} (looked for {full})")
-    if not os.path.isfile(full):
-        raise _err(path, where, f"file not found: {p} (looked for {full})")
-    return full
-
-
 # ---------------------------------------------------------------------- loading
 def read_scene_json(path):
-    """Parse a scene file into a dict, with one-line errors for unreadable or malformed JSON."""
-    path = os.fspath(path)
-    name = os.path.basename(path)
-    if not os.path.exists(path):
-        raise SceneError(f"scene file not found: {path}")
-    if os.path.isdir(path):
-        raise SceneError(f"scene path is a folder, not a file: {path}")
-    if not os.path.isfile(path):
-        raise SceneError(f"scene path is not a regular file: {path}")
-    try:
-        size = os.path.getsize(path)
-        if size == 0:
-            raise SceneError(f"scene file is empty: {path}")
-        if size > MAX_SCENE_BYTES:
-            raise SceneError(f"{name}: is {size} bytes, too large for a scene file "
-                             f"(limit {MAX_SCENE_BYTES})")
-        with open(path, "rb") as fh:
-            raw = fh.read()
-        if b"\0" in raw:
-            raise SceneError(f"{name}: not a text JSON file (it holds binary data)")
-        text = raw.decode("utf-8-sig")
-        if not text.strip():
-            raise SceneError(f"scene file is empty (only white space): {path}")
-        data = json.loads(text)
-    except PermissionError:
-        raise SceneError(f"scene file is not readable (permission denied): {path}") from None
-    except UnicodeDecodeError:
-        raise SceneError(f"{name}: not a text (UTF-8) JSON file") from None
-    except json.JSONDecodeError as exc:
-        raise SceneError(f"{name}: malformed JSON at line {exc.lineno} "
-                         f"column {exc.colno}: {exc.msg}") from None
-    except RecursionError:
-        raise SceneError(f"{name}: malformed JSON: nested too deeply") from None
-    except OSError as exc:
-        raise SceneError(f"scene file could not be read: {path}: "
-                         f"{exc.strerror or type(exc).__name__}") from None
-    return data
+    """Parse a scene file into a dict, with one-line errors for unreadable or malformed JSON
+    (:func:`tracer.validate.read_json`)."""
+    return read_json(path, "scene")
 
 
 def load_scene(path, overrides=None):
@@ -265,18 +155,18 @@ def load_scene(path, overrides=None):
     path = os.fspath(path)
     data = read_scene_json(path)
     overrides = dict(overrides or {})
-    _keys(data, _TOP_KEYS, path, "the top level")
+    check_keys(data, _TOP_KEYS, path, "the top level")
     base = os.path.dirname(os.path.abspath(path))
     if "camera" not in data:
-        raise _err(path, "the top level", "is missing the required key 'camera'")
+        raise file_error(path, "the top level", "is missing the required key 'camera'")
     cam = data["camera"]
-    _keys(cam, _CAMERA_KEYS, path, "camera")
+    check_keys(cam, _CAMERA_KEYS, path, "camera")
     for k in ("origin", "dest", "up"):
         if k not in cam:
-            raise _err(path, "camera", f"is missing the required key {k!r}")
-    origin = _vec3(cam["origin"], path, "camera.origin")
-    dest = _vec3(cam["dest"], path, "camera.dest")
-    up = _vec3(cam["up"], path, "camera.up")
+            raise file_error(path, "camera", f"is missing the required key {k!r}")
+    origin = vec3(cam["origin"], path, "camera.origin")
+    dest = vec3(cam["dest"], path, "camera.dest")
+    up = vec3(cam["up"], path, "camera.up")
 
     def top(key, default, flag=None, **kw):
         if key in overrides and overrides[key] is not None:
@@ -285,32 +175,32 @@ def load_scene(path, overrides=None):
             value, where = data[key], key
         else:
             return default
-        return _number(value, path, where, **kw)
+        return number(value, path, where, **kw)
 
     width = top("width", 512, "--size width", positive=True, integer=True)
     height = top("height", 512, "--size height", positive=True, integer=True)
     if width * height > MAX_PIXELS:
-        raise _err(path, "width x height", f"is {width}x{height}: larger than "
-                                           f"{MAX_PIXELS // 1_000_000} megapixels")
+        raise file_error(path, "width x height", f"is {width}x{height}: larger than "
+                                                 f"{MAX_PIXELS // 1_000_000} megapixels")
     beta = top("beta", 0.5, non_negative=True)
     tol = top("tol", 0.0, non_negative=True)
     if isinstance(data.get("newton"), bool) and overrides.get("newton") is None:
-        raise _err(path, "newton", f"must be a number (a multiple of eps; 0 turns Newton steps "
-                                   f"off), got {_show(data['newton'])}")
+        raise file_error(path, "newton", f"must be a number (a multiple of eps; 0 turns Newton "
+                                         f"steps off), got {show(data['newton'])}")
     newton = top("newton", NEWTON, non_negative=True)
     eps = top("eps", None, positive=True)
     max_steps = top("max_steps", 1000, positive=True, integer=True)
     if max_steps > MAX_STEPS:
-        raise _err(path, "max_steps", f"must be at most {MAX_STEPS}, got {max_steps}")
-    mode = _choice(overrides.get("mode") or data.get("mode", "smooth"), MODES, path, "mode")
-    gradient = _choice(data.get("gradient", "metric"), ("metric", "exact"), path, "gradient")
+        raise file_error(path, "max_steps", f"must be at most {MAX_STEPS}, got {max_steps}")
+    mode = choice(overrides.get("mode") or data.get("mode", "smooth"), MODES, path, "mode")
+    gradient = choice(data.get("gradient", "metric"), ("metric", "exact"), path, "gradient")
     bg = data.get("background", [255, 255, 255])
     if (not isinstance(bg, list) or len(bg) != 3
             or not all(isinstance(v, int) and not isinstance(v, bool) and 0 <= v <= 255 for v in bg)):
-        raise _err(path, "background", f"must be [r, g, b] integers 0-255, got {_show(bg)}")
+        raise file_error(path, "background", f"must be [r, g, b] integers 0-255, got {show(bg)}")
     for key in ("description", "name"):
         if key in data and not isinstance(data[key], str):
-            raise _err(path, key, f"must be a string, got {_show(data[key])}")
+            raise file_error(path, key, f"must be a string, got {show(data[key])}")
     # the camera, before any mesh is loaded
     from tracer.camera import look_at
 
@@ -320,21 +210,21 @@ def load_scene(path, overrides=None):
         raise SceneError(f"{os.path.basename(path)}: {exc}") from None
     objs = data.get("objects")
     if objs is None:
-        raise _err(path, "the top level", "is missing the required key 'objects'")
+        raise file_error(path, "the top level", "is missing the required key 'objects'")
     if not isinstance(objs, list) or not objs:
-        raise _err(path, "objects", f"must be a non-empty list of objects, got {_show(objs)}")
+        raise file_error(path, "objects", f"must be a non-empty list of objects, got {show(objs)}")
     specs = [_object_spec(od, i, base, path, data, overrides, beta) for i, od in enumerate(objs)]
     matcap = data.get("matcap", "")
     if not isinstance(matcap, str):
-        raise _err(path, "matcap", f"must be a file path or \"\", got {_show(matcap)}")
-    matcap = _resolve(base, matcap, path, "matcap") if matcap else ""
+        raise file_error(path, "matcap", f"must be a file path or \"\", got {show(matcap)}")
+    matcap = resolve_path(base, matcap, path, "matcap") if matcap else ""
     if not matcap:
         matcap = next((sp["matcap"] for sp in specs if sp["matcap"]), "")
     default_shading = "matcap" if matcap else "normals"
-    shading = _choice(overrides.get("shading") or data.get("shading", default_shading), SHADINGS,
-                      path, "shading")
+    shading = choice(overrides.get("shading") or data.get("shading", default_shading), SHADINGS,
+                     path, "shading")
     if shading == "matcap" and not matcap:
-        raise _err(path, "shading", "is 'matcap' but no matcap file is given (key 'matcap')")
+        raise file_error(path, "shading", "is 'matcap' but no matcap file is given (key 'matcap')")
     # everything checked: now read the meshes and build the fields
     objects = [_build_object(sp, path, gradient) for sp in specs]
     desc = data.get("description", "")
@@ -360,37 +250,37 @@ def _object_spec(od, i, base, path, data, overrides, beta):
     """Validate one object's keys and files (no mesh is read); return a dict for
     :func:`_build_object`."""
     where = f"objects[{i}]"
-    _keys(od, _OBJECT_KEYS, path, where)
+    check_keys(od, _OBJECT_KEYS, path, where)
     if "path" in od and "parts" in od:
-        raise _err(path, where, "has both 'path' and 'parts'; give one")
+        raise file_error(path, where, "has both 'path' and 'parts'; give one")
     if "parts" in od:
         parts = od["parts"]
         if not isinstance(parts, list) or not parts:
-            raise _err(path, f"{where}.parts", f"must be a non-empty list, got {_show(parts)}")
+            raise file_error(path, f"{where}.parts", f"must be a non-empty list, got {show(parts)}")
         specs = []
         for j, pd in enumerate(parts):
             pw = f"{where}.parts[{j}]"
-            _keys(pd, _PART_KEYS, path, pw)
+            check_keys(pd, _PART_KEYS, path, pw)
             specs.append(_part_spec(pd, base, path, pw))
         merged = True
     elif "path" not in od:
-        raise _err(path, where, "is missing the required key 'path' (or 'parts')")
+        raise file_error(path, where, "is missing the required key 'path' (or 'parts')")
     else:
         specs = [_part_spec(od, base, path, where)]
         merged = False
     if i == 0 and overrides.get("alpha") is not None:
         alpha, alpha_where = overrides["alpha"], "--alpha"
         if alpha != "auto":
-            alpha = _number(alpha, path, "--alpha", positive=True)
+            alpha = number(alpha, path, "--alpha", positive=True)
     elif "alpha" not in od:
-        raise _err(path, where, "is missing the required key 'alpha'")
+        raise file_error(path, where, "is missing the required key 'alpha'")
     elif od["alpha"] == "auto":
         alpha, alpha_where = "auto", f"{where}.alpha"
     else:
         if isinstance(od["alpha"], str):
-            raise _err(path, f"{where}.alpha", f"must be a number or \"auto\", got "
-                                               f"{_show(od['alpha'])}")
-        alpha = _number(od["alpha"], path, f"{where}.alpha", positive=True)
+            raise file_error(path, f"{where}.alpha", f"must be a number or \"auto\", got "
+                                                     f"{show(od['alpha'])}")
+        alpha = number(od["alpha"], path, f"{where}.alpha", positive=True)
         alpha_where = f"{where}.alpha"
     if i == 0 and overrides.get("alpha_u") is not None:
         alpha_u, au_where = overrides["alpha_u"], "--alpha-u"
@@ -400,36 +290,37 @@ def _object_spec(od, i, base, path, data, overrides, beta):
         pass  # no attenuation: alpha_U = alpha, once alpha is known (the command line only)
     elif alpha_u != "auto":
         if isinstance(alpha_u, str):
-            raise _err(path, au_where, f"must be a number or \"auto\", got {_show(alpha_u)}")
-        alpha_u = _number(alpha_u, path, au_where, positive=True)
-    obeta = (_number(od["beta"], path, f"{where}.beta", non_negative=True)
+            raise file_error(path, au_where, f"must be a number or \"auto\", got {show(alpha_u)}")
+        alpha_u = number(alpha_u, path, au_where, positive=True)
+    obeta = (number(od["beta"], path, f"{where}.beta", non_negative=True)
              if "beta" in od and overrides.get("beta") is None else beta)
     if overrides.get("offset") is not None:
-        offset = _number(overrides["offset"], path, "--offset", non_negative=True)
+        offset = number(overrides["offset"], path, "--offset", non_negative=True)
     elif "offset" in od:
-        offset = _number(od["offset"], path, f"{where}.offset", non_negative=True)
+        offset = number(od["offset"], path, f"{where}.offset", non_negative=True)
     elif "offset" in data:
-        offset = _number(data["offset"], path, "offset", non_negative=True)
+        offset = number(data["offset"], path, "offset", non_negative=True)
     else:
         offset = None
     matcap = od.get("matcap", "")
     if not isinstance(matcap, str):
-        raise _err(path, f"{where}.matcap", f"must be a file path or \"\", got {_show(matcap)}")
-    matcap = _resolve(base, matcap, path, f"{where}.matcap") if matcap else ""
+        raise file_error(path, f"{where}.matcap",
+                         f"must be a file path or \"\", got {show(matcap)}")
+    matcap = resolve_path(base, matcap, path, f"{where}.matcap") if matcap else ""
     name = od.get("name", os.path.basename(od.get("path", f"object{i}")))
     if not isinstance(name, str):
-        raise _err(path, f"{where}.name", f"must be a string, got {_show(name)}")
+        raise file_error(path, f"{where}.name", f"must be a string, got {show(name)}")
     return dict(where=where, parts=specs, merged=merged, merged_name=od.get("name", "mixed"),
                 alpha=alpha, alpha_where=alpha_where, alpha_u=alpha_u, beta=obeta,
                 offset=offset, matcap=matcap, name=name)
 
 
 def _part_spec(pd, base, path, where):
-    full = _resolve(base, pd.get("path"), path, f"{where}.path")
-    kind = BVH_TYPES[_choice(pd.get("bvh_type", "mixed"), tuple(BVH_TYPES), path,
-                             f"{where}.bvh_type")]
-    scale = _number(pd["scale"], path, f"{where}.scale", positive=True) if "scale" in pd else 1.0
-    shift = _vec3(pd["translate"], path, f"{where}.translate") if "translate" in pd else np.zeros(3)
+    full = resolve_path(base, pd.get("path"), path, f"{where}.path")
+    kind = BVH_TYPES[choice(pd.get("bvh_type", "mixed"), tuple(BVH_TYPES), path,
+                            f"{where}.bvh_type")]
+    scale = number(pd["scale"], path, f"{where}.scale", positive=True) if "scale" in pd else 1.0
+    shift = vec3(pd["translate"], path, f"{where}.translate") if "translate" in pd else np.zeros(3)
     return dict(where=where, full=full, kind=kind, scale=scale, shift=shift)
 
 
@@ -440,7 +331,7 @@ def _build_object(spec, path, gradient):
         try:
             mesh = merge_meshes(meshes, name=spec["merged_name"])
         except ValueError as exc:
-            raise _err(path, f"{spec['where']}.parts", f"cannot be merged: {exc}") from None
+            raise file_error(path, f"{spec['where']}.parts", f"cannot be merged: {exc}") from None
     else:
         mesh = meshes[0]
     fld = SmoothDistanceField(mesh)
@@ -451,7 +342,7 @@ def _build_object(spec, path, gradient):
     try:
         fld.check_alpha(alpha)
     except ValueError as exc:
-        raise _err(path, spec["alpha_where"], f"is unusable: {exc}") from None
+        raise file_error(path, spec["alpha_where"], f"is unusable: {exc}") from None
     fld.kernel_args(alpha, spec["beta"], alpha_u, gradient)
     return SceneObject(name=str(spec["name"]), field=fld, alpha=float(alpha),
                        alpha_u=float(alpha_u), beta=spec["beta"], offset=float(offset),
@@ -466,14 +357,15 @@ def _part_mesh(ps, path):
         msg = str(exc)
         name = os.path.basename(full)
         msg = msg[len(name) + 2:] if msg.startswith(f"{name}: ") else msg
-        raise _err(path, f"{where}.path", f"({name}): {msg}") from None
+        raise file_error(path, f"{where}.path", f"({name}): {msg}") from None
     scale, shift = ps["scale"], ps["shift"]
     if scale != 1.0 or np.any(shift):
         try:
             mesh = DataMesh(mesh.V * scale + shift, points=mesh.points, edges=mesh.edges,
                             triangles=mesh.triangles, name=mesh.name)
         except ValueError as exc:
-            raise _err(path, f"{where}.scale/translate", f"give unusable data: {exc}") from None
+            raise file_error(path, f"{where}.scale/translate",
+                             f"give unusable data: {exc}") from None
     return mesh
 
 
@@ -585,8 +477,9 @@ def scene_from_field(field, *, alpha, alpha_u=None, beta=0.5, camera=None, width
 
 
 def _api_number(value, name, **kw):
-    """:func:`_number` for keyword arguments: a ``ValueError`` naming the argument."""
+    """:func:`tracer.validate.number` for keyword arguments: a ``ValueError`` naming the
+    argument."""
     try:
-        return _number(value, "", name, **kw)
+        return number(value, "", name, **kw)
     except SceneError as exc:
         raise ValueError(str(exc).lstrip(": ")) from None

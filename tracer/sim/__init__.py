@@ -4,6 +4,8 @@ Modules: :mod:`~tracer.sim.bodies` (bodies and mass properties), :mod:`~tracer.s
 (generated geometry), :mod:`~tracer.sim.constraint` (the scene's single constraint),
 :mod:`~tracer.sim.ipm` (primal-dual interior point), :mod:`~tracer.sim.integrator` (the time
 step), :mod:`~tracer.sim.simfile` (simulation files), :mod:`~tracer.sim.run` (trajectories),
-:mod:`~tracer.sim.animate` (frames, MP4, GIF), :mod:`~tracer.sim.cli_sim` (``tracer simulate``
-and ``tracer animate``), :mod:`~tracer.sim.vbowl` (the paper's 2D V-bowl study).
+:mod:`~tracer.sim.animate` (frames, MP4, GIF), :mod:`~tracer.sim.frames` (the frames as
+independent tasks for :mod:`tracer.runner`), :mod:`~tracer.sim.cli_simulate` and
+:mod:`~tracer.sim.cli_animate` (``tracer simulate`` and ``tracer animate``),
+:mod:`~tracer.sim.vbowl` (the paper's 2D V-bowl study).
 """

@@ -15,7 +15,8 @@ import time
 import numpy as np
 
 from smoothdist import SmoothDistanceField
-from tracer.image import atomic_write, save_png
+from tracer.image import save_png
+from tracer.outputs import atomic_write
 from tracer.render import ProgressBar, render
 from tracer.scene import Scene, SceneObject, default_eps
 

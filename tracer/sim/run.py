@@ -30,7 +30,7 @@ import time
 
 import numpy as np
 
-from tracer.image import atomic_write
+from tracer.outputs import atomic_write
 from tracer.sim.constraint import ContactConstraint
 from tracer.sim.integrator import Integrator
 

@@ -61,11 +61,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from smoothdist import DataMesh
-from tracer.scene import (SHADINGS, SceneError, _choice, _keys, _number, _resolve, _show, _vec3,
-                          read_scene_json)
+from tracer.scene import SHADINGS
 from tracer.sim import primitives
 from tracer.sim.bodies import (AUTO_THICKNESS_OFFSET, Body, auto_alpha, rotation_matrix,
                                thickness)
+from tracer.validate import (SceneError, check_keys, choice, number, read_json, resolve_path,
+                             show, vec3)
 
 _TOP = {"name", "description", "dt", "steps", "gravity", "beta", "constraint", "gap_tol",
         "camera", "bodies"}
@@ -127,49 +128,49 @@ def _wrap(exc):
 def read_simulation_json(path):
     """Parse the file into a dict (one-line :class:`SimFileError` on unreadable/malformed JSON)."""
     try:
-        return read_scene_json(path)
+        return read_json(path, "simulation")
     except SceneError as exc:
         raise _wrap(exc) from None
 
 
 def _rotation(value, path, where):
     if isinstance(value, list) and len(value) == 3 and all(isinstance(r, list) for r in value):
-        rows = [_vec3(r, path, f"{where}[{i}]") for i, r in enumerate(value)]
+        rows = [vec3(r, path, f"{where}[{i}]") for i, r in enumerate(value)]
         R = np.array(rows)
         if not np.allclose(R @ R.T, np.eye(3), atol=1e-6) or np.linalg.det(R) <= 0:
             raise _err(path, where, "must be a rotation matrix (orthonormal rows, det +1)")
         return R
     if isinstance(value, list) and len(value) == 3:
-        return rotation_matrix(_vec3(value, path, where))
+        return rotation_matrix(vec3(value, path, where))
     raise _err(path, where, f"must be a 3x3 rotation matrix or a rotation vector [rx, ry, rz], "
-                            f"got {_show(value)}")
+                            f"got {show(value)}")
 
 
 def _camera(cd, path):
-    _keys(cd, _CAMERA, path, "camera")
+    check_keys(cd, _CAMERA, path, "camera")
     for k in ("origin", "dest", "up"):
         if k not in cd:
             raise _err(path, "camera", f"is missing the required key {k!r}")
-    cam = Camera(origin=_vec3(cd["origin"], path, "camera.origin"),
-                 dest=_vec3(cd["dest"], path, "camera.dest"),
-                 up=_vec3(cd["up"], path, "camera.up"))
+    cam = Camera(origin=vec3(cd["origin"], path, "camera.origin"),
+                 dest=vec3(cd["dest"], path, "camera.dest"),
+                 up=vec3(cd["up"], path, "camera.up"))
     for k in ("width", "height", "every"):
         if k in cd:
-            setattr(cam, k, _number(cd[k], path, f"camera.{k}", positive=True, integer=True))
+            setattr(cam, k, number(cd[k], path, f"camera.{k}", positive=True, integer=True))
     if cam.width * cam.height > 4_000_000:
         raise _err(path, "camera.width", f"x height is {cam.width}x{cam.height}: too large for "
                                          "an animation (limit 4 megapixels)")
     if "fps" in cd:
-        cam.fps = _number(cd["fps"], path, "camera.fps", positive=True)
+        cam.fps = number(cd["fps"], path, "camera.fps", positive=True)
     if "shading" in cd:
-        cam.shading = _choice(cd["shading"], SHADINGS, path, "camera.shading")
+        cam.shading = choice(cd["shading"], SHADINGS, path, "camera.shading")
     if "matcap" in cd:
-        cam.matcap = _resolve(os.path.dirname(os.path.abspath(path)), cd["matcap"], path,
-                              "camera.matcap")
+        cam.matcap = resolve_path(os.path.dirname(os.path.abspath(path)), cd["matcap"], path,
+                                  "camera.matcap")
     if cam.shading == "matcap" and not cam.matcap:
         raise _err(path, "camera.shading", "is 'matcap' but camera.matcap is not given")
     if "background" in cd:
-        bg = _vec3(cd["background"], path, "camera.background")
+        bg = vec3(cd["background"], path, "camera.background")
         if ((bg < 0) | (bg > 255)).any():
             raise _err(path, "camera.background", f"must hold values 0-255, got {cd['background']}")
         cam.background = tuple(int(v) for v in bg)
@@ -184,16 +185,16 @@ def _camera(cd, path):
 
 def _body_spec(bd, i, base, path):
     where = f"bodies[{i}]"
-    _keys(bd, _BODY, path, where)
+    check_keys(bd, _BODY, path, where)
     if "alpha" not in bd:
         raise _err(path, where, "is missing the required key 'alpha'")
     if ("mesh" in bd) == ("primitive" in bd):
         raise _err(path, where, "needs exactly one of 'mesh' (a file) or 'primitive'")
     spec = {"name": bd.get("name", f"body{i}")}
     if not isinstance(spec["name"], str) or not spec["name"]:
-        raise _err(path, f"{where}.name", f"must be a non-empty string, got {_show(bd['name'])}")
+        raise _err(path, f"{where}.name", f"must be a non-empty string, got {show(bd['name'])}")
     if "mesh" in bd:
-        spec["mesh"] = _resolve(base, bd["mesh"], path, f"{where}.mesh")
+        spec["mesh"] = resolve_path(base, bd["mesh"], path, f"{where}.mesh")
     else:
         prim = bd["primitive"]
         if not isinstance(prim, dict) or not isinstance(prim.get("type"), str):
@@ -201,23 +202,23 @@ def _body_spec(bd, i, base, path):
                        f"({', '.join(sorted(primitives.GENERATORS))})")
         if prim["type"] not in primitives.GENERATORS:
             raise _err(path, f"{where}.primitive.type", f"must be one of "
-                       f"{', '.join(sorted(primitives.GENERATORS))}; got {_show(prim['type'])}")
+                       f"{', '.join(sorted(primitives.GENERATORS))}; got {show(prim['type'])}")
         for k, v in prim.items():
             if k == "type":
                 continue
             if isinstance(v, list):
-                [_number(x, path, f"{where}.primitive.{k}[{j}]") for j, x in enumerate(v)]
+                [number(x, path, f"{where}.primitive.{k}[{j}]") for j, x in enumerate(v)]
             else:
-                _number(v, path, f"{where}.primitive.{k}", non_negative=True)
+                number(v, path, f"{where}.primitive.{k}", non_negative=True)
         spec["primitive"] = prim
-    spec["kind"] = _choice(bd["kind"], KINDS, path, f"{where}.kind") if "kind" in bd else None
-    spec["scale"] = _number(bd.get("scale", 1.0), path, f"{where}.scale", positive=True)
+    spec["kind"] = choice(bd["kind"], KINDS, path, f"{where}.kind") if "kind" in bd else None
+    spec["scale"] = number(bd.get("scale", 1.0), path, f"{where}.scale", positive=True)
     spec["crop"] = None
     if "crop" in bd:
         c = bd["crop"]
         if not isinstance(c, list) or len(c) != 2:
-            raise _err(path, f"{where}.crop", f"must be [[x0, y0, z0], [x1, y1, z1]], got {_show(c)}")
-        lo, hi = _vec3(c[0], path, f"{where}.crop[0]"), _vec3(c[1], path, f"{where}.crop[1]")
+            raise _err(path, f"{where}.crop", f"must be [[x0, y0, z0], [x1, y1, z1]], got {show(c)}")
+        lo, hi = vec3(c[0], path, f"{where}.crop[0]"), vec3(c[1], path, f"{where}.crop[1]")
         if not (lo < hi).all():
             raise _err(path, f"{where}.crop", "must have its first corner below the second")
         spec["crop"] = (lo, hi)
@@ -225,19 +226,19 @@ def _body_spec(bd, i, base, path):
         value = bd.get(key, "off" if key == "alpha_u" else None)
         if isinstance(value, str) and value not in words:
             raise _err(path, f"{where}.{key}", f"must be a number or "
-                       f"{' or '.join(chr(34) + w + chr(34) for w in words)}, got {_show(value)}")
-        spec[key] = value if value in words else _number(value, path, f"{where}.{key}",
-                                                         positive=True)
-    spec["density"] = _number(bd.get("density", 1.0), path, f"{where}.density", positive=True)
-    spec["position"] = _vec3(bd.get("position", [0, 0, 0]), path, f"{where}.position")
+                       f"{' or '.join(chr(34) + w + chr(34) for w in words)}, got {show(value)}")
+        spec[key] = value if value in words else number(value, path, f"{where}.{key}",
+                                                        positive=True)
+    spec["density"] = number(bd.get("density", 1.0), path, f"{where}.density", positive=True)
+    spec["position"] = vec3(bd.get("position", [0, 0, 0]), path, f"{where}.position")
     spec["rotation"] = (_rotation(bd["rotation"], path, f"{where}.rotation") if "rotation" in bd
                         else np.eye(3))
-    spec["velocity"] = _vec3(bd.get("velocity", [0, 0, 0]), path, f"{where}.velocity")
-    spec["angular_velocity"] = _vec3(bd.get("angular_velocity", [0, 0, 0]), path,
-                                     f"{where}.angular_velocity")
+    spec["velocity"] = vec3(bd.get("velocity", [0, 0, 0]), path, f"{where}.velocity")
+    spec["angular_velocity"] = vec3(bd.get("angular_velocity", [0, 0, 0]), path,
+                                    f"{where}.angular_velocity")
     static = bd.get("static", False)
     if not isinstance(static, bool):
-        raise _err(path, f"{where}.static", f"must be true or false, got {_show(static)}")
+        raise _err(path, f"{where}.static", f"must be true or false, got {show(static)}")
     spec["static"] = static
     return spec
 
@@ -310,23 +311,23 @@ def load_simulation(path):
     try:
         if not isinstance(data, dict):
             raise _err(path, "the top level", "must be a JSON object")
-        _keys(data, _TOP, path, "the top level")
+        check_keys(data, _TOP, path, "the top level")
         for k in ("dt", "steps", "camera", "bodies"):
             if k not in data:
                 raise _err(path, "the top level", f"is missing the required key {k!r}")
-        dt = _number(data["dt"], path, "dt", positive=True)
-        steps = _number(data["steps"], path, "steps", positive=True, integer=True)
+        dt = number(data["dt"], path, "dt", positive=True)
+        steps = number(data["steps"], path, "steps", positive=True, integer=True)
         if steps > 10_000_000:
             raise _err(path, "steps", f"must be at most 10000000, got {steps}")
-        gravity = _vec3(data.get("gravity", [0, 0, -9.81]), path, "gravity")
-        beta = _number(data.get("beta", 0.5), path, "beta", non_negative=True)
-        constraint = _choice(data.get("constraint", "smooth"), ("smooth", "exact"), path,
-                             "constraint")
-        gap_tol = (_number(data["gap_tol"], path, "gap_tol", positive=True)
+        gravity = vec3(data.get("gravity", [0, 0, -9.81]), path, "gravity")
+        beta = number(data.get("beta", 0.5), path, "beta", non_negative=True)
+        constraint = choice(data.get("constraint", "smooth"), ("smooth", "exact"), path,
+                            "constraint")
+        gap_tol = (number(data["gap_tol"], path, "gap_tol", positive=True)
                    if "gap_tol" in data else None)
         name = data.get("name", os.path.splitext(os.path.basename(path))[0])
         if not isinstance(name, str):
-            raise _err(path, "name", f"must be a string, got {_show(name)}")
+            raise _err(path, "name", f"must be a string, got {show(name)}")
         if "description" in data and not isinstance(data["description"], str):
             raise _err(path, "description", "must be a string")
         camera = _camera(data["camera"], path)
@@ -334,7 +335,7 @@ def load_simulation(path):
             camera.every = max(1, steps // DEFAULT_FRAMES)
         bodies = data["bodies"]
         if not isinstance(bodies, list) or len(bodies) < 2:
-            raise _err(path, "bodies", f"must be a list of at least 2 bodies, got {_show(bodies)}")
+            raise _err(path, "bodies", f"must be a list of at least 2 bodies, got {show(bodies)}")
         base = os.path.dirname(os.path.abspath(path))
         specs = [_body_spec(bd, i, base, path) for i, bd in enumerate(bodies)]
         if all(s["static"] for s in specs):

@@ -102,7 +102,7 @@ def plot(results, path):
         ax.legend(loc="upper center", fontsize=8)
         ax2.legend(fontsize=8)
     fig.tight_layout()
-    from tracer.image import atomic_write
+    from tracer.outputs import atomic_write
 
     with atomic_write(path) as tmp:
         fig.savefig(tmp, format="png")

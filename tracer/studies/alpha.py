@@ -24,13 +24,14 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from tracer.cli import CLIError
-from tracer.studies import runner
-from tracer.studies.common import (REPO, TYPES, add_common, check_size, duration, field_of,
-                                   float_list, load_mesh, non_negative_beta, output_folder,
-                                   positive, unweighted_field, write_bytes, write_json,
-                                   write_text)
+from tracer import runner
+from tracer.outputs import (CLIError, check_size, float_list, non_negative, output_folder,
+                            positive, write_bytes, write_json, write_text)
+from tracer.runner import duration
+from tracer.studies.common import REPO, TYPES, add_common, field_of, load_mesh, unweighted_field
 from tracer.studies.plots import pyplot
+
+HELP = "the paper's alpha studies as image grids"
 
 STUDIES = ("underestimate", "exact-smooth", "weights", "metric", "attenuate")
 
@@ -116,8 +117,8 @@ def study_task(task):
 def run(args):
     """Run one alpha study (or all); returns the exit status (1 when a figure failed)."""
     sched, workers = runner.check_arguments(args)
-    size = check_size(args.size)
-    non_negative_beta(args.beta)
+    size = check_size(args.size, minimum=8)
+    non_negative(args.beta, "--beta")
     if args.alpha_u is not None:
         positive(args.alpha_u, "--alpha-u")
     alphas = float_list(args.alphas, "--alphas", positive=True) if args.alphas else None

@@ -30,11 +30,14 @@ from pathlib import Path
 
 import numpy as np
 
-from tracer.cli import CLIError
-from tracer.studies import runner
-from tracer.studies.common import (TYPES, add_common, beta_tag, cached_field, check_size, close,
-                                   duration, float_list, load_mesh, output_folder, parse_types,
-                                   positive, write_bytes, write_json)
+from tracer import runner
+from tracer.outputs import (CLIError, check_size, float_list, output_folder, positive,
+                            write_bytes, write_json)
+from tracer.runner import duration
+from tracer.studies.common import (TYPES, add_common, beta_tag, cached_field, close, load_mesh,
+                                   parse_types)
+
+HELP = "the paper's beta ablation: time and error vs beta"
 
 BETA_CSV = "beta_ablation.csv"
 BETA_PARAMS = "beta_params.json"
@@ -260,7 +263,7 @@ def run(args):
     tols = float_list(args.tols, "--tols", non_negative=True)
     grid_betas = float_list(args.grid_betas, "--grid-betas", non_negative=True)
     types = parse_types(args.types)
-    size = check_size(args.size)
+    size = check_size(args.size, minimum=8)
     if args.eps is not None:
         positive(args.eps, "--eps")
     out = output_folder(args.output or default_output(size))

@@ -17,12 +17,14 @@ import os
 
 import numpy as np
 
-from tracer.cli import CLIError
-from tracer.studies import runner
-from tracer.studies.common import (REPO, add_common, duration, file_stamp, load_mesh,
-                                   machine_info, non_negative_beta, output_folder, positive,
-                                   write_csv, write_json)
+from tracer import runner
+from tracer.outputs import (CLIError, at_least, non_negative, output_folder, positive, write_csv,
+                            write_json)
+from tracer.runner import duration, file_stamp
+from tracer.studies.common import REPO, add_common, load_mesh, machine_info
 from tracer.studies.plots import PAPER_BH
+
+HELP = "Barnes-Hut near/far switch discontinuity study"
 
 BH_FIELDS = ["trial", "sample", "x", "y", "z", "leaves", "d_hat", "dz_d_hat", "leaves_dbeta",
              "d_hat_dbeta", "discrepancy", "discrepancy_orig_units", "cosine", "kept"]
@@ -215,13 +217,10 @@ def run(args):
     alpha = positive(args.alpha, "--alpha")
     for name in ("iso", "start", "segment", "dbeta"):
         positive(getattr(args, name), f"--{name}")
-    beta = non_negative_beta(args.beta)
-    if args.trials < 1:
-        raise CLIError(f"--trials must be >= 1, got {args.trials}")
-    if args.samples < 2:
-        raise CLIError(f"--samples must be >= 2, got {args.samples}")
-    if args.max_steps < 1:
-        raise CLIError(f"--max-steps must be >= 1, got {args.max_steps}")
+    beta = non_negative(args.beta, "--beta")
+    at_least(args.trials, "--trials")
+    at_least(args.samples, "--samples", 2)
+    at_least(args.max_steps, "--max-steps")
     out = output_folder(args.output or os.path.join("renders", "ablation", "bh-switch"))
     products = [out / "bh_switch.csv", out / "bh_switch.json", out / "bh_switch.png"]
     for p in products:

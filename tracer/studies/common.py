@@ -1,15 +1,14 @@
-"""Helpers shared by the studies: argument parsing, mesh loading with a per-process cache,
-atomic CSV/JSON/text output and the machine description written into reports.
+"""Helpers shared by the studies: the data types, their ``--types`` and common options, mesh
+loading with a per-process cache, "weights off" fields, and the machine description written
+into reports. Option checks and atomic CSV/JSON/text output are in :mod:`tracer.outputs`, the
+task runner in :mod:`tracer.runner`.
 
 Everything here runs both in the process that drives a study and in Dask worker processes;
 nothing imports matplotlib or dask.
 """
 
 import copy
-import csv
 import functools
-import io
-import json
 import math
 import os
 import platform
@@ -18,7 +17,8 @@ from pathlib import Path
 
 import numpy as np
 
-from tracer.cli import CLIError
+from tracer.outputs import CLIError
+from tracer.runner import file_stamp
 
 #: repository root (``tracer/studies/../..``)
 REPO = Path(__file__).resolve().parents[2]
@@ -30,29 +30,6 @@ TYPE_LETTER = {"points": "v", "edges": "e", "triangles": "f"}
 
 
 # =============================================================================== arguments
-def float_list(text, name, *, non_negative=False, positive=False):
-    """Parse ``"0,0.1,0.5"`` into a list of floats (one-line errors)."""
-    vals = []
-    for part in str(text).split(","):
-        part = part.strip()
-        if not part:
-            continue
-        try:
-            v = float(part)
-        except ValueError:
-            raise CLIError(f"{name}: {part!r} is not a number") from None
-        if not math.isfinite(v):
-            raise CLIError(f"{name}: {part!r} is not finite")
-        if non_negative and v < 0:
-            raise CLIError(f"{name}: values must be >= 0, got {v:g}")
-        if positive and v <= 0:
-            raise CLIError(f"{name}: values must be > 0, got {v:g}")
-        vals.append(v)
-    if not vals:
-        raise CLIError(f"{name}: give at least one value (comma separated)")
-    return vals
-
-
 def parse_types(text):
     """``"v,edges,faces"`` -> ``["points", "edges", "triangles"]`` (one-line errors)."""
     out = []
@@ -71,32 +48,6 @@ def parse_types(text):
     return out
 
 
-def positive(value, name):
-    if not (math.isfinite(value) and value > 0):
-        raise CLIError(f"{name} must be a finite number > 0, got {value:g}")
-    return value
-
-
-def non_negative_beta(value, name="--beta"):
-    if not (math.isfinite(value) and value >= 0):
-        raise CLIError(f"{name} must be >= 0, got {value:g}")
-    return value
-
-
-def check_size(size):
-    if not 8 <= size <= 8192:
-        raise CLIError(f"--size must be between 8 and 8192 pixels, got {size}")
-    return size
-
-
-def output_folder(path):
-    """``Path(path)``, refusing an existing file that is not a folder."""
-    out = Path(path)
-    if out.exists() and not out.is_dir():
-        raise CLIError(f"output path exists and is not a folder: {out}")
-    return out
-
-
 def add_common(p):
     """``--threads`` and ``-q`` (every study)."""
     p.add_argument("--threads", type=int, help="numba threads of in-process work (default: all "
@@ -108,7 +59,7 @@ def add_common(p):
 # =============================================================================== meshes
 def load_mesh(path, kind=None):
     """Load a mesh file as a DataMesh (``kind`` as in ``DataMesh.as_kind``), one-line errors
-    (:class:`tracer.cli.CLIError`)."""
+    (:class:`tracer.outputs.CLIError`)."""
     from smoothdist import DataMesh, MeshRepairWarning
 
     path = os.fspath(path)
@@ -124,12 +75,6 @@ def load_mesh(path, kind=None):
     except (ValueError, OSError) as exc:
         msg = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
         raise CLIError(f"cannot use {path}: {msg}") from None
-
-
-def file_stamp(path):
-    """``(absolute path, mtime_ns, size)``: a cache key that changes when the file does."""
-    st = os.stat(path)
-    return (os.path.abspath(path), st.st_mtime_ns, st.st_size)
 
 
 @functools.lru_cache(maxsize=8)
@@ -171,73 +116,13 @@ def unweighted_field(field):
     return out
 
 
-# =============================================================================== output
+# =============================================================================== reports
 def fmt(v, digits=4):
     if v is None or (isinstance(v, float) and not math.isfinite(v)):
         return ""
     if isinstance(v, (int, np.integer)):
         return str(int(v))
     return f"{float(v):.{digits}g}"
-
-
-def csv_value(v):
-    """A CSV cell: floats with 8 significant digits, NaN/None as empty."""
-    if isinstance(v, (float, np.floating)):
-        return fmt(float(v), 8)
-    if v is None:
-        return ""
-    return v
-
-
-def write_csv(path, fields, rows):
-    """Atomically (re)write a whole CSV file."""
-    from tracer.image import atomic_write
-
-    buf = io.StringIO()
-    w = csv.DictWriter(buf, fieldnames=fields, extrasaction="ignore", lineterminator="\n")
-    w.writeheader()
-    for r in rows:
-        w.writerow({k: csv_value(v) for k, v in r.items()})
-    with atomic_write(path) as tmp:
-        with open(tmp, "w", encoding="utf-8", newline="") as fh:
-            fh.write(buf.getvalue())
-            fh.flush()
-            os.fsync(fh.fileno())
-
-
-def write_json(path, data):
-    from tracer.image import atomic_write
-
-    with atomic_write(path) as tmp:
-        with open(tmp, "w", encoding="utf-8") as fh:
-            json.dump(data, fh, indent=2, default=_json_default)
-            fh.write("\n")
-
-
-def _json_default(o):
-    if isinstance(o, np.integer):
-        return int(o)
-    if isinstance(o, np.floating):
-        return float(o)
-    if isinstance(o, np.ndarray):
-        return o.tolist()
-    if isinstance(o, Path):
-        return str(o)
-    raise TypeError(type(o).__name__)
-
-
-def write_text(path, text):
-    from tracer.image import atomic_write
-
-    with atomic_write(path) as tmp:
-        Path(tmp).write_text(text, encoding="utf-8")
-
-
-def write_bytes(path, data):
-    from tracer.image import atomic_write
-
-    with atomic_write(path) as tmp:
-        Path(tmp).write_bytes(data)
 
 
 def machine_info():
@@ -257,12 +142,3 @@ def beta_tag(beta):
 
 def close(a, b, rel=1e-9):
     return abs(float(a) - float(b)) <= rel * max(1.0, abs(float(a)), abs(float(b)))
-
-
-def duration(s):
-    """``12.3s``, ``4.5min`` or ``1.25h``."""
-    if s < 90:
-        return f"{s:.1f}s"
-    if s < 5400:
-        return f"{s / 60:.1f}min"
-    return f"{s / 3600:.2f}h"

@@ -20,11 +20,13 @@ from pathlib import Path
 
 import numpy as np
 
-from tracer.cli import CLIError
-from tracer.studies import runner
-from tracer.studies.common import (REPO, TYPE_LETTER, TYPES, add_common, duration, file_stamp,
-                                   machine_info, non_negative_beta, output_folder, parse_types,
-                                   positive, write_json)
+from tracer import runner
+from tracer.outputs import CLIError, non_negative, output_folder, positive, write_json
+from tracer.runner import duration, file_stamp
+from tracer.studies.common import (REPO, TYPE_LETTER, TYPES, add_common, machine_info,
+                                   parse_types)
+
+HELP = "the paper's Thingi10K grid benchmark over a folder"
 
 MESH_EXTS = (".obj", ".off", ".stl", ".ply")
 BENCH_CSV = "bench_grid.csv"
@@ -181,7 +183,7 @@ def run(args):
         raise CLIError(f"--grid must be between 1 and 400, got {args.grid}")
     alpha = positive(args.alpha, "--alpha")
     alpha_u = positive(args.alpha_u, "--alpha-u") if args.alpha_u is not None else alpha
-    non_negative_beta(args.beta)
+    non_negative(args.beta, "--beta")
     types = parse_types(args.types)
     out = output_folder(args.output or os.path.join(
         "renders", "ablation", f"grid-{folder.resolve().name}"))

@@ -19,8 +19,9 @@ from pathlib import Path
 
 import numpy as np
 
+from tracer.outputs import atomic_write, write_text
 from tracer.studies.common import (TYPE_COLORS, TYPE_LETTER, TYPES, beta_tag, close, fmt,
-                                   machine_info, write_text)
+                                   machine_info)
 
 #: the authors' isosurface error at each beta (bunny, alpha 200, alpha_U 1200, their
 #: ``beta_error_test``), in % of the bbox diagonal for points / edges / triangles. Errors do
@@ -62,8 +63,6 @@ def pyplot():
 
 def savefig(fig, path, dpi=100, max_bytes=195_000):
     """Save a matplotlib figure as PNG atomically (see :func:`png_bytes`)."""
-    from tracer.image import atomic_write
-
     data = png_bytes(fig, dpi, max_bytes)
     with atomic_write(path) as tmp:
         Path(tmp).write_bytes(data)

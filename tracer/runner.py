@@ -1,7 +1,9 @@
-"""Running a study's independent tasks: in-process, on a local Dask cluster, or on an existing one.
+"""Running independent tasks: in-process, on a local Dask cluster, or on an existing one.
 
-A study is a list of tasks (small picklable dicts, each with a unique ``"key"`` and an a-priori
-``"weight"`` for the ETA) and a module-level function ``fn(task) -> record`` (a small dict).
+The studies (:mod:`tracer.studies`) and the frames of ``tracer simulate`` / ``tracer animate``
+(:mod:`tracer.sim.frames`) run through this module. A study is a list of tasks (small picklable
+dicts, each with a unique ``"key"`` and an a-priori ``"weight"`` for the ETA) and a
+module-level function ``fn(task) -> record`` (a small dict).
 :func:`run_tasks` runs ``fn`` on every task and hands each record to the study's ``on_result``
 callback in this process as soon as it arrives, in completion order; the study appends it to
 its :class:`TaskLog` (one CSV row per task), so an interrupted study resumes without redoing the
@@ -20,7 +22,11 @@ Where the tasks run (``--scheduler``):
 A task that raises is retried once; a task whose worker process dies is re-run elsewhere by
 Dask's scheduler (up to ``distributed.scheduler.allowed-failures`` times). A task that still fails
 is reported to ``on_failure`` with a one-line error and the others go on; a task that raises
-:class:`tracer.cli.CLIError` (bad input) stops the study.
+:class:`tracer.outputs.CLIError` (bad input) stops the study.
+
+A worker loads what a task names by path (a mesh, a trajectory) and caches what it builds from
+it (a field, a scene) under the file's :func:`file_stamp`, so that only the small task dict
+travels through the scheduler.
 """
 
 import inspect
@@ -32,8 +38,7 @@ import sys
 import time
 import uuid
 
-from tracer.cli import CLIError
-from tracer.studies.common import csv_value, duration
+from tracer.outputs import CLIError, csv_value, write_csv
 
 #: below this estimated serial cost (seconds) ``--scheduler local`` runs in-process
 LOCAL_MIN_SECONDS = 10.0
@@ -54,6 +59,21 @@ def add_arguments(p):
     p.add_argument("--workers", type=int, metavar="N",
                    help="worker processes of the local cluster (default: one per core)")
     return p
+
+
+def file_stamp(path):
+    """``(absolute path, mtime_ns, size)``: a cache key that changes when the file does."""
+    st = os.stat(path)
+    return (os.path.abspath(path), st.st_mtime_ns, st.st_size)
+
+
+def duration(s):
+    """``12.3s``, ``4.5min`` or ``1.25h``."""
+    if s < 90:
+        return f"{s:.1f}s"
+    if s < 5400:
+        return f"{s / 60:.1f}min"
+    return f"{s / 3600:.2f}h"
 
 
 def cpu_count():
@@ -97,7 +117,7 @@ def check_reachable(address, timeout=CONNECT_TIMEOUT):
     try:
         reply = asyncio.run(asyncio.wait_for(identity(), timeout + 1.0))
     except ImportError:
-        raise CLIError("dask.distributed is not installed (pip install 'distributed'); use "
+        raise CLIError("dask.distributed is not installed (pip install 'smoothdist[studies]'); use "
                        "--scheduler serial") from None
     except KeyboardInterrupt:
         raise
@@ -168,8 +188,6 @@ class TaskLog:
 
     def start(self, rows=()):
         """(Re)write the file with ``rows`` (atomically); later rows are appended."""
-        from tracer.studies.common import write_csv
-
         write_csv(self.path, self.fields, list(rows))
 
     def append(self, row):
@@ -421,7 +439,7 @@ def connect(mode, workers=None, timeout=CONNECT_TIMEOUT):
     try:
         from distributed import Client, LocalCluster
     except ImportError:
-        raise CLIError("dask.distributed is not installed (pip install 'distributed'); use "
+        raise CLIError("dask.distributed is not installed (pip install 'smoothdist[studies]'); use "
                        "--scheduler serial") from None
     if mode == "local":
         n = workers or cpu_count()

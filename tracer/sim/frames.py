@@ -1,12 +1,14 @@
 """The frames of a simulated trajectory as independent tasks (``tracer simulate`` / ``animate``).
 
+* :func:`add_frame_arguments` and :func:`check_frame_arguments`: the options both commands
+  have for the frames (which frames, their size, where they render);
 * :func:`list_tasks`: one task per rendered frame, a small dict (simulation file and trajectory
   by path, frame number, output PNG path, image size);
 * :func:`frame_task`: renders one frame with every body at its pose and writes its PNG
   (atomically); returns a small record. A worker process loads the simulation and the
   trajectory by path and builds every body's tree **once** (cached, keyed by path, modification
   time and size), so only the task dict travels through the scheduler;
-* :func:`render_movie`: runs the tasks through :func:`tracer.studies.runner.run_tasks` (in this
+* :func:`render_movie`: runs the tasks through :func:`tracer.runner.run_tasks` (in this
   process, on a local Dask cluster or on an existing one) and reduces the PNGs, in frame order,
   to an MP4 and a GIF.
 
@@ -20,7 +22,29 @@ import os
 
 import numpy as np
 
-from tracer.studies.common import file_stamp
+from tracer import runner
+from tracer.outputs import CLIError, at_least, check_size
+from tracer.runner import file_stamp
+
+
+def add_frame_arguments(p, unit):
+    """Options shared by simulate and animate: which frames, their size, where they render
+    (``unit`` is what ``--every`` counts: ``step`` or ``frame``)."""
+    p.add_argument("--every", type=int, help=f"render every N-th {unit} (default: the file's)")
+    p.add_argument("--size", nargs=2, type=int, metavar=("W", "H"),
+                   help="frame size in pixels (default: the file's camera size)")
+    p.add_argument("--overwrite", action="store_true", help="replace existing outputs")
+    p.add_argument("--threads", type=int, help="numba threads (default: all cores)")
+    runner.add_arguments(p)
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
+
+
+def check_frame_arguments(args):
+    """Check ``--every``, ``--size``, ``--scheduler`` and ``--workers`` before any work (one-line
+    :class:`~tracer.outputs.CLIError`); returns ``(scheduler, workers)``."""
+    at_least(args.every, "--every")
+    check_size(args.size)
+    return runner.check_arguments(args)
 
 
 def list_tasks(sim_path, traj_path, frames_dir, indices, size=None):
@@ -70,25 +94,23 @@ def frame_task(task):
 def render_movie(sim_path, traj_path, frames_dir, mp4, gif, *, n_frames, every, fps, size=None,
                  scheduler="local", workers=None, quiet=False):
     """Render every ``every``-th frame (and the last) of the trajectory to ``frames_dir``, then
-    write ``mp4`` and ``gif``. Returns the runner's :class:`~tracer.studies.runner.RunInfo`.
+    write ``mp4`` and ``gif``. Returns the runner's :class:`~tracer.runner.RunInfo`.
 
-    Raises :class:`tracer.cli.CLIError` when a frame could not be rendered (nothing of the
+    Raises :class:`tracer.outputs.CLIError` when a frame could not be rendered (nothing of the
     movie is written then)."""
     from PIL import Image
 
-    from tracer.cli import CLIError
     from tracer.sim.animate import frame_indices, write_gif, write_mp4
-    from tracer.studies.runner import run_tasks
 
     tasks = list_tasks(sim_path, traj_path, frames_dir, frame_indices(n_frames, every), size)
     os.makedirs(frames_dir, exist_ok=True)
     done = {0: frame_task(tasks[0])}
     failed = []
-    info = run_tasks(frame_task, tasks[1:],
-                     on_result=lambda t, r: done.__setitem__(t["index"], r),
-                     on_failure=lambda t, err: failed.append((t["key"], err)),
-                     scheduler=scheduler, workers=workers, label="render frames",
-                     estimate=done[0]["seconds"] * (len(tasks) - 1), quiet=quiet)
+    info = runner.run_tasks(frame_task, tasks[1:],
+                            on_result=lambda t, r: done.__setitem__(t["index"], r),
+                            on_failure=lambda t, err: failed.append((t["key"], err)),
+                            scheduler=scheduler, workers=workers, label="render frames",
+                            estimate=done[0]["seconds"] * (len(tasks) - 1), quiet=quiet)
     if failed:
         raise CLIError(f"{len(failed)} frame(s) could not be rendered; first {failed[0][0]}: "
                        f"{failed[0][1]}")

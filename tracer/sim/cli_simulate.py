@@ -1,0 +1,84 @@
+"""``tracer simulate SIM.json -o DIR``: simulate, then render the trajectory to a movie.
+
+Writes ``DIR/trajectory.npz`` (see :mod:`tracer.sim.run`) and, unless ``--no-render``,
+``DIR/frames/frame_NNNNN.png``, ``DIR/<name>.mp4`` and ``DIR/<name>.gif``. Frames are
+independent tasks (:mod:`tracer.sim.frames`): ``--scheduler``/``--workers`` run them on a Dask
+cluster as the studies do (a short movie stays in this process). ``tracer animate``
+(:mod:`tracer.sim.cli_animate`) renders an existing trajectory again.
+
+Bad input (a malformed or invalid simulation file, bodies that overlap at the start, an
+existing output without ``--overwrite``/``--resume``) is one ``error: ...`` line, exit status 2,
+and nothing is written.
+"""
+
+import os
+import sys
+
+from tracer.outputs import CLIError, at_least
+from tracer.sim.frames import add_frame_arguments, check_frame_arguments
+
+HELP = "simulate rigid bodies with one smooth-distance constraint"
+
+
+def add_arguments(p):
+    """Arguments of ``tracer simulate``."""
+    p.add_argument("sim", metavar="SIM.json", help="simulation file (see tracer/sim/simfile.py)")
+    p.add_argument("-o", "--out", metavar="DIR", required=True, help="output folder")
+    p.add_argument("--steps", type=int, help="number of steps (default: the file's)")
+    p.add_argument("--no-render", action="store_true", help="write the trajectory only")
+    p.add_argument("--resume", action="store_true",
+                   help="continue DIR/trajectory.npz from its last frame")
+    add_frame_arguments(p, "step")
+
+
+def run(args):
+    """Simulate (and render); returns the exit status."""
+    from tracer.render import ProgressBar
+    from tracer.sim import run
+    from tracer.sim.frames import render_movie
+    from tracer.sim.simfile import load_simulation
+
+    at_least(args.steps, "--steps")
+    scheduler, workers = check_frame_arguments(args)
+    out = args.out
+    traj = os.path.join(out, "trajectory.npz")
+    if os.path.exists(out) and not os.path.isdir(out):
+        raise CLIError(f"output path is a file, not a folder: {out}")
+    if os.path.exists(traj) and not (args.resume or args.overwrite):
+        raise CLIError(f"output exists: {traj} (pass --resume to continue it or --overwrite)")
+    if args.resume and not os.path.exists(traj):
+        raise CLIError(f"--resume: nothing to resume, {traj} does not exist")
+    sim = load_simulation(args.sim)
+    built = run.build(sim)
+    con = built[0]
+    if not args.resume:
+        run.check_initial_state(sim, con)
+    created = not os.path.isdir(out)
+    os.makedirs(out, exist_ok=True)
+    try:
+        bar = None if args.quiet else ProgressBar("simulate")
+        frames = run.simulate(sim, traj, steps=args.steps, resume=args.resume,
+                              overwrite=args.overwrite or args.resume, progress=bar,
+                              built=built)
+    except BaseException:
+        if created and not os.listdir(out):
+            os.rmdir(out)
+        raise
+    d = min(frames["min_exact_distance"])
+    if not args.quiet:
+        gap = run.closest_gap(sim, con, frames["centers"][-1], frames["rotations"][-1])
+        print(f"wrote {traj}: {len(frames['time'])} frames, minimum exact distance {d:.4g}; "
+              f"{run.describe_gap(gap)}", file=sys.stderr)
+    if args.no_render:
+        return 0
+    data = run.load_trajectory(traj)
+    mp4 = os.path.join(out, f"{sim.name}.mp4")
+    gif = os.path.join(out, f"{sim.name}.gif")
+    render_movie(args.sim, traj, os.path.join(out, "frames"), mp4, gif,
+                 n_frames=len(data["time"]),
+                 every=sim.camera.every if args.every is None else args.every,
+                 fps=sim.camera.fps, size=args.size, scheduler=scheduler, workers=workers,
+                 quiet=args.quiet)
+    if not args.quiet:
+        print(f"wrote {os.path.join(out, 'frames')}/, {mp4}, {gif}", file=sys.stderr)
+    return 0
