@@ -157,7 +157,8 @@ def test_edge_max_and_range_match_dense_sampling(n0, n1):
     assert abs(lo - min(1.0 / n0, 1.0 / n1)) < 1e-12
 
 
-def test_edge_max_digest_example():
+def test_edge_max_authors_example():
+    """docs/authors-code.md §3: end valences 1 and 5 give a maximum of 1.11."""
     c = edge_weight_coefficients(1, 5)
     wmax = edge_weight_max(c)
     assert abs(wmax - 1.11) < 5e-3
@@ -308,7 +309,7 @@ def test_triangle_manifold_range(ve, tri_coeffs):
 
 
 def test_triangle_nonmanifold_dips_below_one_over_v(tri_coeffs):
-    # documented behaviour of the paper's construction (digest table)
+    # documented behaviour of the paper's construction (docs/authors-code.md §3 table)
     for ve, expected in [((2, 1), 0.443), ((3, 3), 0.186), ((4, 3), 0.123), ((6, 3), 0.055)]:
         lo, _ = triangle_weight_range(tri_coeffs[ve])
         assert abs(lo - expected) < 2e-3

@@ -1,0 +1,115 @@
+"""Dependencies: the library needs numpy and numba only; the tracer's parts are extras.
+
+Each check runs in a fresh interpreter in which the packages an install without the extra would
+lack cannot be imported (a meta-path finder refuses them), so a module that imports one of them
+at the top, or on the way of a command that should not need it, fails here.
+"""
+
+import subprocess
+import sys
+import textwrap
+import tomllib
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+#: what each extra adds (the top-level module names)
+TRACER = ("PIL", "trimesh")
+SIM = ("scipy", "imageio", "imageio_ffmpeg")
+STUDIES = ("matplotlib", "distributed", "dask", "pyvista", "vtk", "vtkmodules")
+
+PRELUDE = textwrap.dedent("""\
+    import sys
+    BLOCKED = set({blocked!r})
+
+    class _Refuse:
+        def find_spec(self, name, path=None, target=None):
+            if name.split(".")[0] in BLOCKED:
+                raise ModuleNotFoundError(f"No module named {{name!r}}", name=name)
+            return None
+
+    sys.meta_path.insert(0, _Refuse())
+""")
+
+
+def _run(code, blocked, *args):
+    script = PRELUDE.format(blocked=tuple(blocked)) + textwrap.dedent(code)
+    return subprocess.run([sys.executable, "-c", script, *args], cwd=ROOT, capture_output=True,
+                          text=True, timeout=600)
+
+
+def test_the_library_alone_needs_numpy_and_numba():
+    meta = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
+    names = sorted(d.split(">")[0].split("=")[0].split("<")[0].strip()
+                   for d in meta["dependencies"])
+    assert names == ["numba", "numpy"]
+    extras = meta["optional-dependencies"]
+    assert {"tracer", "sim", "studies", "all", "test"} <= set(extras)
+    # the README's command installs the test extra, which holds everything
+    assert any("all" in d for d in extras["test"])
+
+
+def test_smoothdist_works_without_any_extra():
+    p = _run("""
+        import numpy as np
+        import smoothdist as sd
+        V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1.0]])
+        F = np.array([[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]])
+        d, g = sd.smooth_distance([[0.2, 0.2, 2.0]], V, F, alpha=10.0)
+        e, _ = sd.exact_distance([[0.2, 0.2, 2.0]], V, F)
+        m = sd.load_mesh("scenes/data/bunny.off")
+        c = sd.load_mesh("scenes/data/curves/trefoil.obj")
+        md = sd.mesh_distance(V, F, V + [0, 0, 3.0], F, alpha=10.0, alpha_q=10.0)[0]
+        f = sd.SmoothDistanceField(m.as_kind("points"))
+        f.auto_alpha()
+        bad = [k for k in sys.modules if k.split(".")[0] in BLOCKED]
+        assert not bad, bad
+        print("ok", float(d[0]) <= float(e[0]), m.num_primitives > 0, md > 0)
+    """, TRACER + SIM + STUDIES)
+    assert p.returncode == 0, p.stderr
+    assert p.stdout.split() == ["ok", "True", "True", "True"]
+
+
+def test_a_ply_file_without_trimesh_says_what_to_install():
+    p = _run("""
+        import smoothdist as sd
+        try:
+            sd.load_mesh("scenes/data/pointclouds/scan_guardian_lion_points.ply")
+        except ImportError as exc:
+            print("ImportError:", exc)
+    """, TRACER + SIM + STUDIES)
+    assert p.returncode == 0, p.stderr
+    assert "ImportError:" in p.stdout and "pip install" in p.stdout and "trimesh" in p.stdout
+
+
+def test_tracer_render_needs_only_the_tracer_extra(tmp_path):
+    out = tmp_path / "b.png"
+    p = _run("""
+        import runpy
+        sys.argv = ["tracer"] + sys.argv[1:]
+        runpy.run_module("tracer", run_name="__main__")
+    """, SIM + STUDIES, "render", "scenes/bunny_points.json", "--size", "16", "16",
+        "-o", str(out), "-q")
+    assert p.returncode == 0, p.stderr
+    assert out.stat().st_size > 0
+
+
+@pytest.mark.parametrize("argv, missing", [
+    (["render", "scenes/bunny_points.json", "--size", "8", "8", "-o", "{tmp}/x.png"], "PIL"),
+    (["compare", "scenes/torus.json", "--grid", "8", "--size", "8", "8", "-o", "{tmp}/c"],
+     "pyvista"),
+    (["bench-grid", "-o", "{tmp}/g", "--grid", "4", "--scheduler", "tcp://127.0.0.1:9"],
+     "distributed"),
+])
+def test_a_missing_extra_is_one_line_naming_the_package(tmp_path, argv, missing):
+    p = _run("""
+        import runpy
+        sys.argv = ["tracer"] + sys.argv[1:]
+        runpy.run_module("tracer", run_name="__main__")
+    """, (missing,), *[a.replace("{tmp}", str(tmp_path)) for a in argv])
+    lines = p.stderr.strip().splitlines()
+    assert p.returncode == 2, p.stderr
+    assert len(lines) == 1 and lines[0].startswith("error: "), p.stderr
+    assert "pip install" in lines[0] and "smoothdist[" in lines[0], lines[0]
+    assert "Traceback" not in p.stderr
