@@ -90,6 +90,7 @@ def no_cache_dir(monkeypatch):
     monkeypatch.setattr(numba.core.config, "CACHE_DIR", "")
 
 
+@pytest.mark.slow
 def test_without_the_guard_an_edit_of_a_callee_is_missed(tmp_path):
     pkg = make_toy(tmp_path)
     assert run_toy(pkg, use_guard=False)["value"] == 101
@@ -101,6 +102,7 @@ def test_without_the_guard_an_edit_of_a_callee_is_missed(tmp_path):
     assert stale == {"value": 101, "hits": 1}
 
 
+@pytest.mark.slow
 def test_with_the_guard_an_edit_of_a_callee_is_picked_up(tmp_path, no_cache_dir):
     pkg = make_toy(tmp_path)
     first = run_toy(pkg, use_guard=True)
@@ -118,6 +120,7 @@ def test_with_the_guard_an_edit_of_a_callee_is_picked_up(tmp_path, no_cache_dir)
     assert run_toy(pkg, use_guard=True) == {"value": 122, "hits": 1}
 
 
+@pytest.mark.slow
 def test_the_guard_clears_numba_cache_dir_when_it_is_set(tmp_path, monkeypatch):
     pkg = make_toy(tmp_path)
     root = tmp_path / "numba-cache"
@@ -249,6 +252,7 @@ def test_guard_once_runs_once_and_can_be_switched_off(monkeypatch):
     cache_guard.guard_once()  # warns, does not raise
 
 
+@pytest.mark.slow
 def test_serial_runs_do_not_load_the_parallel_kernels(tmp_path):
     """``SMOOTHDIST_PARALLEL=0`` after a parallel run compiles serial kernels: numba's cache
     index does not key on ``parallel=``, so a cached parallel kernel would be loaded."""

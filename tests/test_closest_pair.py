@@ -168,6 +168,7 @@ def box_points(lo, hi, res=12):
 
 
 @pytest.mark.parametrize("kq", KINDS)
+@pytest.mark.slow
 def test_box_lower_bound_never_overestimates(kq, rng):
     """delta <= dense-sampled primitive-box distance; exact where the paper's test is exact."""
     E = np.zeros(9)

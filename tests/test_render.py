@@ -118,6 +118,7 @@ def fib_field():
     return SmoothDistanceField(fibonacci_sphere(FIB_N, FIB_R))
 
 
+@pytest.mark.slow
 def test_smooth_point_sphere_is_the_analytic_disc(fib_field):
     """2000 points on the unit sphere, alpha 20, beta 0: at this alpha the blobs merge into a
     closed sphere-like surface whose radius r_iso we find on the axis with the batch query
@@ -289,6 +290,7 @@ def test_mixed_scene_renders(scene_cache):
     assert s["mean_steps"] >= 1 and s["mean_leaves"] > 0
 
 
+@pytest.mark.slow
 def test_barnes_hut_only_grows_the_surface(scene_cache):
     """beta > 0 only lowers d_hat, so the beta = 0 hit mask is inside the beta = 0.5 one."""
     exact = render(scene_cache("bunny_points", beta=0.0))
@@ -448,6 +450,7 @@ def _cli(*args, cwd):
                           capture_output=True, text=True, timeout=300, env=env)
 
 
+@pytest.mark.slow
 def test_cli_render_outputs_and_overwrite(tmp_path):
     from PIL import Image
 

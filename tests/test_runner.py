@@ -107,6 +107,7 @@ def test_choose_mode():
     assert runner.choose_mode("tcp://h:8786", None, 1, 0.0) == "tcp://h:8786"
 
 
+@pytest.mark.slow
 def test_scheduler_argument_errors(tmp_path, capsys):
     out = tmp_path / "o"
     assert main(["bench-grid", str(TESTS / "data"), "-o", str(out), "--scheduler",
@@ -123,6 +124,7 @@ def test_scheduler_argument_errors(tmp_path, capsys):
     assert not out.exists()  # nothing was created
 
 
+@pytest.mark.slow
 def test_silent_scheduler_gives_up_after_the_timeout():
     """A server that accepts but never answers: the check gives up with 'no answer'."""
     pytest.importorskip("distributed")
@@ -147,6 +149,7 @@ def cluster():
         runner._shutdown(client, cl)
 
 
+@pytest.mark.slow
 def test_dask_rows_equal_serial_rows(cluster, tmp_path):
     serial, dask = tmp_path / "serial", tmp_path / "dask"
     assert main(["ablate-beta", str(OCTOPUS), "-o", str(serial), *BETA_ARGS,
@@ -169,7 +172,7 @@ def test_dask_needs_no_default_client_and_keeps_the_users(cluster, monkeypatch):
     """``python -m tracer ... --scheduler ADDRESS`` runs in a process with no Dask client: the
     runner's own client is not made the default (a user's stays the default), so it must be
     used explicitly. Here the process's default clients are hidden, as in that process
-    (``No clients found`` before the fix; tests/test_dask_cluster.py runs the real thing)."""
+    (``No clients found`` before the fix; tests/test_runner_cluster.py runs the real thing)."""
     import weakref
 
     import distributed
@@ -209,6 +212,7 @@ def test_dask_killed_worker_and_failing_task(cluster, tmp_path):
     assert "told to fail" in failed["t2"]
 
 
+@pytest.mark.slow
 def test_dask_grid_broken_mesh_and_resume(cluster, tmp_path):
     src = tmp_path / "meshes"
     src.mkdir()

@@ -96,6 +96,7 @@ def test_simulate_renders_frames_mp4_and_gif_and_animate_rerenders(tmp_path):
 
 
 
+@pytest.mark.slow
 def test_animate_frames_on_a_dask_cluster_equal_the_serial_frames(tmp_path):
     """Frames are independent tasks: a 2-worker local cluster renders the same PNGs."""
     pytest.importorskip("distributed")

@@ -36,6 +36,7 @@ def beta_run(tmp_path_factory):
 
 
 # ----------------------------------------------------------------------------- ablate-beta
+@pytest.mark.slow
 def test_beta_outputs_exist(beta_run):
     for name in ("beta_ablation.csv", "beta_params.json", "beta_time.png", "beta_error.png",
                  "beta_grid.png", "beta_diff.png", "report.md", "cache/depth_points_beta0.npy",
@@ -109,6 +110,7 @@ def test_beta_existing_folder_needs_overwrite(beta_run, capsys):
     assert err.startswith("error:") and "--overwrite" in err and len(err.strip().splitlines()) == 1
 
 
+@pytest.mark.slow
 def test_beta_resume_skips_rows(beta_run, tmp_path, monkeypatch):
     import shutil
 
@@ -193,6 +195,7 @@ def test_unweighted_field_is_naive_logsumexp(cube):
     np.testing.assert_allclose(d, ref, rtol=1e-10, atol=1e-12)
 
 
+@pytest.mark.slow
 def test_ablate_alpha_all_studies(tmp_path):
     out = tmp_path / "alpha"
     assert main(["ablate-alpha", "all", "-o", str(out), "--mesh", str(OCTOPUS), "--size", "24",
@@ -304,6 +307,7 @@ def test_bh_switch_summary(tmp_path):
 
 
 # ----------------------------------------------------------------------------- defaults
+@pytest.mark.slow
 def test_default_output_folders(tmp_path, monkeypatch):
     """The README's commands need no -o: results go under renders/ablation/ (cwd-relative)."""
     monkeypatch.chdir(tmp_path)

@@ -28,7 +28,7 @@ from tracer.cli import main
 from tracer.image import load_png
 from tracer.render import camera_of, render, scene_arrays
 from tracer.scene import SceneError, load_scene, scene_from_field
-from test_tol import BUNNY, ROOT
+from test_query_tol import BUNNY, ROOT
 
 SCENES = ROOT / "scenes"
 
@@ -79,6 +79,7 @@ def test_over_relaxed_steps_against_plain(bunny_points):
 
 
 @pytest.mark.parametrize("case", ["bunny_points", "bunny_triangles", "octopus", "tol", "beta0"])
+@pytest.mark.slow
 def test_newton_steps_against_plain(request, bunny_points, case):
     if case == "octopus":
         field = SmoothDistanceField(request.getfixturevalue("octopus"))
@@ -122,6 +123,7 @@ def test_newton_steps_against_plain(request, bunny_points, case):
     assert err_fast <= err_plain
 
 
+@pytest.mark.slow
 def test_trace_pixels_equals_render(bunny_points):
     scene = _scene(bunny_points, size=24)
     full = render(scene, cone=False)
@@ -253,6 +255,7 @@ def test_cli_no_newton_equals_the_scene_key(tmp_path, capsys):
     assert f"else {march.NEWTON:g})" in " ".join(capsys.readouterr().out.split())
 
 
+@pytest.mark.slow
 def test_cli_newton_with_a_mesh_file(tmp_path):
     """A mesh file on the command line: --no-newton and --tol reach the scene, and
     --save-scene writes them."""
@@ -359,6 +362,7 @@ def _thin_shell_cases():
 
 
 @pytest.mark.parametrize("index", [0, 1, 2])
+@pytest.mark.slow
 def test_newton_steps_never_step_over_a_thin_shell(index):
     from tracer.from_mesh import mesh_scene
 

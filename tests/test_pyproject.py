@@ -50,6 +50,7 @@ def test_the_library_alone_needs_numpy_and_numba():
     assert any("all" in d for d in extras["test"])
 
 
+@pytest.mark.slow
 def test_smoothdist_works_without_any_extra():
     p = _run("""
         import numpy as np
@@ -102,6 +103,7 @@ def test_tracer_render_needs_only_the_tracer_extra(tmp_path):
     (["bench-grid", "-o", "{tmp}/g", "--grid", "4", "--scheduler", "tcp://127.0.0.1:9"],
      "distributed"),
 ])
+@pytest.mark.slow
 def test_a_missing_extra_is_one_line_naming_the_package(tmp_path, argv, missing):
     p = _run("""
         import runpy

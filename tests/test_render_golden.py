@@ -14,9 +14,9 @@ the baseline and their difference heat map are written to ``renders/failed/<test
 Baselines are never written implicitly. To create or update them (after checking that the
 change is intended)::
 
-    python -m tests.test_image_regression --regen               # all of them
-    python -m tests.test_image_regression --regen torus-smooth  # some
-    TRACER_REGEN_BASELINES=1 python -m pytest tests/test_image_regression.py
+    python -m tests.test_render_golden --regen               # all of them
+    python -m tests.test_render_golden --regen torus-smooth  # some
+    TRACER_REGEN_BASELINES=1 python -m pytest tests/test_render_golden.py
 
 (with the environment variable set, the golden tests write their baseline and are reported as
 skipped.)
@@ -38,7 +38,7 @@ import pytest
 
 TESTS = Path(__file__).resolve().parent
 ROOT = TESTS.parent
-if __name__ == "__main__" and str(ROOT) not in sys.path:  # python tests/test_image_regression.py
+if __name__ == "__main__" and str(ROOT) not in sys.path:  # python tests/test_render_golden.py
     sys.path.insert(0, str(ROOT))
 
 from tracer.image import load_png, save_png  # noqa: E402
@@ -50,7 +50,7 @@ SIZE = 64
 BASELINE_DIR = TESTS / "baseline"
 FAILED_ROOT = ROOT / "renders" / "failed"
 REGEN_ENV = "TRACER_REGEN_BASELINES"
-REGEN_COMMAND = "python -m tests.test_image_regression --regen"
+REGEN_COMMAND = "python -m tests.test_render_golden --regen"
 
 
 class Tolerance(NamedTuple):
@@ -357,6 +357,7 @@ PYVISTA_CASES = [("bunny_points", 0.97, 3.0, 3e-3), ("two_objects", 0.97, 3.0, 3
 
 @pytest.mark.parametrize("name,min_iou,max_angle,max_depth", PYVISTA_CASES,
                          ids=[c[0] for c in PYVISTA_CASES])
+@pytest.mark.slow
 def test_pyvista_isosurface_matches_tracer(compare_render, name, min_iou, max_angle, max_depth):
     scene = load_small(ROOT / "scenes" / f"{name}.json")
     m = compare_render.compare_scene(scene, grid=64).metrics
@@ -494,7 +495,7 @@ def test_compare_cli_writes_outputs(compare_render, tmp_path, capsys):
     assert m["grid"] == 24 and m["size"] == [32, 32]
     for f in ("tracer.png", "pyvista.png", "diff.png"):
         assert load_png(out / f).shape == (32, 32, 3)
-    sbs = load_png(out / "side_by_side.png")  # titled panels + colour bar (test_first_minutes)
+    sbs = load_png(out / "side_by_side.png")  # titled panels + colour bar (test_from_mesh)
     assert sbs.ndim == 3 and sbs.shape[0] > 32 and sbs.shape[1] > 3 * 32
     assert main(["compare", scene, "-o", str(out), "--grid", "24", "--size", "32", "32"]) == 2
     assert "exists" in capsys.readouterr().err
@@ -505,7 +506,7 @@ def main(argv=None):
     import argparse
 
     parser = argparse.ArgumentParser(
-        prog="python -m tests.test_image_regression",
+        prog="python -m tests.test_render_golden",
         description="Regenerate the golden images in tests/baseline/ (never done implicitly).")
     parser.add_argument("--regen", action="store_true", help="render and write the baselines")
     parser.add_argument("names", nargs="*", metavar="CASE",

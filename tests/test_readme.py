@@ -107,11 +107,12 @@ NOT_RUN = {
         "it needs the authors' renderer built outside the repository "
         "(../shared/tools/authors-bench); the same script without --authors-bin is run",
     "python -m tracer bench-grid MESH_DIR -o OUT_DIR --scheduler tcp://host:8786 # an existing cluster":
-        "it needs an existing Dask cluster; tests/test_dask_cluster.py starts one with the "
+        "it needs an existing Dask cluster; tests/test_runner_cluster.py starts one with the "
         "dask command line and runs this command against it",
     "bash .ci/run": "it runs this test suite (CI runs it)",
-    "python -m tests.test_image_regression --regen [CASE ...]":
-        "it rewrites the repository's baselines; tests/test_image_regression.py tests --regen",
+    'bash .ci/run -m "not slow"': "it runs the quick part of this test suite",
+    "python -m tests.test_render_golden --regen [CASE ...]":
+        "it rewrites the repository's baselines; tests/test_render_golden.py tests --regen",
 }
 
 MENTIONS = {"python -m tracer", "python -m tracer render"}
@@ -178,7 +179,7 @@ def concrete(cmd):
             tokens[i] = PLACEHOLDERS[tok]
         elif re.fullmatch(r"[A-Z][A-Z_]+(\.[a-z]+)?", tok):
             raise AssertionError(f"README command {cmd!r} has a placeholder {tok!r}: add it to "
-                                 "PLACEHOLDERS in tests/test_readme_commands.py")
+                                 "PLACEHOLDERS in tests/test_readme.py")
     return " ".join(tokens)
 
 

@@ -180,6 +180,7 @@ def test_leaf_sizes(octopus, leaf_size, rng):
 
 
 @pytest.mark.parametrize("name", ["octopus", "trefoil"])
+@pytest.mark.slow
 def test_real_local_meshes(request, name, rng):
     mesh = request.getfixturevalue(name)
     field = SmoothDistanceField(mesh)
@@ -191,6 +192,7 @@ def test_real_local_meshes(request, name, rng):
 
 @pytest.mark.parametrize("path", ["scenes/data/bunny.off",
                                   "scenes/data/curves/capillary_networks.obj"])
+@pytest.mark.slow
 def test_repository_meshes(path, rng):
     """The paper's bunny (6,966 triangles) and a curve network from ``scenes/data``."""
     mesh = DataMesh.load(ROOT / path)

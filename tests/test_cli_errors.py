@@ -1073,6 +1073,7 @@ def test_one_primitive_renders(prim):
     assert res.hit.any()  # the exact-mode offset surface (radius 1/alpha) is in view
 
 
+@pytest.mark.slow
 def test_million_points_build_and_render():
     """1e6 points: the field builds and a 16x16 render is finite (about 10 s)."""
     V = np.random.default_rng(0).random((1_000_000, 3))
@@ -1143,6 +1144,7 @@ def _wait_for(proc, needle, timeout):
 
 
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+@pytest.mark.slow
 def test_interrupted_render_leaves_no_file(tmp_path, sig):
     out = tmp_path / "out"
     cmd = [sys.executable, "-m", "tracer", "render", str(LIDAR), "-o", str(out / "big.png"),

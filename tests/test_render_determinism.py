@@ -77,6 +77,7 @@ def test_scene_loading_is_deterministic():
 
 @needs_two_threads
 @pytest.mark.parametrize("beta", [0.0, 0.5])
+@pytest.mark.slow
 def test_queries_are_bit_identical_across_threads(restore_threads, beta):
     r = np.random.default_rng(7)
     V = r.random((3000, 3))

@@ -258,6 +258,7 @@ def _mean_offset(res):
 
 
 @pytest.mark.parametrize("path,kind", SHIPPED)
+@pytest.mark.slow
 def test_auto_alpha_offset_is_within_two_percent_of_the_diagonal(path, kind):
     for view in ("front", "iso"):
         res = tracer.render_mesh(DATA / path, kind=kind, size=(40, 40), view=view)
@@ -281,6 +282,7 @@ def test_auto_alpha_on_a_unit_icosphere(kind):
 @pytest.mark.parametrize("name,data", [
     ("icosphere-4", None), ("bunny", "bunny.off"), ("torus", "meshes/torus.obj"),
     ("octopus", "meshes/octopus_low.obj")])
+@pytest.mark.slow
 def test_auto_alpha_point_clouds_close(name, data):
     """Vertices of closed meshes as point clouds: at alpha="auto" every triangle centroid
     (the point of the sampled surface farthest from the samples) is inside the surface, so
@@ -303,6 +305,7 @@ def test_auto_alpha_point_clouds_close(name, data):
         assert mean_offset <= 0.02 * field.diagonal
 
 
+@pytest.mark.slow
 def test_auto_alpha_dense_clouds_close():
     """The scanned clouds: the midpoint of a sampled point and its nearest neighbour is inside
     the surface (neighbouring blobs merge), for at least 99 % of the samples (a stray
@@ -402,6 +405,7 @@ def test_compare_panels_are_titled_with_a_colour_bar():
     assert (top.sum(axis=2) < 200).sum() > 20
 
 
+@pytest.mark.slow
 def test_array_subclasses_and_lists_are_arrays(queries):
     """trimesh's ``TrackedArray`` and pyvista's ``pyvista_ndarray`` are numpy arrays, lists are
     array-likes: every entry point takes them as ``V, F`` (issue 22: they were refused as
@@ -507,6 +511,7 @@ def test_cli_up_axis(tmp_path, capsys):
     assert "--up applies to a --view" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_auto_alpha_closes_a_random_surface_sample():
     """3,000 points of ``trimesh.sample.sample_surface`` on an ellipsoid: random samples have
     gaps 3-4 median spacings wide, and "auto" capped at 1 / median spacing left holes there
@@ -583,6 +588,7 @@ def _torus_ripple(field, alpha, alpha_u):
     return (t.max() - t.min()) / t.mean()
 
 
+@pytest.mark.slow
 def test_alpha_u_off_evens_out_a_coarse_tessellation(tmp_path, capsys):
     """The pleats "auto" shows on a coarse triangle mesh (issue 22): without attenuation
     (``alpha_u="off"``, ``--alpha-u off``: alpha_U = alpha) the paper's weights even the

@@ -114,6 +114,7 @@ def test_matches_naive_real_local(request, name, rng):
 
 
 @pytest.mark.parametrize("key", sorted(SHARED))
+@pytest.mark.slow
 def test_matches_naive_shared(shared_data, key, rng):
     mesh = load_shared(shared_data, key)
     n = SHARED[key][1]
@@ -231,6 +232,7 @@ def check_bounds(mesh, Q, alphas, alpha_us, betas):
 
 
 @pytest.mark.parametrize("name", BOUND_MESHES)
+@pytest.mark.slow
 def test_conservative_bounds(request, zoo, name, rng):
     mesh = zoo[name] if name in zoo else request.getfixturevalue(name)
     Q = bound_queries(mesh, rng, n=2000 if name in zoo else 1200)
@@ -240,6 +242,7 @@ def test_conservative_bounds(request, zoo, name, rng):
 
 
 @pytest.mark.parametrize("key", ["bunny", "creeper", "capillary"])
+@pytest.mark.slow
 def test_conservative_bounds_shared(shared_data, key, rng):
     mesh = load_shared(shared_data, key)
     check_bounds(mesh, bound_queries(mesh, rng, n=1000 if key == "bunny" else 2000),

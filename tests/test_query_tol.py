@@ -33,7 +33,7 @@ from smoothdist import DataMesh, SmoothDistanceField
 from smoothdist.bvh import concatenate_trees
 from smoothdist.kernels import new_stack
 from smoothdist.query import smooth_distance_point_tol
-from test_fuzz import build, meshes, queries
+from test_query_fuzz import build, meshes, queries
 
 ROOT = Path(__file__).resolve().parents[1]
 BUNNY = ROOT / "scenes" / "data" / "bunny.off"
@@ -247,6 +247,7 @@ def test_scene_key_tol(tmp_path):
             load_scene(_scene_file(tmp_path, tol=bad))
 
 
+@pytest.mark.slow
 def test_cli_tol(tmp_path):
     env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
     scene = _scene_file(tmp_path)

@@ -67,6 +67,7 @@ def near_placement(md, R, direction, gap=0.05):
 
 @pytest.mark.parametrize("dname", list(DATA))
 @pytest.mark.parametrize("qname", list(QUERY))
+@pytest.mark.slow
 def test_brute_force_beta0(dname, qname):
     """beta = 0 BVH result == numpy face-pair brute force, to 1e-9 relative."""
     data = DATA[dname]
@@ -250,6 +251,7 @@ def test_rigid_transform_equals_moved_query():
 
 
 @pytest.mark.parametrize("qname", list(QUERY))
+@pytest.mark.slow
 def test_parallel_and_serial_kernels_agree(qname, monkeypatch):
     """Small query meshes run on the calling thread; the prange kernels give the same bits."""
     import importlib

@@ -63,6 +63,7 @@ def bunny():
 @pytest.mark.parametrize("beta,alpha_u,gradient", [(0.5, 1200.0, "metric"),
                                                    (0.0, None, "metric"),
                                                    (0.5, None, "exact")])
+@pytest.mark.slow
 def test_lean_path_equals_general_path(bunny, kind, beta, alpha_u, gradient):
     field = SmoothDistanceField(bunny.as_kind(kind))
     scene = scene_from_field(field, alpha=200.0, alpha_u=alpha_u, beta=beta, width=24,
@@ -104,6 +105,7 @@ def test_posed_scenes_keep_the_general_path():
 
 @pytest.mark.parametrize("name", ["bunny_triangles", "two_objects", "capillary_exact",
                                   "trefoil"])
+@pytest.mark.slow
 def test_threaded_tiles_equal_the_prange_kernel(name):
     scene = load_scene(SCENES / f"{name}.json", SIZE)
     ref = trace(scene, kernel="rows")

@@ -54,6 +54,7 @@ def test_place_reaches_the_gap():
     assert md.exact(t=t)[0] == pytest.approx(0.02, abs=1e-9)
 
 
+@pytest.mark.slow
 def test_benchmark_cli_rejects_bad_arguments():
     for args in (["--case", "nope"], ["--repeat", "0"], ["--tol", "x"], ["--tol", "-1"]):
         r = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "bench_mesh_distance.py"),
