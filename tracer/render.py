@@ -65,6 +65,16 @@ class RenderResult(NamedTuple):
             return save_npy(path, self.depth, overwrite=overwrite)
         raise ValueError(f"save: path must end in .png or .npy, got {path}")
 
+    def _repr_png_(self):
+        """The image as PNG bytes: a render shows itself in Jupyter."""
+        import io
+
+        from PIL import Image
+
+        buf = io.BytesIO()
+        Image.fromarray(np.ascontiguousarray(self.rgb)).save(buf, format="PNG")
+        return buf.getvalue()
+
     def summary(self):
         """Dict of scalar statistics: size, seconds, hits, mean steps and leaves per pixel."""
         H, W = self.hit.shape
