@@ -196,15 +196,15 @@ def closest_gap(sim, con, centers, rotations):
         R, t = p.relative(X, Rs)
         d = float(p.md.exact(R, t)[0])
         if best is None or d < best[0]:
-            best = (d, p.i, p.j)
+            best = (d, p.i, p.j, getattr(p.md, "field", None))
     if best is None:
         return None
-    d, i, j = best
+    d, i, j, data_field = best
     offsets = []
-    for k in (i, j):
+    for k, field in ((i, data_field), (j, None)):  # the data body's field is the pair's own
         b = sim.bodies[k]
-        offsets.append(SmoothDistanceField(b.mesh).offset_estimate(b.alpha, alpha_u=b.alpha_u,
-                                                                   beta=sim.beta))
+        field = field or SmoothDistanceField(b.mesh)
+        offsets.append(field.offset_estimate(b.alpha, alpha_u=b.alpha_u, beta=sim.beta))
     return {"a": sim.bodies[i].name, "b": sim.bodies[j].name, "exact": d,
             "drawn": tuple(offsets), "visible": d - sum(offsets),
             "thickness": min(thickness(sim.bodies[k].mesh) for k in (i, j))}

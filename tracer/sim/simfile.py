@@ -272,10 +272,10 @@ def _build_body(spec, i, path, mesh, length):
         alpha, alpha_u = spec["alpha"], spec["alpha_u"]
         if alpha == "auto":
             alpha = auto_alpha(mesh, length, "auto" if alpha_u == "auto" else "off")
-        if alpha_u == "auto":
-            from smoothdist import SmoothDistanceField
+        if alpha_u == "auto":  # SmoothDistanceField.auto_alpha_u, without building a tree
+            from smoothdist.field import AUTO_ALPHA_U_FACTOR
 
-            alpha_u = SmoothDistanceField(mesh).auto_alpha_u(alpha)
+            alpha_u = AUTO_ALPHA_U_FACTOR * alpha
         elif alpha_u == "off":
             alpha_u = alpha
         return Body.from_mesh(mesh, name=spec["name"], alpha=alpha,
