@@ -82,7 +82,7 @@ class TreeData(NamedTuple):
 
 
 def primitive_table(mesh):
-    """Gather ``(kind, pts, wc, pwhi, A)`` for every primitive of a :class:`DataMesh`.
+    """Gather ``(kind, pts, wc, pwhi, A)`` for every primitive of a :class:`~smoothdist.DataMesh`.
 
     ``wc`` holds the coefficients of the raw weight ``A w~`` (already multiplied by ``A``).
     """
@@ -113,7 +113,7 @@ def primitive_table(mesh):
 
 
 def build_tree(mesh, leaf_size=1, progress=None):
-    """Build the :class:`TreeData` of a :class:`DataMesh`.
+    """Build the :class:`TreeData` of a :class:`~smoothdist.DataMesh`.
 
     Parameters
     ----------

@@ -8,12 +8,11 @@ constant along the normal of the feature it is clamped to (paper Eq. 7, Fig. "pe
 
 Feature codes
 -------------
-segment ``(a, b)``, parameter ``t`` (point = a + t (b - a)):
-    0 interior, 1 clamped to ``a``, 2 clamped to ``b``.
-triangle ``(a, b, c)``, barycentrics ``(s, t)`` (point = a + s (b - a) + t (c - a)),
-so ``s`` weighs vertex 1 and ``t`` vertex 2 (the paper's phi^1, phi^2):
-    0 interior, 1 edge ab (t = 0), 2 edge ac (s = 0), 3 edge bc (s + t = 1),
-    4 vertex a, 5 vertex b, 6 vertex c.
+* segment ``(a, b)``, parameter ``t`` (point = a + t (b - a)): 0 interior, 1 clamped to
+  ``a``, 2 clamped to ``b``.
+* triangle ``(a, b, c)``, barycentrics ``(s, t)`` (point = a + s (b - a) + t (c - a)), so
+  ``s`` weighs vertex 1 and ``t`` vertex 2 (the paper's phi^1, phi^2): 0 interior, 1 edge ab
+  (t = 0), 2 edge ac (s = 0), 3 edge bc (s + t = 1), 4 vertex a, 5 vertex b, 6 vertex c.
 """
 
 import numba

@@ -73,7 +73,7 @@ class SmoothDistanceField:
     Parameters
     ----------
     mesh : DataMesh, (n, 3) array_like, or a trimesh / pyvista object
-        The data mesh, or vertex positions (then ``F`` as in :class:`DataMesh`), or a
+        The data mesh, or vertex positions (then ``F`` as in :class:`~smoothdist.DataMesh`), or a
         ``trimesh.Trimesh`` / ``PointCloud`` / ``path.Path3D`` or ``pyvista.PolyData``
         (converted by :func:`smoothdist.mesh.as_data_mesh`).
     F : (m, k) array_like of int, optional
@@ -121,7 +121,7 @@ class SmoothDistanceField:
         Built on first access and kept (binned SAH, leaves of up to 4 primitives; about
         1.5 us and 170 bytes per triangle, 70 per point, see :mod:`smoothdist.exact_query`).
         :meth:`exact_distance` builds it once its calls have asked for
-        :data:`EXACT_TREE_AFTER` queries per primitive (the build then pays for itself) and
+        ``EXACT_TREE_AFTER`` queries per primitive (the build then pays for itself) and
         searches the smooth-distance tree with :func:`smoothdist.query.exact_distance_point`
         until then. The smooth kernels never use it.
         """
@@ -184,7 +184,7 @@ class SmoothDistanceField:
         spacing is at most 0.5 % of the diagonal (scans; not the vertices of a coarse mesh).
 
         How: the smooth surface sits where the exact distance ``d`` equals the gap
-        ``d - d_hat``, which varies slowly near the data. We place :data:`AUTO_PROBES` probe
+        ``d - d_hat``, which varies slowly near the data. We place ``AUTO_PROBES`` probe
         points at exact distance ``AUTO_OFFSET x diagonal`` from random spots on random
         primitives and take the smallest alpha at which their mean gap is at most that
         distance (:meth:`offset_estimate`; a few secant steps in ``log alpha``, since the
@@ -437,7 +437,7 @@ class SmoothDistanceField:
         return (*out, QueryStats(nodes, leaves)) if return_stats else out
 
     def kernel_args(self, alpha, beta=0.5, alpha_u=None, gradient="metric"):
-        """Validated scalars for :func:`smoothdist.kernels.smooth_distance_point`.
+        """Validated scalars for :func:`smoothdist.query.smooth_distance_point`.
 
         Returns ``(alpha, beta, S, wgs)``.
         """

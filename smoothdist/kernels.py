@@ -14,7 +14,7 @@ tolerance-controlled pruning (``tol > 0``; same scratch arrays; ``DEFAULT_TOL`` 
 Your own kernels take the package's compilation policy from here, so that they are compiled
 (and cached) like these: decorate them ``@numba.njit(**NJIT)``, or
 ``@numba.njit(**NJIT_PARALLEL)`` for batch loops over ``prange``; ``PARALLEL`` is false under
-``SMOOTHDIST_PARALLEL=0`` (see :mod:`smoothdist._config`).
+``SMOOTHDIST_PARALLEL=0`` (see ``smoothdist/_config.py``).
 """
 
 import numpy as np

@@ -155,7 +155,7 @@ class MeshDistance:
     alpha_u : float, optional
         Weight attenuation threshold (None: no attenuation).
     gradient : {"metric", "exact"}
-        Weight-gradient convention, as in :meth:`SmoothDistanceField.smooth_distance`:
+        Weight-gradient convention, as in :meth:`~smoothdist.SmoothDistanceField.smooth_distance`:
         the paper's alpha-metric, or the exact derivative of the value.
     leaf_size : int
         BVH leaf size when the tree is built here.

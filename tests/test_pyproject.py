@@ -45,7 +45,7 @@ def test_the_library_alone_needs_numpy_and_numba():
                    for d in meta["dependencies"])
     assert names == ["numba", "numpy"]
     extras = meta["optional-dependencies"]
-    assert {"tracer", "sim", "studies", "all", "test"} <= set(extras)
+    assert {"tracer", "sim", "studies", "all", "docs", "test"} <= set(extras)
     # the README's command installs the test extra, which holds everything
     assert any("all" in d for d in extras["test"])
 

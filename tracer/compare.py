@@ -563,7 +563,7 @@ PANEL_TITLES = ("sphere tracer", "pyvista marching cubes", "difference")
 
 
 def labelled_side_by_side(tracer_rgb, pyvista_rgb, diff, vmax=DIFF_VMAX, panel_px=256):
-    """``side_by_side.png``: the three images titled :data:`PANEL_TITLES`, with a colour bar
+    """``side_by_side.png``: the three images titled ``PANEL_TITLES``, with a colour bar
     for the difference (``|depth difference| / diagonal`` in ``inferno``, 0 to ``vmax``) and
     a legend for the pixels only one side hit. Returns an ``(H', W', 3)`` uint8 array.
 

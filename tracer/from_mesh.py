@@ -1,4 +1,4 @@
-"""From a user's mesh to an image in one call: :func:`render_mesh` and :func:`mesh_scene`.
+"""From a user's mesh to an image in one call: :func:`~tracer.render_mesh` and :func:`~tracer.mesh_scene`.
 
 ``tracer.render_mesh(mesh)`` takes a mesh file path, numpy ``(V, F)`` arrays, a
 ``trimesh.Trimesh`` / ``PointCloud`` / ``path.Path3D``, a ``pyvista.PolyData`` or a
@@ -52,7 +52,7 @@ def guess_up(mesh):
 
 
 def resolve_up(mesh, up):
-    """``up`` checked (``"x"``, ``"y"``, ``"z"``), or :func:`guess_up` for ``"auto"`` / None."""
+    """``up`` checked (``"x"``, ``"y"``, ``"z"``), or :func:`~tracer.from_mesh.guess_up` for ``"auto"`` / None."""
     from tracer.camera import UP_AXES
 
     if up is None or up == "auto":
@@ -89,7 +89,7 @@ def mesh_scene(mesh, F=None, *, kind=None, alpha="auto", alpha_u="auto", beta=0.
         region the surface can occupy (the data's vertices grown by the largest possible
         inflation; :func:`tracer.camera.frame_points`).
     up : {"auto", "x", "y", "z"}
-        The data's up axis for ``view``. ``"auto"`` (:func:`guess_up`): z for STL and PLY
+        The data's up axis for ``view``. ``"auto"`` (:func:`~tracer.from_mesh.guess_up`): z for STL and PLY
         files and for trimesh / pyvista objects, y otherwise (OBJ, OFF, arrays).
     camera : (origin, dest, up), optional
         An explicit camera instead of ``view``.

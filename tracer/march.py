@@ -1,9 +1,9 @@
 """Sphere-tracing kernels: march camera rays against a scene's smooth (or exact-offset) distance.
 
-A scene is one :class:`smoothdist.kernels.TreeData` *forest* (the objects' trees concatenated by
+A scene is one :class:`smoothdist.bvh.TreeData` *forest* (the objects' trees concatenated by
 ``smoothdist.kernels.concatenate_trees``), the root node of each object ``roots (k,) int64``,
 a ``(k, P_COLUMNS)`` float64 parameter table ``params``, one row per object, the scene's
-``mode`` (:data:`MODE_SMOOTH` or :data:`MODE_EXACT`) and its ``tol``: one scalar for the whole
+``mode`` (``MODE_SMOOTH`` or ``MODE_EXACT``) and its ``tol``: one scalar for the whole
 scene, the tolerance-controlled pruning of every object (0 = off, the default
 ``smoothdist.kernels.DEFAULT_TOL``; see ``smoothdist.kernels.smooth_distance_point_tol``).
 The columns of ``params`` (built by ``tracer.render.scene_arrays``; the kernels read them by
@@ -18,7 +18,7 @@ column              index   meaning
 :data:`P_WGS`       3       weight-gradient scale (``1/alpha**2`` metric, ``1/alpha`` exact)
 :data:`P_OFFSET`    4       exact-offset mode: the object's distance is ``exact - offset``
 :data:`P_R`         5-13    posed tables only: rotation ``R``, row-major 3x3
-:data:`P_T`         14-16   posed tables only: translation ``t``
+``P_T``             14-16   posed tables only: translation ``t``
 =================== ======= =============================================================
 
 An unposed table has :data:`P_COLUMNS` (5) columns; a posed one :data:`P_COLUMNS_POSED` (17):
@@ -55,6 +55,7 @@ P_ALPHA, P_BETA, P_S, P_WGS, P_OFFSET = 0, 1, 2, 3, 4
 P_COLUMNS = 5
 #: posed tables: ``R`` (row-major 3x3) in columns ``P_R .. P_R + 8``, ``t`` in ``P_T .. P_T + 2``
 P_R = P_COLUMNS
+#: first column of the translation ``t`` in a posed table
 P_T = P_R + 9
 #: columns of a posed table
 P_COLUMNS_POSED = P_T + 3
@@ -323,7 +324,7 @@ def march_ray(tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, lo, hi, ep
     ``relax`` x the previous step (cheaper evaluations far from the surface; 0: never).
 
     ``t_min``: a depth before which the ray is known not to meet the surface (the cone pass
-    of :func:`_render_tile`); the march starts at ``max(box entry, t_min)``.
+    of ``_render_tile``); the march starts at ``max(box entry, t_min)``.
 
     ``newton >= 0`` (scene units, see :func:`newton_distance`): once ``d <= newton``, the ray
     takes Newton steps on ``d(t)`` along the ray, ``h = d / -(g . dir)`` capped at
@@ -629,7 +630,7 @@ def render_tiles(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, ro
     Serial and ``nogil``: ``tracer.render`` runs it from a few Python threads that take
     chunks of tiles as they finish (the tiles, hence the pixels, are exactly those of
     ``render_rows``). Without ``prange`` numba compiles the render in seconds less. The tree
-    and parameters are passed down as borrowed views (:func:`_borrowed`), as ``prange``
+    and parameters are passed down as borrowed views (``_borrowed``), as ``prange``
     would.
     """
     W, ntx, n, stride = _tile_grid(cam, row0, row1)

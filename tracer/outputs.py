@@ -1,6 +1,6 @@
 """What every ``tracer`` command shares: its error class, option checks and output files.
 
-* :class:`CLIError`: bad input, reported by :func:`tracer.cli.main` as one ``error: ...`` line
+* :class:`~tracer.errors.CLIError`: bad input, reported by :func:`tracer.cli.main` as one ``error: ...`` line
   with exit status 2;
 * option checks with one-line errors naming the option: :func:`positive`,
   :func:`non_negative`, :func:`at_least`, :func:`float_list` and :func:`check_size` (one pixel
@@ -19,6 +19,7 @@ import math
 import os
 from contextlib import contextmanager
 from pathlib import Path
+from tracer.errors import CLIError  # noqa: F401  (defined there; imported from here too)
 
 __all__ = [
     "CLIError",
@@ -40,24 +41,20 @@ __all__ = [
 ]
 
 
-class CLIError(Exception):
-    """A user-facing error: printed as one line, exit status 2."""
-
-
 # =============================================================================== options
 #: largest image side, in pixels, of the commands' ``--size`` options checked here
 MAX_SIDE = 8192
 
 
 def positive(value, name):
-    """``value`` if it is a finite number > 0; else a :class:`CLIError` naming ``name``."""
+    """``value`` if it is a finite number > 0; else a :class:`~tracer.errors.CLIError` naming ``name``."""
     if not (math.isfinite(value) and value > 0):
         raise CLIError(f"{name} must be a finite number > 0, got {value:g}")
     return value
 
 
 def non_negative(value, name):
-    """``value`` if it is a finite number >= 0; else a :class:`CLIError` naming ``name``."""
+    """``value`` if it is a finite number >= 0; else a :class:`~tracer.errors.CLIError` naming ``name``."""
     if not (math.isfinite(value) and value >= 0):
         raise CLIError(f"{name} must be >= 0, got {value:g}")
     return value

@@ -14,15 +14,14 @@ from tracer import march
 from tracer.camera import look_at
 from tracer.shading import (load_matcap, shade_headlight, shade_matcap, shade_normals,
                             view_normals)
-
-
-class RenderError(ValueError):
-    """A scene that cannot be rendered as asked (e.g. camera inside the surface)."""
+from tracer.errors import RenderError  # noqa: F401  (defined there; imported from here too)
 
 
 class RenderResult(NamedTuple):
     """Everything one render produces. Images are ``(H, W, ...)``, row 0 at the top.
 
+    Attributes
+    ----------
     rgb : (H, W, 3) uint8
     hit : (H, W) bool
     depth : (H, W) float32

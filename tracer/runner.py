@@ -22,7 +22,7 @@ Where the tasks run (``--scheduler``):
 A task that raises is retried once; a task whose worker process dies is re-run elsewhere by
 Dask's scheduler (up to ``distributed.scheduler.allowed-failures`` times). A task that still fails
 is reported to ``on_failure`` with a one-line error and the others go on; a task that raises
-:class:`tracer.outputs.CLIError` (bad input) stops the study.
+:class:`tracer.errors.CLIError` (bad input) stops the study.
 
 A worker loads what a task names by path (a mesh, a trajectory) and caches what it builds from
 it (a field, a scene) under the file's :func:`file_stamp`, so that only the small task dict
@@ -98,7 +98,7 @@ def check_arguments(args):
 
 def check_reachable(address, timeout=CONNECT_TIMEOUT):
     """Fail fast, before a study creates any output, when no Dask scheduler answers at
-    ``address``: one-line :class:`CLIError` after at most about ``timeout`` seconds."""
+    ``address``: one-line :class:`~tracer.errors.CLIError` after at most about ``timeout`` seconds."""
     import asyncio
 
     scheme, host, port = _split_address(address)
@@ -435,7 +435,7 @@ def run_tasks(fn, tasks, *, on_result, on_failure=None, scheduler="local", worke
 
 def connect(mode, workers=None, timeout=CONNECT_TIMEOUT):
     """``(client, cluster)``: a LocalCluster (``mode == "local"``) or a client of the scheduler
-    at the address ``mode`` (cluster None). One-line :class:`CLIError` when it cannot be had."""
+    at the address ``mode`` (cluster None). One-line :class:`~tracer.errors.CLIError` when it cannot be had."""
     try:
         from distributed import Client, LocalCluster
     except ImportError:

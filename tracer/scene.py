@@ -30,7 +30,7 @@ what this loader accepts.
 Relative paths resolve against the scene file's folder.
 
 Validation: :func:`load_scene` checks every key, value, camera and referenced file before it
-reads any mesh, and raises :class:`SceneError` (a ``ValueError``) with a one-line message
+reads any mesh, and raises :class:`~tracer.errors.SceneError` (a ``ValueError``) with a one-line message
 ``<scene file>: <key> <problem>``. Limits: images up to 64 megapixels, ``max_steps`` up to
 1e6, scene files up to 16 MiB, coordinates up to 1e50 in absolute value. When the data has
 no extent (a single point) the default ``eps`` is ``1e-4 x`` the surface's size
@@ -370,7 +370,7 @@ def _part_mesh(ps, path):
 
 
 def merge_meshes(meshes, name="mixed"):
-    """Concatenate several :class:`DataMesh` into one mixed mesh over a shared vertex array."""
+    """Concatenate several :class:`~smoothdist.DataMesh` into one mixed mesh over a shared vertex array."""
     V, P, E, T = [], [], [], []
     off = 0
     for m in meshes:

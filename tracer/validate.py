@@ -2,12 +2,12 @@
 
 Each check takes the file's ``path`` and ``where``, the place of the value in the file (a key
 such as ``camera.origin`` or ``objects[0].alpha``, or a command-line flag that overrides it),
-and raises :class:`SceneError` (a ``ValueError``) with the message
+and raises :class:`~tracer.errors.SceneError` (a ``ValueError``) with the message
 ``<file name>: <where> <problem>`` (:func:`file_error`). :func:`read_json` reads a file into a
 dict with one-line errors for a missing, unreadable, binary, empty, oversized or malformed file.
 
-:mod:`tracer.scene` and :mod:`tracer.sim.simfile` (whose :class:`~tracer.sim.simfile.SimFileError`
-is a :class:`SceneError`) validate their files with these.
+:mod:`tracer.scene` and :mod:`tracer.sim.simfile` (whose :class:`~tracer.errors.SimFileError`
+is a :class:`~tracer.errors.SceneError`) validate their files with these.
 """
 
 import json
@@ -16,6 +16,7 @@ import numbers
 import os
 
 import numpy as np
+from tracer.errors import SceneError  # noqa: F401  (defined there; imported from here too)
 
 __all__ = ["SceneError", "MAX_JSON_BYTES", "file_error", "show", "json_type", "number", "vec3",
            "choice", "check_keys", "resolve_path", "read_json"]
@@ -24,13 +25,8 @@ __all__ = ["SceneError", "MAX_JSON_BYTES", "file_error", "show", "json_type", "n
 MAX_JSON_BYTES = 16 * 1024 * 1024
 
 
-class SceneError(ValueError):
-    """A scene file (or another JSON input file) that cannot be used; the message names the
-    file and the bad key."""
-
-
 def file_error(path, where, msg):
-    """The :class:`SceneError` ``<file name>: <where> <msg>`` (to raise)."""
+    """The :class:`~tracer.errors.SceneError` ``<file name>: <where> <msg>`` (to raise)."""
     return SceneError(f"{os.path.basename(path)}: {where} {msg}")
 
 
@@ -108,7 +104,7 @@ def resolve_path(base, p, path, where):
 
 
 def read_json(path, what="scene"):
-    """Parse a JSON file into Python values, with one-line :class:`SceneError` messages for a
+    """Parse a JSON file into Python values, with one-line :class:`~tracer.errors.SceneError` messages for a
     file that cannot be read or parsed; ``what`` names the kind of file in them (``"scene
     file not found: ..."``)."""
     path = os.fspath(path)

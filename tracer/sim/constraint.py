@@ -93,7 +93,7 @@ class ContactConstraint:
     factory : callable, optional
         ``factory(data_field, query_mesh, *, alpha, alpha_q, beta, alpha_u, gradient)`` returning
         an object
-        with ``__call__(R, t)`` and ``exact(R, t)`` -> ``(d, G)`` (the :class:`MeshDistance`
+        with ``__call__(R, t)`` and ``exact(R, t)`` -> ``(d, G)`` (the :class:`~smoothdist.MeshDistance`
         contract). Default: :func:`mesh_distance_factory`.
     """
 

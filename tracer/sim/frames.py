@@ -41,7 +41,7 @@ def add_frame_arguments(p, unit):
 
 def check_frame_arguments(args):
     """Check ``--every``, ``--size``, ``--scheduler`` and ``--workers`` before any work (one-line
-    :class:`~tracer.outputs.CLIError`); returns ``(scheduler, workers)``."""
+    :class:`~tracer.errors.CLIError`); returns ``(scheduler, workers)``."""
     at_least(args.every, "--every")
     check_size(args.size)
     return runner.check_arguments(args)
@@ -96,7 +96,7 @@ def render_movie(sim_path, traj_path, frames_dir, mp4, gif, *, n_frames, every, 
     """Render every ``every``-th frame (and the last) of the trajectory to ``frames_dir``, then
     write ``mp4`` and ``gif``. Returns the runner's :class:`~tracer.runner.RunInfo`.
 
-    Raises :class:`tracer.outputs.CLIError` when a frame could not be rendered (nothing of the
+    Raises :class:`tracer.errors.CLIError` when a frame could not be rendered (nothing of the
     movie is written then)."""
     from PIL import Image
 

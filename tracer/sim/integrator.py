@@ -24,7 +24,7 @@ moving bodies before the solve, so the interior-point tolerances are lengths
 (:mod:`tracer.sim.ipm`):
 
 * ``mu0 = z_lin max(c_t, 10 gap_tol)`` and ``mu_min = z_lin gap_tol`` with ``z_lin`` the contact
-  force of the linearised problem (:meth:`Integrator._barrier_range`): the first barrier
+  force of the linearised problem (``Integrator._barrier_range``): the first barrier
   problem keeps the current gap ``c_t``, the last one leaves a gap of about ``gap_tol``,
 * ``gap_tol = 1e-2 / alpha_min`` (the smallest alpha of a body in contact: the blur of the
   softest surface) and ``tol = 1e-2 * gap_tol`` unless given. The gap must stay above the

@@ -43,14 +43,11 @@ from typing import NamedTuple
 
 import numpy as np
 from scipy.linalg import cho_factor, cho_solve
+from tracer.errors import InfeasibleStart  # noqa: F401  (defined there; imported from here too)
 
 TAU = 0.995
 KAPPA = 1e10
 ARMIJO = 1e-4
-
-
-class InfeasibleStart(ValueError):
-    """The starting point violates the constraint (``c(x0) <= 0``)."""
 
 
 class IPMResult(NamedTuple):
@@ -73,7 +70,7 @@ def solve(x0, energy, hessian, constraint, *, mu0, mu_min, tol, sigma=0.2, max_i
     Parameters
     ----------
     x0 : (n,) float
-        Feasible start, ``c(x0) > 0`` (else :class:`InfeasibleStart`).
+        Feasible start, ``c(x0) > 0`` (else :class:`~tracer.errors.InfeasibleStart`).
     energy : callable x -> (E float, grad (n,))
     hessian : callable x -> (n, n) SPD matrix
     constraint : callable x -> (c float, grad (n,))

@@ -33,15 +33,12 @@ import numpy as np
 from tracer.outputs import atomic_write
 from tracer.sim.constraint import ContactConstraint
 from tracer.sim.integrator import Integrator
+from tracer.errors import OverlapError  # noqa: F401  (defined there; imported from here too)
 
 #: keys with one row per frame
 FRAME_KEYS = ("rotations", "translations", "centers", "velocities", "angular_velocities", "time",
               "min_exact_distance", "constraint", "ipm_iterations", "distance_evaluations",
               "seconds")
-
-
-class OverlapError(ValueError):
-    """Bodies overlap (or touch the smooth surface) in the initial state."""
 
 
 def build(sim, factory=None):

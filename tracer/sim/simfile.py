@@ -50,7 +50,7 @@ The authors' simulator (``sims/*.json``) names these ``timestep``, ``num_steps``
 ``is_dynamic``, ``max_alpha``, ``bvh_type`` and ``init_state``; we use one flat object per body.
 
 :func:`load_simulation` validates every key and value (and that every referenced file exists)
-before it reads any mesh, and raises :class:`SimFileError` (a ``ValueError``) with a one-line
+before it reads any mesh, and raises :class:`~tracer.errors.SimFileError` (a ``ValueError``) with a one-line
 message ``<file>: <key> <problem>``. Bodies that already overlap are refused later, by
 :func:`tracer.sim.run.check_initial_state`.
 """
@@ -67,6 +67,7 @@ from tracer.sim.bodies import (AUTO_THICKNESS_OFFSET, Body, auto_alpha, rotation
                                thickness)
 from tracer.validate import (SceneError, check_keys, choice, number, read_json, resolve_path,
                              show, vec3)
+from tracer.errors import SimFileError  # noqa: F401  (defined there; imported from here too)
 
 _TOP = {"name", "description", "dt", "steps", "gravity", "beta", "constraint", "gap_tol",
         "camera", "bodies"}
@@ -77,10 +78,6 @@ _BODY = {"name", "mesh", "primitive", "kind", "scale", "crop", "alpha", "alpha_u
 KINDS = ("points", "edges", "triangles", "mixed")
 #: default number of rendered frames when ``camera.every`` is not given
 DEFAULT_FRAMES = 80
-
-
-class SimFileError(SceneError):
-    """A simulation file that cannot be used; the message names the file and the bad key."""
 
 
 @dataclass
@@ -126,7 +123,7 @@ def _wrap(exc):
 
 
 def read_simulation_json(path):
-    """Parse the file into a dict (one-line :class:`SimFileError` on unreadable/malformed JSON)."""
+    """Parse the file into a dict (one-line :class:`~tracer.errors.SimFileError` on unreadable/malformed JSON)."""
     try:
         return read_json(path, "simulation")
     except SceneError as exc:
@@ -305,7 +302,7 @@ def _crop(mesh, lo, hi):
 
 
 def load_simulation(path):
-    """Read, validate and build a simulation file into a :class:`Simulation`."""
+    """Read, validate and build a simulation file into a :class:`~tracer.sim.simfile.Simulation`."""
     path = os.fspath(path)
     data = read_simulation_json(path)
     try:

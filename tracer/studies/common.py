@@ -59,7 +59,7 @@ def add_common(p):
 # =============================================================================== meshes
 def load_mesh(path, kind=None):
     """Load a mesh file as a DataMesh (``kind`` as in ``DataMesh.as_kind``), one-line errors
-    (:class:`tracer.outputs.CLIError`)."""
+    (:class:`tracer.errors.CLIError`)."""
     from smoothdist import DataMesh, MeshRepairWarning
 
     path = os.fspath(path)

@@ -3,7 +3,7 @@
 * :func:`beta_outputs`: time and error vs beta (with the reference numbers), the image grid,
   the per-pixel depth-difference heat maps (:func:`beta_diff_figure`) and ``report.md`` of
   ``tracer ablate-beta``;
-* :func:`panel_grid` and :func:`alpha_report`: the labelled image grids of ``tracer
+* :func:`panel_grid_png` and :func:`alpha_report`: the labelled image grids of ``tracer
   ablate-alpha`` and their report;
 * :func:`bench_plots`: the two scatter plots of ``tracer bench-grid``;
 * :func:`bh_plot`: the histograms of ``tracer bh-switch``.
@@ -34,6 +34,7 @@ PAPER_BETA_ERROR = {0.0: (0.0, 0.0, 0.0), 0.5: (2.5, 3.7, 3.4), 1.0: (4.9, 6.5, 
 AUTHORS_TIMES = {256: {0.5: (1.48, 2.37, 2.63)}, 512: {0.5: (6.33, 9.33, 10.46)}}
 #: the hit threshold of those measurements (absolute scene units, the authors' value)
 AUTHORS_EPS = 1e-3
+#: how and where :data:`AUTHORS_TIMES` were measured (printed in the reports)
 AUTHORS_TIMES_SETUP = ("authors' C++ (beta_error_test) run side by side with ours: quiet 2-core "
                        "machine, 2 threads each, eps 1e-3 absolute, N x N px")
 
@@ -405,6 +406,8 @@ def _num(v):
 
 
 def bench_plots(out, rows, params):
+    """``bench_time_vs_leaves.png`` and ``bench_leaf_fraction.png`` in the folder ``out``
+    (a Path) from the ``tracer bench-grid`` rows (dicts) and the study's ``params``."""
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(6.0, 4.2))
     fig2, ax2 = plt.subplots(figsize=(6.0, 4.2))
@@ -442,6 +445,8 @@ def bench_plots(out, rows, params):
 
 
 def bh_plot(path, rows, summary):
+    """The two histograms of ``tracer bh-switch`` (leaves visited and error, kept vs rejected
+    switches) from its rows (dicts) and summary, written to ``path`` (PNG)."""
     plt = pyplot()
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(8.0, 3.2))
     kept = [r for r in rows if r["kept"]]

@@ -1,0 +1,111 @@
+"""Sphinx configuration of the smoothdist + tracer documentation.
+
+Build (from the repository root, with the ``docs`` extra installed)::
+
+    python -m sphinx -W --keep-going docs docs/_build/html
+
+``-W`` turns every warning into an error: a broken cross-reference in a docstring or page
+(``nitpicky``), a docstring numpydoc cannot parse, or a gallery example that raises fails the
+build (``tests/test_docs.py`` runs it in the suite).
+"""
+
+import os
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+os.environ.setdefault("MPLBACKEND", "Agg")
+
+import smoothdist  # noqa: E402
+
+project = "smoothdist + tracer"
+author = "the smoothdist developers"
+copyright = "2026, the smoothdist developers"
+version = release = smoothdist.__version__
+
+extensions = [
+    "sphinx.ext.autodoc",
+    "sphinx.ext.autosummary",
+    "sphinx.ext.mathjax",
+    "sphinx.ext.viewcode",
+    "numpydoc",
+    "sphinx_gallery.gen_gallery",
+    "myst_nb",                       # Markdown pages (MyST) and executed notebooks
+]
+
+source_suffix = {".rst": "restructuredtext", ".md": "myst-nb", ".ipynb": "myst-nb"}
+exclude_patterns = ["_build", "**.ipynb_checkpoints", "auto_examples/*.ipynb",
+                    "auto_examples/*.py", "auto_examples/*.zip", "auto_examples/*.json",
+                    "auto_examples/*.md5", "auto_examples/*.codeobj.json"]
+root_doc = "index"
+
+# ---------------------------------------------------------------------------- references
+nitpicky = True                      # a reference that resolves nowhere is a warning (an error)
+# types of other packages (no intersphinx: the build runs offline) and numpydoc's shape words
+nitpick_ignore_regex = [
+    (r"py:class", r"(numpy|np|trimesh|pyvista|pv|PIL|dask|distributed|matplotlib|scipy)\..*"),
+    (r"py:class", r"(optional|array_like|array-like|callable|path-like|file-like)"),
+    (r"py:class", r"(pathlib\.)?Path|os\.PathLike|typing\..*|collections\..*"),
+]
+
+# ---------------------------------------------------------------------------- API reference
+autosummary_generate = True
+templates_path = ["_templates"]
+autosummary_imported_members = False
+autodoc_default_options = {"members": True, "inherited-members": False}
+autodoc_typehints = "none"
+autodoc_member_order = "bysource"
+numpydoc_show_class_members = False
+numpydoc_class_members_toctree = False
+numpydoc_xref_param_type = False
+numpydoc_validation_checks = set()
+
+# ---------------------------------------------------------------------------- Markdown, notebooks
+myst_enable_extensions = ["colon_fence", "dollarmath", "deflist"]
+myst_heading_anchors = 3
+nb_execution_mode = "force"          # the notebooks run at every build
+nb_execution_raise_on_error = True   # a failing cell fails the build
+nb_execution_timeout = 600
+nb_execution_excludepatterns = ["auto_examples/*"]
+
+# ---------------------------------------------------------------------------- gallery
+sphinx_gallery_conf = {
+    "examples_dirs": str(ROOT / "examples"),
+    "gallery_dirs": "auto_examples",
+    "filename_pattern": r"/plot_",   # every plot_*.py runs; its figures become the thumbnails
+    "ignore_pattern": r"(__init__|mesh_distance_demo)\.py",
+    "abort_on_example_error": True,
+    "image_scrapers": ("matplotlib",),
+    "download_all_examples": False,
+    "remove_config_comments": True,
+    "show_memory": False,
+    "min_reported_time": 2,
+    "thumbnail_size": (320, 240),
+}
+
+# ---------------------------------------------------------------------------- HTML
+html_theme = "pydata_sphinx_theme"
+html_title = "smoothdist + tracer"
+html_static_path = []
+html_theme_options = {
+    "navigation_with_keys": False,
+    "show_toc_level": 2,
+    "secondary_sidebar_items": ["page-toc"],
+    "footer_start": ["copyright"],
+    "footer_end": [],
+}
+html_show_sourcelink = False
+
+
+def _skip_member(app, what, name, obj, skip, options):
+    """Leave out NamedTuple field accessors ("Alias for field number N"): the class docstring
+    lists the fields."""
+    doc = getattr(obj, "__doc__", None) or ""
+    if doc.startswith("Alias for field number"):
+        return True
+    return None
+
+
+def setup(app):
+    app.connect("autodoc-skip-member", _skip_member)

@@ -1,0 +1,50 @@
+"""The error types of the tracer, in one place.
+
+Every one is an :class:`Exception` whose message is one line that names the file, key or option
+at fault; :func:`tracer.cli.main` prints it as ``error: ...`` and exits with status 2.
+
+* :class:`TracerError`: the base class of the others;
+* :class:`CLIError`: a bad command-line option or output path;
+* :class:`SceneError`: a scene file (or another JSON input) that cannot be used, and
+  :class:`SimFileError`, the same for a simulation file;
+* :class:`RenderError`: a scene that cannot be rendered as asked (camera inside the surface);
+* :class:`OverlapError`: simulated bodies that overlap in their initial state;
+* :class:`InfeasibleStart`: an interior-point solve started at a point that violates the
+  constraint.
+
+The input errors (all but :class:`CLIError`) are also :class:`ValueError`\\ s, so code that
+catches ``ValueError`` around a render or a load keeps working. Only the standard library is
+imported here.
+"""
+
+__all__ = ["TracerError", "CLIError", "SceneError", "SimFileError", "RenderError",
+           "OverlapError", "InfeasibleStart"]
+
+
+class TracerError(Exception):
+    """Base class of the tracer's user-facing errors (one-line messages)."""
+
+
+class CLIError(TracerError):
+    """A bad command-line option or output path: printed as one line, exit status 2."""
+
+
+class SceneError(TracerError, ValueError):
+    """A scene file (or another JSON input file) that cannot be used; the message names the
+    file and the bad key."""
+
+
+class SimFileError(SceneError):
+    """A simulation file that cannot be used; the message names the file and the bad key."""
+
+
+class RenderError(TracerError, ValueError):
+    """A scene that cannot be rendered as asked (e.g. camera inside the surface)."""
+
+
+class OverlapError(TracerError, ValueError):
+    """Simulated bodies overlap (or touch the smooth surface) in the initial state."""
+
+
+class InfeasibleStart(TracerError, ValueError):
+    """An interior-point solve whose starting point violates the constraint (``c(x0) <= 0``)."""
