@@ -173,13 +173,21 @@ def auto_alpha(mesh, length, alpha_u="off"):
 class Body:
     """One rigid body.
 
-    mesh : DataMesh in body coordinates (centre of mass at the origin).
-    kind : "points", "edges", "triangles" or "mixed".
-    alpha, alpha_u : smooth-distance sharpness and attenuation threshold (1 / length).
-    mass, inertia : kg and the (3, 3) body-frame inertia tensor about the centre of mass.
-    static : static bodies never move (their mass properties are unused).
-    x, R, v, w : world centre of mass, rotation, linear velocity, angular velocity (rad/s).
-    offset : (3,) the centre of mass in the mesh file's coordinates (file vertex ``p`` sits at
+    Attributes
+    ----------
+    mesh : smoothdist.DataMesh
+        In body coordinates (centre of mass at the origin).
+    kind : {"points", "edges", "triangles", "mixed"}
+    alpha, alpha_u : float
+        Smooth-distance sharpness and attenuation threshold (1 / length).
+    mass, inertia : float, (3, 3) float64
+        kg, and the body-frame inertia tensor about the centre of mass.
+    static : bool
+        Static bodies never move (their mass properties are unused).
+    x, R, v, w : (3,), (3, 3), (3,), (3,) float64
+        World centre of mass, rotation, linear velocity, angular velocity (rad/s).
+    offset : (3,) float64
+        The centre of mass in the mesh file's coordinates (file vertex ``p`` sits at
         ``R (p - offset) + x``).
     """
 
