@@ -1,10 +1,17 @@
-"""Every command shown in README.md runs as written (at a tiny size).
+"""Every command shown in README.md and in the user guide (``docs/getting-started.md``,
+``docs/guide/*.md``) runs as written (at a tiny size).
 
-How: the commands are extracted from the README itself -- every line of its ```bash blocks
-(continuation lines joined), every inline code span that starts with ``python `` or
-``bash `` or ``for ``, and every ```python block -- and run one by one, in README order, in a
-scratch folder holding a copy of ``scenes/``, ``benchmarks/`` and ``examples/`` (so nothing is written into
-the repository), with this checkout on PYTHONPATH.
+How: the commands are extracted from the pages themselves (:data:`PAGES`) -- every line of their
+```bash blocks (continuation lines joined), every inline code span that starts with ``python ``
+or ``bash `` or ``for `` (a span may run over a line break within its paragraph), and every
+```python block -- and run one by one, page by page (README first) in page order, in a scratch
+folder holding a copy of ``scenes/``, ``benchmarks/`` and ``examples/`` (so nothing is written
+into the repository), with this checkout on PYTHONPATH. Each test is named after its page and
+command. MyST directives (```{toctree}, ```{image}, ... blocks) are not commands and are
+skipped whole; ``:::`` fence lines are skipped and the Markdown between them is read as usual;
+other fenced blocks (```json, ```ini, ...) are not commands either. A command shown on several
+pages runs once: the later occurrences reuse its result (the key is the command as run, see
+:func:`concrete`, or the code of a python block).
 
 What is changed on the way is listed here, explicitly, so that a reader can check that the
 mapping is honest:
@@ -14,13 +21,17 @@ mapping is honest:
   interpreter. Nothing else about the command changes.
 * :data:`SETUP_REWRITES`: the quick start's venv and pip steps are dropped (CI's ``.ci/run``
   has just done exactly them) and ``.venv/bin/python`` is the shim.
-* :data:`PLACEHOLDERS`: names the README uses for "your file" (``SCENE.json``, ``DIR``, ...)
+* :data:`PLACEHOLDERS`: names the pages use for "your file" (``SCENE.json``, ``DIR``, ...)
   become concrete files. A synopsis (a command with ``[optional]`` parts) is run without its
   optional parts, and every option it lists must appear in the command's ``--help``.
 * :data:`NOT_RUN`: commands that are not run, each with the reason. :data:`MENTIONS`:
   inline spans that name a command without being one.
+* :data:`FRESH`: commands that are alternatives to an earlier one and, at the tiny size, would
+  find its results and refuse to replace them; they run unchanged in a fresh scratch folder.
 * :data:`PYTHON_REWRITES`: image sizes in the Python examples. A ```python block with a
-  ``...`` placeholder is a fragment and is only compiled.
+  ``...`` placeholder is a fragment and is only compiled. A block whose first line is a comment
+  naming a file ``# test_*.py`` (a user's test) is also written to that file in the scratch
+  folder, where the page's ``python -m pytest`` commands run it.
 
 :data:`PENDING` lists the commands expected to fail until another change lands (issue 13
 gives the study commands defaults for ``-o``); they are ``xfail(strict=True)``, so the
@@ -39,6 +50,9 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 README = ROOT / "README.md"
+GUIDE = ROOT / "docs" / "guide"
+#: the pages whose commands run, in this order (README first; the guide pages by name)
+PAGES = [README, ROOT / "docs" / "getting-started.md"] + sorted(GUIDE.glob("*.md"))
 
 pytestmark = pytest.mark.slow
 
@@ -117,8 +131,16 @@ NOT_RUN = {
 
 MENTIONS = {"python -m tracer", "python -m tracer render"}
 
+FRESH = {
+    "python -m tracer ablate-beta scenes/data/bunny.off --size 512":
+        "the 512² study; at the tiny size it writes the folder of the 256² run before it",
+    "python -m tracer ablate-alpha metric":
+        "one of the alpha studies instead of 'all', whose results it would find",
+}
+
 PYTHON_REWRITES = [
     (r"size=\(512, 512\)", "size=(16, 16)"),
+    (r"size=\(128, 128\)", "size=(16, 16)"),
     (r"width=256, height=256", "width=16, height=16"),
 ]
 
@@ -127,44 +149,79 @@ PENDING = set()
 
 
 # ----------------------------------------------------------------------------- extraction
-def readme_commands(text=None):
-    """``[(kind, command)]`` in README order; kind is ``"bash"`` or ``"python"``."""
-    text = README.read_text(encoding="utf-8") if text is None else text
+FENCE = re.compile(r"^\s*(`{3,}|~{3,})\s*([^`\s]*)")
+COLON_FENCE = re.compile(r"^\s*:{3,}")
+
+
+def page_commands(text):
+    """``[(kind, command)]`` in page order; kind is ``"bash"`` or ``"python"``.
+
+    Fenced ```bash blocks give one command per line (continuations joined, comment lines
+    dropped); ```python blocks one command each; MyST directive blocks (```{name}) and other
+    languages none. Inline spans are read per paragraph, so a span may wrap a line."""
     out = []
-    fence = re.compile(r"^```(\w*)\s*$")
-    lang, block = None, []
-    for line in text.splitlines():
-        m = fence.match(line)
-        if m and lang is None:
-            lang, block = m.group(1) or "text", []
-            continue
-        if m and lang is not None:
-            if lang == "bash":
-                joined = "\n".join(block).replace("\\\n", " ")
-                for cmd in joined.splitlines():
-                    cmd = re.sub(r"\s+", " ", cmd).strip()
-                    if cmd and not cmd.startswith("#"):
-                        out.append(("bash", cmd))
-            elif lang == "python":
-                out.append(("python", "\n".join(block)))
-            lang = None
-            continue
-        if lang is not None:
-            block.append(line)
-            continue
-        for span in re.findall(r"`([^`]+)`", line):
+    fence, lang, block, para = None, None, [], []
+
+    def spans():
+        joined = " ".join(para)
+        for span in re.findall(r"`([^`]+)`", joined):
+            span = re.sub(r"\s+", " ", span).strip()
             if re.match(r"(python|bash|for) ", span) or span in MENTIONS:
-                out.append(("bash", span.strip()))
+                out.append(("bash", span))
+        para.clear()
+
+    for line in text.splitlines():
+        if fence is not None:  # inside a fenced block
+            m = FENCE.match(line)
+            if m and m.group(1)[0] == fence[0] and len(m.group(1)) >= len(fence) \
+                    and not m.group(2):
+                if lang == "bash":
+                    joined = "\n".join(block).replace("\\\n", " ")
+                    for cmd in joined.splitlines():
+                        cmd = re.sub(r"\s+", " ", cmd).strip()
+                        if cmd and not cmd.startswith("#"):
+                            out.append(("bash", cmd))
+                elif lang == "python":
+                    out.append(("python", "\n".join(block)))
+                fence = None
+            else:
+                block.append(line)
+            continue
+        m = FENCE.match(line)
+        if m:
+            spans()
+            fence, lang, block = m.group(1), m.group(2) or "text", []
+            continue
+        if COLON_FENCE.match(line) or not line.strip() or line.lstrip().startswith("#"):
+            spans()  # a MyST ::: fence line, a blank line or a heading ends a paragraph
+            if line.lstrip().startswith("#"):
+                para.append(line)
+                spans()
+            continue
+        para.append(line)
+    spans()
     return out
 
 
+def readme_commands(text=None):
+    """The README's commands (as :func:`page_commands`)."""
+    return page_commands(README.read_text(encoding="utf-8") if text is None else text)
+
+
+def _page(path):
+    return path.relative_to(ROOT).as_posix()
+
+
+#: ``[(page, kind, command)]`` of every page, in run order
+COMMANDS = [(_page(p), kind, cmd) for p in PAGES
+            for kind, cmd in page_commands(p.read_text(encoding="utf-8"))
+            if cmd not in MENTIONS]
+
+
 def _id(item):
-    kind, cmd = item
+    page, kind, cmd = item
     first = cmd.strip().splitlines()[0] if cmd.strip() else ""
-    return (kind + ": " + first)[:80]
-
-
-COMMANDS = [c for c in readme_commands() if c[1] not in MENTIONS]
+    return f"{page}: {kind}: {first}"[:100]
 
 
 def concrete(cmd):
@@ -178,7 +235,7 @@ def concrete(cmd):
         if tok in PLACEHOLDERS:
             tokens[i] = PLACEHOLDERS[tok]
         elif re.fullmatch(r"[A-Z][A-Z_]+(\.[a-z]+)?", tok):
-            raise AssertionError(f"README command {cmd!r} has a placeholder {tok!r}: add it to "
+            raise AssertionError(f"command {cmd!r} has a placeholder {tok!r}: add it to "
                                  "PLACEHOLDERS in tests/test_readme.py")
     return " ".join(tokens)
 
@@ -188,17 +245,36 @@ def synopsis_options(cmd):
     return sorted(set(re.findall(r"\[(-{1,2}[\w-]+)", cmd)))
 
 
+def python_code(code):
+    """A python block as run here (:data:`PYTHON_REWRITES`)."""
+    for pat, rep in PYTHON_REWRITES:
+        code = re.sub(pat, rep, code)
+    return code
+
+
 # ----------------------------------------------------------------------------- running
+def make_work(work):
+    """A scratch folder: copies of scenes/, benchmarks/, examples/ and two small images for the
+    diff synopsis (A.png, B.png)."""
+    import numpy as np
+
+    from tracer.image import save_png
+
+    work.mkdir()
+    for name in ("scenes", "benchmarks", "examples"):
+        shutil.copytree(ROOT / name, work / name)
+    img = np.full((8, 8, 3), 200, np.uint8)
+    save_png(work / "a.png", img)
+    save_png(work / "b.png", img)
+    return work
+
+
 @pytest.fixture(scope="module")
 def workspace(tmp_path_factory):
-    """A scratch folder with scenes/ and benchmarks/, a shim ``python`` on PATH, and a record
-    of the commands run so far (some README commands use the output of an earlier one)."""
+    """A scratch folder, a shim ``python`` on PATH, and a record of the commands run so far
+    (some commands use the output of an earlier one; a command shown twice runs once)."""
     base = tmp_path_factory.mktemp("readme")
-    work = base / "work"
-    work.mkdir()
-    shutil.copytree(ROOT / "scenes", work / "scenes")
-    shutil.copytree(ROOT / "benchmarks", work / "benchmarks")
-    shutil.copytree(ROOT / "examples", work / "examples")
+    work = make_work(base / "work")
     bindir = base / "bin"
     bindir.mkdir()
     for name in ("python", "python3"):
@@ -211,64 +287,96 @@ def workspace(tmp_path_factory):
                                      if env.get("PYTHONPATH") else "")
     env["MPLBACKEND"] = "Agg"
     env.pop("TRACER_REGEN_BASELINES", None)
-    # two small images for the diff synopsis (A.png, B.png)
-    import numpy as np
-
-    from tracer.image import save_png
-
-    img = np.full((8, 8, 3), 200, np.uint8)
-    save_png(work / "a.png", img)
-    save_png(work / "b.png", img)
-    return {"work": work, "env": env, "done": {}}
+    return {"base": base, "work": work, "env": env, "done": {}}
 
 
-def run_bash(ws, cmd, timeout=600):
-    return subprocess.run(["bash", "-e", "-o", "pipefail", "-c", cmd], cwd=ws["work"],
+def run_bash(ws, cmd, timeout=600, cwd=None):
+    return subprocess.run(["bash", "-e", "-o", "pipefail", "-c", cmd], cwd=cwd or ws["work"],
                           env=ws["env"], capture_output=True, text=True, timeout=timeout)
 
 
-def run_readme_command(ws, cmd):
-    """Run one README bash command (and, first, the earlier commands whose outputs it uses)."""
-    if cmd in ws["done"]:
-        return ws["done"][cmd]
-    for kind, earlier in COMMANDS:
+def run_page_command(ws, cmd):
+    """Run one bash command (and, first, the earlier commands whose outputs it uses)."""
+    key = concrete(cmd)
+    if key in ws["done"]:
+        return ws["done"][key]
+    for _, kind, earlier in COMMANDS:
         if earlier == cmd:
             break
         outs = re.findall(r"--save-scene (\S+)", earlier)
         if kind == "bash" and any(o in cmd for o in outs):
-            run_readme_command(ws, earlier)
-    proc = run_bash(ws, concrete(cmd))
-    ws["done"][cmd] = proc
+            run_page_command(ws, earlier)
+    cwd = None
+    if cmd in FRESH:
+        cwd = make_work(ws["base"] / f"fresh{len(ws['done'])}")
+    proc = run_bash(ws, key, cwd=cwd)
+    ws["done"][key] = proc
     return proc
 
 
-def test_readme_has_commands():
-    cmds = [c for k, c in COMMANDS if k == "bash"]
-    assert any(c.startswith("python -m tracer render scenes/data/") for c in cmds)
+def run_python_block(ws, code):
+    """Run one python block as a script in the scratch folder (once per distinct block)."""
+    code = python_code(code)
+    if code in ws["done"]:
+        return ws["done"][code]
+    m = re.match(r"#\s*(test_\w+\.py)\b", code.lstrip())
+    if m:  # a user's test file: the page's pytest commands run it
+        (ws["work"] / m.group(1)).write_text(code)
+    script = ws["work"] / "snippet.py"
+    script.write_text(code)
+    proc = run_bash(ws, f"python {script.name}")
+    ws["done"][code] = proc
+    return proc
+
+
+def test_pages_have_commands():
+    assert README in PAGES and len(PAGES) >= 3
+    for page in PAGES:
+        assert page.is_file(), page
+    cmds = [c for _, k, c in COMMANDS if k == "bash"]
+    readme = [c for p, _, c in COMMANDS if p == "README.md"]
+    assert any(c.startswith("python -m tracer render scenes/data/") for c in readme)
     assert any("--save-scene" in c for c in cmds)
-    assert sum(k == "python" for k, _ in COMMANDS) >= 2
-    for cmd in NOT_RUN:
-        assert cmd in cmds, f"NOT_RUN lists {cmd!r}, which the README no longer shows"
-    for cmd in PENDING:
-        assert cmd in cmds, f"PENDING lists {cmd!r}, which the README no longer shows"
+    assert sum(k == "python" for _, k, _ in COMMANDS) >= 2
+    for table in (NOT_RUN, FRESH, PENDING):
+        for cmd in table:
+            assert cmd in cmds, f"{cmd!r} is listed in tests/test_readme.py, but no page shows it"
+
+
+def test_myst_directives_are_not_commands():
+    text = textwrap.dedent("""\
+        ```{toctree}
+        :maxdepth: 2
+
+        python -m not_a_command
+        ```
+
+        :::{note}
+        Run `python -m tracer diff A.png B.png` to compare.
+        :::
+
+        A span over a line break: `python -m tracer
+        ablate-alpha metric`.
+
+        ```json
+        {"python -m x": 1}
+        ```
+        """)
+    assert page_commands(text) == [("bash", "python -m tracer diff A.png B.png"),
+                                   ("bash", "python -m tracer ablate-alpha metric")]
 
 
 @pytest.mark.parametrize("item", [pytest.param(
     c, id=_id(c), marks=[pytest.mark.xfail(strict=True, reason="the studies get -o defaults "
                                            "in issue 13; remove from PENDING after merging")]
-    if c[1] in PENDING else []) for c in COMMANDS])
-def test_readme_command_runs(workspace, item):
-    kind, cmd = item
+    if c[2] in PENDING else []) for c in COMMANDS])
+def test_page_command_runs(workspace, item):
+    page, kind, cmd = item
     if kind == "python":
-        code = cmd
-        if re.search(r"(^|[^.])\.\.\.([^.]|$)", code):
-            compile(code, "README.md", "exec")  # a fragment with placeholders
+        if re.search(r"(^|[^.])\.\.\.([^.]|$)", cmd):
+            compile(cmd, page, "exec")  # a fragment with placeholders
             return
-        for pat, rep in PYTHON_REWRITES:
-            code = re.sub(pat, rep, code)
-        script = workspace["work"] / "snippet.py"
-        script.write_text(code)
-        proc = run_bash(workspace, f"python {script.name}")
+        proc = run_python_block(workspace, cmd)
         assert proc.returncode == 0, proc.stderr[-2000:]
         return
     if cmd in NOT_RUN:
@@ -280,5 +388,5 @@ def test_readme_command_runs(workspace, item):
         for opt in synopsis_options(cmd):
             assert re.search(rf"(^|[\s,\[]){re.escape(opt)}([\s,=\]]|$)", helptext, re.M), \
                 (cmd, opt)
-    proc = run_readme_command(workspace, cmd)
-    assert proc.returncode == 0, (concrete(cmd), proc.stderr[-2000:])
+    proc = run_page_command(workspace, cmd)
+    assert proc.returncode == 0, (page, concrete(cmd), proc.stderr[-2000:])
