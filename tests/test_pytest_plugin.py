@@ -92,3 +92,13 @@ def test_check_rejects_what_is_not_an_image(pytester):
     res = pytester.runpytest()
     res.assert_outcomes(failed=1)
     res.stdout.fnmatch_lines(["*RenderResult, a PNG path or an (H, W?, C?) uint8 array*"])
+
+
+def test_a_baseline_of_another_size_fails_naming_both(pytester):
+    pytester.makepyfile(test_user=USER_TEST.format(level=40))
+    pytester.runpytest("--regen-baselines").assert_outcomes(passed=1)
+    pytester.makepyfile(test_user=USER_TEST.format(level=40).replace("_image(40)",
+                                                                      "_image(40)[:4]"))
+    res = pytester.runpytest()
+    res.assert_outcomes(failed=1)
+    res.stdout.fnmatch_lines(["*image_regression test_square:*shape*baseline*test_square.png*"])

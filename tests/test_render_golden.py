@@ -4,31 +4,27 @@ sphere tracer against an independent pipeline (pyvista marching cubes) and an an
 Golden images
 -------------
 ``tests/baseline/<scene>-<mode>.png``: every ``scenes/*.json`` rendered at 64 x 64 pixels in
-``smooth`` and in ``exact`` mode (the scene's own shading, camera and parameters otherwise).
-A render passes when the mean absolute error is at most ``tol`` (0-255 units) and at most
-``max_fraction`` of the pixels differ by more than ``threshold`` in some channel
-(:class:`Tolerance`; per-case overrides in ``TOLERANCES``). On failure the generated image,
-the baseline and their difference heat map are written to ``renders/failed/<test name>/``
-(git-ignored) and named in the assertion message.
+``smooth`` and in ``exact`` mode (the scene's own shading, camera and parameters otherwise),
+compared by the ``image_regression`` fixture that the package gives every test suite
+(:mod:`tracer.pytest_plugin`; our ``pyproject.toml`` leaves its baseline folder at the default,
+``tests/baseline``). A render passes when the mean absolute error is at most ``tol`` (0-255
+units) and at most ``max_fraction`` of the pixels differ by more than ``threshold`` in some
+channel (:class:`Tolerance`; per-case overrides in ``TOLERANCES``). On failure the render, the
+baseline and their difference heat map are written to ``.image-regression/<case>/``
+(git-ignored) and named in the assertion; ``--image-report DIR`` writes a page of every
+comparison.
 
 Baselines are never written implicitly. To create or update them (after checking that the
 change is intended)::
 
-    python -m tests.test_render_golden --regen               # all of them
-    python -m tests.test_render_golden --regen torus-smooth  # some
-    TRACER_REGEN_BASELINES=1 python -m pytest tests/test_render_golden.py
-
-(with the environment variable set, the golden tests write their baseline and are reported as
-skipped.)
+    python -m pytest tests/test_render_golden.py --regen-baselines                  # all
+    python -m pytest tests/test_render_golden.py --regen-baselines -k torus-smooth  # some
 
 The pyvista tests are skipped, with the reason, where VTK cannot render off-screen.
 """
 
 import dataclasses
 import functools
-import os
-import re
-import shutil
 import sys
 from pathlib import Path
 from typing import NamedTuple
@@ -38,19 +34,15 @@ import pytest
 
 TESTS = Path(__file__).resolve().parent
 ROOT = TESTS.parent
-if __name__ == "__main__" and str(ROOT) not in sys.path:  # python tests/test_render_golden.py
-    sys.path.insert(0, str(ROOT))
 
-from tracer.image import load_png, save_png  # noqa: E402
-from tracer.imagediff import check_images  # noqa: E402
+from tracer.image import load_png, save_png
+from tracer.imagediff import check_images
 
 SCENES = sorted((ROOT / "scenes").glob("*.json"))
 MODES = ("smooth", "exact")
 SIZE = 64
 BASELINE_DIR = TESTS / "baseline"
-FAILED_ROOT = ROOT / "renders" / "failed"
-REGEN_ENV = "TRACER_REGEN_BASELINES"
-REGEN_COMMAND = "python -m tests.test_render_golden --regen"
+REGEN_COMMAND = "python -m pytest tests/test_render_golden.py --regen-baselines"
 
 
 class Tolerance(NamedTuple):
@@ -78,10 +70,6 @@ def case_name(scene_path, mode):
     return f"{Path(scene_path).stem}-{mode}"
 
 
-def baseline_path(name):
-    return BASELINE_DIR / f"{name}.png"
-
-
 CASES = [(p, m) for p in SCENES for m in MODES]
 CASE_IDS = [case_name(p, m) for p, m in CASES]
 
@@ -102,103 +90,33 @@ def render_case(scene_path, mode, size=SIZE):
     return render(scene).rgb
 
 
-def missing_message(baseline):
-    return (f"baseline {baseline} is missing; render it with `{REGEN_COMMAND} "
-            f"{Path(baseline).stem}` (or run pytest with {REGEN_ENV}=1), check the picture, "
-            f"and commit it")
-
-
-class RegressionCheck(NamedTuple):
-    """Outcome of :func:`compare_to_baseline`: ``passed``, a ``message`` for the assertion,
-    the :class:`tracer.imagediff.DiffVerdict` (None when there was nothing to compare) and the
-    folder the failure images went to (None when passed)."""
-
-    passed: bool
-    message: str
-    verdict: object
-    folder: object
-
-
-def _safe(name):
-    return re.sub(r"[^A-Za-z0-9._-]+", "_", name).strip("_") or "test"
-
-
-def compare_to_baseline(generated, baseline, test_name, tolerance=DEFAULT_TOLERANCE,
-                        failed_root=FAILED_ROOT):
-    """Compare a render with its golden image.
-
-    On failure, ``generated.png``, ``baseline.png`` and ``diff.png`` are written to
-    ``failed_root / <test_name>`` and the message names them; on success a stale failure
-    folder of the same test is removed.
-    """
-    baseline = Path(baseline)
-    folder = Path(failed_root) / _safe(test_name)
-    if not baseline.is_file():
-        return RegressionCheck(False, missing_message(baseline), None, None)
-    base = load_png(baseline)
-    gen = np.asarray(generated, dtype=np.uint8)
-    verdict = None
-    if base.shape != gen.shape:
-        summary = f"image shapes differ: generated {gen.shape} vs baseline {base.shape}"
-    else:
-        verdict = check_images(gen, base, tol=tolerance.tol, threshold=tolerance.threshold,
-                               max_fraction=tolerance.max_fraction)
-        if verdict.passed:
-            if folder.is_dir():
-                shutil.rmtree(folder, ignore_errors=True)
-            return RegressionCheck(True, verdict.summary(), verdict, None)
-        summary = verdict.summary()
-    folder.mkdir(parents=True, exist_ok=True)
-    written = [save_png(folder / "generated.png", gen), save_png(folder / "baseline.png", base)]
-    if verdict is not None:
-        written.append(save_png(folder / "diff.png", verdict.diff.diff))
-    message = (f"{test_name}: the render differs from {baseline}: {summary}\n"
-               + "".join(f"  {p.stem:9s} {p}\n" for p in written)
-               + f"  if the change is intended, update the baseline: {REGEN_COMMAND} "
-                 f"{baseline.stem}")
-    return RegressionCheck(False, message, verdict, folder)
-
-
-def regenerate(names=None, stream=sys.stdout):
-    """Render and write the baselines of ``names`` (case names; default: every case)."""
-    wanted = set(names or CASE_IDS)
-    unknown = sorted(wanted - set(CASE_IDS))
-    if unknown:
-        raise SystemExit(f"unknown case(s) {', '.join(unknown)}; known: {', '.join(CASE_IDS)}")
-    BASELINE_DIR.mkdir(parents=True, exist_ok=True)
-    for (path, mode), name in zip(CASES, CASE_IDS):
-        if name in wanted:
-            out = save_png(baseline_path(name), render_case(path, mode))
-            print(f"wrote {out.relative_to(ROOT)}", file=stream)
-
-
 # --------------------------------------------------------------------------- golden images
 @pytest.mark.parametrize("scene_path,mode", CASES, ids=CASE_IDS)
-def test_golden_image(scene_path, mode, request):
+def test_golden_image(scene_path, mode, image_regression):
     name = case_name(scene_path, mode)
     rgb = render_case(scene_path, mode)
     assert rgb.shape == (SIZE, SIZE, 3) and rgb.dtype == np.uint8
-    if os.environ.get(REGEN_ENV) == "1":
-        BASELINE_DIR.mkdir(parents=True, exist_ok=True)
-        save_png(baseline_path(name), rgb)
-        pytest.skip(f"{REGEN_ENV}=1: wrote {baseline_path(name)}")
-    check = compare_to_baseline(rgb, baseline_path(name), request.node.name,
-                                TOLERANCES.get(name, DEFAULT_TOLERANCE))
-    assert check.passed, check.message
+    image_regression.check(rgb, name=name, **TOLERANCES.get(name, DEFAULT_TOLERANCE)._asdict())
 
 
-def test_every_scene_has_baselines():
+def test_every_scene_has_baselines(request):
     assert SCENES, "no scenes/*.json found"
-    if os.environ.get(REGEN_ENV) == "1":
-        pytest.skip(f"{REGEN_ENV}=1")
-    missing = [n for n in CASE_IDS if not baseline_path(n).is_file()]
+    if request.config.getoption("--regen-baselines"):
+        pytest.skip("--regen-baselines: the baselines are being written")
+    missing = [n for n in CASE_IDS if not (BASELINE_DIR / f"{n}.png").is_file()]
     assert not missing, (f"{len(missing)} baseline(s) missing ({', '.join(missing)}); create "
                          f"them with `{REGEN_COMMAND}`")
     stale = sorted(p.stem for p in BASELINE_DIR.glob("*.png") if p.stem not in CASE_IDS)
     assert not stale, f"baselines without a scene: {', '.join(stale)} (delete them)"
 
 
-# --------------------------------------------------------------------------- the checkers
+def test_the_fixture_reads_our_baselines(pytestconfig):
+    """Our baselines are where the fixture looks: the ini option's default, from the rootdir."""
+    folder = Path(str(pytestconfig.rootpath)) / pytestconfig.getini("image_baseline_dir")
+    assert folder.resolve() == BASELINE_DIR.resolve()
+
+
+# --------------------------------------------------------------------------- the criteria
 CHECK_SCENE = ROOT / "scenes" / "bunny_triangles.json"
 
 
@@ -211,30 +129,20 @@ def reference():
     return scene, render(scene).rgb
 
 
-def test_identical_render_passes(reference, tmp_path):
+def _verdict(image, reference_rgb):
+    return check_images(image, reference_rgb, **DEFAULT_TOLERANCE._asdict())
+
+
+def test_identical_render_passes(reference):
     from tracer.render import render
 
     scene, rgb = reference
-    again = render(scene).rgb                     # deterministic, whatever the thread count
-    save_png(tmp_path / "base.png", rgb)
-    check = compare_to_baseline(again, tmp_path / "base.png", "identical", failed_root=tmp_path)
-    assert check.passed, check.message
-    assert check.verdict.diff.mean_abs_error == 0.0 and check.verdict.diff.max_abs_error == 0
-    assert not (tmp_path / "identical").exists()
+    verdict = _verdict(render(scene).rgb, rgb)   # deterministic, whatever the thread count
+    assert verdict.passed, verdict.summary()
+    assert verdict.diff.mean_abs_error == 0.0 and verdict.diff.max_abs_error == 0
 
 
-def _assert_caught(perturbed, reference_rgb, tmp_path, label):
-    save_png(tmp_path / "base.png", reference_rgb)
-    check = compare_to_baseline(perturbed, tmp_path / "base.png", label, failed_root=tmp_path)
-    assert not check.passed, f"the comparison did not catch the {label}: {check.message}"
-    for f in ("generated.png", "baseline.png", "diff.png"):
-        assert (tmp_path / label / f).is_file()
-        assert str(tmp_path / label / f) in check.message
-    assert "--regen" in check.message
-    return check
-
-
-def test_shifted_camera_fails(reference, tmp_path):
+def test_shifted_camera_fails(reference):
     """Moving the camera sideways by 1.5 pixels' worth must be caught."""
     from tracer.render import camera_of, render
 
@@ -244,36 +152,20 @@ def test_shifted_camera_fails(reference, tmp_path):
     shift = 1.5 * dist / scene.width * cam.horizontal   # the image plane spans dist at dist
     moved = dataclasses.replace(scene, camera_origin=scene.camera_origin + shift,
                                 camera_dest=scene.camera_dest + shift)
-    check = _assert_caught(render(moved).rgb, rgb, tmp_path, "shifted_camera")
-    assert check.verdict.diff.fraction_over > 3 * DEFAULT_TOLERANCE.max_fraction
+    verdict = _verdict(render(moved).rgb, rgb)
+    assert not verdict.passed
+    assert verdict.diff.fraction_over > 3 * DEFAULT_TOLERANCE.max_fraction
 
 
-def test_changed_alpha_fails(reference, tmp_path):
+def test_changed_alpha_fails(reference):
     """A 20 % larger alpha (thinner blur) must be caught."""
     from tracer.render import render
 
     scene, rgb = reference
     objs = [dataclasses.replace(o, alpha=1.2 * o.alpha) for o in scene.objects]
-    check = _assert_caught(render(dataclasses.replace(scene, objects=objs)).rgb, rgb, tmp_path,
-                           "changed_alpha")
-    assert check.verdict.diff.fraction_over > 3 * DEFAULT_TOLERANCE.max_fraction
-
-
-def test_missing_baseline_says_how_to_create_it(reference, tmp_path):
-    scene, rgb = reference
-    check = compare_to_baseline(rgb, tmp_path / "nope-smooth.png", "missing",
-                                failed_root=tmp_path)
-    assert not check.passed
-    assert f"{REGEN_COMMAND} nope-smooth" in check.message and REGEN_ENV in check.message
-    assert not (tmp_path / "nope-smooth.png").exists()      # never created implicitly
-
-
-def test_shape_mismatch_fails(reference, tmp_path):
-    scene, rgb = reference
-    save_png(tmp_path / "base.png", rgb[:32])
-    check = compare_to_baseline(rgb, tmp_path / "base.png", "shape", failed_root=tmp_path)
-    assert not check.passed and "shapes differ" in check.message
-    assert (tmp_path / "shape" / "generated.png").is_file()
+    verdict = _verdict(render(dataclasses.replace(scene, objects=objs)).rgb, rgb)
+    assert not verdict.passed
+    assert verdict.diff.fraction_over > 3 * DEFAULT_TOLERANCE.max_fraction
 
 
 # --------------------------------------------------------------------------- tracer diff CLI
@@ -499,28 +391,3 @@ def test_compare_cli_writes_outputs(compare_render, tmp_path, capsys):
     assert sbs.ndim == 3 and sbs.shape[0] > 32 and sbs.shape[1] > 3 * 32
     assert main(["compare", scene, "-o", str(out), "--grid", "24", "--size", "32", "32"]) == 2
     assert "exists" in capsys.readouterr().err
-
-
-# --------------------------------------------------------------------------- regeneration
-def main(argv=None):
-    import argparse
-
-    parser = argparse.ArgumentParser(
-        prog="python -m tests.test_render_golden",
-        description="Regenerate the golden images in tests/baseline/ (never done implicitly).")
-    parser.add_argument("--regen", action="store_true", help="render and write the baselines")
-    parser.add_argument("names", nargs="*", metavar="CASE",
-                        help="cases to regenerate, e.g. torus-smooth (default: all; see --list)")
-    parser.add_argument("--list", action="store_true", help="list the cases and exit")
-    args = parser.parse_args(argv)
-    if args.list:
-        print("\n".join(CASE_IDS))
-        return 0
-    if not args.regen:
-        parser.error("nothing to do: pass --regen to rewrite the baselines")
-    regenerate(args.names)
-    return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())
