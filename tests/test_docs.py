@@ -111,3 +111,58 @@ def test_a_failing_gallery_example_fails_the_build(tmp_path):
     (tmp_path / "ex" / "plot_one.py").write_text('"""\nWorks\n=====\n\nPrints.\n"""\n\nprint(1)\n')
     proc = sphinx(src, tmp_path, cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr[-3000:]
+
+
+# --------------------------------------------------------------------------- the public API
+API_PAGES = [DOCS / "api" / "smoothdist.rst", DOCS / "api" / "tracer.rst"]
+
+
+def _documented():
+    """``module.name`` of every entry of the API pages' autosummary tables."""
+    entries = []
+    for page in API_PAGES:
+        current = None
+        for line in page.read_text(encoding="utf-8").splitlines():
+            m = re.match(r"\.\. currentmodule:: (\S+)", line)
+            if m:
+                current = m.group(1)
+            m = re.match(r" {3}([A-Za-z_][\w.]*)$", line)
+            if m and current:
+                entries.append(f"{current}.{m.group(1)}")
+    return entries
+
+
+def _split(dotted):
+    """(module, name) for a documented ``pkg.mod.name``: the longest importable prefix."""
+    import importlib
+
+    parts = dotted.split(".")
+    for i in range(len(parts) - 1, 0, -1):
+        try:
+            return importlib.import_module(".".join(parts[:i])), parts[i:]
+        except ImportError:
+            continue
+    raise AssertionError(f"{dotted}: no importable module")
+
+
+def test_the_documented_api_is_the_exported_api():
+    """Every name on the API pages is exported (``__all__``) where it is documented, and every
+    name the packages export is on the API pages."""
+    import smoothdist
+    import tracer
+    import tracer.sim
+
+    documented = _documented()
+    assert len(documented) > 20
+    for dotted in documented:
+        module, attrs = _split(dotted)
+        assert len(attrs) == 1, f"{dotted}: document a module's name, not an attribute's"
+        assert hasattr(module, attrs[0]), f"{dotted} does not exist"
+        assert attrs[0] in getattr(module, "__all__", ()), (
+            f"{dotted} is documented but not in {module.__name__}.__all__")
+    for pkg in (smoothdist, tracer, tracer.sim):
+        for name in pkg.__all__:
+            if name.startswith("__"):
+                continue
+            assert f"{pkg.__name__}.{name}" in documented, (
+                f"{pkg.__name__}.{name} is exported but not on the API pages")

@@ -14,6 +14,9 @@ import numpy as np
 
 from smoothdist.kernels import DEFAULT_TOL
 
+__all__ = ["render_mesh", "mesh_scene", "load_geometry", "guess_up", "resolve_up",
+           "describe_parameters", "scene_dict"]
+
 KINDS = ("triangles", "edges", "points", "mixed")
 
 

@@ -27,6 +27,8 @@ from pathlib import Path
 
 import pytest
 
+__all__ = ["image_regression", "ImageRegression", "write_report"]
+
 DEFAULT_BASELINE_DIR = "tests/baseline"
 DEFAULT_FAILED_DIR = ".image-regression"
 

@@ -16,6 +16,9 @@ from tracer.shading import (load_matcap, shade_headlight, shade_matcap, shade_no
                             view_normals)
 from tracer.errors import RenderError  # noqa: F401  (defined there; imported from here too)
 
+__all__ = ["render", "RenderResult", "RenderError", "camera_of", "distance_at_camera",
+           "scene_arrays", "SceneArrays", "render_threads", "ProgressBar"]
+
 
 class RenderResult(NamedTuple):
     """Everything one render produces. Images are ``(H, W, ...)``, row 0 at the top.

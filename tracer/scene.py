@@ -48,6 +48,9 @@ from tracer.march import NEWTON
 from tracer.validate import (SceneError, check_keys, choice, file_error, number, read_json,
                              resolve_path, show, vec3)
 
+__all__ = ["Scene", "SceneObject", "SceneError", "load_scene", "read_scene_json",
+           "scene_from_field", "default_eps", "merge_meshes"]
+
 BVH_TYPES = {"faces": "triangles", "triangles": "triangles", "edges": "edges",
              "points": "points", "mixed": "mixed"}
 SHADINGS = ("normals", "matcap", "headlight")

@@ -9,3 +9,25 @@ independent tasks for :mod:`tracer.runner`), :mod:`~tracer.sim.cli_simulate` and
 :mod:`~tracer.sim.cli_animate` (``tracer simulate`` and ``tracer animate``),
 :mod:`~tracer.sim.vbowl` (the paper's 2D V-bowl study).
 """
+
+_LAZY = {
+    "load_simulation": "tracer.sim.simfile",
+    "Simulation": "tracer.sim.simfile",
+    "simulate": "tracer.sim.run",
+}
+
+__all__ = sorted(_LAZY)
+
+
+def __getattr__(name):
+    """The entry points, imported on first use (scipy loads only when needed). The movie
+    writer is ``tracer.sim.animate.animate`` (not exported here: it would shadow its module)."""
+    if name in _LAZY:
+        import importlib
+
+        return getattr(importlib.import_module(_LAZY[name]), name)
+    raise AttributeError(f"module 'tracer.sim' has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__))

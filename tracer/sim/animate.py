@@ -20,6 +20,8 @@ from tracer.outputs import atomic_write
 from tracer.render import ProgressBar, render
 from tracer.scene import Scene, SceneObject, default_eps
 
+__all__ = ["animate", "body_scene", "render_frames", "frame_indices", "write_mp4", "write_gif"]
+
 
 def body_scene(sim, size=None):
     """A :class:`~tracer.scene.Scene` with one object per body (body coordinates);

@@ -35,6 +35,9 @@ from tracer.sim.constraint import ContactConstraint
 from tracer.sim.integrator import Integrator
 from tracer.errors import OverlapError  # noqa: F401  (defined there; imported from here too)
 
+__all__ = ["simulate", "build", "OverlapError", "check_initial_state", "save_trajectory",
+           "load_trajectory", "restore", "closest_gap", "describe_gap", "FRAME_KEYS"]
+
 #: keys with one row per frame
 FRAME_KEYS = ("rotations", "translations", "centers", "velocities", "angular_velocities", "time",
               "min_exact_distance", "constraint", "ipm_iterations", "distance_evaluations",

@@ -69,6 +69,8 @@ from tracer.validate import (SceneError, check_keys, choice, number, read_json, 
                              show, vec3)
 from tracer.errors import SimFileError  # noqa: F401  (defined there; imported from here too)
 
+__all__ = ["Simulation", "Camera", "SimFileError", "load_simulation", "read_simulation_json"]
+
 _TOP = {"name", "description", "dt", "steps", "gravity", "beta", "constraint", "gap_tol",
         "camera", "bodies"}
 _CAMERA = {"origin", "dest", "up", "width", "height", "fps", "every", "shading", "matcap",
