@@ -138,7 +138,7 @@ def simulate(sim, out_path, *, steps=None, resume=False, overwrite=False, progre
 
     ``steps`` overrides the file's step count. With ``resume`` an existing trajectory is
     continued from its last frame up to ``steps`` in total. ``progress(done, total, elapsed)``
-    is called after each step. ``built``: the ``(constraint, integrator)`` of :func:`build`
+    is called after each step. ``built``: the ``(constraint, integrator)`` of :func:`~tracer.sim.run.build`
     when the caller has them already.
     """
     steps = sim.steps if steps is None else int(steps)
