@@ -29,9 +29,10 @@ mapping is honest:
 * :data:`FRESH`: commands that are alternatives to an earlier one and, at the tiny size, would
   find its results and refuse to replace them; they run unchanged in a fresh scratch folder.
 * :data:`PYTHON_REWRITES`: image sizes in the Python examples. A ```python block with a
-  ``...`` placeholder is a fragment and is only compiled. A block whose first line is a comment
-  naming a file ``# test_*.py`` (a user's test) is also written to that file in the scratch
-  folder, where the page's ``python -m pytest`` commands run it.
+  ``...`` placeholder in its code (not in a comment: :func:`is_fragment`) is a fragment and is
+  only compiled. A block whose first line is a comment naming a file ``# test_*.py`` (a user's
+  test) is also written to that file in the scratch folder, where the page's
+  ``python -m pytest`` commands run it.
 
 :data:`PENDING` lists the commands expected to fail until another change lands (issue 13
 gives the study commands defaults for ``-o``); they are ``xfail(strict=True)``, so the
@@ -127,6 +128,9 @@ NOT_RUN = {
     'bash .ci/run -m "not slow"': "it runs the quick part of this test suite",
     "python -m tests.test_render_golden --regen [CASE ...]":
         "it rewrites the repository's baselines; tests/test_render_golden.py tests --regen",
+    ".venv/bin/python -m sphinx -W --keep-going docs docs/_build/html":
+        "it builds the whole documentation site, gallery and notebook included (minutes); "
+        "tests/test_docs.py builds it in the suite",
 }
 
 MENTIONS = {"python -m tracer", "python -m tracer render"}
@@ -245,6 +249,15 @@ def synopsis_options(cmd):
     return sorted(set(re.findall(r"\[(-{1,2}[\w-]+)", cmd)))
 
 
+def is_fragment(code):
+    """A python block with ``...`` as code (a placeholder, not in a comment or a string)."""
+    import io
+    import tokenize
+
+    toks = tokenize.generate_tokens(io.StringIO(code).readline)
+    return any(t.type == tokenize.OP and t.string == "..." for t in toks)
+
+
 def python_code(code):
     """A python block as run here (:data:`PYTHON_REWRITES`)."""
     for pat, rep in PYTHON_REWRITES:
@@ -343,6 +356,12 @@ def test_pages_have_commands():
             assert cmd in cmds, f"{cmd!r} is listed in tests/test_readme.py, but no page shows it"
 
 
+def test_fragments_are_code_with_placeholders():
+    assert is_fragment("V, F = ..., ...\nd = f(V, F)")
+    assert is_fragment("d = f(alpha=...)")
+    assert not is_fragment("res.rgb  # (H, W, ...) arrays\nprint('...')")
+
+
 def test_myst_directives_are_not_commands():
     text = textwrap.dedent("""\
         ```{toctree}
@@ -373,7 +392,7 @@ def test_myst_directives_are_not_commands():
 def test_page_command_runs(workspace, item):
     page, kind, cmd = item
     if kind == "python":
-        if re.search(r"(^|[^.])\.\.\.([^.]|$)", cmd):
+        if is_fragment(cmd):
             compile(cmd, page, "exec")  # a fragment with placeholders
             return
         proc = run_python_block(workspace, cmd)
