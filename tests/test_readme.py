@@ -126,8 +126,9 @@ NOT_RUN = {
         "dask command line and runs this command against it",
     "bash .ci/run": "it runs this test suite (CI runs it)",
     'bash .ci/run -m "not slow"': "it runs the quick part of this test suite",
-    "python -m tests.test_render_golden --regen [CASE ...]":
-        "it rewrites the repository's baselines; tests/test_render_golden.py tests --regen",
+    "python -m pytest tests/test_render_golden.py --regen-baselines":
+        "it rewrites the repository's baselines; tests/test_pytest_plugin.py tests "
+        "--regen-baselines in a throwaway project",
     ".venv/bin/python -m sphinx -W --keep-going docs docs/_build/html":
         "it builds the whole documentation site, gallery and notebook included (minutes); "
         "tests/test_docs.py builds it in the suite",
@@ -299,7 +300,6 @@ def workspace(tmp_path_factory):
     env["PYTHONPATH"] = str(ROOT) + (os.pathsep + env["PYTHONPATH"]
                                      if env.get("PYTHONPATH") else "")
     env["MPLBACKEND"] = "Agg"
-    env.pop("TRACER_REGEN_BASELINES", None)
     return {"base": base, "work": work, "env": env, "done": {}}
 
 
