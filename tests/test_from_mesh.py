@@ -103,7 +103,8 @@ def test_cli_renders_a_mesh_file_framed_and_saves_its_scene(tmp_path, capsys):
     stl = tmp_path / "ico.stl"
     trimesh.Trimesh(V * 3.0 + 100.0, F).export(stl)
     out, saved = tmp_path / "ico.png", tmp_path / "scenes" / "ico.json"
-    assert main(["render", str(stl), "--size", "40", "40", "-o", str(out),
+    # (no ground plane, so that the border must be background if the framing holds)
+    assert main(["render", str(stl), "--size", "40", "40", "-o", str(out), "--no-ground",
                  "--save-scene", str(saved)]) == 0
     summary = capsys.readouterr().out
     img = load_png(out)
@@ -117,6 +118,7 @@ def test_cli_renders_a_mesh_file_framed_and_saves_its_scene(tmp_path, capsys):
     assert f"alpha {a:.4g}, alpha_U {20 * a:.4g}, inflation <= " \
         f"{field.inflation(a, 20 * a):.3g}" in summary
     data = json.loads(saved.read_text())
+    assert data["shading"] == "lit" and data["lighting"] == {"ground": False}
     assert data["objects"][0]["path"] == "../ico.stl"
     assert data["objects"][0]["alpha"] == pytest.approx(a, rel=1e-5)
     out2 = tmp_path / "again.png"

@@ -63,7 +63,7 @@ def test_npy_round_trip(tmp_path):
 
 @pytest.mark.parametrize(
     "bad",
-    [np.zeros((4, 4, 3), dtype=np.float64), np.zeros((4, 4, 4), dtype=np.uint8),
+    [np.zeros((4, 4, 3), dtype=np.float64), np.zeros((4, 4, 2), dtype=np.uint8),
      np.zeros((4,), dtype=np.uint8), np.zeros((0, 4, 3), dtype=np.uint8)],
 )
 def test_save_png_validates(tmp_path, bad):

@@ -68,8 +68,31 @@ def add_arguments(p):
                    help="exact mode: offset distance (default 1/alpha per object)")
     p.add_argument("--eps", type=float, help="hit threshold in scene units "
                    "(default 1e-4 x bbox diagonal)")
-    p.add_argument("--shading", choices=("normals", "matcap", "headlight"),
-                   help="view-space normal colours, matcap, or diffuse headlight")
+    p.add_argument("--shading", choices=("lit", "normals", "matcap", "headlight"),
+                   help="lit: key and fill lights, soft shadows, ambient occlusion and a "
+                   "ground (default for a mesh file); normals: the paper's view-space normal "
+                   "colours (a scene file's default); matcap; diffuse headlight")
+    p.add_argument("--samples", type=int, metavar="N",
+                   help="anti-aliasing: N samples per pixel, tent-filtered (default: scene's, "
+                   "1)")
+    p.add_argument("--adaptive", action="store_true", default=None,
+                   help="give the extra samples only to pixels that differ from a neighbour "
+                   "(edges, shadow borders)")
+    p.add_argument("--transparent", action="store_true", default=None,
+                   help="RGBA PNG: transparent background, alpha = coverage (with the lit "
+                   "shading's ground: its shadow only)")
+    p.add_argument("--color", nargs=3, type=int, metavar=("R", "G", "B"),
+                   help="lit shading: base colour of the (first) object, 0-255")
+    p.add_argument("--background", nargs=3, type=int, metavar=("R", "G", "B"),
+                   help="background colour, 0-255 (default white)")
+    p.add_argument("--penumbra", type=float,
+                   help="lit shading: shadow softness > 0 (0.02 nearly hard, default 0.08)")
+    p.add_argument("--no-shadows", dest="shadows", action="store_false", default=None,
+                   help="lit shading: no shadows")
+    p.add_argument("--no-ao", dest="ao", action="store_false", default=None,
+                   help="lit shading: no ambient occlusion")
+    p.add_argument("--no-ground", dest="ground", action="store_false", default=None,
+                   help="lit shading: no ground plane")
     p.add_argument("--depth", metavar="OUT.npy",
                    help="write the depth AOV: ray parameter t, float32 (H, W), NaN on misses")
     p.add_argument("--normals", metavar="OUT.npy",
@@ -103,7 +126,8 @@ def _auto_or_number(flag, *words):
 _NUMBERS = (("--alpha", "alpha", 0.0, False), ("--alpha-u", "alpha_u", 0.0, False),
             ("--beta", "beta", 0.0, True), ("--eps", "eps", 0.0, False),
             ("--tol", "tol", 0.0, True), ("--newton", "newton", 0.0, True),
-            ("--offset", "offset", 0.0, True))
+            ("--offset", "offset", 0.0, True), ("--penumbra", "penumbra", 0.0, False),
+            ("--samples", "samples", 1, True))
 
 
 def check_options(args):
@@ -124,6 +148,14 @@ def check_options(args):
             raise CLIError(f"{flag} must be finite, got {v}")
         if v < low or (v == low and not closed):
             raise CLIError(f"{flag} must be {'>=' if closed else '>'} {low:g}, got {v}")
+    from tracer.film import MAX_SAMPLES
+
+    if args.samples is not None and args.samples > MAX_SAMPLES:
+        raise CLIError(f"--samples must be at most {MAX_SAMPLES}, got {args.samples}")
+    for flag in ("color", "background"):
+        v = getattr(args, flag, None)
+        if v is not None and not all(0 <= c <= 255 for c in v):
+            raise CLIError(f"--{flag} must be three integers 0-255, got {' '.join(map(str, v))}")
 
 
 def input_kind(path):
@@ -163,7 +195,9 @@ def run(args):
         raise CLIError("--up applies to a --view; a scene file's camera sets its own up")
     overrides = {"beta": args.beta, "alpha": args.alpha, "alpha_u": args.alpha_u,
                  "mode": args.mode, "eps": args.eps, "shading": args.shading,
-                 "offset": args.offset, "tol": args.tol, "newton": args.newton}
+                 "offset": args.offset, "tol": args.tol, "newton": args.newton,
+                 "samples": args.samples, "adaptive": args.adaptive,
+                 "transparent": args.transparent, "lighting": _lighting_args(args)}
     if args.size:
         overrides["width"], overrides["height"] = args.size
     name = os.path.splitext(os.path.basename(args.scene))[0]
@@ -187,10 +221,14 @@ def run(args):
         scene = load_scene(args.scene, overrides)
         if args.view or args.camera:
             _replace_camera(scene, args)
+        if args.color is not None:
+            scene.objects[0].color = tuple(float(c) for c in args.color)
+        if args.background is not None:
+            scene.background = tuple(args.background)
     bar = None if args.quiet else ProgressBar(f"render {name}")
     result = render(scene, progress=bar)
     make_parents(outputs)
-    written = [save_png(out, result.rgb, overwrite=args.overwrite)]
+    written = [result.save(out, overwrite=args.overwrite)]
     if args.depth:
         written.append(save_npy(args.depth, result.depth, overwrite=args.overwrite))
     if args.normals:
@@ -238,6 +276,12 @@ def run(args):
     return 0
 
 
+def _lighting_args(args):
+    """The lit shading's settings given on the command line (None: not given)."""
+    return {"penumbra": args.penumbra, "shadows": args.shadows, "ao": args.ao,
+            "ground": args.ground}
+
+
 def _camera_arg(args):
     c = args.camera
     return (np.array(c[0:3]), np.array(c[3:6]), np.array(c[6:9]))
@@ -272,8 +316,13 @@ def _build_mesh_scene(args):
                       view=args.view or "front", up=args.up or "auto",
                       camera=_camera_arg(args) if args.camera else None,
                       mode=args.mode or "smooth", offset=args.offset, eps=args.eps,
-                      shading=args.shading or "normals",
-                      tol=args.tol if args.tol is not None else 0.0, newton=args.newton)
+                      shading=args.shading or "lit",
+                      tol=args.tol if args.tol is not None else 0.0, newton=args.newton,
+                      samples=args.samples or 1, adaptive=bool(args.adaptive),
+                      transparent=bool(args.transparent),
+                      lighting={k: v for k, v in _lighting_args(args).items() if v is not None},
+                      color=args.color,
+                      background=tuple(args.background) if args.background else (255, 255, 255))
 
 
 def _replace_camera(scene, args):
@@ -342,10 +391,18 @@ def _edited_scene(data, args, scene):
                               else float(f"{scene.objects[0].alpha_u:.6g}"))
     if args.size:
         data["width"], data["height"] = args.size
-    for key in ("beta", "mode", "eps", "shading", "offset", "tol", "newton"):
+    for key in ("beta", "mode", "eps", "shading", "offset", "tol", "newton", "samples",
+                "adaptive", "transparent"):
         if getattr(args, key) is not None:
             data[key] = getattr(args, key)
             if key in ("beta", "offset"):  # the command line overrode per-object values too
                 for od in data["objects"]:
                     od.pop(key, None)
+    given = {k: v for k, v in _lighting_args(args).items() if v is not None}
+    if given:
+        data.setdefault("lighting", {}).update(given)
+    if args.color is not None:
+        first["color"] = list(args.color)
+    if args.background is not None:
+        data["background"] = list(args.background)
     return data

@@ -67,8 +67,9 @@ def resolve_up(mesh, up):
 
 def mesh_scene(mesh, F=None, *, kind=None, alpha="auto", alpha_u="auto", beta=0.5,
                size=(512, 512), view="front", camera=None, mode="smooth", offset=None,
-               eps=None, shading="normals", matcap="", name=None, tol=DEFAULT_TOL, newton=None,
-               up="auto"):
+               eps=None, shading="lit", matcap="", name=None, tol=DEFAULT_TOL, newton=None,
+               up="auto", samples=1, adaptive=False, transparent=False, lighting=None,
+               color=None, background=(255, 255, 255)):
     """A one-object :class:`tracer.scene.Scene` for ``mesh``, camera framing the surface.
 
     Parameters
@@ -96,8 +97,11 @@ def mesh_scene(mesh, F=None, *, kind=None, alpha="auto", alpha_u="auto", beta=0.
         files and for trimesh / pyvista objects, y otherwise (OBJ, OFF, arrays).
     camera : (origin, dest, up), optional
         An explicit camera instead of ``view``.
-    mode, offset, eps, shading, matcap, tol, newton :
-        As in :func:`tracer.scene.scene_from_field`.
+    shading : {"lit", "normals", "matcap", "headlight"}
+        ``"lit"`` (the default here): key and fill lights, soft shadows, ambient occlusion
+        and a ground (:mod:`tracer.lighting`); ``"normals"``: the paper's normal colours.
+    mode, offset, eps, matcap, tol, newton, samples, adaptive, transparent, lighting, color :
+        As in :func:`tracer.scene.scene_from_field` (``background`` too).
     name : str, optional
         The scene's name (default: the mesh's).
     """
@@ -115,15 +119,20 @@ def mesh_scene(mesh, F=None, *, kind=None, alpha="auto", alpha_u="auto", beta=0.
                             camera=view if camera is None else camera, width=width,
                             height=height, mode=mode, eps=eps, offset=offset, shading=shading,
                             matcap=matcap, name=name or os.path.splitext(data.name)[0], tol=tol,
-                            newton=newton, up=up)
+                            newton=newton, up=up, samples=samples, adaptive=adaptive,
+                            transparent=transparent, lighting=lighting, color=color,
+                            background=background)
 
 
 def render_mesh(mesh, F=None, *, kind=None, alpha="auto", alpha_u="auto", beta=0.5,
                 size=(512, 512), view="front", camera=None, mode="smooth", offset=None,
-                eps=None, shading="normals", matcap="", progress=None, up="auto"):
+                eps=None, shading="lit", matcap="", progress=None, up="auto", samples=1,
+                adaptive=False, transparent=False, lighting=None, color=None,
+                background=(255, 255, 255), tol=DEFAULT_TOL, newton=None):
     """Sphere-trace the smooth-distance surface of ``mesh``; arrays back, nothing written.
 
-    Parameters are those of :func:`mesh_scene`; ``progress`` as in
+    Parameters are those of :func:`mesh_scene` (the ``"lit"`` shading by default;
+    ``shading="normals"`` gives the paper's normal colours); ``progress`` as in
     :func:`tracer.render.render`.
 
     Returns
@@ -137,14 +146,17 @@ def render_mesh(mesh, F=None, *, kind=None, alpha="auto", alpha_u="auto", beta=0
     Example::
 
         import trimesh, tracer
-        res = tracer.render_mesh(trimesh.creation.icosphere(), kind="edges", size=(256, 256))
+        res = tracer.render_mesh(trimesh.creation.icosphere(), kind="edges", size=(256, 256),
+                                 samples=8, adaptive=True)     # anti-aliased, lit
         res.save("renders/ico.png")         # res.rgb, res.depth, res.hit, ... are arrays
     """
     from tracer.render import render
 
     scene = mesh_scene(mesh, F, kind=kind, alpha=alpha, alpha_u=alpha_u, beta=beta, size=size,
                        view=view, camera=camera, mode=mode, offset=offset, eps=eps,
-                       shading=shading, matcap=matcap, up=up)
+                       shading=shading, matcap=matcap, up=up, samples=samples,
+                       adaptive=adaptive, transparent=transparent, lighting=lighting,
+                       color=color, background=background, tol=tol, newton=newton)
     return render(scene, progress=progress)
 
 
@@ -192,6 +204,27 @@ def scene_dict(scene, scene_path, source_paths):
         out["matcap"] = rel(scene.matcap)
     if scene.tol:
         out["tol"] = float(scene.tol)
+    if scene.samples != 1:
+        out["samples"] = int(scene.samples)
+    if scene.adaptive:
+        out["adaptive"] = True
+    if scene.transparent:
+        out["transparent"] = True
+    if tuple(scene.background) != (255, 255, 255):
+        out["background"] = [int(v) for v in scene.background]
+    if scene.shading == "lit":
+        from dataclasses import asdict
+
+        from tracer.lighting import Lighting
+
+        default = asdict(Lighting())
+        changed = {k: (list(v) if isinstance(v, tuple) else v)
+                   for k, v in asdict(scene.lighting).items() if v != default[k]}
+        if changed:
+            out["lighting"] = changed
+    for od, o in zip(objs, scene.objects):
+        if o.color is not None:
+            od["color"] = [int(round(v)) for v in o.color]
     if scene.newton != NEWTON:
         out["newton"] = float(scene.newton)
     return out

@@ -33,8 +33,8 @@ def save_png(path, rgb, overwrite=True):
     ----------
     path : str or os.PathLike
         Destination; the format is PNG whatever the suffix.
-    rgb : (H, W, 3) or (H, W) uint8 array
-        Colour or grey image, row 0 = top.
+    rgb : (H, W, 3), (H, W, 4) or (H, W) uint8 array
+        Colour, colour with alpha (straight, not premultiplied) or grey image, row 0 = top.
     overwrite : bool, default True
         If False, raise FileExistsError when ``path`` exists.
 
@@ -48,9 +48,10 @@ def save_png(path, rgb, overwrite=True):
     arr = np.asarray(rgb)
     if arr.dtype != np.uint8:
         raise ValueError(f"image must be uint8, got dtype {arr.dtype}")
-    if not (arr.ndim == 2 or (arr.ndim == 3 and arr.shape[2] == 3)) or 0 in arr.shape:
-        raise ValueError(f"image must have shape (H, W, 3) or (H, W), got shape {arr.shape}")
-    img = Image.fromarray(np.ascontiguousarray(arr))  # infers "RGB" or "L" from the shape
+    if not (arr.ndim == 2 or (arr.ndim == 3 and arr.shape[2] in (3, 4))) or 0 in arr.shape:
+        raise ValueError(f"image must have shape (H, W, 3), (H, W, 4) or (H, W), got shape "
+                         f"{arr.shape}")
+    img = Image.fromarray(np.ascontiguousarray(arr))  # "RGB", "RGBA" or "L" from the shape
     path = Path(path)
     with atomic_write(path, overwrite=overwrite) as tmp:
         img.save(tmp, format="PNG")
@@ -84,12 +85,14 @@ def save_npy(path, array, overwrite=True):
     return path
 
 
-def load_png(path):
-    """Read an image as RGB.
+def load_png(path, alpha=False):
+    """Read an image as RGB (or RGBA).
 
     Parameters
     ----------
     path : str or os.PathLike
+    alpha : bool, default False
+        Return ``(H, W, 4)`` with the alpha channel (255 where the file has none).
 
     Returns
     -------
@@ -111,7 +114,7 @@ def load_png(path):
         raise FileNotFoundError(f"image not found: {path}")
     try:
         with Image.open(path) as img:
-            return np.array(img.convert("RGB"), dtype=np.uint8)
+            return np.array(img.convert("RGBA" if alpha else "RGB"), dtype=np.uint8)
     except (OSError, UnidentifiedImageError) as exc:
         raise ValueError(f"cannot read image {path}: {exc}") from None
 

@@ -591,6 +591,32 @@ def trace_pixels(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, ro
         leaves[i] = lv
 
 
+@numba.njit(**NJIT_PARALLEL)
+def trace_rays(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, rows, cols,
+               depth_max, hit, tbuf, grad, steps, relax=RELAX, omega=OMEGA, newton=0.0):
+    """Trace camera rays through sub-pixel positions (anti-aliasing samples).
+
+    ``rows, cols (n,) float64``: image coordinates; pixel ``(r, c)``'s own ray is at
+    ``(r, c)`` exactly (:func:`tracer.camera.ray_direction` takes fractional positions).
+    Outputs have the length of ``rows``: ``hit (n,) bool``, ``tbuf (n,)``, ``grad (n, 3)``,
+    ``steps (n,) int64``. Each ray is independent, so the result does not depend on the
+    number of threads.
+    """
+    for i in prange(rows.size):
+        stack = np.empty(depth_max + 4, dtype=np.int64)
+        dstack = np.empty(depth_max + 4)
+        dx, dy, dz = ray_direction(cam, rows[i], cols[i])
+        h, t, gx, gy, gz, st, lv, bs = march_ray(tree, roots, params, mode, tol, cam[0], cam[1],
+                                                 cam[2], dx, dy, dz, lo, hi, eps, max_steps,
+                                                 stack, dstack, relax, omega, 0.0, newton)
+        hit[i] = h == 1
+        tbuf[i] = t
+        grad[i, 0] = gx
+        grad[i, 1] = gy
+        grad[i, 2] = gz
+        steps[i] = st
+
+
 @intrinsic
 def _borrowed(typingctx, value):
     """``value`` (an array, or a tuple such as a ``TreeData`` holding arrays) with every array

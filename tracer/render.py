@@ -39,6 +39,16 @@ class RenderResult(NamedTuple):
     camera : tracer.camera.Camera
     scene : tracer.scene.Scene or None
         The scene rendered (its objects hold the alpha and alpha_U used).
+    alpha : (H, W) float32
+        Coverage: the fraction of the pixel's samples that hit the surface (with a
+        transparent ground, its shadow). ``depth``, ``normals`` and ``hit`` are those of the
+        pixel's centre sample.
+    samples : (H, W) int32
+        Samples traced per pixel (1 everywhere without anti-aliasing).
+    aovs : dict
+        Further images of the centre samples, for the ``"lit"`` shading: ``shadow`` and
+        ``ao`` (0-1), ``object`` (index, -1 on misses), ``ground`` (bool); and the counts
+        ``rays`` and ``light_queries``.
     """
 
     rgb: np.ndarray
@@ -51,6 +61,9 @@ class RenderResult(NamedTuple):
     seconds: float
     camera: object
     scene: object = None
+    alpha: np.ndarray = None
+    samples: np.ndarray = None
+    aovs: dict = None
 
     def save(self, path, *, overwrite=True):
         """Write the image as PNG (``.png``), or the depth ``(H, W)`` float32 (NaN on misses)
@@ -60,12 +73,24 @@ class RenderResult(NamedTuple):
 
         name = str(path).lower()
         if name.endswith(".png"):
-            return save_png(path, self.rgb, overwrite=overwrite)
+            return save_png(path, self.rgba if self.transparent else self.rgb,
+                            overwrite=overwrite)
         if name.endswith(".npy") and "normal" in os.path.basename(name):
             return save_npy(path, self.normals.astype(np.float32), overwrite=overwrite)
         if name.endswith(".npy"):
             return save_npy(path, self.depth, overwrite=overwrite)
         raise ValueError(f"save: path must end in .png or .npy, got {path}")
+
+    @property
+    def rgba(self):
+        """``(H, W, 4) uint8``: the image with its coverage as alpha."""
+        a = np.ones(self.hit.shape, np.float32) if self.alpha is None else self.alpha
+        return np.dstack([self.rgb, np.round(255.0 * a).astype(np.uint8)])
+
+    @property
+    def transparent(self):
+        """Whether the scene asked for a transparent background (PNGs are then RGBA)."""
+        return bool(getattr(self.scene, "transparent", False))
 
     def _repr_png_(self):
         """The image as PNG bytes: a render shows itself in Jupyter."""
@@ -74,7 +99,8 @@ class RenderResult(NamedTuple):
         from PIL import Image
 
         buf = io.BytesIO()
-        Image.fromarray(np.ascontiguousarray(self.rgb)).save(buf, format="PNG")
+        Image.fromarray(np.ascontiguousarray(self.rgba if self.transparent else self.rgb)).save(
+            buf, format="PNG")
         return buf.getvalue()
 
     def summary(self):
@@ -205,7 +231,7 @@ def distance_at_camera(scene, arrays=None):
 
 
 def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None, omega=None,
-           cone=None, newton=None):
+           cone=None, newton=None, samples=None, adaptive=None):
     """Trace and shade ``scene``.
 
     Parameters
@@ -234,6 +260,12 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
         the scene box diagonal; 0: plain sphere tracing; default: the scene's ``newton``,
         ``tracer.march.NEWTON`` unless the scene file sets it); see
         :func:`tracer.march.march_ray`.
+    samples : int, optional
+        Anti-aliasing samples per pixel (default: the scene's ``samples``, 1); see
+        :mod:`tracer.film`.
+    adaptive : bool, optional
+        Give the extra samples only to pixels that disagree with a neighbour (default: the
+        scene's ``adaptive``).
 
     Raises
     ------
@@ -279,14 +311,34 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
                 progress(r0 * W + done, H * W, time.perf_counter() - t0)
         trace_tiles(args, r0, r1, depth_max, (hit, tbuf, grad, steps, leaves, bis), options,
                     report)
-    seconds = time.perf_counter() - t0
     norm = np.linalg.norm(grad, axis=2, keepdims=True)
     normals = np.where(norm > 0, grad / np.where(norm > 0, norm, 1.0), 0.0)
-    rgb = shade(scene, camera, normals, hit)
+    samples = _samples(scene.samples if samples is None else samples)
+    adaptive = bool(scene.adaptive if adaptive is None else adaptive)
+    if samples == 1 and scene.shading != "lit" and not scene.transparent:
+        seconds = time.perf_counter() - t0
+        rgb = shade(scene, camera, normals, hit)
+        alpha, spp, aovs = hit.astype(np.float32), np.ones((H, W), np.int32), {"rays": H * W}
+    else:
+        from tracer.film import form_image
+
+        kargs = args[:10] + (depth_max,)
+        rgb, alpha, spp, aovs = form_image(scene, camera, arrays, kargs, options,
+                                           (hit, tbuf, grad), samples, adaptive)
+        seconds = time.perf_counter() - t0
     depth = tbuf.astype(np.float32)
     return RenderResult(rgb=rgb, hit=hit, depth=depth, normals=normals, steps=steps,
                         leaves=leaves, bisections=bis, seconds=seconds, camera=camera,
-                        scene=scene)
+                        scene=scene, alpha=alpha, samples=spp, aovs=aovs)
+
+
+def _samples(value):
+    from tracer.film import MAX_SAMPLES
+
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) \
+            or not 1 <= value <= MAX_SAMPLES:
+        raise ValueError(f"samples must be an integer from 1 to {MAX_SAMPLES}, got {value!r}")
+    return int(value)
 
 
 def _progress_callback(progress, scene):

@@ -44,6 +44,8 @@ import numpy as np
 
 import smoothdist
 from smoothdist import DataMesh, SmoothDistanceField
+from tracer.film import MAX_SAMPLES
+from tracer.lighting import Lighting
 from tracer.march import NEWTON
 from tracer.validate import (SceneError, check_keys, choice, file_error, number, read_json,
                              resolve_path, show, vec3)
@@ -53,15 +55,17 @@ __all__ = ["Scene", "SceneObject", "SceneError", "load_scene", "read_scene_json"
 
 BVH_TYPES = {"faces": "triangles", "triangles": "triangles", "edges": "edges",
              "points": "points", "mixed": "mixed"}
-SHADINGS = ("normals", "matcap", "headlight")
+SHADINGS = ("normals", "matcap", "headlight", "lit")
 MODES = ("smooth", "exact")
 
 _TOP_KEYS = {"camera", "objects", "width", "height", "beta", "eps", "mode", "offset", "shading",
              "matcap", "background", "max_steps", "gradient", "description", "name", "tol",
-             "newton"}
+             "newton", "samples", "adaptive", "transparent", "lighting"}
+_LIGHTING_KEYS = {"shadows", "penumbra", "ao", "ao_distance", "ground", "ground_color", "key",
+                  "exposure"}
 _CAMERA_KEYS = {"origin", "dest", "up"}
 _OBJECT_KEYS = {"path", "parts", "alpha", "max_alpha", "bvh_type", "matcap", "beta", "offset",
-                "name", "scale", "translate"}
+                "name", "scale", "translate", "color"}
 _PART_KEYS = {"path", "bvh_type", "scale", "translate"}
 
 
@@ -76,6 +80,8 @@ class SceneObject:
     beta: float
     offset: float
     matcap: str = ""
+    #: base colour of the ``"lit"`` shading, sRGB 0-255 (None: the default or the palette)
+    color: tuple = None
 
 
 @dataclass
@@ -101,6 +107,13 @@ class Scene:
     extra: dict = dc_field(default_factory=dict)
     tol: float = 0.0
     newton: float = NEWTON
+    #: anti-aliasing samples per pixel, and whether only disagreeing pixels get them all
+    samples: int = 1
+    adaptive: bool = False
+    #: RGBA output whose alpha is the pixel's coverage (background not painted)
+    transparent: bool = False
+    #: settings of the ``"lit"`` shading
+    lighting: Lighting = dc_field(default_factory=Lighting)
 
     @property
     def name(self):
@@ -148,7 +161,9 @@ def load_scene(path, overrides=None):
     overrides : dict, optional
         Values that replace the file's: ``width``, ``height``, ``beta``, ``alpha`` (first
         object; a number or "auto"), ``alpha_u`` (first object's ``max_alpha``; a number or
-        "auto"), ``mode``, ``eps``, ``shading``, ``offset``, ``tol``, ``newton``.
+        "auto"), ``mode``, ``eps``, ``shading``, ``offset``, ``tol``, ``newton``,
+        ``samples``, ``adaptive``, ``transparent`` and ``lighting`` (a dict of
+        :class:`~tracer.lighting.Lighting` fields).
 
     Raises
     ------
@@ -201,6 +216,13 @@ def load_scene(path, overrides=None):
     if (not isinstance(bg, list) or len(bg) != 3
             or not all(isinstance(v, int) and not isinstance(v, bool) and 0 <= v <= 255 for v in bg)):
         raise file_error(path, "background", f"must be [r, g, b] integers 0-255, got {show(bg)}")
+    samples = top("samples", 1, "--samples", positive=True, integer=True)
+    if samples > MAX_SAMPLES:
+        where = "--samples" if overrides.get("samples") is not None else "samples"
+        raise file_error(path, where, f"must be at most {MAX_SAMPLES}, got {samples}")
+    adaptive = _flag(data, overrides, "adaptive", path)
+    transparent = _flag(data, overrides, "transparent", path)
+    lighting = _lighting(data.get("lighting", {}), overrides.get("lighting"), path)
     for key in ("description", "name"):
         if key in data and not isinstance(data[key], str):
             raise file_error(path, key, f"must be a string, got {show(data[key])}")
@@ -234,7 +256,9 @@ def load_scene(path, overrides=None):
     scene = Scene(path=path, camera_origin=origin, camera_dest=dest, camera_up=up,
                   objects=objects, width=width, height=height, beta=beta, eps=eps, mode=mode,
                   shading=shading, matcap=matcap, background=tuple(bg), max_steps=max_steps,
-                  gradient=gradient, description=str(desc), tol=tol, newton=newton)
+                  gradient=gradient, description=str(desc), tol=tol, newton=newton,
+                  samples=samples, adaptive=adaptive, transparent=transparent,
+                  lighting=lighting)
     if scene.eps is None:
         scene.eps = default_eps(scene)
     return scene
@@ -247,6 +271,53 @@ def default_eps(scene):
     if not ref > 0:
         ref = max(max(1.0 / o.alpha, o.offset) for o in scene.objects)
     return 1e-4 * max(ref, 1e-12)
+
+
+def _flag(data, overrides, key, path):
+    """A boolean top-level key (an override, when given, wins)."""
+    if overrides.get(key) is not None:
+        return bool(overrides[key])
+    value = data.get(key, False)
+    if not isinstance(value, bool):
+        raise file_error(path, key, f"must be true or false, got {show(value)}")
+    return value
+
+
+def color(value, path, where):
+    """``[r, g, b]`` integers 0-255 as a tuple of floats."""
+    if (not isinstance(value, list) or len(value) != 3
+            or not all(isinstance(v, int) and not isinstance(v, bool) and 0 <= v <= 255
+                       for v in value)):
+        raise file_error(path, where, f"must be [r, g, b] integers 0-255, got {show(value)}")
+    return tuple(float(v) for v in value)
+
+
+def _lighting(ld, override, path):
+    """The ``lighting`` object as :class:`~tracer.lighting.Lighting` (``override``: a dict of
+    already-checked values from the command line, applied on top)."""
+    check_keys(ld, _LIGHTING_KEYS, path, "lighting")
+    kw = {}
+    for key in ("shadows", "ao", "ground"):
+        if key in ld:
+            if not isinstance(ld[key], bool):
+                raise file_error(path, f"lighting.{key}", f"must be true or false, got "
+                                                         f"{show(ld[key])}")
+            kw[key] = ld[key]
+    for key in ("penumbra", "ao_distance", "exposure"):
+        if key in ld:
+            kw[key] = number(ld[key], path, f"lighting.{key}", positive=True)
+    if "ground_color" in ld:
+        kw["ground_color"] = color(ld["ground_color"], path, "lighting.ground_color")
+    if "key" in ld:
+        key = vec3(ld["key"], path, "lighting.key")
+        if not np.linalg.norm(key) > 0:
+            raise file_error(path, "lighting.key", "must be a non-zero vector")
+        kw["key"] = tuple(key)
+    kw.update({k: v for k, v in (override or {}).items() if v is not None})
+    try:
+        return Lighting(**kw)
+    except ValueError as exc:
+        raise SceneError(f"{os.path.basename(path)}: {exc}") from None
 
 
 def _object_spec(od, i, base, path, data, overrides, beta):
@@ -313,9 +384,10 @@ def _object_spec(od, i, base, path, data, overrides, beta):
     name = od.get("name", os.path.basename(od.get("path", f"object{i}")))
     if not isinstance(name, str):
         raise file_error(path, f"{where}.name", f"must be a string, got {show(name)}")
+    ocolor = color(od["color"], path, f"{where}.color") if "color" in od else None
     return dict(where=where, parts=specs, merged=merged, merged_name=od.get("name", "mixed"),
                 alpha=alpha, alpha_where=alpha_where, alpha_u=alpha_u, beta=obeta,
-                offset=offset, matcap=matcap, name=name)
+                offset=offset, matcap=matcap, name=name, color=ocolor)
 
 
 def _part_spec(pd, base, path, where):
@@ -349,7 +421,7 @@ def _build_object(spec, path, gradient):
     fld.kernel_args(alpha, spec["beta"], alpha_u, gradient)
     return SceneObject(name=str(spec["name"]), field=fld, alpha=float(alpha),
                        alpha_u=float(alpha_u), beta=spec["beta"], offset=float(offset),
-                       matcap=spec["matcap"])
+                       matcap=spec["matcap"], color=spec["color"])
 
 
 def _part_mesh(ps, path):
@@ -389,7 +461,8 @@ def merge_meshes(meshes, name="mixed"):
 def scene_from_field(field, *, alpha, alpha_u=None, beta=0.5, camera=None, width=512,
                      height=512, mode="smooth", eps=None, offset=None, shading="normals",
                      matcap="", gradient="metric", name="scene", max_steps=1000, tol=0.0,
-                     newton=None, up="y"):
+                     newton=None, up="y", samples=1, adaptive=False, transparent=False,
+                     lighting=None, color=None, background=(255, 255, 255)):
     """Build a one-object :class:`Scene` in code (no JSON), e.g. for parameter studies.
 
     Parameters
@@ -417,6 +490,18 @@ def scene_from_field(field, *, alpha, alpha_u=None, beta=0.5, camera=None, width
         plain sphere tracing; default ``tracer.march.NEWTON``), as the scene key ``newton``.
     up : {"x", "y", "z"}
         The data's up axis, for a view name ``camera`` (:func:`tracer.camera.view_vectors`).
+    samples : int
+        Anti-aliasing samples per pixel (1 to ``tracer.film.MAX_SAMPLES``), as the scene key.
+    adaptive : bool
+        Extra samples only where neighbouring pixels disagree (:mod:`tracer.film`).
+    transparent : bool
+        Leave the background transparent: RGBA PNGs whose alpha is the coverage.
+    lighting : tracer.lighting.Lighting or dict, optional
+        Settings of the ``"lit"`` shading (a dict of its fields; default ``Lighting()``).
+    color : (3,) int, optional
+        Base colour of the object in the ``"lit"`` shading, sRGB 0-255.
+    background : (3,) int
+        Background colour, sRGB 0-255.
     """
     if mode not in MODES:
         raise ValueError(f"mode must be one of {MODES}, got {mode!r}")
@@ -444,6 +529,22 @@ def scene_from_field(field, *, alpha, alpha_u=None, beta=0.5, camera=None, width
     if width * height > MAX_PIXELS:
         raise ValueError(f"width x height is {width}x{height}: larger than "
                          f"{MAX_PIXELS // 1_000_000} megapixels")
+    from tracer.film import MAX_SAMPLES
+    from tracer.lighting import _check_color
+
+    samples = int(_api_number(samples, "samples", positive=True, integer=True))
+    if samples > MAX_SAMPLES:
+        raise ValueError(f"samples must be at most {MAX_SAMPLES}, got {samples}")
+    if lighting is None:
+        lighting = Lighting()
+    elif isinstance(lighting, dict):
+        lighting = Lighting(**lighting)
+    elif not isinstance(lighting, Lighting):
+        raise ValueError(f"lighting must be a tracer.lighting.Lighting or a dict, got "
+                         f"{type(lighting).__name__}")
+    if color is not None:
+        color = _check_color(color, "color")
+    background = tuple(int(round(v)) for v in _check_color(background, "background"))
     lo, hi = field.bounds
     if isinstance(camera, str):
         from tracer.camera import frame_points
@@ -469,11 +570,13 @@ def scene_from_field(field, *, alpha, alpha_u=None, beta=0.5, camera=None, width
     look_at(origin, dest, up, width, height)  # validates the camera
     obj = SceneObject(name=name, field=field, alpha=alpha, alpha_u=alpha_u, beta=beta,
                       offset=offset if offset is not None else 1.0 / alpha,
-                      matcap=matcap)
+                      matcap=matcap, color=color)
     scene = Scene(path=f"{name}.json", camera_origin=origin, camera_dest=dest, camera_up=up,
                   objects=[obj], width=width, height=height, beta=beta,
                   eps=eps, mode=mode, shading=shading, matcap=matcap, max_steps=max_steps,
-                  gradient=gradient, tol=tol, newton=newton)
+                  gradient=gradient, tol=tol, newton=newton, samples=samples,
+                  adaptive=bool(adaptive), transparent=bool(transparent), lighting=lighting,
+                  background=background)
     if scene.eps is None:
         scene.eps = default_eps(scene)
     return scene

@@ -45,6 +45,7 @@ def sections(schema=None):
     schema = schema or load_schema()
     props = schema["properties"]
     return [("Top level", "", schema), ("camera", "camera.", props["camera"]),
+            ("lighting", "lighting.", props["lighting"]),
             ("objects[i]", "objects[i].", schema["$defs"]["object"]),
             ("objects[i].parts[j]", "objects[i].parts[j].", schema["$defs"]["part"])]
 
@@ -62,6 +63,8 @@ def _type_ok(value, t):
             isinstance(value, float) and value.is_integer())
     if t == "number":
         return isinstance(value, (int, float)) and not isinstance(value, bool)
+    if t == "boolean":
+        return isinstance(value, bool)
     raise ValueError(f"schema type {t!r} is not supported by this validator")
 
 

@@ -16,6 +16,7 @@ import numpy as np
 
 from smoothdist import SmoothDistanceField
 from tracer.image import save_png
+from tracer.lighting import Lighting
 from tracer.outputs import atomic_write
 from tracer.render import ProgressBar, render
 from tracer.scene import Scene, SceneObject, default_eps
@@ -31,10 +32,11 @@ def body_scene(sim, size=None):
     objs = [SceneObject(name=b.name, field=SmoothDistanceField(b.mesh), alpha=b.alpha,
                         alpha_u=b.alpha_u, beta=sim.beta, offset=1.0 / b.alpha)
             for b in sim.bodies]
+    # lit clips: the bodies' own floors catch the shadows, so no extra ground plane
     scene = Scene(path=sim.path, camera_origin=cam.origin, camera_dest=cam.dest,
                   camera_up=cam.up, objects=objs, width=width, height=height,
                   beta=sim.beta, shading=cam.shading, matcap=cam.matcap,
-                  background=cam.background)
+                  background=cam.background, lighting=Lighting(ground=False))
     scene.eps = default_eps(scene)
     return scene
 

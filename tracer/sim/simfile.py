@@ -16,7 +16,7 @@ Format (keys not listed are refused; lengths in scene units, times in seconds)::
         "width": 640, "height": 360,     image size (default 640 x 360)
         "fps": 25,                       movie frame rate (default 25)
         "every": 4,                      render every N-th step (default: about 80 frames)
-        "shading": "normals",            "normals" | "headlight" | "matcap"
+        "shading": "lit",                "lit" | "normals" | "headlight" | "matcap"
         "matcap": "path.png",            with shading "matcap"
         "background": [255, 255, 255]
       },
@@ -93,7 +93,7 @@ class Camera:
     height: int = 360
     fps: float = 25.0
     every: int = 1
-    shading: str = "normals"
+    shading: str = "lit"
     matcap: str = ""
     background: tuple = (255, 255, 255)
 

@@ -1,0 +1,428 @@
+"""Pixels from samples: anti-aliasing, adaptive refinement, shading of every sample, alpha.
+
+A render first traces one ray per pixel, through the pixel's own position (the tile kernels of
+:mod:`tracer.march`); those *centre samples* give the depth, normals and hit mask of a
+:class:`~tracer.render.RenderResult`. With ``samples = N > 1`` every pixel gets ``N - 1`` more
+rays (:func:`tracer.march.trace_rays`) at the offsets of :func:`sample_offsets`: a
+low-discrepancy (R2) sequence warped so that the offsets are distributed like a tent filter of
+radius one pixel. Every sample then carries the same weight and the pixel is their mean, which
+is the tent-filtered image (filter importance sampling); sample 0 is the centre.
+
+``adaptive``: the centre samples of neighbouring pixels are compared (hit or miss, object,
+ground, shaded colour); where a pair disagrees both pixels get 4 samples, and those whose 4
+samples still disagree get all ``N``. Elsewhere one sample is enough.
+
+Every sample is shaded (:mod:`tracer.shading`, or :mod:`tracer.lighting` for ``"lit"``) and
+averaged with its coverage: lit colours in linear light (encoded to sRGB at the end), the
+other shadings in display values, as they were defined. The alpha of a pixel is the fraction of
+its samples that hit the surface (or, transparent with a ground, the ground's shadow: a shadow
+catcher). Lit samples that hit the same object as their pixel's centre sample reuse its shadow
+and occlusion (both vary slowly across a pixel); others are lit afresh.
+"""
+
+import numpy as np
+
+from tracer import lighting as _lighting
+from tracer import march
+from tracer.camera import primary_rays
+from tracer.shading import (load_matcap, shade_headlight, shade_matcap, shade_normals,
+                            view_normals)
+
+__all__ = ["sample_offsets", "form_image", "MAX_SAMPLES", "ADAPTIVE_FIRST"]
+
+#: largest number of samples per pixel
+MAX_SAMPLES = 1024
+#: samples of a pixel flagged by the adaptive pass before its own samples are compared
+ADAPTIVE_FIRST = 4
+#: shaded colours (display values, 0-1) that differ by more than this disagree
+COLOR_CONTRAST = 0.05
+
+_R2 = 1.32471795724474602596     # the plastic number: R2 sequence (Roberts 2018)
+
+
+def _tent_inverse(u):
+    """Inverse CDF of the tent filter ``1 - |x|`` on ``[-1, 1]``."""
+    return np.where(u < 0.5, -1.0 + np.sqrt(2.0 * u), 1.0 - np.sqrt(2.0 * (1.0 - u)))
+
+
+def sample_offsets(n):
+    """``(n, 2)`` sub-pixel offsets ``(d_row, d_col)`` in pixels; offset 0 is ``(0, 0)``.
+
+    The R2 sequence started at ``(0.5, 0.5)`` and warped by the tent's inverse CDF: its first
+    ``k`` points are well spread for every ``k`` (so the adaptive pass can add samples to a
+    pixel in order) and distributed like the tent filter of radius one pixel."""
+    k = np.arange(int(n), dtype=np.float64)
+    u = np.mod(0.5 + k / _R2, 1.0)
+    v = np.mod(0.5 + k / _R2 ** 2, 1.0)
+    return np.stack([_tent_inverse(v), _tent_inverse(u)], axis=1)
+
+
+class _Shader:
+    """Shades samples of one render (colours, alphas, objects, light factors)."""
+
+    def __init__(self, scene, camera, arrays, kargs):
+        self.scene = scene
+        self.camera = camera
+        self.arrays = arrays
+        self.kargs = kargs                  # tree, roots (kernel form), params, mode, tol, ...
+        self.lit = scene.shading == "lit"
+        self.transparent = bool(getattr(scene, "transparent", False))
+        self.nobj = len(scene.objects)
+        self.origin = np.asarray(camera.origin, dtype=np.float64)
+        bg = np.asarray(scene.background, dtype=np.float64) / 255.0
+        if self.lit:
+            light = scene.lighting
+            self.light = light
+            self.key, self.fill, self.up = _lighting.light_directions(light, camera,
+                                                                       scene.camera_up)
+            self.bg = _lighting.srgb_to_linear(bg)
+            self.base = _lighting.srgb_to_linear(np.array(
+                [_object_color(o, i, self.nobj) for i, o in enumerate(scene.objects)]) / 255.0)
+            self.ground_base = _lighting.srgb_to_linear(np.asarray(light.ground_color) / 255.0)
+            self.diag = scene.diagonal
+            lo, hi = scene.bounds
+            self.centre = 0.5 * (lo + hi)
+            self.ground = None
+            if light.ground:
+                verts = np.concatenate([o.field.mesh.V for o in scene.objects]) \
+                    if arrays.params.shape[1] == march.P_COLUMNS else None
+                if verts is not None:
+                    self.ground = _lighting.ground_height(arrays, verts, self.up, scene.eps)
+                else:   # posed objects: the bottom of the posed scene box
+                    self.ground = min(float(c @ self.up) for c in
+                                      _lighting._corners(arrays.lo, arrays.hi))
+            self.queries = 0
+            self.leaves = 0
+            self.slack = _lighting.LIGHT_SLACK * self.diag
+        else:
+            self.bg = bg
+            if scene.shading == "matcap":
+                self.matcap = load_matcap(scene.matcap)
+
+    # ------------------------------------------------------------------ pieces
+    def objects_at(self, P):
+        if self.nobj == 1 or len(P) == 0:
+            return np.zeros(len(P), dtype=np.int64)
+        tree, roots, params, mode, lo, hi, depth_max, tol = self.arrays
+        out = np.empty(len(P), dtype=np.int64)
+        march_roots = roots if np.ndim(roots) else np.asarray([roots], dtype=np.int64)
+        _lighting.object_ids(tree, march_roots, params, mode, tol, np.ascontiguousarray(P),
+                             depth_max, out)
+        return out
+
+    def light_at(self, P, N):
+        """Shadow and occlusion at points with normals (the kernel, batched)."""
+        n = len(P)
+        shadow = np.ones(n)
+        ao = np.ones(n)
+        if n == 0 or not (self.light.shadows or self.light.ao):
+            return shadow, ao
+        tree, roots, params, mode, lo, hi, depth_max, tol = self.arrays
+        eps = float(self.scene.eps)
+        if self.ground is not None:     # shadow rays may start on the ground, below the box
+            lo, hi = _box_with_ground(lo, hi, self.up, self.ground)
+        work = np.zeros((n, 2), dtype=np.int64)
+        # loosened tolerance: the slack bounds how far below the render's distance a light
+        # query may be (tol must be > 0 for the kernels to prune)
+        _lighting.light_points(tree, np.asarray(roots, dtype=np.int64), params, mode,
+                               max(float(tol), 1e-12), np.ascontiguousarray(P),
+                               np.ascontiguousarray(N), self.key, lo, hi, eps, depth_max,
+                               1.0 / self.light.penumbra,
+                               self.light.ao_distance * self.diag / _lighting.AO_SAMPLES,
+                               self.light.shadows, self.light.ao,
+                               self.slack, max(2.0 * eps, _lighting.SHADOW_START * self.diag),
+                               shadow, ao, work)
+        self.queries += int(work[:, 0].sum())
+        self.leaves += int(work[:, 1].sum())
+        return shadow, ao
+
+    def ground_hits(self, dirs, miss):
+        """``(on_ground (n,) bool, points (n, 3), fade (n,))`` for camera rays ``dirs``."""
+        n = len(dirs)
+        on = np.zeros(n, dtype=bool)
+        pts = np.zeros((n, 3))
+        fade = np.zeros(n)
+        if self.ground is None or not miss.any():
+            return on, pts, fade
+        du = dirs @ self.up
+        t = (self.ground - self.origin @ self.up) / np.where(du < 0, du, -1.0)
+        on = miss & (du < -1e-9) & (t > 0) & np.isfinite(t)
+        pts[on] = self.origin + t[on, None] * dirs[on]
+        # the ground fades into the background away from the object (a studio floor)
+        r = np.linalg.norm(pts - (self.centre - (self.centre @ self.up - self.ground) * self.up),
+                           axis=1)
+        fade = np.where(on, np.exp(-(r / (0.9 * self.diag)) ** 2), 0.0)
+        return on, pts, fade
+
+    # ------------------------------------------------------------------ samples
+    def shade(self, hit, t, grad, dirs, reuse=None, grid=None):
+        """Colours ``(n, 3)`` (linear if lit, display values otherwise), alphas ``(n,)`` and a
+        record of what each sample saw (for reuse by later samples of the same pixel).
+
+        ``grid = (H, W)``: the samples are an image's centre samples, whose light is computed
+        at every other pixel of every other row and filled in between (:func:`_fill_light`)."""
+        n = len(hit)
+        norm = np.linalg.norm(grad, axis=1, keepdims=True)
+        normals = np.where(norm > 0, grad / np.where(norm > 0, norm, 1.0), 0.0)
+        if not self.lit:
+            nv = view_normals(normals.reshape(n, 1, 3), self.camera)
+            h2 = hit.reshape(n, 1)
+            if self.scene.shading == "matcap":
+                rgb = shade_matcap(nv, h2, self.matcap)
+            elif self.scene.shading == "headlight":
+                rgb = shade_headlight(nv, h2)
+            else:
+                rgb = shade_normals(nv, h2)
+            colour = rgb.reshape(n, 3).astype(np.float64) / 255.0
+            return colour, hit.astype(np.float64), {"obj": np.zeros(n, np.int64), "hit": hit}
+        P = self.origin + np.where(hit, t, 0.0)[:, None] * dirs
+        obj = self.objects_at(P[hit])
+        obj_all = np.full(n, -1, dtype=np.int64)
+        obj_all[hit] = obj
+        miss = ~hit
+        on_ground, G, fade = self.ground_hits(dirs, miss)
+        shadow = np.ones(n)
+        ao = np.ones(n)
+        fresh = hit | on_ground
+        if reuse is not None:
+            same = (hit & (obj_all == reuse["obj"])) | (on_ground & reuse["ground"])
+            shadow[same] = reuse["shadow"][same]
+            ao[same] = reuse["ao"][same]
+            fresh &= ~same
+        # the gradient points out of the surface, towards the side the ray came from
+        facing = np.where(hit[:, None], normals, self.up)
+        depth = np.where(hit, t, np.linalg.norm(G - self.origin, axis=1))
+
+        def light(idx):
+            if idx.size:
+                pts = np.where(hit[idx, None], P[idx], G[idx])
+                shadow[idx], ao[idx] = self.light_at(pts, facing[idx])
+
+        if grid is not None and LIGHT_STRIDE > 1:
+            H, W = grid
+            r, c = np.divmod(np.arange(n), W)
+            coarse = fresh & (r % LIGHT_STRIDE == 0) & (c % LIGHT_STRIDE == 0)
+            light(np.flatnonzero(coarse))
+            key = np.where(hit, obj_all, np.where(on_ground, -2, -1))
+            filled = _fill_light((H, W), fresh & ~coarse, coarse, key, depth, facing, shadow,
+                                 ao)
+            light(np.flatnonzero(fresh & ~coarse & ~filled))
+        else:
+            light(np.flatnonzero(fresh))
+        colour = np.zeros((n, 3))
+        alpha = np.zeros(n)
+        if hit.any():
+            colour[hit] = _lighting.shade_lit(normals[hit], dirs[hit], self.base[obj],
+                                              shadow[hit], ao[hit], self.key, self.fill,
+                                              self.up, self.light.exposure)
+            alpha[hit] = 1.0
+        g = np.flatnonzero(on_ground)
+        if g.size:
+            lit_ground = _lighting.shade_ground(self.ground_base, shadow[g], ao[g], self.key,
+                                                self.up, self.light.exposure)
+            if self.transparent:     # a shadow catcher: black, as opaque as the shadow is dark
+                full = _lighting.shade_ground(self.ground_base, np.ones(1), np.ones(1),
+                                              self.key, self.up, self.light.exposure)[0]
+                dark = 1.0 - (lit_ground / np.maximum(full, 1e-12)).mean(axis=1)
+                alpha[g] = np.clip(fade[g] * dark, 0.0, 1.0)
+            else:
+                colour[g] = fade[g, None] * lit_ground + (1.0 - fade[g, None]) * self.bg
+                alpha[g] = 1.0
+        record = {"obj": obj_all, "ground": on_ground, "shadow": shadow, "ao": ao, "hit": hit,
+                  "on_ground": on_ground}
+        return colour, alpha, record
+
+    def encode(self, colour):
+        """Display values in ``[0, 1]`` of averaged colours."""
+        return _lighting.linear_to_srgb(colour) if self.lit else np.clip(colour, 0.0, 1.0)
+
+
+#: the centre samples' light is computed at every LIGHT_STRIDE-th pixel of every
+#: LIGHT_STRIDE-th row and filled in between where the neighbours agree (1: every pixel)
+LIGHT_STRIDE = 2
+#: a coarse neighbour fills a pixel in when it sees the same object, its depth is within this
+#: fraction of the pixel's and its normal within ``acos(FILL_COS)``
+FILL_DEPTH = 0.02
+FILL_COS = 0.9
+
+
+def _fill_light(shape, want, coarse, key, depth, normals, shadow, ao):
+    """Shadow and occlusion of the pixels ``want`` from the coarse pixels around them.
+
+    Each wanted pixel takes the bilinear-weighted mean of the (up to four) surrounding coarse
+    pixels that see the same object (``key``), at a depth within :data:`FILL_DEPTH` and with a
+    normal within ``acos(FILL_COS)`` of its own; pixels without such a neighbour are left out
+    (returned False) to be lit on their own. Edits ``shadow`` and ``ao`` in place; returns the
+    mask of pixels filled."""
+    H, W = shape
+    s = LIGHT_STRIDE
+    idx = np.flatnonzero(want)
+    filled = np.zeros(key.size, dtype=bool)
+    if idx.size == 0:
+        return filled
+    r, c = np.divmod(idx, W)
+    r0, c0 = (r // s) * s, (c // s) * s
+    fr, fc = (r - r0) / s, (c - c0) / s
+    acc_s = np.zeros(idx.size)
+    acc_a = np.zeros(idx.size)
+    acc_w = np.zeros(idx.size)
+    for dr, dc, w in ((0, 0, (1 - fr) * (1 - fc)), (0, s, (1 - fr) * fc),
+                      (s, 0, fr * (1 - fc)), (s, s, fr * fc)):
+        rr, cc = r0 + dr, c0 + dc
+        inside = (rr < H) & (cc < W)
+        j = np.where(inside, rr * W + np.minimum(cc, W - 1), 0)
+        ok = inside & coarse[j] & (key[j] == key[idx]) & (w > 0)
+        ok &= np.abs(depth[j] - depth[idx]) <= FILL_DEPTH * depth[idx]
+        ok &= (normals[j] * normals[idx]).sum(axis=1) >= FILL_COS
+        wt = np.where(ok, w, 0.0)
+        acc_s += wt * shadow[j]
+        acc_a += wt * ao[j]
+        acc_w += wt
+    good = acc_w > 0
+    shadow[idx[good]] = acc_s[good] / acc_w[good]
+    ao[idx[good]] = acc_a[good] / acc_w[good]
+    filled[idx[good]] = True
+    return filled
+
+
+def _box_with_ground(lo, hi, up, height):
+    """The scene box grown to reach the ground plane (along the axis closest to ``up``)."""
+    lo = np.array(lo, dtype=np.float64)
+    hi = np.array(hi, dtype=np.float64)
+    a = int(np.argmax(np.abs(up)))
+    if up[a] > 0:
+        lo[a] = min(lo[a], height / up[a] - 1e-9)
+    else:
+        hi[a] = max(hi[a], height / up[a] + 1e-9)
+    return lo, hi
+
+
+def _object_color(obj, i, nobj):
+    color = getattr(obj, "color", None)
+    if color is not None:
+        return np.asarray(color, dtype=np.float64)
+    if nobj == 1:
+        return np.asarray(_lighting.DEFAULT_COLOR, dtype=np.float64)
+    return np.asarray(_lighting.PALETTE[i % len(_lighting.PALETTE)], dtype=np.float64)
+
+
+def _neighbour_flags(colour, record, shape):
+    """Pixels whose centre sample disagrees with a 4-neighbour's (both get flagged)."""
+    H, W = shape
+    c = colour.reshape(H, W, 3)
+    keys = [record["hit"].reshape(H, W), record["obj"].reshape(H, W)]
+    if "on_ground" in record:
+        keys.append(record["on_ground"].reshape(H, W))
+    flags = np.zeros((H, W), dtype=bool)
+    for axis in (0, 1):
+        a = [slice(None)] * 2
+        b = [slice(None)] * 2
+        a[axis] = slice(0, -1)
+        b[axis] = slice(1, None)
+        a, b = tuple(a), tuple(b)
+        diff = np.abs(c[a] - c[b]).max(axis=2) > COLOR_CONTRAST
+        for k in keys:
+            diff |= k[a] != k[b]
+        flags[a] |= diff
+        flags[b] |= diff
+    return flags.ravel()
+
+
+def _trace(kargs, options, rows, cols):
+    tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, depth_max = kargs
+    relax, omega, cone, newton = options
+    n = rows.size
+    hit = np.zeros(n, dtype=np.bool_)
+    t = np.full(n, np.nan)
+    grad = np.zeros((n, 3))
+    steps = np.zeros(n, dtype=np.int64)
+    if n:
+        march.trace_rays(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, rows, cols,
+                         depth_max, hit, t, grad, steps, relax, omega, newton)
+    return hit, t, grad, steps
+
+
+def form_image(scene, camera, arrays, kargs, options, centre, samples=1, adaptive=False):
+    """Shade the centre samples, add ``samples - 1`` more per pixel (all pixels, or the
+    adaptive selection), and average.
+
+    ``kargs = (tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, depth_max)`` in the
+    march kernels' form; ``centre = (hit (H, W), t (H, W), grad (H, W, 3))``. Returns
+    ``(rgb (H, W, 3) uint8, alpha (H, W) float32, spp (H, W) int32, info dict)``; ``info``
+    holds the centre samples' ``shadow``, ``ao``, ``object`` and ``ground`` maps (lit only)
+    and the ``rays`` and ``light_queries`` counts."""
+    H, W = scene.height, scene.width
+    hit0, t0, grad0 = (np.asarray(a) for a in centre)
+    dirs = primary_rays(camera).reshape(-1, 3)
+    shader = _Shader(scene, camera, arrays, kargs)
+    colour0, alpha0, rec0 = shader.shade(hit0.ravel(), t0.ravel(), grad0.reshape(-1, 3), dirs,
+                                         grid=(H, W))
+    acc = colour0 * alpha0[:, None]
+    acc_a = alpha0.copy()
+    spp = np.ones(H * W, dtype=np.int32)
+    offsets = sample_offsets(samples)
+    rays = 0
+
+    def add(pixels, ks):
+        nonlocal rays
+        if pixels.size == 0 or len(ks) == 0:
+            return None
+        pix = np.repeat(pixels, len(ks))
+        kk = np.tile(np.asarray(ks), pixels.size)
+        r = (pix // W).astype(np.float64) + offsets[kk, 0]
+        c = (pix % W).astype(np.float64) + offsets[kk, 1]
+        d = _dir(kargs[5], r, c)
+        hit, t, grad, _ = _trace(kargs, options, r, c)
+        rays += pix.size
+        reuse = None
+        if shader.lit:
+            reuse = {key: rec0[key][pix] for key in ("obj", "ground", "shadow", "ao")}
+        col, a, rec = shader.shade(hit, t, grad, d, reuse)
+        np.add.at(acc, pix, col * a[:, None])
+        np.add.at(acc_a, pix, a)
+        np.add.at(spp, pix, 1)
+        return pix, col, rec
+
+    if samples > 1 and not adaptive:
+        add(np.arange(H * W), range(1, samples))
+    elif samples > 1:
+        first = min(samples, ADAPTIVE_FIRST)
+        flagged = np.flatnonzero(_neighbour_flags(shader.encode(colour0), rec0, (H, W)))
+        out = add(flagged, range(1, first))
+        if out is not None and samples > first:
+            pix, col, rec = out
+            m = first - 1
+            disp = shader.encode(col).reshape(flagged.size, m, 3)
+            disp = np.concatenate([shader.encode(colour0[flagged])[:, None], disp], axis=1)
+            spread = (disp.max(axis=1) - disp.min(axis=1)).max(axis=1) > COLOR_CONTRAST
+            hits = np.concatenate([rec0["hit"][flagged][:, None],
+                                   rec["hit"].reshape(flagged.size, m)], axis=1)
+            spread |= hits.any(axis=1) & ~hits.all(axis=1)
+            add(flagged[spread], range(first, samples))
+
+    cover = acc_a / spp
+    mean = acc / spp[:, None]                       # premultiplied
+    if shader.transparent:
+        colour = np.where(acc_a[:, None] > 0, acc / np.maximum(acc_a, 1e-300)[:, None], 0.0)
+    else:
+        colour = mean + (1.0 - cover)[:, None] * shader.bg
+    rgb = np.round(255.0 * shader.encode(colour)).astype(np.uint8).reshape(H, W, 3)
+    info = {"rays": int(H * W + rays)}
+    if shader.lit:
+        info.update(shadow=rec0["shadow"].reshape(H, W), ao=rec0["ao"].reshape(H, W),
+                    object=rec0["obj"].reshape(H, W), ground=rec0["on_ground"].reshape(H, W),
+                    light_queries=shader.queries, light_leaves=shader.leaves)
+    return rgb, cover.reshape(H, W).astype(np.float32), spp.reshape(H, W), info
+
+
+def _dir(cam, rows, cols):
+    """Unit ray directions through fractional image positions (vectorised
+    :func:`tracer.camera.ray_direction`)."""
+    from tracer.camera import _scales
+
+    width, height = cam[12], cam[13]
+    sx, sy = _scales(width, height)
+    dx = (cols / width - 0.5) * sx
+    dy = ((height - 1.0 - rows) / height - 0.5) * sy
+    d = cam[3:6][None, :] + dx[:, None] * cam[6:9][None, :] + dy[:, None] * cam[9:12][None, :]
+    return d / np.linalg.norm(d, axis=1, keepdims=True)
