@@ -34,8 +34,14 @@ __all__ = ["sample_offsets", "form_image", "MAX_SAMPLES", "ADAPTIVE_FIRST"]
 MAX_SAMPLES = 1024
 #: samples of a pixel flagged by the adaptive pass before its own samples are compared
 ADAPTIVE_FIRST = 4
-#: shaded colours (display values, 0-1) that differ by more than this disagree
+#: neighbouring pixels' centre samples (display values, 0-1) that differ by more than this
+#: disagree
 COLOR_CONTRAST = 0.05
+#: a flagged pixel's first ADAPTIVE_FIRST samples that spread by more than this get the rest
+SAMPLE_SPREAD = 0.02
+
+#: hit threshold of the extra samples, in pixels (see :func:`tracer.march.trace_samples`)
+EPS_PX = 0.1
 
 _R2 = 1.32471795724474602596     # the plastic number: R2 sequence (Roberts 2018)
 
@@ -80,6 +86,8 @@ class _Shader:
                 [_object_color(o, i, self.nobj) for i, o in enumerate(scene.objects)]) / 255.0)
             self.ground_base = _lighting.srgb_to_linear(np.asarray(light.ground_color) / 255.0)
             self.diag = scene.diagonal
+            if not self.diag > 0:   # data of no extent (one point): the surface's box
+                self.diag = float(np.linalg.norm(np.asarray(arrays.hi) - np.asarray(arrays.lo)))
             lo, hi = scene.bounds
             self.centre = 0.5 * (lo + hi)
             self.ground = None
@@ -93,7 +101,7 @@ class _Shader:
                                       _lighting._corners(arrays.lo, arrays.hi))
             self.queries = 0
             self.leaves = 0
-            self.slack = _lighting.LIGHT_SLACK * self.diag
+            self.slack = 0.0        # light queries are the render's own (see LIGHT_SLACK)
         else:
             self.bg = bg
             if scene.shading == "matcap":
@@ -117,15 +125,13 @@ class _Shader:
         ao = np.ones(n)
         if n == 0 or not (self.light.shadows or self.light.ao):
             return shadow, ao
-        tree, roots, params, mode, lo, hi, depth_max, tol = self.arrays
+        tree, roots, params, mode, tol = self.kargs[:5]   # the render's own queries
+        lo, hi, depth_max = self.arrays.lo, self.arrays.hi, self.arrays.depth_max
         eps = float(self.scene.eps)
         if self.ground is not None:     # shadow rays may start on the ground, below the box
             lo, hi = _box_with_ground(lo, hi, self.up, self.ground)
         work = np.zeros((n, 2), dtype=np.int64)
-        # loosened tolerance: the slack bounds how far below the render's distance a light
-        # query may be (tol must be > 0 for the kernels to prune)
-        _lighting.light_points(tree, np.asarray(roots, dtype=np.int64), params, mode,
-                               max(float(tol), 1e-12), np.ascontiguousarray(P),
+        _lighting.light_points(tree, roots, params, mode, tol, np.ascontiguousarray(P),
                                np.ascontiguousarray(N), self.key, lo, hi, eps, depth_max,
                                1.0 / self.light.penumbra,
                                self.light.ao_distance * self.diag / _lighting.AO_SAMPLES,
@@ -307,39 +313,47 @@ def _object_color(obj, i, nobj):
 
 
 def _neighbour_flags(colour, record, shape):
-    """Pixels whose centre sample disagrees with a 4-neighbour's (both get flagged)."""
+    """Pixels whose centre sample disagrees with one of its 8 neighbours' (both get flagged):
+    ``(flags, edges)``, both ``(H W,)`` bool; ``edges``: the disagreement is geometric (hit or
+    miss, object, ground), not only a colour contrast."""
     H, W = shape
     c = colour.reshape(H, W, 3)
     keys = [record["hit"].reshape(H, W), record["obj"].reshape(H, W)]
     if "on_ground" in record:
         keys.append(record["on_ground"].reshape(H, W))
     flags = np.zeros((H, W), dtype=bool)
-    for axis in (0, 1):
-        a = [slice(None)] * 2
-        b = [slice(None)] * 2
-        a[axis] = slice(0, -1)
-        b[axis] = slice(1, None)
-        a, b = tuple(a), tuple(b)
-        diff = np.abs(c[a] - c[b]).max(axis=2) > COLOR_CONTRAST
+    edges = np.zeros((H, W), dtype=bool)
+    # the 8 neighbours (a pixel's tent filter reaches one pixel into each of them)
+    for dr, dc in ((0, 1), (1, 0), (1, 1), (1, -1)):
+        a = (slice(0, H - dr), slice(max(0, -dc), W - max(0, dc)))
+        b = (slice(dr, H), slice(max(0, dc), W - max(0, -dc)))
+        geo = np.zeros(c[a].shape[:2], dtype=bool)
         for k in keys:
-            diff |= k[a] != k[b]
+            geo |= k[a] != k[b]
+        diff = geo | (np.abs(c[a] - c[b]).max(axis=2) > COLOR_CONTRAST)
         flags[a] |= diff
         flags[b] |= diff
-    return flags.ravel()
+        edges[a] |= geo
+        edges[b] |= geo
+    return flags.ravel(), edges.ravel()
 
 
-def _trace(kargs, options, rows, cols):
+def _trace(kargs, options, pixels, W, offsets):
+    """The samples ``offsets (K, 2)`` of the pixels ``pixels (m,)`` (flat indices), flattened
+    pixel-major: ``hit, t, grad, steps`` of length ``m K``."""
     tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, depth_max = kargs
     relax, omega, cone, newton = options
-    n = rows.size
-    hit = np.zeros(n, dtype=np.bool_)
-    t = np.full(n, np.nan)
-    grad = np.zeros((n, 3))
-    steps = np.zeros(n, dtype=np.int64)
-    if n:
-        march.trace_rays(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, rows, cols,
-                         depth_max, hit, t, grad, steps, relax, omega, newton)
-    return hit, t, grad, steps
+    m, K = pixels.size, len(offsets)
+    hit = np.zeros((m, K), dtype=np.bool_)
+    t = np.full((m, K), np.nan)
+    grad = np.zeros((m, K, 3))
+    steps = np.zeros((m, K), dtype=np.int64)
+    if m and K:
+        rows, cols = np.divmod(pixels.astype(np.int64), W)
+        march.trace_samples(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, rows,
+                            cols, np.ascontiguousarray(offsets, dtype=np.float64), depth_max,
+                            hit, t, grad, steps, relax, omega, cone, newton, EPS_PX)
+    return hit.ravel(), t.ravel(), grad.reshape(-1, 3), steps.ravel()
 
 
 def form_image(scene, camera, arrays, kargs, options, centre, samples=1, adaptive=False):
@@ -362,18 +376,21 @@ def form_image(scene, camera, arrays, kargs, options, centre, samples=1, adaptiv
     spp = np.ones(H * W, dtype=np.int32)
     offsets = sample_offsets(samples)
     rays = 0
+    work = [0]
 
     def add(pixels, ks):
         nonlocal rays
         if pixels.size == 0 or len(ks) == 0:
             return None
+        ks = np.asarray(ks)
         pix = np.repeat(pixels, len(ks))
-        kk = np.tile(np.asarray(ks), pixels.size)
+        kk = np.tile(ks, pixels.size)
         r = (pix // W).astype(np.float64) + offsets[kk, 0]
         c = (pix % W).astype(np.float64) + offsets[kk, 1]
         d = _dir(kargs[5], r, c)
-        hit, t, grad, _ = _trace(kargs, options, r, c)
+        hit, t, grad, st = _trace(kargs, options, pixels, W, offsets[ks])
         rays += pix.size
+        work[0] += int(st.sum())
         reuse = None
         if shader.lit:
             reuse = {key: rec0[key][pix] for key in ("obj", "ground", "shadow", "ao")}
@@ -387,17 +404,21 @@ def form_image(scene, camera, arrays, kargs, options, centre, samples=1, adaptiv
         add(np.arange(H * W), range(1, samples))
     elif samples > 1:
         first = min(samples, ADAPTIVE_FIRST)
-        flagged = np.flatnonzero(_neighbour_flags(shader.encode(colour0), rec0, (H, W)))
+        flags, edges = _neighbour_flags(shader.encode(colour0), rec0, (H, W))
+        flagged = np.flatnonzero(flags)
         out = add(flagged, range(1, first))
         if out is not None and samples > first:
             pix, col, rec = out
             m = first - 1
             disp = shader.encode(col).reshape(flagged.size, m, 3)
             disp = np.concatenate([shader.encode(colour0[flagged])[:, None], disp], axis=1)
-            spread = (disp.max(axis=1) - disp.min(axis=1)).max(axis=1) > COLOR_CONTRAST
+            spread = (disp.max(axis=1) - disp.min(axis=1)).max(axis=1) > SAMPLE_SPREAD
             hits = np.concatenate([rec0["hit"][flagged][:, None],
                                    rec["hit"].reshape(flagged.size, m)], axis=1)
             spread |= hits.any(axis=1) & ~hits.all(axis=1)
+            # a silhouette or an object border: 4 samples that happen to agree do not say
+            # how much of the tent footprint is covered
+            spread |= edges[flagged]
             add(flagged[spread], range(first, samples))
 
     cover = acc_a / spp
@@ -407,7 +428,7 @@ def form_image(scene, camera, arrays, kargs, options, centre, samples=1, adaptiv
     else:
         colour = mean + (1.0 - cover)[:, None] * shader.bg
     rgb = np.round(255.0 * shader.encode(colour)).astype(np.uint8).reshape(H, W, 3)
-    info = {"rays": int(H * W + rays)}
+    info = {"rays": int(H * W + rays), "sample_steps": work[0]}
     if shader.lit:
         info.update(shadow=rec0["shadow"].reshape(H, W), ao=rec0["ao"].reshape(H, W),
                     object=rec0["obj"].reshape(H, W), ground=rec0["on_ground"].reshape(H, W),

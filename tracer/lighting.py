@@ -44,9 +44,10 @@ SHADOW_STEPS = 96
 AO_SAMPLES = 5
 #: a shadow ray stops once less than this fraction of the light gets through
 SHADOW_CUTOFF = 2e-3
-#: light queries may under-estimate the distance by this fraction of the scene diagonal
-#: (tolerance pruning, a bound; invisible in shadows and occlusion, and much cheaper)
-LIGHT_SLACK = 2e-3
+#: the kernels can loosen light queries by a slack (tolerance pruning with a bound, as the
+#: march does); tried at 2e-3 of the diagonal on the bunny, it visited 20 % fewer leaves but
+#: took 25 % longer than the render's own lean queries, so the renders pass 0
+LIGHT_SLACK = 0.0
 #: shadow rays start this far (fraction of the scene diagonal) from the surface: the first,
 #: most expensive queries next to the surface are skipped (contact shadows come from the
 #: occlusion term)

@@ -592,29 +592,47 @@ def trace_pixels(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, ro
 
 
 @numba.njit(**NJIT_PARALLEL)
-def trace_rays(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, rows, cols,
-               depth_max, hit, tbuf, grad, steps, relax=RELAX, omega=OMEGA, newton=0.0):
-    """Trace camera rays through sub-pixel positions (anti-aliasing samples).
+def trace_samples(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, rows, cols,
+                  offsets, depth_max, hit, tbuf, grad, steps, relax=RELAX, omega=OMEGA,
+                  cone=CONE, newton=0.0, eps_px=0.0):
+    """Trace anti-aliasing samples: for pixel ``(rows[i], cols[i])`` the rays through
+    ``(rows[i] + offsets[k, 0], cols[i] + offsets[k, 1])`` for every ``k``.
 
-    ``rows, cols (n,) float64``: image coordinates; pixel ``(r, c)``'s own ray is at
-    ``(r, c)`` exactly (:func:`tracer.camera.ray_direction` takes fractional positions).
-    Outputs have the length of ``rows``: ``hit (n,) bool``, ``tbuf (n,)``, ``grad (n, 3)``,
-    ``steps (n,) int64``. Each ray is independent, so the result does not depend on the
-    number of threads.
+    ``offsets (K, 2)`` lie within one pixel of the pixel's own ray (``|offset| <= 1`` per
+    axis), so one cone pass over the pixel's 3 x 3 block (:func:`cone_start`) gives all ``K``
+    rays a conservative start depth. Outputs are ``(m, K)``: ``hit`` bool, ``tbuf``,
+    ``steps`` int64 (the cone pass booked on sample 0), and ``grad (m, K, 3)``. Pixels are
+    independent, so the result does not depend on the number of threads.
+
+    ``eps_px >= 0``: the hit threshold of these rays is at least ``eps_px`` pixels, measured at
+    the cone's start depth (a lower bound of any hit's depth): a sample only decides how much
+    of the pixel is covered, and a ray that comes within a fraction of a pixel of the surface
+    covers it.
     """
+    pixel = 1.0 / min(cam[12], cam[13])      # a pixel's size at unit depth
     for i in prange(rows.size):
         stack = np.empty(depth_max + 4, dtype=np.int64)
         dstack = np.empty(depth_max + 4)
-        dx, dy, dz = ray_direction(cam, rows[i], cols[i])
-        h, t, gx, gy, gz, st, lv, bs = march_ray(tree, roots, params, mode, tol, cam[0], cam[1],
-                                                 cam[2], dx, dy, dz, lo, hi, eps, max_steps,
-                                                 stack, dstack, relax, omega, 0.0, newton)
-        hit[i] = h == 1
-        tbuf[i] = t
-        grad[i, 0] = gx
-        grad[i, 1] = gy
-        grad[i, 2] = gz
-        steps[i] = st
+        r = rows[i]
+        c = cols[i]
+        t_min = 0.0
+        c_ev = 0
+        if cone:
+            t_min, c_ev, c_lv = cone_start(tree, roots, params, mode, tol, cam, lo, hi, eps,
+                                           r - 1, r + 2, c - 1, c + 2, stack, dstack, relax)
+        e = max(eps, eps_px * pixel * t_min)
+        for k in range(offsets.shape[0]):
+            dx, dy, dz = ray_direction(cam, r + offsets[k, 0], c + offsets[k, 1])
+            h, t, gx, gy, gz, st, lv, bs = march_ray(tree, roots, params, mode, tol, cam[0],
+                                                     cam[1], cam[2], dx, dy, dz, lo, hi, e,
+                                                     max_steps, stack, dstack, relax, omega,
+                                                     t_min, newton)
+            hit[i, k] = h == 1
+            tbuf[i, k] = t
+            grad[i, k, 0] = gx
+            grad[i, k, 1] = gy
+            grad[i, k, 2] = gz
+            steps[i, k] = st + (c_ev if k == 0 else 0)
 
 
 @intrinsic
