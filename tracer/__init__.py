@@ -4,7 +4,8 @@ The one-call entry point is :func:`render_mesh` (``tracer.render_mesh(mesh)`` ->
 :class:`RenderResult` of numpy arrays); :func:`mesh_scene`, :func:`scene_from_field` and
 :func:`tracer.render.render` are the steps it takes, :func:`load_scene` reads a scene file,
 :func:`check_images` compares two images as the image-regression tests do, and
-:func:`show_animation` plays frames inline in Jupyter. The error types are in
+:func:`show_animation` plays frames inline in Jupyter; :class:`Lighting` holds the settings
+of the ``"lit"`` shading. The error types are in
 :mod:`tracer.errors`. The names are imported on first use, so ``import tracer`` (and the command
 line) stays light.
 """
@@ -19,6 +20,7 @@ _LAZY = {
     "RenderResult": "tracer.render",
     "check_images": "tracer.imagediff",
     "show_animation": "tracer.notebook",
+    "Lighting": "tracer.lighting",
 }
 
 __all__ = sorted(_LAZY)

@@ -3,14 +3,18 @@
 A render first traces one ray per pixel, through the pixel's own position (the tile kernels of
 :mod:`tracer.march`); those *centre samples* give the depth, normals and hit mask of a
 :class:`~tracer.render.RenderResult`. With ``samples = N > 1`` every pixel gets ``N - 1`` more
-rays (:func:`tracer.march.trace_rays`) at the offsets of :func:`sample_offsets`: a
+rays (:func:`tracer.march.trace_samples`) at the offsets of :func:`sample_offsets`: a
 low-discrepancy (R2) sequence warped so that the offsets are distributed like a tent filter of
 radius one pixel. Every sample then carries the same weight and the pixel is their mean, which
 is the tent-filtered image (filter importance sampling); sample 0 is the centre.
 
-``adaptive``: the centre samples of neighbouring pixels are compared (hit or miss, object,
-ground, shaded colour); where a pair disagrees both pixels get 4 samples, and those whose 4
-samples still disagree get all ``N``. Elsewhere one sample is enough.
+``adaptive``: the centre samples of neighbouring pixels are compared (8 neighbours: hit or
+miss, object, ground, shaded colour within :data:`COLOR_CONTRAST`); where a pair disagrees
+both pixels get :data:`ADAPTIVE_FIRST` (4) samples, and silhouette and object-border pixels,
+and those whose 4 samples spread by more than :data:`SAMPLE_SPREAD`, get all ``N``. Elsewhere
+one sample is enough. The samples of a pixel are traced together after one cone pass over
+its 3 x 3 block (:func:`tracer.march.trace_samples`), with a hit threshold of
+:data:`EPS_PX` pixel.
 
 Every sample is shaded (:mod:`tracer.shading`, or :mod:`tracer.lighting` for ``"lit"``) and
 averaged with its coverage: lit colours in linear light (encoded to sRGB at the end), the

@@ -143,7 +143,9 @@ def render_mesh(mesh, F=None, *, kind=None, alpha="auto", alpha_u="auto", beta=0
         ``camera``, ``scene`` (``scene.objects[0].alpha`` / ``.alpha_u`` are the values used)
         and ``save(path)``.
 
-    Example::
+    Examples
+    --------
+    .. code-block:: python
 
         import trimesh, tracer
         res = tracer.render_mesh(trimesh.creation.icosphere(), kind="edges", size=(256, 256),

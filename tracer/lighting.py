@@ -21,7 +21,7 @@ and exact-offset mode apply to every shadow and occlusion query as they do to ca
 Cost, in distance queries per lit pixel: one shadow ray (typically 10-40 queries, at most
 :data:`SHADOW_STEPS`) and :data:`AO_SAMPLES` (5) occlusion queries, on top of the camera ray.
 Ground pixels pay the same. Anti-aliasing samples reuse the pixel's own shadow and occlusion
-when they hit the same object (:mod:`tracer.sampling`).
+when they hit the same object (:mod:`tracer.film`).
 """
 
 import math
