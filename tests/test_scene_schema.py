@@ -189,6 +189,22 @@ def test_shipped_scenes_are_valid(schema):
     (lambda d: d["objects"][0].pop("alpha"), "alpha"),
     (lambda d: d.update(background=[0, 0, 256]), "background"),
     (lambda d: d.update(objects=[]), "objects"),
+    # issue 18: anti-aliasing and the lit shading
+    (lambda d: d.update(samples=0), "samples"),
+    (lambda d: d.update(samples=1025), "samples"),
+    (lambda d: d.update(samples=2.5), "samples"),
+    (lambda d: d.update(adaptive="yes"), "adaptive"),
+    (lambda d: d.update(transparent=1), "transparent"),
+    (lambda d: d.update(lighting={"penumbra": 0}), "penumbra"),
+    (lambda d: d.update(lighting={"ao_distance": -1}), "ao_distance"),
+    (lambda d: d.update(lighting={"exposure": 0}), "exposure"),
+    (lambda d: d.update(lighting={"bogus": 1}), "unknown key"),
+    (lambda d: d.update(lighting={"shadows": "no"}), "shadows"),
+    (lambda d: d.update(lighting={"ground_color": [0, 0, 256]}), "ground_color"),
+    (lambda d: d.update(lighting=[1]), "lighting"),
+    (lambda d: d["objects"][0].update(color=[0, 0, 256]), "color"),
+    (lambda d: d["objects"][0].update(color=[0, 0, 0.5]), "color"),
+    (lambda d: d["objects"][0].update(color=[0, 0]), "color"),
 ])
 def test_schema_and_loader_refuse_the_same_bad_values(schema, tmp_path, edit, loader_word):
     (tmp_path / "tet.obj").write_text(TET)
