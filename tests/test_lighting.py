@@ -128,8 +128,20 @@ def test_ground_pixels_are_where_the_rays_meet_the_plane(ball):
     oc = res.camera.origin - BALL_C
     b = d @ oc
     sphere = b * b - (oc @ oc - BALL_R ** 2) >= 0
-    expected = ~sphere & np.isfinite(G[..., 0])
+    # the ground fades out (tracer.film.FADE, GROUND_MIN_FADE) around the surface's box
+    from tracer import film
+    from tracer.render import scene_arrays
+
+    arrays = scene_arrays(scene)
+    centre = 0.5 * (arrays.lo + arrays.hi)
+    foot = centre - (centre @ UP - (BALL_C @ UP - BALL_R)) * UP
+    radius = film.FADE * np.linalg.norm(arrays.hi - arrays.lo)
+    fade = np.exp(-(np.linalg.norm(G - foot, axis=-1) / radius) ** 2)
+    drawn = np.where(np.isfinite(fade), fade, 0.0) >= film.GROUND_MIN_FADE
     sure = maximum_filter(sphere, 3) == minimum_filter(sphere, 3)   # off the silhouette
+    sure &= np.abs(np.log(np.where(np.isfinite(fade) & (fade > 0), fade, 1e-300))
+                   - np.log(film.GROUND_MIN_FADE)) > 0.05     # not at the fade's cut
+    expected = ~sphere & np.isfinite(G[..., 0]) & drawn
     assert expected.sum() > 1000
     np.testing.assert_array_equal(res.aovs["ground"][sure], expected[sure])
 
@@ -241,8 +253,9 @@ def test_ground_occlusion_follows_the_formula():
     """Two overlapping spheres (radius 1 around (+-0.3, 1, 0)) on the ground y = 0, no
     shadows, ao_distance 1: the occlusion AOV of the ground pixels against the formula with
     the analytic distance, at the points where the rays meet y = 0. Measured: mean |error|
-    0.002 over all 1,811 ground pixels, 0.012 over the 292 occluded ones (the interpolation
-    between every other pixel); a ground 0.1 too low gives 0.036 there, 1.0 too low 0.23."""
+    0.0053 over all 1,811 ground pixels, 0.031 over the occluded ones (the interpolation
+    between every third pixel of this 48 x 48 image; 0.002 / 0.012 with every other pixel);
+    a ground 0.1 too low gives 0.036 there at every other pixel, 1.0 too low 0.23."""
     centres = np.array([[-0.3, 1.0, 0.0], [0.3, 1.0, 0.0]])
     field = SmoothDistanceField(centres)
     scene = scene_from_field(field, alpha=1.0, mode="exact", offset=1.0, width=48, height=48,
@@ -261,8 +274,8 @@ def test_ground_occlusion_follows_the_formula():
     occluded = ref < 0.99
     assert occluded.sum() > 100 and (ref < 0.5).sum() > 20
     err = np.abs(got - ref)
-    assert err.mean() < 0.005 and err[occluded].mean() < 0.02, (err.mean(), err[occluded].mean())
-    assert (got[~occluded] > 0.98).all()
+    assert err.mean() < 0.008 and err[occluded].mean() < 0.04, (err.mean(), err[occluded].mean())
+    assert (got[~occluded] > 0.95).all()     # 0.964 at worst: interpolated next to a contact
     # ground just outside the spheres' outline (seen from above) is darker than farther out
     rho = np.linalg.norm(G[:, None, [0, 2]] - centres[:, [0, 2]], axis=2).min(axis=1)
     assert got[rho < 1.1].mean() < 0.7 and (got[rho > 1.6] > 0.98).all()   # 0.55, 0.997
