@@ -22,7 +22,7 @@ other shadings in display values, as they were defined. The alpha of a pixel is 
 its samples that hit the surface (or, transparent with a ground, the ground's shadow: a shadow
 catcher). The centre samples' shadow and occlusion are computed at every
 :data:`LIGHT_STRIDE`-th pixel of every :data:`LIGHT_STRIDE`-th row and filled in where the
-neighbours agree (:func:`_fill_light`; shadow edges and object borders are computed in full);
+neighbours agree (``_fill_light``; shadow edges and object borders are computed in full);
 the other samples take theirs bilinearly from the centre samples around them that see the same
 object (or ground), and are lit afresh where none does.
 """
@@ -182,7 +182,7 @@ class _Shader:
 
         ``grid = (H, W)``: the samples are an image's centre samples, whose light is computed
         at every LIGHT_STRIDE-th pixel of every LIGHT_STRIDE-th row and filled in between
-        (:func:`_fill_light`)."""
+        (``_fill_light``)."""
         n = len(hit)
         norm = np.linalg.norm(grad, axis=1, keepdims=True)
         normals = np.where(norm > 0, grad / np.where(norm > 0, norm, 1.0), 0.0)
