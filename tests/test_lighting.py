@@ -476,3 +476,9 @@ def test_bad_value_in_a_process(tmp_path):
     lines = p.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0] == "error: scene.json: samples must be > 0, got 0"
     assert not (tmp_path / "out").exists()
+
+
+def test_an_unknown_lighting_key_in_the_api_is_one_clear_error():
+    field = SmoothDistanceField(np.zeros((1, 3)))
+    with pytest.raises(ValueError, match="lighting has unknown key.*'bogus'"):
+        scene_from_field(field, alpha=1.0, shading="lit", lighting={"bogus": 1})

@@ -538,6 +538,10 @@ def scene_from_field(field, *, alpha, alpha_u=None, beta=0.5, camera=None, width
     if lighting is None:
         lighting = Lighting()
     elif isinstance(lighting, dict):
+        unknown = sorted(set(lighting) - _LIGHTING_KEYS)
+        if unknown:
+            raise ValueError(f"lighting has unknown key(s) {', '.join(map(repr, unknown))} "
+                             f"(allowed: {', '.join(sorted(_LIGHTING_KEYS))})")
         lighting = Lighting(**lighting)
     elif not isinstance(lighting, Lighting):
         raise ValueError(f"lighting must be a tracer.lighting.Lighting or a dict, got "
