@@ -78,6 +78,8 @@ TINY = {
     "benchmarks/bench_sim.py": ["--steps", "3"],
     "tracer simulate": ["--size", "16", "12", "--steps", "3"],
     "tracer animate": ["--size", "16", "12"],
+    "benchmarks/bench_quality.py": ["--cost-size", "16", "--quality-size", "8", "--reference",
+                                    "8", "--samples", "4", "--repeat", "1"],
     "benchmarks/bench_studies.py": ["--size", "8", "--betas", "1", "--grid", "4",
                                     "--trivial", "4", "--folder", "scenes/data/meshes"],
 }
