@@ -113,7 +113,7 @@ class _Shader:
                                       _lighting._corners(arrays.lo, arrays.hi))
             self.queries = 0
             self.leaves = 0
-            self.slack = 0.0        # light queries are the render's own (see LIGHT_SLACK)
+            self.slack = _lighting.LIGHT_SLACK * self.diag   # 0: the render's own queries
         else:
             self.bg = bg
             if scene.shading == "matcap":
