@@ -13,6 +13,11 @@ divided among its ``n_j + 1`` vertices,
     grad_k = sum_{j ∋ k} exp(-alpha_q d_hat_j) grad d_hat_j / (n_j + 1) / sum_j exp(-alpha_q d_hat_j).
 
 So the vertex gradients sum to the gradient of a rigid translation of the whole query mesh.
+Their torque ``sum_k (x_k - o) x grad_k`` applies each primitive's force at its centroid, which
+is exact for point queries only: a pair distance changes under a rotation through the motion of
+its closest point on ``g_j``. :meth:`MeshDistance.with_couple` adds the couple that makes the
+torque the exact rotational derivative (:mod:`smoothdist.mesh_moment`), and
+:meth:`MeshDistance.rigid_gradient` returns force and torque either way.
 
 Conventions: distances are unsigned, in scene units (the data mesh's frame). ``R``, ``t`` map query
 vertices ``x -> R x + t`` into that frame; gradients are with respect to the transformed vertex
@@ -25,6 +30,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from smoothdist import mesh_moment as _mm
 from smoothdist import mesh_query as _mq
 from smoothdist._cast import as_indices, as_points, non_negative, positive
 from smoothdist.convert import is_foreign_geometry
@@ -36,6 +42,9 @@ from smoothdist.query import DEFAULT_TOL
 #: query meshes with fewer primitives than this run on the calling thread (a parallel launch
 #: costs more than their work, and much more on a busy machine)
 SERIAL_BELOW = {"smooth": 32, "exact": 1024}
+#: how rigid-body torques are taken from the gradient: the exact derivative, or the paper's
+#: equal split of each primitive's force over its vertices
+TORQUES = ("exact", "split")
 
 
 class QueryMesh(NamedTuple):
@@ -239,6 +248,61 @@ class MeshDistance:
         """Smooth distance ``d_hat(M_d, M_q)`` (float) and vertex gradients ``(n, 3)``."""
         d, g = self.primitive_distances(R, t, method=method)
         return split_to_vertices(d, g, self.query, self.alpha_q)
+
+    def primitive_moments(self, R=None, t=None, *, method="bvh"):
+        """Per query primitive: ``(d_hat (m,), translation gradient (m, 3), moment (m, 3))``.
+
+        ``d_hat`` and the gradient equal :meth:`primitive_distances`' bit for bit; the moment
+        is the gradient of ``d_hat_j`` for a rotation of the primitive about its centroid
+        (:mod:`smoothdist.mesh_moment`; 0 for points). Scene units, data frame.
+        """
+        if method not in ("bvh", "brute"):
+            raise ValueError(f"method must be 'bvh' or 'brute', got {method!r}")
+        pts = self._primitive_coords(R, t)
+        m = self.query.kind.size
+        d = np.empty(m)
+        g = np.empty((m, 3))
+        mo = np.empty((m, 3))
+        nodes = np.empty(m, dtype=np.int64)
+        leaves = np.empty(m, dtype=np.int64)
+        kernel = (_mm.smooth_moment_primitives_serial if m < SERIAL_BELOW["smooth"]
+                  else _mm.smooth_moment_primitives)
+        kernel(self.field.tree, self.query.kind, pts, self.alpha, self.beta, self.S, self.wgs,
+               method == "brute", d, g, mo, nodes, leaves, self.tol)
+        self.last_stats = (nodes, leaves)
+        return d, g, mo
+
+    def with_couple(self, R=None, t=None, *, method="bvh"):
+        """``(d_hat, G (n, 3), C (3,))``: :meth:`__call__`'s result and the couple ``C`` that
+        makes its torque exact.
+
+        For any point ``o``, the gradient of ``d_hat`` for a rotation of the query about ``o``
+        is ``sum_k (x_k - o) x G_k + C`` (``x_k`` the transformed query vertices): the equal
+        split's torque plus ``C = sum_j softmax_j M_j``, the primitives' moments about their
+        centroids (:meth:`primitive_moments`). ``C = 0`` for point queries. Data frame.
+        """
+        d, g, mo = self.primitive_moments(R, t, method=method)
+        dist, G = split_to_vertices(d, g, self.query, self.alpha_q)
+        e = np.exp(-self.alpha_q * (d - d.min()))
+        return dist, G, (e / e.sum()) @ mo
+
+    def rigid_gradient(self, R=None, t=None, *, torques="exact", method="bvh"):
+        """``(d_hat, force (3,), torque (3,))``: the gradient of ``d_hat`` for a translation of
+        the query and for a rotation of it about ``t`` (its frame's origin), data frame.
+
+        ``torques="exact"`` is the derivative of ``d_hat`` (:meth:`with_couple`); ``"split"``
+        the paper's equal split (Eq. 7-8: each primitive's force at its centroid).
+        """
+        if torques not in TORQUES:
+            raise ValueError(f"torques must be one of {TORQUES}, got {torques!r}")
+        Rm, tv = as_rigid_transform(R, t)
+        if torques == "exact":
+            dist, G, C = self.with_couple(Rm, tv, method=method)
+        else:
+            dist, G = self(Rm, tv, method=method)
+            C = np.zeros(3)
+        X = self.transformed_vertices(Rm, tv) - tv
+        return dist, G.sum(axis=0), np.cross(X, G).sum(axis=0) + C
 
     def exact(self, R=None, t=None):
         """Exact minimum pairwise distance (float) and its gradient ``(n, 3)``.
