@@ -376,3 +376,112 @@ def test_newton_steps_never_step_over_a_thin_shell(index):
     assert missed.sum() == 0, f"{name} alpha {alpha}: {missed.sum()} pixels stepped through"
     assert (fast.hit & ~plain.hit).sum() == 0
     assert fast.steps.sum() < plain.steps.sum()
+
+
+# ----------------------------------------------------------------------------- the end cone
+def _plain_first_hit(arrays, cam, r, c, eps, max_steps):
+    """``t`` of the first hit of the ray through fractional pixel ``(r, c)``, plain sphere
+    tracing from the camera (no cone, no over-relaxation, no Newton), or ``inf``."""
+    tree, roots, params, mode, lo, hi, depth_max, tol = arrays
+    stack = np.empty(depth_max + 4, dtype=np.int64)
+    dstack = np.empty(depth_max + 4)
+    d3 = march.ray_direction(cam, r, c)
+    h, t, *_ = march.march_ray(tree, roots, params, mode, tol, cam[0], cam[1], cam[2], *d3, lo,
+                               hi, eps, max_steps, stack, dstack, 0.0, 1.0, 0.0, 0.0)
+    return t if h == 1 else np.inf
+
+
+@pytest.mark.parametrize("kind", ["points", "triangles"])
+def test_cone_end_bounds_every_ray_of_the_block(kind, bunny_points):
+    """Every ray within one pixel of a pixel's own ray meets the surface (plain march) at or
+    before the pixel's ``cone_end`` depth, and no earlier than its ``cone_start`` depth; the
+    end cone does cut the rays short (it would pass with ``t_end = inf``)."""
+    field = bunny_points if kind == "points" else SmoothDistanceField(DataMesh.load(BUNNY))
+    scene = _scene(field, size=40, eps=1e-4 * field.diagonal)
+    arrays = scene_arrays(scene)
+    tree, roots, params, mode, lo, hi, depth_max, tol = arrays
+    cam = camera_of(scene).as_array()
+    full = render(scene)
+    # the pixels around the silhouette (where the adaptive pass sends its samples)
+    h = full.hit
+    edge = np.zeros_like(h)
+    edge[1:-1, 1:-1] = (h[1:-1, 1:-1] != h[:-2, 1:-1]) | (h[1:-1, 1:-1] != h[2:, 1:-1]) | \
+        (h[1:-1, 1:-1] != h[1:-1, :-2]) | (h[1:-1, 1:-1] != h[1:-1, 2:])
+    rr, cc = np.nonzero(edge)
+    assert rr.size >= 30
+    stack = np.empty(depth_max + 4, dtype=np.int64)
+    dstack = np.empty(depth_max + 4)
+    rng = np.random.default_rng(4)
+    shortened = 0
+    for r, c in list(zip(rr, cc))[::2]:
+        t_lo, _, _ = march.cone_start(tree, roots, params, mode, tol, cam, lo, hi, scene.eps,
+                                      r - 1, r + 2, c - 1, c + 2, stack, dstack)
+        t_hi, _, _ = march.cone_end(tree, roots, params, mode, tol, cam, lo, hi, scene.eps,
+                                    r - 1, r + 2, c - 1, c + 2, stack, dstack)
+        assert t_lo <= t_hi
+        exits = []
+        for dr, dc in [(0, 0), (-1, -1), (1, 1), (-1, 1), (1, -1)] + \
+                list(rng.uniform(-1, 1, (6, 2))):
+            t = _plain_first_hit(arrays, cam, r + dr, c + dc, scene.eps, 4000)
+            if np.isfinite(t):
+                assert t_lo - 1e-12 <= t <= t_hi + 1e-12, (r, c, dr, dc, t_lo, t, t_hi)
+            d3 = march.ray_direction(cam, r + dr, c + dc)
+            exits.append(march.ray_box(cam[0], cam[1], cam[2], *d3, lo, hi)[1])
+        shortened += t_hi < min(exits)
+    assert shortened >= 5
+
+
+def test_samples_equal_a_plain_march(bunny_points):
+    """``trace_samples`` (cone passes both ways, over-relaxed steps, bounds reused by a second
+    call) finds the hits of plain sphere tracing at the same sub-pixel positions."""
+    from tracer.film import SAMPLE_OMEGA, sample_offsets
+
+    scene = _scene(bunny_points, size=32, eps=1e-4 * bunny_points.diagonal)
+    arrays = scene_arrays(scene)
+    tree, roots, params, mode, lo, hi, depth_max, tol = arrays
+    cam = camera_of(scene).as_array()
+    full = render(scene)
+    rr, cc = np.nonzero(full.hit[1:-1, 1:-1] != full.hit[2:, 1:-1])
+    rows, cols = (rr + 1).astype(np.int64), (cc + 1).astype(np.int64)
+    offsets = sample_offsets(8)
+    m, K = rows.size, len(offsets)
+    t_lo, t_hi = np.full(m, np.nan), np.full(m, np.nan)
+    for part in (offsets[:3], offsets[3:]):          # the second call reuses the bounds
+        k = len(part)
+        hit = np.zeros((m, k), dtype=np.bool_)
+        t = np.full((m, k), np.nan)
+        grad = np.zeros((m, k, 3))
+        steps = np.zeros((m, k), dtype=np.int64)
+        march.trace_samples(tree, roots, params, mode, tol, cam, lo, hi, float(scene.eps), 4000,
+                            rows, cols, np.ascontiguousarray(part), depth_max, hit, t, grad,
+                            steps, t_lo, t_hi, march.RELAX, SAMPLE_OMEGA, True, 0.0, 0.0)
+        assert np.isfinite(t_lo).all() and np.isfinite(t_hi).all()
+        ref = np.array([[_plain_first_hit(arrays, cam, rows[i] + o[0], cols[i] + o[1],
+                                          float(scene.eps), 4000) for o in part]
+                        for i in range(m)])
+        # a ray that grazes the surface within eps may be decided either way
+        assert (hit != np.isfinite(ref)).sum() <= max(1, 0.01 * hit.size)
+        both = hit & np.isfinite(ref)
+        assert both.sum() >= 10
+        # over-relaxed steps stop anywhere in the band d <= eps: within a few eps / cos
+        assert np.abs(t[both] - ref[both]).max() <= 0.01 * bunny_points.diagonal
+
+
+def test_an_over_relaxed_step_past_t_max_is_taken_again_plainly():
+    """A ray whose over-relaxed first step jumps past ``t_max`` must not call that a miss:
+    the gap between the certified ball and ``t_max`` may hold the surface (here a single
+    point's zero set, at depth 1 on a ray through it)."""
+    field = SmoothDistanceField(DataMesh(np.zeros((1, 3)), points=np.array([0])))
+    scene = scene_from_field(field, alpha=50.0, width=8, height=8)
+    tree, roots, params, mode, lo, hi, depth_max, tol = scene_arrays(scene)
+    lo, hi = np.full(3, -1.0), np.full(3, 1.0)
+    stack = np.empty(depth_max + 4, dtype=np.int64)
+    dstack = np.empty(depth_max + 4)
+    o = np.array([0.0, 0.0, -2.0])
+    for omega, t_max in ((1.0, np.inf), (1.0, 2.5), (1.9, 2.5), (1.9, 2.01)):
+        h, t, *_ = march.march_ray(tree, roots, params, mode, tol, *o, 0.0, 0.0, 1.0, lo, hi,
+                                   1e-6, 200, stack, dstack, 0.0, omega, 0.0, 0.0, t_max)
+        assert h == 1 and abs(t - 2.0) < 1e-5, (omega, t_max, h, t)
+    h, t, *_ = march.march_ray(tree, roots, params, mode, tol, *o, 0.0, 0.0, 1.0, lo, hi, 1e-6,
+                               200, stack, dstack, 0.0, 1.9, 0.0, 0.0, 1.99)
+    assert h == 0                                     # the point lies beyond t_max

@@ -12,9 +12,10 @@ is the tent-filtered image (filter importance sampling); sample 0 is the centre.
 miss, object, ground, shaded colour within :data:`COLOR_CONTRAST`); where a pair disagrees
 both pixels get :data:`ADAPTIVE_FIRST` (4) samples, and silhouette and object-border pixels,
 and those whose 4 samples spread by more than :data:`SAMPLE_SPREAD`, get all ``N``. Elsewhere
-one sample is enough. The samples of a pixel are traced together after one cone pass over
-its 3 x 3 block (:func:`tracer.march.trace_samples`), with the scene's hit threshold
-(:data:`EPS_PX`).
+one sample is enough. The samples of a pixel are traced together between two cone passes over
+its 3 x 3 block, one from the camera and one back from beyond the box, which bound where any
+of them can meet the surface (:func:`tracer.march.trace_samples`, done once per pixel), with
+over-relaxed steps (:data:`SAMPLE_OMEGA`) and the scene's hit threshold (:data:`EPS_PX`).
 
 Every sample is shaded (:mod:`tracer.shading`, or :mod:`tracer.lighting` for ``"lit"``) and
 averaged with its coverage: lit colours in linear light (encoded to sRGB at the end), the
@@ -52,6 +53,11 @@ SAMPLE_SPREAD = 0.02
 #: pixel saves 10 % of the time (0.25: 22 %) but fattens silhouettes (coverage +0.036 on
 #: edge pixels at 0.1), so it is off
 EPS_PX = 0.0
+#: over-relaxation of the extra samples' sphere-tracing steps (:func:`tracer.march.march_ray`,
+#: with its safe fallback). Measured on the 512^2 lit bunny, adaptive 16, the silhouette
+#: pixels' 12 last samples: 33.1 distance queries per ray at 1.0, 29.7 at 1.3, 28.1 at 1.6,
+#: 33.3 at 1.9 (coverage unchanged to 2e-4)
+SAMPLE_OMEGA = 1.6
 
 _R2 = 1.32471795724474602596     # the plastic number: R2 sequence (Roberts 2018)
 
@@ -402,21 +408,26 @@ def _neighbour_flags(colour, record, shape):
     return flags.ravel(), edges.ravel()
 
 
-def _trace(kargs, options, pixels, W, offsets):
+def _trace(kargs, options, pixels, W, offsets, bounds=None):
     """The samples ``offsets (K, 2)`` of the pixels ``pixels (m,)`` (flat indices), flattened
-    pixel-major: ``hit, t, grad, steps`` of length ``m K``."""
+    pixel-major: ``hit, t, grad, steps`` of length ``m K``. ``bounds = (t_lo, t_hi)``, each
+    ``(m,)``: the pixels' cone bounds, read where finite, written where not (NaN)."""
     tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, depth_max = kargs
     relax, omega, cone, newton = options
+    omega = max(omega, SAMPLE_OMEGA)
     m, K = pixels.size, len(offsets)
     hit = np.zeros((m, K), dtype=np.bool_)
     t = np.full((m, K), np.nan)
     grad = np.zeros((m, K, 3))
     steps = np.zeros((m, K), dtype=np.int64)
+    if bounds is None:
+        bounds = (np.full(m, np.nan), np.full(m, np.nan))
     if m and K:
         rows, cols = np.divmod(pixels.astype(np.int64), W)
         march.trace_samples(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, rows,
                             cols, np.ascontiguousarray(offsets, dtype=np.float64), depth_max,
-                            hit, t, grad, steps, relax, omega, cone, newton, EPS_PX)
+                            hit, t, grad, steps, bounds[0], bounds[1], relax, omega, cone,
+                            newton, EPS_PX)
     return hit.ravel(), t.ravel(), grad.reshape(-1, 3), steps.ravel()
 
 
@@ -441,6 +452,9 @@ def form_image(scene, camera, arrays, kargs, options, centre, samples=1, adaptiv
     offsets = sample_offsets(samples)
     rays = 0
     work = [0]
+    # the pixels' cone bounds (march.trace_samples), kept from one pass to the next
+    cone_lo = np.full(H * W, np.nan)
+    cone_hi = np.full(H * W, np.nan)
 
     def add(pixels, ks):
         nonlocal rays
@@ -452,7 +466,9 @@ def form_image(scene, camera, arrays, kargs, options, centre, samples=1, adaptiv
         r = (pix // W).astype(np.float64) + offsets[kk, 0]
         c = (pix % W).astype(np.float64) + offsets[kk, 1]
         d = _dir(kargs[5], r, c)
-        hit, t, grad, st = _trace(kargs, options, pixels, W, offsets[ks])
+        bounds = (cone_lo[pixels], cone_hi[pixels])
+        hit, t, grad, st = _trace(kargs, options, pixels, W, offsets[ks], bounds)
+        cone_lo[pixels], cone_hi[pixels] = bounds
         rays += pix.size
         work[0] += int(st.sum())
         reuse = None

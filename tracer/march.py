@@ -312,7 +312,7 @@ def _false_position(tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, a, f
 
 @numba.njit(**NJIT)
 def march_ray(tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, lo, hi, eps, max_steps,
-              stack, dstack, relax=RELAX, omega=OMEGA, t_min=0.0, newton=0.0):
+              stack, dstack, relax=RELAX, omega=OMEGA, t_min=0.0, newton=0.0, t_max=np.inf):
     """March one ray; returns ``(hit, t, gx, gy, gz, steps, leaves, bisections)``.
 
     ``omega >= 1``: over-relaxed steps ``t += omega d`` (Keinert et al. 2014) with a safe
@@ -324,7 +324,9 @@ def march_ray(tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, lo, hi, ep
     ``relax`` x the previous step (cheaper evaluations far from the surface; 0: never).
 
     ``t_min``: a depth before which the ray is known not to meet the surface (the cone pass
-    of ``_render_tile``); the march starts at ``max(box entry, t_min)``.
+    of ``_render_tile``); the march starts at ``max(box entry, t_min)``. ``t_max``: a depth
+    beyond which the ray is known not to meet the surface (:func:`cone_end`); the march ends
+    at ``min(box exit, t_max)``.
 
     ``newton >= 0`` (scene units, see :func:`newton_distance`): once ``d <= newton``, the ray
     takes Newton steps on ``d(t)`` along the ray, ``h = d / -(g . dir)`` capped at
@@ -348,6 +350,7 @@ def march_ray(tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, lo, hi, ep
     """
     t, t_exit = ray_box(ox, oy, oz, dx, dy, dz, lo, hi)
     t = max(t, t_min)
+    t_exit = min(t_exit, t_max)
     relaxable = mode == MODE_SMOOTH and tol > 0.0 and relax > 0.0
     steps = 0
     leaves = 0
@@ -419,28 +422,23 @@ def march_ray(tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, lo, hi, ep
         # value there would mostly fall below eps and be evaluated again)
         slack = relax * d if (relaxable and d > near) else 0.0
         if t > t_exit:
-            break
+            if t_prev + d_prev >= t_exit:
+                break
+            # an over-relaxed or Newton step past the end left (t_prev + d_prev, t_exit)
+            # uncertified: take the plain step instead
+            w = 1.0
+            newton_step = False
+            t = t_prev + d_prev
+            step = d_prev
     return 0, np.nan, 0.0, 0.0, 0.0, steps, leaves, bis
 
 
 @numba.njit(**NJIT)
-def cone_start(tree, roots, params, mode, tol, cam, lo, hi, eps, r_lo, r_hi, c_lo, c_hi, stack,
-               dstack, relax=RELAX):
-    """Conservative common start depth for the rays of pixels ``[r_lo, r_hi) x [c_lo, c_hi)``.
-
-    Cone marching along the tile's central direction ``u``: every pixel ray ``v`` of the tile
-    has ``|v - u| <= delta`` (the largest over the four corner rays: the rays of a tile form
-    a spherically convex set, whose farthest point from ``u`` is a corner). A point at
-    parameter ``s`` of ray ``v`` lies within ``|s - t| + t delta`` of the central point at
-    ``t``, so if the scene distance there is ``D``, every ray is surface-free on
-    ``[t, t + D - t delta)`` (the ball of radius ``D`` is, by the same Lipschitz argument as
-    sphere tracing, docs/design-notes.md §4). Steps ``t += D - t delta`` start at the camera
-    (outside the surface) and stop once the cone is wider than a quarter of ``D`` (or leaves
-    the box).
-    For ``tol > 0`` scenes the evaluations are loosened like the march's (``relax``): an
-    under-estimated ``D`` is still a surface-free radius. Returns ``(t_start, evaluations,
-    leaves)``.
-    """
+def _cone_axis(cam, r_lo, r_hi, c_lo, c_hi):
+    """``(ux, uy, uz, delta)``: the unit central direction of the rays of pixels
+    ``[r_lo, r_hi) x [c_lo, c_hi)`` and a bound ``delta >= |v - u|`` over those rays ``v`` (the
+    rays of a rectangle form a spherically convex set, whose farthest point from ``u`` is a
+    corner)."""
     ux = 0.0
     uy = 0.0
     uz = 0.0
@@ -459,7 +457,27 @@ def cone_start(tree, roots, params, mode, tol, cam, lo, hi, eps, r_lo, r_hi, c_l
         for c in (c_lo, c_hi - 1):
             vx, vy, vz = ray_direction(cam, r, c)
             delta = max(delta, math.sqrt((vx - ux) ** 2 + (vy - uy) ** 2 + (vz - uz) ** 2))
-    delta = delta * 1.0001 + 1e-12
+    return ux, uy, uz, delta * 1.0001 + 1e-12
+
+
+@numba.njit(**NJIT)
+def cone_start(tree, roots, params, mode, tol, cam, lo, hi, eps, r_lo, r_hi, c_lo, c_hi, stack,
+               dstack, relax=RELAX):
+    """Conservative common start depth for the rays of pixels ``[r_lo, r_hi) x [c_lo, c_hi)``.
+
+    Cone marching along the tile's central direction ``u``: every pixel ray ``v`` of the tile
+    has ``|v - u| <= delta`` (:func:`_cone_axis`). A point at
+    parameter ``s`` of ray ``v`` lies within ``|s - t| + t delta`` of the central point at
+    ``t``, so if the scene distance there is ``D``, every ray is surface-free on
+    ``[t, t + D - t delta)`` (the ball of radius ``D`` is, by the same Lipschitz argument as
+    sphere tracing, docs/design-notes.md §4). Steps ``t += D - t delta`` start at the camera
+    (outside the surface) and stop once the cone is wider than a quarter of ``D`` (or leaves
+    the box).
+    For ``tol > 0`` scenes the evaluations are loosened like the march's (``relax``): an
+    under-estimated ``D`` is still a surface-free radius. Returns ``(t_start, evaluations,
+    leaves)``.
+    """
+    ux, uy, uz, delta = _cone_axis(cam, r_lo, r_hi, c_lo, c_hi)
     t_in, t_out = ray_box(cam[0], cam[1], cam[2], ux, uy, uz, lo, hi)
     t = 0.0
     evals = 0
@@ -480,6 +498,51 @@ def cone_start(tree, roots, params, mode, tol, cam, lo, hi, eps, r_lo, r_hi, c_l
         t += step
         if t > t_out:
             break
+    return t, evals, leaves
+
+
+@numba.njit(**NJIT)
+def cone_end(tree, roots, params, mode, tol, cam, lo, hi, eps, r_lo, r_hi, c_lo, c_hi, stack,
+             dstack, relax=RELAX):
+    """Conservative common end depth for the rays of pixels ``[r_lo, r_hi) x [c_lo, c_hi)``:
+    :func:`cone_start` run backwards, from the distance of the box's farthest corner
+    towards the camera.
+
+    Every ray ``v`` of the block is surface-free from the returned ``t_end`` on: beyond the
+    farthest corner's distance a point is outside the box (no surface there), and each
+    step ``t -= D - t delta`` keeps, by the argument of :func:`cone_start` (symmetric in
+    ``s - t``), the part of every ray within ``D - t delta`` of ``t`` surface-free. A ray
+    that passes a silhouette then stops at ``t_end`` instead of stepping out of the box with
+    the growing distances behind the silhouette. Stops when the step falls below a quarter
+    of ``D`` (or ``eps``), or the cone reaches the camera. Returns ``(t_end, evaluations,
+    leaves)``."""
+    ux, uy, uz, delta = _cone_axis(cam, r_lo, r_hi, c_lo, c_hi)
+    # every point farther from the camera than the box's farthest corner is outside the box
+    # (rays have unit speed): the cone starts there
+    t = 0.0
+    for k in range(8):
+        cx = hi[0] if k & 1 else lo[0]
+        cy = hi[1] if k & 2 else lo[1]
+        cz = hi[2] if k & 4 else lo[2]
+        t = max(t, math.sqrt((cx - cam[0]) ** 2 + (cy - cam[1]) ** 2 + (cz - cam[2]) ** 2))
+    evals = 0
+    leaves = 0
+    loose = mode == MODE_SMOOTH and tol > 0.0 and relax > 0.0
+    slack = np.inf if loose else 0.0
+    while evals < CONE_STEPS:
+        d, gx, gy, gz, nn, ll = scene_distance(tree, roots, params, mode, tol, cam[0] + t * ux,
+                                               cam[1] + t * uy, cam[2] + t * uz, stack,
+                                               dstack, slack)
+        if loose:
+            slack = relax * d
+        evals += 1
+        leaves += ll
+        step = d - t * delta
+        if step <= 0.25 * d or step <= eps:
+            break
+        t -= step
+        if t <= 0.0:
+            return 0.0, evals, leaves
     return t, evals, leaves
 
 
@@ -593,16 +656,19 @@ def trace_pixels(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, ro
 
 @numba.njit(**NJIT_PARALLEL)
 def trace_samples(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, rows, cols,
-                  offsets, depth_max, hit, tbuf, grad, steps, relax=RELAX, omega=OMEGA,
-                  cone=CONE, newton=0.0, eps_px=0.0):
+                  offsets, depth_max, hit, tbuf, grad, steps, t_lo, t_hi, relax=RELAX,
+                  omega=OMEGA, cone=CONE, newton=0.0, eps_px=0.0):
     """Trace anti-aliasing samples: for pixel ``(rows[i], cols[i])`` the rays through
     ``(rows[i] + offsets[k, 0], cols[i] + offsets[k, 1])`` for every ``k``.
 
     ``offsets (K, 2)`` lie within one pixel of the pixel's own ray (``|offset| <= 1`` per
-    axis), so one cone pass over the pixel's 3 x 3 block (:func:`cone_start`) gives all ``K``
-    rays a conservative start depth. Outputs are ``(m, K)``: ``hit`` bool, ``tbuf``,
-    ``steps`` int64 (the cone pass booked on sample 0), and ``grad (m, K, 3)``. Pixels are
-    independent, so the result does not depend on the number of threads.
+    axis), so one cone pass over the pixel's 3 x 3 block from the camera (:func:`cone_start`)
+    and one from beyond the box (:func:`cone_end`) bound the part of all ``K`` rays that can
+    meet the surface: ``[t_lo[i], t_hi[i]]``. ``t_lo, t_hi (m,)`` are read when finite (from
+    an earlier call for the same pixels: the cone passes are not repeated) and written
+    otherwise. Outputs are ``(m, K)``: ``hit`` bool, ``tbuf``, ``steps`` int64 (the cone
+    passes booked on sample 0), and ``grad (m, K, 3)``. Pixels are independent, so the
+    result does not depend on the number of threads.
 
     ``eps_px >= 0``: the hit threshold of these rays is at least ``eps_px`` pixels, measured at
     the cone's start depth (a lower bound of any hit's depth): a sample only decides how much
@@ -615,18 +681,25 @@ def trace_samples(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, r
         dstack = np.empty(depth_max + 4)
         r = rows[i]
         c = cols[i]
-        t_min = 0.0
         c_ev = 0
-        if cone:
-            t_min, c_ev, c_lv = cone_start(tree, roots, params, mode, tol, cam, lo, hi, eps,
-                                           r - 1, r + 2, c - 1, c + 2, stack, dstack, relax)
+        if cone and not (np.isfinite(t_lo[i]) and np.isfinite(t_hi[i])):
+            t_lo[i], ev, lv = cone_start(tree, roots, params, mode, tol, cam, lo, hi, eps, r - 1,
+                                         r + 2, c - 1, c + 2, stack, dstack, relax)
+            c_ev += ev
+            t_hi[i], ev, lv = cone_end(tree, roots, params, mode, tol, cam, lo, hi, eps, r - 1,
+                                       r + 2, c - 1, c + 2, stack, dstack, relax)
+            c_ev += ev
+        elif not cone:
+            t_lo[i] = 0.0
+            t_hi[i] = np.inf
+        t_min = t_lo[i]
         e = max(eps, eps_px * pixel * t_min)
         for k in range(offsets.shape[0]):
             dx, dy, dz = ray_direction(cam, r + offsets[k, 0], c + offsets[k, 1])
             h, t, gx, gy, gz, st, lv, bs = march_ray(tree, roots, params, mode, tol, cam[0],
                                                      cam[1], cam[2], dx, dy, dz, lo, hi, e,
                                                      max_steps, stack, dstack, relax, omega,
-                                                     t_min, newton)
+                                                     t_min, newton, t_hi[i])
             hit[i, k] = h == 1
             tbuf[i, k] = t
             grad[i, k, 0] = gx
