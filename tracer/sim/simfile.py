@@ -48,6 +48,9 @@ Format (keys not listed are refused; lengths in scene units, times in seconds)::
 
 The authors' simulator (``sims/*.json``) names these ``timestep``, ``num_steps``, ``objects``,
 ``is_dynamic``, ``max_alpha``, ``bvh_type`` and ``init_state``; we use one flat object per body.
+:func:`load_simulation` reads their files too, unchanged (a top-level ``objects`` list instead
+of ``bodies``): :mod:`tracer.sim.authors_format`. They have no camera; theirs get
+:func:`auto_camera` (``Camera.auto``), which frames the whole trajectory when frames are rendered.
 
 :func:`load_simulation` validates every key and value (and that every referenced file exists)
 before it reads any mesh, and raises :class:`~tracer.errors.SimFileError` (a ``ValueError``) with a one-line
@@ -69,7 +72,8 @@ from tracer.validate import (SceneError, check_keys, choice, number, read_json, 
                              show, vec3)
 from tracer.errors import SimFileError  # noqa: F401  (defined there; imported from here too)
 
-__all__ = ["Simulation", "Camera", "SimFileError", "load_simulation", "read_simulation_json"]
+__all__ = ["Simulation", "Camera", "SimFileError", "load_simulation", "read_simulation_json",
+           "auto_camera"]
 
 _TOP = {"name", "description", "dt", "steps", "gravity", "beta", "constraint", "gap_tol",
         "camera", "bodies"}
@@ -84,7 +88,9 @@ DEFAULT_FRAMES = 80
 
 @dataclass
 class Camera:
-    """Rendering settings of a simulation."""
+    """Rendering settings of a simulation. ``auto``: the view was not given (an authors' file);
+    frames are rendered from :func:`auto_camera` of the trajectory instead of ``origin``,
+    ``dest`` and ``up`` (which frame the initial state)."""
 
     origin: np.ndarray
     dest: np.ndarray
@@ -96,6 +102,57 @@ class Camera:
     shading: str = "lit"
     matcap: str = ""
     background: tuple = (255, 255, 255)
+    auto: bool = False
+
+
+#: free border of :func:`auto_camera`, a fraction of the image's half-size
+AUTO_CAMERA_MARGIN = 0.08
+#: elevation of :func:`auto_camera`'s view above the horizontal (degrees), for scenes that
+#: are not flat
+AUTO_CAMERA_ELEVATION = 20.0
+
+
+def auto_camera(bodies, gravity, rotations=None, centers=None, width=640, height=360):
+    """``(origin, dest, up)`` of a camera that sees every body at every pose.
+
+    ``rotations (F, B, 3, 3)`` and ``centers (F, B, 3)``: the bodies' poses over a trajectory
+    (default: their current poses). Up is the coordinate axis closest to ``-gravity`` (+y
+    without gravity). The view looks across the thinner horizontal extent of the bodies'
+    swept bounding box (so a 2D scene in a vertical plane is seen face on, wide axis to the
+    right), from :data:`AUTO_CAMERA_ELEVATION` degrees above unless the box is flat, and is
+    as close as :func:`tracer.camera.frame_points` allows with every drawn surface (within
+    about ``(1 + log n) / alpha`` of its mesh) in view.
+    """
+    from tracer.camera import frame_points
+
+    if rotations is None:
+        rotations = np.array([[b.R for b in bodies]])
+        centers = np.array([[b.x for b in bodies]])
+    pts, radius = [], 0.0
+    for k, b in enumerate(bodies):
+        lo, hi = b.mesh.bounds
+        corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
+                            for z in (lo[2], hi[2])])
+        R, X = np.asarray(rotations)[:, k], np.asarray(centers)[:, k]
+        if b.static:
+            R, X = R[:1], X[:1]
+        pts.append((np.einsum("fij,cj->fci", R, corners) + X[:, None, :]).reshape(-1, 3))
+        radius = max(radius, (1.0 + np.log(max(b.mesh.num_primitives, 1))) / b.alpha)
+    pts = np.concatenate(pts)
+    g = np.asarray(gravity, dtype=float)
+    axis = int(np.argmax(np.abs(g))) if np.linalg.norm(g) > 0 else 1
+    up = np.zeros(3)
+    up[axis] = -np.sign(g[axis]) if np.linalg.norm(g) > 0 else 1.0
+    ext = np.ptp(pts, axis=0)
+    a, b = [i for i in range(3) if i != axis]
+    thin, wide = (a, b) if ext[a] <= ext[b] else (b, a)
+    wide_dir = np.zeros(3)
+    wide_dir[wide] = 1.0
+    eye = np.cross(wide_dir, up)                 # the wide axis to the right of the image
+    flat = ext[thin] <= 0.05 * max(ext.max(), 1e-300)
+    el = 0.0 if flat else np.radians(AUTO_CAMERA_ELEVATION)
+    direction = np.cos(el) * eye + np.sin(el) * up
+    return frame_points(pts, radius, (direction, up), width, height, AUTO_CAMERA_MARGIN)
 
 
 @dataclass
@@ -304,9 +361,15 @@ def _crop(mesh, lo, hi):
 
 
 def load_simulation(path):
-    """Read, validate and build a simulation file into a :class:`~tracer.sim.simfile.Simulation`."""
+    """Read, validate and build a simulation file into a :class:`~tracer.sim.simfile.Simulation`:
+    ours (top-level ``bodies``) or the authors' (top-level ``objects``,
+    :mod:`tracer.sim.authors_format`)."""
     path = os.fspath(path)
     data = read_simulation_json(path)
+    if isinstance(data, dict) and "objects" in data and "bodies" not in data:
+        from tracer.sim.authors_format import build_simulation
+
+        return build_simulation(data, path)
     try:
         if not isinstance(data, dict):
             raise _err(path, "the top level", "must be a JSON object")
