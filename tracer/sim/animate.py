@@ -24,17 +24,26 @@ from tracer.scene import Scene, SceneObject, default_eps
 __all__ = ["animate", "body_scene", "render_frames", "frame_indices", "write_mp4", "write_gif"]
 
 
-def body_scene(sim, size=None):
+def body_scene(sim, size=None, trajectory=None):
     """A :class:`~tracer.scene.Scene` with one object per body (body coordinates);
-    ``size (W, H)`` overrides the camera's image size."""
+    ``size (W, H)`` overrides the camera's image size. A simulation without a camera of its
+    own (``camera.auto``, the authors' files) is framed by
+    :func:`~tracer.sim.simfile.auto_camera` over ``trajectory`` (a dict with ``rotations``
+    and ``centers``), or at the initial state without one."""
     cam = sim.camera
     width, height = (cam.width, cam.height) if size is None else (int(size[0]), int(size[1]))
+    origin, dest, up = cam.origin, cam.dest, cam.up
+    if cam.auto and trajectory is not None:
+        from tracer.sim.simfile import auto_camera
+
+        origin, dest, up = auto_camera(sim.bodies, sim.gravity, trajectory["rotations"],
+                                       trajectory["centers"], width, height)
     objs = [SceneObject(name=b.name, field=SmoothDistanceField(b.mesh), alpha=b.alpha,
                         alpha_u=b.alpha_u, beta=sim.beta, offset=1.0 / b.alpha)
             for b in sim.bodies]
     # lit clips: the bodies' own floors catch the shadows, so no extra ground plane
-    scene = Scene(path=sim.path, camera_origin=cam.origin, camera_dest=cam.dest,
-                  camera_up=cam.up, objects=objs, width=width, height=height,
+    scene = Scene(path=sim.path, camera_origin=origin, camera_dest=dest,
+                  camera_up=up, objects=objs, width=width, height=height,
                   beta=sim.beta, shading=cam.shading, matcap=cam.matcap,
                   background=cam.background, lighting=Lighting(ground=False))
     scene.eps = default_eps(scene)
@@ -53,7 +62,7 @@ def render_frames(sim, traj, frames_dir, *, every=None, progress=None, overwrite
                   size=None):
     """Render the trajectory's frames to ``frames_dir/frame_NNNNN.png``; returns the images.
     ``size (W, H)``: frame size in pixels (default: the simulation camera's)."""
-    scene = body_scene(sim, size)
+    scene = body_scene(sim, size, traj)
     every = sim.camera.every if every is None else every
     idx = frame_indices(len(traj["time"]), every)
     os.makedirs(frames_dir, exist_ok=True)

@@ -7,7 +7,9 @@
 * :func:`frame_task`: renders one frame with every body at its pose and writes its PNG
   (atomically); returns a small record. A worker process loads the simulation and the
   trajectory by path and builds every body's tree **once** (cached, keyed by path, modification
-  time and size), so only the task dict travels through the scheduler;
+  time and size), so only the task dict travels through the scheduler. A simulation without a
+  camera (the authors' files) is framed on the whole trajectory
+  (:func:`tracer.sim.simfile.auto_camera`);
 * :func:`render_movie`: runs the tasks through :func:`tracer.runner.run_tasks` (in this
   process, on a local Dask cluster or on an existing one) and reduces the PNGs, in frame order,
   to an MP4 and a GIF.
@@ -59,12 +61,16 @@ def list_tasks(sim_path, traj_path, frames_dir, indices, size=None):
 
 
 @functools.lru_cache(maxsize=4)
-def _scene(sim_stamp, size):
+def _scene(sim_stamp, size, traj_stamp):
     from tracer.sim.animate import body_scene
     from tracer.sim.simfile import load_simulation
 
     sim = load_simulation(sim_stamp[0])
-    return sim, body_scene(sim, size)
+    traj = None
+    if sim.camera.auto:                        # framed on the whole trajectory
+        rotations, centers = _poses(traj_stamp)
+        traj = {"rotations": rotations, "centers": centers}
+    return sim, body_scene(sim, size, traj)
 
 
 @functools.lru_cache(maxsize=4)
@@ -81,8 +87,9 @@ def frame_task(task):
     from tracer.render import render
 
     size = tuple(task["size"]) if task.get("size") else None
-    sim, scene = _scene(file_stamp(task["sim"]), size)
-    rotations, centers = _poses(file_stamp(task["trajectory"]))
+    traj_stamp = file_stamp(task["trajectory"])
+    sim, scene = _scene(file_stamp(task["sim"]), size, traj_stamp)
+    rotations, centers = _poses(traj_stamp)
     f = task["frame"]
     poses = [(rotations[f, k], centers[f, k]) for k in range(len(sim.bodies))]
     res = render(scene, transforms=poses)
