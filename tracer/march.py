@@ -466,7 +466,7 @@ def cone_start(tree, roots, params, mode, tol, cam, lo, hi, eps, r_lo, r_hi, c_l
     """Conservative common start depth for the rays of pixels ``[r_lo, r_hi) x [c_lo, c_hi)``.
 
     Cone marching along the tile's central direction ``u``: every pixel ray ``v`` of the tile
-    has ``|v - u| <= delta`` (:func:`_cone_axis`). A point at
+    has ``|v - u| <= delta`` (``_cone_axis``). A point at
     parameter ``s`` of ray ``v`` lies within ``|s - t| + t delta`` of the central point at
     ``t``, so if the scene distance there is ``D``, every ray is surface-free on
     ``[t, t + D - t delta)`` (the ball of radius ``D`` is, by the same Lipschitz argument as
