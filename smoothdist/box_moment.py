@@ -43,13 +43,32 @@ def _cross_axis(rx, ry, rz, a, ua):
 
 
 @numba.njit(**NJIT)
-def gap_moment(kq, Q, ux, uy, uz, cx, cy, cz):
-    """Moment about ``c`` of the per-axis box gap whose translation gradient is ``u``.
+def extreme_levers(kq, Q, cx, cy, cz, L):
+    """Fill ``L (18,)`` with ``(Q_k - c) x e_a`` for the query vertex ``k`` extreme along axis
+    ``a``: ``L[6 a : 6 a + 3]`` for the smallest coordinate, ``L[6 a + 3 : 6 a + 6]`` for the
+    largest (ties go to the first vertex). ``Q (9,)`` the query's ``kq + 1`` vertices."""
+    for a in range(3):
+        kmin = 0
+        kmax = 0
+        for j in range(1, kq + 1):
+            if Q[3 * j + a] < Q[3 * kmin + a]:
+                kmin = j
+            if Q[3 * j + a] > Q[3 * kmax + a]:
+                kmax = j
+        for side in range(2):
+            k = kmin if side == 0 else kmax
+            lx, ly, lz = _cross_axis(Q[3 * k] - cx, Q[3 * k + 1] - cy, Q[3 * k + 2] - cz, a, 1.0)
+            L[6 * a + 3 * side] = lx
+            L[6 * a + 3 * side + 1] = ly
+            L[6 * a + 3 * side + 2] = lz
 
-    Axis ``a`` with ``u_a < 0`` (query below the box) is set by the query's largest coordinate
-    along ``a``, ``u_a > 0`` by its smallest; ties go to the first vertex. ``Q (9,)`` the
-    query's ``kq + 1`` vertices. Returns ``(mx, my, mz)``.
-    """
+
+@numba.njit(**NJIT)
+def gap_moment(L, ux, uy, uz):
+    """Moment of the per-axis box gap whose translation gradient is ``u``, from the query's
+    :func:`extreme_levers` ``L``: axis ``a`` with ``u_a < 0`` (query below the box) is set by
+    the query's largest coordinate along ``a``, ``u_a > 0`` by its smallest. Returns
+    ``(mx, my, mz)``."""
     mx = 0.0
     my = 0.0
     mz = 0.0
@@ -57,14 +76,10 @@ def gap_moment(kq, Q, ux, uy, uz, cx, cy, cz):
         ua = ux if a == 0 else (uy if a == 1 else uz)
         if ua == 0.0:
             continue
-        k = 0
-        for j in range(1, kq + 1):
-            if (ua < 0.0 and Q[3 * j + a] > Q[3 * k + a]) or (ua > 0.0 and Q[3 * j + a] < Q[3 * k + a]):
-                k = j
-        ax, ay, az = _cross_axis(Q[3 * k] - cx, Q[3 * k + 1] - cy, Q[3 * k + 2] - cz, a, ua)
-        mx += ax
-        my += ay
-        mz += az
+        o = 6 * a + (3 if ua < 0.0 else 0)
+        mx += ua * L[o]
+        my += ua * L[o + 1]
+        mz += ua * L[o + 2]
     return mx, my, mz
 
 
@@ -74,11 +89,12 @@ def _cross(ax, ay, az, bx, by, bz):
 
 
 @numba.njit(**NJIT)
-def box_lower_bound_moment(kq, Q, qlo, qhi, lo, hi, node, E, cx, cy, cz):
+def box_lower_bound_moment(kq, Q, qlo, qhi, lo, hi, node, E, cx, cy, cz, L):
     """:func:`~smoothdist.box_distance.box_lower_bound` and its moment about ``c``.
 
-    Arguments as there, plus the moment's reference point ``(cx, cy, cz)``; ``kq`` 1 or 2.
-    Returns ``(delta, ux, uy, uz, mx, my, mz)``.
+    Arguments as there, plus the moment's reference point ``(cx, cy, cz)`` and the query's
+    :func:`extreme_levers` ``L`` about it; ``kq`` 1 or 2. Returns
+    ``(delta, ux, uy, uz, mx, my, mz)``.
     """
     delta, ux, uy, uz = box_lower_bound(kq, Q, qlo, qhi, lo, hi, node, E)
     if delta == 0.0 or (ux == 0.0 and uy == 0.0 and uz == 0.0):
@@ -133,7 +149,7 @@ def box_lower_bound_moment(kq, Q, qlo, qhi, lo, hi, node, E, cx, cy, cz):
     n_axes = (ux != 0.0) + (uy != 0.0) + (uz != 0.0)
     if n_axes == 1 and abs(ux) + abs(uy) + abs(uz) == 1.0 and delta == math.sqrt(
             g0 * g0 + g1 * g1 + g2 * g2):
-        mx, my, mz = gap_moment(kq, Q, ux, uy, uz, cx, cy, cz)
+        mx, my, mz = gap_moment(L, ux, uy, uz)
         return delta, ux, uy, uz, mx, my, mz
     # the normal gap: distance from the triangle's plane to the box corner furthest along u
     Kx = 0.5 * (lo[node, 0] + hi[node, 0]) + (0.5 * (hi[node, 0] - lo[node, 0]) if ux > 0.0 else

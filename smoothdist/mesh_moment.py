@@ -32,7 +32,7 @@ from numba import prange
 
 from smoothdist._config import NJIT, NJIT_PARALLEL
 from smoothdist.box_distance import box_box_distance, box_box_offset
-from smoothdist.box_moment import box_lower_bound_moment, gap_moment
+from smoothdist.box_moment import box_lower_bound_moment, extreme_levers, gap_moment
 from smoothdist.closest_pair import closest_pair
 from smoothdist.closest_point import TRI_AB, TRI_AC, TRI_INTERIOR
 from smoothdist.mesh_query import (TASKS, _dot, _point_box, feature_directions, query_box,
@@ -180,14 +180,16 @@ def smooth_moment_primitive(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scr
     """:func:`smoothdist.mesh_query.smooth_distance_primitive` with the moment about the
     query's centroid.
 
-    Same traversal and arguments (``kq`` 1 or 2). Returns
+    Same traversal and arguments (``kq`` 1 or 2), but ``scratch (33,)``. Returns
     ``(d_hat, gx, gy, gz, mx, my, mz, nodes_visited, leaves_visited)``.
     """
     qlo = scratch[0:3]
     qhi = scratch[3:6]
     E = scratch[6:15]
+    L = scratch[15:33]
     query_box(kq, Q, qlo, qhi)
     cx, cy, cz = centroid(kq, Q)
+    extreme_levers(kq, Q, cx, cy, cz, L)
     m = np.inf
     s = 0.0
     gx = 0.0
@@ -216,18 +218,18 @@ def smooth_moment_primitive(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scr
             dg = tree.diag[node]
             if dg < beta * bd:
                 delta, ux, uy, uz = box_box_offset(qlo, qhi, lo, hi, node)
-                ax, ay, az = gap_moment(kq, Q, ux, uy, uz, cx, cy, cz)
+                ax, ay, az = gap_moment(L, ux, uy, uz)
                 far = True
             elif dg < beta * _point_box(kq, Q, lo, hi, node):
                 delta, ux, uy, uz, ax, ay, az = box_lower_bound_moment(kq, Q, qlo, qhi, lo, hi,
-                                                                       node, E, cx, cy, cz)
+                                                                       node, E, cx, cy, cz, L)
                 far = dg < beta * delta
         if not far and tol > 0.0 and s > 0.0:
             wh = tree.whi[node]
             W = cnt * (wh if (S == 1.0 or wh == 1.0) else math.exp(S * math.log(wh)))
             if W * math.exp(-alpha * (bd - m)) <= tol * s:
                 delta, ux, uy, uz = box_box_offset(qlo, qhi, lo, hi, node)
-                ax, ay, az = gap_moment(kq, Q, ux, uy, uz, cx, cy, cz)
+                ax, ay, az = gap_moment(L, ux, uy, uz)
                 far = True
         if far:
             wh = tree.whi[node]
@@ -278,7 +280,7 @@ def _moment_task(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g, ou
     k = tree.depth + 4
     stack = np.empty(k, dtype=np.int64)
     dstack = np.empty(k)
-    scratch = np.empty(15)
+    scratch = np.empty(33)
     for j in range(task, qkind.size, ntasks):
         kq = qkind[j]
         Q = qpts[j]
