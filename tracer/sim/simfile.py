@@ -11,6 +11,9 @@ Format (keys not listed are refused; lengths in scene units, times in seconds)::
       "beta": 0.5,                       Barnes-Hut parameter of every pair, default 0.5
       "constraint": "smooth",            "smooth" (LSE of pair smooth distances) or "exact"
       "gap_tol": 1e-5,                   optional interior-point gap tolerance (scene units)
+      "torques": "exact",                rotation gradient: "exact" (default) or "split" (the
+                                         paper's equal split, as the authors' simulator;
+                                         tracer.sim.constraint)
       "camera": {                        required (used when rendering)
         "origin": [x, y, z], "dest": [x, y, z], "up": [x, y, z],
         "width": 640, "height": 360,     image size (default 640 x 360)
@@ -68,6 +71,7 @@ from tracer.scene import SHADINGS
 from tracer.sim import primitives
 from tracer.sim.bodies import (AUTO_THICKNESS_OFFSET, Body, auto_alpha, rotation_matrix,
                                thickness)
+from tracer.sim.constraint import DEFAULT_TORQUES, TORQUES
 from tracer.validate import (SceneError, check_keys, choice, number, read_json, resolve_path,
                              show, vec3)
 from tracer.errors import SimFileError  # noqa: F401  (defined there; imported from here too)
@@ -76,7 +80,7 @@ __all__ = ["Simulation", "Camera", "SimFileError", "load_simulation", "read_simu
            "auto_camera"]
 
 _TOP = {"name", "description", "dt", "steps", "gravity", "beta", "constraint", "gap_tol",
-        "camera", "bodies"}
+        "torques", "camera", "bodies"}
 _CAMERA = {"origin", "dest", "up", "width", "height", "fps", "every", "shading", "matcap",
            "background"}
 _BODY = {"name", "mesh", "primitive", "kind", "scale", "crop", "alpha", "alpha_u", "density",
@@ -170,6 +174,7 @@ class Simulation:
     camera: Camera
     gap_tol: float = None
     spec: dict = field(default_factory=dict)
+    torques: str = DEFAULT_TORQUES
 
 
 def _err(path, where, msg):
@@ -387,6 +392,7 @@ def load_simulation(path):
                             "constraint")
         gap_tol = (number(data["gap_tol"], path, "gap_tol", positive=True)
                    if "gap_tol" in data else None)
+        torques = choice(data.get("torques", DEFAULT_TORQUES), TORQUES, path, "torques")
         name = data.get("name", os.path.splitext(os.path.basename(path))[0])
         if not isinstance(name, str):
             raise _err(path, "name", f"must be a string, got {show(name)}")
@@ -416,4 +422,4 @@ def load_simulation(path):
         raise _wrap(exc) from None
     return Simulation(path=path, name=name, bodies=built, dt=dt, steps=steps, gravity=gravity,
                       beta=beta, constraint=constraint, camera=camera, gap_tol=gap_tol,
-                      spec=data)
+                      spec=data, torques=torques)
