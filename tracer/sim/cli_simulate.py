@@ -28,6 +28,10 @@ def add_arguments(p):
     p.add_argument("--no-render", action="store_true", help="write the trajectory only")
     p.add_argument("--resume", action="store_true",
                    help="continue DIR/trajectory.npz from its last frame")
+    p.add_argument("--torques", choices=("exact", "split"),
+                   help="rotation gradient: the exact derivative, or the paper's equal split "
+                        "of each primitive's force (the authors' simulator); default: the "
+                        "file's \"torques\", else exact")
     add_frame_arguments(p, "step")
 
 
@@ -49,7 +53,7 @@ def run(args):
     if args.resume and not os.path.exists(traj):
         raise CLIError(f"--resume: nothing to resume, {traj} does not exist")
     sim = load_simulation(args.sim)
-    built = run.build(sim)
+    built = run.build(sim, torques=args.torques)
     con = built[0]
     if not args.resume:
         run.check_initial_state(sim, con)

@@ -9,10 +9,18 @@ evaluated **once**, in that orientation, and both bodies' gradients come from th
 the translation gradient is the derivative of the returned value (the authors evaluate each
 orientation and mix them). The pair distances use the exact derivative of the weights
 (``gradient="exact"``), not the paper's alpha-metric gradient, so that the solver's line search
-sees a gradient consistent with the values. The rotation gradient uses the paper's equal split
-of each query primitive's force over its vertices (Eq. 7-8), i.e. the force acts at the
-primitive's centroid rather than at its closest point: exact for point queries, an
-approximation of the order of the primitive size for edges and triangles.
+sees a gradient consistent with the values. The rotation gradient is chosen by ``torques``:
+
+* ``"exact"`` (default): the derivative of the pair distance for a rotation of the bodies.
+  Each pair term acts at its own closest point on the query primitive (envelope theorem), so
+  the equal-split torque gets the couple of :meth:`smoothdist.MeshDistance.with_couple`;
+* ``"split"``: the paper's equal split of each query primitive's force over its vertices
+  (Eq. 7-8; the authors' simulator), i.e. the force acts at the primitive's centroid: exact for
+  point queries, off by the order of the primitive size times the force for edges and triangles
+  (the rotation gradient then disagrees with the values the line search sees).
+
+Both give the same translation gradient, and identical results for point-cloud query bodies.
+A distance object without ``with_couple`` (e.g. a stand-in) gets split torques.
 
 The scene constraint is the LogSumExp of the pair distances with the largest alpha of the scene
 (paper Sec. 5.5)::
@@ -25,8 +33,9 @@ exact-distance constraint, C0 only; used by the V-bowl study).
 Gradients are returned per body as a world-space force-like pair ``(gx, gw)``: ``gx`` the
 derivative with respect to a translation of the body and ``gw`` with respect to a small world
 rotation ``exp([w]x)`` applied about its centre of mass. From the query's vertex gradients
-``g_i`` (world) at vertices ``p_i``: ``gx = sum g_i``, ``gw = sum (p_i - x) x g_i`` for the query
-body, and the negatives about the data body's centre for the data body.
+``g_i`` (world) at vertices ``p_i`` and the couple ``C`` (world; 0 with split torques):
+``gx = sum g_i``, ``gw = sum (p_i - x) x g_i + C`` for the query body, and the negatives about
+the data body's centre for the data body.
 
 Broad phase (exact, not a heuristic): a pair whose lower bound ``(gap of bounding spheres) /
 (1 + beta) - inflation`` exceeds the smallest pair distance by more than ``40 / a`` changes
@@ -41,6 +50,9 @@ from smoothdist import SmoothDistanceField
 
 #: pairs whose lower bound exceeds the current minimum by this many 1/a are skipped
 SKIP_EXPONENT = 40.0
+#: the rotation gradient: exact derivative, or the paper's equal split (module notes)
+TORQUES = ("exact", "split")
+DEFAULT_TORQUES = "exact"
 
 
 def mesh_distance_factory():
@@ -90,6 +102,9 @@ class ContactConstraint:
     beta : float
         Barnes-Hut parameter of every pair distance.
     mode : {"smooth", "exact"}
+    torques : {"exact", "split"}
+        The rotation gradient of the smooth constraint (module notes). ``mode="exact"`` always
+        splits the minimising primitive's gradient (the authors' exact constraint).
     factory : callable, optional
         ``factory(data_field, query_mesh, *, alpha, alpha_q, beta, alpha_u, gradient)`` returning
         an object
@@ -97,12 +112,15 @@ class ContactConstraint:
         contract). Default: :func:`mesh_distance_factory`.
     """
 
-    def __init__(self, bodies, beta=0.5, mode="smooth", factory=None):
+    def __init__(self, bodies, beta=0.5, mode="smooth", factory=None, torques=DEFAULT_TORQUES):
         if mode not in ("smooth", "exact"):
             raise ValueError(f"mode must be 'smooth' or 'exact', got {mode!r}")
+        if torques not in TORQUES:
+            raise ValueError(f"torques must be one of {TORQUES}, got {torques!r}")
         factory = factory or mesh_distance_factory()
         self.bodies = bodies
         self.mode = mode
+        self.torques = torques
         self.pairs = []
         fields = {}
         for a in range(len(bodies)):
@@ -121,14 +139,22 @@ class ContactConstraint:
         self.alpha_min = min(min(bodies[p.i].alpha, bodies[p.j].alpha) for p in self.pairs)
         self.evaluations = 0
 
-    def _pair(self, p, X, Rs, exact):
+    def _pair(self, p, X, Rs, exact, gradient=True):
+        """``(d, G (n, 3), C (3,) or None)`` of a pair in the data body's frame."""
         R, t = p.relative(X, Rs)
-        d, G = (p.md.exact if exact else p.md)(R, t)
+        C = None
+        if exact:
+            d, G = p.md.exact(R, t)
+        elif gradient and self.torques == "exact" and hasattr(p.md, "with_couple"):
+            d, G, C = p.md.with_couple(R, t)
+        else:
+            d, G = p.md(R, t)
         self.evaluations += 1
-        return float(d), np.asarray(G, dtype=float)
+        return float(d), np.asarray(G, dtype=float), C
 
-    def _pair_gradient(self, p, X, Rs, G):
-        """World ``(gx, gw)`` of the data body and of the query body from vertex gradients."""
+    def _pair_gradient(self, p, X, Rs, G, C=None):
+        """World ``(gx, gw)`` of the data body and of the query body from vertex gradients
+        and the couple ``C`` (data frame; None: split torques)."""
         RA, RB = Rs[p.i], Rs[p.j]
         g = G @ RA.T                                  # world vertex gradients
         P = self.bodies[p.j].mesh.V @ RB.T           # query vertices relative to its centre
@@ -137,6 +163,10 @@ class ContactConstraint:
         # data body: moving it by dx is moving the query by -dx; rotation about x_A
         rel = P + (X[p.j] - X[p.i])
         gw_d = -np.cross(rel, g).sum(axis=0)
+        if C is not None:                             # a couple: the same about any point
+            Cw = RA @ C
+            gw_q = gw_q + Cw
+            gw_d = gw_d - Cw
         return -gsum, gw_d, gsum, gw_q
 
     def evaluate(self, X, Rs, gradient=True):
@@ -151,7 +181,7 @@ class ContactConstraint:
                 gap = float(np.linalg.norm(X[p.i] - X[p.j])) - p.radius
                 if gap - p.offset > best:             # exact distances are >= sphere gaps
                     continue
-                d, G = self._pair(p, X, Rs, exact=True)
+                d, G, _ = self._pair(p, X, Rs, exact=True)
                 if d - p.offset < best:
                     best, arg = d - p.offset, (p, G)
             if gradient:
@@ -165,14 +195,14 @@ class ContactConstraint:
         for p in order:
             if terms and p.lower_bound(X) > m + SKIP_EXPONENT / a:
                 break
-            d, G = self._pair(p, X, Rs, exact=False)
-            terms.append((p, d, G))
+            d, G, C = self._pair(p, X, Rs, exact=False, gradient=gradient)
+            terms.append((p, d, G, C))
             m = min(m, d)
-        for p, d, G in terms:
+        for p, d, G, C in terms:
             w = math.exp(-a * (d - m))
             s += w
             if gradient:
-                g_i, w_i, g_j, w_j = self._pair_gradient(p, X, Rs, G)
+                g_i, w_i, g_j, w_j = self._pair_gradient(p, X, Rs, G, C)
                 gx[p.i] += w * g_i
                 gw[p.i] += w * w_i
                 gx[p.j] += w * g_j

@@ -31,7 +31,7 @@ import time
 import numpy as np
 
 from tracer.outputs import atomic_write
-from tracer.sim.constraint import ContactConstraint
+from tracer.sim.constraint import DEFAULT_TORQUES, ContactConstraint
 from tracer.sim.integrator import Integrator
 from tracer.errors import OverlapError  # noqa: F401  (defined there; imported from here too)
 
@@ -44,9 +44,16 @@ FRAME_KEYS = ("rotations", "translations", "centers", "velocities", "angular_vel
               "seconds")
 
 
-def build(sim, factory=None):
-    """``(constraint, integrator)`` for a loaded simulation."""
-    con = ContactConstraint(sim.bodies, beta=sim.beta, mode=sim.constraint, factory=factory)
+def build(sim, factory=None, torques=None):
+    """``(constraint, integrator)`` for a loaded simulation.
+
+    ``torques``: ``"exact"`` or ``"split"`` (:mod:`tracer.sim.constraint`); None takes the
+    simulation's (its file's ``"torques"`` key, default ``"exact"``).
+    """
+    if torques is None:
+        torques = getattr(sim, "torques", None) or DEFAULT_TORQUES
+    con = ContactConstraint(sim.bodies, beta=sim.beta, mode=sim.constraint, factory=factory,
+                            torques=torques)
     integ = Integrator(sim.bodies, con, sim.gravity, sim.dt, gap_tol=sim.gap_tol)
     return con, integ
 
@@ -133,16 +140,20 @@ def restore(sim, data, frame=-1):
 
 
 def simulate(sim, out_path, *, steps=None, resume=False, overwrite=False, progress=None,
-             factory=None, checkpoint_seconds=20.0, built=None):
+             factory=None, checkpoint_seconds=20.0, built=None, torques=None):
     """Run ``sim`` and write its trajectory to ``out_path``; returns the frames dict.
 
     ``steps`` overrides the file's step count. With ``resume`` an existing trajectory is
     continued from its last frame up to ``steps`` in total. ``progress(done, total, elapsed)``
     is called after each step. ``built``: the ``(constraint, integrator)`` of :func:`~tracer.sim.run.build`
-    when the caller has them already.
+    when the caller has them already. ``torques`` (``"exact"`` / ``"split"``) overrides the
+    file's rotation gradient (:mod:`tracer.sim.constraint`); not with ``built``.
     """
     steps = sim.steps if steps is None else int(steps)
-    con, integ = built if built is not None else build(sim, factory)
+    if built is not None and torques is not None and built[0].torques != torques:
+        raise ValueError(f"torques={torques!r} but the built constraint has "
+                         f"{built[0].torques!r}")
+    con, integ = built if built is not None else build(sim, factory, torques=torques)
     frames = {k: [] for k in FRAME_KEYS}
     if resume and os.path.exists(out_path):
         data = load_trajectory(out_path)
