@@ -27,7 +27,9 @@ Format (keys not listed are refused; lengths in scene units, times in seconds)::
         {
           "name": "bunny",               default "body<i>"
           "mesh": "../data/bunny.off",   a mesh file (relative to this file), or
-          "primitive": {"type": "icosphere", "radius": 0.5},   (tracer.sim.primitives)
+          "primitive": {"type": "icosphere", "radius": 0.5},   (tracer.sim.primitives;
+                                         numbers, lists of numbers, and "path": a file
+                                         relative to this file, e.g. lidar_terrain's tile)
           "kind": "triangles",           "points" | "edges" | "triangles" | "mixed" (default:
                                          what the file holds)
           "scale": 1.0,                  uniform scale of the file's coordinates
@@ -264,10 +266,13 @@ def _body_spec(bd, i, base, path):
         if prim["type"] not in primitives.GENERATORS:
             raise _err(path, f"{where}.primitive.type", f"must be one of "
                        f"{', '.join(sorted(primitives.GENERATORS))}; got {show(prim['type'])}")
-        for k, v in prim.items():
+        prim = dict(prim)
+        for k, v in list(prim.items()):
             if k == "type":
                 continue
-            if isinstance(v, list):
+            if k == "path":                  # a generator's input file, relative to this file
+                prim[k] = resolve_path(base, v, path, f"{where}.primitive.path")
+            elif isinstance(v, list):
                 [number(x, path, f"{where}.primitive.{k}[{j}]") for j, x in enumerate(v)]
             else:
                 number(v, path, f"{where}.primitive.{k}", non_negative=True)
