@@ -273,8 +273,8 @@ class MeshDistance:
         return d, g, mo
 
     def with_couple(self, R=None, t=None, *, method="bvh"):
-        """``(d_hat, G (n, 3), C (3,))``: :meth:`__call__`'s result and the couple ``C`` that
-        makes its torque exact.
+        """``(d_hat, G (n, 3), C (3,))``: what calling the object returns, and the couple ``C``
+        that makes its torque exact.
 
         For any point ``o``, the gradient of ``d_hat`` for a rotation of the query about ``o``
         is ``sum_k (x_k - o) x G_k + C`` (``x_k`` the transformed query vertices): the equal
