@@ -1,4 +1,5 @@
-"""Benchmark the shipped simulations (``scenes/simulations/*.json``).
+"""Benchmark the shipped simulations (``scenes/simulations/*.json``, and with ``--table3`` the
+paper's Table 3 scenes ``scenes/simulations/table3/*.json``, named ``table3/<name>``).
 
 Per scene: seconds per step (the time step only: constraint evaluations and the interior-point
 solve; the per-frame exact distance for the report is excluded), pair-distance evaluations per
@@ -8,6 +9,12 @@ the minimum exact distance between any two bodies over the whole run (must stay 
     python benchmarks/bench_sim.py                       # run every scene (no rendering)
     python benchmarks/bench_sim.py --steps 50 bunnies_plane
     python benchmarks/bench_sim.py --from DIR            # summarise DIR/<scene>/trajectory.npz
+    python benchmarks/bench_sim.py --table3 --steps 20 table3/ico_bowl   # a Table 3 scene
+    python benchmarks/bench_sim.py --table3 --from DIR   # DIR/<scene>/ or DIR/<name>/trajectory.npz
+
+The Table 3 scenes are large (up to 6.6 million points, up to hours per run at their step
+counts): they run only when asked for (``--table3``), and a row then also gives the bodies'
+primitive counts.
 
 Timings depend on the machine's load; say so when you report them.
 """
@@ -47,27 +54,57 @@ def summarise(name, z, wall=None):
     return row
 
 
+def primitive_counts(sim):
+    """``"736 edges + (960 triangles + 6 edges)"``: each body's primitives, in file order."""
+    def count(m):
+        parts = [f"{n} {k}" for k, n in (("points", len(m.points)), ("edges", len(m.edges)),
+                                         ("triangles", len(m.triangles))) if n]
+        return parts[0] if len(parts) == 1 else "(" + " + ".join(parts) + ")"
+
+    return " + ".join(count(b.mesh) for b in sim.bodies)
+
+
+def scene_files(table3=False):
+    """``[(name, path)]`` of the shipped scenes (and the Table 3 ones, ``table3/<name>``)."""
+    root = os.path.join(HERE, "..", "scenes", "simulations")
+    out = [(os.path.splitext(os.path.basename(f))[0], f)
+           for f in sorted(glob.glob(os.path.join(root, "*.json")))]
+    if table3:
+        out += [("table3/" + os.path.splitext(os.path.basename(f))[0], f)
+                for f in sorted(glob.glob(os.path.join(root, "table3", "*.json")))]
+    return out
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("scenes", nargs="*", help="scene names (default: all)")
+    ap.add_argument("--table3", action="store_true",
+                    help="also the Table 3 scenes (scenes/simulations/table3/, table3/<name>)")
     ap.add_argument("--steps", type=int, help="override every scene's step count")
     ap.add_argument("--from", dest="src", metavar="DIR",
                     help="summarise DIR/<scene>/trajectory.npz instead of running")
     ap.add_argument("--json", metavar="OUT.json", help="also write the rows as JSON")
     args = ap.parse_args(argv)
-    files = sorted(glob.glob(os.path.join(HERE, "..", "scenes", "simulations", "*.json")))
-    names = [os.path.splitext(os.path.basename(f))[0] for f in files]
-    pick = args.scenes or names
+    scenes = scene_files(args.table3)
+    pick = args.scenes or [n for n, _ in scenes]
+    unknown = sorted(set(pick) - {n for n, _ in scenes})
+    if unknown:
+        ap.error(f"unknown scene(s) {', '.join(unknown)}"
+                 + ("" if args.table3 else " (Table 3 scenes need --table3)"))
     rows = []
-    for f, name in zip(files, names):
+    for name, f in scenes:
         if name not in pick:
             continue
         if args.src:
-            p = os.path.join(args.src, name, "trajectory.npz")
-            if not os.path.exists(p):
-                print(f"skip {name}: no {p}", file=sys.stderr)
+            cands = [os.path.join(args.src, name, "trajectory.npz"),
+                     os.path.join(args.src, os.path.basename(name), "trajectory.npz")]
+            p = next((c for c in cands if os.path.exists(c)), None)
+            if p is None:
+                print(f"skip {name}: no {cands[0]}", file=sys.stderr)
                 continue
             rows.append(summarise(name, run.load_trajectory(p)))
+            if name.startswith("table3/"):
+                rows[-1]["primitives"] = primitive_counts(load_simulation(f))
         else:
             sim = load_simulation(f)
             with tempfile.TemporaryDirectory() as tmp:
@@ -77,9 +114,11 @@ def main(argv=None):
                 rows.append(summarise(name, run.load_trajectory(os.path.join(tmp,
                                                                             "trajectory.npz")),
                                       wall))
+            if name.startswith("table3/"):
+                rows[-1]["primitives"] = primitive_counts(sim)
         print(json.dumps(rows[-1]), flush=True)
     if rows:
-        keys = list(rows[0])
+        keys = list(dict.fromkeys(k for r in rows for k in r))
         print("\n| " + " | ".join(keys) + " |")
         print("|" + "---|" * len(keys))
         for r in rows:
