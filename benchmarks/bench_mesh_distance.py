@@ -26,13 +26,26 @@ Usage (from the repository root)::
 
     python benchmarks/bench_mesh_distance.py                  # all cases, best of 10
     python benchmarks/bench_mesh_distance.py --case bunny-bunny --repeat 20 --json out.json
+    python benchmarks/bench_mesh_distance.py --authors-bin ../authors-build/bench/mesh_bench \
+        --rounds 10 --repeat 20                               # side by side with the authors
+
+Side by side (``--authors-bin``, the authors' ``meshDistance`` built as ``mesh_bench``, see
+``../shared/tools/authors-bench/README.md``): each case's arrays and placement are written to a
+case directory (``--case-dir``, default a temporary one; ``max_alpha`` 1, i.e. no attenuation, as
+ours), then ``--rounds`` rounds alternate their ``mesh_bench DIR THREADS REPEAT`` and ``REPEAT`` of
+our calls, so that both see the same machine load; the best and the median of the rounds' bests
+are reported, with the load average before and after. ``tol`` is 0 there (the paper's algorithm).
+``--overhead`` times one call on a one-edge query against a one-edge data mesh: the fixed cost of
+a call (validation, transform, kernel launch, vertex split).
 """
 
 import argparse
 import json
 import os
 import platform
+import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -120,6 +133,99 @@ def run_case(name, spec, repeat, beta, tol=0.0, placement=None):
     }
 
 
+def load_average():
+    """The 1-minute load average (nan where the platform has none)."""
+    return os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
+
+
+def write_authors_case(case_dir, spec, t, beta):
+    """Write a case directory for the authors' ``mesh_bench`` (arrays, parameters, placement)."""
+    (Vd, Fd), (Vq, Fq), alpha, alpha_q = spec[0], spec[1], spec[2], spec[3]
+    case_dir = Path(case_dir)
+    case_dir.mkdir(parents=True, exist_ok=True)
+    np.savetxt(case_dir / "Vd.txt", np.asarray(Vd, dtype=float), fmt="%.17g")
+    np.savetxt(case_dir / "Vq.txt", np.asarray(Vq, dtype=float), fmt="%.17g")
+    for name, F in (("Fd.txt", Fd), ("Fq.txt", Fq)):
+        if F is None:                                   # a point cloud: an empty file
+            (case_dir / name).write_text("")
+        else:
+            np.savetxt(case_dir / name, np.asarray(F, dtype=np.int64), fmt="%d")
+    t = np.asarray(t, dtype=float)
+    (case_dir / "params.txt").write_text(
+        f"{alpha:.17g} {alpha_q:.17g} {beta:.17g} 1 {t[0]:.17g} {t[1]:.17g} {t[2]:.17g}\n")
+    return case_dir
+
+
+def run_authors(binary, case_dir, threads, repeat):
+    """Run ``mesh_bench CASE_DIR THREADS REPEAT`` (smooth mode) and parse its printout."""
+    env = {k: v for k, v in os.environ.items() if k != "EXACT"}   # any EXACT means exact mode
+    r = subprocess.run([str(binary), str(case_dir), str(threads), str(repeat)], env=env,
+                       capture_output=True, text=True, check=True)
+    out = {}
+    for line in r.stdout.splitlines():
+        key, _, rest = line.partition(" ")
+        vals = [float(x) for x in rest.split()]
+        out[key] = vals[0] if len(vals) == 1 else vals
+    return out
+
+
+def side_by_side(names, specs, args):
+    """Alternate the authors' ``mesh_bench`` and our calls per case; print and return rows."""
+    threads = args.threads or numba.get_num_threads()
+    tmp = None
+    if args.case_dir:
+        root = Path(args.case_dir)
+    else:
+        tmp = tempfile.TemporaryDirectory(prefix="bench_mesh_distance_")
+        root = Path(tmp.name)
+    rows = []
+    load0 = load_average()
+    print(f"# side by side: authors {args.authors_bin}, {threads} threads each, beta {args.beta:g},"
+          f" {args.rounds} rounds x best of {args.repeat}; load average {load0:.2f}")
+    print(f"{'case':14s} {'authors ms':>10s} {'med':>7s} {'ours ms':>8s} {'med':>7s} "
+          f"{'ratio':>6s} {'load':>5s} {'authors d':>11s} {'ours d':>11s}")
+    try:
+        for n in names:
+            spec = specs[n]
+            data, query, alpha, alpha_q, start, direction, _ = spec
+            md = MeshDistance(data, query, alpha=alpha, alpha_q=alpha_q, beta=args.beta)
+            t = md.translation_at_gap(1.0 / alpha, direction, start)
+            case_dir = write_authors_case(root / n, spec, t, args.beta)
+            d, _ = md(t=t)                                          # warm-up
+            theirs, ours = [], []
+            a = None
+            for _ in range(args.rounds):
+                a = run_authors(args.authors_bin, case_dir, threads, args.repeat)
+                theirs.append(a["ms_best"])
+                ours.append(1e3 * time_call(lambda: md(t=t), args.repeat)[0])
+            load = load_average()
+            r = {"case": n, "authors_ms_best": min(theirs),
+                 "authors_ms_median": float(np.median(theirs)), "ms_best": min(ours),
+                 "ms_median": float(np.median(ours)), "ratio": min(ours) / min(theirs),
+                 "authors_distance": a["dist"], "smooth_distance": d, "threads": threads,
+                 "beta": args.beta, "load_average": load, "translation": t.tolist()}
+            rows.append(r)
+            print(f"{n:14s} {r['authors_ms_best']:10.2f} {r['authors_ms_median']:7.2f} "
+                  f"{r['ms_best']:8.2f} {r['ms_median']:7.2f} {r['ratio']:6.2f} {load:5.2f} "
+                  f"{a['dist']:11.6f} {d:11.6f}", flush=True)
+    finally:
+        if tmp is not None:
+            tmp.cleanup()
+    print(f"# load average before {load0:.2f}, after {load_average():.2f}")
+    return rows
+
+
+def call_overhead(repeat):
+    """Best and median time (µs) of one call on a one-edge query against a one-edge data mesh."""
+    md = MeshDistance((np.array([[-1.0, 0, 0], [1, 0, 0]]), [[0, 1]]),
+                      (np.array([[0.0, -1, 1], [1, 1, 1]]), [[0, 1]]), alpha=50.0, alpha_q=50.0,
+                      beta=0.5)
+    R, t = np.eye(3), np.array([0.0, 0.1, 0.0])
+    md(R, t)
+    best, med = time_call(lambda: md(R, t), repeat)
+    return 1e6 * best, 1e6 * med
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--case", action="append", help="run only this case (repeatable)")
@@ -128,9 +234,23 @@ def main(argv=None):
     ap.add_argument("--tol", default="0,1e-6",
                     help="comma-separated pruning tolerances to run (0 = the paper's algorithm)")
     ap.add_argument("--json", help="also write the results to this JSON file")
+    ap.add_argument("--authors-bin", help="the authors' mesh_bench: time it side by side")
+    ap.add_argument("--rounds", type=int, default=5,
+                    help="side by side: alternating rounds of theirs and ours")
+    ap.add_argument("--threads", type=int, default=0,
+                    help="side by side: the authors' threads (default: numba's)")
+    ap.add_argument("--case-dir", help="side by side: keep the case directories here")
+    ap.add_argument("--overhead", action="store_true",
+                    help="also time one call on a one-edge mesh pair (fixed cost per call)")
     args = ap.parse_args(argv)
     if args.repeat < 1:
         print("error: --repeat must be >= 1", file=sys.stderr)
+        return 2
+    if args.rounds < 1 or args.threads < 0:
+        print("error: --rounds must be >= 1 and --threads >= 0", file=sys.stderr)
+        return 2
+    if args.authors_bin and not os.access(args.authors_bin, os.X_OK):
+        print(f"error: --authors-bin {args.authors_bin!r} is not an executable", file=sys.stderr)
         return 2
     try:
         tols = [float(x) for x in args.tol.split(",")]
@@ -146,9 +266,21 @@ def main(argv=None):
         if n not in specs:
             print(f"error: unknown case {n!r}; choose from {', '.join(specs)}", file=sys.stderr)
             return 2
-    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
+    load = load_average()
     print(f"# {platform.processor() or platform.machine()}, {os.cpu_count()} CPUs, numba "
           f"{numba.get_num_threads()} threads, load average {load:.2f}")
+    overhead = None
+    if args.overhead:
+        overhead = call_overhead(max(args.repeat, 1000))
+        print(f"# one call, 1 query edge vs 1 data edge: {overhead[0]:.1f} us best, "
+              f"{overhead[1]:.1f} us median")
+    if args.authors_bin:
+        rows = side_by_side(names, specs, args)
+        if args.json:
+            _write_json(args.json, {"machine": _machine(load), "repeat": args.repeat,
+                                    "rounds": args.rounds, "overhead_us": overhead,
+                                    "side_by_side": rows})
+        return 0
     print(f"{'case':14s} {'data':>16s} {'query':>16s} {'alpha':>9s} {'tol':>6s} {'ms best':>8s} "
           f"{'ms med':>8s} {'paper ms':>9s} {'exact ms':>9s} {'d_hat':>9s} {'d exact':>9s} "
           f"{'leaves':>7s}")
@@ -167,14 +299,21 @@ def main(argv=None):
                   f"{r['smooth_distance']:9.4f} {r['exact_distance']:9.4f} {r['mean_leaves']:7.1f}",
                   flush=True)
     if args.json:
-        out = {"machine": {"processor": platform.processor() or platform.machine(),
-                           "cpus": os.cpu_count(), "numba_threads": numba.get_num_threads(),
-                           "load_average": load}, "repeat": args.repeat, "results": rows}
-        tmp = args.json + ".tmp"
-        with open(tmp, "w") as fh:
-            json.dump(out, fh, indent=1)
-        os.replace(tmp, args.json)
+        _write_json(args.json, {"machine": _machine(load), "repeat": args.repeat,
+                                "overhead_us": overhead, "results": rows})
     return 0
+
+
+def _machine(load):
+    return {"processor": platform.processor() or platform.machine(), "cpus": os.cpu_count(),
+            "numba_threads": numba.get_num_threads(), "load_average": load}
+
+
+def _write_json(path, out):
+    tmp = path + ".tmp"
+    with open(tmp, "w") as fh:
+        json.dump(out, fh, indent=1)
+    os.replace(tmp, path)
 
 
 if __name__ == "__main__":
