@@ -141,26 +141,45 @@ def test_make_meshes_is_reproducible():
 
 def test_lidar_terrain_generator():
     n = 110_000
-    small = primitives.lidar_terrain(copies=2, tiles=(2, 1), seed=3)
-    seam = 2 * n - len(small) // 2                     # tile points on the shared edge, once
-    assert len(small) % 2 == 0 and 1 <= seam <= 100
-    assert np.array_equal(small, primitives.lidar_terrain(copies=2, tiles=(2, 1), seed=3))
-    assert not np.array_equal(small, primitives.lidar_terrain(copies=2, tiles=(2, 1), seed=4))
-    assert len(np.unique(small, axis=0)) == len(small)  # no duplicated points
-    # centred in x and y, z from the lowest (unjittered) point, the tile's size at scale 1
+    two = primitives.lidar_terrain(copies=1, tiles=(2, 1), scale=1.0)
+    seam = 2 * n - len(two)                            # tile points on the shared edge, once
+    assert 1 <= seam <= 100
+    # mirrored: the second copy is the first reflected about their common edge (x = 0)
+    left, right = two[two[:, 0] < 0] * [-1, 1, 1], two[two[:, 0] > 0]
+    assert len(left) == len(right) == n - seam
+    order = lambda P: P[np.lexsort(np.round(P, 6).T)]  # noqa: E731
+    assert np.allclose(order(left), order(right), atol=1e-9)
+    # one tile, the tile's size at scale 1: centred in x and y, z from the lowest point
     one = primitives.lidar_terrain(copies=1, scale=1.0)
     assert len(one) == n
     assert np.allclose(one.min(axis=0)[:2], -one.max(axis=0)[:2])
     assert one[:, 2].min() == 0.0
     tile = primitives.DataMesh.load(primitives.AUTZEN_TILE).V
     assert np.allclose(np.ptp(one, axis=0), np.ptp(tile, axis=0))
-    # mirrored: the second copy is the first reflected about their common edge (x = 0)
-    two = primitives.lidar_terrain(copies=1, tiles=(2, 1), scale=1.0)
-    left, right = two[two[:, 0] < 0] * [-1, 1, 1], two[two[:, 0] > 0]
-    assert len(two) == 2 * n - seam and len(left) == len(right) == n - seam
-    order = lambda P: P[np.lexsort(np.round(P, 6).T)]  # noqa: E731
-    assert np.allclose(order(left), order(right), atol=1e-9)
-    assert primitives.lidar_terrain(copies=1, z_scale=2.0)[:, 2].max() == pytest.approx(
-        2 * one[:, 2].max() * 0.05)
+    # densified: the tile's points then the jittered copies, reproducible from the seed
+    dense = primitives.lidar_terrain(copies=3, seed=3, z_scale=2.0)
+    assert len(dense) == 3 * n
+    assert np.allclose(dense[::3] * [1, 1, 0.5], 0.05 * one)
+    assert np.array_equal(dense, primitives.lidar_terrain(copies=3, seed=3, z_scale=2.0))
+    assert not np.array_equal(dense, primitives.lidar_terrain(copies=3, seed=4, z_scale=2.0))
+    jitter = (dense.reshape(n, 3, 3)[:, 1:] - dense[::3, None]) / 0.05
+    assert np.std(jitter[..., 0]) == pytest.approx(1.0, rel=0.02)       # 1 ft horizontally
+    assert np.std(jitter[..., 2]) == pytest.approx(2 * 0.1, rel=0.02)   # 0.1 ft, z_scale 2
     with pytest.raises(ValueError):
         primitives.lidar_terrain(copies=0)
+
+
+def test_bench_sim_finds_table3(capsys):
+    sys.path.insert(0, os.path.join(ROOT, "benchmarks"))
+    try:
+        import bench_sim
+    finally:
+        sys.path.pop(0)
+    names = [n for n, _ in bench_sim.scene_files(table3=True)]
+    assert {f"table3/{n}" for n in EXPECTED} <= set(names)
+    assert not any(n.startswith("table3/") for n, _ in bench_sim.scene_files())
+    bench_sim.main(["--table3", "--steps", "2", "table3/trefoil_ringtoss"])
+    out = capsys.readouterr().out
+    assert "12400 points + 100 edges" in out and "| table3/trefoil_ringtoss | 2 |" in out
+    with pytest.raises(SystemExit):
+        bench_sim.main(["table3/trefoil_ringtoss"])          # Table 3 scenes need --table3

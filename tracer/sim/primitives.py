@@ -316,7 +316,9 @@ def lidar_terrain(path=None, copies=60, jitter=1.0, z_jitter=0.1, tiles=(1, 1), 
     copies, nx, ny = int(copies), int(tiles[0]), int(tiles[1])
     if copies < 1 or nx < 1 or ny < 1:
         raise ValueError(f"copies and tiles must be >= 1, got {copies} and {list(tiles)}")
-    P = DataMesh.load(path, kind="points").V
+    from smoothdist.mesh import read_mesh_file
+
+    P = np.asarray(read_mesh_file(os.fspath(path))[0], dtype=float)
     lo, hi = P.min(axis=0), P.max(axis=0)
     w = hi - lo
     U = P - lo
