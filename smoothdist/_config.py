@@ -6,6 +6,8 @@ may hard-code ``fastmath=`` or ``parallel=`` (``tests/test_config_policy.py`` gr
 * ``FASTMATH`` is off: LogSumExp relies on IEEE ``exp`` underflow and on ``inf`` comparisons,
   which fastmath is allowed to break.
 * ``CACHE`` is on, so a fresh process loads compiled kernels from ``__pycache__``.
+* ``NJIT_INLINE`` (``NJIT`` with ``forceinline``) is for small helpers that hot loops call
+  (the whole-mesh traversal): numba does not inline njit calls on its own.
 * ``PARALLEL`` may be switched off with ``SMOOTHDIST_PARALLEL=0`` (serial reference runs).
   Those runs do not use the on-disk cache: numba's cache index is keyed on the signature,
   the machine and the bytecode, not on ``parallel=``, so they would load the parallel
@@ -23,3 +25,6 @@ CACHE = PARALLEL
 NJIT = dict(cache=CACHE, fastmath=FASTMATH, nogil=True)
 #: keyword arguments for batch kernels that loop over queries with ``prange``
 NJIT_PARALLEL = dict(cache=CACHE, fastmath=FASTMATH, nogil=True, parallel=PARALLEL)
+#: keyword arguments for small helpers of hot loops: ``NJIT`` plus ``forceinline`` (LLVM's
+#: ``alwaysinline``: no call, and a caller's constant arguments fold into the helper)
+NJIT_INLINE = dict(NJIT, forceinline=True)

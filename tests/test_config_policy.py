@@ -4,8 +4,9 @@
   ``fastmath=`` or ``parallel=`` (fastmath would break LogSumExp's reliance on IEEE ``inf``
   and underflow; parallelism is switched centrally by ``SMOOTHDIST_PARALLEL``).
 * Every numba decoration or call (``numba.njit``, ``njit``, ``numba.jit``, ...) takes its
-  options from ``**NJIT`` or ``**NJIT_PARALLEL`` and nothing else, so that every kernel is
-  cached (``cache=True``) and compiled with the same flags.
+  options from ``**NJIT``, ``**NJIT_PARALLEL`` or ``**NJIT_INLINE`` (``NJIT`` plus
+  ``forceinline``) and nothing else, so that every kernel is cached (``cache=True``) and
+  compiled with the same flags.
 """
 
 import ast
@@ -23,7 +24,7 @@ CONFIG = ROOT / "smoothdist" / "_config.py"
 FORBIDDEN = ("fastmath", "parallel")
 NUMBA_DECORATORS = {"njit", "jit", "generated_jit", "vectorize", "guvectorize", "cfunc",
                     "stencil", "jit_module"}
-ALLOWED_OPTIONS = {"NJIT", "NJIT_PARALLEL"}
+ALLOWED_OPTIONS = {"NJIT", "NJIT_PARALLEL", "NJIT_INLINE"}
 
 
 def sources():
@@ -53,6 +54,7 @@ def test_config_is_the_cached_policy():
     assert _config.NJIT["cache"] is True and _config.NJIT_PARALLEL["cache"] is True
     assert _config.NJIT["fastmath"] is False and _config.NJIT_PARALLEL["fastmath"] is False
     assert "parallel" not in _config.NJIT
+    assert _config.NJIT_INLINE == dict(_config.NJIT, forceinline=True)
     assert keyword_uses(CONFIG.read_text()), "the scanner must see _config.py's own flags"
 
 
