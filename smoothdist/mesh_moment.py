@@ -31,15 +31,9 @@ import numpy as np
 from numba import prange
 
 from smoothdist._config import NJIT, NJIT_PARALLEL
-from smoothdist.box_distance import box_box_distance, box_box_offset
-from smoothdist.box_moment import box_lower_bound_moment, extreme_levers, gap_moment
-from smoothdist.closest_pair import closest_pair
-from smoothdist.closest_point import TRI_AB, TRI_AC, TRI_INTERIOR
-from smoothdist.mesh_query import (TASKS, _dot, _point_box, feature_directions, query_box,
-                                   weight_gradient)
-from smoothdist.query import (DEFAULT_TOL, _attenuate, push_nearest_first,
-                              smooth_distance_point)
-from smoothdist.weights import eval_edge_weight, eval_triangle_weight
+from smoothdist.mesh_query import (TASKS, centroid, pair_terms, query_coefficient,  # noqa: F401
+                                   smooth_traverse)
+from smoothdist.query import DEFAULT_TOL, smooth_distance_point
 
 
 @numba.njit(**NJIT)
@@ -63,18 +57,8 @@ def accumulate_moment(m, s, gx, gy, gz, mx, my, mz, d, W, vx, vy, vz, ux, uy, uz
             mz + e * uz)
 
 
-@numba.njit(**NJIT)
-def _query_coefficient(nd, d1x, d1y, d1z, w1, nq, q1x, q1y, q1z):
-    """The query-edge component ``y`` of :func:`~smoothdist.mesh_query.weight_gradient`'s
-    solve (one data and one query direction, same singularity test; 0 otherwise)."""
-    if nq == 1 and nd == 1:
-        a = _dot(d1x, d1y, d1z, d1x, d1y, d1z)
-        b = -_dot(d1x, d1y, d1z, q1x, q1y, q1z)
-        c = _dot(q1x, q1y, q1z, q1x, q1y, q1z)
-        det = a * c - b * b
-        if det > 1e-12 * a * c:
-            return -b * w1 / det
-    return 0.0
+#: the query-edge coefficient of the weight's motion (``mesh_query.query_coefficient``)
+_query_coefficient = query_coefficient
 
 
 @numba.njit(**NJIT)
@@ -84,94 +68,8 @@ def pair_term_moment(tree, i, kq, Q, S, wgs, cx, cy, cz):
     Returns ``(d, W, vx, vy, vz, mx, my, mz)``: ``v`` as there, and
     ``M = (p - c) x v + wgs y (q x r)`` (module notes).
     """
-    k = tree.kind[i]
-    P = tree.pts[i]
-    c = closest_pair(kq, Q, k, P)
-    d = math.sqrt(c[0])
-    rx = c[1]
-    ry = c[2]
-    rz = c[3]
-    W = 1.0
-    gwx = 0.0
-    gwy = 0.0
-    gwz = 0.0
-    y = 0.0
-    q1x = q1y = q1z = 0.0
-    if k != 0:
-        df = c[9]
-        if k == 1:
-            w, dw = eval_edge_weight(tree.wc[i], c[7])
-            W, fac = _attenuate(w, dw, tree.pwhi[i], S)
-            w1 = fac
-            w2 = 0.0
-        else:
-            w, dws, dwt = eval_triangle_weight(tree.wc[i], c[7], c[8])
-            W, fac = _attenuate(w, 1.0, tree.pwhi[i], S)
-            if df == TRI_INTERIOR:
-                w1 = fac * dws
-                w2 = fac * dwt
-            elif df == TRI_AB:
-                w1 = fac * dws
-                w2 = 0.0
-            elif df == TRI_AC:
-                w1 = fac * dwt
-                w2 = 0.0
-            else:
-                w1 = fac * (dwt - dws)
-                w2 = 0.0
-        if fac != 0.0:
-            nd, d1x, d1y, d1z, d2x, d2y, d2z = feature_directions(k, df, P)
-            if nd > 0:
-                nq, q1x, q1y, q1z, q2x, q2y, q2z = feature_directions(kq, c[6], Q)
-                gwx, gwy, gwz = weight_gradient(nd, d1x, d1y, d1z, d2x, d2y, d2z, w1, w2, nq,
-                                                q1x, q1y, q1z)
-                y = _query_coefficient(nd, d1x, d1y, d1z, w1, nq, q1x, q1y, q1z)
-    if d > 0.0:
-        inv = W / d
-        vx = rx * inv - wgs * gwx
-        vy = ry * inv - wgs * gwy
-        vz = rz * inv - wgs * gwz
-    else:
-        vx = -wgs * gwx
-        vy = -wgs * gwy
-        vz = -wgs * gwz
-    # the closest point on the query, relative to c
-    s = c[4]
-    t = c[5]
-    px = Q[0] - cx
-    py = Q[1] - cy
-    pz = Q[2] - cz
-    if kq >= 1:
-        px += s * (Q[3] - Q[0])
-        py += s * (Q[4] - Q[1])
-        pz += s * (Q[5] - Q[2])
-    if kq == 2:
-        px += t * (Q[6] - Q[0])
-        py += t * (Q[7] - Q[1])
-        pz += t * (Q[8] - Q[2])
-    mx = py * vz - pz * vy
-    my = pz * vx - px * vz
-    mz = px * vy - py * vx
-    if y != 0.0:
-        f = wgs * y
-        mx += f * (q1y * rz - q1z * ry)
-        my += f * (q1z * rx - q1x * rz)
-        mz += f * (q1x * ry - q1y * rx)
-    return d, W, vx, vy, vz, mx, my, mz
-
-
-@numba.njit(**NJIT)
-def centroid(kq, Q):
-    """Centroid ``(cx, cy, cz)`` of the query's ``kq + 1`` vertices."""
-    cx = Q[0]
-    cy = Q[1]
-    cz = Q[2]
-    for j in range(1, kq + 1):
-        cx += Q[3 * j]
-        cy += Q[3 * j + 1]
-        cz += Q[3 * j + 2]
-    n = kq + 1.0
-    return cx / n, cy / n, cz / n
+    return pair_terms(tree.kind, tree.pts, tree.wc, tree.pwhi, i, kq, Q, S, wgs, kq >= 0, cx,
+                      cy, cz)
 
 
 @numba.njit(**NJIT)
@@ -180,82 +78,11 @@ def smooth_moment_primitive(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scr
     """:func:`smoothdist.mesh_query.smooth_distance_primitive` with the moment about the
     query's centroid.
 
-    Same traversal and arguments (``kq`` 1 or 2), but ``scratch (33,)``. Returns
+    Same traversal (:func:`smoothdist.mesh_query.smooth_traverse`) and arguments (``kq`` 1 or
+    2), but ``scratch (33,)``. Returns
     ``(d_hat, gx, gy, gz, mx, my, mz, nodes_visited, leaves_visited)``.
     """
-    qlo = scratch[0:3]
-    qhi = scratch[3:6]
-    E = scratch[6:15]
-    L = scratch[15:33]
-    query_box(kq, Q, qlo, qhi)
-    cx, cy, cz = centroid(kq, Q)
-    extreme_levers(kq, Q, cx, cy, cz, L)
-    m = np.inf
-    s = 0.0
-    gx = 0.0
-    gy = 0.0
-    gz = 0.0
-    mx = 0.0
-    my = 0.0
-    mz = 0.0
-    nodes = 0
-    leaves = 0
-    lo = tree.lo
-    hi = tree.hi
-    stack[0] = 0
-    dstack[0] = box_box_distance(qlo, qhi, lo, hi, 0)
-    sp = 1
-    while sp > 0:
-        sp -= 1
-        node = stack[sp]
-        bd = dstack[sp]
-        nodes += 1
-        cnt = tree.count[node]
-        far = False
-        delta = ux = uy = uz = 0.0
-        ax = ay = az = 0.0
-        if cnt > 1 and beta > 0.0:
-            dg = tree.diag[node]
-            if dg < beta * bd:
-                delta, ux, uy, uz = box_box_offset(qlo, qhi, lo, hi, node)
-                ax, ay, az = gap_moment(L, ux, uy, uz)
-                far = True
-            elif dg < beta * _point_box(kq, Q, lo, hi, node):
-                delta, ux, uy, uz, ax, ay, az = box_lower_bound_moment(kq, Q, qlo, qhi, lo, hi,
-                                                                       node, E, cx, cy, cz, L)
-                far = dg < beta * delta
-        if not far and tol > 0.0 and s > 0.0:
-            wh = tree.whi[node]
-            W = cnt * (wh if (S == 1.0 or wh == 1.0) else math.exp(S * math.log(wh)))
-            if W * math.exp(-alpha * (bd - m)) <= tol * s:
-                delta, ux, uy, uz = box_box_offset(qlo, qhi, lo, hi, node)
-                ax, ay, az = gap_moment(L, ux, uy, uz)
-                far = True
-        if far:
-            wh = tree.whi[node]
-            W = cnt * (wh if (S == 1.0 or wh == 1.0) else math.exp(S * math.log(wh)))
-            m, s, gx, gy, gz, mx, my, mz = accumulate_moment(
-                m, s, gx, gy, gz, mx, my, mz, delta, W, W * ux, W * uy, W * uz, W * ax, W * ay,
-                W * az, alpha)
-            leaves += 1
-            continue
-        l = tree.left[node]
-        if l < 0:
-            st = tree.start[node]
-            for i in range(st, st + cnt):
-                d, W, vx, vy, vz, tx, ty, tz = pair_term_moment(tree, i, kq, Q, S, wgs, cx, cy,
-                                                                cz)
-                m, s, gx, gy, gz, mx, my, mz = accumulate_moment(
-                    m, s, gx, gy, gz, mx, my, mz, d, W, vx, vy, vz, tx, ty, tz, alpha)
-            leaves += cnt
-            continue
-        r = tree.right[node]
-        dl = box_box_distance(qlo, qhi, lo, hi, l)
-        dr = box_box_distance(qlo, qhi, lo, hi, r)
-        sp = push_nearest_first(stack, dstack, sp, l, dl, r, dr)
-    inv = 1.0 / s
-    return (m - math.log(s) / alpha, gx * inv, gy * inv, gz * inv, mx * inv, my * inv, mz * inv,
-            nodes, leaves)
+    return smooth_traverse(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, tol, True)
 
 
 @numba.njit(**NJIT)
@@ -309,12 +136,12 @@ def _moment_task(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g, ou
 
 @numba.njit(**NJIT_PARALLEL)
 def smooth_moment_primitives(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g, out_m,
-                             out_nodes, out_leaves, tol=DEFAULT_TOL):
+                             out_nodes, out_leaves, tol=DEFAULT_TOL, ntasks=TASKS):
     """``d_hat``, translation gradient and moment (about the centroid) of every query primitive.
 
     As :func:`smoothdist.mesh_query.smooth_distance_primitives`, plus ``out_m (m, 3)`` float64.
     """
-    ntasks = min(qkind.size, TASKS)
+    ntasks = max(1, min(qkind.size, ntasks))
     for task in prange(ntasks):
         _moment_task(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g, out_m,
                      out_nodes, out_leaves, tol, task, ntasks)

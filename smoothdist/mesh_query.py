@@ -24,6 +24,15 @@ box-box distance when that already satisfies ``diag < beta delta``, else
 :func:`smoothdist.box_distance.box_lower_bound` (the paper's halfspace test, done
 conservatively). So the far field overestimates the subtree's sum and ``d_hat_beta <= d_hat_0``.
 Point queries use the point kernels themselves.
+
+One traversal (:func:`smooth_traverse`) serves the translation gradient and, with ``moment``,
+:mod:`smoothdist.mesh_moment`'s rotational one; ``moment`` is a compile-time constant of each
+caller, so the distance kernel carries none of the moment's work. For speed (the same nodes,
+terms and values as a plain version; issue 17): the tree's arrays are taken out of the tree
+once (a NamedTuple field read in the loop updates a reference count), the data primitive's
+coordinates go to the closest-pair kernels as scalars, small helpers are inlined
+(``NJIT_INLINE``), the stack holds squared box distances, and the finer Barnes-Hut bound is
+only tried where a cheap upper bound says it could qualify the node.
 """
 
 import math
@@ -32,17 +41,34 @@ import numba
 import numpy as np
 from numba import prange
 
-from smoothdist._config import NJIT, NJIT_PARALLEL
+from smoothdist._config import NJIT, NJIT_INLINE, NJIT_PARALLEL
 from smoothdist.box_distance import box_box_distance, box_box_offset, box_lower_bound
-from smoothdist.closest_pair import closest_pair
+from smoothdist.box_moment import box_lower_bound_moment, extreme_levers, gap_moment
+from smoothdist.closest_pair import (closest_pair, segment_point, segment_segment, segment_triangle,
+                                     triangle_point, triangle_segment, triangle_triangle)
 from smoothdist.closest_point import (SEG_INTERIOR, TRI_AB, TRI_AC, TRI_BC, TRI_INTERIOR)
 from smoothdist.query import (DEFAULT_TOL, _attenuate, exact_distance_point, logsumexp_accumulate,
-                              push_nearest_first, smooth_distance_point)
-from smoothdist.weights import eval_edge_weight, eval_triangle_weight
+                              smooth_distance_point)
+from smoothdist.weights import eval_triangle_weight
 
-#: number of parallel tasks; task ``c`` takes query primitives ``c, c + TASKS, ...`` so that the
+#: :func:`smoothdist.query._attenuate`, inlined (it calls no other kernel)
+_attenuate_inline = numba.njit(**NJIT_INLINE)(_attenuate.py_func)
+
+#: most parallel tasks; task ``c`` of ``n`` takes query primitives ``c, c + n, ...`` so that the
 #: expensive ones (near the data, usually contiguous in a mesh) are spread over all threads
 TASKS = 64
+
+
+def parallel_tasks(m):
+    """Number of strided tasks for ``m`` query primitives: one per numba thread (at most
+    ``TASKS``).
+
+    A ``prange`` hands each thread an equal run of consecutive tasks, so with more tasks than
+    threads the tasks that got one primitive more than the others (the first ``m % n``) all
+    land on the first thread: 100 primitives in 64 tasks gave one of two threads 64 of them.
+    One task per thread gives every thread ``m / n`` primitives, rounded.
+    """
+    return max(1, min(int(m), numba.get_num_threads(), TASKS))
 
 
 @numba.njit(**NJIT)
@@ -69,7 +95,7 @@ def feature_directions(kind, feat, X):
     return 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
 
 
-@numba.njit(**NJIT)
+@numba.njit(**NJIT_INLINE)
 def _dot(ax, ay, az, bx, by, bz):
     return ax * bx + ay * by + az * bz
 
@@ -104,17 +130,73 @@ def weight_gradient(nd, d1x, d1y, d1z, d2x, d2y, d2z, w1, w2, nq, q1x, q1y, q1z)
     return y1 * d1x + y2 * d2x, y1 * d1y + y2 * d2y, y1 * d1z + y2 * d2z
 
 
+@numba.njit(**NJIT_INLINE)
+def _edge_weight(wc, i, t):
+    """:func:`smoothdist.weights.eval_edge_weight` of row ``i`` of ``wc`` (no row view)."""
+    c0 = wc[i, 0]
+    c1 = wc[i, 1]
+    c2 = wc[i, 2]
+    c3 = wc[i, 3]
+    c4 = wc[i, 4]
+    w = c0 + t * (c1 + t * (c2 + t * (c3 + t * c4)))
+    dw = c1 + t * (2.0 * c2 + t * (3.0 * c3 + t * (4.0 * c4)))
+    return w, dw
+
+
+@numba.njit(**NJIT_INLINE)
+def _closest(kind, P, i, kq, Q):
+    """:func:`smoothdist.closest_pair.closest_pair` of query ``(kq, Q)`` and data primitive ``i``
+    of ``kind``, ``P`` (the tree's arrays), called with the data's coordinates as scalars for
+    edge and triangle queries (no row view, no dispatch through every kind pair)."""
+    k = kind[i]
+    if kq == 0:
+        # a point query (the brute-force references only: the traversal takes edges and
+        # triangles)
+        return closest_pair(kq, Q, k, P[i])
+    if k == 0:
+        if kq == 1:
+            return segment_point(Q[0], Q[1], Q[2], Q[3], Q[4], Q[5], P[i, 0], P[i, 1], P[i, 2])
+        return triangle_point(Q[0], Q[1], Q[2], Q[3], Q[4], Q[5], Q[6], Q[7], Q[8], P[i, 0],
+                              P[i, 1], P[i, 2])
+    if k == 1:
+        if kq == 1:
+            return segment_segment(Q[0], Q[1], Q[2], Q[3], Q[4], Q[5], P[i, 0], P[i, 1], P[i, 2],
+                                   P[i, 3], P[i, 4], P[i, 5])
+        return triangle_segment(Q[0], Q[1], Q[2], Q[3], Q[4], Q[5], Q[6], Q[7], Q[8], P[i, 0],
+                                P[i, 1], P[i, 2], P[i, 3], P[i, 4], P[i, 5])
+    if kq == 1:
+        return segment_triangle(Q[0], Q[1], Q[2], Q[3], Q[4], Q[5], P[i, 0], P[i, 1], P[i, 2],
+                                P[i, 3], P[i, 4], P[i, 5], P[i, 6], P[i, 7], P[i, 8])
+    return triangle_triangle(Q[0], Q[1], Q[2], Q[3], Q[4], Q[5], Q[6], Q[7], Q[8], P[i, 0],
+                             P[i, 1], P[i, 2], P[i, 3], P[i, 4], P[i, 5], P[i, 6], P[i, 7],
+                             P[i, 8])
+
+
 @numba.njit(**NJIT)
-def pair_term(tree, i, kq, Q, S, wgs):
+def query_coefficient(nd, d1x, d1y, d1z, w1, nq, q1x, q1y, q1z):
+    """The query-edge component ``y`` of :func:`weight_gradient`'s solve (one data and one query
+    direction, same singularity test; 0 otherwise): the rotational part of the weight's motion
+    (:mod:`smoothdist.mesh_moment`)."""
+    if nq == 1 and nd == 1:
+        a = _dot(d1x, d1y, d1z, d1x, d1y, d1z)
+        b = -_dot(d1x, d1y, d1z, q1x, q1y, q1z)
+        c = _dot(q1x, q1y, q1z, q1x, q1y, q1z)
+        det = a * c - b * b
+        if det > 1e-12 * a * c:
+            return -b * w1 / det
+    return 0.0
+
+
+@numba.njit(**NJIT_INLINE)
+def _pair(kind, pts, wc, pwhi, i, kq, Q, S, wgs, moment, cx, cy, cz):
     """Term of data primitive ``i`` (tree order) for query primitive ``(kq, Q)``.
 
-    Returns ``(d, W, vx, vy, vz)`` as :func:`smoothdist.query.primitive_term`: distance,
-    attenuated weight and the gradient numerator ``W unit(r) - wgs grad W`` (gradients with
-    respect to a translation of the query).
+    Returns ``(d, W, vx, vy, vz, mx, my, mz)``: distance, attenuated weight, the gradient
+    numerator ``v = W unit(r) - wgs grad W`` (for a translation of the query) and, with
+    ``moment``, the term's moment about ``c`` (:mod:`smoothdist.mesh_moment`; else 0).
     """
-    k = tree.kind[i]
-    P = tree.pts[i]
-    c = closest_pair(kq, Q, k, P)
+    c = _closest(kind, pts, i, kq, Q)
+    k = kind[i]
     d = math.sqrt(c[0])
     rx = c[1]
     ry = c[2]
@@ -123,16 +205,32 @@ def pair_term(tree, i, kq, Q, S, wgs):
     gwx = 0.0
     gwy = 0.0
     gwz = 0.0
+    y = 0.0
+    q1x = q1y = q1z = 0.0
     if k != 0:
         df = c[9]
         if k == 1:
-            w, dw = eval_edge_weight(tree.wc[i], c[7])
-            W, fac = _attenuate(w, dw, tree.pwhi[i], S)
-            w1 = fac
-            w2 = 0.0
+            w, dw = _edge_weight(wc, i, c[7])
+            W, fac = _attenuate_inline(w, dw, pwhi[i], S)
+            if fac != 0.0 and df == SEG_INTERIOR:
+                # feature_directions and weight_gradient with the data edge's one direction
+                d1x = pts[i, 3] - pts[i, 0]
+                d1y = pts[i, 4] - pts[i, 1]
+                d1z = pts[i, 5] - pts[i, 2]
+                if kq == 1:
+                    nq = 1 if c[6] == SEG_INTERIOR else 0
+                    q1x = Q[3] - Q[0]
+                    q1y = Q[4] - Q[1]
+                    q1z = Q[5] - Q[2]
+                else:
+                    nq, q1x, q1y, q1z, _, _, _ = feature_directions(kq, c[6], Q)
+                gwx, gwy, gwz = weight_gradient(1, d1x, d1y, d1z, 0.0, 0.0, 0.0, fac, 0.0, nq,
+                                                q1x, q1y, q1z)
+                if moment:
+                    y = query_coefficient(1, d1x, d1y, d1z, fac, nq, q1x, q1y, q1z)
         else:
-            w, dws, dwt = eval_triangle_weight(tree.wc[i], c[7], c[8])
-            W, fac = _attenuate(w, 1.0, tree.pwhi[i], S)
+            w, dws, dwt = eval_triangle_weight(wc[i], c[7], c[8])
+            W, fac = _attenuate_inline(w, 1.0, pwhi[i], S)
             if df == TRI_INTERIOR:
                 w1 = fac * dws
                 w2 = fac * dwt
@@ -145,16 +243,67 @@ def pair_term(tree, i, kq, Q, S, wgs):
             else:
                 w1 = fac * (dwt - dws)
                 w2 = 0.0
-        if fac != 0.0:
-            nd, d1x, d1y, d1z, d2x, d2y, d2z = feature_directions(k, df, P)
-            if nd > 0:
-                nq, q1x, q1y, q1z, q2x, q2y, q2z = feature_directions(kq, c[6], Q)
-                gwx, gwy, gwz = weight_gradient(nd, d1x, d1y, d1z, d2x, d2y, d2z, w1, w2, nq,
-                                                q1x, q1y, q1z)
+            if fac != 0.0:
+                nd, d1x, d1y, d1z, d2x, d2y, d2z = feature_directions(k, df, pts[i])
+                if nd > 0:
+                    nq, q1x, q1y, q1z, _, _, _ = feature_directions(kq, c[6], Q)
+                    gwx, gwy, gwz = weight_gradient(nd, d1x, d1y, d1z, d2x, d2y, d2z, w1, w2, nq,
+                                                    q1x, q1y, q1z)
+                    if moment:
+                        y = query_coefficient(nd, d1x, d1y, d1z, w1, nq, q1x, q1y, q1z)
     if d > 0.0:
         inv = W / d
-        return d, W, rx * inv - wgs * gwx, ry * inv - wgs * gwy, rz * inv - wgs * gwz
-    return d, W, -wgs * gwx, -wgs * gwy, -wgs * gwz
+        vx = rx * inv - wgs * gwx
+        vy = ry * inv - wgs * gwy
+        vz = rz * inv - wgs * gwz
+    else:
+        vx = -wgs * gwx
+        vy = -wgs * gwy
+        vz = -wgs * gwz
+    mx = my = mz = 0.0
+    if moment:
+        # the closest point on the query, relative to c
+        s = c[4]
+        t = c[5]
+        px = Q[0] - cx
+        py = Q[1] - cy
+        pz = Q[2] - cz
+        if kq >= 1:
+            px += s * (Q[3] - Q[0])
+            py += s * (Q[4] - Q[1])
+            pz += s * (Q[5] - Q[2])
+        if kq == 2:
+            px += t * (Q[6] - Q[0])
+            py += t * (Q[7] - Q[1])
+            pz += t * (Q[8] - Q[2])
+        mx = py * vz - pz * vy
+        my = pz * vx - px * vz
+        mz = px * vy - py * vx
+        if y != 0.0:
+            f = wgs * y
+            mx += f * (q1y * rz - q1z * ry)
+            my += f * (q1z * rx - q1x * rz)
+            mz += f * (q1x * ry - q1y * rx)
+    return d, W, vx, vy, vz, mx, my, mz
+
+
+#: :func:`_pair` as an ordinary kernel (for the brute-force references: one compiled copy)
+pair_terms = numba.njit(**NJIT)(_pair.py_func)
+
+
+@numba.njit(**NJIT)
+def pair_term(tree, i, kq, Q, S, wgs):
+    """Term of data primitive ``i`` (tree order) for query primitive ``(kq, Q)``.
+
+    Returns ``(d, W, vx, vy, vz)`` as :func:`smoothdist.query.primitive_term`: distance,
+    attenuated weight and the gradient numerator ``W unit(r) - wgs grad W`` (gradients with
+    respect to a translation of the query).
+    """
+    # ``kq < 0`` is a run-time False: the moment reference (``moment=kq >= 0``) shares the
+    # compiled pair_terms
+    d, W, vx, vy, vz, _, _, _ = pair_terms(tree.kind, tree.pts, tree.wc, tree.pwhi, i, kq, Q, S,
+                                           wgs, kq < 0, 0.0, 0.0, 0.0)
+    return d, W, vx, vy, vz
 
 
 @numba.njit(**NJIT)
@@ -172,6 +321,234 @@ def query_box(kq, Q, qlo, qhi):
 
 
 @numba.njit(**NJIT)
+def centroid(kq, Q):
+    """Centroid ``(cx, cy, cz)`` of the query's ``kq + 1`` vertices."""
+    cx = Q[0]
+    cy = Q[1]
+    cz = Q[2]
+    for j in range(1, kq + 1):
+        cx += Q[3 * j]
+        cy += Q[3 * j + 1]
+        cz += Q[3 * j + 2]
+    n = kq + 1.0
+    return cx / n, cy / n, cz / n
+
+
+@numba.njit(**NJIT_INLINE)
+def _box_gap2(l0, l1, l2, h0, h1, h2, lo, hi, node):
+    """Squared :func:`smoothdist.box_distance.box_box_distance` of the query box ``l..h``
+    (scalars) and a node's box (the same sum of the same squared gaps)."""
+    d2 = 0.0
+    g = lo[node, 0] - h0
+    if g > 0.0:
+        d2 += g * g
+    else:
+        g = l0 - hi[node, 0]
+        if g > 0.0:
+            d2 += g * g
+    g = lo[node, 1] - h1
+    if g > 0.0:
+        d2 += g * g
+    else:
+        g = l1 - hi[node, 1]
+        if g > 0.0:
+            d2 += g * g
+    g = lo[node, 2] - h2
+    if g > 0.0:
+        d2 += g * g
+    else:
+        g = l2 - hi[node, 2]
+        if g > 0.0:
+            d2 += g * g
+    return d2
+
+
+@numba.njit(**NJIT_INLINE)
+def _signed_gap(ql, qh, nl, nh):
+    """One axis of :func:`smoothdist.box_distance.box_box_offset`: the gap (negative when the
+    query is below the node, 0 when the intervals overlap)."""
+    g = nl - qh
+    if g > 0.0:
+        return -g
+    g = ql - nh
+    if g < 0.0:
+        return 0.0
+    return g
+
+
+@numba.njit(**NJIT_INLINE)
+def _accumulate(m, s, gx, gy, gz, mx, my, mz, d, W, vx, vy, vz, ux, uy, uz, alpha, moment):
+    """:func:`smoothdist.query.logsumexp_accumulate` (the same operations on ``m, s, g``), with
+    the moment ``u`` summed like ``v`` when ``moment``."""
+    if d < m:
+        f = math.exp(-alpha * (m - d))
+        s *= f
+        gx *= f
+        gy *= f
+        gz *= f
+        if moment:
+            mx *= f
+            my *= f
+            mz *= f
+        m = d
+    e = math.exp(-alpha * (d - m))
+    if moment:
+        mx += e * ux
+        my += e * uy
+        mz += e * uz
+    return m, s + W * e, gx + e * vx, gy + e * vy, gz + e * vz, mx, my, mz
+
+
+@numba.njit(**NJIT_INLINE)
+def _far_weight(whi, node, cnt, S):
+    """``count * whi**S``: the far-field weight of a node (bounds every replaced term)."""
+    wh = whi[node]
+    return cnt * (wh if (S == 1.0 or wh == 1.0) else math.exp(S * math.log(wh)))
+
+
+@numba.njit(**NJIT)
+def smooth_traverse(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, tol, moment):
+    """The traversal of :func:`smooth_distance_primitive` and, with ``moment``,
+    :func:`smoothdist.mesh_moment.smooth_moment_primitive` (one code for both, so that their
+    ``d_hat`` and gradients agree bit for bit; inlined, so that a constant ``moment`` folds).
+
+    ``scratch`` holds 15 float64 (33 with ``moment``). Returns
+    ``(d_hat, gx, gy, gz, mx, my, mz, nodes_visited, leaves_visited)``; the moment about the
+    query's centroid is 0 without ``moment``.
+
+    The stack holds squared box-box distances; Barnes-Hut tests ``diag**2 < beta**2 d**2``, as
+    the point kernel does. The finer bound (:func:`smoothdist.box_distance.box_lower_bound`)
+    is tried only if the smallest query-vertex distance to the box could qualify the node, and
+    that only if the box-box distance plus the query box's diagonal (an upper bound of it)
+    could: a cheap test that rejects most nodes before the per-vertex one.
+    """
+    qlo = scratch[0:3]
+    qhi = scratch[3:6]
+    E = scratch[6:15]
+    query_box(kq, Q, qlo, qhi)
+    l0 = qlo[0]
+    l1 = qlo[1]
+    l2 = qlo[2]
+    h0 = qhi[0]
+    h1 = qhi[1]
+    h2 = qhi[2]
+    # any query vertex is within the query box's diagonal of the box-box closest point
+    qd = math.sqrt((h0 - l0) ** 2 + (h1 - l1) ** 2 + (h2 - l2) ** 2)
+    b2 = beta * beta
+    ib = (1.0 - 1e-9) / beta if beta > 0.0 else 0.0
+    cx = cy = cz = 0.0
+    if moment:
+        L = scratch[15:33]
+        cx, cy, cz = centroid(kq, Q)
+        extreme_levers(kq, Q, cx, cy, cz, L)
+    else:
+        L = E
+    m = np.inf
+    s = 0.0
+    gx = 0.0
+    gy = 0.0
+    gz = 0.0
+    mx = 0.0
+    my = 0.0
+    mz = 0.0
+    nodes = 0
+    leaves = 0
+    lo = tree.lo
+    hi = tree.hi
+    count = tree.count
+    diag = tree.diag
+    left = tree.left
+    right = tree.right
+    start = tree.start
+    whi = tree.whi
+    # (arrays taken out of the tree once: a NamedTuple field read in the loop costs a reference
+    # count update each time)
+    kind = tree.kind
+    pts = tree.pts
+    wc = tree.wc
+    pwhi = tree.pwhi
+    stack[0] = 0
+    dstack[0] = _box_gap2(l0, l1, l2, h0, h1, h2, lo, hi, 0)
+    sp = 1
+    while sp > 0:
+        sp -= 1
+        node = stack[sp]
+        bd2 = dstack[sp]
+        nodes += 1
+        cnt = count[node]
+        far = False
+        delta = ux = uy = uz = 0.0
+        ax = ay = az = 0.0
+        if cnt > 1 and beta > 0.0:
+            dg = diag[node]
+            if dg * dg < b2 * bd2:
+                # the box-box distance (a lower bound) already qualifies the node
+                g0 = _signed_gap(l0, h0, lo[node, 0], hi[node, 0])
+                g1 = _signed_gap(l1, h1, lo[node, 1], hi[node, 1])
+                g2 = _signed_gap(l2, h2, lo[node, 2], hi[node, 2])
+                delta = math.sqrt(g0 * g0 + g1 * g1 + g2 * g2)
+                if delta > 0.0:
+                    ux = g0 / delta
+                    uy = g1 / delta
+                    uz = g2 / delta
+                if moment:
+                    ax, ay, az = gap_moment(L, ux, uy, uz)
+                far = True
+            else:
+                x = dg * ib - qd
+                if (x <= 0.0 or x * x < bd2) and dg < beta * _point_box(kq, Q, lo, hi, node):
+                    # the box distance is at most any vertex's: only then can the finer bound
+                    # help
+                    if moment:
+                        delta, ux, uy, uz, ax, ay, az = box_lower_bound_moment(
+                            kq, Q, qlo, qhi, lo, hi, node, E, cx, cy, cz, L)
+                    else:
+                        delta, ux, uy, uz = box_lower_bound(kq, Q, qlo, qhi, lo, hi, node, E)
+                    far = dg < beta * delta
+        if not far and tol > 0.0 and s > 0.0:
+            W = _far_weight(whi, node, cnt, S)
+            if W * math.exp(-alpha * (math.sqrt(bd2) - m)) <= tol * s:
+                delta, ux, uy, uz = box_box_offset(qlo, qhi, lo, hi, node)
+                if moment:
+                    ax, ay, az = gap_moment(L, ux, uy, uz)
+                far = True
+        if far:
+            W = _far_weight(whi, node, cnt, S)
+            m, s, gx, gy, gz, mx, my, mz = _accumulate(
+                m, s, gx, gy, gz, mx, my, mz, delta, W, W * ux, W * uy, W * uz, W * ax, W * ay,
+                W * az, alpha, moment)
+            leaves += 1
+            continue
+        l = left[node]
+        if l < 0:
+            st = start[node]
+            for i in range(st, st + cnt):
+                d, W, vx, vy, vz, tx, ty, tz = _pair(kind, pts, wc, pwhi, i, kq, Q, S, wgs, moment,
+                                                     cx, cy, cz)
+                m, s, gx, gy, gz, mx, my, mz = _accumulate(
+                    m, s, gx, gy, gz, mx, my, mz, d, W, vx, vy, vz, tx, ty, tz, alpha, moment)
+            leaves += cnt
+            continue
+        r = right[node]
+        dl = _box_gap2(l0, l1, l2, h0, h1, h2, lo, hi, l)
+        dr = _box_gap2(l0, l1, l2, h0, h1, h2, lo, hi, r)
+        if dl <= dr:
+            stack[sp] = r
+            dstack[sp] = dr
+            stack[sp + 1] = l
+            dstack[sp + 1] = dl
+        else:
+            stack[sp] = l
+            dstack[sp] = dl
+            stack[sp + 1] = r
+            dstack[sp + 1] = dr
+        sp += 2
+    inv = 1.0 / s
+    return (m - math.log(s) / alpha, gx * inv, gy * inv, gz * inv, mx * inv, my * inv, mz * inv,
+            nodes, leaves)
+
+
+@numba.njit(**NJIT)
 def smooth_distance_primitive(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch,
                               tol=DEFAULT_TOL):
     """Smooth distance ``d_hat(g)`` and its translation gradient for an edge or triangle query.
@@ -186,68 +563,9 @@ def smooth_distance_primitive(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, s
     overestimate of the subtree's sum as Barnes-Hut's, so ``d_hat`` only decreases, by at most
     ``-log(1 - k tol) / alpha`` for ``k`` such nodes (``k tol < 1``).
     """
-    qlo = scratch[0:3]
-    qhi = scratch[3:6]
-    E = scratch[6:15]
-    query_box(kq, Q, qlo, qhi)
-    m = np.inf
-    s = 0.0
-    gx = 0.0
-    gy = 0.0
-    gz = 0.0
-    nodes = 0
-    leaves = 0
-    lo = tree.lo
-    hi = tree.hi
-    stack[0] = 0
-    dstack[0] = box_box_distance(qlo, qhi, lo, hi, 0)
-    sp = 1
-    while sp > 0:
-        sp -= 1
-        node = stack[sp]
-        bd = dstack[sp]
-        nodes += 1
-        cnt = tree.count[node]
-        far = False
-        delta = ux = uy = uz = 0.0
-        if cnt > 1 and beta > 0.0:
-            dg = tree.diag[node]
-            if dg < beta * bd:
-                # the box-box distance (a lower bound) already qualifies the node
-                delta, ux, uy, uz = box_box_offset(qlo, qhi, lo, hi, node)
-                far = True
-            elif dg < beta * _point_box(kq, Q, lo, hi, node):
-                # the box distance is at most any vertex's: only then can the finer bound help
-                delta, ux, uy, uz = box_lower_bound(kq, Q, qlo, qhi, lo, hi, node, E)
-                far = dg < beta * delta
-        if not far and tol > 0.0 and s > 0.0:
-            wh = tree.whi[node]
-            W = cnt * (wh if (S == 1.0 or wh == 1.0) else math.exp(S * math.log(wh)))
-            if W * math.exp(-alpha * (bd - m)) <= tol * s:
-                delta, ux, uy, uz = box_box_offset(qlo, qhi, lo, hi, node)
-                far = True
-        if far:
-            wh = tree.whi[node]
-            W = cnt * (wh if (S == 1.0 or wh == 1.0) else math.exp(S * math.log(wh)))
-            m, s, gx, gy, gz = logsumexp_accumulate(m, s, gx, gy, gz, delta, W, W * ux, W * uy,
-                                                    W * uz, alpha)
-            leaves += 1
-            continue
-        l = tree.left[node]
-        if l < 0:
-            st = tree.start[node]
-            for i in range(st, st + cnt):
-                d, W, vx, vy, vz = pair_term(tree, i, kq, Q, S, wgs)
-                m, s, gx, gy, gz = logsumexp_accumulate(m, s, gx, gy, gz, d, W, vx, vy, vz,
-                                                        alpha)
-            leaves += cnt
-            continue
-        r = tree.right[node]
-        dl = box_box_distance(qlo, qhi, lo, hi, l)
-        dr = box_box_distance(qlo, qhi, lo, hi, r)
-        sp = push_nearest_first(stack, dstack, sp, l, dl, r, dr)
-    inv = 1.0 / s
-    return m - math.log(s) / alpha, gx * inv, gy * inv, gz * inv, nodes, leaves
+    d, gx, gy, gz, _, _, _, nodes, leaves = smooth_traverse(
+        tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, tol, False)
+    return d, gx, gy, gz, nodes, leaves
 
 
 @numba.njit(**NJIT)
@@ -384,14 +702,15 @@ def _smooth_task(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g, ou
 
 @numba.njit(**NJIT_PARALLEL)
 def smooth_distance_primitives(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g,
-                               out_nodes, out_leaves, tol=DEFAULT_TOL):
+                               out_nodes, out_leaves, tol=DEFAULT_TOL, ntasks=TASKS):
     """``d_hat`` and translation gradient of every query primitive, in parallel.
 
     ``qkind (m,)`` int64, ``qpts (m, 9)`` float64; fills ``out_d (m,)``, ``out_g (m, 3)``,
     ``out_nodes``, ``out_leaves (m,)``. ``brute`` sums every data primitive (reference).
     ``tol``: see :func:`smooth_distance_primitive` (edge and triangle queries only).
+    ``ntasks``: the number of strided tasks (:func:`parallel_tasks`).
     """
-    ntasks = min(qkind.size, TASKS)
+    ntasks = max(1, min(qkind.size, ntasks))
     for task in prange(ntasks):
         _smooth_task(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g, out_nodes,
                      out_leaves, tol, task, ntasks)
@@ -429,14 +748,15 @@ def _exact_task(tree, qkind, qpts, bound2, out_d, out_g, out_prim, task, ntasks)
 
 
 @numba.njit(**NJIT_PARALLEL)
-def exact_distance_primitives(tree, qkind, qpts, bound2, out_d, out_g, out_prim):
+def exact_distance_primitives(tree, qkind, qpts, bound2, out_d, out_g, out_prim, ntasks=TASKS):
     """Exact distance, unit translation gradient and closest data primitive per query primitive.
 
     Edge and triangle queries only look for pairs closer than ``sqrt(bound2)`` (an upper bound of
     the minimum over all query primitives, e.g. from the query vertices); the others get
-    ``inf`` and ``-1``. Point queries are always exact.
+    ``inf`` and ``-1``. Point queries are always exact. ``ntasks`` as in
+    :func:`smooth_distance_primitives`.
     """
-    ntasks = min(qkind.size, TASKS)
+    ntasks = max(1, min(qkind.size, ntasks))
     for task in prange(ntasks):
         _exact_task(tree, qkind, qpts, bound2, out_d, out_g, out_prim, task, ntasks)
 

@@ -28,11 +28,13 @@ lowers it (``d_hat_beta <= d_hat_0``).
 import math
 from typing import NamedTuple
 
+import numba
 import numpy as np
 
 from smoothdist import mesh_moment as _mm
 from smoothdist import mesh_query as _mq
-from smoothdist._cast import as_indices, as_points, non_negative, positive
+from smoothdist._cast import COORD_LIMIT, as_indices, as_points, non_negative, positive
+from smoothdist._config import NJIT
 from smoothdist.convert import is_foreign_geometry
 from smoothdist.field import SmoothDistanceField
 from smoothdist.mesh import DataMesh, as_data_mesh
@@ -127,9 +129,11 @@ def as_rigid_transform(R=None, t=None):
             raise ValueError(f"R must be a (3, 3) rotation matrix: {exc}") from None
         if Rm.shape != (3, 3):
             raise ValueError(f"R must have shape (3, 3), got {Rm.shape}")
-        if not np.all(np.isfinite(Rm)):
+        Rm = np.ascontiguousarray(Rm)
+        bad = _rotation_defect(Rm)
+        if bad == 1:
             raise ValueError("R contains NaN or infinite entries")
-        if np.abs(Rm.T @ Rm - np.eye(3)).max() > 1e-6 or np.linalg.det(Rm) < 0:
+        if bad == 2:
             raise ValueError("R must be a rotation matrix (orthonormal, det +1)")
     if t is None:
         tv = np.zeros(3)
@@ -140,9 +144,70 @@ def as_rigid_transform(R=None, t=None):
             raise ValueError(f"t must be a (3,) translation: {exc}") from None
         if tv.shape != (3,):
             raise ValueError(f"t must have shape (3,), got {tv.shape}")
-        if not np.all(np.isfinite(tv)):
+        if not (math.isfinite(tv[0]) and math.isfinite(tv[1]) and math.isfinite(tv[2])):
             raise ValueError("t contains NaN or infinite entries")
     return Rm, tv
+
+
+@numba.njit(**NJIT)
+def _rotation_defect(R):
+    """0 for a rotation ``R (3, 3)``; 1 for NaN or infinite entries; 2 when ``R^T R`` is more
+    than 1e-6 from the identity in some entry, or ``det R < 0``."""
+    for i in range(3):
+        for j in range(3):
+            if not math.isfinite(R[i, j]):
+                return 1
+    for i in range(3):
+        for j in range(3):
+            a = R[0, i] * R[0, j] + R[1, i] * R[1, j] + R[2, i] * R[2, j]
+            if abs(a - (1.0 if i == j else 0.0)) > 1e-6:
+                return 2
+    det = (R[0, 0] * (R[1, 1] * R[2, 2] - R[1, 2] * R[2, 1])
+           - R[0, 1] * (R[1, 0] * R[2, 2] - R[1, 2] * R[2, 0])
+           + R[0, 2] * (R[1, 0] * R[2, 1] - R[1, 1] * R[2, 0]))
+    return 2 if det < 0.0 else 0
+
+
+@numba.njit(**NJIT)
+def _check_gather(X, index, pts):
+    """``pts[j]`` = the 9 coordinates of primitive ``j``'s vertices ``index[j]`` in ``X`` (for
+    the rows of ``pts``). Returns False when a coordinate of ``X`` is NaN, infinite or beyond
+    ``COORD_LIMIT`` (the checks of :func:`smoothdist._cast.as_points`)."""
+    ok = True
+    for i in range(X.shape[0]):
+        for a in range(3):
+            if not abs(X[i, a]) <= COORD_LIMIT:
+                ok = False
+    for j in range(pts.shape[0]):
+        for c in range(3):
+            v = index[j, c]
+            for a in range(3):
+                pts[j, 3 * c + a] = X[v, a]
+    return ok
+
+
+@numba.njit(**NJIT)
+def _split(d, g, kind, index, alpha_q, G):
+    """:func:`split_to_vertices` into ``G (n, 3)`` (zeroed here); returns ``d_hat``."""
+    m = d.size
+    dmin = np.inf
+    for j in range(m):
+        dmin = min(dmin, d[j])
+    e = np.empty(m)
+    s = 0.0
+    for j in range(m):
+        e[j] = math.exp(-alpha_q * (d[j] - dmin))
+        s += e[j]
+    G[:] = 0.0
+    for j in range(m):
+        nv = kind[j] + 1
+        w = e[j] / s / nv
+        for c in range(nv):
+            v = index[j, c]
+            G[v, 0] += w * g[j, 0]
+            G[v, 1] += w * g[j, 1]
+            G[v, 2] += w * g[j, 2]
+    return dmin - math.log(s) / alpha_q
 
 
 class MeshDistance:
@@ -216,13 +281,24 @@ class MeshDistance:
 
     def transformed_vertices(self, R=None, t=None):
         """Query vertices ``R x + t``, ``(n, 3)`` float64."""
+        return self._place(R, t, False)[0]
+
+    def _place(self, R, t, primitives=True):
+        """``(X, pts)``: the transformed vertices and, if ``primitives``, every primitive's
+        ``(m, 9)`` vertex coordinates (else ``(0, 9)``), in one pass."""
         Rm, tv = as_rigid_transform(R, t)
-        # the same finiteness and range checks as any input (a huge t could overflow a kernel)
-        return as_points(self.query.V @ Rm.T + tv, "transformed query vertices")
+        q = self.query
+        X = q.V @ Rm.T
+        X += tv
+        pts = np.empty((q.kind.size if primitives else 0, 9))
+        if not _check_gather(X, q.index, pts):
+            # the same finiteness and range checks (and messages) as any input: a huge t could
+            # overflow a kernel
+            as_points(X, "transformed query vertices")
+        return X, pts
 
     def _primitive_coords(self, R, t):
-        X = self.transformed_vertices(R, t)
-        return np.ascontiguousarray(X[self.query.index].reshape(-1, 9))
+        return self._place(R, t)[1]
 
     def primitive_distances(self, R=None, t=None, *, method="bvh"):
         """Per query primitive: ``(d_hat (m,), translation gradient (m, 3))``.
@@ -237,10 +313,14 @@ class MeshDistance:
         g = np.empty((m, 3))
         nodes = np.empty(m, dtype=np.int64)
         leaves = np.empty(m, dtype=np.int64)
-        kernel = (_mq.smooth_distance_primitives_serial if m < SERIAL_BELOW["smooth"]
-                  else _mq.smooth_distance_primitives)
-        kernel(self.field.tree, self.query.kind, pts, self.alpha, self.beta, self.S, self.wgs,
-               method == "brute", d, g, nodes, leaves, self.tol)
+        if m < SERIAL_BELOW["smooth"]:
+            _mq.smooth_distance_primitives_serial(
+                self.field.tree, self.query.kind, pts, self.alpha, self.beta, self.S, self.wgs,
+                method == "brute", d, g, nodes, leaves, self.tol)
+        else:
+            _mq.smooth_distance_primitives(
+                self.field.tree, self.query.kind, pts, self.alpha, self.beta, self.S, self.wgs,
+                method == "brute", d, g, nodes, leaves, self.tol, _mq.parallel_tasks(m))
         self.last_stats = (nodes, leaves)
         return d, g
 
@@ -265,10 +345,14 @@ class MeshDistance:
         mo = np.empty((m, 3))
         nodes = np.empty(m, dtype=np.int64)
         leaves = np.empty(m, dtype=np.int64)
-        kernel = (_mm.smooth_moment_primitives_serial if m < SERIAL_BELOW["smooth"]
-                  else _mm.smooth_moment_primitives)
-        kernel(self.field.tree, self.query.kind, pts, self.alpha, self.beta, self.S, self.wgs,
-               method == "brute", d, g, mo, nodes, leaves, self.tol)
+        if m < SERIAL_BELOW["smooth"]:
+            _mm.smooth_moment_primitives_serial(
+                self.field.tree, self.query.kind, pts, self.alpha, self.beta, self.S, self.wgs,
+                method == "brute", d, g, mo, nodes, leaves, self.tol)
+        else:
+            _mm.smooth_moment_primitives(
+                self.field.tree, self.query.kind, pts, self.alpha, self.beta, self.S, self.wgs,
+                method == "brute", d, g, mo, nodes, leaves, self.tol, _mq.parallel_tasks(m))
         self.last_stats = (nodes, leaves)
         return d, g, mo
 
@@ -283,8 +367,7 @@ class MeshDistance:
         """
         d, g, mo = self.primitive_moments(R, t, method=method)
         dist, G = split_to_vertices(d, g, self.query, self.alpha_q)
-        e = np.exp(-self.alpha_q * (d - d.min()))
-        return dist, G, (e / e.sum()) @ mo
+        return dist, G, _softmax_sum(d, mo, self.alpha_q)
 
     def rigid_gradient(self, R=None, t=None, *, torques="exact", method="bvh"):
         """``(d_hat, force (3,), torque (3,))``: the gradient of ``d_hat`` for a translation of
@@ -310,7 +393,7 @@ class MeshDistance:
         The gradient is the unit vector from the data's closest point to the query's, split
         equally among the minimising query primitive's vertices (zero elsewhere).
         """
-        pts = self._primitive_coords(R, t)
+        X, pts = self._place(R, t)
         m = self.query.kind.size
         d = np.empty(m)
         g = np.empty((m, 3))
@@ -318,15 +401,18 @@ class MeshDistance:
         bound2 = np.inf
         if np.any(self.query.kind > 0):
             # the query's vertices give an upper bound of the minimum: primitives prune with it
-            X = np.ascontiguousarray(self.transformed_vertices(R, t)[self._used])
+            X = np.ascontiguousarray(X[self._used])
             if X.shape[0] < SERIAL_BELOW["exact"]:
                 dv = float(_mq.nearest_vertex_distance(self.field.tree, X))
             else:
                 dv = float(self.field.exact_distance(X)[0].min())
             bound2 = (dv * (1 + 1e-9)) ** 2 + 1e-300
-        kernel = (_mq.exact_distance_primitives_serial if m < SERIAL_BELOW["exact"]
-                  else _mq.exact_distance_primitives)
-        kernel(self.field.tree, self.query.kind, pts, bound2, d, g, prim)
+        if m < SERIAL_BELOW["exact"]:
+            _mq.exact_distance_primitives_serial(self.field.tree, self.query.kind, pts, bound2, d,
+                                                 g, prim)
+        else:
+            _mq.exact_distance_primitives(self.field.tree, self.query.kind, pts, bound2, d, g,
+                                          prim, _mq.parallel_tasks(m))
         j = int(np.argmin(d))
         G = np.zeros((self.num_query_vertices, 3))
         k = int(self.query.kind[j]) + 1
@@ -380,26 +466,37 @@ class MeshDistance:
                 f"alpha_q={self.alpha_q:g}, beta={self.beta:g})")
 
 
+@numba.njit(**NJIT)
+def _softmax_sum(d, mo, alpha_q):
+    """``sum_j softmax_j mo[j]`` with ``softmax = exp(-alpha_q d) / sum`` (the couple)."""
+    dmin = np.inf
+    for j in range(d.size):
+        dmin = min(dmin, d[j])
+    s = 0.0
+    cx = cy = cz = 0.0
+    for j in range(d.size):
+        e = math.exp(-alpha_q * (d[j] - dmin))
+        s += e
+        cx += e * mo[j, 0]
+        cy += e * mo[j, 1]
+        cz += e * mo[j, 2]
+    out = np.empty(3)
+    out[0] = cx / s
+    out[1] = cy / s
+    out[2] = cz / s
+    return out
+
+
 def split_to_vertices(d, g, query, alpha_q):
     """Combine per-primitive distances by LogSumExp (Eq. 6) and split gradients (Eq. 7-8).
 
     ``d (m,)``, ``g (m, 3)`` per query primitive; returns ``(d_hat float, G (n, 3))``.
     """
-    m = float(d.min())
-    e = np.exp(-alpha_q * (d - m))
-    s = float(e.sum())
-    dist = m - math.log(s) / alpha_q
-    nv = query.kind + 1
-    w = e / s / nv
-    n = query.V.shape[0]
-    G = np.zeros((n, 3))
-    for c in range(3):
-        use = nv > c
-        idx = query.index[use, c]
-        wc = w[use]
-        for a in range(3):
-            G[:, a] += np.bincount(idx, weights=wc * g[use, a], minlength=n)
-    return dist, G
+    G = np.empty((query.V.shape[0], 3))
+    dist = _split(np.ascontiguousarray(d, dtype=np.float64),
+                  np.ascontiguousarray(g, dtype=np.float64), query.kind, query.index,
+                  float(alpha_q), G)
+    return float(dist), G
 
 
 def mesh_distance(V_data, F_data, V_query, F_query, *, alpha, alpha_q, beta=0.5, alpha_u=None,
