@@ -8,13 +8,15 @@ other in the same run, 2 threads each:
   comparison: ``/work/shared/tools/authors-bench/README.md``), in a scratch folder (it writes
   ``<name>__<object>__state.txt`` and ``__times.txt`` files there);
 * ours: ``python -m tracer simulate FILE -o DIR --no-render --threads 2 --scheduler serial``
-  (a fresh process, like theirs: start-up, numba's cached kernels, BVH builds included), with
+  (a fresh process, like theirs: start-up, loading numba's cached kernels and BVH builds
+  included; a one-step run before it compiles the kernels if the cache is cold), with
   ``--torques split`` by default, the equal split of a primitive's force over its vertices
   that their simulator uses (``--torques exact`` for ours at its default).
 
 The copy of the file that both read has its mesh paths made absolute (theirs opens them
 relative to the working directory, ours relative to the file) and, with ``--steps N``, its
-``num_steps`` set to ``N``.
+``num_steps`` set to ``N``; an OBJ file with ``l`` (line) records is copied with them written
+as 2-vertex ``f`` records, the only form of an edge their reader takes (ours reads both).
 
 Reported per file: wall seconds of each and their ratio (ours / theirs), distance
 evaluations (theirs: lines of the ``__times.txt`` files, one per ``meshDistance`` call;
@@ -60,10 +62,21 @@ def prepared_copy(path, folder, steps=None):
     ``folder``; returns ``(new path, spec)``."""
     spec = json.loads(Path(path).read_text())
     base = Path(path).resolve().parent
-    for obj in spec.get("objects", []):
-        for mesh in obj.get("meshes", []):
+    for i, obj in enumerate(spec.get("objects", [])):
+        for j, mesh in enumerate(obj.get("meshes", [])):
             if "path" in mesh:
-                mesh["path"] = str((base / mesh["path"]).resolve())
+                src = (base / mesh["path"]).resolve()
+                mesh["path"] = str(src)
+                if src.suffix.lower() == ".obj":
+                    text = src.read_text()
+                    if "\nl " in "\n" + text:
+                        # their OBJ reader (igl::readOBJ) skips "l" records and reads an edge
+                        # as a 2-vertex "f": both programs read this copy (ours takes either)
+                        lines = ["f " + ln[2:] if ln.startswith("l ") else ln
+                                 for ln in text.splitlines()]
+                        dest = Path(folder) / f"{i}_{j}_{src.name}"
+                        dest.write_text("\n".join(lines) + "\n")
+                        mesh["path"] = str(dest)
     if steps is not None:
         spec["num_steps"] = int(steps)
     out = Path(folder) / Path(path).name
@@ -158,6 +171,11 @@ def main(argv=None):
     for f in args.files:
         tmp = tempfile.mkdtemp(prefix="bench_authors_sim_")
         try:
+            # warm-up: numba compiles (or loads from its cache) our kernels once, outside
+            # the timing, as their binary is compiled before it runs
+            warm, _ = prepared_copy(f, tmp, 1)
+            run_ours(warm, args.threads, args.torques, args.timeout)
+            shutil.rmtree(Path(tmp) / "ours", ignore_errors=True)
             sim_path, spec = prepared_copy(f, tmp, args.steps)
             size = scene_size(sim_path)
             try:
