@@ -36,7 +36,7 @@ import math
 
 import numba
 
-from smoothdist._config import NJIT
+from smoothdist._config import NJIT, NJIT_INLINE
 from smoothdist.closest_point import (SEG_A, SEG_B, SEG_INTERIOR, TRI_A, TRI_AB, TRI_AC, TRI_B,
                                       TRI_BC, TRI_C, TRI_INTERIOR, closest_point_segment,
                                       closest_point_triangle)
@@ -50,7 +50,7 @@ DEGENERATE = 1e-16
 NEAR_PARALLEL = 1e-8
 
 
-@numba.njit(**NJIT)
+@numba.njit(**NJIT_INLINE)
 def segment_feature(u):
     """Feature code of segment parameter ``u`` in [0, 1]."""
     if u <= 0.0:

@@ -69,7 +69,7 @@ def pair_term_moment(tree, i, kq, Q, S, wgs, cx, cy, cz):
     ``M = (p - c) x v + wgs y (q x r)`` (module notes).
     """
     return pair_terms(tree.kind, tree.pts, tree.wc, tree.pwhi, i, kq, Q, S, wgs, kq >= 0, cx,
-                      cy, cz)
+                      cy, cz, tree.kind[i])
 
 
 @numba.njit(**NJIT)

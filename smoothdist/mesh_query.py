@@ -53,6 +53,8 @@ from smoothdist.weights import eval_triangle_weight
 
 #: :func:`smoothdist.query._attenuate`, inlined (it calls no other kernel)
 _attenuate_inline = numba.njit(**NJIT_INLINE)(_attenuate.py_func)
+#: :func:`smoothdist.closest_pair.segment_segment`, inlined (the edge-edge leaves)
+_segment_segment_inline = numba.njit(**NJIT_INLINE)(segment_segment.py_func)
 
 #: most parallel tasks; task ``c`` of ``n`` takes query primitives ``c, c + n, ...`` so that the
 #: expensive ones (near the data, usually contiguous in a mesh) are spread over all threads
@@ -144,11 +146,10 @@ def _edge_weight(wc, i, t):
 
 
 @numba.njit(**NJIT_INLINE)
-def _closest(kind, P, i, kq, Q):
+def _closest(kind, P, i, kq, Q, k):
     """:func:`smoothdist.closest_pair.closest_pair` of query ``(kq, Q)`` and data primitive ``i``
     of ``kind``, ``P`` (the tree's arrays), called with the data's coordinates as scalars for
     edge and triangle queries (no row view, no dispatch through every kind pair)."""
-    k = kind[i]
     if kq == 0:
         # a point query (the brute-force references only: the traversal takes edges and
         # triangles)
@@ -160,8 +161,8 @@ def _closest(kind, P, i, kq, Q):
                               P[i, 1], P[i, 2])
     if k == 1:
         if kq == 1:
-            return segment_segment(Q[0], Q[1], Q[2], Q[3], Q[4], Q[5], P[i, 0], P[i, 1], P[i, 2],
-                                   P[i, 3], P[i, 4], P[i, 5])
+            return _segment_segment_inline(Q[0], Q[1], Q[2], Q[3], Q[4], Q[5], P[i, 0], P[i, 1],
+                                           P[i, 2], P[i, 3], P[i, 4], P[i, 5])
         return triangle_segment(Q[0], Q[1], Q[2], Q[3], Q[4], Q[5], Q[6], Q[7], Q[8], P[i, 0],
                                 P[i, 1], P[i, 2], P[i, 3], P[i, 4], P[i, 5])
     if kq == 1:
@@ -188,15 +189,14 @@ def query_coefficient(nd, d1x, d1y, d1z, w1, nq, q1x, q1y, q1z):
 
 
 @numba.njit(**NJIT_INLINE)
-def _pair(kind, pts, wc, pwhi, i, kq, Q, S, wgs, moment, cx, cy, cz):
+def _pair(kind, pts, wc, pwhi, i, kq, Q, S, wgs, moment, cx, cy, cz, k):
     """Term of data primitive ``i`` (tree order) for query primitive ``(kq, Q)``.
 
     Returns ``(d, W, vx, vy, vz, mx, my, mz)``: distance, attenuated weight, the gradient
     numerator ``v = W unit(r) - wgs grad W`` (for a translation of the query) and, with
     ``moment``, the term's moment about ``c`` (:mod:`smoothdist.mesh_moment`; else 0).
     """
-    c = _closest(kind, pts, i, kq, Q)
-    k = kind[i]
+    c = _closest(kind, pts, i, kq, Q, k)
     d = math.sqrt(c[0])
     rx = c[1]
     ry = c[2]
@@ -302,7 +302,7 @@ def pair_term(tree, i, kq, Q, S, wgs):
     # ``kq < 0`` is a run-time False: the moment reference (``moment=kq >= 0``) shares the
     # compiled pair_terms
     d, W, vx, vy, vz, _, _, _ = pair_terms(tree.kind, tree.pts, tree.wc, tree.pwhi, i, kq, Q, S,
-                                           wgs, kq < 0, 0.0, 0.0, 0.0)
+                                           wgs, kq < 0, 0.0, 0.0, 0.0, tree.kind[i])
     return d, W, vx, vy, vz
 
 
@@ -523,8 +523,15 @@ def smooth_traverse(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, to
         if l < 0:
             st = start[node]
             for i in range(st, st + cnt):
-                d, W, vx, vy, vz, tx, ty, tz = _pair(kind, pts, wc, pwhi, i, kq, Q, S, wgs, moment,
-                                                     cx, cy, cz)
+                k = kind[i]
+                if kq == 1 and k == 1:
+                    # edges against edges: a copy of the inlined term in which the compiler
+                    # knows both kinds (and keeps only that case)
+                    d, W, vx, vy, vz, tx, ty, tz = _pair(kind, pts, wc, pwhi, i, kq, Q, S, wgs,
+                                                         moment, cx, cy, cz, k)
+                else:
+                    d, W, vx, vy, vz, tx, ty, tz = _pair(kind, pts, wc, pwhi, i, kq, Q, S, wgs,
+                                                         moment, cx, cy, cz, k)
                 m, s, gx, gy, gz, mx, my, mz = _accumulate(
                     m, s, gx, gy, gz, mx, my, mz, d, W, vx, vy, vz, tx, ty, tz, alpha, moment)
             leaves += cnt
