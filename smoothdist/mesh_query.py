@@ -287,7 +287,7 @@ def _pair(kind, pts, wc, pwhi, i, kq, Q, S, wgs, moment, cx, cy, cz, k):
     return d, W, vx, vy, vz, mx, my, mz
 
 
-#: :func:`_pair` as an ordinary kernel (for the brute-force references: one compiled copy)
+#: ``_pair`` as an ordinary kernel (for the brute-force references: one compiled copy)
 pair_terms = numba.njit(**NJIT)(_pair.py_func)
 
 
