@@ -98,8 +98,9 @@ class DataMesh:
         Parameters
         ----------
         path : str or os.PathLike
-            The file. OBJ ``l`` records become edges, ``f`` records triangles (polygons are
-            fanned); a file without faces or lines is a point cloud.
+            The file. OBJ ``l`` records and 2-vertex ``f`` records become edges, other ``f``
+            records triangles (polygons are fanned); a file without faces or lines is a point
+            cloud.
         kind : {None, "points", "edges", "triangles"}
             ``None`` keeps everything the file holds (possibly mixed). ``"points"`` keeps the
             vertices, ``"edges"`` the unique edges of triangles plus the file's own edges,
@@ -439,13 +440,12 @@ def _read_obj(path):
                         raise ValueError("OBJ vertex indices start at 1, not 0")
                     nv = len(verts)
                     idx = [i - 1 if i > 0 else nv + i for i in idx]
-                    if tag == "l":
-                        if len(idx) < 2:
-                            raise ValueError("a line needs at least 2 vertices")
+                    if tag == "l" or len(idx) == 2:   # a 2-vertex face is an edge (libigl's
+                        if len(idx) < 2:                 # and the authors' convention)
+                            raise ValueError(f"{'a line' if tag == 'l' else 'a face'} needs at "
+                                             "least 2 vertices")
                         edges.extend(zip(idx[:-1], idx[1:]))
                     else:
-                        if len(idx) < 3:
-                            raise ValueError("a face needs at least 3 vertices")
                         tris.extend((idx[0], idx[j], idx[j + 1]) for j in range(1, len(idx) - 1))
             except (ValueError, IndexError) as exc:
                 raise _MeshFileError(f"{path}:{lineno}: malformed OBJ record "

@@ -40,6 +40,16 @@ def test_obj_lines_load_as_edges(tmp_path):
     np.testing.assert_array_equal(m.V[m.edges[3]], [[5, 5, 5], [6, 5, 5]])
 
 
+def test_obj_two_vertex_faces_are_edges(tmp_path):
+    """The authors' files (and libigl's writer) store an edge as ``f a b``: it loads as the
+    same edge as ``l a b``."""
+    f = DataMesh.load(write(tmp_path / "f.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2\nf 2/5 3\n"))
+    ln = DataMesh.load(write(tmp_path / "l.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nl 1 2\nl 2 3\n"))
+    assert f.kind == ln.kind == "edges"
+    np.testing.assert_array_equal(np.sort(f.edges, axis=1), np.sort(ln.edges, axis=1))
+    np.testing.assert_array_equal(f.V, ln.V)
+
+
 def test_obj_faces_polygons_negative_indices_and_mixed(tmp_path):
     p = write(tmp_path / "mixed.obj",
               "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 3\nvn 0 0 1\n"
@@ -279,7 +289,7 @@ def test_unsupported_extension(tmp_path, name):
 @pytest.mark.parametrize("text,word", [
     ("v 0 0 0\nv 1 2 x\n", "malformed"),
     ("v 0 0 0\nv 1 0 0\nv 0 1\n", "malformed"),
-    ("v 0 0 0\nv 1 0 0\nf 1 2\n", "malformed"),
+    ("v 0 0 0\nv 1 0 0\nf 1\n", "malformed"),
     ("v 0 0 0\nv 1 0 0\nl 1\n", "malformed"),
     ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n", "out of range"),
     ("v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n", "NaN"),

@@ -32,11 +32,13 @@ OCTOPUS_TRIANGLES = 4432
 
 
 def write_obj(path, V, E=None, F=None, header=()):
-    """An OBJ file of vertices ``V``, edges ``E`` (``l`` records) and triangles ``F``."""
+    """An OBJ file of vertices ``V``, edges ``E`` and triangles ``F``. Edges are 2-vertex ``f``
+    records, the only edges the authors' reader takes (``l`` lines are skipped by it); ours
+    reads both."""
     lines = [f"# {h}" for h in header]
     lines += ["v " + " ".join(f"{x:.9g}" for x in v) for v in np.asarray(V, float)]
     if E is not None:
-        lines += [f"l {a + 1} {b + 1}" for a, b in np.asarray(E)]
+        lines += [f"f {a + 1} {b + 1}" for a, b in np.asarray(E)]
     if F is not None:
         lines += [f"f {a + 1} {b + 1} {c + 1}" for a, b, c in np.asarray(F)]
     with open(path, "w", newline="\n") as fh:
