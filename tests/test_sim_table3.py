@@ -183,3 +183,33 @@ def test_bench_sim_finds_table3(capsys):
     assert "12400 points + 100 edges" in out and "| table3/trefoil_ringtoss | 2 |" in out
     with pytest.raises(SystemExit):
         bench_sim.main(["table3/trefoil_ringtoss"])          # Table 3 scenes need --table3
+
+
+def test_make_clips_end_to_end(tmp_path):
+    """``make_clips.py`` on a short run of one scene: simulates, renders the frames, writes the
+    MP4, the GIF, the README's small GIF and a JSON row whose frame count matches the PNGs."""
+    from PIL import Image
+
+    out, small, rows = tmp_path / "clips", tmp_path / "readme", tmp_path / "rows.json"
+    proc = subprocess.run(
+        [sys.executable, os.path.join(TABLE3, "make_clips.py"), "trefoil_ringtoss", "--steps", "4",
+         "--frames", "3", "--size", "48", "32", "--readme-size", "24", "16", "-o", str(out),
+         "--readme", str(small), "--json", str(rows)],
+        capture_output=True, text=True, cwd=ROOT, timeout=600)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    scene = out / "trefoil_ringtoss"
+    pngs = sorted((scene / "trefoil_ringtoss_frames").glob("*.png"))
+    [row] = json.loads(rows.read_text())
+    assert row["steps"] == 4 and row["frames"] == len(pngs) == 3
+    assert Image.open(pngs[0]).size == (48, 32)
+    assert (scene / "trefoil_ringtoss.mp4").stat().st_size > 0
+    gif = Image.open(small / "trefoil_ringtoss.gif")
+    # (Pillow merges consecutive frames that came out identical at this size)
+    assert gif.size == (24, 16) and 1 <= gif.n_frames <= 3
+    assert row["s_per_frame_median"] > 0
+
+
+def test_make_clips_refuses_an_unknown_scene():
+    proc = subprocess.run([sys.executable, os.path.join(TABLE3, "make_clips.py"), "no_such"],
+                          capture_output=True, text=True, cwd=ROOT, timeout=120)
+    assert proc.returncode == 2 and "unknown scene" in proc.stderr

@@ -101,7 +101,8 @@ def frame_task(task):
 def render_movie(sim_path, traj_path, frames_dir, mp4, gif, *, n_frames, every, fps, size=None,
                  scheduler="local", workers=None, quiet=False):
     """Render every ``every``-th frame (and the last) of the trajectory to ``frames_dir``, then
-    write ``mp4`` and ``gif``. Returns the runner's :class:`~tracer.runner.RunInfo`.
+    write ``mp4`` and ``gif``. Returns the runner's :class:`~tracer.runner.RunInfo`, with
+    ``frame_seconds`` added: each frame's render time in seconds, in frame order.
 
     Raises :class:`tracer.errors.CLIError` when a frame could not be rendered (nothing of the
     movie is written then)."""
@@ -124,4 +125,5 @@ def render_movie(sim_path, traj_path, frames_dir, mp4, gif, *, n_frames, every, 
     images = [np.asarray(Image.open(done[n]["png"]).convert("RGB")) for n in range(len(tasks))]
     write_mp4(mp4, images, fps)
     write_gif(gif, images, fps)
+    info.frame_seconds = [done[n]["seconds"] for n in range(len(tasks))]
     return info
