@@ -9,7 +9,8 @@ other in the same run, 2 threads each:
   ``<name>__<object>__state.txt`` and ``__times.txt`` files there);
 * ours: ``python -m tracer simulate FILE -o DIR --no-render --threads 2 --scheduler serial``
   (a fresh process, like theirs: start-up, loading numba's cached kernels and BVH builds
-  included; a one-step run before it compiles the kernels if the cache is cold), with
+  included; an untimed run of the same file before it compiles the kernels if numba's cache
+  is cold), with
   ``--torques split`` by default, the equal split of a primitive's force over its vertices
   that their simulator uses (``--torques exact`` for ours at its default).
 
@@ -172,8 +173,11 @@ def main(argv=None):
         tmp = tempfile.mkdtemp(prefix="bench_authors_sim_")
         try:
             # warm-up: numba compiles (or loads from its cache) our kernels once, outside
-            # the timing, as their binary is compiled before it runs
-            warm, _ = prepared_copy(f, tmp, 1)
+            # the timing, as their binary is compiled before it runs. The warm-up is the
+            # whole run: a kernel first needed at contact (the gradient kernels) would
+            # otherwise be compiled inside the timed run (after an edit of its source file,
+            # 48 s on ico_bowl)
+            warm, _ = prepared_copy(f, tmp, args.steps)
             run_ours(warm, args.threads, args.torques, args.timeout)
             shutil.rmtree(Path(tmp) / "ours", ignore_errors=True)
             sim_path, spec = prepared_copy(f, tmp, args.steps)
