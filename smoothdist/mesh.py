@@ -440,11 +440,11 @@ def _read_obj(path):
                         raise ValueError("OBJ vertex indices start at 1, not 0")
                     nv = len(verts)
                     idx = [i - 1 if i > 0 else nv + i for i in idx]
+                    if len(idx) < 2:
+                        raise ValueError(f"{'a line' if tag == 'l' else 'a face'} needs at "
+                                         "least 2 vertices")
                     if tag == "l" or len(idx) == 2:   # a 2-vertex face is an edge (libigl's
-                        if len(idx) < 2:                 # and the authors' convention)
-                            raise ValueError(f"{'a line' if tag == 'l' else 'a face'} needs at "
-                                             "least 2 vertices")
-                        edges.extend(zip(idx[:-1], idx[1:]))
+                        edges.extend(zip(idx[:-1], idx[1:]))   # and the authors' convention)
                     else:
                         tris.extend((idx[0], idx[j], idx[j + 1]) for j in range(1, len(idx) - 1))
             except (ValueError, IndexError) as exc:

@@ -126,6 +126,16 @@ NOT_RUN = {
     "python -m tracer bench-grid MESH_DIR -o OUT_DIR --scheduler tcp://host:8786 # an existing cluster":
         "it needs an existing Dask cluster; tests/test_runner_cluster.py starts one with the "
         "dask command line and runs this command against it",
+    "python benchmarks/bench_authors_sim.py --authors-bin "
+    "../authors-build/bench/rigid_body_simulator scenes/simulations/table3/ico_bowl.json "
+    "--steps 400 --timeout 1200":
+        "it needs the authors' simulator built outside the repository "
+        "(../shared/tools/authors-bench) and takes minutes; tests/test_bench_authors_sim.py "
+        "runs the script against a stand-in simulator",
+    "python benchmarks/bench_mesh_distance.py --authors-bin ../authors-build/bench/mesh_bench "
+    "--rounds 5 --repeat 10 --threads 2":
+        "it needs the authors' mesh_bench built outside the repository "
+        "(../shared/tools/authors-bench); the same script without --authors-bin is run",
     "bash .ci/run": "it runs this test suite (CI runs it)",
     'bash .ci/run -m "not slow"': "it runs the quick part of this test suite",
     "python -m pytest tests/test_render_golden.py --regen-baselines":
