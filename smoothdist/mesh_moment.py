@@ -31,30 +31,9 @@ import numpy as np
 from numba import prange
 
 from smoothdist._config import NJIT, NJIT_PARALLEL
-from smoothdist.mesh_query import (TASKS, centroid, pair_terms, query_coefficient,  # noqa: F401
-                                   smooth_traverse)
+from smoothdist.mesh_query import (TASKS, _accumulate, centroid, pair_terms,  # noqa: F401
+                                   query_coefficient, smooth_traverse)
 from smoothdist.query import DEFAULT_TOL, smooth_distance_point
-
-
-@numba.njit(**NJIT)
-def accumulate_moment(m, s, gx, gy, gz, mx, my, mz, d, W, vx, vy, vz, ux, uy, uz, alpha):
-    """:func:`smoothdist.query.logsumexp_accumulate` with a moment ``u`` summed like ``v``.
-
-    Returns ``(m, s, gx, gy, gz, mx, my, mz)``; the same operations on ``m, s, g``.
-    """
-    if d < m:
-        f = math.exp(-alpha * (m - d))
-        s *= f
-        gx *= f
-        gy *= f
-        gz *= f
-        mx *= f
-        my *= f
-        mz *= f
-        m = d
-    e = math.exp(-alpha * (d - m))
-    return (m, s + W * e, gx + e * vx, gy + e * vy, gz + e * vz, mx + e * ux, my + e * uy,
-            mz + e * uz)
 
 
 #: the query-edge coefficient of the weight's motion (``mesh_query.query_coefficient``)
@@ -95,8 +74,8 @@ def smooth_moment_brute_primitive(tree, kq, Q, alpha, S, wgs):
     mx = my = mz = 0.0
     for i in range(tree.kind.size):
         d, W, vx, vy, vz, tx, ty, tz = pair_term_moment(tree, i, kq, Q, S, wgs, cx, cy, cz)
-        m, s, gx, gy, gz, mx, my, mz = accumulate_moment(m, s, gx, gy, gz, mx, my, mz, d, W, vx,
-                                                         vy, vz, tx, ty, tz, alpha)
+        m, s, gx, gy, gz, mx, my, mz = _accumulate(m, s, gx, gy, gz, mx, my, mz, d, W, vx, vy,
+                                                   vz, tx, ty, tz, alpha, True)
     return m - math.log(s) / alpha, gx / s, gy / s, gz / s, mx / s, my / s, mz / s
 
 
