@@ -32,7 +32,7 @@ import numpy as np
 from numba import prange
 
 from smoothdist.kernels import NJIT, NJIT_PARALLEL
-from tracer.march import march_ray, ray_box, scene_distance
+from tracer.march import march_ray, object_lower_bound, ray_box, scene_distance
 
 __all__ = ["Lighting", "DEFAULT_COLOR", "PALETTE", "soft_shadow", "ambient_occlusion",
            "light_points", "object_ids", "ground_height", "light_directions", "shade_lit",
@@ -236,7 +236,21 @@ def object_ids(tree, roots, params, mode, tol, P, depth_max, out):
         dstack = np.empty(depth_max + 4)
         best = np.inf
         arg = 0
+        # nearest root box first; an object whose lower bound is not below the best distance
+        # so far cannot be nearer
+        first = 0
+        lb_first = np.inf
         for kk in range(roots.size):
+            lb = object_lower_bound(tree, roots, params, mode, tol, kk, P[i, 0], P[i, 1],
+                                    P[i, 2], 0.0)
+            if lb < lb_first:
+                lb_first = lb
+                first = kk
+        for j in range(roots.size):
+            kk = first if j == 0 else (j - 1 if j <= first else j)
+            if j > 0 and object_lower_bound(tree, roots, params, mode, tol, kk, P[i, 0],
+                                            P[i, 1], P[i, 2], 0.0) >= best:
+                continue
             d = scene_distance(tree, roots[kk:kk + 1], params[kk:kk + 1], mode, tol, P[i, 0],
                                P[i, 1], P[i, 2], stack, dstack, 0.0)[0]
             if d < best:

@@ -26,7 +26,9 @@ object ``k`` is then evaluated at its local point ``R^T (p - t)`` and its gradie
 back by ``R`` (rigid bodies drawn at their poses without rebuilding a tree). Objects are
 combined as the paper combines them: by a second LogSumExp with the largest alpha (smooth
 mode), or by the minimum (exact-offset mode, where each object's distance is
-``exact - offset``).
+``exact - offset``). The object with the nearest root box is evaluated first; an object whose
+root box alone shows that it cannot change the result (:func:`object_lower_bound`: not below
+the minimum, or a LogSumExp term below one unit in the last place of the sum) is skipped.
 
 Safety (docs/design-notes.md §4): each ray starts where it enters the scene box grown by
 ``margin`` (the isosurface can lie at most ``log(A^S N) / alpha`` outside the data, Barnes-Hut
@@ -43,6 +45,7 @@ from numba import prange
 from numba.core import types as nbtypes
 from numba.extending import intrinsic
 
+from smoothdist.closest_point import box_distance2
 from smoothdist.kernels import (NJIT, NJIT_PARALLEL, exact_distance_point, logsumexp_accumulate,
                                 smooth_distance_point, smooth_distance_point_tol)
 from tracer.camera import ray_direction
@@ -109,8 +112,8 @@ def scene_distance(tree, roots, params, mode, tol, x, y, z, stack, dstack, slack
                                      params[0, P_S], params[0, P_WGS], stack, dstack, roots)
     nobj = roots.size
     if params.shape[1] >= P_COLUMNS_POSED:
-        return _scene_distance_posed(tree, roots, params, mode, tol, x, y, z, stack, dstack,
-                                     slack)
+        return _scene_distance_objects(tree, roots, params, mode, tol, x, y, z, stack, dstack,
+                                       slack)
     if nobj == 1:
         if mode == MODE_SMOOTH:
             alpha = params[0, P_ALPHA]
@@ -121,46 +124,117 @@ def scene_distance(tree, roots, params, mode, tol, x, y, z, stack, dstack, slack
         d, gx, gy, gz, p, nodes, leaves = exact_distance_point(tree, x, y, z, stack, dstack,
                                                                roots[0])
         return d - params[0, P_OFFSET], gx, gy, gz, nodes, leaves
+    return _scene_distance_objects(tree, roots, params, mode, tol, x, y, z, stack, dstack, slack)
+
+
+@numba.njit(**NJIT)
+def _local_point(params, k, x, y, z):
+    """Object ``k``'s own coordinates of ``(x, y, z)``: ``R^T (p - t)`` in a posed table, the
+    point itself otherwise."""
+    if params.shape[1] < P_COLUMNS_POSED:
+        return x, y, z
+    px = x - params[k, P_T]
+    py = y - params[k, P_T + 1]
+    pz = z - params[k, P_T + 2]
+    R0 = P_R
+    return (params[k, R0] * px + params[k, R0 + 3] * py + params[k, R0 + 6] * pz,
+            params[k, R0 + 1] * px + params[k, R0 + 4] * py + params[k, R0 + 7] * pz,
+            params[k, R0 + 2] * px + params[k, R0 + 5] * py + params[k, R0 + 8] * pz)
+
+
+@numba.njit(**NJIT)
+def object_lower_bound(tree, roots, params, mode, tol, k, x, y, z, slack):
+    """A lower bound (scene units) of object ``k``'s distance at ``(x, y, z)`` from its root
+    box alone: smooth mode ``b - (log N + S max(log whi, 0) + log(1 + tol_k)) / alpha`` (``b``
+    the distance to the box; no term of ``N`` primitives is larger than ``whi**S
+    exp(-alpha b)``, Barnes-Hut far fields included, and tolerance pruning lowers the sum's
+    log by at most ``log(1 + tol_k)``); exact-offset mode ``b - offset``."""
+    lx, ly, lz = _local_point(params, k, x, y, z)
+    root = roots[k]
+    b = math.sqrt(box_distance2(lx, ly, lz, tree.lo, tree.hi, root)[0])
+    if mode == MODE_EXACT:
+        return b - params[k, P_OFFSET]
+    alpha = params[k, P_ALPHA]
+    n = max(tree.count[root], 1)
+    return b - (math.log(n) + params[k, P_S] * max(tree.lwhi[root], 0.0)
+                + math.log1p(_loosened(tol, alpha, slack))) / alpha
+
+
+@numba.njit(**NJIT)
+def _object_distance(tree, roots, params, mode, tol, k, x, y, z, stack, dstack, slack):
+    """Object ``k``'s distance and gradient at ``(x, y, z)`` (posed when ``params`` has the
+    pose columns; exact-offset mode subtracts the offset). Returns ``(d, gx, gy, gz, nodes,
+    leaves)``, the gradient in scene coordinates."""
+    lx, ly, lz = _local_point(params, k, x, y, z)
+    if mode == MODE_SMOOTH:
+        alpha = params[k, P_ALPHA]
+        d, hx, hy, hz, nn, ll = smooth_distance_point_tol(
+            tree, lx, ly, lz, alpha, _far_beta(params[k, P_BETA], tol, alpha, slack),
+            _loosened(tol, alpha, slack), params[k, P_S], params[k, P_WGS], stack, dstack,
+            roots[k])
+    else:
+        d, hx, hy, hz, p, nn, ll = exact_distance_point(tree, lx, ly, lz, stack, dstack,
+                                                        roots[k])
+        d -= params[k, P_OFFSET]
+    if params.shape[1] < P_COLUMNS_POSED:
+        return d, hx, hy, hz, nn, ll
+    R0 = P_R
+    gx = params[k, R0] * hx + params[k, R0 + 1] * hy + params[k, R0 + 2] * hz
+    gy = params[k, R0 + 3] * hx + params[k, R0 + 4] * hy + params[k, R0 + 5] * hz
+    gz = params[k, R0 + 6] * hx + params[k, R0 + 7] * hy + params[k, R0 + 8] * hz
+    return d, gx, gy, gz, nn, ll
+
+
+#: objects whose lower bound (:func:`object_lower_bound`) lies this many ``1 / alpha`` beyond
+#: the running minimum add less than ``2**-53 / k`` of the scene's LogSumExp sum each (the sum
+#: relative to its minimum is >= 1): they are skipped, so the scene's value is that of all
+#: objects up to float64 rounding
+SKIP_LOG = 53.0 * math.log(2.0)
+
+
+@numba.njit(**NJIT)
+def _scene_distance_objects(tree, roots, params, mode, tol, x, y, z, stack, dstack, slack):
+    """:func:`scene_distance` of several objects (posed or not): the object with the smallest
+    :func:`object_lower_bound` first, then every other one unless its bound shows it cannot
+    matter: in exact-offset mode a bound ``>=`` the minimum so far (the minimum is exact), in
+    smooth mode a bound past ``m + (SKIP_LOG + log k) / a`` (its term is below one unit in
+    the last place of the sum)."""
+    nobj = roots.size
     nodes = 0
     leaves = 0
-    if mode == MODE_EXACT:
-        best = np.inf
-        bgx = 0.0
-        bgy = 0.0
-        bgz = 0.0
-        for k in range(nobj):
-            d, gx, gy, gz, p, nn, ll = exact_distance_point(tree, x, y, z, stack, dstack,
-                                                            roots[k])
-            nodes += nn
-            leaves += ll
-            d -= params[k, P_OFFSET]
-            if d < best:
-                best = d
-                bgx = gx
-                bgy = gy
-                bgz = gz
-        return best, bgx, bgy, bgz, nodes, leaves
-    # smooth: LogSumExp over objects with the largest alpha, shifted by the smallest d
+    first = 0
+    lb_first = np.inf
+    for k in range(nobj):
+        lb = object_lower_bound(tree, roots, params, mode, tol, k, x, y, z, slack)
+        if lb < lb_first:
+            lb_first = lb
+            first = k
     a = params[0, P_ALPHA]
     for k in range(1, nobj):
         a = max(a, params[k, P_ALPHA])
+    reach = (SKIP_LOG + math.log(nobj)) / a
     m = np.inf
     s = 0.0
     sx = 0.0
     sy = 0.0
     sz = 0.0
-    for k in range(nobj):
-        alpha = params[k, P_ALPHA]
-        d, gx, gy, gz, nn, ll = smooth_distance_point_tol(tree, x, y, z, alpha,
-                                                          _far_beta(params[k, P_BETA], tol,
-                                                                    alpha, slack),
-                                                          _loosened(tol, alpha, slack),
-                                                          params[k, P_S], params[k, P_WGS],
-                                                          stack, dstack, roots[k])
+    for j in range(nobj):
+        k = first if j == 0 else (j - 1 if j <= first else j)
+        if j > 0:
+            lb = object_lower_bound(tree, roots, params, mode, tol, k, x, y, z, slack)
+            if lb >= (m if mode == MODE_EXACT else m + reach):
+                continue
+        d, gx, gy, gz, nn, ll = _object_distance(tree, roots, params, mode, tol, k, x, y, z,
+                                                 stack, dstack, slack)
         nodes += nn
         leaves += ll
-        m, s, sx, sy, sz = logsumexp_accumulate(m, s, sx, sy, sz, d, 1.0, gx, gy, gz, a)
-    return m - math.log(s) / a, sx / s, sy / s, sz / s, nodes, leaves
+        if mode == MODE_SMOOTH:
+            m, s, sx, sy, sz = logsumexp_accumulate(m, s, sx, sy, sz, d, 1.0, gx, gy, gz, a)
+        elif d < m:
+            m, sx, sy, sz = d, gx, gy, gz
+    if mode == MODE_SMOOTH:
+        return m - math.log(s) / a, sx / s, sy / s, sz / s, nodes, leaves
+    return m, sx, sy, sz, nodes, leaves
 
 
 @numba.njit(**NJIT)
@@ -191,52 +265,6 @@ def _was_loosened(params, tol, slack):
         if _loosened(tol, params[k, P_ALPHA], slack) != tol:
             return True
     return False
-
-
-@numba.njit(**NJIT)
-def _scene_distance_posed(tree, roots, params, mode, tol, x, y, z, stack, dstack, slack):
-    """:func:`scene_distance` with object ``k`` posed by ``params[k, P_R:P_COLUMNS_POSED]``
-    (``R``, ``t``)."""
-    nodes = 0
-    leaves = 0
-    a = params[0, P_ALPHA]
-    for k in range(1, roots.size):
-        a = max(a, params[k, P_ALPHA])
-    m = np.inf
-    s = 0.0
-    sx = 0.0
-    sy = 0.0
-    sz = 0.0
-    for k in range(roots.size):
-        R = params[k, P_R:P_R + 9]
-        px = x - params[k, P_T]
-        py = y - params[k, P_T + 1]
-        pz = z - params[k, P_T + 2]
-        lx = R[0] * px + R[3] * py + R[6] * pz
-        ly = R[1] * px + R[4] * py + R[7] * pz
-        lz = R[2] * px + R[5] * py + R[8] * pz
-        if mode == MODE_SMOOTH:
-            alpha = params[k, P_ALPHA]
-            d, hx, hy, hz, nn, ll = smooth_distance_point_tol(
-                tree, lx, ly, lz, alpha, _far_beta(params[k, P_BETA], tol, alpha, slack),
-                _loosened(tol, alpha, slack), params[k, P_S], params[k, P_WGS], stack, dstack,
-                roots[k])
-        else:
-            d, hx, hy, hz, p, nn, ll = exact_distance_point(tree, lx, ly, lz, stack, dstack,
-                                                            roots[k])
-            d -= params[k, P_OFFSET]
-        nodes += nn
-        leaves += ll
-        gx = R[0] * hx + R[1] * hy + R[2] * hz
-        gy = R[3] * hx + R[4] * hy + R[5] * hz
-        gz = R[6] * hx + R[7] * hy + R[8] * hz
-        if mode == MODE_SMOOTH:
-            m, s, sx, sy, sz = logsumexp_accumulate(m, s, sx, sy, sz, d, 1.0, gx, gy, gz, a)
-        elif d < m:
-            m, sx, sy, sz = d, gx, gy, gz
-    if mode == MODE_SMOOTH:
-        return m - math.log(s) / a, sx / s, sy / s, sz / s, nodes, leaves
-    return m, sx, sy, sz, nodes, leaves
 
 
 def newton_distance(eps, lo, hi, newton=NEWTON):
