@@ -48,7 +48,7 @@ from smoothdist.closest_pair import (closest_pair, segment_point, segment_segmen
                                      triangle_point, triangle_segment, triangle_triangle)
 from smoothdist.closest_point import (SEG_INTERIOR, TRI_AB, TRI_AC, TRI_BC, TRI_INTERIOR)
 from smoothdist.query import (DEFAULT_TOL, _attenuate, exact_distance_point, logsumexp_accumulate,
-                              smooth_distance_point)
+                              negligible_reach, smooth_distance_point)
 from smoothdist.weights import eval_triangle_weight
 
 #: :func:`smoothdist.query._attenuate`, inlined (it calls no other kernel)
@@ -467,6 +467,10 @@ def smooth_traverse(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, to
     pts = tree.pts
     wc = tree.wc
     pwhi = tree.pwhi
+    # negligible-term pruning, as in the point kernel (smoothdist.query.negligible_reach): a
+    # node at box-box distance >= m + reach adds less than 2**-53 x n_B / N of the sum
+    reach = negligible_reach(tree, 0, S, alpha)
+    cut2 = np.inf
     stack[0] = 0
     dstack[0] = _box_gap2(l0, l1, l2, h0, h1, h2, lo, hi, 0)
     sp = 1
@@ -474,6 +478,8 @@ def smooth_traverse(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, to
         sp -= 1
         node = stack[sp]
         bd2 = dstack[sp]
+        if bd2 >= cut2:
+            continue
         nodes += 1
         cnt = count[node]
         far = False
@@ -518,6 +524,8 @@ def smooth_traverse(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, to
                 m, s, gx, gy, gz, mx, my, mz, delta, W, W * ux, W * uy, W * uz, W * ax, W * ay,
                 W * az, alpha, moment)
             leaves += 1
+            cut = max(m + reach, 0.0)
+            cut2 = cut * cut
             continue
         l = left[node]
         if l < 0:
@@ -535,6 +543,8 @@ def smooth_traverse(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, to
                 m, s, gx, gy, gz, mx, my, mz = _accumulate(
                     m, s, gx, gy, gz, mx, my, mz, d, W, vx, vy, vz, tx, ty, tz, alpha, moment)
             leaves += cnt
+            cut = max(m + reach, 0.0)
+            cut2 = cut * cut
             continue
         r = right[node]
         dl = _box_gap2(l0, l1, l2, h0, h1, h2, lo, hi, l)

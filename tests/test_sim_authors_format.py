@@ -348,6 +348,45 @@ def test_the_automatic_camera_frames_every_pose_of_the_trajectory():
     assert not np.allclose(origin, sim.camera.origin)
 
 
+@pytest.mark.parametrize("plane_size", [3.0, 60.0])
+def test_the_automatic_camera_focuses_on_the_motion_over_terrain(tmp_path, plane_size):
+    """A static body far larger than the motion (terrain; AUTO_CAMERA_FOCUS) is cut by the
+    frame: the moving cube's swept box fills a good part of the image, seen from higher up.
+    A static body of the motion's size is framed whole, as before."""
+    from tracer.camera import look_at, project
+    from tracer.sim.simfile import AUTO_CAMERA_ELEVATION, AUTO_CAMERA_FOCUS_ELEVATION
+
+    spec = _spec()
+    a = plane_size
+    spec["objects"][0]["meshes"] = [{"data": {"points": [[-a, 0, -a], [a, 0, -a], [a, 0, a],
+                                                         [-a, 0, a]],
+                                              "faces": [[0, 2, 1], [0, 3, 2]]},
+                                     "bvh_type": "faces"}]
+    sim = load_simulation(str(_write(tmp_path, spec)))
+    F = 20
+    rotations = np.broadcast_to(np.eye(3), (F, 2, 3, 3)).copy()
+    centers = np.zeros((F, 2, 3))
+    centers[:, 1] = np.c_[np.linspace(0, 1, F), np.linspace(2.5, 0.6, F), np.zeros(F)]
+    origin, dest, up = auto_camera(sim.bodies, sim.gravity, rotations, centers, 640, 360)
+    cam = look_at(origin, dest, up, 640, 360)
+    cube = np.array(CUBE_V)
+    swept = np.concatenate([cube + c for c in centers[:, 1]])
+    rows, cols = project(cam, swept)[:2]
+    assert (rows > 0).all() and (rows < 359).all() and (cols > 0).all() and (cols < 639).all()
+    view = (dest - origin) / np.linalg.norm(dest - origin)
+    elevation = np.degrees(np.arcsin(-view @ up))
+    corners = np.array([[x, 0, z] for x in (-a, a) for z in (-a, a)])
+    prow, pcol = project(cam, corners)[:2]
+    inside = (prow > 0) & (prow < 359) & (pcol > 0) & (pcol < 639)
+    if plane_size > 10:
+        assert np.ptp(rows) > 0.3 * 360                  # the motion fills the frame
+        assert elevation == pytest.approx(AUTO_CAMERA_FOCUS_ELEVATION, abs=1.0)
+        assert not inside.any()                          # the terrain is cut by the frame
+    else:
+        assert elevation == pytest.approx(AUTO_CAMERA_ELEVATION, abs=1.0)
+        assert inside.all()                              # the whole plane is in view
+
+
 # ---------------------------------------------------------------------- their recorded runs
 def _ours(tmp_path, name, steps, torques=None):
     sim = load_simulation(os.path.join(DATA, name))

@@ -116,6 +116,14 @@ AUTO_CAMERA_MARGIN = 0.08
 #: elevation of :func:`auto_camera`'s view above the horizontal (degrees), for scenes that
 #: are not flat
 AUTO_CAMERA_ELEVATION = 20.0
+#: :func:`auto_camera`: a static body whose box diagonal exceeds this many times the diagonal
+#: of the moving bodies' swept box (terrain under a falling body) is not framed whole: the
+#: frame holds the swept box grown by AUTO_CAMERA_FOCUS_GROW of its diagonal on every side,
+#: seen from AUTO_CAMERA_FOCUS_ELEVATION degrees (from the side, the body would be lost
+#: behind the terrain's own relief)
+AUTO_CAMERA_FOCUS = 4.0
+AUTO_CAMERA_FOCUS_GROW = 0.5
+AUTO_CAMERA_FOCUS_ELEVATION = 40.0
 
 
 def auto_camera(bodies, gravity, rotations=None, centers=None, width=640, height=360):
@@ -127,14 +135,16 @@ def auto_camera(bodies, gravity, rotations=None, centers=None, width=640, height
     swept bounding box (so a 2D scene in a vertical plane is seen face on, wide axis to the
     right), from :data:`AUTO_CAMERA_ELEVATION` degrees above unless the box is flat, and is
     as close as :func:`tracer.camera.frame_points` allows with every drawn surface (within
-    about ``(1 + log n) / alpha`` of its mesh) in view.
+    about ``(1 + log n) / alpha`` of its mesh) in view. A static body far larger than the
+    motion (:data:`AUTO_CAMERA_FOCUS`: terrain) is cut by the frame instead: the view holds the
+    moving bodies' swept box with a border and looks down on it from higher.
     """
     from tracer.camera import frame_points
 
     if rotations is None:
         rotations = np.array([[b.R for b in bodies]])
         centers = np.array([[b.x for b in bodies]])
-    pts, radius = [], 0.0
+    moving, still, radius = [], [], 0.0
     for k, b in enumerate(bodies):
         lo, hi = b.mesh.bounds
         corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
@@ -142,9 +152,20 @@ def auto_camera(bodies, gravity, rotations=None, centers=None, width=640, height
         R, X = np.asarray(rotations)[:, k], np.asarray(centers)[:, k]
         if b.static:
             R, X = R[:1], X[:1]
-        pts.append((np.einsum("fij,cj->fci", R, corners) + X[:, None, :]).reshape(-1, 3))
+        (still if b.static else moving).append(
+            (np.einsum("fij,cj->fci", R, corners) + X[:, None, :]).reshape(-1, 3))
         radius = max(radius, (1.0 + np.log(max(b.mesh.num_primitives, 1))) / b.alpha)
-    pts = np.concatenate(pts)
+    elevation = AUTO_CAMERA_ELEVATION
+    pts = np.concatenate(moving + still)
+    if moving and still:
+        swept = np.concatenate(moving)
+        lo, hi = swept.min(axis=0), swept.max(axis=0)
+        diag = float(np.linalg.norm(hi - lo))
+        if np.linalg.norm(np.ptp(np.concatenate(still), axis=0)) > AUTO_CAMERA_FOCUS * diag:
+            lo, hi = lo - AUTO_CAMERA_FOCUS_GROW * diag, hi + AUTO_CAMERA_FOCUS_GROW * diag
+            pts = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
+                            for z in (lo[2], hi[2])])
+            elevation = AUTO_CAMERA_FOCUS_ELEVATION
     g = np.asarray(gravity, dtype=float)
     axis = int(np.argmax(np.abs(g))) if np.linalg.norm(g) > 0 else 1
     up = np.zeros(3)
@@ -156,7 +177,7 @@ def auto_camera(bodies, gravity, rotations=None, centers=None, width=640, height
     wide_dir[wide] = 1.0
     eye = np.cross(wide_dir, up)                 # the wide axis to the right of the image
     flat = ext[thin] <= 0.05 * max(ext.max(), 1e-300)
-    el = 0.0 if flat else np.radians(AUTO_CAMERA_ELEVATION)
+    el = 0.0 if flat else np.radians(elevation)
     direction = np.cos(el) * eye + np.sin(el) * up
     return frame_points(pts, radius, (direction, up), width, height, AUTO_CAMERA_MARGIN)
 
