@@ -82,6 +82,7 @@ TINY = {
                                     "8", "--samples", "4", "--repeat", "1"],
     "benchmarks/bench_studies.py": ["--size", "8", "--betas", "1", "--grid", "4",
                                     "--trivial", "4", "--folder", "scenes/data/meshes"],
+    "benchmarks/bench_frame.py": ["--size", "16", "9", "--repeat", "1"],
 }
 
 SHIM = textwrap.dedent('''\
