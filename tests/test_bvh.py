@@ -10,6 +10,7 @@ import pytest
 import naive
 from smoothdist import DataMesh, SmoothDistanceField
 from smoothdist.bvh import build_tree
+from smoothdist.query import negligible_reach
 
 MESHES = ("point_cloud", "circle", "segment_star", "icosphere", "cube", "mixed_mesh",
           "nonmanifold_mesh", "octopus", "trefoil")
@@ -153,8 +154,20 @@ def test_stats_beta_zero_visit_everything(request, zoo, name, rng):
         f = SmoothDistanceField(mesh, leaf_size=leaf_size)
         Q = naive.near_queries(mesh, 100, rng)
         _, _, st = f.smooth_distance(Q, alpha=10.0, beta=0.0, return_stats=True)
-        assert np.all(st.leaves_visited == f.num_primitives)
-        assert np.all(st.nodes_visited == f.tree.lo.shape[0])
+        # every primitive, except those skipped as negligible (smoothdist.query.
+        # negligible_reach): all within ``reach`` of the nearest one are visited
+        D = naive.distances_to_primitives(Q, mesh)
+        reach = negligible_reach(f.tree, 0, f.kernel_args(10.0, 0.0, None, "exact")[2], 10.0)
+        must = (D < D.min(axis=1, keepdims=True) + reach).sum(axis=1)
+        assert np.all(st.leaves_visited <= f.num_primitives)
+        assert np.all(st.leaves_visited >= must)
+        assert np.all(st.nodes_visited <= f.tree.lo.shape[0])
+        _, _, st = f.smooth_distance(Q, alpha=100.0, beta=0.0, return_stats=True)
+        assert np.all(st.leaves_visited >= (D < D.min(axis=1, keepdims=True)
+                                            + negligible_reach(
+                                                f.tree, 0, f.kernel_args(100.0, 0.0, None,
+                                                                         "exact")[2],
+                                                100.0)).sum(1))
         _, _, st = f.smooth_distance(Q, alpha=10.0, method="brute", return_stats=True)
         assert np.all(st.leaves_visited == f.num_primitives)
 
