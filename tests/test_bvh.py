@@ -10,7 +10,6 @@ import pytest
 import naive
 from smoothdist import DataMesh, SmoothDistanceField
 from smoothdist.bvh import build_tree
-from smoothdist.query import negligible_reach
 
 MESHES = ("point_cloud", "circle", "segment_star", "icosphere", "cube", "mixed_mesh",
           "nonmanifold_mesh", "octopus", "trefoil")
@@ -147,6 +146,14 @@ def test_bad_leaf_size(icosphere, leaf_size):
         SmoothDistanceField(icosphere, leaf_size=leaf_size)
 
 
+def _reach(field, alpha):
+    """The negligible-term reach, written out: terms beyond the nearest distance plus this
+    are below ``2**-53 / N`` of the sum (docs/design-notes.md, "Negligible terms")."""
+    S = field.kernel_args(alpha, 0.0, None, "exact")[2]
+    n = field.num_primitives
+    return (math.log(n * 2.0 ** 53) + S * max(math.log(field.tree.whi[0]), 0.0)) / alpha
+
+
 @pytest.mark.parametrize("name", ["icosphere", "mixed_mesh", "octopus"])
 def test_stats_beta_zero_visit_everything(request, zoo, name, rng):
     mesh = get(request, zoo, name)
@@ -157,17 +164,14 @@ def test_stats_beta_zero_visit_everything(request, zoo, name, rng):
         # every primitive, except those skipped as negligible (smoothdist.query.
         # negligible_reach): all within ``reach`` of the nearest one are visited
         D = naive.distances_to_primitives(Q, mesh)
-        reach = negligible_reach(f.tree, 0, f.kernel_args(10.0, 0.0, None, "exact")[2], 10.0)
+        reach = _reach(f, 10.0)
         must = (D < D.min(axis=1, keepdims=True) + reach).sum(axis=1)
         assert np.all(st.leaves_visited <= f.num_primitives)
         assert np.all(st.leaves_visited >= must)
         assert np.all(st.nodes_visited <= f.tree.lo.shape[0])
         _, _, st = f.smooth_distance(Q, alpha=100.0, beta=0.0, return_stats=True)
         assert np.all(st.leaves_visited >= (D < D.min(axis=1, keepdims=True)
-                                            + negligible_reach(
-                                                f.tree, 0, f.kernel_args(100.0, 0.0, None,
-                                                                         "exact")[2],
-                                                100.0)).sum(1))
+                                            + _reach(f, 100.0)).sum(1))
         _, _, st = f.smooth_distance(Q, alpha=10.0, method="brute", return_stats=True)
         assert np.all(st.leaves_visited == f.num_primitives)
 
