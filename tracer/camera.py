@@ -484,9 +484,15 @@ def frame_box(lo, hi, view="front", width=512, height=512, margin=FRAME_MARGIN):
         raise ValueError(f"bounds must satisfy lo <= hi, got lo={lo.tolist()} hi={hi.tolist()}")
     if not np.linalg.norm(hi - lo) > 0.0:
         raise ValueError(f"bounds are a single point {lo.tolist()}; nothing to frame")
-    corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
-                        for z in (lo[2], hi[2])])
-    return frame_points(corners, 0.0, view, width, height, margin)
+    return frame_points(box_corners(lo, hi), 0.0, view, width, height, margin)
+
+
+def box_corners(lo, hi):
+    """The eight corners ``(8, 3)`` float64 of the axis-aligned box ``lo..hi``."""
+    lo = np.asarray(lo, dtype=np.float64)
+    hi = np.asarray(hi, dtype=np.float64)
+    return np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
+                     for z in (lo[2], hi[2])])
 
 
 def frame_points(points, radius, view="front", width=512, height=512, margin=FRAME_MARGIN,

@@ -32,7 +32,7 @@ import numpy as np
 
 from tracer import lighting as _lighting
 from tracer import march
-from tracer.camera import primary_rays
+from tracer.camera import box_corners, primary_rays
 from tracer.shading import (load_matcap, shade_headlight, shade_matcap, shade_normals,
                             view_normals)
 
@@ -115,8 +115,7 @@ class _Shader:
                 if verts is not None:
                     self.ground = _lighting.ground_height(arrays, verts, self.up, scene.eps)
                 else:   # posed objects: the bottom of the posed scene box
-                    self.ground = min(float(c @ self.up) for c in
-                                      _lighting._corners(arrays.lo, arrays.hi))
+                    self.ground = float((box_corners(arrays.lo, arrays.hi) @ self.up).min())
             self.queries = 0
             self.leaves = 0
             self.slack = _lighting.LIGHT_SLACK * self.diag   # 0: the render's own queries

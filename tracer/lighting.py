@@ -32,7 +32,9 @@ import numpy as np
 from numba import prange
 
 from smoothdist.kernels import NJIT, NJIT_PARALLEL
-from tracer.march import march_ray, object_lower_bound, ray_box, scene_distance
+from tracer.camera import box_corners
+from tracer.march import (march_ray, nearest_object, object_lower_bound, ray_box,
+                          scene_distance, visiting_order)
 
 __all__ = ["Lighting", "DEFAULT_COLOR", "PALETTE", "soft_shadow", "ambient_occlusion",
            "light_points", "object_ids", "ground_height", "light_directions", "shade_lit",
@@ -238,16 +240,9 @@ def object_ids(tree, roots, params, mode, tol, P, depth_max, out):
         arg = 0
         # nearest root box first; an object whose lower bound is not below the best distance
         # so far cannot be nearer
-        first = 0
-        lb_first = np.inf
-        for kk in range(roots.size):
-            lb = object_lower_bound(tree, roots, params, mode, tol, kk, P[i, 0], P[i, 1],
-                                    P[i, 2], 0.0)
-            if lb < lb_first:
-                lb_first = lb
-                first = kk
+        first = nearest_object(tree, roots, params, mode, tol, P[i, 0], P[i, 1], P[i, 2], 0.0)
         for j in range(roots.size):
-            kk = first if j == 0 else (j - 1 if j <= first else j)
+            kk = visiting_order(j, first)
             if j > 0 and object_lower_bound(tree, roots, params, mode, tol, kk, P[i, 0],
                                             P[i, 1], P[i, 2], 0.0) >= best:
                 continue
@@ -301,16 +296,13 @@ def ground_height(arrays, data_vertices, up, eps, max_steps=400):
     up = np.asarray(up, dtype=np.float64)
     heights = data_vertices @ up
     lowest = data_vertices[np.argsort(heights)[:10]]
-    box_bottom = min(float(c @ up) for c in _corners(lo, hi))
+    box_bottom = float((box_corners(lo, hi) @ up).min())
     starts = lowest - ((lowest @ up) - box_bottom + eps)[:, None] * up
     roots_arg = roots if np.ndim(roots) else np.asarray([roots], dtype=np.int64)
     h = _lowest_hit(tree, roots_arg, params, mode, tol, np.ascontiguousarray(starts), up,
                     lo, hi, eps, max_steps, depth_max)
     return float(h) if np.isfinite(h) else box_bottom
 
-
-def _corners(lo, hi):
-    return [np.array([(hi if i >> a & 1 else lo)[a] for a in range(3)]) for i in range(8)]
 
 
 def srgb_to_linear(c):

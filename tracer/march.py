@@ -185,6 +185,28 @@ def _object_distance(tree, roots, params, mode, tol, k, x, y, z, stack, dstack, 
     return d, gx, gy, gz, nn, ll
 
 
+@numba.njit(**NJIT)
+def nearest_object(tree, roots, params, mode, tol, x, y, z, slack):
+    """The object with the smallest :func:`object_lower_bound` at ``(x, y, z)`` (visited
+    first: the one most likely to set the minimum)."""
+    first = 0
+    lb_first = np.inf
+    for k in range(roots.size):
+        lb = object_lower_bound(tree, roots, params, mode, tol, k, x, y, z, slack)
+        if lb < lb_first:
+            lb_first = lb
+            first = k
+    return first
+
+
+@numba.njit(**NJIT)
+def visiting_order(j, first):
+    """The ``j``-th object visited: ``first``, then the others in index order."""
+    if j == 0:
+        return first
+    return j - 1 if j <= first else j
+
+
 #: objects whose lower bound (:func:`object_lower_bound`) lies this many ``1 / alpha`` beyond
 #: the running minimum add less than ``2**-53 / k`` of the scene's LogSumExp sum each (the sum
 #: relative to its minimum is >= 1): they are skipped, so the scene's value is that of all
@@ -202,13 +224,7 @@ def _scene_distance_objects(tree, roots, params, mode, tol, x, y, z, stack, dsta
     nobj = roots.size
     nodes = 0
     leaves = 0
-    first = 0
-    lb_first = np.inf
-    for k in range(nobj):
-        lb = object_lower_bound(tree, roots, params, mode, tol, k, x, y, z, slack)
-        if lb < lb_first:
-            lb_first = lb
-            first = k
+    first = nearest_object(tree, roots, params, mode, tol, x, y, z, slack)
     a = params[0, P_ALPHA]
     for k in range(1, nobj):
         a = max(a, params[k, P_ALPHA])
@@ -219,7 +235,7 @@ def _scene_distance_objects(tree, roots, params, mode, tol, x, y, z, stack, dsta
     sy = 0.0
     sz = 0.0
     for j in range(nobj):
-        k = first if j == 0 else (j - 1 if j <= first else j)
+        k = visiting_order(j, first)
         if j > 0:
             lb = object_lower_bound(tree, roots, params, mode, tol, k, x, y, z, slack)
             if lb >= (m if mode == MODE_EXACT else m + reach):

@@ -11,7 +11,7 @@ import numpy as np
 
 from smoothdist.kernels import DEFAULT_TOL, PARALLEL, concatenate_trees
 from tracer import march
-from tracer.camera import look_at
+from tracer.camera import box_corners, look_at
 from tracer.shading import (load_matcap, shade_headlight, shade_matcap, shade_normals,
                             view_normals)
 from tracer.errors import RenderError  # noqa: F401  (defined there; imported from here too)
@@ -197,9 +197,7 @@ def _posed(scene, transforms, params, grow):
         posed[k, march.P_R:march.P_R + 9] = R.ravel()
         posed[k, march.P_T:march.P_T + 3] = t
         lo, hi = o.field.bounds
-        corners = np.array([[(hi if i >> a & 1 else lo)[a] + (grow if i >> a & 1 else -grow)
-                             for a in range(3)] for i in range(8)])
-        world = corners @ R.T + t
+        world = box_corners(lo - grow, hi + grow) @ R.T + t
         los.append(world.min(axis=0))
         his.append(world.max(axis=0))
     return posed, np.min(los, axis=0), np.max(his, axis=0)

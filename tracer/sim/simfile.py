@@ -139,16 +139,14 @@ def auto_camera(bodies, gravity, rotations=None, centers=None, width=640, height
     motion (:data:`AUTO_CAMERA_FOCUS`: terrain) is cut by the frame instead: the view holds the
     moving bodies' swept box with a border and looks down on it from higher.
     """
-    from tracer.camera import frame_points
+    from tracer.camera import box_corners, frame_points
 
     if rotations is None:
         rotations = np.array([[b.R for b in bodies]])
         centers = np.array([[b.x for b in bodies]])
     moving, still, radius = [], [], 0.0
     for k, b in enumerate(bodies):
-        lo, hi = b.mesh.bounds
-        corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
-                            for z in (lo[2], hi[2])])
+        corners = box_corners(*b.mesh.bounds)
         R, X = np.asarray(rotations)[:, k], np.asarray(centers)[:, k]
         if b.static:
             R, X = R[:1], X[:1]
@@ -162,9 +160,8 @@ def auto_camera(bodies, gravity, rotations=None, centers=None, width=640, height
         lo, hi = swept.min(axis=0), swept.max(axis=0)
         diag = float(np.linalg.norm(hi - lo))
         if np.linalg.norm(np.ptp(np.concatenate(still), axis=0)) > AUTO_CAMERA_FOCUS * diag:
-            lo, hi = lo - AUTO_CAMERA_FOCUS_GROW * diag, hi + AUTO_CAMERA_FOCUS_GROW * diag
-            pts = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
-                            for z in (lo[2], hi[2])])
+            pts = box_corners(lo - AUTO_CAMERA_FOCUS_GROW * diag,
+                              hi + AUTO_CAMERA_FOCUS_GROW * diag)
             elevation = AUTO_CAMERA_FOCUS_ELEVATION
     g = np.asarray(gravity, dtype=float)
     axis = int(np.argmax(np.abs(g))) if np.linalg.norm(g) > 0 else 1
