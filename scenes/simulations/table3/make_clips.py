@@ -63,7 +63,7 @@ def small_gif(frames, path, size, max_frames, fps):
     pick = np.unique(np.linspace(0, len(frames) - 1, min(len(frames), max_frames)).round()
                      .astype(int))
     ims = [Image.open(frames[i]).convert("RGB").resize(size, Image.LANCZOS)
-           .quantize(colors=128, method=Image.Quantize.MEDIANCUT) for i in pick]
+           .quantize(colors=128, method=Image.Quantize.FASTOCTREE) for i in pick]
     duration = int(round(1000.0 * len(frames) / len(pick) / fps))
     with atomic_write(path, overwrite=True) as tmp:
         ims[0].save(tmp, format="GIF", save_all=True, append_images=ims[1:], loop=0,
