@@ -204,3 +204,21 @@ def test_false_color_validation():
         false_color(np.zeros((2, 2)), np.zeros((2, 3), dtype=bool))
     with pytest.raises(ValueError, match="colormap"):
         false_color(np.zeros((2, 2)), np.ones((2, 2), dtype=bool), cmap="no-such-map")
+
+
+@pytest.mark.parametrize("colors", [64, 128])
+def test_gif_frames_keep_a_small_saturated_body(colors):
+    """A 12 x 12 blue body on a large textured beige-brown background (a body on LiDAR trees):
+    every one of its pixels stays blue in the GIF palette (median cut drew it grey), and the
+    background stays close to its colours."""
+    from tracer.image import gif_frame
+
+    rng = np.random.default_rng(0)
+    t = rng.random((180, 320, 1))
+    img = (np.array([235, 215, 180]) * (1 - t) + np.array([90, 75, 60]) * t).astype(np.uint8)
+    img[80:92, 150:162] = (60, 110, 200)
+    out = np.asarray(gif_frame(img, colors).convert("RGB")).astype(int)
+    assert gif_frame(img, colors).mode == "P"
+    body = out[80:92, 150:162]
+    assert ((body[..., 2] - body[..., 0]) > 100).all()
+    assert np.abs(out - img.astype(int)).mean() < 4.0

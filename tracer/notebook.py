@@ -87,10 +87,9 @@ def _frames(source):
 
 
 def _gif_bytes(images, fps):
-    from PIL import Image
+    from tracer.image import gif_frame
 
-    frames = [Image.fromarray(np.ascontiguousarray(im)).quantize(
-        colors=128, method=Image.Quantize.MEDIANCUT) for im in images]
+    frames = [gif_frame(im) for im in images]
     buf = io.BytesIO()
     frames[0].save(buf, format="GIF", save_all=True, append_images=frames[1:], loop=0,
                    duration=max(int(round(1000.0 / fps)), 20), optimize=True)

@@ -15,7 +15,7 @@ import time
 import numpy as np
 
 from smoothdist import SmoothDistanceField
-from tracer.image import save_png
+from tracer.image import gif_frame, save_png
 from tracer.lighting import Lighting
 from tracer.outputs import atomic_write
 from tracer.render import ProgressBar, render
@@ -95,13 +95,10 @@ def write_mp4(path, images, fps, overwrite=True):
 
 def write_gif(path, images, fps, overwrite=True, max_frames=60):
     """Write ``images`` as a looping GIF (at most ``max_frames`` frames, evenly picked)."""
-    from PIL import Image
-
     pick = np.unique(np.linspace(0, len(images) - 1, min(len(images), max_frames)).round()
                      .astype(int))
     step = len(images) / len(pick)
-    frames = [Image.fromarray(images[i]).quantize(colors=64, method=Image.Quantize.MEDIANCUT)
-              for i in pick]
+    frames = [gif_frame(images[i], 64) for i in pick]
     with atomic_write(path, overwrite=overwrite) as tmp:
         frames[0].save(tmp, format="GIF", save_all=True, append_images=frames[1:], loop=0,
                        duration=int(round(1000.0 * step / fps)), optimize=True)

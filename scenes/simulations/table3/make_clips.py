@@ -58,12 +58,13 @@ def small_gif(frames, path, size, max_frames, fps):
     import numpy as np
     from PIL import Image
 
+    from tracer.image import gif_frame
     from tracer.outputs import atomic_write
 
     pick = np.unique(np.linspace(0, len(frames) - 1, min(len(frames), max_frames)).round()
                      .astype(int))
-    ims = [Image.open(frames[i]).convert("RGB").resize(size, Image.LANCZOS)
-           .quantize(colors=128, method=Image.Quantize.FASTOCTREE) for i in pick]
+    ims = [gif_frame(np.asarray(Image.open(frames[i]).convert("RGB")
+                                .resize(size, Image.LANCZOS))) for i in pick]
     duration = int(round(1000.0 * len(frames) / len(pick) / fps))
     with atomic_write(path, overwrite=True) as tmp:
         ims[0].save(tmp, format="GIF", save_all=True, append_images=ims[1:], loop=0,
