@@ -230,13 +230,14 @@ def test_images_do_not_depend_on_the_thread_count(adaptive, octopus):
 
 # ----------------------------------------------------------------------------- adaptive
 def test_adaptive_sampling_spends_its_rays_on_the_silhouette():
-    """Measured at 40 x 40, lit, no ground: adaptive 16 differs from uniform 16 by 0.077 on
-    average (0-255 units), one sample by 2.1; adaptive traces 7,186 rays (76 % of the pixels
-    keep one sample), uniform 25,600."""
+    """Silhouette pixels get ADAPTIVE_SECOND (8) samples, and all 16 exactly where those 8
+    saw both the sphere and the background (checked against a uniform 8-sample render, whose
+    offsets are the same); the background keeps one."""
     from scipy.ndimage import maximum_filter, minimum_filter
 
     kw = dict(shading="lit", lighting={"ground": False})
     one = render(sphere_scene(1, **kw))
+    uni8 = render(sphere_scene(8, **kw))
     uni = render(sphere_scene(16, **kw))
     ada = render(sphere_scene(16, True, **kw))
     assert (uni.samples == 16).all() and uni.aovs["rays"] == 16 * SIZE * SIZE
@@ -245,16 +246,28 @@ def test_adaptive_sampling_spends_its_rays_on_the_silhouette():
     silhouette = maximum_filter(hit, size=3) != minimum_filter(hit, size=3)
     background = ~maximum_filter(hit, size=5)
     assert silhouette.sum() > 100 and background.sum() > 500
-    assert (ada.samples[silhouette] == 16).all()
+    assert (ada.samples[silhouette] >= film.ADAPTIVE_SECOND).all()
     assert (ada.samples[background] == 1).all()
     assert (ada.samples == 1).mean() > 0.6
-    # where both sampled a pixel fully they agree exactly (the same offsets)
-    np.testing.assert_array_equal(ada.alpha[silhouette], uni.alpha[silhouette])
+    # the pixels that went on to 16 are those whose first 8 samples disagree
+    eight = ada.samples >= film.ADAPTIVE_SECOND
+    mixed8 = (uni8.alpha > 0) & (uni8.alpha < 1)
+    np.testing.assert_array_equal(ada.samples[eight] == 16, mixed8[eight])
+    assert 20 < (ada.samples == 16).sum() < (ada.samples == 8).sum() + (ada.samples == 16).sum()
+    # where both sampled a pixel alike they agree exactly (the same offsets)
+    full = ada.samples == 16
+    np.testing.assert_array_equal(ada.alpha[full], uni.alpha[full])
+    at8 = ada.samples == 8
+    np.testing.assert_array_equal(ada.alpha[at8], uni8.alpha[at8])
 
-    def mae(a, b):
-        return np.abs(a.rgb.astype(float) - b.rgb.astype(float)).mean()
+    # as close to a 256-sample reference as uniform 16 (measured: 0.68 against 0.72 in 0-255
+    # units; one sample 2.0, uniform 8 0.86), with under 40 % of its rays
+    ref = render(sphere_scene(256, **kw))
 
-    assert mae(ada, uni) < 0.1 * mae(one, uni), (mae(ada, uni), mae(one, uni))
+    def mae(a):
+        return np.abs(a.rgb.astype(float) - ref.rgb.astype(float)).mean()
+
+    assert mae(ada) <= mae(uni) < 0.5 * mae(one), (mae(ada), mae(uni), mae(one))
     assert ada.aovs["rays"] < 0.4 * uni.aovs["rays"], (ada.aovs["rays"], uni.aovs["rays"])
 
 

@@ -431,10 +431,12 @@ def test_cone_end_bounds_every_ray_of_the_block(kind, bunny_points):
     assert shortened >= 5
 
 
-def test_samples_equal_a_plain_march(bunny_points):
+@pytest.mark.parametrize("newton", [False, True])
+def test_samples_equal_a_plain_march(bunny_points, newton):
     """``trace_samples`` (cone passes both ways, over-relaxed steps, bounds reused by a second
-    call) finds the hits of plain sphere tracing at the same sub-pixel positions."""
-    from tracer.film import SAMPLE_OMEGA, sample_offsets
+    call; with ``newton``: Newton steps down to the film's grazing cosine) finds the hits of
+    plain sphere tracing at the same sub-pixel positions."""
+    from tracer.film import SAMPLE_NEWTON_COS, SAMPLE_OMEGA, sample_offsets
 
     scene = _scene(bunny_points, size=32, eps=1e-4 * bunny_points.diagonal)
     arrays = scene_arrays(scene)
@@ -446,6 +448,8 @@ def test_samples_equal_a_plain_march(bunny_points):
     offsets = sample_offsets(8)
     m, K = rows.size, len(offsets)
     t_lo, t_hi = np.full(m, np.nan), np.full(m, np.nan)
+    nd = march.newton_distance(scene.eps, lo, hi) if newton else 0.0
+    assert (nd > 0) == newton
     for part in (offsets[:3], offsets[3:]):          # the second call reuses the bounds
         k = len(part)
         hit = np.zeros((m, k), dtype=np.bool_)
@@ -454,7 +458,8 @@ def test_samples_equal_a_plain_march(bunny_points):
         steps = np.zeros((m, k), dtype=np.int64)
         march.trace_samples(tree, roots, params, mode, tol, cam, lo, hi, float(scene.eps), 4000,
                             rows, cols, np.ascontiguousarray(part), depth_max, hit, t, grad,
-                            steps, t_lo, t_hi, march.RELAX, SAMPLE_OMEGA, True, 0.0, 0.0)
+                            steps, t_lo, t_hi, march.RELAX, SAMPLE_OMEGA, True, nd, 0.0,
+                            SAMPLE_NEWTON_COS)
         assert np.isfinite(t_lo).all() and np.isfinite(t_hi).all()
         ref = np.array([[_plain_first_hit(arrays, cam, rows[i] + o[0], cols[i] + o[1],
                                           float(scene.eps), 4000) for o in part]
@@ -464,7 +469,15 @@ def test_samples_equal_a_plain_march(bunny_points):
         both = hit & np.isfinite(ref)
         assert both.sum() >= 10
         # over-relaxed steps stop anywhere in the band d <= eps: within a few eps / cos
-        assert np.abs(t[both] - ref[both]).max() <= 0.01 * bunny_points.diagonal
+        dt = np.abs(t[both] - ref[both])
+        if not newton:
+            assert dt.max() <= 0.01 * bunny_points.diagonal
+        else:
+            # a Newton step (up to NEWTON_CAP d long) along a grazing ray can cross a thin
+            # part of the surface and land in the next one (march_ray's docstring): measured
+            # 1 of 112 hits here, 129 eps deeper; the rest within 7 eps
+            assert (dt > 10 * scene.eps).sum() <= max(1, 0.02 * both.sum())
+            assert dt.max() <= 0.05 * bunny_points.diagonal
 
 
 def test_an_over_relaxed_step_past_t_max_is_taken_again_plainly():

@@ -356,7 +356,8 @@ def _false_position(tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, a, f
 
 @numba.njit(**NJIT)
 def march_ray(tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, lo, hi, eps, max_steps,
-              stack, dstack, relax=RELAX, omega=OMEGA, t_min=0.0, newton=0.0, t_max=np.inf):
+              stack, dstack, relax=RELAX, omega=OMEGA, t_min=0.0, newton=0.0, t_max=np.inf,
+              newton_cos=NEWTON_COS):
     """March one ray; returns ``(hit, t, gx, gy, gz, steps, leaves, bisections)``.
 
     ``omega >= 1``: over-relaxed steps ``t += omega d`` (Keinert et al. 2014) with a safe
@@ -380,7 +381,8 @@ def march_ray(tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, lo, hi, ep
     converges quadratically and usually lands within ``eps`` in one or two steps. Smooth mode
     only: the exact-offset field of a point cloud is a union of spheres, kinked everywhere. A
     Newton step that ends inside (``d < -eps``) is resolved by false position in the bracket.
-    Grazing rays (``-(g . dir) < NEWTON_COS |g|``) keep sphere steps. A Newton step longer
+    Grazing rays (``-(g . dir) < newton_cos |g|``, default :data:`NEWTON_COS`) keep sphere
+    steps. A Newton step longer
     than ``d`` is not certified surface-free beyond ``d``: when the spheres at its two ends do
     not overlap and it lands outside (``d >= -eps``) where ``d`` grows along the ray, it may
     have stepped over a thin shell (the zero set around a triangle sheet at high alpha is
@@ -457,7 +459,7 @@ def march_ray(tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, lo, hi, ep
         step = w * d
         if d <= near and newton_on:
             sd = -(gx * dx + gy * dy + gz * dz)
-            if sd > NEWTON_COS * math.sqrt(gx * gx + gy * gy + gz * gz):
+            if sd > newton_cos * math.sqrt(gx * gx + gy * gy + gz * gz):
                 step = min(d / sd, NEWTON_CAP * d)
                 w = 1.0
                 newton_step = step > d
@@ -701,7 +703,7 @@ def trace_pixels(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, ro
 @numba.njit(**NJIT_PARALLEL)
 def trace_samples(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, rows, cols,
                   offsets, depth_max, hit, tbuf, grad, steps, t_lo, t_hi, relax=RELAX,
-                  omega=OMEGA, cone=CONE, newton=0.0, eps_px=0.0):
+                  omega=OMEGA, cone=CONE, newton=0.0, eps_px=0.0, newton_cos=NEWTON_COS):
     """Trace anti-aliasing samples: for pixel ``(rows[i], cols[i])`` the rays through
     ``(rows[i] + offsets[k, 0], cols[i] + offsets[k, 1])`` for every ``k``.
 
@@ -743,7 +745,7 @@ def trace_samples(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, r
             h, t, gx, gy, gz, st, lv, bs = march_ray(tree, roots, params, mode, tol, cam[0],
                                                      cam[1], cam[2], dx, dy, dz, lo, hi, e,
                                                      max_steps, stack, dstack, relax, omega,
-                                                     t_min, newton, t_hi[i])
+                                                     t_min, newton, t_hi[i], newton_cos)
             hit[i, k] = h == 1
             tbuf[i, k] = t
             grad[i, k, 0] = gx
