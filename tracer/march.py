@@ -78,7 +78,12 @@ NEWTON = 100.0
 NEWTON_FAR = 0.01
 #: a Newton step is at most this many times the sphere-tracing step ``d``
 NEWTON_CAP = 4.0
-#: rays meeting the surface at a smaller cosine (relative to ``|g|``) keep sphere steps
+#: rays meeting the surface at a smaller cosine (relative to ``|g|``) keep sphere steps.
+#: Tried 0.02 for camera rays (512^2 bunny V / E / F, 2026-11-25): 7-12 % faster (3.30 ->
+#: 2.89 s on triangles, 10 % fewer queries), but 136-230 pixels' depth moved by more than
+#: 1e-4 (up to 1.4 % of the diagonal: the Newton step crossed a thin part and hit the surface
+#: behind), a visible error in a one-sample image, so camera rays keep 0.2 (the anti-aliasing
+#: samples, weighted 1/N, use 0.02: ``tracer.film.SAMPLE_NEWTON_COS``)
 NEWTON_COS = 0.2
 #: seed each tile's rays with a conservative start depth from a cone march (cone_start)
 CONE = True
