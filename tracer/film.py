@@ -13,10 +13,12 @@ miss, object, ground, shaded colour within :data:`COLOR_CONTRAST`); where a pair
 both pixels get :data:`ADAPTIVE_FIRST` (4) samples; silhouette and object-border pixels, and
 those whose 4 samples spread by more than :data:`SAMPLE_SPREAD` or saw different things (an
 object, another object, nothing), get :data:`ADAPTIVE_SECOND` (8); those whose 8 samples saw
-different things get all ``N``. Elsewhere one sample is enough. The samples of a pixel are traced together between two cone passes over
-its 3 x 3 block, one from the camera and one back from beyond the box, which bound where any
-of them can meet the surface (:func:`tracer.march.trace_samples`, done once per pixel), with
-over-relaxed steps (:data:`SAMPLE_OMEGA`) and the scene's hit threshold (:data:`EPS_PX`).
+different things get all ``N``. Elsewhere one sample is enough. The samples of a pixel are
+traced together between two cone passes over its 3 x 3 block, one from the camera and one back
+from beyond the box, which bound where any of them can meet the surface
+(:func:`tracer.march.trace_samples`, done once per pixel), with over-relaxed steps
+(:data:`SAMPLE_OMEGA`), Newton steps down to a grazing cosine of :data:`SAMPLE_NEWTON_COS`
+and the scene's hit threshold (:data:`EPS_PX`).
 
 Every sample is shaded (:mod:`tracer.shading`, or :mod:`tracer.lighting` for ``"lit"``) and
 averaged with its coverage: lit colours in linear light (encoded to sRGB at the end), the

@@ -304,7 +304,6 @@ def ground_height(arrays, data_vertices, up, eps, max_steps=400):
     return float(h) if np.isfinite(h) else box_bottom
 
 
-
 def srgb_to_linear(c):
     """sRGB values in ``[0, 1]`` to linear light."""
     c = np.asarray(c, dtype=np.float64)

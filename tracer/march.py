@@ -387,13 +387,13 @@ def march_ray(tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, lo, hi, ep
     only: the exact-offset field of a point cloud is a union of spheres, kinked everywhere. A
     Newton step that ends inside (``d < -eps``) is resolved by false position in the bracket.
     Grazing rays (``-(g . dir) < newton_cos |g|``, default :data:`NEWTON_COS`) keep sphere
-    steps. A Newton step longer
-    than ``d`` is not certified surface-free beyond ``d``: when the spheres at its two ends do
-    not overlap and it lands outside (``d >= -eps``) where ``d`` grows along the ray, it may
-    have stepped over a thin shell (the zero set around a triangle sheet at high alpha is
-    one), so it is undone, and the ray goes on with plain sphere steps. What is left: a step
-    that crosses a whole shell *and* lands where ``d`` falls again (approaching a second
-    surface within ``NEWTON_CAP x newton``) is not detected.
+    steps. A Newton step longer than ``d`` is not certified surface-free beyond ``d``: when
+    the spheres at its two ends do not overlap and it lands outside (``d >= -eps``) where
+    ``d`` grows along the ray, it may have stepped over a thin shell (the zero set around a
+    triangle sheet at high alpha is one), so it is undone, and the ray goes on with plain
+    sphere steps. What is left: a step that crosses a whole shell *and* lands where ``d``
+    falls again (approaching a second surface within ``NEWTON_CAP x newton``) is not
+    detected.
 
     ``hit`` is 1 when ``|d| <= eps`` was reached inside the box (``d < -eps`` only after
     ``BISECT_ITERS`` bracketing steps); then ``t`` is the ray parameter and ``g`` the
