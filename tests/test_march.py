@@ -468,16 +468,22 @@ def test_samples_equal_a_plain_march(bunny_points, newton):
         assert (hit != np.isfinite(ref)).sum() <= max(1, 0.01 * hit.size)
         both = hit & np.isfinite(ref)
         assert both.sum() >= 10
-        # over-relaxed steps stop anywhere in the band d <= eps: within a few eps / cos
+        # every hit is a point of the band d <= eps (evaluated on its own)
+        for i, j in zip(*np.nonzero(hit)):
+            p = cam[:3] + t[i, j] * np.array(march.ray_direction(cam, rows[i] + part[j, 0],
+                                                                  cols[i] + part[j, 1]))
+            assert march.distance_at(tree, roots, params, mode, tol, *p, depth_max) \
+                <= scene.eps * (1 + 1e-9)
+        # the steps stop anywhere in the band: within a few eps / cos of plain sphere
+        # tracing, except where a ray runs through the band along a stretch that dips below
+        # eps more than once: plain steps may land in an earlier dip that the longer
+        # (over-relaxed or Newton) steps pass (both stops are hits; measured without Newton:
+        # 1 of 112 hits, 132 eps deeper, in a dip 0.2 eps long), and a Newton step along a
+        # grazing ray can cross a thin part and land in the next one (march_ray's docstring:
+        # 1 of 112 hits, 129 eps deeper); the rest within 7 eps
         dt = np.abs(t[both] - ref[both])
-        if not newton:
-            assert dt.max() <= 0.01 * bunny_points.diagonal
-        else:
-            # a Newton step (up to NEWTON_CAP d long) along a grazing ray can cross a thin
-            # part of the surface and land in the next one (march_ray's docstring): measured
-            # 1 of 112 hits here, 129 eps deeper; the rest within 7 eps
-            assert (dt > 10 * scene.eps).sum() <= max(1, 0.02 * both.sum())
-            assert dt.max() <= 0.05 * bunny_points.diagonal
+        assert (dt > 10 * scene.eps).sum() <= max(1, 0.02 * both.sum())
+        assert dt.max() <= 0.05 * bunny_points.diagonal
 
 
 def test_an_over_relaxed_step_past_t_max_is_taken_again_plainly():

@@ -32,6 +32,7 @@ import numpy as np
 from numba import prange
 
 from smoothdist.kernels import NJIT, NJIT_PARALLEL
+from smoothdist.schedule import scatter_stride, scattered
 from tracer.camera import box_corners
 from tracer.march import (march_ray, nearest_object, object_lower_bound, ray_box,
                           scene_distance, visiting_order)
@@ -203,7 +204,10 @@ def light_points(tree, roots, params, mode, tol, P, N, L, lo, hi, eps, depth_max
     Writes ``shadow (n,)``, ``ao (n,)`` (1 where not asked for)
     and ``work (n, 2) int64``: distance queries and leaves visited. Every point is independent (no dependence on threads)."""
     bias = 2.0 * eps
-    for i in prange(P.shape[0]):
+    n = P.shape[0]
+    stride = scatter_stride(n)
+    for j in prange(n):
+        i = scattered(j, n, stride)   # neighbouring points (alike in cost) to different threads
         stack = np.empty(depth_max + 4, dtype=np.int64)
         dstack = np.empty(depth_max + 4)
         nx, ny, nz = N[i, 0], N[i, 1], N[i, 2]
@@ -233,7 +237,10 @@ def light_points(tree, roots, params, mode, tol, P, N, L, lo, hi, eps, depth_max
 @numba.njit(**NJIT_PARALLEL)
 def object_ids(tree, roots, params, mode, tol, P, depth_max, out):
     """Index of the object nearest to each point ``P (n, 3)`` (its own distance, smallest)."""
-    for i in prange(P.shape[0]):
+    n = P.shape[0]
+    s = scatter_stride(n)
+    for q in prange(n):
+        i = scattered(q, n, s)
         stack = np.empty(depth_max + 4, dtype=np.int64)
         dstack = np.empty(depth_max + 4)
         best = np.inf

@@ -48,6 +48,7 @@ from numba.extending import intrinsic
 from smoothdist.closest_point import box_distance2
 from smoothdist.kernels import (NJIT, NJIT_PARALLEL, exact_distance_point, logsumexp_accumulate,
                                 smooth_distance_point, smooth_distance_point_tol)
+from smoothdist.schedule import scatter_stride, scattered
 from tracer.camera import ray_direction
 
 MODE_SMOOTH, MODE_EXACT = 0, 1
@@ -72,6 +73,12 @@ RELAX = 0.25
 FAR_BETA = 0.25
 #: over-relaxation factor of sphere-tracing steps (1: plain sphere tracing); see march_ray
 OMEGA = 1.0
+#: an over-relaxed step is this fraction of the longest step whose end sphere still overlaps
+#: the start sphere if ``d`` changes linearly (see march_ray). Measured on the anti-aliasing
+#: samples of the 512^2 lit bunny (adaptive 16, omega 2): 0.65 / 0.8 / 0.9 / 1.0 -> 907 k /
+#: 828 k / 809 k / 883 k distance queries (the fixed factor 1.6 falling back to 1 for good
+#: after the first failed step, as before: 1.07 M)
+OMEGA_SAFETY = 0.9
 #: Newton steps along the ray once ``d <= NEWTON x eps`` (0: plain sphere tracing), but never
 #: from farther than ``NEWTON_FAR`` x the scene box diagonal; see march_ray and newton_distance
 NEWTON = 100.0
@@ -365,10 +372,14 @@ def march_ray(tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, lo, hi, ep
               newton_cos=NEWTON_COS):
     """March one ray; returns ``(hit, t, gx, gy, gz, steps, leaves, bisections)``.
 
-    ``omega >= 1``: over-relaxed steps ``t += omega d`` (Keinert et al. 2014) with a safe
-    fallback: when the unbounding spheres of two consecutive points do not overlap
-    (``omega d_prev > d_prev + |d|``) the segment between them is not certified empty, so the
-    ray goes back to the plain step ``t_prev + d_prev`` and continues with ``omega = 1``.
+    ``omega >= 1``: over-relaxed steps (Keinert et al. 2014) whose length follows the slope
+    of ``d`` along the ray: where ``d`` changes at the rate ``s = g . dir``, the unbounding
+    spheres at ``t`` and ``t + h`` still overlap for ``h <= 2 d / (1 - s)``; the step is
+    :data:`OMEGA_SAFETY` of that, between ``d`` and ``omega d``. So a ray heading into the
+    surface takes plain steps and one that grazes it or moves away lengthens them. Every such
+    step is checked: when the spheres of its two ends do not overlap (``h > d_prev + d``, with
+    ``d`` the new distance, taken as 0 inside) the segment between them is not certified
+    empty, and the ray takes the plain step ``t_prev + d_prev`` instead (then goes on).
 
     ``relax``: for scenes with ``tol > 0``, a step may under-estimate the distance by up to
     ``relax`` x the previous step (cheaper evaluations far from the surface; 0: never).
@@ -415,12 +426,12 @@ def march_ray(tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, lo, hi, ep
     # counts as a hit (a Newton step may start from a loosened value: it is only shorter)
     slack = np.inf if relaxable else 0.0
     near = max(eps, newton)
-    w = omega
     d_prev = 0.0
     step = 0.0
     # Newton steps stay on until one is undone (see the check below), then plain steps
     newton_on = newton > 0.0 and mode == MODE_SMOOTH
     newton_step = False
+    relaxed = False         # the last step was an over-relaxed one (to be checked)
     while steps < max_steps:
         d, gx, gy, gz, nn, ll = scene_distance(tree, roots, params, mode, tol, ox + t * dx,
                                                oy + t * dy, oz + t * dz, stack, dstack, slack)
@@ -431,9 +442,9 @@ def march_ray(tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, lo, hi, ep
                                                    oy + t * dy, oz + t * dz, stack, dstack, 0.0)
             steps += 1
             leaves += ll
-        if w > 1.0 and step > d_prev + abs(d):
+        if relaxed and step > d_prev + max(d, 0.0):
             # the over-relaxed step may have jumped over a surface: redo it plainly
-            w = 1.0
+            relaxed = False
             t = t_prev + d_prev
             step = d_prev
             continue
@@ -461,12 +472,16 @@ def march_ray(tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, lo, hi, ep
             return 1, t, gx, gy, gz, steps, leaves, bis
         t_prev = t
         d_prev = d
-        step = w * d
+        step = d
+        if omega > 1.0:
+            slope = min(gx * dx + gy * dy + gz * dz, 0.999)
+            step = d * min(omega, max(1.0, 2.0 * OMEGA_SAFETY / (1.0 - slope)))
+        relaxed = step > d
         if d <= near and newton_on:
             sd = -(gx * dx + gy * dy + gz * dz)
             if sd > newton_cos * math.sqrt(gx * gx + gy * gy + gz * gz):
                 step = min(d / sd, NEWTON_CAP * d)
-                w = 1.0
+                relaxed = False
                 newton_step = step > d
         t += step
         # near the surface the next point is evaluated at full accuracy at once (a loosened
@@ -477,7 +492,7 @@ def march_ray(tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, lo, hi, ep
                 break
             # an over-relaxed or Newton step past the end left (t_prev + d_prev, t_exit)
             # uncertified: take the plain step instead
-            w = 1.0
+            relaxed = False
             newton_step = False
             t = t_prev + d_prev
             step = d_prev
@@ -727,7 +742,10 @@ def trace_samples(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, r
     covers it.
     """
     pixel = 1.0 / min(cam[12], cam[13])      # a pixel's size at unit depth
-    for i in prange(rows.size):
+    n = rows.size
+    s = scatter_stride(n)
+    for j in prange(n):
+        i = scattered(j, n, s)      # neighbouring pixels (alike in cost) to different threads
         stack = np.empty(depth_max + 4, dtype=np.int64)
         dstack = np.empty(depth_max + 4)
         r = rows[i]
