@@ -41,6 +41,7 @@ from numba import prange
 from smoothdist._config import NJIT, NJIT_PARALLEL
 from smoothdist.closest_point import closest_point_segment, closest_point_triangle
 from smoothdist.mesh import KIND_TRIANGLE
+from smoothdist.schedule import deal, dealt
 
 #: queries handled by one parallel task (one stack and one seed chain each)
 CHUNK = 64
@@ -571,17 +572,23 @@ def exact_stack_size(et):
 
 
 @numba.njit(**NJIT_PARALLEL)
-def exact_tree_batch(et, Q, seeded, out_d, out_g, out_prim, out_nodes, out_leaves):
+def exact_tree_batch(et, Q, seeded, out_d, out_g, out_prim, out_nodes, out_leaves,
+                     threads=1):
     """Exact distance for every row of ``Q (q, 3)`` into the output arrays.
 
     With ``seeded``, each query starts from the previous query's closest primitive (queries
     are taken in chunks of :data:`CHUNK` rows; the chain restarts at every chunk, so the
-    results do not depend on the thread count).
+    results do not depend on the thread count). The chunks are dealt out to ``threads``
+    threads (:mod:`smoothdist.schedule`).
     """
     n = Q.shape[0]
     nchunks = (n + CHUNK - 1) // CHUNK
     k = et.depth + 4
-    for c in prange(nchunks):
+    slots = deal(nchunks, threads)
+    for j in prange(slots):
+        c = dealt(j, slots, threads)    # every threads-th chunk to each thread
+        if c >= nchunks:
+            continue
         stack = np.empty(k, dtype=np.int64)
         dstack = np.empty(k)
         prev = -1

@@ -23,6 +23,7 @@ from smoothdist._config import NJIT, NJIT_PARALLEL
 from smoothdist.closest_point import (SEG_INTERIOR, TRI_AB, TRI_AC, TRI_BC, TRI_INTERIOR,
                                       box_distance2, closest_point_segment,
                                       closest_point_triangle)
+from smoothdist.schedule import deal, dealt
 from smoothdist.weights import eval_edge_weight, eval_triangle_weight
 
 #: queries handled by one parallel task (one traversal stack each)
@@ -573,15 +574,22 @@ def smooth_distance_brute_point(tree, px, py, pz, alpha, S, wgs):
 
 @numba.njit(**NJIT_PARALLEL)
 def smooth_distance_batch(tree, Q, alpha, beta, S, wgs, brute, out_d, out_g, out_nodes,
-                          out_leaves, tol=DEFAULT_TOL):
+                          out_leaves, tol=DEFAULT_TOL, threads=1):
     """Fill ``out_d (q,)``, ``out_g (q, 3)``, ``out_nodes``, ``out_leaves (q,)`` for ``Q (q, 3)``.
 
     ``tol > 0``: tolerance-controlled pruning (:func:`smooth_distance_point_tol`).
+    ``threads``: chunks of :data:`CHUNK` rows are dealt out to that many threads
+    (:mod:`smoothdist.schedule`; pass :func:`smoothdist.schedule.threads`); it never changes
+    a value.
     """
     n = Q.shape[0]
     nchunks = (n + CHUNK - 1) // CHUNK
     k = tree.depth + 4
-    for c in prange(nchunks):
+    slots = deal(nchunks, threads)
+    for j in prange(slots):
+        c = dealt(j, slots, threads)    # every threads-th chunk to each thread
+        if c >= nchunks:
+            continue
         stack = np.empty(k, dtype=np.int64)
         dstack = np.empty(k)
         for i in range(c * CHUNK, min(n, (c + 1) * CHUNK)):
@@ -602,12 +610,17 @@ def smooth_distance_batch(tree, Q, alpha, beta, S, wgs, brute, out_d, out_g, out
 
 
 @numba.njit(**NJIT_PARALLEL)
-def exact_distance_batch(tree, Q, out_d, out_g, out_prim, out_nodes, out_leaves):
-    """Exact distance for every row of ``Q (q, 3)`` into the output arrays."""
+def exact_distance_batch(tree, Q, out_d, out_g, out_prim, out_nodes, out_leaves, threads=1):
+    """Exact distance for every row of ``Q (q, 3)`` into the output arrays (chunks dealt out
+    to ``threads`` threads, as in :func:`smooth_distance_batch`)."""
     n = Q.shape[0]
     nchunks = (n + CHUNK - 1) // CHUNK
     k = tree.depth + 4
-    for c in prange(nchunks):
+    slots = deal(nchunks, threads)
+    for j in prange(slots):
+        c = dealt(j, slots, threads)    # every threads-th chunk to each thread
+        if c >= nchunks:
+            continue
         stack = np.empty(k, dtype=np.int64)
         dstack = np.empty(k)
         for i in range(c * CHUNK, min(n, (c + 1) * CHUNK)):

@@ -1,43 +1,54 @@
-"""How batch kernels share their work between threads: a scattered visiting order.
+"""How batch kernels share their work between threads: items dealt out like cards.
 
 A ``prange`` loop (numba's OpenMP and workqueue layers) hands each thread one run of
 consecutive iterations. Queries and pixels usually come in spatial order (a grid, the rows of
 an image, the silhouette pixels of a render), and their cost follows the geometry: the thread
-that got the half of the list near the surface does most of the work while the other waits.
-Visiting iteration ``j`` as item ``(j * s) % n``, with a stride ``s`` coprime to ``n`` near
-``n / phi`` (the golden ratio), gives every thread's run items from all over the list, so each
-thread gets a similar mix. The order changes which thread computes an item, never its value:
-results do not depend on it (nor on the number of threads).
+that got the part of the list near the surface does most of the work while the other waits.
+Dealt out instead (item ``c`` to thread ``c mod T``), every thread gets every ``T``-th item of
+the list, so each gets a similar mix, and still walks through space in order (neighbouring
+items, which visit the same part of the tree, run at about the same time).
 
-Measured on the 512 x 512 lit bunny with adaptive anti-aliasing (2 threads): the extra
-samples' kernel ran 1.49x faster on 2 threads than on 1 in list order, and took 23 % less
-time in the scattered order.
+Use, with ``threads`` from :func:`threads` passed in by the Python caller (a kernel that
+calls ``numba.get_num_threads()`` itself cannot be cached on disk)::
+
+    slots = deal(n, threads)
+    for j in prange(slots):
+        c = dealt(j, slots, threads)
+        if c >= n:
+            continue                 # padding
+        ...                          # item c
+
+The order changes which thread computes an item, never its value: results do not depend on
+it (nor on the number of threads). Measured (2 threads): the anti-aliasing samples of the
+512 x 512 lit bunny ran 1.49 x faster on 2 threads than on 1 in list order (the rest of the
+render 1.8 x); see ``docs/guide/performance.md`` for the figures after.
 """
-
-import math
 
 import numba
 
-from smoothdist._config import NJIT, NJIT_INLINE
+from smoothdist._config import NJIT, NJIT_INLINE, PARALLEL
 
-__all__ = ["scatter_stride", "scattered"]
+__all__ = ["threads", "deal", "dealt"]
 
-_INV_PHI = 0.6180339887498949
+
+def threads():
+    """Threads that a ``prange`` loop started from the calling thread runs on (numba's
+    setting, ``numba.set_num_threads``; 1 under ``SMOOTHDIST_PARALLEL=0``)."""
+    return numba.get_num_threads() if PARALLEL else 1
 
 
 @numba.njit(**NJIT)
-def scatter_stride(n):
-    """A stride ``s`` (int) coprime to ``n >= 0`` near ``n / phi``: ``j -> (j * s) % n`` is a
-    permutation of ``0 .. n - 1`` (``s`` = 1 for ``n < 3``)."""
-    if n < 3:
-        return 1
-    s = int(_INV_PHI * n)
-    while math.gcd(s, n) != 1:
-        s += 1
-    return s
+def deal(n, threads):
+    """Slots for dealing ``n >= 0`` items to ``threads >= 1`` threads: ``n`` rounded up to a
+    multiple of ``threads``."""
+    threads = max(1, threads)
+    return (n + threads - 1) // threads * threads
 
 
 @numba.njit(**NJIT_INLINE)
-def scattered(j, n, s):
-    """The item visited at iteration ``j`` of ``n`` with stride ``s`` (:func:`scatter_stride`)."""
-    return (j * s) % n
+def dealt(j, slots, threads):
+    """The item at slot ``j`` (``0 <= j < slots``; items ``>= n`` are padding, to skip): thread
+    ``k``'s run of slots ``[k per, (k + 1) per)`` holds items ``k, k + threads, ...``."""
+    threads = max(1, threads)
+    per = slots // threads
+    return (j % per) * threads + j // per

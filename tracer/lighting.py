@@ -32,7 +32,7 @@ import numpy as np
 from numba import prange
 
 from smoothdist.kernels import NJIT, NJIT_PARALLEL
-from smoothdist.schedule import scatter_stride, scattered
+from smoothdist.schedule import deal, dealt
 from tracer.camera import box_corners
 from tracer.march import (march_ray, nearest_object, object_lower_bound, ray_box,
                           scene_distance, visiting_order)
@@ -194,7 +194,7 @@ def _ao_total(delta):
 
 @numba.njit(**NJIT_PARALLEL)
 def light_points(tree, roots, params, mode, tol, P, N, L, lo, hi, eps, depth_max, k, delta,
-                 do_shadow, do_ao, slack, t_min, shadow, ao, work):
+                 do_shadow, do_ao, slack, t_min, shadow, ao, work, threads=1):
     """Shadow and occlusion at points ``P (n, 3)`` with unit normals ``N (n, 3)``.
 
     ``L (3,)``: unit direction towards the key light; ``k = 1 / penumbra``; ``delta``: the
@@ -202,12 +202,16 @@ def light_points(tree, roots, params, mode, tol, P, N, L, lo, hi, eps, depth_max
     the render's own distance (tolerance pruning loosened as in
     :func:`tracer.march.scene_distance`; ``roots`` must then be an array and ``tol > 0``).
     Writes ``shadow (n,)``, ``ao (n,)`` (1 where not asked for)
-    and ``work (n, 2) int64``: distance queries and leaves visited. Every point is independent (no dependence on threads)."""
+    and ``work (n, 2) int64``: distance queries and leaves visited. Every point is
+    independent (no dependence on threads); the points are dealt out to ``threads`` threads
+    (:mod:`smoothdist.schedule`)."""
     bias = 2.0 * eps
     n = P.shape[0]
-    stride = scatter_stride(n)
-    for j in prange(n):
-        i = scattered(j, n, stride)   # neighbouring points (alike in cost) to different threads
+    slots = deal(n, threads)
+    for j in prange(slots):
+        i = dealt(j, slots, threads)  # neighbouring points (alike in cost) to different threads
+        if i >= n:
+            continue
         stack = np.empty(depth_max + 4, dtype=np.int64)
         dstack = np.empty(depth_max + 4)
         nx, ny, nz = N[i, 0], N[i, 1], N[i, 2]
@@ -235,12 +239,15 @@ def light_points(tree, roots, params, mode, tol, P, N, L, lo, hi, eps, depth_max
 
 
 @numba.njit(**NJIT_PARALLEL)
-def object_ids(tree, roots, params, mode, tol, P, depth_max, out):
-    """Index of the object nearest to each point ``P (n, 3)`` (its own distance, smallest)."""
+def object_ids(tree, roots, params, mode, tol, P, depth_max, out, threads=1):
+    """Index of the object nearest to each point ``P (n, 3)`` (its own distance, smallest);
+    points dealt out to ``threads`` threads (:mod:`smoothdist.schedule`)."""
     n = P.shape[0]
-    s = scatter_stride(n)
-    for q in prange(n):
-        i = scattered(q, n, s)
+    slots = deal(n, threads)
+    for q in prange(slots):
+        i = dealt(q, slots, threads)
+        if i >= n:
+            continue
         stack = np.empty(depth_max + 4, dtype=np.int64)
         dstack = np.empty(depth_max + 4)
         best = np.inf

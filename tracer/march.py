@@ -48,7 +48,7 @@ from numba.extending import intrinsic
 from smoothdist.closest_point import box_distance2
 from smoothdist.kernels import (NJIT, NJIT_PARALLEL, exact_distance_point, logsumexp_accumulate,
                                 smooth_distance_point, smooth_distance_point_tol)
-from smoothdist.schedule import scatter_stride, scattered
+from smoothdist.schedule import deal, dealt
 from tracer.camera import ray_direction
 
 MODE_SMOOTH, MODE_EXACT = 0, 1
@@ -723,7 +723,8 @@ def trace_pixels(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, ro
 @numba.njit(**NJIT_PARALLEL)
 def trace_samples(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, rows, cols,
                   offsets, depth_max, hit, tbuf, grad, steps, t_lo, t_hi, relax=RELAX,
-                  omega=OMEGA, cone=CONE, newton=0.0, eps_px=0.0, newton_cos=NEWTON_COS):
+                  omega=OMEGA, cone=CONE, newton=0.0, eps_px=0.0, newton_cos=NEWTON_COS,
+                  threads=1):
     """Trace anti-aliasing samples: for pixel ``(rows[i], cols[i])`` the rays through
     ``(rows[i] + offsets[k, 0], cols[i] + offsets[k, 1])`` for every ``k``.
 
@@ -734,7 +735,9 @@ def trace_samples(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, r
     an earlier call for the same pixels: the cone passes are not repeated) and written
     otherwise. Outputs are ``(m, K)``: ``hit`` bool, ``tbuf``, ``steps`` int64 (the cone
     passes booked on sample 0), and ``grad (m, K, 3)``. Pixels are independent, so the
-    result does not depend on the number of threads.
+    result does not depend on the number of threads; they are dealt out to ``threads``
+    threads (:mod:`smoothdist.schedule`: the flagged pixels come in image order, and their
+    cost follows the silhouette).
 
     ``eps_px >= 0``: the hit threshold of these rays is at least ``eps_px`` pixels, measured at
     the cone's start depth (a lower bound of any hit's depth): a sample only decides how much
@@ -743,9 +746,11 @@ def trace_samples(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, r
     """
     pixel = 1.0 / min(cam[12], cam[13])      # a pixel's size at unit depth
     n = rows.size
-    s = scatter_stride(n)
-    for j in prange(n):
-        i = scattered(j, n, s)      # neighbouring pixels (alike in cost) to different threads
+    slots = deal(n, threads)
+    for j in prange(slots):
+        i = dealt(j, slots, threads)    # neighbouring pixels (alike in cost) to different threads
+        if i >= n:
+            continue
         stack = np.empty(depth_max + 4, dtype=np.int64)
         dstack = np.empty(depth_max + 4)
         r = rows[i]
