@@ -64,8 +64,8 @@ def test_cone_pass_against_plain(request, bunny_points, case):
     else:
         field = bunny_points
         scene = _scene(field, eps=1e-4 * field.diagonal)
-    plain = render(scene, cone=False)
-    fast = render(scene, cone=True)
+    plain = render(scene, cone=False, omega=1.0)
+    fast = render(scene, cone=True, omega=1.0)
     _check_close(fast, plain, scene.eps, field.diagonal)
     assert fast.steps.sum() < plain.steps.sum()
 
