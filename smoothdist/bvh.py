@@ -4,9 +4,12 @@ The tree is a :class:`TreeData` named tuple of numpy arrays (structure of arrays
 kernels receive whole. Primitives of all three kinds live in one table, reordered so that every
 node covers a contiguous range ``start[node] : start[node] + count[node]``.
 
-Build: top-down, iterative, object-median split on the longest axis of the primitive centroids'
-bounding box (balanced, so the depth is ``ceil(log2(m / leaf_size))`` and a traversal stack of
-``depth + 2`` entries suffices).
+Build: top-down, iterative. A node's primitives are sorted along the longest axis of their
+centroids' bounding box and split where the surface area heuristic is smallest (each side
+keeps at least :data:`SAH_MIN` of them, so the depth stays below about ``7.5 ln m``; the
+traversal stacks hold ``depth + 4`` entries). Measured against the object-median split of
+before (512^2 bunny renders at beta 0.5, V / E / F): 18 / 22 / 31 % fewer leaves visited and
+17-31 % less time, at the same error against beta 0 (docs/guide/performance.md).
 """
 
 import threading
@@ -125,7 +128,7 @@ def build_tree(mesh, leaf_size=1, progress=None):
         ``total`` placed in leaves), and once at the end.
 
     Memory: about ``(9 + 13 + 4) x 8`` bytes per primitive for the primitive table plus 96
-    bytes per node (fewer than ``min(2 m, 4 m / leaf_size)`` nodes), plus transients of the
+    bytes per node (at most ``2 m - 1`` nodes), plus transients of the
     same order during the build. A point cloud needs no weight coefficients and no per-primitive
     boxes (a point is its own box), which the build exploits.
     """
@@ -193,10 +196,10 @@ def _run_build(cent, plo, phi, leaf_size, done):
     """``(order, lo, hi, left, right, start, count, depth)`` of the tree over the primitives'
     centroids ``cent`` and boxes ``plo, phi`` (``done[0]`` counts the primitives placed)."""
     m = cent.shape[0]
-    # object-median splits leave more than leaf_size / 2 primitives in every leaf, so there
-    # are fewer than 2 m / leaf_size leaves and 4 m / leaf_size nodes. The arrays are made
-    # here, so that the kernel compiles none of numpy's constructors (a cold-start cost)
-    cap = max(1, min(2 * m, 4 * (m // leaf_size) + 4))
+    # every leaf holds a primitive or more, so a binary tree has at most 2 m - 1 nodes. The
+    # arrays are made here, so that the kernel compiles none of numpy's constructors (a
+    # cold-start cost)
+    cap = max(1, 2 * m)
     order = np.arange(m, dtype=np.int64)
     nodes = (np.empty((cap, 3)), np.empty((cap, 3)), np.full(cap, -1, dtype=np.int64),
              np.full(cap, -1, dtype=np.int64), np.zeros(cap, dtype=np.int64),
@@ -281,7 +284,7 @@ def _build(cent, plo, phi, leaf_size, done, order, lo, hi, left, right, start, c
         for k in range(s, e):
             keys[k] = cent[order[k], axis]
         _sort_by_key(keys, order, kbuf, obuf, s, e)
-        mid = (s + e) // 2
+        mid = _sah_split(plo, phi, order, kbuf, s, e)
         l = n_nodes
         r = n_nodes + 1
         n_nodes += 2
@@ -298,6 +301,66 @@ def _build(cent, plo, phi, leaf_size, done, order, lo, hi, left, right, start, c
         st_d[sp] = d + 1
         sp += 1
     return n_nodes, depth
+
+
+#: each side of a split holds at least this fraction of the node's primitives (bounds the
+#: depth by ``log(m) / log(1 / (1 - SAH_MIN))``, about 7.5 ln m)
+SAH_MIN = 0.125
+
+
+@numba.njit(**NJIT)
+def _sah_split(plo, phi, order, area, s, e):
+    """Split position ``k`` in ``(s, e)`` of ``order[s:e]`` (sorted along the split axis) that
+    minimises the surface area heuristic ``A(s:k) (k - s) + A(k:e) (e - k)`` (``A``: the box
+    area of those primitives, up to a factor 2), each side at least :data:`SAH_MIN` of the
+    primitives. ``area (m,)``: scratch."""
+    lo0 = np.inf
+    lo1 = np.inf
+    lo2 = np.inf
+    hi0 = -np.inf
+    hi1 = -np.inf
+    hi2 = -np.inf
+    for k in range(s, e):
+        i = order[k]
+        lo0 = min(lo0, plo[i, 0])
+        lo1 = min(lo1, plo[i, 1])
+        lo2 = min(lo2, plo[i, 2])
+        hi0 = max(hi0, phi[i, 0])
+        hi1 = max(hi1, phi[i, 1])
+        hi2 = max(hi2, phi[i, 2])
+        a = hi0 - lo0
+        b = hi1 - lo1
+        c = hi2 - lo2
+        area[k] = a * b + b * c + c * a          # area of the box of order[s:k+1]
+    lo0 = np.inf
+    lo1 = np.inf
+    lo2 = np.inf
+    hi0 = -np.inf
+    hi1 = -np.inf
+    hi2 = -np.inf
+    n = e - s
+    k_min = s + max(1, int(SAH_MIN * n))
+    k_max = e - max(1, int(SAH_MIN * n))
+    best = np.inf
+    arg = (s + e) // 2
+    for k in range(e - 1, s, -1):            # right side order[k:e]
+        i = order[k]
+        lo0 = min(lo0, plo[i, 0])
+        lo1 = min(lo1, plo[i, 1])
+        lo2 = min(lo2, plo[i, 2])
+        hi0 = max(hi0, phi[i, 0])
+        hi1 = max(hi1, phi[i, 1])
+        hi2 = max(hi2, phi[i, 2])
+        if k < k_min or k > k_max:
+            continue
+        a = hi0 - lo0
+        b = hi1 - lo1
+        c = hi2 - lo2
+        cost = area[k - 1] * (k - s) + (a * b + b * c + c * a) * (e - k)
+        if cost < best:
+            best = cost
+            arg = k
+    return arg
 
 
 #: runs of this many keys are insertion-sorted before the merge passes of _sort_by_key

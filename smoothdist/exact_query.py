@@ -1,8 +1,8 @@
 """Exact unsigned distance on a tree of its own: binned-SAH build, wide leaves, child boxes
 stored with their parent, and a batch kernel seeded by the previous query's closest primitive.
 
-The smooth-distance kernels need the balanced object-median tree of :mod:`smoothdist.bvh`
-(its node diameters and weight bounds drive Barnes-Hut); exact branch and bound only needs
+The smooth-distance kernels need the leaf-size-1 tree of :mod:`smoothdist.bvh` (its node
+diameters and weight bounds drive Barnes-Hut); exact branch and bound only needs
 tight boxes and few nodes. :class:`ExactTree` is that second tree. It is built from a
 :class:`~smoothdist.bvh.TreeData`'s primitive table by :func:`build_exact_tree`, and
 :class:`~smoothdist.field.SmoothDistanceField` builds it lazily, once its exact-distance calls

@@ -9,7 +9,7 @@ import pytest
 
 import naive
 from smoothdist import DataMesh, SmoothDistanceField
-from smoothdist.bvh import build_tree
+from smoothdist.bvh import SAH_MIN, build_tree
 
 MESHES = ("point_cloud", "circle", "segment_star", "icosphere", "cube", "mixed_mesh",
           "nonmanifold_mesh", "octopus", "trefoil")
@@ -87,7 +87,7 @@ def check_tree(mesh, leaf_size):
         # children partition the parent's range, boxes nest
         assert tree.start[L] == s and tree.start[R] == s + tree.count[L]
         assert tree.count[L] + tree.count[R] == c
-        assert abs(tree.count[L] - tree.count[R]) <= 1          # object-median split
+        _check_split(tree, prims, s, c, tree.count[L])
         for ch in (L, R):
             assert not reached[ch], "node reached twice"
             reached[ch] = True
@@ -97,9 +97,42 @@ def check_tree(mesh, leaf_size):
     assert reached.all(), "unreachable nodes"
     assert np.all(seen == 1), "every primitive must lie in exactly one leaf"
     assert tree.depth == depth.max()
-    assert tree.depth <= max(0, math.ceil(math.log2(m / leaf_size)))
+    # every split keeps SAH_MIN of the primitives on each side
+    assert tree.depth <= max(0, math.ceil(math.log(m) / -math.log1p(-SAH_MIN)))
     assert SmoothDistanceField(mesh, leaf_size=leaf_size).weight_bound == tree.whi[0]
     return tree
+
+
+def _area(e):
+    """Half the surface area of boxes with extents ``e (k, 3)``."""
+    return e[:, 0] * e[:, 1] + e[:, 1] * e[:, 2] + e[:, 2] * e[:, 0]
+
+
+def _check_split(tree, prims, s, c, cl):
+    """The node ``[s, s + c)`` split after ``cl`` primitives: those with the smallest centroids
+    along the longest axis of the centroids' box go left, each side keeps at least ``SAH_MIN``
+    of them, and (where the centroids along the axis are distinct, so the order is unique) the
+    split has the smallest surface-area cost ``A_L n_L + A_R n_R`` of those allowed."""
+    P = [prims[tree.orig[i]] for i in range(s, s + c)]
+    cent = np.array([p.mean(axis=0) for p in P])
+    ext = cent.max(axis=0) - cent.min(axis=0)
+    axis = 1 if (ext[1] > ext[0] and ext[1] >= ext[2]) else 2 if (ext[2] > ext[0]
+                                                                   and ext[2] > ext[1]) else 0
+    x = cent[:, axis]
+    assert x[:cl].max() <= x[cl:].min()
+    lo_count = max(1, int(SAH_MIN * c))
+    assert lo_count <= cl <= c - lo_count
+    if np.unique(x).size == c and c > 3:
+        rank = np.argsort(x)
+        plo = np.array([P[i].min(axis=0) for i in rank])
+        phi = np.array([P[i].max(axis=0) for i in rank])
+        # boxes of the first k and of the last c - k primitives, k = 1 .. c - 1
+        e_l = np.maximum.accumulate(phi)[:-1] - np.minimum.accumulate(plo)[:-1]
+        e_r = (np.maximum.accumulate(phi[::-1]) - np.minimum.accumulate(plo[::-1]))[::-1][1:]
+        k = np.arange(1, c)
+        cost = (_area(e_l) * k + _area(e_r) * (c - k))
+        ok = (k >= lo_count) & (k <= c - lo_count)
+        assert cost[cl - 1] <= cost[ok].min() * (1 + 1e-9) + 1e-300
 
 
 @pytest.mark.parametrize("name", MESHES)

@@ -14,7 +14,8 @@ at beta 0 and 0.5, tol 0 and 1e-6, the metric and the exact gradient, at the Tab
 and a rotated, shifted one. Checked: ``d_hat`` (value), the vertex gradients, the couple of
 :meth:`MeshDistance.with_couple`, the per-primitive distances and gradients, and the exact
 distance, each to 1e-12 relative (the couple, which nearly cancels on the symmetric bowl, to
-1e-12 of the gradients' scale). The geometry is stored, not regenerated, so that a change of
+1e-12 of the gradients' scale); for the approximations that depend on the tree's shape
+(beta > 0, tol > 0) the exact distance only (see ``_check``). The geometry is stored, not regenerated, so that a change of
 the generators does not move the reference.
 """
 
@@ -53,19 +54,26 @@ def _close(a, b, scale=None):
     assert np.abs(a - b).max() <= REL * s, (np.abs(a - b).max(), s)
 
 
-def _check(md, R, t, ref, key, primitives=True):
+def _check(md, R, t, ref, key, primitives=True, approximate=False):
+    """``approximate``: Barnes-Hut (beta > 0) or tol > 0, whose values depend on the tree's
+    shape; since the tree splits by the surface area heuristic (2026-11-25) they differ from
+    the reference (by up to 8 % for one query primitive's gradient), so only the exact
+    distance is compared then (the approximations are checked against beta 0 and brute force
+    in ``tests/test_whole_mesh.py``: bounds with and without Barnes-Hut, tol)."""
     d, G = md(R, t)
-    _close(d, ref[key + "/d"][0])
-    _close(G, ref[key + "/G"])
     dc, Gc, C = md.with_couple(R, t)
     assert dc == d and np.array_equal(Gc, G)
+    _close(md.exact(R, t)[0], ref[key + "/exact"][0])
+    if approximate:
+        return
+    _close(d, ref[key + "/d"][0])
+    _close(G, ref[key + "/G"])
     _close(C, ref[key + "/C"], scale=max(np.abs(ref[key + "/C"]).max(),
                                          np.abs(ref[key + "/G"]).max()))
     if primitives and key + "/dj" in ref:
         dj, gj = md.primitive_distances(R, t)
         _close(dj, ref[key + "/dj"])
         _close(gj, ref[key + "/gj"])
-    _close(md.exact(R, t)[0], ref[key + "/exact"][0])
 
 
 @pytest.mark.parametrize("name", ["bowl_ico", "ring_toss_near", "slide_sphere"])
@@ -84,7 +92,7 @@ def test_table3_cases_unchanged(ref, name):
             R, t = None, t0
         else:
             R, t = ref[f"{name}/R1"], t0 + [0.01, 0.03, -0.02]
-        _check(md, R, t, ref, key)
+        _check(md, R, t, ref, key, approximate=beta > 0 or tol > 0)
 
 
 def test_mixed_data_with_attenuation_unchanged(ref):
@@ -100,7 +108,7 @@ def test_mixed_data_with_attenuation_unchanged(ref):
         for k in (0, 1):
             key = f"mixed/b{beta}/pose{k}"
             t = ref[key + "/t"]
-            _check(md, R, t, ref, key)
+            _check(md, R, t, ref, key, approximate=True)        # tol 1e-9
             d, G = md(R, t, method="brute")
             _close(d, ref[key + "/brute_d"][0])
             _close(G, ref[key + "/brute_G"])

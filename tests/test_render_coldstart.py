@@ -176,10 +176,32 @@ def test_a_plain_render_is_lean(tmp_path):
 
 
 # ----------------------------------------------------------------------------- BVH build
+def _sah_split(plo, phi):
+    """Where the build splits primitives with boxes ``plo, phi (n, 3)`` (in their sorted
+    order): the ``k`` of smallest ``A(:k) k + A(k:) (n - k)`` with ``A`` the half box area and
+    both sides at least ``SAH_MIN n`` (at least 1); the largest such ``k`` on a tie."""
+    from smoothdist.bvh import SAH_MIN
+
+    n = len(plo)
+
+    def area(lo, hi):
+        a, b, c = (hi - lo).T
+        return a * b + b * c + c * a
+
+    left = area(np.minimum.accumulate(plo), np.maximum.accumulate(phi))        # [:k + 1]
+    right = area(np.minimum.accumulate(plo[::-1]), np.maximum.accumulate(phi[::-1]))[::-1]
+    k = np.arange(n - 1, 0, -1)                                                  # descending
+    cost = left[k - 1] * k.astype(float) + right[k] * (n - k).astype(float)
+    lo_count = max(1, int(SAH_MIN * n))
+    ok = (k >= lo_count) & (k <= n - lo_count)
+    return int(k[ok][np.argmin(cost[ok])])
+
+
 def reference_build(cent, plo, phi, leaf_size):
     """The build's specification in plain numpy: depth-first, nodes numbered in pairs as
-    their parent is split, object-median split on the longest centroid axis, the node's
-    primitives ordered by ``np.argsort(kind="stable")`` along it."""
+    their parent is split, the node's primitives ordered by ``np.argsort(kind="stable")``
+    along the longest centroid axis and split by the surface area heuristic
+    (:func:`_sah_split`)."""
     m = len(cent)
     order = np.arange(m)
     nodes = {}
@@ -197,10 +219,11 @@ def reference_build(cent, plo, phi, leaf_size):
                 axis = 1
             elif ext[2] > ext[0] and ext[2] > ext[1]:
                 axis = 2
-            order[s:e] = idx[np.argsort(cent[idx, axis], kind="stable")]
+            order[s:e] = idx = idx[np.argsort(cent[idx, axis], kind="stable")]
+            mid = _sah_split(plo[idx], phi[idx])
             left, right = n_nodes, n_nodes + 1
             n_nodes += 2
-            stack += [(right, (s + e) // 2, e), (left, s, (s + e) // 2)]
+            stack += [(right, s + mid, e), (left, s, s + mid)]
         nodes[node] = (box[0], box[1], left, right, s, e - s)
     cols = list(zip(*(nodes[i] for i in range(n_nodes))))
     return order, np.array(cols[0]), np.array(cols[1]), *(np.array(c) for c in cols[2:])
