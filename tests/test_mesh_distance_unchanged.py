@@ -15,8 +15,8 @@ and a rotated, shifted one. Checked: ``d_hat`` (value), the vertex gradients, th
 :meth:`MeshDistance.with_couple`, the per-primitive distances and gradients, and the exact
 distance, each to 1e-12 relative (the couple, which nearly cancels on the symmetric bowl, to
 1e-12 of the gradients' scale); for the approximations that depend on the tree's shape
-(beta > 0, tol > 0) the exact distance only (see ``_check``). The geometry is stored, not regenerated, so that a change of
-the generators does not move the reference.
+(beta > 0, tol > 0) the exact distance only (see ``_check``). The geometry is stored, not
+regenerated, so that a change of the generators does not move the reference.
 """
 
 from pathlib import Path
