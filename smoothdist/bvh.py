@@ -19,7 +19,7 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
-from smoothdist._config import NJIT
+from smoothdist._config import NJIT, NJIT_INLINE
 from smoothdist.mesh import KIND_EDGE, KIND_POINT, KIND_TRIANGLE
 
 
@@ -210,6 +210,26 @@ def _run_build(cent, plo, phi, leaf_size, done):
     return (order,) + tuple(a[:n_nodes].copy() for a in nodes) + (depth,)
 
 
+#: an empty box ``(lo0, lo1, lo2, hi0, hi1, hi2)``
+_EMPTY_BOX = (np.inf, np.inf, np.inf, -np.inf, -np.inf, -np.inf)
+
+
+@numba.njit(**NJIT_INLINE)
+def _grow(box, plo, phi, i):
+    """``box`` grown to hold the box ``plo[i], phi[i]``."""
+    return (min(box[0], plo[i, 0]), min(box[1], plo[i, 1]), min(box[2], plo[i, 2]),
+            max(box[3], phi[i, 0]), max(box[4], phi[i, 1]), max(box[5], phi[i, 2]))
+
+
+@numba.njit(**NJIT_INLINE)
+def _half_area(box):
+    """Half the surface area of ``box``."""
+    a = box[3] - box[0]
+    b = box[4] - box[1]
+    c = box[5] - box[2]
+    return a * b + b * c + c * a
+
+
 @numba.njit(**NJIT)
 def _build(cent, plo, phi, leaf_size, done, order, lo, hi, left, right, start, count, keys,
            kbuf, obuf, stacks):
@@ -236,46 +256,23 @@ def _build(cent, plo, phi, leaf_size, done, order, lo, hi, left, right, start, c
         d = st_d[sp]
         if d > depth:
             depth = d
-        blo0 = np.inf
-        blo1 = np.inf
-        blo2 = np.inf
-        bhi0 = -np.inf
-        bhi1 = -np.inf
-        bhi2 = -np.inf
-        clo0 = np.inf
-        clo1 = np.inf
-        clo2 = np.inf
-        chi0 = -np.inf
-        chi1 = -np.inf
-        chi2 = -np.inf
+        box = _EMPTY_BOX
+        cbox = _EMPTY_BOX
         for k in range(s, e):
             i = order[k]
-            blo0 = min(blo0, plo[i, 0])
-            blo1 = min(blo1, plo[i, 1])
-            blo2 = min(blo2, plo[i, 2])
-            bhi0 = max(bhi0, phi[i, 0])
-            bhi1 = max(bhi1, phi[i, 1])
-            bhi2 = max(bhi2, phi[i, 2])
-            clo0 = min(clo0, cent[i, 0])
-            clo1 = min(clo1, cent[i, 1])
-            clo2 = min(clo2, cent[i, 2])
-            chi0 = max(chi0, cent[i, 0])
-            chi1 = max(chi1, cent[i, 1])
-            chi2 = max(chi2, cent[i, 2])
-        lo[node, 0] = blo0
-        lo[node, 1] = blo1
-        lo[node, 2] = blo2
-        hi[node, 0] = bhi0
-        hi[node, 1] = bhi1
-        hi[node, 2] = bhi2
+            box = _grow(box, plo, phi, i)
+            cbox = _grow(cbox, cent, cent, i)
+        for c in range(3):
+            lo[node, c] = box[c]
+            hi[node, c] = box[3 + c]
         start[node] = s
         count[node] = e - s
         if e - s <= leaf_size:
             done[0] += e - s
             continue
-        ext0 = chi0 - clo0
-        ext1 = chi1 - clo1
-        ext2 = chi2 - clo2
+        ext0 = cbox[3] - cbox[0]
+        ext1 = cbox[4] - cbox[1]
+        ext2 = cbox[5] - cbox[2]
         axis = 0
         if ext1 > ext0 and ext1 >= ext2:
             axis = 1
@@ -314,49 +311,21 @@ def _sah_split(plo, phi, order, area, s, e):
     minimises the surface area heuristic ``A(s:k) (k - s) + A(k:e) (e - k)`` (``A``: the box
     area of those primitives, up to a factor 2), each side at least :data:`SAH_MIN` of the
     primitives. ``area (m,)``: scratch."""
-    lo0 = np.inf
-    lo1 = np.inf
-    lo2 = np.inf
-    hi0 = -np.inf
-    hi1 = -np.inf
-    hi2 = -np.inf
+    box = _EMPTY_BOX
     for k in range(s, e):
-        i = order[k]
-        lo0 = min(lo0, plo[i, 0])
-        lo1 = min(lo1, plo[i, 1])
-        lo2 = min(lo2, plo[i, 2])
-        hi0 = max(hi0, phi[i, 0])
-        hi1 = max(hi1, phi[i, 1])
-        hi2 = max(hi2, phi[i, 2])
-        a = hi0 - lo0
-        b = hi1 - lo1
-        c = hi2 - lo2
-        area[k] = a * b + b * c + c * a          # area of the box of order[s:k+1]
-    lo0 = np.inf
-    lo1 = np.inf
-    lo2 = np.inf
-    hi0 = -np.inf
-    hi1 = -np.inf
-    hi2 = -np.inf
+        box = _grow(box, plo, phi, order[k])
+        area[k] = _half_area(box)                # the box of order[s:k+1]
     n = e - s
     k_min = s + max(1, int(SAH_MIN * n))
     k_max = e - max(1, int(SAH_MIN * n))
     best = np.inf
     arg = (s + e) // 2
-    for k in range(e - 1, s, -1):            # right side order[k:e]
-        i = order[k]
-        lo0 = min(lo0, plo[i, 0])
-        lo1 = min(lo1, plo[i, 1])
-        lo2 = min(lo2, plo[i, 2])
-        hi0 = max(hi0, phi[i, 0])
-        hi1 = max(hi1, phi[i, 1])
-        hi2 = max(hi2, phi[i, 2])
+    box = _EMPTY_BOX
+    for k in range(e - 1, s, -1):                # the box of order[k:e]
+        box = _grow(box, plo, phi, order[k])
         if k < k_min or k > k_max:
             continue
-        a = hi0 - lo0
-        b = hi1 - lo1
-        c = hi2 - lo2
-        cost = area[k - 1] * (k - s) + (a * b + b * c + c * a) * (e - k)
+        cost = area[k - 1] * (k - s) + _half_area(box) * (e - k)
         if cost < best:
             best = cost
             arg = k
