@@ -70,8 +70,8 @@ EPS_PX = 0.0
 #: the 512^2 lit bunny, adaptive 16: the samples' distance queries (with the cone passes)
 #: 1.07 M with the fixed factor 1.6 of before (which fell back to 1 for good after its first
 #: failed step); with the slope rule at ``OMEGA_SAFETY`` 0.9, 809 k capped at 2 or at 3 (at
-#: 0.8: 842 k capped at 1.6, 828 k at 3). Camera rays keep plain steps
-#: (:data:`tracer.march.OMEGA`)
+#: 0.8: 842 k capped at 1.6, 828 k at 3). Camera rays take the same rule
+#: (:data:`tracer.march.OMEGA`, also 2)
 SAMPLE_OMEGA = 2.0
 
 #: the extra samples take Newton steps (:func:`tracer.march.march_ray`) unless

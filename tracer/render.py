@@ -248,8 +248,9 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
         Scenes with ``tol > 0``: a sphere-tracing step may under-estimate the distance by up
         to ``relax`` x the previous step (default ``tracer.march.RELAX``; 0: never).
     omega : float, optional
-        Over-relaxation of the sphere-tracing steps (>= 1, with a safe fallback; default
-        ``tracer.march.OMEGA``).
+        Cap of the over-relaxed sphere-tracing steps, as a multiple of the distance (>= 1;
+        1: plain steps; each relaxed step is checked, with a safe fallback; smooth mode only;
+        default ``tracer.march.OMEGA``); see :func:`tracer.march.march_ray`.
     cone : bool, optional
         Seed each tile's rays with a conservative start depth from a cone march (default
         ``tracer.march.CONE``).
