@@ -41,7 +41,6 @@ from numba import prange
 from smoothdist._config import NJIT, NJIT_PARALLEL
 from smoothdist.closest_point import closest_point_segment, closest_point_triangle
 from smoothdist.mesh import KIND_TRIANGLE
-from smoothdist.schedule import deal, dealt
 
 #: queries handled by one parallel task (one stack and one seed chain each)
 CHUNK = 64
@@ -573,34 +572,32 @@ def exact_stack_size(et):
 
 @numba.njit(**NJIT_PARALLEL)
 def exact_tree_batch(et, Q, seeded, out_d, out_g, out_prim, out_nodes, out_leaves,
-                     threads=1):
+                     ntasks=1):
     """Exact distance for every row of ``Q (q, 3)`` into the output arrays.
 
     With ``seeded``, each query starts from the previous query's closest primitive (queries
     are taken in chunks of :data:`CHUNK` rows; the chain restarts at every chunk, so the
-    results do not depend on the thread count). The chunks are dealt out to ``threads``
-    threads (:mod:`smoothdist.schedule`).
+    results do not depend on the thread count). ``ntasks`` strided tasks share the chunks out
+    (:mod:`smoothdist.schedule`).
     """
     n = Q.shape[0]
     nchunks = (n + CHUNK - 1) // CHUNK
     k = et.depth + 4
-    slots = deal(nchunks, threads)
-    for j in prange(slots):
-        c = dealt(j, slots, threads)    # every threads-th chunk to each thread
-        if c >= nchunks:
-            continue
+    ntasks = max(1, min(nchunks, ntasks))
+    for task in prange(ntasks):
         stack = np.empty(k, dtype=np.int64)
         dstack = np.empty(k)
-        prev = -1
-        for i in range(c * CHUNK, min(n, (c + 1) * CHUNK)):
-            d, gx, gy, gz, p, nodes, leaves, prev2 = exact_tree_point(
-                et, Q[i, 0], Q[i, 1], Q[i, 2], stack, dstack, prev)
-            if seeded:
-                prev = prev2
-            out_d[i] = d
-            out_g[i, 0] = gx
-            out_g[i, 1] = gy
-            out_g[i, 2] = gz
-            out_prim[i] = p
-            out_nodes[i] = nodes
-            out_leaves[i] = leaves
+        for c in range(task, nchunks, ntasks):    # every ntasks-th chunk
+            prev = -1
+            for i in range(c * CHUNK, min(n, (c + 1) * CHUNK)):
+                d, gx, gy, gz, p, nodes, leaves, prev2 = exact_tree_point(
+                    et, Q[i, 0], Q[i, 1], Q[i, 2], stack, dstack, prev)
+                if seeded:
+                    prev = prev2
+                out_d[i] = d
+                out_g[i, 0] = gx
+                out_g[i, 1] = gy
+                out_g[i, 2] = gz
+                out_prim[i] = p
+                out_nodes[i] = nodes
+                out_leaves[i] = leaves

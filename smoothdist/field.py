@@ -11,7 +11,7 @@ from smoothdist._cast import as_points, non_negative, positive
 from smoothdist.bvh import build_tree
 from smoothdist.exact_query import build_exact_tree, exact_tree_batch
 from smoothdist.mesh import as_data_mesh
-from smoothdist.schedule import deal, dealt, threads
+from smoothdist.schedule import parallel_tasks
 
 GRADIENTS = ("metric", "exact")
 METHODS = ("bvh", "brute")
@@ -344,7 +344,7 @@ class SmoothDistanceField:
         rng = np.random.default_rng(seed)
         pick = pts if pts.shape[0] <= samples else pts[rng.choice(pts.shape[0], samples,
                                                                    replace=False)]
-        d = _nearest_other(self.tree, np.ascontiguousarray(pick), threads())
+        d = _nearest_other(self.tree, np.ascontiguousarray(pick), parallel_tasks(len(pick)))
         d = d[np.isfinite(d) & (d > 0)]
         return float(np.median(d)) if d.size else max(self.diagonal, 1.0)
 
@@ -402,7 +402,7 @@ class SmoothDistanceField:
         leaves = np.empty(n, dtype=np.int64)
         if n:
             _q.smooth_distance_batch(self.tree, Q, alpha, beta, S, wgs, method == "brute", d, g,
-                                     nodes, leaves, tol, threads())
+                                     nodes, leaves, tol, parallel_tasks(n))
         res = SmoothDistanceResult(d, g)
         return (res.distance, res.gradient, QueryStats(nodes, leaves)) if return_stats else res
 
@@ -431,9 +431,11 @@ class SmoothDistanceField:
             self._exact_queries = self.__dict__.get("_exact_queries", 0) + n
             if ("_exact_tree" in self.__dict__
                     or self._exact_queries >= EXACT_TREE_AFTER * self.num_primitives):
-                exact_tree_batch(self.exact_tree, Q, True, d, g, prim, nodes, leaves, threads())
+                exact_tree_batch(self.exact_tree, Q, True, d, g, prim, nodes, leaves,
+                                 parallel_tasks(n))
             else:
-                _q.exact_distance_batch(self.tree, Q, d, g, prim, nodes, leaves, threads())
+                _q.exact_distance_batch(self.tree, Q, d, g, prim, nodes, leaves,
+                                        parallel_tasks(n))
         out = ExactDistanceResult(d, g, prim) if return_closest else SmoothDistanceResult(d, g)
         return (*out, QueryStats(nodes, leaves)) if return_stats else out
 
@@ -455,18 +457,16 @@ class SmoothDistanceField:
 
 
 @numba.njit(**_q.NJIT_PARALLEL)
-def _nearest_other(tree, P, threads=1):
+def _nearest_other(tree, P, ntasks=1):
     """Distance from each row of ``P (n, 3)`` to the nearest primitive at distance > 0."""
     out = np.empty(P.shape[0])
     k = tree.depth + 4
     n = P.shape[0]
-    slots = deal(n, threads)
-    for j in numba.prange(slots):
-        i = dealt(j, slots, threads)
-        if i >= n:
-            continue
+    ntasks = max(1, min(n, ntasks))
+    for task in numba.prange(ntasks):
         stack = np.empty(k, dtype=np.int64)
         dstack = np.empty(k)
-        out[i] = _q.exact_distance_point(tree, P[i, 0], P[i, 1], P[i, 2], stack, dstack, 0,
-                                         0.0)[0]
+        for i in range(task, n, ntasks):
+            out[i] = _q.exact_distance_point(tree, P[i, 0], P[i, 1], P[i, 2], stack, dstack, 0,
+                                             0.0)[0]
     return out

@@ -49,28 +49,13 @@ from smoothdist.closest_pair import (closest_pair, segment_point, segment_segmen
 from smoothdist.closest_point import (SEG_INTERIOR, TRI_AB, TRI_AC, TRI_BC, TRI_INTERIOR)
 from smoothdist.query import (DEFAULT_TOL, _attenuate, exact_distance_point, logsumexp_accumulate,
                               negligible_reach, smooth_distance_point)
+from smoothdist.schedule import TASKS
 from smoothdist.weights import eval_triangle_weight
 
 #: :func:`smoothdist.query._attenuate`, inlined (it calls no other kernel)
 _attenuate_inline = numba.njit(**NJIT_INLINE)(_attenuate.py_func)
 #: :func:`smoothdist.closest_pair.segment_segment`, inlined (the edge-edge leaves)
 _segment_segment_inline = numba.njit(**NJIT_INLINE)(segment_segment.py_func)
-
-#: most parallel tasks; task ``c`` of ``n`` takes query primitives ``c, c + n, ...`` so that the
-#: expensive ones (near the data, usually contiguous in a mesh) are spread over all threads
-TASKS = 64
-
-
-def parallel_tasks(m):
-    """Number of strided tasks for ``m`` query primitives: one per numba thread (at most
-    ``TASKS``).
-
-    A ``prange`` hands each thread an equal run of consecutive tasks, so with more tasks than
-    threads the tasks that got one primitive more than the others (the first ``m % n``) all
-    land on the first thread: 100 primitives in 64 tasks gave one of two threads 64 of them.
-    One task per thread gives every thread ``m / n`` primitives, rounded.
-    """
-    return max(1, min(int(m), numba.get_num_threads(), TASKS))
 
 
 @numba.njit(**NJIT)
@@ -725,7 +710,7 @@ def smooth_distance_primitives(tree, qkind, qpts, alpha, beta, S, wgs, brute, ou
     ``qkind (m,)`` int64, ``qpts (m, 9)`` float64; fills ``out_d (m,)``, ``out_g (m, 3)``,
     ``out_nodes``, ``out_leaves (m,)``. ``brute`` sums every data primitive (reference).
     ``tol``: see :func:`smooth_distance_primitive` (edge and triangle queries only).
-    ``ntasks``: the number of strided tasks (:func:`parallel_tasks`).
+    ``ntasks``: the number of strided tasks (:func:`smoothdist.schedule.parallel_tasks`).
     """
     ntasks = max(1, min(qkind.size, ntasks))
     for task in prange(ntasks):

@@ -23,7 +23,6 @@ from smoothdist._config import NJIT, NJIT_PARALLEL
 from smoothdist.closest_point import (SEG_INTERIOR, TRI_AB, TRI_AC, TRI_BC, TRI_INTERIOR,
                                       box_distance2, closest_point_segment,
                                       closest_point_triangle)
-from smoothdist.schedule import deal, dealt
 from smoothdist.weights import eval_edge_weight, eval_triangle_weight
 
 #: queries handled by one parallel task (one traversal stack each)
@@ -574,62 +573,58 @@ def smooth_distance_brute_point(tree, px, py, pz, alpha, S, wgs):
 
 @numba.njit(**NJIT_PARALLEL)
 def smooth_distance_batch(tree, Q, alpha, beta, S, wgs, brute, out_d, out_g, out_nodes,
-                          out_leaves, tol=DEFAULT_TOL, threads=1):
+                          out_leaves, tol=DEFAULT_TOL, ntasks=1):
     """Fill ``out_d (q,)``, ``out_g (q, 3)``, ``out_nodes``, ``out_leaves (q,)`` for ``Q (q, 3)``.
 
     ``tol > 0``: tolerance-controlled pruning (:func:`smooth_distance_point_tol`).
-    ``threads``: chunks of :data:`CHUNK` rows are dealt out to that many threads
-    (:mod:`smoothdist.schedule`; pass :func:`smoothdist.schedule.threads`); it never changes
+    ``ntasks``: strided tasks over the chunks of :data:`CHUNK` rows (task ``t`` takes chunks
+    ``t, t + ntasks, ...``; pass :func:`smoothdist.schedule.parallel_tasks`); it never changes
     a value.
     """
     n = Q.shape[0]
     nchunks = (n + CHUNK - 1) // CHUNK
     k = tree.depth + 4
-    slots = deal(nchunks, threads)
-    for j in prange(slots):
-        c = dealt(j, slots, threads)    # every threads-th chunk to each thread
-        if c >= nchunks:
-            continue
+    ntasks = max(1, min(nchunks, ntasks))
+    for task in prange(ntasks):
         stack = np.empty(k, dtype=np.int64)
         dstack = np.empty(k)
-        for i in range(c * CHUNK, min(n, (c + 1) * CHUNK)):
-            if brute:
-                d, gx, gy, gz = smooth_distance_brute_point(tree, Q[i, 0], Q[i, 1], Q[i, 2],
-                                                            alpha, S, wgs)
-                nodes = 0
-                leaves = tree.kind.size
-            else:
-                d, gx, gy, gz, nodes, leaves = smooth_distance_point_tol(
-                    tree, Q[i, 0], Q[i, 1], Q[i, 2], alpha, beta, tol, S, wgs, stack, dstack)
-            out_d[i] = d
-            out_g[i, 0] = gx
-            out_g[i, 1] = gy
-            out_g[i, 2] = gz
-            out_nodes[i] = nodes
-            out_leaves[i] = leaves
+        for c in range(task, nchunks, ntasks):    # every ntasks-th chunk
+            for i in range(c * CHUNK, min(n, (c + 1) * CHUNK)):
+                if brute:
+                    d, gx, gy, gz = smooth_distance_brute_point(tree, Q[i, 0], Q[i, 1], Q[i, 2],
+                                                                alpha, S, wgs)
+                    nodes = 0
+                    leaves = tree.kind.size
+                else:
+                    d, gx, gy, gz, nodes, leaves = smooth_distance_point_tol(
+                        tree, Q[i, 0], Q[i, 1], Q[i, 2], alpha, beta, tol, S, wgs, stack, dstack)
+                out_d[i] = d
+                out_g[i, 0] = gx
+                out_g[i, 1] = gy
+                out_g[i, 2] = gz
+                out_nodes[i] = nodes
+                out_leaves[i] = leaves
 
 
 @numba.njit(**NJIT_PARALLEL)
-def exact_distance_batch(tree, Q, out_d, out_g, out_prim, out_nodes, out_leaves, threads=1):
-    """Exact distance for every row of ``Q (q, 3)`` into the output arrays (chunks dealt out
-    to ``threads`` threads, as in :func:`smooth_distance_batch`)."""
+def exact_distance_batch(tree, Q, out_d, out_g, out_prim, out_nodes, out_leaves, ntasks=1):
+    """Exact distance for every row of ``Q (q, 3)`` into the output arrays (``ntasks`` strided
+    tasks over the chunks, as in :func:`smooth_distance_batch`)."""
     n = Q.shape[0]
     nchunks = (n + CHUNK - 1) // CHUNK
     k = tree.depth + 4
-    slots = deal(nchunks, threads)
-    for j in prange(slots):
-        c = dealt(j, slots, threads)    # every threads-th chunk to each thread
-        if c >= nchunks:
-            continue
+    ntasks = max(1, min(nchunks, ntasks))
+    for task in prange(ntasks):
         stack = np.empty(k, dtype=np.int64)
         dstack = np.empty(k)
-        for i in range(c * CHUNK, min(n, (c + 1) * CHUNK)):
-            d, gx, gy, gz, p, nodes, leaves = exact_distance_point(tree, Q[i, 0], Q[i, 1],
-                                                                   Q[i, 2], stack, dstack)
-            out_d[i] = d
-            out_g[i, 0] = gx
-            out_g[i, 1] = gy
-            out_g[i, 2] = gz
-            out_prim[i] = p
-            out_nodes[i] = nodes
-            out_leaves[i] = leaves
+        for c in range(task, nchunks, ntasks):    # every ntasks-th chunk
+            for i in range(c * CHUNK, min(n, (c + 1) * CHUNK)):
+                d, gx, gy, gz, p, nodes, leaves = exact_distance_point(tree, Q[i, 0], Q[i, 1],
+                                                                       Q[i, 2], stack, dstack)
+                out_d[i] = d
+                out_g[i, 0] = gx
+                out_g[i, 1] = gy
+                out_g[i, 2] = gz
+                out_prim[i] = p
+                out_nodes[i] = nodes
+                out_leaves[i] = leaves

@@ -1,54 +1,42 @@
-"""How batch kernels share their work between threads: items dealt out like cards.
+"""How batch kernels share their work between threads: strided tasks.
 
 A ``prange`` loop (numba's OpenMP and workqueue layers) hands each thread one run of
 consecutive iterations. Queries and pixels usually come in spatial order (a grid, the rows of
-an image, the silhouette pixels of a render), and their cost follows the geometry: the thread
-that got the part of the list near the surface does most of the work while the other waits.
-Dealt out instead (item ``c`` to thread ``c mod T``), every thread gets every ``T``-th item of
-the list, so each gets a similar mix, and still walks through space in order (neighbouring
-items, which visit the same part of the tree, run at about the same time).
+an image, the silhouette pixels of a render, the primitives of a query mesh), and their cost
+follows the geometry: the thread that got the part of the list near the surface does most of
+the work while the other waits. So the batch kernels loop over ``ntasks`` tasks, one per
+thread (:func:`parallel_tasks`), and task ``t`` takes items ``t, t + ntasks, ...``: every
+thread gets a similar mix and still walks through space in order (neighbouring items, which
+visit the same part of the tree, run at about the same time)::
 
-Use, with ``threads`` from :func:`threads` passed in by the Python caller (a kernel that
-calls ``numba.get_num_threads()`` itself cannot be cached on disk)::
+    ntasks = max(1, min(n, ntasks))
+    for task in prange(ntasks):
+        ...                              # scratch stacks, once per task
+        for i in range(task, n, ntasks):
+            ...                          # item i
 
-    slots = deal(n, threads)
-    for j in prange(slots):
-        c = dealt(j, slots, threads)
-        if c >= n:
-            continue                 # padding
-        ...                          # item c
-
-The order changes which thread computes an item, never its value: results do not depend on
-it (nor on the number of threads). Measured (2 threads): the anti-aliasing samples of the
-512 x 512 lit bunny ran 1.49 x faster on 2 threads than on 1 in list order (the rest of the
-render 1.8 x); see ``docs/guide/performance.md`` for the figures after.
+The task count comes from the Python caller: a kernel that calls ``numba.get_num_threads()``
+itself cannot be cached on disk. It changes which thread computes an item, never its value:
+results do not depend on it (nor on the number of threads). Measured (2 threads): the
+anti-aliasing samples of the 512 x 512 lit bunny ran 1.49 x faster on 2 threads than on 1 in
+list order (the rest of the render 1.8 x); see ``docs/guide/performance.md`` for the figures
+after.
 """
 
 import numba
 
-from smoothdist._config import NJIT, NJIT_INLINE, PARALLEL
+__all__ = ["TASKS", "parallel_tasks"]
 
-__all__ = ["threads", "deal", "dealt"]
-
-
-def threads():
-    """Threads that a ``prange`` loop started from the calling thread runs on (numba's
-    setting, ``numba.set_num_threads``; 1 under ``SMOOTHDIST_PARALLEL=0``)."""
-    return numba.get_num_threads() if PARALLEL else 1
+#: most parallel tasks
+TASKS = 64
 
 
-@numba.njit(**NJIT)
-def deal(n, threads):
-    """Slots for dealing ``n >= 0`` items to ``threads >= 1`` threads: ``n`` rounded up to a
-    multiple of ``threads``."""
-    threads = max(1, threads)
-    return (n + threads - 1) // threads * threads
+def parallel_tasks(m):
+    """Number of strided tasks for ``m`` items: one per numba thread (at most :data:`TASKS`).
 
-
-@numba.njit(**NJIT_INLINE)
-def dealt(j, slots, threads):
-    """The item at slot ``j`` (``0 <= j < slots``; items ``>= n`` are padding, to skip): thread
-    ``k``'s run of slots ``[k per, (k + 1) per)`` holds items ``k, k + threads, ...``."""
-    threads = max(1, threads)
-    per = slots // threads
-    return (j % per) * threads + j // per
+    With more tasks than threads the tasks that got one item more than the others (the first
+    ``m % n``) would all land on the first thread (``prange`` hands each thread an equal run of
+    consecutive tasks): 100 query primitives in 64 tasks gave one of two threads 64 of them.
+    One task per thread gives every thread ``m / n`` items, rounded.
+    """
+    return max(1, min(int(m), numba.get_num_threads(), TASKS))

@@ -39,6 +39,7 @@ from smoothdist.convert import is_foreign_geometry
 from smoothdist.field import SmoothDistanceField
 from smoothdist.mesh import DataMesh, as_data_mesh
 from smoothdist.query import DEFAULT_TOL
+from smoothdist.schedule import parallel_tasks
 
 
 #: query meshes with fewer primitives than this run on the calling thread (a parallel launch
@@ -320,7 +321,7 @@ class MeshDistance:
         else:
             _mq.smooth_distance_primitives(
                 self.field.tree, self.query.kind, pts, self.alpha, self.beta, self.S, self.wgs,
-                method == "brute", d, g, nodes, leaves, self.tol, _mq.parallel_tasks(m))
+                method == "brute", d, g, nodes, leaves, self.tol, parallel_tasks(m))
         self.last_stats = (nodes, leaves)
         return d, g
 
@@ -352,7 +353,7 @@ class MeshDistance:
         else:
             _mm.smooth_moment_primitives(
                 self.field.tree, self.query.kind, pts, self.alpha, self.beta, self.S, self.wgs,
-                method == "brute", d, g, mo, nodes, leaves, self.tol, _mq.parallel_tasks(m))
+                method == "brute", d, g, mo, nodes, leaves, self.tol, parallel_tasks(m))
         self.last_stats = (nodes, leaves)
         return d, g, mo
 
@@ -412,7 +413,7 @@ class MeshDistance:
                                                  g, prim)
         else:
             _mq.exact_distance_primitives(self.field.tree, self.query.kind, pts, bound2, d, g,
-                                          prim, _mq.parallel_tasks(m))
+                                          prim, parallel_tasks(m))
         j = int(np.argmin(d))
         G = np.zeros((self.num_query_vertices, 3))
         k = int(self.query.kind[j]) + 1

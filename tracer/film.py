@@ -33,7 +33,7 @@ object (or ground), and are lit afresh where none does.
 
 import numpy as np
 
-from smoothdist.schedule import threads
+from smoothdist.schedule import parallel_tasks
 from tracer import lighting as _lighting
 from tracer import march
 from tracer.camera import box_corners, primary_rays
@@ -158,7 +158,7 @@ class _Shader:
         out = np.empty(len(P), dtype=np.int64)
         march_roots = roots if np.ndim(roots) else np.asarray([roots], dtype=np.int64)
         _lighting.object_ids(tree, march_roots, params, mode, tol, np.ascontiguousarray(P),
-                             depth_max, out, threads())
+                             depth_max, out, parallel_tasks(len(P)))
         return out
 
     def light_at(self, P, N):
@@ -180,7 +180,7 @@ class _Shader:
                                self.light.ao_distance * self.diag / _lighting.AO_SAMPLES,
                                self.light.shadows, self.light.ao,
                                self.slack, max(2.0 * eps, _lighting.SHADOW_START * self.diag),
-                               shadow, ao, work, threads())
+                               shadow, ao, work, parallel_tasks(n))
         self.queries += int(work[:, 0].sum())
         self.leaves += int(work[:, 1].sum())
         return shadow, ao
@@ -457,7 +457,7 @@ def _trace(kargs, options, pixels, W, offsets, bounds=None):
         march.trace_samples(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, rows,
                             cols, np.ascontiguousarray(offsets, dtype=np.float64), depth_max,
                             hit, t, grad, steps, bounds[0], bounds[1], relax, omega, cone,
-                            newton, EPS_PX, SAMPLE_NEWTON_COS, threads())
+                            newton, EPS_PX, SAMPLE_NEWTON_COS, parallel_tasks(m))
     return hit.ravel(), t.ravel(), grad.reshape(-1, 3), steps.ravel()
 
 

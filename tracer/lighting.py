@@ -32,7 +32,6 @@ import numpy as np
 from numba import prange
 
 from smoothdist.kernels import NJIT, NJIT_PARALLEL
-from smoothdist.schedule import deal, dealt
 from tracer.camera import box_corners
 from tracer.march import (march_ray, nearest_object, object_lower_bound, ray_box,
                           scene_distance, visiting_order)
@@ -194,7 +193,7 @@ def _ao_total(delta):
 
 @numba.njit(**NJIT_PARALLEL)
 def light_points(tree, roots, params, mode, tol, P, N, L, lo, hi, eps, depth_max, k, delta,
-                 do_shadow, do_ao, slack, t_min, shadow, ao, work, threads=1):
+                 do_shadow, do_ao, slack, t_min, shadow, ao, work, ntasks=1):
     """Shadow and occlusion at points ``P (n, 3)`` with unit normals ``N (n, 3)``.
 
     ``L (3,)``: unit direction towards the key light; ``k = 1 / penumbra``; ``delta``: the
@@ -203,69 +202,65 @@ def light_points(tree, roots, params, mode, tol, P, N, L, lo, hi, eps, depth_max
     :func:`tracer.march.scene_distance`; ``roots`` must then be an array and ``tol > 0``).
     Writes ``shadow (n,)``, ``ao (n,)`` (1 where not asked for)
     and ``work (n, 2) int64``: distance queries and leaves visited. Every point is
-    independent (no dependence on threads); the points are dealt out to ``threads`` threads
+    independent (no dependence on threads); ``ntasks`` strided tasks share them out
     (:mod:`smoothdist.schedule`)."""
     bias = 2.0 * eps
     n = P.shape[0]
-    slots = deal(n, threads)
-    for j in prange(slots):
-        i = dealt(j, slots, threads)  # neighbouring points (alike in cost) to different threads
-        if i >= n:
-            continue
+    ntasks = max(1, min(n, ntasks))
+    for task in prange(ntasks):
         stack = np.empty(depth_max + 4, dtype=np.int64)
         dstack = np.empty(depth_max + 4)
-        nx, ny, nz = N[i, 0], N[i, 1], N[i, 2]
-        px = P[i, 0] + bias * nx
-        py = P[i, 1] + bias * ny
-        pz = P[i, 2] + bias * nz
-        s = 1.0
-        q = 0
-        lv = 0
-        if do_shadow and nx * L[0] + ny * L[1] + nz * L[2] > 0.0:
-            s, q, lv = soft_shadow(tree, roots, params, mode, tol, px, py, pz, L[0], L[1], L[2],
-                               lo, hi, eps, t_min, k, stack, dstack, slack)
-        elif do_shadow:
-            s = 0.0          # facing away from the light: no direct light anyway
-        a = 1.0
-        if do_ao:
-            a, la = ambient_occlusion(tree, roots, params, mode, tol, px, py, pz, nx, ny, nz,
-                                      delta, stack, dstack, slack)
-            q += AO_SAMPLES
-            lv += la
-        shadow[i] = s
-        ao[i] = a
-        work[i, 0] = q
-        work[i, 1] = lv
+        for i in range(task, n, ntasks):  # every ntasks-th point
+            nx, ny, nz = N[i, 0], N[i, 1], N[i, 2]
+            px = P[i, 0] + bias * nx
+            py = P[i, 1] + bias * ny
+            pz = P[i, 2] + bias * nz
+            s = 1.0
+            q = 0
+            lv = 0
+            if do_shadow and nx * L[0] + ny * L[1] + nz * L[2] > 0.0:
+                s, q, lv = soft_shadow(tree, roots, params, mode, tol, px, py, pz, L[0], L[1],
+                                       L[2], lo, hi, eps, t_min, k, stack, dstack, slack)
+            elif do_shadow:
+                s = 0.0          # facing away from the light: no direct light anyway
+            a = 1.0
+            if do_ao:
+                a, la = ambient_occlusion(tree, roots, params, mode, tol, px, py, pz, nx, ny, nz,
+                                          delta, stack, dstack, slack)
+                q += AO_SAMPLES
+                lv += la
+            shadow[i] = s
+            ao[i] = a
+            work[i, 0] = q
+            work[i, 1] = lv
 
 
 @numba.njit(**NJIT_PARALLEL)
-def object_ids(tree, roots, params, mode, tol, P, depth_max, out, threads=1):
+def object_ids(tree, roots, params, mode, tol, P, depth_max, out, ntasks=1):
     """Index of the object nearest to each point ``P (n, 3)`` (its own distance, smallest);
-    points dealt out to ``threads`` threads (:mod:`smoothdist.schedule`)."""
+    ``ntasks`` strided tasks (:mod:`smoothdist.schedule`)."""
     n = P.shape[0]
-    slots = deal(n, threads)
-    for q in prange(slots):
-        i = dealt(q, slots, threads)
-        if i >= n:
-            continue
+    ntasks = max(1, min(n, ntasks))
+    for task in prange(ntasks):
         stack = np.empty(depth_max + 4, dtype=np.int64)
         dstack = np.empty(depth_max + 4)
-        best = np.inf
-        arg = 0
-        # nearest root box first; an object whose lower bound is not below the best distance
-        # so far cannot be nearer
-        first = nearest_object(tree, roots, params, mode, tol, P[i, 0], P[i, 1], P[i, 2], 0.0)
-        for j in range(roots.size):
-            kk = visiting_order(j, first)
-            if j > 0 and object_lower_bound(tree, roots, params, mode, tol, kk, P[i, 0],
-                                            P[i, 1], P[i, 2], 0.0) >= best:
-                continue
-            d = scene_distance(tree, roots[kk:kk + 1], params[kk:kk + 1], mode, tol, P[i, 0],
-                               P[i, 1], P[i, 2], stack, dstack, 0.0)[0]
-            if d < best:
-                best = d
-                arg = kk
-        out[i] = arg
+        for i in range(task, n, ntasks):
+            best = np.inf
+            arg = 0
+            # nearest root box first; an object whose lower bound is not below the best distance
+            # so far cannot be nearer
+            first = nearest_object(tree, roots, params, mode, tol, P[i, 0], P[i, 1], P[i, 2], 0.0)
+            for j in range(roots.size):
+                kk = visiting_order(j, first)
+                if j > 0 and object_lower_bound(tree, roots, params, mode, tol, kk, P[i, 0],
+                                                P[i, 1], P[i, 2], 0.0) >= best:
+                    continue
+                d = scene_distance(tree, roots[kk:kk + 1], params[kk:kk + 1], mode, tol, P[i, 0],
+                                   P[i, 1], P[i, 2], stack, dstack, 0.0)[0]
+                if d < best:
+                    best = d
+                    arg = kk
+            out[i] = arg
 
 
 @numba.njit(**NJIT)

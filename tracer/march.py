@@ -48,7 +48,6 @@ from numba.extending import intrinsic
 from smoothdist.closest_point import box_distance2
 from smoothdist.kernels import (NJIT, NJIT_PARALLEL, exact_distance_point, logsumexp_accumulate,
                                 smooth_distance_point, smooth_distance_point_tol)
-from smoothdist.schedule import deal, dealt
 from tracer.camera import ray_direction
 
 MODE_SMOOTH, MODE_EXACT = 0, 1
@@ -738,7 +737,7 @@ def trace_pixels(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, ro
 def trace_samples(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, rows, cols,
                   offsets, depth_max, hit, tbuf, grad, steps, t_lo, t_hi, relax=RELAX,
                   omega=OMEGA, cone=CONE, newton=0.0, eps_px=0.0, newton_cos=NEWTON_COS,
-                  threads=1):
+                  ntasks=1):
     """Trace anti-aliasing samples: for pixel ``(rows[i], cols[i])`` the rays through
     ``(rows[i] + offsets[k, 0], cols[i] + offsets[k, 1])`` for every ``k``.
 
@@ -749,9 +748,9 @@ def trace_samples(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, r
     an earlier call for the same pixels: the cone passes are not repeated) and written
     otherwise. Outputs are ``(m, K)``: ``hit`` bool, ``tbuf``, ``steps`` int64 (the cone
     passes booked on sample 0), and ``grad (m, K, 3)``. Pixels are independent, so the
-    result does not depend on the number of threads; they are dealt out to ``threads``
-    threads (:mod:`smoothdist.schedule`: the flagged pixels come in image order, and their
-    cost follows the silhouette).
+    result does not depend on the number of threads; ``ntasks`` strided tasks share them out
+    (:mod:`smoothdist.schedule`: the flagged pixels come in image order, and their cost
+    follows the silhouette).
 
     ``eps_px >= 0``: the hit threshold of these rays is at least ``eps_px`` pixels, measured at
     the cone's start depth (a lower bound of any hit's depth): a sample only decides how much
@@ -760,40 +759,38 @@ def trace_samples(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, r
     """
     pixel = 1.0 / min(cam[12], cam[13])      # a pixel's size at unit depth
     n = rows.size
-    slots = deal(n, threads)
-    for j in prange(slots):
-        i = dealt(j, slots, threads)    # neighbouring pixels (alike in cost) to different threads
-        if i >= n:
-            continue
+    ntasks = max(1, min(n, ntasks))
+    for task in prange(ntasks):
         stack = np.empty(depth_max + 4, dtype=np.int64)
         dstack = np.empty(depth_max + 4)
-        r = rows[i]
-        c = cols[i]
-        c_ev = 0
-        if cone and not (np.isfinite(t_lo[i]) and np.isfinite(t_hi[i])):
-            t_lo[i], ev, lv = cone_start(tree, roots, params, mode, tol, cam, lo, hi, eps, r - 1,
-                                         r + 2, c - 1, c + 2, stack, dstack, relax)
-            c_ev += ev
-            t_hi[i], ev, lv = cone_end(tree, roots, params, mode, tol, cam, lo, hi, eps, r - 1,
-                                       r + 2, c - 1, c + 2, stack, dstack, relax)
-            c_ev += ev
-        elif not cone:
-            t_lo[i] = 0.0
-            t_hi[i] = np.inf
-        t_min = t_lo[i]
-        e = max(eps, eps_px * pixel * t_min)
-        for k in range(offsets.shape[0]):
-            dx, dy, dz = ray_direction(cam, r + offsets[k, 0], c + offsets[k, 1])
-            h, t, gx, gy, gz, st, lv, bs = march_ray(tree, roots, params, mode, tol, cam[0],
-                                                     cam[1], cam[2], dx, dy, dz, lo, hi, e,
-                                                     max_steps, stack, dstack, relax, omega,
-                                                     t_min, newton, t_hi[i], newton_cos)
-            hit[i, k] = h == 1
-            tbuf[i, k] = t
-            grad[i, k, 0] = gx
-            grad[i, k, 1] = gy
-            grad[i, k, 2] = gz
-            steps[i, k] = st + (c_ev if k == 0 else 0)
+        for i in range(task, n, ntasks):    # every ntasks-th pixel
+            r = rows[i]
+            c = cols[i]
+            c_ev = 0
+            if cone and not (np.isfinite(t_lo[i]) and np.isfinite(t_hi[i])):
+                t_lo[i], ev, lv = cone_start(tree, roots, params, mode, tol, cam, lo, hi, eps,
+                                             r - 1, r + 2, c - 1, c + 2, stack, dstack, relax)
+                c_ev += ev
+                t_hi[i], ev, lv = cone_end(tree, roots, params, mode, tol, cam, lo, hi, eps, r - 1,
+                                           r + 2, c - 1, c + 2, stack, dstack, relax)
+                c_ev += ev
+            elif not cone:
+                t_lo[i] = 0.0
+                t_hi[i] = np.inf
+            t_min = t_lo[i]
+            e = max(eps, eps_px * pixel * t_min)
+            for k in range(offsets.shape[0]):
+                dx, dy, dz = ray_direction(cam, r + offsets[k, 0], c + offsets[k, 1])
+                h, t, gx, gy, gz, st, lv, bs = march_ray(tree, roots, params, mode, tol, cam[0],
+                                                         cam[1], cam[2], dx, dy, dz, lo, hi, e,
+                                                         max_steps, stack, dstack, relax, omega,
+                                                         t_min, newton, t_hi[i], newton_cos)
+                hit[i, k] = h == 1
+                tbuf[i, k] = t
+                grad[i, k, 0] = gx
+                grad[i, k, 1] = gy
+                grad[i, k, 2] = gz
+                steps[i, k] = st + (c_ev if k == 0 else 0)
 
 
 @intrinsic
