@@ -17,13 +17,13 @@ Feature codes
 
 import numba
 
-from smoothdist._config import NJIT
+from smoothdist._config import NJIT_INLINE
 
 SEG_INTERIOR, SEG_A, SEG_B = 0, 1, 2
 TRI_INTERIOR, TRI_AB, TRI_AC, TRI_BC, TRI_A, TRI_B, TRI_C = 0, 1, 2, 3, 4, 5, 6
 
 
-@numba.njit(**NJIT)
+@numba.njit(**NJIT_INLINE)
 def closest_point_segment(px, py, pz, ax, ay, az, bx, by, bz):
     """Closest point on segment ``ab`` to ``p``.
 
@@ -43,7 +43,7 @@ def closest_point_segment(px, py, pz, ax, ay, az, bx, by, bz):
     return ax + t * ex, ay + t * ey, az + t * ez, t, SEG_INTERIOR
 
 
-@numba.njit(**NJIT)
+@numba.njit(**NJIT_INLINE)
 def closest_point_triangle(px, py, pz, ax, ay, az, bx, by, bz, cx, cy, cz):
     """Closest point on triangle ``abc`` to ``p`` (Voronoi-region method, Ericson 2005 §5.1.5).
 
@@ -96,7 +96,7 @@ def closest_point_triangle(px, py, pz, ax, ay, az, bx, by, bz, cx, cy, cz):
             TRI_INTERIOR)
 
 
-@numba.njit(**NJIT)
+@numba.njit(**NJIT_INLINE)
 def box_distance2(px, py, pz, lo, hi, node):
     """Squared distance from ``p`` to the axis-aligned box ``lo[node]..hi[node]``.
 

@@ -19,7 +19,7 @@ import numba
 import numpy as np
 from numba import prange
 
-from smoothdist._config import NJIT, NJIT_PARALLEL
+from smoothdist._config import NJIT, NJIT_INLINE, NJIT_PARALLEL
 from smoothdist.closest_point import (SEG_INTERIOR, TRI_AB, TRI_AC, TRI_BC, TRI_INTERIOR,
                                       box_distance2, closest_point_segment,
                                       closest_point_triangle)
@@ -29,7 +29,7 @@ from smoothdist.weights import eval_edge_weight, eval_triangle_weight
 CHUNK = 64
 
 
-@numba.njit(**NJIT)
+@numba.njit(**NJIT_INLINE)
 def _attenuate(raw, dwfac_in, whi, S):
     """Clamp the raw weight ``A w~`` into ``[1, whi]`` and raise it to ``S``.
 
@@ -46,7 +46,7 @@ def _attenuate(raw, dwfac_in, whi, S):
     return W, S * W / raw * dwfac_in
 
 
-@numba.njit(**NJIT)
+@numba.njit(**NJIT_INLINE)
 def primitive_term(tree, i, px, py, pz, S, wgs):
     """Term of primitive ``i`` (tree order) for query ``p``.
 
@@ -131,7 +131,7 @@ def primitive_term(tree, i, px, py, pz, S, wgs):
     return d, W, vx, vy, vz
 
 
-@numba.njit(**NJIT)
+@numba.njit(**NJIT_INLINE)
 def push_nearest_first(stack, dstack, sp, l, dl, r, dr):
     """Push child nodes ``l`` and ``r`` (box distances ``dl``, ``dr``) onto the traversal
     stack so that the nearer one is popped first; returns the new stack size."""
@@ -148,7 +148,7 @@ def push_nearest_first(stack, dstack, sp, l, dl, r, dr):
     return sp + 2
 
 
-@numba.njit(**NJIT)
+@numba.njit(**NJIT_INLINE)
 def logsumexp_accumulate(m, s, gx, gy, gz, d, W, vx, vy, vz, alpha):
     """Add one term to a streaming LogSumExp kept relative to a running shift ``m``.
 
@@ -270,7 +270,7 @@ def smooth_distance_point(tree, px, py, pz, alpha, beta, S, wgs, stack, dstack, 
 NEGLIGIBLE = 2.0 ** -53
 
 
-@numba.njit(**NJIT)
+@numba.njit(**NJIT_INLINE)
 def negligible_reach(tree, root, S, alpha):
     """Distance beyond the running minimum ``m`` (scene units) past which a node's terms are
     negligible: a box at distance ``>= m + reach`` holding ``n_B`` of the ``N`` primitives
@@ -295,7 +295,7 @@ DEFAULT_TOL = 0.0
 TOL_LEAF = 8
 
 
-@numba.njit(**NJIT)
+@numba.njit(**NJIT_INLINE)
 def _shift(m, d, alpha):
     """``(factor, new shift)``: sums relative to ``m`` times ``factor`` are relative to
     ``min(m, d)``."""
@@ -304,7 +304,7 @@ def _shift(m, d, alpha):
     return 1.0, m
 
 
-@numba.njit(**NJIT)
+@numba.njit(**NJIT_INLINE)
 def _shift_sums(m, d, alpha, s, gx, gy, gz, s_ex, e_far, s_ref):
     """The tol kernel's running sums re-expressed relative to ``min(m, d)`` (see
     :func:`_shift`); returns ``(m, s, gx, gy, gz, s_ex, e_far, s_ref)``."""

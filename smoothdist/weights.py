@@ -33,7 +33,7 @@ import operator
 import numba
 import numpy as np
 
-from smoothdist._config import NJIT
+from smoothdist._config import NJIT_INLINE
 
 __all__ = [
     "edge_weight_coefficients",
@@ -173,7 +173,7 @@ def edge_weight_max(c):
     return edge_weight_range(c)[1]
 
 
-@numba.njit(**NJIT)
+@numba.njit(**NJIT_INLINE)
 def eval_edge_weight(c, t):
     """Edge weight quartic and its derivative (numba kernel).
 
@@ -425,7 +425,7 @@ def triangle_weight_range(c, n=200):
     return float(w.min()), float(w.max())
 
 
-@numba.njit(**NJIT)
+@numba.njit(**NJIT_INLINE)
 def eval_triangle_weight(c, s, t):
     """Triangle weight and its partial derivatives (numba kernel).
 
