@@ -69,19 +69,66 @@ def test_authors_reference_times_only_at_their_size_and_eps():
 
 
 def test_beta_tol_series(tmp_path):
-    """--tols adds a tolerance-pruned series: close to beta 0, with fewer leaves."""
+    """--tols adds a tolerance-pruned series (at beta 0): close to beta 0, with fewer
+    leaves; the frontier plot and table set the beta renders against it."""
     out = tmp_path / "tol"
-    assert main(["ablate-beta", str(OCTOPUS), "-o", str(out), "--size", "24", "--betas", "0",
+    assert main(["ablate-beta", str(OCTOPUS), "-o", str(out), "--size", "24", "--betas", "0,1",
                  "--tols", "0,0.01", "--types", "points", "--alpha", "40", "--alpha-u", "300",
                  "-q"]) == 0
-    rows = {float(r["tol"]): r for r in _rows(out / "beta_ablation.csv")}
-    assert set(rows) == {0.0, 0.01}
-    assert float(rows[0.01]["mean_leaves"]) < float(rows[0.0]["mean_leaves"])
+    rows = {(float(r["beta"]), float(r["tol"])): r for r in _rows(out / "beta_ablation.csv")}
+    assert set(rows) == {(0.0, 0.0), (1.0, 0.0), (0.0, 0.01)}
+    assert float(rows[0.0, 0.01]["mean_leaves"]) < float(rows[0.0, 0.0]["mean_leaves"])
     # d_hat_tol >= d_hat_0 - log(1 + tol)/alpha: the depth moves by about that much at most
     diag = json.loads((out / "beta_params.json").read_text())["diag"]
-    assert float(rows[0.01]["error_rel_diag"]) * diag <= 3 * np.log1p(0.01) / 40.0
-    assert "tol 0.01" in (out / "report.md").read_text(encoding="utf-8") or \
-        "| 0.01 |" in (out / "report.md").read_text(encoding="utf-8")
+    assert float(rows[0.0, 0.01]["error_rel_diag"]) * diag <= 3 * np.log1p(0.01) / 40.0
+    report = (out / "report.md").read_text(encoding="utf-8")
+    assert "| 0.01 |" in report and "beta_frontier.png" in report
+    assert (out / "beta_frontier.png").is_file()
+    table = report[report.index("## β against tol"):].splitlines()
+    line = next(ln for ln in table if ln.startswith("| points | 1 |"))
+    # the tol render is far more accurate than beta 1; dominated exactly when no slower
+    faster = float(rows[0.0, 0.01]["seconds"]) <= float(rows[1.0, 0.0]["seconds"])
+    assert ("| tol 0.01 |" in line) == faster and ("nearest: tol 0.01" in line) != faster
+
+
+def test_beta_tol_renders_at_tol_betas():
+    """Each tol > 0 is rendered at beta 0 only (the frontier's tol series) unless asked."""
+    from tracer.studies import beta
+
+    def keys(**kw):
+        return [(t["beta"], t["tol"]) for t in beta.list_tasks(
+            OCTOPUS, ["points"], [0.5, 1.0], [0.01, 0.1], size=8, alpha=1.0, alpha_u=1.0,
+            eps=None, **kw)]
+
+    assert keys() == [(0.0, 0.0), (0.5, 0.0), (1.0, 0.0), (0.0, 0.01), (0.0, 0.1)]
+    assert keys(tol_betas=None) == [(b, t) for t in (0.0, 0.01, 0.1) for b in (0.0, 0.5, 1.0)]
+    assert keys(tol_betas=[0.5]) == [(0.0, 0.0), (0.5, 0.0), (1.0, 0.0), (0.5, 0.01),
+                                     (0.5, 0.1)]
+
+
+def _row(kind, b, t, seconds, err):
+    return {"type": kind, "beta": b, "tol": t, "seconds": seconds, "error_rel_diag": err}
+
+
+def test_frontier_finds_the_fastest_dominating_tol():
+    """frontier(): a tol render dominates a beta render when its error and its time are both
+    no larger; the fastest such tol is named, else the most accurate one that is no slower."""
+    from tracer.studies.plots import frontier
+
+    rows = [_row("points", 0.0, 0.0, 10.0, 0.0), _row("points", 0.1, 0.0, 2.0, 1e-3),
+            _row("points", 0.5, 0.0, 0.5, 1e-2), _row("points", 1.0, 0.0, 0.2, 3e-2),
+            _row("points", 0.0, 1e-2, 1.5, 2e-4), _row("points", 0.0, 1e-3, 1.9, 5e-5),
+            _row("points", 0.0, 1.0, 0.4, 2e-2), _row("edges", 0.5, 0.0, 9.0, 1.0),
+            _row("points", 0.0, 10.0, 0.3, float("nan"))]   # no reference: left out
+    front = frontier(rows, "points")
+    assert [f["row"]["beta"] for f in front] == [0.1, 0.5, 1.0]
+    assert front[0]["by"]["tol"] == 1e-2          # 1e-3 dominates too, but is slower
+    assert front[1]["by"] is None and front[1]["nearest"]["tol"] == 1.0   # no slower, 2e-2
+    assert front[2]["by"] is None and front[2]["nearest"]["tol"] == 1.0   # none no slower
+    # a beta render equal to a tol render in both counts as dominated (no larger, no longer)
+    rows.append(_row("points", 0.0, 0.5, 0.5, 1e-2))
+    assert frontier(rows, "points")[1]["by"]["tol"] == 0.5
+    assert frontier(rows, "edges") == [{"row": rows[7], "by": None, "nearest": None}]
 
 
 def test_beta_csv_columns_and_rows(beta_run):

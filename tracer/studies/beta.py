@@ -19,7 +19,10 @@ The study as independent tasks:
   difference to beta = 0 (``beta_diff.png``, with its colour bar) and ``report.md``.
 
 ``tol`` is the renderer's tolerance-controlled pruning (the scene key ``tol``; 0 = off); tasks
-with ``tol > 0`` are listed when ``--tols`` asks for them.
+with ``tol > 0`` are listed when ``--tols`` asks for them, at beta 0 unless ``--tol-betas``
+says otherwise. ``beta_frontier.png`` and the report's frontier table set each beta's render
+against the tol renders: the fastest one with an error no larger and a time no longer, if
+any (:func:`tracer.studies.plots.frontier`).
 """
 
 import io
@@ -76,8 +79,13 @@ def add_arguments(p):
                    help="comma-separated betas (default 0,0.1,...,1.0); 0, the reference, "
                    "is always rendered")
     p.add_argument("--tols", default="0",
-                   help="comma-separated tolerances for tolerance-controlled pruning, each a "
-                   "series (default 0: off; e.g. 0,1e-2,3e-3,1e-3); 0 is the plain series")
+                   help="comma-separated tolerances for tolerance-controlled pruning (default "
+                   "0: off; e.g. 1e-3,1e-2,0.1,1); each tol > 0 is rendered at the betas of "
+                   "--tol-betas, and beta_frontier.png sets the tol series against the beta "
+                   "series (error against time)")
+    p.add_argument("--tol-betas", default="0",
+                   help="betas at which each tol > 0 is rendered (default 0: the tol series "
+                   "of the frontier; 'all': every beta of --betas)")
     p.add_argument("--size", type=int, default=256,
                    help="image width = height in pixels (default 256, the size of the "
                    "reference timings; the paper's figure uses 512)")
@@ -112,16 +120,18 @@ def file_stem(kind, beta, tol):
     return f"{kind}_beta{beta_tag(beta)}" + (f"_tol{beta_tag(tol)}" if tol else "")
 
 
-def list_tasks(mesh, types, betas, tols, *, size, alpha, alpha_u, eps):
-    """One task per (type, beta, tol): a dict of render parameters and its ``key``. The
-    reference (beta 0, tol 0) of every type is always included."""
+def list_tasks(mesh, types, betas, tols, *, size, alpha, alpha_u, eps, tol_betas=(0.0,)):
+    """One task per (type, beta, tol): a dict of render parameters and its ``key``. ``tol``
+    0 is rendered at every beta, each ``tol > 0`` at the betas ``tol_betas`` (None: every
+    beta). The reference (beta 0, tol 0) of every type is always included."""
     betas = sorted(set(betas) | {0.0})
     tols = sorted(set(tols) | {0.0})
+    tol_betas = betas if tol_betas is None else sorted(set(tol_betas))
     mesh = os.path.abspath(mesh)
     return [{"key": task_key(k, b, t), "mesh": mesh, "type": k, "beta": float(b),
              "tol": float(t), "size": int(size), "alpha": float(alpha),
              "alpha_u": float(alpha_u), "eps": None if eps is None else float(eps)}
-            for k in types for t in tols for b in betas]
+            for k in types for t in tols for b in (tol_betas if t else betas)]
 
 
 _WARM = set()
@@ -261,6 +271,8 @@ def run(args):
     alpha_u = positive(args.alpha_u, "--alpha-u")
     betas = float_list(args.betas, "--betas", non_negative=True)
     tols = float_list(args.tols, "--tols", non_negative=True)
+    tol_betas = (None if args.tol_betas.strip().lower() == "all"
+                 else float_list(args.tol_betas, "--tol-betas", non_negative=True))
     grid_betas = float_list(args.grid_betas, "--grid-betas", non_negative=True)
     types = parse_types(args.types)
     size = check_size(args.size, minimum=8)
@@ -270,7 +282,8 @@ def run(args):
     cache = Path(args.depth_cache) if args.depth_cache else out / "cache"
     csv_path = out / BETA_CSV
     products = [csv_path, out / BETA_PARAMS, out / "beta_time.png", out / "beta_error.png",
-                out / "beta_grid.png", out / "beta_diff.png", out / "report.md"]
+                out / "beta_frontier.png", out / "beta_grid.png", out / "beta_diff.png",
+                out / "report.md"]
     existing = [p for p in products if p.exists()]
     if existing and not (args.overwrite or args.resume):
         raise CLIError(f"{out} already holds beta-ablation results ({existing[0].name}); pass "
@@ -319,7 +332,7 @@ def run(args):
     rows = [r for r in rows if r["key"] in done]
     log.start(rows)
     tasks = list_tasks(args.mesh, types, betas, tols, size=size, alpha=alpha, alpha_u=alpha_u,
-                       eps=args.eps)
+                       eps=args.eps, tol_betas=tol_betas)
     todo = [t for t in tasks if t["key"] not in done]
     label = f"ablate-beta {params['mesh_name']}"
     say = (lambda s: None) if args.quiet else (lambda s: print(s, flush=True))
@@ -350,7 +363,7 @@ def run(args):
     ok = reduce(out, cache, log, params, types, grid_betas)
     say(f"Beta ablation of {params['mesh_name']}: {len(ok)} rows in {csv_path} "
         f"({len(todo)} render(s) {info.describe()}, {duration(info.seconds)}); wrote "
-        f"beta_time.png, beta_error.png, beta_grid.png"
+        f"beta_time.png, beta_error.png, beta_frontier.png, beta_grid.png"
         + (", beta_diff.png" if (out / "beta_diff.png").exists() else "")
         + f" and report.md in {out}.")
     if info.failed:

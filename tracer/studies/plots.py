@@ -1,6 +1,7 @@
 """Plots and reports of the studies (matplotlib, Agg; imported only when a study writes them).
 
-* :func:`beta_outputs`: time and error vs beta (with the reference numbers), the image grid,
+* :func:`beta_outputs`: time and error vs beta (with the reference numbers), error against
+  time with the tol series (:func:`beta_frontier`, :func:`frontier`), the image grid,
   the per-pixel depth-difference heat maps (:func:`beta_diff_figure`) and ``report.md`` of
   ``tracer ablate-beta``;
 * :func:`panel_grid_png` and :func:`alpha_report`: the labelled image grids of ``tracer
@@ -104,13 +105,15 @@ def beta_outputs(out, cache, rows, params, types, grid_betas):
     """Plots, image grid and report of the beta study from its rows (dicts with numbers).
 
     Rows with ``tol > 0`` (tolerance-controlled pruning) are drawn as extra dotted series in
-    the time and error plots and listed in the report; the image grid shows ``tol = 0``.
+    the time and error plots, set against the beta series in ``beta_frontier.png`` and the
+    report's frontier table, and listed in the report; the image grid shows ``tol = 0``.
     """
     present = beta_plots(out, rows, params)
+    front = beta_frontier(out, rows, params, present)
     plain = [r for r in rows if not r.get("tol", 0.0)]
     beta_grid(out, cache, plain, present, grid_betas)
     diff = beta_diff(out, cache, plain, present, grid_betas, params)
-    write_text(out / "report.md", beta_report(rows, params, present, diff=diff))
+    write_text(out / "report.md", beta_report(rows, params, present, diff=diff, front=front))
 
 
 def beta_plots(out, rows, params):
@@ -174,6 +177,117 @@ def beta_plots(out, rows, params):
     savefig(fig, out / "beta_error.png")
     plt.close(fig)
     return present
+
+
+def frontier(rows, kind):
+    """Each beta render of ``kind`` against the tol renders (rows with ``tol > 0``).
+
+    Returns one dict per plain row with ``beta > 0`` (by beta): ``row``; ``by``, the fastest
+    tol row whose error is no larger and whose time is no longer (None if there is none);
+    ``nearest``, when there is none, the tol row of smallest error among those no slower
+    (else the fastest tol row), to say how far the tol series is from it. Rows without an
+    error (no reference) are left out."""
+    def ok(r):
+        return r["type"] == kind and math.isfinite(r["error_rel_diag"])
+
+    tols = [r for r in rows if ok(r) and r.get("tol", 0.0)]
+    out = []
+    for r in sorted((r for r in rows if ok(r) and not r.get("tol", 0.0) and r["beta"] > 0),
+                    key=lambda r: r["beta"]):
+        dom = [t for t in tols if t["error_rel_diag"] <= r["error_rel_diag"]
+               and t["seconds"] <= r["seconds"]]
+        by = min(dom, key=lambda t: t["seconds"]) if dom else None
+        nearest = None
+        if by is None and tols:
+            faster = [t for t in tols if t["seconds"] <= r["seconds"]]
+            nearest = (min(faster, key=lambda t: t["error_rel_diag"]) if faster
+                       else min(tols, key=lambda t: t["seconds"]))
+        out.append({"row": r, "by": by, "nearest": nearest})
+    return out
+
+
+def beta_frontier(out, rows, params, present):
+    """``beta_frontier.png``: mean error against render time, one panel per type, the beta
+    series (labelled by beta) and the tol series (labelled by tol; beta as in the CSV) on log
+    axes; a beta render that some tol render dominates (error and time no larger) is drawn
+    hollow. Returns False (and writes nothing) when no row has ``tol > 0``."""
+    tol_rows = [r for r in rows if r.get("tol", 0.0) and math.isfinite(r["error_rel_diag"])]
+    if not tol_rows:
+        return False
+    plt = pyplot()
+    from matplotlib.ticker import FuncFormatter, NullFormatter
+
+    fig, axes = plt.subplots(1, len(present), squeeze=False,
+                             figsize=(4.2 * len(present), 4.0))
+    for ax, k in zip(axes[0], present):
+        c = TYPE_COLORS[k]
+        front = frontier(rows, k)
+        bs = [f["row"] for f in front]
+        floor = 1e-4    # % of the diagonal: errors of 0 drawn at the axis floor
+        ax.plot([r["seconds"] for r in bs], [max(100 * r["error_rel_diag"], floor) for r in bs],
+                "-", color=c, alpha=0.6, label="β series (tol 0)")
+        for f in front:
+            r = f["row"]
+            ax.plot(r["seconds"], max(100 * r["error_rel_diag"], floor), "o", color=c,
+                    mfc="white" if f["by"] else c, ms=6)
+            ax.annotate(f"β {r['beta']:g}", (r["seconds"], max(100 * r["error_rel_diag"], floor)),
+                        textcoords="offset points", xytext=(4, 3), fontsize=6, color=c)
+        ts = sorted((r for r in tol_rows if r["type"] == k),
+                    key=lambda r: (r["beta"], r["tol"]))
+        for b in sorted({r["beta"] for r in ts}):
+            tb = [r for r in ts if r["beta"] == b]
+            ax.plot([r["seconds"] for r in tb],
+                    [max(100 * r["error_rel_diag"], floor) for r in tb], "^:", color="0.25",
+                    ms=5, label=f"tol series (β {b:g})")
+            for r in tb:
+                ax.annotate(f"{r['tol']:g}", (r["seconds"], max(100 * r["error_rel_diag"], floor)),
+                            textcoords="offset points", xytext=(4, -8), fontsize=6, color="0.25")
+        ref = next((r for r in rows if r["type"] == k and r["beta"] == 0.0
+                    and not r.get("tol", 0.0)), None)
+        if ref is not None:
+            ax.axvline(ref["seconds"], color=c, ls="--", lw=0.8,
+                       label=f"β 0 (reference) {ref['seconds']:.3g} s")
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        for axis in (ax.xaxis, ax.yaxis):
+            axis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+            axis.set_minor_formatter(NullFormatter())
+        ax.set_xlabel("render time (s)")
+        ax.set_ylabel("mean |t − t_0| (% of bbox diagonal)")
+        n_dom = sum(1 for f in front if f["by"])
+        ax.set_title(f"{k}: {n_dom} of {len(front)} β dominated by a tol", fontsize=9)
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=6, loc="best")
+    fig.suptitle(f"{params['mesh_name']}: error against time, β and tol "
+                 f"({params['width']}², α={params['alpha']:g}, α_U={params['alpha_u']:g}; "
+                 "hollow: a tol render is as accurate and as fast)", fontsize=9)
+    fig.tight_layout()
+    savefig(fig, out / "beta_frontier.png")
+    plt.close(fig)
+    return True
+
+
+def frontier_lines(rows, present):
+    """The report's frontier table (markdown lines; empty without tol rows)."""
+    if not any(r.get("tol", 0.0) for r in rows):
+        return []
+    lines = ["## β against tol", "",
+             "For each β, the fastest tol render with an error no larger and a time no longer "
+             "(its β in brackets when not 0); where there is none, the most accurate tol render "
+             "that is no slower (or else the fastest one), for comparison.", "",
+             "| type | β | time (s) | error (% diag) | dominated by | its time (s) | "
+             "its error (% diag) |", "|---|---|---|---|---|---|---|"]
+    for k in present:
+        for f in frontier(rows, k):
+            r, t = f["row"], f["by"] or f["nearest"]
+            who = "–" if t is None else (
+                ("tol " if f["by"] else "no (nearest: tol ") + f"{t['tol']:g}"
+                + (f" [β {t['beta']:g}]" if t["beta"] else "") + ("" if f["by"] else ")"))
+            lines.append(f"| {k} | {r['beta']:g} | {r['seconds']:.3g} | "
+                         f"{100 * r['error_rel_diag']:.4f} | {who} | "
+                         + ("– | – |" if t is None else
+                            f"{t['seconds']:.3g} | {100 * t['error_rel_diag']:.4f} |"))
+    return lines + [""]
 
 
 def beta_grid(out, cache, rows, present, grid_betas):
@@ -291,7 +405,7 @@ def beta_diff(out, cache, rows, present, grid_betas, params):
     return True
 
 
-def beta_report(rows, params, present, diff=False):
+def beta_report(rows, params, present, diff=False, front=False):
     m = machine_info()
     lines = [f"# β ablation: {params['mesh_name']}", "",
              "Madan & Levin 2022, Sec. 4.3 (figure \"betatest\"); protocol of the authors' "
@@ -310,6 +424,7 @@ def beta_report(rows, params, present, diff=False):
              "depend on other load on the machine.",
              *([f"- note: {params['note']}"] if params.get("note") else []), "",
              "![time vs beta](beta_time.png)", "", "![error vs beta](beta_error.png)", "",
+             *(["![error against time, beta and tol](beta_frontier.png)", ""] if front else []),
              "![renders](beta_grid.png)", "",
              *(["![depth difference to beta = 0](beta_diff.png)", ""] if diff else []),
              "## Measured vs reference", "",
@@ -340,7 +455,8 @@ def beta_report(rows, params, present, diff=False):
                 f"{100 * r['error_rel_diag']:.3f} | {fmt(ref_e, 3) or '–'} | "
                 f"{100 * r['error_std_rel_diag']:.3f} | {r['hits']} | {r['mean_leaves']:.0f} | "
                 f"{r['leaves_per_eval']:.1f} |")
-    lines += ["", "The raw numbers are in `beta_ablation.csv`; the parameters in "
+    lines += ["", *frontier_lines(rows, present),
+              "The raw numbers are in `beta_ablation.csv`; the parameters in "
               "`beta_params.json`.", ""]
     return "\n".join(lines)
 
