@@ -88,7 +88,8 @@ def test_beta_tol_series(tmp_path):
     line = next(ln for ln in table if ln.startswith("| points | 1 |"))
     # the tol render is far more accurate than beta 1; dominated exactly when no slower
     faster = float(rows[0.0, 0.01]["seconds"]) <= float(rows[1.0, 0.0]["seconds"])
-    assert ("| tol 0.01 |" in line) == faster and ("nearest: tol 0.01" in line) != faster
+    assert ("| tol 0.01 |" in line) == faster
+    assert ("no (as accurate: tol 0.01, slower)" in line) != faster
 
 
 def test_beta_tol_renders_at_tol_betas():
@@ -112,7 +113,8 @@ def _row(kind, b, t, seconds, err):
 
 def test_frontier_finds_the_fastest_dominating_tol():
     """frontier(): a tol render dominates a beta render when its error and its time are both
-    no larger; the fastest such tol is named, else the most accurate one that is no slower."""
+    no larger; the fastest such tol is named, else the fastest one as accurate (slower), else
+    the most accurate one."""
     from tracer.studies.plots import frontier
 
     rows = [_row("points", 0.0, 0.0, 10.0, 0.0), _row("points", 0.1, 0.0, 2.0, 1e-3),
@@ -123,8 +125,12 @@ def test_frontier_finds_the_fastest_dominating_tol():
     front = frontier(rows, "points")
     assert [f["row"]["beta"] for f in front] == [0.1, 0.5, 1.0]
     assert front[0]["by"]["tol"] == 1e-2          # 1e-3 dominates too, but is slower
-    assert front[1]["by"] is None and front[1]["nearest"]["tol"] == 1.0   # no slower, 2e-2
-    assert front[2]["by"] is None and front[2]["nearest"]["tol"] == 1.0   # none no slower
+    # beta 0.5 (0.5 s, 1e-2): tol 1 is faster but less accurate; 1e-2 is as accurate
+    assert front[1]["by"] is None and front[1]["nearest"]["tol"] == 1e-2
+    assert front[2]["by"] is None and front[2]["nearest"]["tol"] == 1.0   # 2e-2 <= 3e-2
+    rows.append(_row("points", 0.05, 0.0, 5.0, 1e-6))  # more accurate than every tol
+    assert frontier(rows, "points")[0]["nearest"]["tol"] == 1e-3
+    rows.pop()
     # a beta render equal to a tol render in both counts as dominated (no larger, no longer)
     rows.append(_row("points", 0.0, 0.5, 0.5, 1e-2))
     assert frontier(rows, "points")[1]["by"]["tol"] == 0.5
