@@ -65,8 +65,12 @@ P_COLUMNS_POSED = P_T + 3
 #: bisection iterations when a step overshoots into d < 0 (halves the bracket each time)
 BISECT_ITERS = 40
 #: tol mode: a sphere-tracing step may under-estimate by up to this fraction of the previous
-#: distance (the evaluation's tolerance is loosened accordingly; 0 disables the relaxation)
-RELAX = 0.25
+#: distance (the evaluation's tolerance is loosened accordingly; 0 disables the relaxation).
+#: 0.1 against 0.25 (bunny, beta 0, 2026-11-25): 3-11 % fewer leaves per pixel (256² points
+#: tol 3e-3 / 0.1: 1,409 -> 1,310, 843 -> 753; 128² edges: 5,777 -> 5,470, 3,434 -> 3,342),
+#: fewer evaluations per hit pixel (6.1 -> 5.5); 0.05 as 0.1; 0.5: +10 % leaves; 0: a
+#: quarter more leaves (the misses' far evaluations at full accuracy)
+RELAX = 0.1
 #: tol mode: loosened evaluations (far from the surface) also use Barnes-Hut with at least
 #: this beta (conservative, so still safe); 0 disables
 FAR_BETA = 0.25
