@@ -26,7 +26,8 @@ other shadings in display values, as they were defined. The alpha of a pixel is 
 its samples that hit the surface (or, transparent with a ground, the ground's shadow: a shadow
 catcher). The centre samples' shadow and occlusion are computed at every
 :data:`LIGHT_STRIDE`-th pixel of every :data:`LIGHT_STRIDE`-th row and filled in where the
-neighbours agree (``_fill_light``; shadow edges and object borders are computed in full);
+neighbours agree, each of the two on its own (``_fill_light``; shadow edges, occlusion
+creases and object borders are computed in full);
 the other samples take theirs bilinearly from the centre samples around them that see the same
 object (or ground), and are lit afresh where none does.
 """
@@ -161,12 +162,15 @@ class _Shader:
                              depth_max, out, parallel_tasks(len(P)))
         return out
 
-    def light_at(self, P, N):
-        """Shadow and occlusion at points with normals (the kernel, batched)."""
+    def light_at(self, P, N, shadows=True, ao=True):
+        """Shadow and occlusion at points with normals (the kernel, batched); ``shadows`` /
+        ``ao`` False: that factor is not computed (returned as 1)."""
         n = len(P)
+        do_shadow = bool(shadows and self.light.shadows)
+        do_ao = bool(ao and self.light.ao)
         shadow = np.ones(n)
         ao = np.ones(n)
-        if n == 0 or not (self.light.shadows or self.light.ao):
+        if n == 0 or not (do_shadow or do_ao):
             return shadow, ao
         tree, roots, params, mode, tol = self.kargs[:5]   # the render's own queries
         lo, hi, depth_max = self.arrays.lo, self.arrays.hi, self.arrays.depth_max
@@ -178,7 +182,7 @@ class _Shader:
                                np.ascontiguousarray(N), self.key, lo, hi, eps, depth_max,
                                1.0 / self.light.penumbra,
                                self.light.ao_distance * self.diag / _lighting.AO_SAMPLES,
-                               self.light.shadows, self.light.ao,
+                               do_shadow, do_ao,
                                self.slack, max(2.0 * eps, _lighting.SHADOW_START * self.diag),
                                shadow, ao, work, parallel_tasks(n))
         self.queries += int(work[:, 0].sum())
@@ -248,10 +252,14 @@ class _Shader:
         facing = np.where(hit[:, None], normals, self.up)
         depth = np.where(hit, t, np.linalg.norm(G - self.origin, axis=1))
 
-        def light(idx):
+        def light(idx, shadows=True, occlusion=True):
             if idx.size:
                 pts = np.where(hit[idx, None], P[idx], G[idx])
-                shadow[idx], ao[idx] = self.light_at(pts, facing[idx])
+                s_i, a_i = self.light_at(pts, facing[idx], shadows, occlusion)
+                if shadows:
+                    shadow[idx] = s_i
+                if occlusion:
+                    ao[idx] = a_i
 
         if grid is not None and LIGHT_STRIDE > 1:
             H, W = grid
@@ -259,9 +267,12 @@ class _Shader:
             coarse = fresh & (r % LIGHT_STRIDE == 0) & (c % LIGHT_STRIDE == 0)
             light(np.flatnonzero(coarse))
             key = np.where(hit, obj_all, np.where(on_ground, -2, -1))
-            filled = _fill_light((H, W), fresh & ~coarse, coarse, key, depth, facing, shadow,
-                                 ao)
-            light(np.flatnonzero(fresh & ~coarse & ~filled))
+            got_s, got_a = _fill_light((H, W), fresh & ~coarse, coarse, key, depth, facing,
+                                       shadow, ao)
+            rest = fresh & ~coarse
+            light(np.flatnonzero(rest & ~got_s & ~got_a))
+            light(np.flatnonzero(rest & ~got_s & got_a), occlusion=False)
+            light(np.flatnonzero(rest & got_s & ~got_a), shadows=False)
         else:
             light(np.flatnonzero(fresh))
         colour = np.zeros((n, 3))
@@ -299,8 +310,8 @@ LIGHT_STRIDE = 3
 #: fraction of the pixel's and its normal within ``acos(FILL_COS)``
 FILL_DEPTH = 0.02
 FILL_COS = 0.9
-#: ... and when the coarse neighbours' shadows, and their occlusions, differ by at most this
-#: (else: a shadow edge, or a contact)
+#: ... and, for the shadow, when the coarse neighbours' shadows differ by at most this (else:
+#: a shadow edge), for the occlusion when their occlusions do (else: a crease or a contact)
 FILL_SHADOW = 0.1
 #: the ground fades into the background as ``exp(-(r / R)^2)`` with ``R`` this many times the
 #: diagonal of the box that holds the surface (``r``: distance from below its centre) ...
@@ -314,15 +325,19 @@ def _fill_light(shape, want, coarse, key, depth, normals, shadow, ao):
 
     Each wanted pixel takes the bilinear-weighted mean of the (up to four) surrounding coarse
     pixels that see the same object (``key``), at a depth within :data:`FILL_DEPTH` and with a
-    normal within ``acos(FILL_COS)`` of its own; pixels without such a neighbour are left out
-    (returned False) to be lit on their own. Edits ``shadow`` and ``ao`` in place; returns the
-    mask of pixels filled."""
+    normal within ``acos(FILL_COS)`` of its own, for its shadow where those neighbours'
+    shadows differ by at most :data:`FILL_SHADOW`, and for its occlusion where their
+    occlusions do (each factor on its own: a shadow edge over an open floor still takes its
+    occlusion from the neighbours). Pixels without such a neighbour, or where the neighbours
+    disagree, are left out to be lit on their own. Edits ``shadow`` and ``ao`` in place;
+    returns the masks ``(shadow filled, occlusion filled)``."""
     H, W = shape
     s = LIGHT_STRIDE
     idx = np.flatnonzero(want)
-    filled = np.zeros(key.size, dtype=bool)
+    got_s = np.zeros(key.size, dtype=bool)
+    got_a = np.zeros(key.size, dtype=bool)
     if idx.size == 0:
-        return filled
+        return got_s, got_a
     r, c = np.divmod(idx, W)
     r0, c0 = (r // s) * s, (c // s) * s
     fr, fc = (r - r0) / s, (c - c0) / s
@@ -350,12 +365,14 @@ def _fill_light(shape, want, coarse, key, depth, normals, shadow, ao):
         a_lo = np.where(ok, np.minimum(a_lo, ao[j]), a_lo)
         a_hi = np.where(ok, np.maximum(a_hi, ao[j]), a_hi)
     # across a shadow's edge, or where the occlusion changes fast, the neighbours disagree:
-    # no interpolation there
-    good = (acc_w > 0) & (s_hi - s_lo <= FILL_SHADOW) & (a_hi - a_lo <= FILL_SHADOW)
-    shadow[idx[good]] = acc_s[good] / acc_w[good]
-    ao[idx[good]] = acc_a[good] / acc_w[good]
-    filled[idx[good]] = True
-    return filled
+    # no interpolation of that factor there
+    good_s = (acc_w > 0) & (s_hi - s_lo <= FILL_SHADOW)
+    good_a = (acc_w > 0) & (a_hi - a_lo <= FILL_SHADOW)
+    shadow[idx[good_s]] = acc_s[good_s] / acc_w[good_s]
+    ao[idx[good_a]] = acc_a[good_a] / acc_w[good_a]
+    got_s[idx[good_s]] = True
+    got_a[idx[good_a]] = True
+    return got_s, got_a
 
 
 def _interpolated_light(reuse, key):
