@@ -456,10 +456,12 @@ def test_samples_equal_a_plain_march(bunny_points, newton):
         t = np.full((m, k), np.nan)
         grad = np.zeros((m, k, 3))
         steps = np.zeros((m, k), dtype=np.int64)
+        objs = np.full((m, k), -1, dtype=np.int32)
         march.trace_samples(tree, roots, params, mode, tol, cam, lo, hi, float(scene.eps), 4000,
                             rows, cols, np.ascontiguousarray(part), depth_max, hit, t, grad,
-                            steps, t_lo, t_hi, march.RELAX, SAMPLE_OMEGA, True, nd, 0.0,
+                            steps, objs, t_lo, t_hi, march.RELAX, SAMPLE_OMEGA, True, nd, 0.0,
                             SAMPLE_NEWTON_COS)
+        assert ((objs == 0) == hit).all()           # one object: 0 at every hit, -1 elsewhere
         assert np.isfinite(t_lo).all() and np.isfinite(t_hi).all()
         ref = np.array([[_plain_first_hit(arrays, cam, rows[i] + o[0], cols[i] + o[1],
                                           float(scene.eps), 4000) for o in part]

@@ -52,8 +52,9 @@ def _scene(meshes, mode, alphas):
                  width=8, height=8, mode=mode, eps=1e-4)
 
 
-def _reference(scene, poses, Q, mode):
-    """Every object on its own (brute force at its local points), combined in numpy."""
+def _reference(scene, poses, Q, mode, own=False):
+    """Every object on its own (brute force at its local points), combined in numpy; ``own``:
+    also each object's own distance ``(k, n)``."""
     ds, gs = [], []
     for o, (R, t) in zip(scene.objects, poses):
         local = (Q - t) @ R             # R^T (q - t), row by row
@@ -67,12 +68,14 @@ def _reference(scene, poses, Q, mode):
     D, G = np.array(ds), np.array(gs)
     if mode == "exact":
         k = np.argmin(D, axis=0)
-        return D[k, np.arange(len(Q))], G[k, np.arange(len(Q))]
-    a = max(o.alpha for o in scene.objects)
-    m = D.min(axis=0)
-    w = np.exp(-a * (D - m))
-    s = w.sum(axis=0)
-    return m - np.log(s) / a, (w[:, :, None] * G).sum(axis=0) / s[:, None]
+        res = D[k, np.arange(len(Q))], G[k, np.arange(len(Q))]
+    else:
+        a = max(o.alpha for o in scene.objects)
+        m = D.min(axis=0)
+        w = np.exp(-a * (D - m))
+        s = w.sum(axis=0)
+        res = m - np.log(s) / a, (w[:, :, None] * G).sum(axis=0) / s[:, None]
+    return res + (D,) if own else res
 
 
 def _kernel(arrays, Q):
@@ -81,12 +84,14 @@ def _kernel(arrays, Q):
     dstack = np.empty(depth_max + 4)
     out = np.empty((len(Q), 4))
     leaves = np.empty(len(Q), dtype=np.int64)
+    near = np.empty(len(Q), dtype=np.int64)
     for i, q in enumerate(Q):
-        d, gx, gy, gz, nodes, lv = march.scene_distance(tree, roots, params, mode, tol, *q,
-                                                        stack, dstack, 0.0)
+        d, gx, gy, gz, nodes, lv, nearest = march.scene_distance(tree, roots, params, mode,
+                                                                 tol, *q, stack, dstack, 0.0)
         out[i] = d, gx, gy, gz
         leaves[i] = lv
-    return out[:, 0], out[:, 1:], leaves
+        near[i] = nearest
+    return out[:, 0], out[:, 1:], leaves, near
 
 
 @pytest.mark.parametrize("posed", [False, True])
@@ -102,9 +107,15 @@ def test_object_skip_equals_every_object(mode, posed, rng):
     arrays = scene_arrays(scene, poses if posed else None)
     lo, hi = arrays.lo, arrays.hi
     Q = rng.uniform(lo, hi, size=(400, 3))
-    d, g, leaves = _kernel(arrays, Q)
-    dr, gr = _reference(scene, poses, Q, mode)
+    d, g, leaves, near = _kernel(arrays, Q)
+    dr, gr, Dr = _reference(scene, poses, Q, mode, own=True)
     np.testing.assert_allclose(d, dr, rtol=1e-12, atol=1e-12)
+    # the nearest object (the one a ray's hit shows) is the argmin of the objects' own
+    # distances, wherever that is not a near tie
+    gap = np.sort(Dr, axis=0)[1] - Dr.min(axis=0)
+    clear = gap > 1e-9
+    assert clear.mean() > 0.9
+    np.testing.assert_array_equal(near[clear], np.argmin(Dr, axis=0)[clear])
     if mode == "smooth":
         np.testing.assert_allclose(g, gr, rtol=1e-9, atol=1e-9)
     else:
@@ -141,3 +152,52 @@ def test_object_lower_bound_is_below_each_object(rng):
                                                dstack, 0.0)[0]
                     assert lb <= d + 1e-12 * (1 + abs(d)), (mode, tol, k, lb, d)
                     assert math.isfinite(lb)
+
+
+@pytest.mark.parametrize("samples", [1, 4])
+@pytest.mark.parametrize("mode", ["smooth", "exact"])
+def test_render_object_map_is_the_nearest_object(mode, samples, rng):
+    """A lit render's object map (``aovs["object"]``), which the march finds at each hit, is
+    what ``tracer.lighting.object_ids`` computes at the hit points on its own (each object's
+    own distance, smallest); the anti-aliasing samples colour their hits the same way (an
+    image with the samples' colours from ``object_ids`` is the same image)."""
+    from tracer import film, lighting
+    from tracer.camera import primary_rays
+    from tracer.render import render
+
+    meshes = _objects(rng)
+    # blunt enough for the wire and the cloud to cover pixels at 48 x 48
+    scene = _scene(meshes, mode, [60.0, 10.0, 8.0])
+    for o in scene.objects:
+        o.offset = 0.15
+    scene.width = scene.height = 48
+    scene.camera_origin = np.array([1.0, 1.0, 5.0])
+    scene.camera_dest = np.array([1.0, 1.0, 0.0])
+    scene.shading = "lit"
+    scene.samples = samples
+    res = render(scene)
+    obj = res.aovs["object"]
+    assert set(np.unique(obj[res.hit])) == {0, 1, 2}       # all three objects in view
+    assert (obj[~res.hit] == -1).all()
+    P = res.camera.origin + np.asarray(res.depth, float)[..., None] * primary_rays(res.camera)
+    arrays = scene_arrays(scene)
+    tree, roots, params, mode_k, lo, hi, depth_max, tol = arrays
+    ref = np.empty(int(res.hit.sum()), dtype=np.int64)
+    lighting.object_ids(tree, roots, params, mode_k, tol, np.ascontiguousarray(P[res.hit]),
+                        depth_max, ref)
+    # depth is stored in float32: hit points lie within rounding of the march's own points
+    assert np.mean(obj[res.hit] == ref) > 0.995
+    if samples > 1:
+        # the samples' objects from object_ids instead of the march: the same image
+        shade = film._Shader.shade
+
+        def shade_found_again(self, hit, t, grad, dirs, reuse=None, grid=None, objs=None):
+            return shade(self, hit, t, grad, dirs, reuse, grid,
+                         objs if grid is not None else None)
+
+        film._Shader.shade = shade_found_again
+        try:
+            again = render(scene)
+        finally:
+            film._Shader.shade = shade
+        assert np.abs(again.rgb.astype(int) - res.rgb.astype(int)).max() <= 1

@@ -40,7 +40,7 @@ def trace(scene, roots=None, threads=None, band=None, kernel="tiles"):
     H, W = scene.height, scene.width
     out = (np.zeros((H, W), dtype=np.bool_), np.full((H, W), np.nan), np.zeros((H, W, 3)),
            np.zeros((H, W), dtype=np.int64), np.zeros((H, W), dtype=np.int64),
-           np.zeros((H, W), dtype=np.int64))
+           np.zeros((H, W), dtype=np.int64), np.full((H, W), -1, dtype=np.int32))
     args = (tree, roots, params, mode, tol, camera_of(scene).as_array(), lo, hi,
             float(scene.eps), int(scene.max_steps))
     options = (march.RELAX, march.OMEGA, march.CONE, march.newton_distance(scene.eps, lo, hi))

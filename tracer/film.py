@@ -211,9 +211,12 @@ class _Shader:
         return on, pts, fade
 
     # ------------------------------------------------------------------ samples
-    def shade(self, hit, t, grad, dirs, reuse=None, grid=None):
+    def shade(self, hit, t, grad, dirs, reuse=None, grid=None, objs=None):
         """Colours ``(n, 3)`` (linear if lit, display values otherwise), alphas ``(n,)`` and a
         record of what each sample saw (for reuse by later samples of the same pixel).
+
+        ``objs (n,)``: the object each hit shows, as the march found it at the hit
+        (:func:`tracer.march.march_ray`); None: found here (:meth:`objects_at`).
 
         ``grid = (H, W)``: the samples are an image's centre samples, whose light is computed
         at every LIGHT_STRIDE-th pixel of every LIGHT_STRIDE-th row and filled in between
@@ -233,7 +236,7 @@ class _Shader:
             colour = rgb.reshape(n, 3).astype(np.float64) / 255.0
             return colour, hit.astype(np.float64), {"obj": np.zeros(n, np.int64), "hit": hit}
         P = self.origin + np.where(hit, t, 0.0)[:, None] * dirs
-        obj = self.objects_at(P[hit])
+        obj = self.objects_at(P[hit]) if objs is None else np.asarray(objs, np.int64)[hit]
         obj_all = np.full(n, -1, dtype=np.int64)
         obj_all[hit] = obj
         miss = ~hit
@@ -457,7 +460,7 @@ def _neighbour_flags(colour, record, shape):
 
 def _trace(kargs, options, pixels, W, offsets, bounds=None):
     """The samples ``offsets (K, 2)`` of the pixels ``pixels (m,)`` (flat indices), flattened
-    pixel-major: ``hit, t, grad, steps`` of length ``m K``. ``bounds = (t_lo, t_hi)``, each
+    pixel-major: ``hit, t, grad, steps, objs`` of length ``m K``. ``bounds = (t_lo, t_hi)``, each
     ``(m,)``: the pixels' cone bounds, read where finite, written where not (NaN)."""
     tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, depth_max = kargs
     relax, omega, cone, newton = options
@@ -467,15 +470,16 @@ def _trace(kargs, options, pixels, W, offsets, bounds=None):
     t = np.full((m, K), np.nan)
     grad = np.zeros((m, K, 3))
     steps = np.zeros((m, K), dtype=np.int64)
+    objs = np.full((m, K), -1, dtype=np.int32)
     if bounds is None:
         bounds = (np.full(m, np.nan), np.full(m, np.nan))
     if m and K:
         rows, cols = np.divmod(pixels.astype(np.int64), W)
         march.trace_samples(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, rows,
                             cols, np.ascontiguousarray(offsets, dtype=np.float64), depth_max,
-                            hit, t, grad, steps, bounds[0], bounds[1], relax, omega, cone,
-                            newton, EPS_PX, SAMPLE_NEWTON_COS, parallel_tasks(m))
-    return hit.ravel(), t.ravel(), grad.reshape(-1, 3), steps.ravel()
+                            hit, t, grad, steps, objs, bounds[0], bounds[1], relax, omega,
+                            cone, newton, EPS_PX, SAMPLE_NEWTON_COS, parallel_tasks(m))
+    return hit.ravel(), t.ravel(), grad.reshape(-1, 3), steps.ravel(), objs.ravel()
 
 
 def form_image(scene, camera, arrays, kargs, options, centre, samples=1, adaptive=False):
@@ -483,16 +487,18 @@ def form_image(scene, camera, arrays, kargs, options, centre, samples=1, adaptiv
     adaptive selection), and average.
 
     ``kargs = (tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, depth_max)`` in the
-    march kernels' form; ``centre = (hit (H, W), t (H, W), grad (H, W, 3))``. Returns
+    march kernels' form; ``centre = (hit (H, W), t (H, W), grad (H, W, 3), objs (H, W))``
+    (``objs``, the object each hit shows, may be left out: then it is found again). Returns
     ``(rgb (H, W, 3) uint8, alpha (H, W) float32, spp (H, W) int32, info dict)``; ``info``
     holds the centre samples' ``shadow``, ``ao``, ``object`` and ``ground`` maps (lit only)
     and the ``rays`` and ``light_queries`` counts."""
     H, W = scene.height, scene.width
-    hit0, t0, grad0 = (np.asarray(a) for a in centre)
+    hit0, t0, grad0 = (np.asarray(a) for a in centre[:3])
+    objs0 = np.asarray(centre[3]).ravel() if len(centre) > 3 else None
     dirs = primary_rays(camera).reshape(-1, 3)
     shader = _Shader(scene, camera, arrays, kargs)
     colour0, alpha0, rec0 = shader.shade(hit0.ravel(), t0.ravel(), grad0.reshape(-1, 3), dirs,
-                                         grid=(H, W))
+                                         grid=(H, W), objs=objs0)
     acc = colour0 * alpha0[:, None]
     acc_a = alpha0.copy()
     spp = np.ones(H * W, dtype=np.int32)
@@ -514,7 +520,7 @@ def form_image(scene, camera, arrays, kargs, options, centre, samples=1, adaptiv
         c = (pix % W).astype(np.float64) + offsets[kk, 1]
         d = _dir(kargs[5], r, c)
         bounds = (cone_lo[pixels], cone_hi[pixels])
-        hit, t, grad, st = _trace(kargs, options, pixels, W, offsets[ks], bounds)
+        hit, t, grad, st, obj = _trace(kargs, options, pixels, W, offsets[ks], bounds)
         cone_lo[pixels], cone_hi[pixels] = bounds
         rays += pix.size
         work[0] += int(st.sum())
@@ -523,7 +529,7 @@ def form_image(scene, camera, arrays, kargs, options, centre, samples=1, adaptiv
             # a sample's light: interpolated from the centre samples around it (that see
             # what it sees), else its own
             reuse = {"position": (r, c), "centre": rec0, "shape": (H, W)}
-        col, a, rec = shader.shade(hit, t, grad, d, reuse)
+        col, a, rec = shader.shade(hit, t, grad, d, reuse, objs=obj)
         np.add.at(acc, pix, col * a[:, None])
         np.add.at(acc_a, pix, a)
         np.add.at(spp, pix, 1)

@@ -270,9 +270,9 @@ def _lowest_hit(tree, roots, params, mode, tol, starts, up, lo, hi, eps, max_ste
     dstack = np.empty(depth_max + 4)
     best = np.inf
     for i in range(starts.shape[0]):
-        h, t, gx, gy, gz, st, lv, bs = march_ray(tree, roots, params, mode, tol, starts[i, 0],
-                                                 starts[i, 1], starts[i, 2], up[0], up[1],
-                                                 up[2], lo, hi, eps, max_steps, stack, dstack)
+        h, t = march_ray(tree, roots, params, mode, tol, starts[i, 0], starts[i, 1],
+                         starts[i, 2], up[0], up[1], up[2], lo, hi, eps, max_steps, stack,
+                         dstack)[:2]
         if h == 1:
             z = (starts[i, 0] + t * up[0]) * up[0] + (starts[i, 1] + t * up[1]) * up[1] \
                 + (starts[i, 2] + t * up[2]) * up[2]

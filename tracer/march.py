@@ -127,7 +127,9 @@ def scene_distance(tree, roots, params, mode, tol, x, y, z, stack, dstack, slack
     ``max(tol, expm1(alpha * slack))`` per object, i.e. lets each object's ``d_hat`` be up to
     ``slack`` below the ``tol = 0`` value (never above it).
 
-    Returns ``(d, gx, gy, gz, nodes, leaves)``; the gradient is not normalised.
+    Returns ``(d, gx, gy, gz, nodes, leaves, nearest)``; the gradient is not normalised;
+    ``nearest`` is the object whose own distance is the smallest (0 for one object; see
+    :func:`_scene_distance_objects`), so that a ray's hit knows what it shows.
 
     ``roots`` may also be one root node, an int: one unposed object in smooth mode without
     tolerance pruning (``tracer.render.kernel_roots``), the same value as the general path
@@ -135,8 +137,10 @@ def scene_distance(tree, roots, params, mode, tol, x, y, z, stack, dstack, slack
     at compile time), which is what keeps the first render of such a scene short.
     """
     if isinstance(roots, int):
-        return smooth_distance_point(tree, x, y, z, params[0, P_ALPHA], params[0, P_BETA],
-                                     params[0, P_S], params[0, P_WGS], stack, dstack, roots)
+        d, gx, gy, gz, nodes, leaves = smooth_distance_point(
+            tree, x, y, z, params[0, P_ALPHA], params[0, P_BETA], params[0, P_S],
+            params[0, P_WGS], stack, dstack, roots)
+        return d, gx, gy, gz, nodes, leaves, 0
     nobj = roots.size
     if params.shape[1] >= P_COLUMNS_POSED:
         return _scene_distance_objects(tree, roots, params, mode, tol, x, y, z, stack, dstack,
@@ -144,13 +148,14 @@ def scene_distance(tree, roots, params, mode, tol, x, y, z, stack, dstack, slack
     if nobj == 1:
         if mode == MODE_SMOOTH:
             alpha = params[0, P_ALPHA]
-            return smooth_distance_point_tol(tree, x, y, z, alpha,
-                                             _far_beta(params[0, P_BETA], tol, alpha, slack),
-                                             _loosened(tol, alpha, slack), params[0, P_S],
-                                             params[0, P_WGS], stack, dstack, roots[0])
+            d, gx, gy, gz, nodes, leaves = smooth_distance_point_tol(
+                tree, x, y, z, alpha, _far_beta(params[0, P_BETA], tol, alpha, slack),
+                _loosened(tol, alpha, slack), params[0, P_S], params[0, P_WGS], stack, dstack,
+                roots[0])
+            return d, gx, gy, gz, nodes, leaves, 0
         d, gx, gy, gz, p, nodes, leaves = exact_distance_point(tree, x, y, z, stack, dstack,
                                                                roots[0])
-        return d - params[0, P_OFFSET], gx, gy, gz, nodes, leaves
+        return d - params[0, P_OFFSET], gx, gy, gz, nodes, leaves, 0
     return _scene_distance_objects(tree, roots, params, mode, tol, x, y, z, stack, dstack, slack)
 
 
@@ -247,7 +252,9 @@ def _scene_distance_objects(tree, roots, params, mode, tol, x, y, z, stack, dsta
     :func:`object_lower_bound` first, then every other one unless its bound shows it cannot
     matter: in exact-offset mode a bound ``>=`` the minimum so far (the minimum is exact), in
     smooth mode a bound past ``m + (SKIP_LOG + log k) / a`` (its term is below one unit in
-    the last place of the sum)."""
+    the last place of the sum). The last value returned is the object whose own distance is
+    the smallest (the first of equals in visiting order; a skipped object cannot be it: its
+    bound is not below the minimum), what :func:`tracer.lighting.object_ids` computes."""
     nobj = roots.size
     nodes = 0
     leaves = 0
@@ -261,6 +268,8 @@ def _scene_distance_objects(tree, roots, params, mode, tol, x, y, z, stack, dsta
     sx = 0.0
     sy = 0.0
     sz = 0.0
+    nearest = first
+    d_near = np.inf
     for j in range(nobj):
         k = visiting_order(j, first)
         if j > 0:
@@ -271,13 +280,16 @@ def _scene_distance_objects(tree, roots, params, mode, tol, x, y, z, stack, dsta
                                                  stack, dstack, slack)
         nodes += nn
         leaves += ll
+        if d < d_near:
+            d_near = d
+            nearest = k
         if mode == MODE_SMOOTH:
             m, s, sx, sy, sz = logsumexp_accumulate(m, s, sx, sy, sz, d, 1.0, gx, gy, gz, a)
         elif d < m:
             m, sx, sy, sz = d, gx, gy, gz
     if mode == MODE_SMOOTH:
-        return m - math.log(s) / a, sx / s, sy / s, sz / s, nodes, leaves
-    return m, sx, sy, sz, nodes, leaves
+        return m - math.log(s) / a, sx / s, sy / s, sz / s, nodes, leaves, nearest
+    return m, sx, sy, sz, nodes, leaves, nearest
 
 
 @numba.njit(**NJIT)
@@ -341,14 +353,15 @@ def ray_box(ox, oy, oz, dx, dy, dz, lo, hi):
 
 @numba.njit(**NJIT)
 def _false_position(tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, a, fa, b, fb, gx, gy,
-                    gz, eps, stack, dstack):
+                    gz, nearest, eps, stack, dstack):
     """Root of ``d(t)`` in the bracket ``d(a) = fa > eps``, ``d(b) = fb < -eps``.
 
     Illinois false position (the kept end's value is halved when the same end is kept twice),
     falling back to the midpoint when the interpolate is not inside the bracket. Stops at the
     first point with ``|d| <= eps``; after ``BISECT_ITERS`` evaluations it returns the inner
-    end ``b`` (``d < -eps``). Returns ``(t, gx, gy, gz, evaluations, leaves)``; the gradient is
-    that of the returned point (``g`` as given if ``b`` is never moved).
+    end ``b`` (``d < -eps``). Returns ``(t, gx, gy, gz, evaluations, leaves, nearest)``; the
+    gradient and the nearest object are those of the returned point (``g`` and ``nearest`` as
+    given if ``b`` is never moved).
     """
     side = 0
     evals = 0
@@ -357,8 +370,9 @@ def _false_position(tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, a, f
         x = (a * fb - b * fa) / (fb - fa)
         if not (a < x < b):
             x = 0.5 * (a + b)
-        dm, mx, my, mz, nn, ll = scene_distance(tree, roots, params, mode, tol, ox + x * dx,
-                                                oy + x * dy, oz + x * dz, stack, dstack, 0.0)
+        dm, mx, my, mz, nn, ll, ob = scene_distance(tree, roots, params, mode, tol,
+                                                    ox + x * dx, oy + x * dy, oz + x * dz,
+                                                    stack, dstack, 0.0)
         evals += 1
         leaves += ll
         if dm > eps:
@@ -373,19 +387,20 @@ def _false_position(tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, a, f
             gx = mx
             gy = my
             gz = mz
+            nearest = ob
             if dm >= -eps:
                 break
             if side == -1:
                 fa *= 0.5
             side = -1
-    return b, gx, gy, gz, evals, leaves
+    return b, gx, gy, gz, evals, leaves, nearest
 
 
 @numba.njit(**NJIT)
 def march_ray(tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, lo, hi, eps, max_steps,
               stack, dstack, relax=RELAX, omega=OMEGA, t_min=0.0, newton=0.0, t_max=np.inf,
               newton_cos=NEWTON_COS):
-    """March one ray; returns ``(hit, t, gx, gy, gz, steps, leaves, bisections)``.
+    """March one ray; returns ``(hit, t, gx, gy, gz, steps, leaves, bisections, nearest)``.
 
     ``omega >= 1``: over-relaxed steps (Keinert et al. 2014) whose length follows the slope of
     ``d`` along the ray: where ``d`` changes at the rate ``s = g . dir``, the unbounding
@@ -425,7 +440,8 @@ def march_ray(tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, lo, hi, ep
 
     ``hit`` is 1 when ``|d| <= eps`` was reached inside the box (``d < -eps`` only after
     ``BISECT_ITERS`` bracketing steps); then ``t`` is the ray parameter and ``g`` the
-    (unnormalised) distance gradient there. Misses return ``t = nan``.
+    (unnormalised) distance gradient there, and ``nearest`` the object whose own distance is
+    the smallest there (:func:`scene_distance`). Misses return ``t = nan``, ``nearest = -1``.
     """
     t, t_exit = ray_box(ox, oy, oz, dx, dy, dz, lo, hi)
     t = max(t, t_min)
@@ -435,7 +451,7 @@ def march_ray(tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, lo, hi, ep
     leaves = 0
     bis = 0
     if t > t_exit:
-        return 0, np.nan, 0.0, 0.0, 0.0, steps, leaves, bis
+        return 0, np.nan, 0.0, 0.0, 0.0, steps, leaves, bis, -1
     t_prev = t
     # relaxed accuracy far from the surface (scenes with tol > 0 only): a step may lose up
     # to relax x the previous distance, never more, and stays safe because d_hat_tol only
@@ -449,14 +465,17 @@ def march_ray(tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, lo, hi, ep
     newton_on = newton > 0.0 and mode == MODE_SMOOTH
     newton_step = False
     relaxed = False         # the last step was an over-relaxed one (to be checked)
+    ob = -1
     while steps < max_steps:
-        d, gx, gy, gz, nn, ll = scene_distance(tree, roots, params, mode, tol, ox + t * dx,
-                                               oy + t * dy, oz + t * dz, stack, dstack, slack)
+        d, gx, gy, gz, nn, ll, ob = scene_distance(tree, roots, params, mode, tol, ox + t * dx,
+                                                   oy + t * dy, oz + t * dz, stack, dstack,
+                                                   slack)
         steps += 1
         leaves += ll
         if d <= eps and slack > 0.0 and relaxable and _was_loosened(params, tol, slack):
-            d, gx, gy, gz, nn, ll = scene_distance(tree, roots, params, mode, tol, ox + t * dx,
-                                                   oy + t * dy, oz + t * dz, stack, dstack, 0.0)
+            d, gx, gy, gz, nn, ll, ob = scene_distance(tree, roots, params, mode, tol,
+                                                       ox + t * dx, oy + t * dy, oz + t * dz,
+                                                       stack, dstack, 0.0)
             steps += 1
             leaves += ll
         if relaxed and step > d_prev + max(d, 0.0):
@@ -481,12 +500,13 @@ def march_ray(tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, lo, hi, ep
             if d < -eps and t > t_prev:
                 # overshoot into the negative band: find the root in [t_prev (d > eps), t]
                 bis += 1
-                t, gx, gy, gz, ev, lv = _false_position(tree, roots, params, mode, tol, ox, oy, oz,
-                                                        dx, dy, dz, t_prev, d_prev, t, d, gx,
-                                                        gy, gz, eps, stack, dstack)
+                t, gx, gy, gz, ev, lv, ob = _false_position(tree, roots, params, mode, tol, ox,
+                                                            oy, oz, dx, dy, dz, t_prev, d_prev,
+                                                            t, d, gx, gy, gz, ob, eps, stack,
+                                                            dstack)
                 steps += ev
                 leaves += lv
-            return 1, t, gx, gy, gz, steps, leaves, bis
+            return 1, t, gx, gy, gz, steps, leaves, bis, ob
         t_prev = t
         d_prev = d
         step = d
@@ -513,7 +533,7 @@ def march_ray(tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, lo, hi, ep
             newton_step = False
             t = t_prev + d_prev
             step = d_prev
-    return 0, np.nan, 0.0, 0.0, 0.0, steps, leaves, bis
+    return 0, np.nan, 0.0, 0.0, 0.0, steps, leaves, bis, -1
 
 
 @numba.njit(**NJIT)
@@ -568,9 +588,9 @@ def cone_start(tree, roots, params, mode, tol, cam, lo, hi, eps, r_lo, r_hi, c_l
     loose = mode == MODE_SMOOTH and tol > 0.0 and relax > 0.0
     slack = np.inf if loose else 0.0
     while evals < CONE_STEPS:
-        d, gx, gy, gz, nn, ll = scene_distance(tree, roots, params, mode, tol, cam[0] + t * ux,
-                                               cam[1] + t * uy, cam[2] + t * uz, stack,
-                                               dstack, slack)
+        d, gx, gy, gz, nn, ll, ob = scene_distance(tree, roots, params, mode, tol,
+                                                   cam[0] + t * ux, cam[1] + t * uy,
+                                                   cam[2] + t * uz, stack, dstack, slack)
         if loose:
             slack = relax * d
         evals += 1
@@ -613,9 +633,9 @@ def cone_end(tree, roots, params, mode, tol, cam, lo, hi, eps, r_lo, r_hi, c_lo,
     loose = mode == MODE_SMOOTH and tol > 0.0 and relax > 0.0
     slack = np.inf if loose else 0.0
     while evals < CONE_STEPS:
-        d, gx, gy, gz, nn, ll = scene_distance(tree, roots, params, mode, tol, cam[0] + t * ux,
-                                               cam[1] + t * uy, cam[2] + t * uz, stack,
-                                               dstack, slack)
+        d, gx, gy, gz, nn, ll, ob = scene_distance(tree, roots, params, mode, tol,
+                                                   cam[0] + t * ux, cam[1] + t * uy,
+                                                   cam[2] + t * uz, stack, dstack, slack)
         if loose:
             slack = relax * d
         evals += 1
@@ -631,8 +651,8 @@ def cone_end(tree, roots, params, mode, tol, cam, lo, hi, eps, r_lo, r_hi, c_lo,
 
 @numba.njit(**NJIT)
 def _render_tile(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, r_lo, r_hi, c_lo,
-                 c_hi, depth_max, hit, tbuf, grad, steps, leaves, bisect, relax, omega, cone,
-                 newton):
+                 c_hi, depth_max, hit, tbuf, grad, steps, leaves, bisect, objs, relax, omega,
+                 cone, newton):
     stack = np.empty(depth_max + 4, dtype=np.int64)
     dstack = np.empty(depth_max + 4)
     ox = cam[0]
@@ -654,9 +674,10 @@ def _render_tile(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, r_
                                                    eps, r_lo, r_hi, c_lo, c_hi, stack, dstack,
                                                    relax)
                     pending = False
-            h, t, gx, gy, gz, st, lv, bs = march_ray(tree, roots, params, mode, tol, ox, oy, oz,
-                                                     dx, dy, dz, lo, hi, eps, max_steps, stack,
-                                                     dstack, relax, omega, t_min, newton)
+            h, t, gx, gy, gz, st, lv, bs, ob = march_ray(tree, roots, params, mode, tol, ox, oy,
+                                                         oz, dx, dy, dz, lo, hi, eps, max_steps,
+                                                         stack, dstack, relax, omega, t_min,
+                                                         newton)
             st += c_ev
             lv += c_lv
             hit[r, c] = h == 1
@@ -667,6 +688,7 @@ def _render_tile(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, r_
             steps[r, c] = st
             leaves[r, c] = lv
             bisect[r, c] = bs
+            objs[r, c] = ob
 
 
 @numba.njit(**NJIT)
@@ -692,12 +714,14 @@ def _tile_rect(j, n, stride, ntx, row0, row1, W):
 
 @numba.njit(**NJIT_PARALLEL)
 def render_rows(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, row0, row1,
-                depth_max, hit, tbuf, grad, steps, leaves, bisect, relax=RELAX, omega=OMEGA,
-                cone=CONE, newton=0.0):
+                depth_max, hit, tbuf, grad, steps, leaves, bisect, objs, relax=RELAX,
+                omega=OMEGA, cone=CONE, newton=0.0):
     """Trace rows ``row0 <= r < row1`` of the image into the per-pixel output arrays.
 
     Outputs are full-image arrays: ``hit (H, W) bool``, ``tbuf (H, W) float64``,
-    ``grad (H, W, 3) float64``, ``steps``, ``leaves``, ``bisect (H, W) int64``. Work is split
+    ``grad (H, W, 3) float64``, ``steps``, ``leaves``, ``bisect (H, W) int64`` and ``objs (H,
+    W) int32``, the object each hit shows (its own distance the smallest at the hit; -1 where
+    the ray misses; see :func:`march_ray`). Work is split
     into ``TILE x TILE`` tiles so that neighbouring rays share cache lines of the tree; a tile
     is traced by one thread, so the result does not depend on the number of threads. Tiles
     are visited in a scattered order (``j * STRIDE mod n``) so that the static split of the
@@ -707,8 +731,8 @@ def render_rows(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, row
     for j in prange(n):
         r_lo, r_hi, c_lo, c_hi = _tile_rect(j, n, stride, ntx, row0, row1, W)
         _render_tile(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, r_lo, r_hi,
-                     c_lo, c_hi, depth_max, hit, tbuf, grad, steps, leaves, bisect, relax,
-                     omega, cone, newton)
+                     c_lo, c_hi, depth_max, hit, tbuf, grad, steps, leaves, bisect, objs,
+                     relax, omega, cone, newton)
 
 
 @numba.njit(**NJIT)
@@ -728,9 +752,10 @@ def trace_pixels(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, ro
         stack = np.empty(depth_max + 4, dtype=np.int64)
         dstack = np.empty(depth_max + 4)
         dx, dy, dz = ray_direction(cam, rows[i], cols[i])
-        h, t, gx, gy, gz, st, lv, bs = march_ray(tree, roots, params, mode, tol, cam[0], cam[1],
-                                                 cam[2], dx, dy, dz, lo, hi, eps, max_steps,
-                                                 stack, dstack, relax, omega, 0.0, newton)
+        h, t, gx, gy, gz, st, lv, bs, ob = march_ray(tree, roots, params, mode, tol, cam[0],
+                                                     cam[1], cam[2], dx, dy, dz, lo, hi, eps,
+                                                     max_steps, stack, dstack, relax, omega, 0.0,
+                                                     newton)
         hit[i] = h == 1
         tbuf[i] = t
         steps[i] = st
@@ -739,7 +764,7 @@ def trace_pixels(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, ro
 
 @numba.njit(**NJIT_PARALLEL)
 def trace_samples(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, rows, cols,
-                  offsets, depth_max, hit, tbuf, grad, steps, t_lo, t_hi, relax=RELAX,
+                  offsets, depth_max, hit, tbuf, grad, steps, objs, t_lo, t_hi, relax=RELAX,
                   omega=OMEGA, cone=CONE, newton=0.0, eps_px=0.0, newton_cos=NEWTON_COS,
                   ntasks=1):
     """Trace anti-aliasing samples: for pixel ``(rows[i], cols[i])`` the rays through
@@ -751,7 +776,8 @@ def trace_samples(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, r
     meet the surface: ``[t_lo[i], t_hi[i]]``. ``t_lo, t_hi (m,)`` are read when finite (from
     an earlier call for the same pixels: the cone passes are not repeated) and written
     otherwise. Outputs are ``(m, K)``: ``hit`` bool, ``tbuf``, ``steps`` int64 (the cone
-    passes booked on sample 0), and ``grad (m, K, 3)``. Pixels are independent, so the
+    passes booked on sample 0), ``objs`` int32 (the object each hit shows, -1 for a miss;
+    :func:`march_ray`), and ``grad (m, K, 3)``. Pixels are independent, so the
     result does not depend on the number of threads; ``ntasks`` strided tasks share them out
     (:mod:`smoothdist.schedule`: the flagged pixels come in image order, and their cost
     follows the silhouette).
@@ -785,16 +811,17 @@ def trace_samples(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, r
             e = max(eps, eps_px * pixel * t_min)
             for k in range(offsets.shape[0]):
                 dx, dy, dz = ray_direction(cam, r + offsets[k, 0], c + offsets[k, 1])
-                h, t, gx, gy, gz, st, lv, bs = march_ray(tree, roots, params, mode, tol, cam[0],
-                                                         cam[1], cam[2], dx, dy, dz, lo, hi, e,
-                                                         max_steps, stack, dstack, relax, omega,
-                                                         t_min, newton, t_hi[i], newton_cos)
+                h, t, gx, gy, gz, st, lv, bs, ob = march_ray(
+                    tree, roots, params, mode, tol, cam[0], cam[1], cam[2], dx, dy, dz, lo, hi,
+                    e, max_steps, stack, dstack, relax, omega, t_min, newton, t_hi[i],
+                    newton_cos)
                 hit[i, k] = h == 1
                 tbuf[i, k] = t
                 grad[i, k, 0] = gx
                 grad[i, k, 1] = gy
                 grad[i, k, 2] = gz
                 steps[i, k] = st + (c_ev if k == 0 else 0)
+                objs[i, k] = ob
 
 
 @intrinsic
@@ -827,8 +854,8 @@ def _borrowed(typingctx, value):
 
 @numba.njit(**NJIT)
 def render_tiles(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, row0, row1,
-                 depth_max, hit, tbuf, grad, steps, leaves, bisect, relax, omega, cone, newton,
-                 j0, j1):
+                 depth_max, hit, tbuf, grad, steps, leaves, bisect, objs, relax, omega, cone,
+                 newton, j0, j1):
     """Trace tiles ``j0 <= j < j1`` of :func:`render_rows`' tile order for rows
     ``row0 <= r < row1``, in the calling thread (same arguments and outputs as
     ``render_rows``; ``relax, omega, cone, newton`` are required here).
@@ -848,5 +875,5 @@ def render_tiles(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, ro
     for j in range(j0, min(j1, n)):
         r_lo, r_hi, c_lo, c_hi = _tile_rect(j, n, stride, ntx, row0, row1, W)
         _render_tile(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, r_lo, r_hi,
-                     c_lo, c_hi, depth_max, hit, tbuf, grad, steps, leaves, bisect, relax,
-                     omega, cone, newton)
+                     c_lo, c_hi, depth_max, hit, tbuf, grad, steps, leaves, bisect, objs,
+                     relax, omega, cone, newton)

@@ -292,6 +292,7 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
     steps = np.zeros((H, W), dtype=np.int64)
     leaves = np.zeros((H, W), dtype=np.int64)
     bis = np.zeros((H, W), dtype=np.int64)
+    objs = np.full((H, W), -1, dtype=np.int32)
     cam = camera.as_array()
     args = (tree, kernel_roots(roots, params, mode, tol), params, mode, tol, cam, lo, hi,
             float(scene.eps), int(scene.max_steps))
@@ -308,8 +309,8 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
         if progress is not None:
             def report(done, r0=r0):
                 progress(r0 * W + done, H * W, time.perf_counter() - t0)
-        trace_tiles(args, r0, r1, depth_max, (hit, tbuf, grad, steps, leaves, bis), options,
-                    report)
+        trace_tiles(args, r0, r1, depth_max, (hit, tbuf, grad, steps, leaves, bis, objs),
+                    options, report)
     norm = np.linalg.norm(grad, axis=2, keepdims=True)
     normals = np.where(norm > 0, grad / np.where(norm > 0, norm, 1.0), 0.0)
     samples = _samples(scene.samples if samples is None else samples)
@@ -323,7 +324,7 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
 
         kargs = args[:10] + (depth_max,)
         rgb, alpha, spp, aovs = form_image(scene, camera, arrays, kargs, options,
-                                           (hit, tbuf, grad), samples, adaptive)
+                                           (hit, tbuf, grad, objs), samples, adaptive)
         seconds = time.perf_counter() - t0
     depth = tbuf.astype(np.float32)
     return RenderResult(rgb=rgb, hit=hit, depth=depth, normals=normals, steps=steps,
@@ -372,7 +373,7 @@ def trace_tiles(args, row0, row1, depth_max, outputs, options, report=None, thre
     """Trace image rows ``row0 <= r < row1`` into ``outputs``.
 
     ``args = (tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps)`` and ``outputs =
-    (hit, tbuf, grad, steps, leaves, bisect)`` as for :func:`tracer.march.render_rows`,
+    (hit, tbuf, grad, steps, leaves, bisect, objs)`` as for :func:`tracer.march.render_rows`,
     ``options = (relax, omega, cone, newton)``. ``threads`` Python threads (default
     :func:`render_threads`) take chunks of tiles from a shared counter and trace them with
     the serial, GIL-free kernel :func:`tracer.march.render_tiles`, so that a thread that
