@@ -111,6 +111,12 @@ NEWTON_COS = 0.2
 CONE = True
 #: largest number of distance evaluations of one tile's cone march
 CONE_STEPS = 64
+#: the cone passes of a tile: once one of its rays has missed after more than this many
+#: evaluations, the tile's :func:`cone_end` depth is computed and ends its later rays (misses
+#: then stop behind the silhouette instead of stepping out of the box). Bunny 512^2, beta 0.5,
+#: V / E / F (2026-11-26): 2-5 % less time, 3-4 % fewer leaves, the same images bit for bit;
+#: 1, 4 or 8 alike
+END_AFTER = 4
 #: pixels per side of the square tiles handed to threads (and of the cone pass; 4 beat 8 and 16
 #: by 16-18 % CPU time on the bunny at eps 1e-4 x diag, and 2: more cone marches than they save)
 TILE = 4
@@ -659,7 +665,9 @@ def _render_tile(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, r_
     oy = cam[1]
     oz = cam[2]
     t_min = 0.0
+    t_max = np.inf
     pending = cone
+    pending_end = cone
     for r in range(r_lo, r_hi):
         for c in range(c_lo, c_hi):
             dx, dy, dz = ray_direction(cam, r, c)
@@ -677,7 +685,13 @@ def _render_tile(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, r_
             h, t, gx, gy, gz, st, lv, bs, ob = march_ray(tree, roots, params, mode, tol, ox, oy,
                                                          oz, dx, dy, dz, lo, hi, eps, max_steps,
                                                          stack, dstack, relax, omega, t_min,
-                                                         newton)
+                                                         newton, t_max)
+            if h == 0 and pending_end and st > END_AFTER:
+                t_max, e_ev, e_lv = cone_end(tree, roots, params, mode, tol, cam, lo, hi, eps,
+                                             r_lo, r_hi, c_lo, c_hi, stack, dstack, relax)
+                c_ev += e_ev
+                c_lv += e_lv
+                pending_end = False
             st += c_ev
             lv += c_lv
             hit[r, c] = h == 1
@@ -723,7 +737,10 @@ def render_rows(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, row
     W) int32``, the object each hit shows (its own distance the smallest at the hit; -1 where
     the ray misses; see :func:`march_ray`). Work is split
     into ``TILE x TILE`` tiles so that neighbouring rays share cache lines of the tree; a tile
-    is traced by one thread, so the result does not depend on the number of threads. Tiles
+    is traced by one thread, so the result does not depend on the number of threads. With
+    ``cone``, a tile's rays start at its :func:`cone_start` depth and, once one of them has
+    missed after more than :data:`END_AFTER` evaluations, the later ones end at its
+    :func:`cone_end` depth. Tiles
     are visited in a scattered order (``j * STRIDE mod n``) so that the static split of the
     loop between threads gives each thread a similar mix of empty and busy tiles.
     """
