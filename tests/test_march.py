@@ -414,8 +414,8 @@ def test_cone_end_bounds_every_ray_of_the_block(kind, bunny_points):
     rng = np.random.default_rng(4)
     shortened = 0
     for r, c in list(zip(rr, cc))[::2]:
-        t_lo, _, _ = march.cone_start(tree, roots, params, mode, tol, cam, lo, hi, scene.eps,
-                                      r - 1, r + 2, c - 1, c + 2, stack, dstack)
+        t_lo = march.cone_start(tree, roots, params, mode, tol, cam, lo, hi, scene.eps,
+                                r - 1, r + 2, c - 1, c + 2, stack, dstack)[0]
         t_hi, _, _ = march.cone_end(tree, roots, params, mode, tol, cam, lo, hi, scene.eps,
                                     r - 1, r + 2, c - 1, c + 2, stack, dstack)
         assert t_lo <= t_hi
@@ -506,3 +506,91 @@ def test_an_over_relaxed_step_past_t_max_is_taken_again_plainly():
     h, t, *_ = march.march_ray(tree, roots, params, mode, tol, *o, 0.0, 0.0, 1.0, lo, hi, 1e-6,
                                200, stack, dstack, 0.0, 1.9, 0.0, 0.0, 1.99)
     assert h == 0                                     # the point lies beyond t_max
+
+
+# ------------------------------------------------------------------- the cone's Newton step
+def _sheet_field():
+    """A flat 2 x 2 sheet of 32 triangles in the plane z = 0."""
+    g = np.linspace(-1.0, 1.0, 5)
+    X, Y = np.meshgrid(g, g)
+    V = np.c_[X.ravel(), Y.ravel(), np.zeros(X.size)]
+    F = []
+    for i in range(4):
+        for j in range(4):
+            a, b, c, d = i * 5 + j, i * 5 + j + 1, (i + 1) * 5 + j, (i + 1) * 5 + j + 1
+            F += [[a, b, d], [a, d, c]]
+    return SmoothDistanceField(DataMesh(V, np.array(F)))
+
+
+@pytest.mark.parametrize("case", ["sheet", "bunny_triangles", "bunny_points"])
+def test_cone_newton_step_against_plain(case, bunny_points):
+    """``march.cone_newton_step``: ``d_lb`` never exceeds the ray's own distance at the cone's
+    depth (the Lipschitz bound the step relies on); a march that takes the predicted first
+    step hits where plain sphere tracing does (within ``4 eps / cos``) and takes fewer
+    evaluations than the same march without the step."""
+    if case == "sheet":
+        field = _sheet_field()
+        scene = scene_from_field(field, alpha=40.0, width=256, height=256,
+                                 eps=1e-4 * field.diagonal)
+        scene.camera_origin = np.array([0.2, -1.6, 1.9])
+        scene.camera_dest = np.array([0.0, 0.0, 0.0])
+    else:
+        field = (bunny_points if case == "bunny_points"
+                 else SmoothDistanceField(DataMesh.load(BUNNY)))
+        scene = _scene(field, size=256, eps=1e-4 * field.diagonal)
+    arrays = scene_arrays(scene)
+    tree, roots, params, mode, lo, hi, depth_max, tol = arrays
+    cam = camera_of(scene).as_array()
+    eps = float(scene.eps)
+    nd = march.newton_distance(eps, lo, hi)
+    stack = np.empty(depth_max + 4, dtype=np.int64)
+    dstack = np.empty(depth_max + 4)
+    steps = {"predicted": 0, "plain": 0}
+    predicted = 0
+    err = []            # hit depth errors against plain tracing, in eps / cos: (with, without)
+    # every 8th tile of the 256 x 256 image in each direction (the cone must end within the
+    # Newton distance: at a coarser resolution it ends farther out)
+    for r0 in range(0, 256, 32):
+        for c0 in range(0, 256, 32):
+            t_min, _, _, D, gx, gy, gz = march.cone_start(tree, roots, params, mode, tol, cam,
+                                                          lo, hi, eps, r0, r0 + 4, c0, c0 + 4,
+                                                          stack, dstack)
+            if not 0.0 < D <= nd:
+                continue
+            ux, uy, uz, delta = march._cone_axis(cam, r0, r0 + 4, c0, c0 + 4)
+            for r in range(r0, r0 + 4):
+                for c in range(c0, c0 + 4):
+                    v = march.ray_direction(cam, r, c)
+                    t_pred, d_lb = march.cone_newton_step(t_min, D, gx, gy, gz, ux, uy, uz,
+                                                          delta, *v)
+                    p = cam[:3] + t_min * np.asarray(v)
+                    d_own = march.scene_distance(tree, roots, params, mode, tol, *p, stack,
+                                                 dstack, 0.0)[0]
+                    assert d_lb <= d_own + 1e-12
+                    if not (t_pred > t_min and d_lb > eps):
+                        continue
+                    predicted += 1
+                    common = (tree, roots, params, mode, tol, cam[0], cam[1], cam[2], *v, lo,
+                              hi, eps, 4000, stack, dstack, march.RELAX, 1.0, t_min, nd)
+                    a = march.march_ray(*common, np.inf, march.NEWTON_COS, t_pred, d_lb)
+                    b = march.march_ray(*common)
+                    ref = _plain_first_hit(arrays, cam, r, c, eps, 4000)
+                    assert a[0] == b[0] == np.isfinite(ref)
+                    if a[0]:
+                        g = np.array(a[2:5])
+                        cos = max(abs(g @ np.asarray(v)) / np.linalg.norm(g), 0.05)
+                        err.append((abs(a[1] - ref) * cos / eps, abs(b[1] - ref) * cos / eps))
+                    steps["predicted"] += a[5]
+                    steps["plain"] += b[5]
+    assert predicted >= 40
+    err = np.array(err)
+    # a hit stops anywhere in the band (4 eps / cos wide, Barnes-Hut's jumps included); as
+    # often as the march without the step, a ray stops in another part of it
+    # (measured: medians 0.45-0.51, 98th percentiles 1.3 either way; the largest, 7.3 on the
+    # points, is the same ray's with or without the step)
+    within = np.mean(err <= 4, axis=0)
+    assert within[0] >= 0.98 and within[0] >= within[1] - 0.01
+    assert err[:, 0].max() <= err[:, 1].max() + 4
+    # the evaluation at the cone's depth is saved (the step is capped at NEWTON_CAP d_lb, so
+    # it rarely reaches the surface at once)
+    assert steps["plain"] - steps["predicted"] >= 0.2 * predicted

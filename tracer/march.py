@@ -109,6 +109,13 @@ NEWTON_CAP = 4.0
 NEWTON_COS = 0.2
 #: seed each tile's rays with a conservative start depth from a cone march (cone_start)
 CONE = True
+#: smooth mode, Newton steps on: where the cone pass ends within the Newton distance, each ray
+#: of the tile takes its first step to where the tangent plane of the cone's last evaluation
+#: meets it (:func:`cone_newton_step`), checked as a Newton step. Bunny 512^2 at our eps
+#: (2026-11-26): 5 % less time, 7 % fewer leaves on hit pixels, the mean depth error against a
+#: 100x tighter plain render unchanged (1.4-1.7e-5 of the diagonal); no effect at eps 1e-3,
+#: where the cone's end is not certified far enough from the surface to step by more than eps
+CONE_NEWTON = True
 #: largest number of distance evaluations of one tile's cone march
 CONE_STEPS = 64
 #: the cone passes of a tile: once one of its rays has missed after more than this many
@@ -405,7 +412,7 @@ def _false_position(tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, a, f
 @numba.njit(**NJIT)
 def march_ray(tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, lo, hi, eps, max_steps,
               stack, dstack, relax=RELAX, omega=OMEGA, t_min=0.0, newton=0.0, t_max=np.inf,
-              newton_cos=NEWTON_COS):
+              newton_cos=NEWTON_COS, t_pred=0.0, d_lb=0.0):
     """March one ray; returns ``(hit, t, gx, gy, gz, steps, leaves, bisections, nearest)``.
 
     ``omega >= 1``: over-relaxed steps (Keinert et al. 2014) whose length follows the slope of
@@ -444,6 +451,11 @@ def march_ray(tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, lo, hi, ep
     falls again (approaching a second surface within ``NEWTON_CAP x newton``) is not
     detected.
 
+    ``t_pred > t_min`` and ``d_lb > eps`` (smooth mode, Newton steps on, no ``tol``
+    relaxation): the ray's distance at ``t_min`` is known to be at least ``d_lb`` and its first
+    step goes to ``t_pred`` (:func:`cone_newton_step`), checked as a Newton step; the ray's
+    evaluation at ``t_min`` is saved.
+
     ``hit`` is 1 when ``|d| <= eps`` was reached inside the box (``d < -eps`` only after
     ``BISECT_ITERS`` bracketing steps); then ``t`` is the ray parameter and ``g`` the
     (unnormalised) distance gradient there, and ``nearest`` the object whose own distance is
@@ -472,6 +484,13 @@ def march_ray(tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, lo, hi, ep
     newton_step = False
     relaxed = False         # the last step was an over-relaxed one (to be checked)
     ob = -1
+    if newton_on and not relaxable and d_lb > eps and t < t_pred <= t_exit:
+        # a first step predicted from the tile's cone pass, taken and checked as a Newton step
+        # from a point whose distance is at least d_lb
+        d_prev = d_lb
+        step = t_pred - t
+        newton_step = step > d_lb
+        t = t_pred
     while steps < max_steps:
         d, gx, gy, gz, nn, ll, ob = scene_distance(tree, roots, params, mode, tol, ox + t * dx,
                                                    oy + t * dy, oz + t * dz, stack, dstack,
@@ -584,7 +603,8 @@ def cone_start(tree, roots, params, mode, tol, cam, lo, hi, eps, r_lo, r_hi, c_l
     the box).
     For ``tol > 0`` scenes the evaluations are loosened like the march's (``relax``): an
     under-estimated ``D`` is still a surface-free radius. Returns ``(t_start, evaluations,
-    leaves)``.
+    leaves, D, gx, gy, gz)``: ``D`` and ``g`` are the distance and gradient at the returned
+    depth on the central ray (``D = -1``: none, or a loosened value).
     """
     ux, uy, uz, delta = _cone_axis(cam, r_lo, r_hi, c_lo, c_hi)
     t_in, t_out = ray_box(cam[0], cam[1], cam[2], ux, uy, uz, lo, hi)
@@ -593,6 +613,8 @@ def cone_start(tree, roots, params, mode, tol, cam, lo, hi, eps, r_lo, r_hi, c_l
     leaves = 0
     loose = mode == MODE_SMOOTH and tol > 0.0 and relax > 0.0
     slack = np.inf if loose else 0.0
+    d = -1.0
+    gx = gy = gz = 0.0
     while evals < CONE_STEPS:
         d, gx, gy, gz, nn, ll, ob = scene_distance(tree, roots, params, mode, tol,
                                                    cam[0] + t * ux, cam[1] + t * uy,
@@ -606,8 +628,30 @@ def cone_start(tree, roots, params, mode, tol, cam, lo, hi, eps, r_lo, r_hi, c_l
             break
         t += step
         if t > t_out:
+            d = -1.0
             break
-    return t, evals, leaves
+    return t, evals, leaves, d if slack == 0.0 else -1.0, gx, gy, gz
+
+
+@numba.njit(**NJIT)
+def cone_newton_step(t_min, D, gx, gy, gz, ux, uy, uz, delta, dx, dy, dz):
+    """A ray's first step from its tile's cone pass: ``(t_pred, d_lb)``.
+
+    The cone's last evaluation, at depth ``t_min`` on the central ray ``u``, gave the distance
+    ``D`` and gradient ``g``. The ray ``v`` (``|v - u| <= delta``) is at most ``t_min delta``
+    from that point at the same depth, so its distance there is at least ``d_lb = D - t_min
+    delta`` (Lipschitz, as for :func:`cone_start`). ``t_pred`` is where the tangent plane
+    ``D + g . (p - t_min u) = 0`` meets the ray, capped at ``t_min + NEWTON_CAP d_lb`` as a
+    Newton step from distance ``d_lb`` would be; 0 where the ray meets the plane at a cosine
+    below ``NEWTON_COS`` (grazing) or not at all. :func:`march_ray` takes it as its first step
+    and checks it as it checks its own Newton steps (an uncertified step that lands where the
+    distance grows along the ray is undone)."""
+    d_lb = D - t_min * delta
+    gv = gx * dx + gy * dy + gz * dz
+    if not gv < -NEWTON_COS * math.sqrt(gx * gx + gy * gy + gz * gz):
+        return 0.0, d_lb
+    cu = t_min * (gx * ux + gy * uy + gz * uz)
+    return min((cu - D) / gv, t_min + NEWTON_CAP * d_lb), d_lb
 
 
 @numba.njit(**NJIT)
@@ -666,6 +710,8 @@ def _render_tile(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, r_
     oz = cam[2]
     t_min = 0.0
     t_max = np.inf
+    D = -1.0
+    cgx = cgy = cgz = ux = uy = uz = delta = 0.0
     pending = cone
     pending_end = cone
     for r in range(r_lo, r_hi):
@@ -678,14 +724,24 @@ def _render_tile(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, r_
                 if t_in <= t_out:
                     # the first ray of the tile that meets the box runs the cone pass (and its
                     # work is booked on that pixel)
-                    t_min, c_ev, c_lv = cone_start(tree, roots, params, mode, tol, cam, lo, hi,
-                                                   eps, r_lo, r_hi, c_lo, c_hi, stack, dstack,
-                                                   relax)
+                    t_min, c_ev, c_lv, D, cgx, cgy, cgz = cone_start(
+                        tree, roots, params, mode, tol, cam, lo, hi, eps, r_lo, r_hi, c_lo,
+                        c_hi, stack, dstack, relax)
                     pending = False
+                    if not (CONE_NEWTON and 0.0 < D <= newton):
+                        D = -1.0
+                    else:
+                        ux, uy, uz, delta = _cone_axis(cam, r_lo, r_hi, c_lo, c_hi)
+            t_pred = 0.0
+            d_lb = 0.0
+            if D > 0.0:
+                t_pred, d_lb = cone_newton_step(t_min, D, cgx, cgy, cgz, ux, uy, uz, delta, dx,
+                                                dy, dz)
             h, t, gx, gy, gz, st, lv, bs, ob = march_ray(tree, roots, params, mode, tol, ox, oy,
                                                          oz, dx, dy, dz, lo, hi, eps, max_steps,
                                                          stack, dstack, relax, omega, t_min,
-                                                         newton, t_max)
+                                                         newton, t_max, NEWTON_COS, t_pred,
+                                                         d_lb)
             if h == 0 and pending_end and st > END_AFTER:
                 t_max, e_ev, e_lv = cone_end(tree, roots, params, mode, tol, cam, lo, hi, eps,
                                              r_lo, r_hi, c_lo, c_hi, stack, dstack, relax)
@@ -815,8 +871,8 @@ def trace_samples(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, r
             c = cols[i]
             c_ev = 0
             if cone and not (np.isfinite(t_lo[i]) and np.isfinite(t_hi[i])):
-                t_lo[i], ev, lv = cone_start(tree, roots, params, mode, tol, cam, lo, hi, eps,
-                                             r - 1, r + 2, c - 1, c + 2, stack, dstack, relax)
+                t_lo[i], ev = cone_start(tree, roots, params, mode, tol, cam, lo, hi, eps,
+                                         r - 1, r + 2, c - 1, c + 2, stack, dstack, relax)[:2]
                 c_ev += ev
                 t_hi[i], ev, lv = cone_end(tree, roots, params, mode, tol, cam, lo, hi, eps, r - 1,
                                            r + 2, c - 1, c + 2, stack, dstack, relax)
