@@ -212,7 +212,7 @@ def main(argv=None):
     for r in rows:
         a = r["authors"]
         cell = lambda x: f"{x:.2f}"
-        ratio = lambda x: "-" if a is None else f"{x / a:.2f}"
+        ratio = lambda x: "-" if a is None else f"{x / a:.3f}"
         vals = [r["type"], f"{r['size']}²", "-" if a is None else cell(a), cell(r["ours"]),
                 ratio(r["ours"])]
         if args.our_eps:
