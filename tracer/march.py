@@ -453,8 +453,7 @@ def march_ray(tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, lo, hi, ep
     falls again (approaching a second surface within ``NEWTON_CAP x newton``) is not
     detected.
 
-    ``t_pred > t_min`` and ``d_lb > 0`` (smooth mode, Newton steps on, no ``tol``
-    relaxation): the ray's distance at ``t_min`` is known to be at least ``d_lb`` and its first
+    ``t_pred > t_min`` and ``d_lb > 0`` (smooth mode, Newton steps on): the ray's distance at ``t_min`` is known to be at least ``d_lb`` and its first
     step goes to ``t_pred`` (:func:`cone_newton_step`), checked as a Newton step; the ray's
     evaluation at ``t_min`` is saved. (With ``d_lb <= eps`` the ray at ``t_min`` may already
     lie in the band ``d <= eps``; it then stops at ``t_pred``, deeper in the same band, or, if
@@ -488,13 +487,15 @@ def march_ray(tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, lo, hi, ep
     newton_step = False
     relaxed = False         # the last step was an over-relaxed one (to be checked)
     ob = -1
-    if newton_on and not relaxable and d_lb > 0.0 and t < t_pred <= t_exit:
+    if newton_on and d_lb > 0.0 and t < t_pred <= t_exit:
         # a first step predicted from the tile's cone pass, taken and checked as a Newton step
-        # from a point whose distance is at least d_lb
+        # from a point whose distance is at least d_lb; it lands near the surface, so it is
+        # evaluated at the scene's own tol at once
         d_prev = d_lb
         step = t_pred - t
         newton_step = step > d_lb
         t = t_pred
+        slack = 0.0
     while steps < max_steps:
         d, gx, gy, gz, nn, ll, ob = scene_distance(tree, roots, params, mode, tol, ox + t * dx,
                                                    oy + t * dy, oz + t * dz, stack, dstack,
@@ -608,7 +609,8 @@ def cone_start(tree, roots, params, mode, tol, cam, lo, hi, eps, r_lo, r_hi, c_l
     For ``tol > 0`` scenes the evaluations are loosened like the march's (``relax``): an
     under-estimated ``D`` is still a surface-free radius. Returns ``(t_start, evaluations,
     leaves, D, gx, gy, gz)``: ``D`` and ``g`` are the distance and gradient at the returned
-    depth on the central ray (``D = -1``: none, or a loosened value).
+    depth on the central ray (``D = -1``: none; with ``relax``, ``D`` may be a loosened value,
+    which is still a lower bound).
     """
     ux, uy, uz, delta = _cone_axis(cam, r_lo, r_hi, c_lo, c_hi)
     t_in, t_out = ray_box(cam[0], cam[1], cam[2], ux, uy, uz, lo, hi)
@@ -634,7 +636,7 @@ def cone_start(tree, roots, params, mode, tol, cam, lo, hi, eps, r_lo, r_hi, c_l
         if t > t_out:
             d = -1.0
             break
-    return t, evals, leaves, d if slack == 0.0 else -1.0, gx, gy, gz
+    return t, evals, leaves, d, gx, gy, gz
 
 
 @numba.njit(**NJIT)
