@@ -127,6 +127,9 @@ NOT_RUN = {
     "python benchmarks/bench_authors.py --authors-bin PATH --sizes 512 --repeat 2 --our-eps":
         "it needs the authors' renderer built outside the repository "
         "(../shared/tools/authors-bench); the same script without --authors-bin is run",
+    "python benchmarks/bench_authors.py --authors-bin PATH --sizes 512 --repeat 3 --our-eps":
+        "it needs the authors' renderer built outside the repository "
+        "(../shared/tools/authors-bench); the same script without --authors-bin is run",
     "python -m tracer bench-grid MESH_DIR -o OUT_DIR --scheduler tcp://host:8786 # an existing cluster":
         "it needs an existing Dask cluster; tests/test_runner_cluster.py starts one with the "
         "dask command line and runs this command against it",
