@@ -124,9 +124,6 @@ NOT_RUN = {
     "python benchmarks/bench_authors.py --authors-bin PATH --sizes 256 512 --repeat 2 --our-eps":
         "it needs the authors' renderer built outside the repository "
         "(../shared/tools/authors-bench); the same script without --authors-bin is run",
-    "python benchmarks/bench_authors.py --authors-bin PATH --sizes 512 --repeat 2 --our-eps":
-        "it needs the authors' renderer built outside the repository "
-        "(../shared/tools/authors-bench); the same script without --authors-bin is run",
     "python benchmarks/bench_authors.py --authors-bin PATH --sizes 512 --repeat 3 --our-eps":
         "it needs the authors' renderer built outside the repository "
         "(../shared/tools/authors-bench); the same script without --authors-bin is run",

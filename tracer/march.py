@@ -144,7 +144,7 @@ def scene_distance(tree, roots, params, mode, tol, x, y, z, stack, dstack, slack
 
     Returns ``(d, gx, gy, gz, nodes, leaves, nearest)``; the gradient is not normalised;
     ``nearest`` is the object whose own distance is the smallest (0 for one object; see
-    :func:`_scene_distance_objects`), so that a ray's hit knows what it shows.
+    ``_scene_distance_objects``), so that a ray's hit knows what it shows.
 
     ``roots`` may also be one root node, an int: one unposed object in smooth mode without
     tolerance pruning (``tracer.render.kernel_roots``), the same value as the general path
