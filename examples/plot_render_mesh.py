@@ -18,7 +18,7 @@ print(f"alpha {obj.alpha:.1f}, alpha_U {obj.alpha_u:.0f}, {res.hit.mean():.0%} o
 
 fig, (ax0, ax1) = plt.subplots(1, 2, figsize=(8, 4))
 ax0.imshow(res.rgb)
-ax0.set_title("image (normal colours)")
+ax0.set_title("image (the default lit look)")
 ax1.imshow(res.depth, cmap="magma")
 ax1.set_title("depth")
 for ax in (ax0, ax1):

@@ -488,17 +488,16 @@ def form_image(scene, camera, arrays, kargs, options, centre, samples=1, adaptiv
 
     ``kargs = (tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, depth_max)`` in the
     march kernels' form; ``centre = (hit (H, W), t (H, W), grad (H, W, 3), objs (H, W))``
-    (``objs``, the object each hit shows, may be left out: then it is found again). Returns
+    (``objs``: the object each hit shows, as the march found it). Returns
     ``(rgb (H, W, 3) uint8, alpha (H, W) float32, spp (H, W) int32, info dict)``; ``info``
     holds the centre samples' ``shadow``, ``ao``, ``object`` and ``ground`` maps (lit only)
     and the ``rays`` and ``light_queries`` counts."""
     H, W = scene.height, scene.width
-    hit0, t0, grad0 = (np.asarray(a) for a in centre[:3])
-    objs0 = np.asarray(centre[3]).ravel() if len(centre) > 3 else None
+    hit0, t0, grad0, objs0 = (np.asarray(a) for a in centre)
     dirs = primary_rays(camera).reshape(-1, 3)
     shader = _Shader(scene, camera, arrays, kargs)
     colour0, alpha0, rec0 = shader.shade(hit0.ravel(), t0.ravel(), grad0.reshape(-1, 3), dirs,
-                                         grid=(H, W), objs=objs0)
+                                         grid=(H, W), objs=objs0.ravel())
     acc = colour0 * alpha0[:, None]
     acc_a = alpha0.copy()
     spp = np.ones(H * W, dtype=np.int32)

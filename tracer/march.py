@@ -284,7 +284,6 @@ def _scene_distance_objects(tree, roots, params, mode, tol, x, y, z, stack, dsta
     sy = 0.0
     sz = 0.0
     nearest = first
-    d_near = np.inf
     for j in range(nobj):
         k = visiting_order(j, first)
         if j > 0:
@@ -295,8 +294,7 @@ def _scene_distance_objects(tree, roots, params, mode, tol, x, y, z, stack, dsta
                                                  stack, dstack, slack)
         nodes += nn
         leaves += ll
-        if d < d_near:
-            d_near = d
+        if d < m:               # m is the smallest object distance so far in both modes
             nearest = k
         if mode == MODE_SMOOTH:
             m, s, sx, sy, sz = logsumexp_accumulate(m, s, sx, sy, sz, d, 1.0, gx, gy, gz, a)
@@ -453,9 +451,10 @@ def march_ray(tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, lo, hi, ep
     falls again (approaching a second surface within ``NEWTON_CAP x newton``) is not
     detected.
 
-    ``t_pred > t_min`` and ``d_lb > 0`` (smooth mode, Newton steps on): the ray's distance at ``t_min`` is known to be at least ``d_lb`` and its first
-    step goes to ``t_pred`` (:func:`cone_newton_step`), checked as a Newton step; the ray's
-    evaluation at ``t_min`` is saved. (With ``d_lb <= eps`` the ray at ``t_min`` may already
+    ``t_pred > t_min`` and ``d_lb > 0`` (smooth mode, Newton steps on): the ray's distance at
+    ``t_min`` is known to be at least ``d_lb`` and its first step goes to ``t_pred``
+    (:func:`cone_newton_step`), checked as a Newton step; the ray's evaluation at ``t_min`` is
+    saved. (With ``d_lb <= eps`` the ray at ``t_min`` may already
     lie in the band ``d <= eps``; it then stops at ``t_pred``, deeper in the same band, or, if
     that overshoots, at a band point that false position finds between the two.)
 
