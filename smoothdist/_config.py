@@ -1,11 +1,18 @@
 """Numba compilation policy, in one place.
 
 Every kernel in this package is decorated through these flags; nothing else in the code base
-may hard-code ``fastmath=`` or ``parallel=`` (``tests/test_config_policy.py`` greps for it).
+may hard-code ``fastmath=``, ``parallel=`` or ``error_model=`` (``tests/test_config_policy.py``
+greps for it).
 
 * ``FASTMATH`` is off: LogSumExp relies on IEEE ``exp`` underflow and on ``inf`` comparisons,
   which fastmath is allowed to break.
 * ``CACHE`` is on, so a fresh process loads compiled kernels from ``__pycache__``.
+* ``ERROR_MODEL`` is ``"numpy"``: a float division by zero gives ``inf`` / ``nan`` as in numpy
+  instead of raising ``ZeroDivisionError``. Kernels trust their (validated) input and never
+  divide by zero on purpose, but under numba's default ``"python"`` model every division
+  carries a zero test and an exception exit, which keeps LLVM from optimising the hot loops
+  around it: the same images bit for bit, and the lit 640x360 frame 0.92 -> 0.71 s, the exact
+  1e6 grid 2 % faster (2026-11-26, 2 threads).
 * ``NJIT_INLINE`` (``NJIT`` with ``forceinline``) is for small helpers that hot loops call
   (the whole-mesh traversal): numba does not inline njit calls on its own.
 * ``PARALLEL`` may be switched off with ``SMOOTHDIST_PARALLEL=0`` (serial reference runs).
@@ -18,13 +25,15 @@ may hard-code ``fastmath=`` or ``parallel=`` (``tests/test_config_policy.py`` gr
 import os
 
 FASTMATH = False
+ERROR_MODEL = "numpy"
 PARALLEL = os.environ.get("SMOOTHDIST_PARALLEL", "1") != "0"
 CACHE = PARALLEL
 
 #: keyword arguments for small scalar kernels called from other kernels
-NJIT = dict(cache=CACHE, fastmath=FASTMATH, nogil=True)
+NJIT = dict(cache=CACHE, fastmath=FASTMATH, nogil=True, error_model=ERROR_MODEL)
 #: keyword arguments for batch kernels that loop over queries with ``prange``
-NJIT_PARALLEL = dict(cache=CACHE, fastmath=FASTMATH, nogil=True, parallel=PARALLEL)
+NJIT_PARALLEL = dict(cache=CACHE, fastmath=FASTMATH, nogil=True, parallel=PARALLEL,
+                     error_model=ERROR_MODEL)
 #: keyword arguments for small helpers of hot loops: ``NJIT`` plus ``forceinline`` (LLVM's
 #: ``alwaysinline``: no call, and a caller's constant arguments fold into the helper)
 NJIT_INLINE = dict(NJIT, forceinline=True)

@@ -1,8 +1,9 @@
 """Code policy: numba compilation flags live in ``smoothdist/_config.py`` only.
 
 * No file in ``smoothdist/`` or ``tracer/`` other than ``smoothdist/_config.py`` may pass
-  ``fastmath=`` or ``parallel=`` (fastmath would break LogSumExp's reliance on IEEE ``inf``
-  and underflow; parallelism is switched centrally by ``SMOOTHDIST_PARALLEL``).
+  ``fastmath=``, ``parallel=`` or ``error_model=`` (fastmath would break LogSumExp's reliance
+  on IEEE ``inf`` and underflow; parallelism is switched centrally by ``SMOOTHDIST_PARALLEL``;
+  every kernel divides under the same error model).
 * Every numba decoration or call (``numba.njit``, ``njit``, ``numba.jit``, ...) takes its
   options from ``**NJIT``, ``**NJIT_PARALLEL`` or ``**NJIT_INLINE`` (``NJIT`` plus
   ``forceinline``) and nothing else, so that every kernel is cached (``cache=True``) and
@@ -21,7 +22,7 @@ from smoothdist import _config
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("smoothdist", "tracer")
 CONFIG = ROOT / "smoothdist" / "_config.py"
-FORBIDDEN = ("fastmath", "parallel")
+FORBIDDEN = ("fastmath", "parallel", "error_model")
 NUMBA_DECORATORS = {"njit", "jit", "generated_jit", "vectorize", "guvectorize", "cfunc",
                     "stencil", "jit_module"}
 ALLOWED_OPTIONS = {"NJIT", "NJIT_PARALLEL", "NJIT_INLINE"}
@@ -53,6 +54,8 @@ def keyword_uses(text):
 def test_config_is_the_cached_policy():
     assert _config.NJIT["cache"] is True and _config.NJIT_PARALLEL["cache"] is True
     assert _config.NJIT["fastmath"] is False and _config.NJIT_PARALLEL["fastmath"] is False
+    # numpy's error model: no zero test and exception exit on every division in hot loops
+    assert _config.NJIT["error_model"] == "numpy" == _config.NJIT_PARALLEL["error_model"]
     assert "parallel" not in _config.NJIT
     assert _config.NJIT_INLINE == dict(_config.NJIT, forceinline=True)
     assert keyword_uses(CONFIG.read_text()), "the scanner must see _config.py's own flags"
