@@ -10,12 +10,16 @@ pixels whose hit/miss differs. A full ``beta = 0`` render takes minutes (about 4
 at 512² on 2 cores), so the reference is traced on every ``--stride``-th pixel in each
 direction only (default 8: 1/64 of the pixels). The beta 0.5 render is listed for comparison
 (its error and time), with the authors' beta 0.5 times from ``bench_authors.py``'s published
-table (same machine class; measure side by side with ``bench_authors.py --tol``).
+table (same machine class; measure side by side with ``bench_authors.py --tol``). With
+``--full-beta0`` the whole ``beta = 0`` render is timed as well (once; about 13 / 55 / 40 s at
+256², 2 threads) and every row gets its time as a fraction of it, the ratio of issue 20's
+third target (tol at beta-0 accuracy against our own beta-0 render).
 
 Usage::
 
     python benchmarks/bench_tol.py                         # 512², tol 1e-2 3e-3 1e-3
     python benchmarks/bench_tol.py --size 128 --tol 1e-2 --types points --stride 4
+    python benchmarks/bench_tol.py --size 256 --tol 3e-3 4e-3 --stride 4 --full-beta0
 """
 
 import argparse
@@ -70,14 +74,16 @@ def main(argv=None):
     p.add_argument("--stride", type=int, default=8, help="reference pixel stride (default 8)")
     p.add_argument("--repeat", type=int, default=1)
     p.add_argument("--threads", type=int, default=2)
+    p.add_argument("--full-beta0", action="store_true", dest="full_beta0",
+                   help="also time the whole beta 0 render and give each row's time over it")
     args = p.parse_args(argv)
     numba.set_num_threads(args.threads)
     full = smoothdist.load_mesh(MESH)
     camera = paper_camera(full.V)
     print(f"# {load()} before; {args.threads} threads", file=sys.stderr)
-    lines = ["| type | setting | render s | mean leaves/px | depth error mean (diag) "
+    lines = ["| type | setting | render s | / beta 0 | mean leaves/px | depth error mean (diag) "
              "| max (diag) | hit/miss differ | authors beta 0.5 s (published) |",
-             "|---|---|---:|---:|---:|---:|---:|---:|"]
+             "|---|---|---:|---:|---:|---:|---:|---:|---:|"]
     for kind in args.types:
         field = SmoothDistanceField(full.as_kind(kind))
         diag = field.diagonal
@@ -94,6 +100,14 @@ def main(argv=None):
         print(f"# {kind}: beta 0 reference on {rows.size} pixels in "
               f"{time.perf_counter() - t0:.1f} s ({load()})", file=sys.stderr, flush=True)
         authors = PUBLISHED.get(args.size, {}).get(kind, (None,))[0]
+        full0 = None
+        if args.full_beta0:
+            t0 = time.perf_counter()
+            res0 = render(scene(0.0, 0.0))
+            full0 = time.perf_counter() - t0
+            lines.append(f"| {kind} | beta 0 (whole render) | {full0:.2f} | 1 | "
+                         f"{res0.leaves.mean():.0f} | 0 | 0 | 0 | - |")
+            print(lines[-1], file=sys.stderr, flush=True)
         for beta, tol in [(0.5, 0.0)] + [(0.0, t) for t in args.tol]:
             best = None
             for _ in range(args.repeat):
@@ -107,7 +121,8 @@ def main(argv=None):
             both = h & rhit
             err = np.abs(res.depth[rows, cols][both].astype(float) - rt[both]) / diag
             name = f"beta {beta:g}" if tol == 0 else f"beta 0, tol {tol:g}"
-            lines.append(f"| {kind} | {name} | {wall:.2f} | {res.leaves.mean():.0f} | "
+            frac = "-" if full0 is None else f"{wall / full0:.3f}"
+            lines.append(f"| {kind} | {name} | {wall:.2f} | {frac} | {res.leaves.mean():.0f} | "
                          f"{err.mean():.2e} | {err.max():.2e} | {int((h != rhit).sum())} | "
                          f"{'-' if authors is None else f'{authors:.2f}'} |")
             print(lines[-1], file=sys.stderr, flush=True)
