@@ -6,12 +6,12 @@ the paper's camera, ``--size`` squared pixels (default 512), 2 threads, our defa
 (one ``tracer.render.render`` call, best of ``--repeat``), mean leaves per pixel, and the
 depth error against a ``beta = 0`` reference, in units of the bbox diagonal: mean and max
 of ``|t_tol - t_0|`` over pixels where both hit (the authors' metric), and the number of
-pixels whose hit/miss differs. A full ``beta = 0`` render takes minutes (about 4 / 17 / 12 min
-at 512² on 2 cores), so the reference is traced on every ``--stride``-th pixel in each
-direction only (default 8: 1/64 of the pixels). The beta 0.5 render is listed for comparison
+pixels whose hit/miss differs. A full ``beta = 0`` render takes minutes (about 0.3 / 2.3 /
+1.6 min at 512² on 2 cores, 2026-11-26), so the reference is traced on every
+``--stride``-th pixel in each direction only (default 8: 1/64 of the pixels). The beta 0.5 render is listed for comparison
 (its error and time), with the authors' beta 0.5 times from ``bench_authors.py``'s published
 table (same machine class; measure side by side with ``bench_authors.py --tol``). With
-``--full-beta0`` the whole ``beta = 0`` render is timed as well (once; about 13 / 55 / 40 s at
+``--full-beta0`` the whole ``beta = 0`` render is timed as well (once; about 6 / 40 / 28 s at
 256², 2 threads) and every row gets its time as a fraction of it, the ratio of issue 20's
 third target (tol at beta-0 accuracy against our own beta-0 render).
 
