@@ -432,7 +432,7 @@ class SmoothDistanceField:
             if ("_exact_tree" in self.__dict__
                     or self._exact_queries >= EXACT_TREE_AFTER * self.num_primitives):
                 exact_tree_batch(self.exact_tree, Q, True, d, g, prim, nodes, leaves,
-                                 parallel_tasks(n))
+                                 parallel_tasks(n), bool(return_stats))
             else:
                 _q.exact_distance_batch(self.tree, Q, d, g, prim, nodes, leaves,
                                         parallel_tasks(n))

@@ -13,7 +13,8 @@ import naive
 from smoothdist import DataMesh, SmoothDistanceField
 from smoothdist import field as field_mod
 from smoothdist import query
-from smoothdist.exact_query import MAX_LEAF, build_exact_tree, exact_tree_batch, primitive_d2
+from smoothdist.exact_query import (MAX_LEAF, build_exact_tree, exact_stack_size, exact_tree_batch,
+                                     exact_tree_point, primitive_d2)
 
 ROOT = Path(__file__).resolve().parents[1]
 ZOO = ("point_cloud", "circle", "segment_star", "icosphere", "cube", "mixed_mesh",
@@ -382,3 +383,47 @@ def test_depth_stays_bounded_on_uneven_data(rng):
     assert SAH_DEPTH < et.depth <= SAH_DEPTH + 10
     Q = np.concatenate([naive.near_queries(mesh, 200, rng), V[:40] * 1.001])
     check_exact(field, et, Q)
+
+
+@numba.njit
+def _one_at_a_time(et, Q, k):
+    """Every row of ``Q`` by the single-query kernel, unseeded, with stacks of length ``k``:
+    ``(d, prim in tree order)``."""
+    n = Q.shape[0]
+    d = np.empty(n)
+    p = np.empty(n, dtype=np.int64)
+    stack = np.empty(k, dtype=np.int64)
+    dstack = np.empty(k)
+    for i in range(n):
+        r = exact_tree_point(et, Q[i, 0], Q[i, 1], Q[i, 2], stack, dstack, -1)
+        d[i] = r[0]
+        p[i] = r[7]
+    return d, p
+
+
+@pytest.mark.parametrize("name", ["octopus", "mixed_mesh", "point_cloud", "segment_star"])
+def test_groups_equal_one_query_at_a_time(request, name, rng):
+    """The batch traces GROUP rows together; every row gets what the single-query kernel
+    finds (the same distance; the same primitive unless tied), for every length of a short
+    last group, seeded or not, counting or not."""
+    mesh = request.getfixturevalue(name) if name == "octopus" else \
+        request.getfixturevalue("zoo")[name]
+    field = SmoothDistanceField(mesh)
+    et = field.exact_tree
+    Q = np.concatenate([coherent(mesh, 9), naive.near_queries(mesh, 301, rng)])
+    ref_d, _ = _one_at_a_time(et, Q, exact_stack_size(et))
+    atol = 1e-13 * mesh.diagonal
+    for n in (1, 2, 3, 5, 7, Q.shape[0]):            # short last groups of every length
+        for seeded in (True, False):
+            d, g, p, no, le = run_tree(et, Q[:n], seeded)
+            np.testing.assert_allclose(d, ref_d[:n], rtol=1e-12, atol=atol)
+    # counting the nodes and leaves changes no result
+    a = run_tree(et, Q)
+    n = Q.shape[0]
+    d, g = np.empty(n), np.empty((n, 3))
+    p, no, le = (np.empty(n, dtype=np.int64) for _ in range(3))
+    exact_tree_batch(et, Q, True, d, g, p, no, le, 1, False)
+    np.testing.assert_array_equal(d, a[0])
+    np.testing.assert_array_equal(g, a[1])
+    np.testing.assert_array_equal(p, a[2])
+    assert a[3].min() >= 1 and a[4].min() >= 1
