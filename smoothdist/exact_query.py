@@ -490,6 +490,17 @@ def primitive_closest(kind, pts, i, px, py, pz):
     return cx, cy, cz
 
 
+@numba.njit(**NJIT_INLINE)
+def winner_result(kind, pts, bi, px, py, pz):
+    """``(d, gx, gy, gz)``: distance from ``p`` to primitive ``bi`` (tree order) and the unit
+    gradient ``(p - c) / d`` (zero on the geometry), from its closest point ``c``."""
+    cx, cy, cz = primitive_closest(kind, pts, bi, px, py, pz)
+    d = math.sqrt((px - cx) ** 2 + (py - cy) ** 2 + (pz - cz) ** 2)
+    if d > 0.0:
+        return d, (px - cx) / d, (py - cy) / d, (pz - cz) / d
+    return 0.0, 0.0, 0.0, 0.0
+
+
 @numba.njit(**NJIT)
 def exact_tree_point(et, px, py, pz, stack, dstack, seed=-1):
     """Exact unsigned distance at ``p`` by nearest-first branch and bound over an ExactTree.
@@ -566,11 +577,8 @@ def exact_tree_point(et, px, py, pz, stack, dstack, seed=-1):
                 stack[sp] = c1
                 dstack[sp] = d1
                 sp += 1
-    cx, cy, cz = primitive_closest(kind, pts, bi, px, py, pz)
-    d = math.sqrt((px - cx) ** 2 + (py - cy) ** 2 + (pz - cz) ** 2)
-    if d > 0.0:
-        return d, (px - cx) / d, (py - cy) / d, (pz - cz) / d, et.orig[bi], nodes, leaves, bi
-    return 0.0, 0.0, 0.0, 0.0, et.orig[bi], nodes, leaves, bi
+    d, gx, gy, gz = winner_result(kind, pts, bi, px, py, pz)
+    return d, gx, gy, gz, et.orig[bi], nodes, leaves, bi
 
 
 def exact_stack_size(et):
@@ -579,8 +587,8 @@ def exact_stack_size(et):
 
 
 @numba.njit(**NJIT)
-def exact_tree_group(et, P, k, stack, dstack, best, idx, need, nodes, leaves, uni=-1,
-                     count=True):
+def exact_tree_group(et, P, k, stack, dstack, best, idx, need, nodes, leaves, count=True,
+                     tri_only=False):
     """Exact branch and bound for the ``GROUP`` queries ``P (GROUP, 3)`` in one traversal.
 
     The rows ``k <= q < GROUP`` repeat row ``k - 1`` (a short last group) and are not
@@ -594,6 +602,7 @@ def exact_tree_group(et, P, k, stack, dstack, best, idx, need, nodes, leaves, un
     of a tile) visit mostly the same nodes, and the group reads each node's boxes once for all
     of them. Children are pushed nearer-first by the sum of the group's squared distances.
     ``dstack`` is ``(len(stack), GROUP)``: each entry's box distance for every query.
+    ``count``: count nodes and leaves; ``tri_only``: the table holds triangles only.
     """
     kind = et.kind
     pts = et.pts
@@ -630,7 +639,7 @@ def exact_tree_group(et, P, k, stack, dstack, best, idx, need, nodes, leaves, un
                     if need[q]:
                         nodes[q] += 1
                         leaves[q] += cnt
-            if uni == 2:                # a table of triangles only (the common case)
+            if tri_only:                # no per-primitive kind dispatch (3 % on the bunny)
                 for i in range(st, st + cnt):
                     for q in range(k):
                         if need[q]:
@@ -703,7 +712,8 @@ def exact_tree_batch(et, Q, seeded, out_d, out_g, out_prim, out_nodes, out_leave
     ``seeded``, each group starts from the previous group's last closest primitive (the chain
     restarts at every chunk, so the results do not depend on the thread count). ``ntasks``
     strided tasks share the chunks out (:mod:`smoothdist.schedule`). The closest point,
-    distance and gradient of each query's winner are computed as in :func:`exact_tree_point`.
+    distance and gradient of each query's winner come from :func:`winner_result`, as in
+    :func:`exact_tree_point`.
     """
     n = Q.shape[0]
     nchunks = (n + CHUNK - 1) // CHUNK
@@ -712,9 +722,7 @@ def exact_tree_batch(et, Q, seeded, out_d, out_g, out_prim, out_nodes, out_leave
     kind = et.kind
     pts = et.pts
     gram = et.gram
-    uni = -1
-    if kind.size and kind.min() == kind.max():
-        uni = kind[0]
+    tri_only = kind.size > 0 and kind.min() == KIND_TRIANGLE
     for task in prange(ntasks):
         stack = np.empty(cap, dtype=np.int64)
         dstack = np.empty((cap, GROUP))
@@ -742,24 +750,15 @@ def exact_tree_batch(et, Q, seeded, out_d, out_g, out_prim, out_nodes, out_leave
                         best[q] = primitive_d2(kind, pts, gram, prev, P[q, 0], P[q, 1], P[q, 2])
                         idx[q] = prev
                         leaves[q] = 1
-                exact_tree_group(et, P, k, stack, dstack, best, idx, need, nodes, leaves, uni,
-                                 count)
+                exact_tree_group(et, P, k, stack, dstack, best, idx, need, nodes, leaves, count,
+                                 tri_only)
                 for q in range(k):
-                    px = P[q, 0]
-                    py = P[q, 1]
-                    pz = P[q, 2]
                     bi = idx[q]
-                    cx, cy, cz = primitive_closest(kind, pts, bi, px, py, pz)
-                    d = math.sqrt((px - cx) ** 2 + (py - cy) ** 2 + (pz - cz) ** 2)
+                    d, gx, gy, gz = winner_result(kind, pts, bi, P[q, 0], P[q, 1], P[q, 2])
                     out_d[i + q] = d
-                    if d > 0.0:
-                        out_g[i + q, 0] = (px - cx) / d
-                        out_g[i + q, 1] = (py - cy) / d
-                        out_g[i + q, 2] = (pz - cz) / d
-                    else:
-                        out_g[i + q, 0] = 0.0
-                        out_g[i + q, 1] = 0.0
-                        out_g[i + q, 2] = 0.0
+                    out_g[i + q, 0] = gx
+                    out_g[i + q, 1] = gy
+                    out_g[i + q, 2] = gz
                     out_prim[i + q] = et.orig[bi]
                     out_nodes[i + q] = nodes[q]
                     out_leaves[i + q] = leaves[q]
