@@ -11,6 +11,7 @@ here).
 """
 
 import os
+import re
 import warnings
 
 import numpy as np
@@ -358,8 +359,8 @@ def _repair(V, P, E, T, repair, name, quiet_duplicates):
 # ---------------------------------------------------------------------- file reading
 #: File extensions :func:`read_mesh_file` reads: OBJ with our own reader (it keeps ``l``
 #: records as edges), ASCII OFF with our own reader (no trimesh import: faster start-up), the
-#: others (and binary OFF) with trimesh (a glTF scene's parts are concatenated; XYZ
-#: is a point cloud).
+#: others (and binary OFF) with trimesh (a glTF scene's parts are concatenated); XYZ point
+#: clouds with our own reader (columns separated by white space or commas).
 MESH_EXTENSIONS = (".obj", ".off", ".stl", ".ply", ".glb", ".gltf", ".xyz")
 
 
@@ -387,6 +388,8 @@ def read_mesh_file(path):
             V, E, T = _read_obj(path)
         elif ext == ".off" and _is_ascii_off(path):
             V, E, T = _read_off(path)
+        elif ext == ".xyz":
+            V, E, T = _read_xyz(path)
         else:
             V, E, T = _read_with_trimesh(path, ext)
     except _MeshFileError as exc:
@@ -497,6 +500,50 @@ def _read_off(path):
         raise _MeshFileError(f"{path}: malformed OFF file ({exc})") from None
     return (V, np.array(edges, dtype=np.int64).reshape(-1, 2),
             np.array(tris, dtype=np.int64).reshape(-1, 3))
+
+
+#: separators of an XYZ row: white space and/or one comma (or semicolon)
+_XYZ_SEP = re.compile(r"\s*[,;]\s*|\s+")
+
+
+def _read_xyz(path):
+    """XYZ point cloud: one point per line, ``x y z`` or ``x,y,z`` (white space, commas or
+    semicolons between the columns; further columns, such as normals or colours, are
+    ignored). ``#`` comments, blank lines and a non-numeric first line (a header such as
+    ``x,y,z``) are skipped."""
+    with open(path, "rb") as fh:
+        head = fh.read(_SNIFF)
+    if b"\0" in head:
+        raise _MeshFileError(f"{path}: not a text XYZ file (it holds binary data)")
+    verts = []
+    header_allowed = True
+    with open(path, "r", encoding="utf-8", errors="replace") as fh:
+        for lineno, line in enumerate(fh, 1):
+            text = line.split("#", 1)[0].strip()
+            if not text:
+                continue
+            cols = [c for c in _XYZ_SEP.split(text) if c]
+            try:
+                if len(cols) < 3:
+                    raise ValueError(f"{len(cols)} column(s), need x, y and z")
+                verts.append((float(cols[0]), float(cols[1]), float(cols[2])))
+            except ValueError as exc:
+                if header_allowed and not any(_is_number(c) for c in cols):
+                    header_allowed = False
+                    continue
+                raise _MeshFileError(f"{path}:{lineno}: malformed XYZ row "
+                                     f"{text[:60]!r} ({exc})") from None
+            header_allowed = False
+    V = np.array(verts, dtype=np.float64).reshape(-1, 3)
+    return V, np.zeros((0, 2), dtype=np.int64), np.zeros((0, 3), dtype=np.int64)
+
+
+def _is_number(text):
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
 
 
 def _read_with_trimesh(path, ext):

@@ -73,6 +73,8 @@ CATALOGUE = [
     ("file-garbage-obj", "OBJ file of random bytes", "cli", "error: not a text OBJ file"),
     ("file-garbage-ply", "PLY file of random bytes", "cli", "error: could not read mesh file"),
     ("file-mesh-is-folder", "object path names a folder", "cli", "error: is a folder"),
+    ("file-render-folder", "tracer render FOLDER (a folder named like a mesh too)", "cli",
+     "error: it is a folder, not a file"),
     ("file-nan-coords", "OBJ vertex 'v nan 0 0'", "cli", "error: NaN or infinite"),
     ("file-inf-coords", "OBJ vertex 'v 1e999 0 0' (inf)", "cli", "error: NaN or infinite"),
     ("file-huge-coords", "OBJ vertices at +-1e300", "cli", "error: coordinates beyond"),
@@ -325,6 +327,12 @@ def _(d, mp):
 def _(d, mp):
     (d / "folder.obj").mkdir()
     return [scene(d, mesh=None, obj={"path": "folder.obj"})]
+
+
+@setup("file-render-folder")
+def _(d, mp):
+    (d / "meshes.obj").mkdir()
+    return [str(d / "meshes.obj")]
 
 
 @setup("file-nan-coords")

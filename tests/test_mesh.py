@@ -93,6 +93,21 @@ def test_ply_loads_mesh_and_point_cloud(tmp_path):
     np.testing.assert_allclose(np.sort(c.V, axis=0), np.sort(pts, axis=0), rtol=1e-6)
 
 
+def test_xyz_loads_with_white_space_or_commas(tmp_path):
+    pts = np.random.default_rng(2).normal(size=(7, 3))
+    rows = [f"{x!r} {y!r} {z!r}" for x, y, z in pts.tolist()]
+    spaced = DataMesh.load(write(tmp_path / "spaced.xyz", "\n".join(rows) + "\n"))
+    # a header, commas with or without spaces, a comment, a blank line, extra columns
+    commas = ["x,y,z"] + [f"{x!r},{y!r}, {z!r}" for x, y, z in pts[:4].tolist()] + ["# scan 2", ""] \
+        + [f"{x!r},{y!r},{z!r},0.0,0.0,1.0" for x, y, z in pts[4:].tolist()]
+    comma = DataMesh.load(write(tmp_path / "comma.xyz", "\n".join(commas)))
+    for m in (spaced, comma):
+        assert m.kind == "points" and m.points.size == 7
+        np.testing.assert_array_equal(m.V[m.points], pts)   # repr round-trips exactly
+    with pytest.raises(ValueError, match=r"bad\.xyz:2: malformed XYZ row '1,2'"):
+        DataMesh.load(write(tmp_path / "bad.xyz", "0,0,0\n1,2\n"))
+
+
 def test_stl_loads_and_merges_quietly(tmp_path):
     box = trimesh.creation.box(extents=(1.0, 2.0, 3.0))
     box.export(tmp_path / "box.stl")

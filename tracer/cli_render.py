@@ -162,6 +162,9 @@ def input_kind(path):
     """``"scene"`` or ``"mesh"`` for a render input, from its extension (or a leading ``{``);
     a one-line ``CLIError`` saying what is accepted for anything else."""
     path = os.fspath(path)
+    if os.path.isdir(path):
+        raise CLIError(f"cannot render {path}: it is a folder, not a file (give a scene file "
+                       f"(.json) or a mesh / point-cloud file in it)")
     ext = os.path.splitext(path)[1].lower()
     if ext in MESH_EXTENSIONS:
         return "mesh"
