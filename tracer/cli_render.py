@@ -64,8 +64,9 @@ def add_arguments(p):
                         "steps only save distance evaluations")
     p.add_argument("--mode", choices=("smooth", "exact"),
                    help="smooth distance, or exact distance offset surface")
-    p.add_argument("--offset", type=float,
-                   help="exact mode: offset distance (default 1/alpha per object)")
+    p.add_argument("--offset", type=float, metavar="C",
+                   help="the surface's offset C >= 0: smooth mode d_hat = C (default 0), "
+                   "exact mode d = C (default 1/alpha per object)")
     p.add_argument("--eps", type=float, help="hit threshold in scene units "
                    "(default 1e-4 x bbox diagonal)")
     p.add_argument("--shading", choices=("lit", "normals", "matcap", "headlight"),
@@ -251,6 +252,7 @@ def run(args):
     stats.update(scene=os.path.abspath(args.scene), mode=scene.mode, beta=scene.beta,
                  tol=scene.tol, newton=scene.newton,
                  eps=scene.eps, objects=[{"name": o.name, "alpha": o.alpha, "alpha_u": o.alpha_u,
+                                          "offset": o.level(scene.mode),
                                           "primitives": o.field.num_primitives}
                                          for o in scene.objects])
     if args.stats:

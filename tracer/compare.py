@@ -208,7 +208,7 @@ def scene_field(scene, points, chunk=_CHUNK):
     -----
     Same formula as :func:`tracer.march.scene_distance`, evaluated with the library's
     parallel batch queries per object: smooth mode ``d_k = field_k.smooth_distance(alpha_k,
-    beta_k, alpha_u_k, scene.gradient)``, combined for several objects by
+    beta_k, alpha_u_k, scene.gradient) - c_k`` (``c_k`` the object's smooth offset), combined for several objects by
     ``m - log(sum exp(-a (d_k - m))) / a`` with ``a`` the largest alpha and ``m = min d_k``
     (gradient: the ``exp``-weighted mean); exact mode ``min_k (exact_k - offset_k)`` with the
     gradient of the minimiser.
@@ -240,7 +240,7 @@ def _scene_field_chunk(scene, Q):
     for o in objs:
         dk, gk = o.field.smooth_distance(Q, alpha=o.alpha, beta=o.beta, alpha_u=o.alpha_u,
                                          gradient=scene.gradient, tol=scene.tol)
-        ds.append(dk)
+        ds.append(dk - o.level("smooth"))
         gs.append(gk)
     if len(objs) == 1:
         return ds[0], gs[0]
@@ -262,12 +262,13 @@ def positive_margin(scene):
     trivially, a Barnes-Hut far-field node at its box distance ``bd`` because the node is only
     used when its diagonal is ``< beta bd``, so that its primitives are within
     ``(1 + beta) bd``; the weights sum to at most ``A^S N``; and the objects' LogSumExp is at
-    least ``min_k d_hat_k - log(K) / a``. Exact mode: the largest offset.
+    least ``min_k d_hat_k - log(K) / a``; an object's smooth offset ``c_k`` adds to its
+    term. Exact mode: the largest offset.
     """
     objs = scene.objects
     if scene.mode == "exact":
         return max(o.offset for o in objs)
-    margin = max(o.field.inflation(o.alpha, o.alpha_u) for o in objs)
+    margin = max(o.field.inflation(o.alpha, o.alpha_u) + o.level("smooth") for o in objs)
     if len(objs) > 1:
         margin += np.log(len(objs)) / max(o.alpha for o in objs)
     return float((1.0 + max(o.beta for o in objs)) * margin)

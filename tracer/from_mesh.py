@@ -164,14 +164,20 @@ def render_mesh(mesh, F=None, *, kind=None, alpha="auto", alpha_u="auto", beta=0
 
 def describe_parameters(scene):
     """One phrase per object: ``alpha 43.3, alpha_U 866, inflation <= 0.021 (0.6% of the
-    diagonal)`` (the worst-case inflation bound ``log(A^S N) / alpha``)."""
+    diagonal)`` (the worst-case inflation bound ``log(A^S N) / alpha``); exact mode ``offset
+    0.023 (...)``; smooth mode with an offset ``c > 0`` adds ``, offset 0.03 (...)``: the
+    surface ``d_hat = c``, within ``c`` + the inflation bound of the data."""
     diag = scene.diagonal if scene.diagonal > 0 else 1.0
     parts = []
     for o in scene.objects:
         infl = (o.offset if scene.mode == "exact" else o.field.inflation(o.alpha, o.alpha_u))
         what = "offset" if scene.mode == "exact" else "inflation <="
-        parts.append(f"alpha {o.alpha:.4g}, alpha_U {o.alpha_u:.4g}, {what} {infl:.3g} "
-                     f"({100 * infl / diag:.2g}% of the diagonal)")
+        text = (f"alpha {o.alpha:.4g}, alpha_U {o.alpha_u:.4g}, {what} {infl:.3g} "
+                f"({100 * infl / diag:.2g}% of the diagonal)")
+        c = o.level(scene.mode)
+        if scene.mode == "smooth" and c > 0:
+            text += f", offset {c:.3g} ({100 * c / diag:.2g}%)"
+        parts.append(text)
     return "; ".join(parts)
 
 
@@ -193,8 +199,8 @@ def scene_dict(scene, scene_path, source_paths):
     for o, src in zip(scene.objects, source_paths):
         od = {"path": rel(src), "alpha": float(f"{o.alpha:.6g}"),
               "max_alpha": float(f"{o.alpha_u:.6g}"), "bvh_type": _bvh_type(o.field.mesh.kind)}
-        if scene.mode == "exact":
-            od["offset"] = float(f"{o.offset:.6g}")
+        if scene.mode == "exact" or o.level(scene.mode) > 0:
+            od["offset"] = float(f"{o.level(scene.mode):.6g}")
         objs.append(od)
     out = {"description": f"written by tracer render --save-scene from {os.path.basename(source_paths[0])}",
            "camera": {k: [float(f"{v:.9g}") for v in np.asarray(vec, dtype=float)]

@@ -16,7 +16,8 @@ column              index   meaning
 :data:`P_BETA`      1       Barnes-Hut beta (>= 0; 0 exact)
 :data:`P_S`         2       attenuation exponent ``S = min(alpha / alpha_U, 1)``
 :data:`P_WGS`       3       weight-gradient scale (``1/alpha**2`` metric, ``1/alpha`` exact)
-:data:`P_OFFSET`    4       exact-offset mode: the object's distance is ``exact - offset``
+:data:`P_OFFSET`    4       the object's offset ``c >= 0``: its distance is ``exact - c``
+                            (exact-offset mode) or ``d_hat - c`` (smooth mode)
 :data:`P_R`         5-13    posed tables only: rotation ``R``, row-major 3x3
 ``P_T``             14-16   posed tables only: translation ``t``
 =================== ======= =============================================================
@@ -26,7 +27,9 @@ object ``k`` is then evaluated at its local point ``R^T (p - t)`` and its gradie
 back by ``R`` (rigid bodies drawn at their poses without rebuilding a tree). Objects are
 combined as the paper combines them: by a second LogSumExp with the largest alpha (smooth
 mode), or by the minimum (exact-offset mode, where each object's distance is
-``exact - offset``). The object with the nearest root box is evaluated first; an object whose
+``exact - offset``). In smooth mode each object's ``d_hat - c`` is combined (``c`` its
+``P_OFFSET``, 0 by default): the surface ``d_hat = c``. ``d_hat - c`` is as Lipschitz as
+``d_hat`` and lies below ``d - c``, so every bound below holds for it with ``c`` subtracted. The object with the nearest root box is evaluated first; an object whose
 root box alone shows that it cannot change the result (:func:`object_lower_bound`: not below
 the minimum, or a LogSumExp term below one unit in the last place of the sum) is skipped.
 
@@ -157,7 +160,7 @@ def scene_distance(tree, roots, params, mode, tol, x, y, z, stack, dstack, slack
         d, gx, gy, gz, nodes, leaves = smooth_distance_point(
             tree, x, y, z, params[0, P_ALPHA], params[0, P_BETA], params[0, P_S],
             params[0, P_WGS], stack, dstack, roots)
-        return d, gx, gy, gz, nodes, leaves, 0
+        return d - params[0, P_OFFSET], gx, gy, gz, nodes, leaves, 0
     nobj = roots.size
     if params.shape[1] >= P_COLUMNS_POSED:
         return _scene_distance_objects(tree, roots, params, mode, tol, x, y, z, stack, dstack,
@@ -169,7 +172,7 @@ def scene_distance(tree, roots, params, mode, tol, x, y, z, stack, dstack, slack
                 tree, x, y, z, alpha, _far_beta(params[0, P_BETA], tol, alpha, slack),
                 _loosened(tol, alpha, slack), params[0, P_S], params[0, P_WGS], stack, dstack,
                 roots[0])
-            return d, gx, gy, gz, nodes, leaves, 0
+            return d - params[0, P_OFFSET], gx, gy, gz, nodes, leaves, 0
         d, gx, gy, gz, p, nodes, leaves = exact_distance_point(tree, x, y, z, stack, dstack,
                                                                roots[0])
         return d - params[0, P_OFFSET], gx, gy, gz, nodes, leaves, 0
@@ -197,7 +200,8 @@ def object_lower_bound(tree, roots, params, mode, tol, k, x, y, z, slack):
     box alone: smooth mode ``b - (log N + S max(log whi, 0) + log(1 + tol_k)) / alpha`` (``b``
     the distance to the box; no term of ``N`` primitives is larger than ``whi**S
     exp(-alpha b)``, Barnes-Hut far fields included, and tolerance pruning lowers the sum's
-    log by at most ``log(1 + tol_k)``); exact-offset mode ``b - offset``."""
+    log by at most ``log(1 + tol_k)``), minus the object's smooth offset; exact-offset mode
+    ``b - offset``."""
     lx, ly, lz = _local_point(params, k, x, y, z)
     root = roots[k]
     b = math.sqrt(box_distance2(lx, ly, lz, tree.lo, tree.hi, root)[0])
@@ -206,13 +210,13 @@ def object_lower_bound(tree, roots, params, mode, tol, k, x, y, z, slack):
     alpha = params[k, P_ALPHA]
     n = max(tree.count[root], 1)
     return b - (math.log(n) + params[k, P_S] * max(tree.lwhi[root], 0.0)
-                + math.log1p(_loosened(tol, alpha, slack))) / alpha
+                + math.log1p(_loosened(tol, alpha, slack))) / alpha - params[k, P_OFFSET]
 
 
 @numba.njit(**NJIT)
 def _object_distance(tree, roots, params, mode, tol, k, x, y, z, stack, dstack, slack):
     """Object ``k``'s distance and gradient at ``(x, y, z)`` (posed when ``params`` has the
-    pose columns; exact-offset mode subtracts the offset). Returns ``(d, gx, gy, gz, nodes,
+    pose columns; the object's offset subtracted in both modes). Returns ``(d, gx, gy, gz, nodes,
     leaves)``, the gradient in scene coordinates."""
     lx, ly, lz = _local_point(params, k, x, y, z)
     if mode == MODE_SMOOTH:
@@ -221,6 +225,7 @@ def _object_distance(tree, roots, params, mode, tol, k, x, y, z, stack, dstack, 
             tree, lx, ly, lz, alpha, _far_beta(params[k, P_BETA], tol, alpha, slack),
             _loosened(tol, alpha, slack), params[k, P_S], params[k, P_WGS], stack, dstack,
             roots[k])
+        d -= params[k, P_OFFSET]
     else:
         d, hx, hy, hz, p, nn, ll = exact_distance_point(tree, lx, ly, lz, stack, dstack,
                                                         roots[k])

@@ -150,7 +150,9 @@ def scene_arrays(scene, transforms=None):
     march kernels.
 
     The box ``lo..hi`` is the data's bounding box grown by the largest possible isosurface
-    inflation (``log(A^S N) / alpha`` per object; the offset in exact mode) plus twice ``eps``.
+    inflation (``log(A^S N) / alpha`` plus the smooth offset per object; the offset in exact
+    mode) plus twice ``eps``. ``params[:, P_OFFSET]`` holds each object's offset in the
+    scene's mode (:func:`object_level`).
     ``transforms`` (optional): per object a rigid pose ``(R (3, 3), t (3,))``; object ``k`` is
     drawn at ``R_k x + t_k`` (``params`` gets the 12 pose columns ``P_R``, ``P_T`` of
     :mod:`tracer.march`, and the box is the union of the posed, grown object boxes).
@@ -161,11 +163,12 @@ def scene_arrays(scene, transforms=None):
     margin = 0.0
     for k, o in enumerate(scene.objects):
         alpha, beta, S, wgs = o.field.kernel_args(o.alpha, o.beta, o.alpha_u, scene.gradient)
-        params[k, columns] = (alpha, beta, S, wgs, o.offset)
+        level = object_level(o, scene.mode)
+        params[k, columns] = (alpha, beta, S, wgs, level)
         if scene.mode == "exact":
-            margin = max(margin, o.offset)
+            margin = max(margin, level)
         else:
-            margin = max(margin, o.field.inflation(alpha, o.alpha_u))
+            margin = max(margin, o.field.inflation(alpha, o.alpha_u) + level)
     if scene.mode == "smooth" and len(trees) > 1:
         a = params[:, march.P_ALPHA].max()
         margin += np.log(len(trees)) / a
@@ -178,6 +181,15 @@ def scene_arrays(scene, transforms=None):
         params, lo, hi = _posed(scene, transforms, params, grow)
         return SceneArrays(tree, roots, params, mode, lo, hi, tree.depth, tol)
     return SceneArrays(tree, roots, params, mode, lo - grow, hi + grow, tree.depth, tol)
+
+
+def object_level(obj, mode):
+    """The offset ``c`` an object's surface is drawn at (``d - c = 0`` exact, ``d_hat - c = 0``
+    smooth; :meth:`tracer.scene.SceneObject.level`), checked: finite and ``>= 0``."""
+    c = float(obj.level(mode))
+    if not (math.isfinite(c) and c >= 0.0):
+        raise ValueError(f"{obj.name}: offset must be a finite number >= 0, got {c}")
+    return c
 
 
 def _posed(scene, transforms, params, grow):

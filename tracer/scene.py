@@ -8,7 +8,8 @@ Authors' keys (abhimadan/smoothdists ``scenes/*.json``)::
 
 Extensions (all optional): top level ``width``, ``height``, ``beta``, ``eps`` (absolute, scene
 units; default ``1e-4 x`` the data's bbox diagonal), ``mode`` (``"smooth"`` or ``"exact"``),
-``offset`` (exact mode; default ``1/alpha`` per object), ``shading`` (``"normals"``,
+``offset`` (the level of the surface: exact mode ``d = offset``, default ``1/alpha`` per
+object; smooth mode ``d_hat = offset``, default 0), ``shading`` (``"normals"``,
 ``"matcap"``, ``"headlight"``), ``matcap``, ``background`` ([r, g, b] 0-255), ``max_steps``,
 ``gradient`` (``"metric"`` or ``"exact"``), ``description``, ``tol`` (tolerance-controlled
 pruning, a number >= 0, default 0 = off; see ``smoothdist.query.smooth_distance_point_tol``),
@@ -71,7 +72,11 @@ _PART_KEYS = {"path", "bvh_type", "scale", "translate"}
 
 @dataclass
 class SceneObject:
-    """One object: a data mesh with its field and parameters."""
+    """One object: a data mesh with its field and parameters.
+
+    ``offset`` is the exact mode's offset (the surface ``d = offset``), ``smooth_offset`` the
+    smooth mode's (the surface ``d_hat = smooth_offset``, default 0). The scene key and the
+    ``offset`` argument set both; left out, they are ``1/alpha`` and 0 (:meth:`level`)."""
 
     name: str
     field: SmoothDistanceField
@@ -82,6 +87,13 @@ class SceneObject:
     matcap: str = ""
     #: base colour of the ``"lit"`` shading, sRGB 0-255 (None: the default or the palette)
     color: tuple = None
+    #: smooth mode: the level ``c >= 0`` of the rendered surface ``d_hat = c``
+    smooth_offset: float = 0.0
+
+    def level(self, mode):
+        """The offset the object's surface is drawn at in ``mode``: ``offset`` in exact
+        mode, ``smooth_offset`` in smooth mode."""
+        return float(self.offset if mode == "exact" else self.smooth_offset)
 
 
 @dataclass
@@ -414,6 +426,7 @@ def _build_object(spec, path, gradient):
     alpha_u = (fld.auto_alpha_u(alpha) if spec["alpha_u"] == "auto" else
                alpha if spec["alpha_u"] == "off" else spec["alpha_u"])
     offset = spec["offset"] if spec["offset"] is not None else 1.0 / alpha
+    smooth_offset = spec["offset"] if spec["offset"] is not None else 0.0
     try:
         fld.check_alpha(alpha)
     except ValueError as exc:
@@ -421,7 +434,8 @@ def _build_object(spec, path, gradient):
     fld.kernel_args(alpha, spec["beta"], alpha_u, gradient)
     return SceneObject(name=str(spec["name"]), field=fld, alpha=float(alpha),
                        alpha_u=float(alpha_u), beta=spec["beta"], offset=float(offset),
-                       matcap=spec["matcap"], color=spec["color"])
+                       matcap=spec["matcap"], color=spec["color"],
+                       smooth_offset=float(smooth_offset))
 
 
 def _part_mesh(ps, path):
@@ -483,6 +497,11 @@ def scene_from_field(field, *, alpha, alpha_u=None, beta=0.5, camera=None, width
         paper's beta-study camera (bbox centre + 2 x the
         largest extent along +z, looking at the centre, up +y), which may crop a blurry
         surface.
+    mode : {"smooth", "exact"}
+        The smooth distance's isosurface, or the exact distance's offset surface.
+    offset : float, optional
+        The level of the surface (finite, >= 0), as the scene key ``offset``: smooth mode
+        ``d_hat = offset`` (default 0), exact mode ``d = offset`` (default ``1/alpha``).
     tol : float
         Tolerance-controlled pruning (>= 0; 0 = off), as the scene key ``tol``.
     newton : float, optional
@@ -553,15 +572,17 @@ def scene_from_field(field, *, alpha, alpha_u=None, beta=0.5, camera=None, width
     if isinstance(camera, str):
         from tracer.camera import frame_points
 
-        # the surface lies within its inflation bound (exact mode: the offset) of the data
+        # the surface lies within its inflation bound plus its offset (exact mode: the
+        # offset) of the data
         grow = (offset if mode == "exact" and offset is not None else
-                1.0 / alpha if mode == "exact" else field.inflation(alpha, alpha_u))
+                1.0 / alpha if mode == "exact" else
+                field.inflation(alpha, alpha_u) + (offset or 0.0))
         camera = frame_points(field.mesh.used_vertices(), grow + 2.0 * (eps or 0.0), camera,
                               width, height, up=up)
     elif camera is None:
         c = 0.5 * (lo + hi)
         # a single point (or identical points) has no extent: back off by the surface's size
-        ext = max(float((hi - lo).max()), field.inflation(alpha, alpha_u),
+        ext = max(float((hi - lo).max()), field.inflation(alpha, alpha_u) + (offset or 0.0),
                   offset if offset is not None else 1.0 / alpha)
         camera = (c + np.array([0.0, 0.0, 2.0 * ext]), c, np.array([0.0, 1, 0]))
     try:
@@ -574,7 +595,8 @@ def scene_from_field(field, *, alpha, alpha_u=None, beta=0.5, camera=None, width
     look_at(origin, dest, up, width, height)  # validates the camera
     obj = SceneObject(name=name, field=field, alpha=alpha, alpha_u=alpha_u, beta=beta,
                       offset=offset if offset is not None else 1.0 / alpha,
-                      matcap=matcap, color=color)
+                      matcap=matcap, color=color,
+                      smooth_offset=offset if offset is not None else 0.0)
     scene = Scene(path=f"{name}.json", camera_origin=origin, camera_dest=dest, camera_up=up,
                   objects=[obj], width=width, height=height, beta=beta,
                   eps=eps, mode=mode, shading=shading, matcap=matcap, max_steps=max_steps,
