@@ -17,6 +17,13 @@ from tracer.render import render
 RNG = np.random.default_rng(35)
 
 
+@pytest.fixture(autouse=True)
+def _seeded():
+    """Every test draws the same points whichever tests run before it."""
+    global RNG
+    RNG = np.random.default_rng(35)
+
+
 def fd_normals(shape, P, h=1e-6):
     """Unit central-difference gradients of ``shape.distance``."""
     G = np.empty_like(P)
@@ -68,7 +75,10 @@ def test_shape_normals_are_the_gradients_of_their_distance(name):
         keep &= (top2[:, 2] - top2[:, 1] > 1e-3) | np.any(Q > 0, axis=1)
     got = shape.normals(P[keep])
     ref = fd_normals(shape, P[keep])
-    assert np.degrees(np.arccos(np.clip(np.sum(got * ref, axis=1), -1, 1))).max() < 0.05
+    # (the metric reports whole degrees; central differences are good to ~1e-3 degrees
+    # except near a ridge of the distance, inside the rounded cube's edges)
+    angles = np.degrees(np.arccos(np.clip(np.sum(got * ref, axis=1), -1, 1)))
+    assert angles.max() < 0.1 and np.median(angles) < 1e-3
 
 
 def test_rounded_cube_is_pyvistas_superellipsoid_and_its_closest_points_are_closest():
