@@ -35,6 +35,7 @@ triangle fall back to the boundary candidates, which contain a minimiser.
 import math
 
 import numba
+import numpy as np
 
 from smoothdist._config import NJIT, NJIT_INLINE
 from smoothdist.closest_point import (SEG_A, SEG_B, SEG_INTERIOR, TRI_A, TRI_AB, TRI_AC, TRI_B,
@@ -181,6 +182,8 @@ def segment_segment(px, py, pz, qx, qy, qz, ax, ay, az, bx, by, bz):
     best = math.inf
     brx = bry = brz = 0.0
     bu = bv = 0.0
+    M, L = pair_scale(px, py, pz, qx, qy, qz, qx, qy, qz, ax, ay, az, bx, by, bz, bx, by, bz)
+    ntie = 0
     if den > 0.0 and den > 1e-30 * A * E:
         u = (B * F - C * E) / den
         v = (A * F - B * C) / den
@@ -190,6 +193,7 @@ def segment_segment(px, py, pz, qx, qy, qz, ax, ay, az, bx, by, bz):
             rz = wz + u * d1z - v * d2z
             best = rx * rx + ry * ry + rz * rz
             brx, bry, brz, bu, bv = rx, ry, rz, u, v
+            ntie = 1
     # near-parallel or degenerate: also every endpoint of one segment against the other segment
     for k in range(4):
         if k == 0:
@@ -217,9 +221,13 @@ def segment_segment(px, py, pz, qx, qy, qz, ax, ay, az, bx, by, bz):
             rz = cz - bz
             v = 1.0
         d2 = rx * rx + ry * ry + rz * rz
+        ntie = count_ties(d2, u, 0.0, best, bu, 0.0, ntie, M, L)
         if d2 < best:
             best = d2
             brx, bry, brz, bu, bv = rx, ry, rz, u, v
+    if ntie > 1 and best > 0.0:
+        return tied_pair(1, _flat(px, py, pz, qx, qy, qz, qx, qy, qz), 1,
+                         _flat(ax, ay, az, bx, by, bz, bx, by, bz))
     return (best, brx, bry, brz, bu, 0.0, segment_feature(bu), bv, 0.0, segment_feature(bv))
 
 
@@ -314,7 +322,15 @@ def segment_triangle(px, py, pz, qx, qy, qz, ax, ay, az, bx, by, bz, cx, cy, cz)
 
     Candidates: a crossing (distance 0); each endpoint against the triangle; each triangle vertex
     against the segment; each triangle edge against the segment at an interior stationary pair.
+    Tied candidates: :func:`tied_pair`.
     """
+    return _segment_triangle(px, py, pz, qx, qy, qz, ax, ay, az, bx, by, bz, cx, cy, cz, True)
+
+
+@numba.njit(**NJIT_INLINE)
+def _segment_triangle(px, py, pz, qx, qy, qz, ax, ay, az, bx, by, bz, cx, cy, cz, seg_query):
+    """:func:`segment_triangle`; ``seg_query`` False: the triangle is the query (ties are
+    resolved on its side), the result still in the segment-first convention."""
     if not triangle_is_degenerate(ax, ay, az, bx, by, bz, cx, cy, cz):
         hit, u, s, t = segment_crosses_triangle(px, py, pz, qx, qy, qz, ax, ay, az, bx, by, bz,
                                                 cx, cy, cz)
@@ -322,10 +338,13 @@ def segment_triangle(px, py, pz, qx, qy, qz, ax, ay, az, bx, by, bz, cx, cy, cz)
             return 0.0, 0.0, 0.0, 0.0, u, 0.0, segment_feature(u), s, t, TRI_INTERIOR
     best = math.inf
     out = (math.inf, 0.0, 0.0, 0.0, 0.0, 0.0, 0, 0.0, 0.0, 0)
+    M, L = pair_scale(px, py, pz, qx, qy, qz, qx, qy, qz, ax, ay, az, bx, by, bz, cx, cy, cz)
+    ntie = 0
     # the segment's endpoints against the triangle
     for k in range(2):
         ex, ey, ez = (px, py, pz) if k == 0 else (qx, qy, qz)
         c = point_triangle(ex, ey, ez, ax, ay, az, bx, by, bz, cx, cy, cz)
+        ntie = count_ties(c[0], float(k), 0.0, best, out[4], 0.0, ntie, M, L)
         if c[0] < best:
             best = c[0]
             out = (c[0], c[1], c[2], c[3], float(k), 0.0, SEG_A if k == 0 else SEG_B,
@@ -343,6 +362,7 @@ def segment_triangle(px, py, pz, qx, qy, qz, ax, ay, az, bx, by, bz, cx, cy, cz)
         ry = gy - ey
         rz = gz - ez
         d2 = rx * rx + ry * ry + rz * rz
+        ntie = count_ties(d2, u, 0.0, best, out[4], 0.0, ntie, M, L)
         if d2 < best:
             best = d2
             out = (d2, rx, ry, rz, u, 0.0, f, ds, dt, df)
@@ -351,17 +371,26 @@ def segment_triangle(px, py, pz, qx, qy, qz, ax, ay, az, bx, by, bz, cx, cy, cz)
         ux, uy, uz, vx, vy, vz = _edge_vertices(e, ax, ay, az, bx, by, bz, cx, cy, cz)
         found, d2, rx, ry, rz, u, v = segment_segment_interior(px, py, pz, qx, qy, qz, ux, uy,
                                                                uz, vx, vy, vz)
-        if found and d2 < best:
-            best = d2
-            s, t, f = triangle_edge_point(e, v)
-            out = (d2, rx, ry, rz, u, 0.0, SEG_INTERIOR, s, t, f)
+        if found:
+            ntie = count_ties(d2, u, 0.0, best, out[4], 0.0, ntie, M, L)
+            if d2 < best:
+                best = d2
+                s, t, f = triangle_edge_point(e, v)
+                out = (d2, rx, ry, rz, u, 0.0, SEG_INTERIOR, s, t, f)
+    if ntie > 1 and best > 0.0:
+        S = _flat(px, py, pz, qx, qy, qz, qx, qy, qz)
+        T = _flat(ax, ay, az, bx, by, bz, cx, cy, cz)
+        if seg_query:
+            return tied_pair(1, S, 2, T)
+        c = tied_pair(2, T, 1, S)
+        return c[0], -c[1], -c[2], -c[3], c[7], c[8], c[9], c[4], c[5], c[6]
     return out
 
 
 @numba.njit(**NJIT)
 def triangle_segment(px, py, pz, qx, qy, qz, rx_, ry_, rz_, ax, ay, az, bx, by, bz):
     """Triangle ``pqr`` (query) against segment ``ab``."""
-    c = segment_triangle(ax, ay, az, bx, by, bz, px, py, pz, qx, qy, qz, rx_, ry_, rz_)
+    c = _segment_triangle(ax, ay, az, bx, by, bz, px, py, pz, qx, qy, qz, rx_, ry_, rz_, False)
     return c[0], -c[1], -c[2], -c[3], c[7], c[8], c[9], c[4], c[5], c[6]
 
 
@@ -409,6 +438,8 @@ def triangle_triangle(px, py, pz, qx, qy, qz, rx_, ry_, rz_, ax, ay, az, bx, by,
                 return 0.0, 0.0, 0.0, 0.0, s, t, TRI_INTERIOR, ds, dt, df
     best = math.inf
     out = (math.inf, 0.0, 0.0, 0.0, 0.0, 0.0, 0, 0.0, 0.0, 0)
+    M, L = pair_scale(px, py, pz, qx, qy, qz, rx_, ry_, rz_, ax, ay, az, bx, by, bz, cx, cy, cz)
+    ntie = 0
     # vertices of each against the other
     for k in range(3):
         if k == 0:
@@ -418,6 +449,7 @@ def triangle_triangle(px, py, pz, qx, qy, qz, rx_, ry_, rz_, ax, ay, az, bx, by,
         else:
             ex, ey, ez, qs, qt, qf = rx_, ry_, rz_, 0.0, 1.0, TRI_C
         c = point_triangle(ex, ey, ez, ax, ay, az, bx, by, bz, cx, cy, cz)
+        ntie = count_ties(c[0], qs, qt, best, out[4], out[5], ntie, M, L)
         if c[0] < best:
             best = c[0]
             out = (c[0], c[1], c[2], c[3], qs, qt, qf, c[7], c[8], c[9])
@@ -429,6 +461,7 @@ def triangle_triangle(px, py, pz, qx, qy, qz, rx_, ry_, rz_, ax, ay, az, bx, by,
         else:
             ex, ey, ez, ds, dt, df = cx, cy, cz, 0.0, 1.0, TRI_C
         c = point_triangle(ex, ey, ez, px, py, pz, qx, qy, qz, rx_, ry_, rz_)
+        ntie = count_ties(c[0], c[7], c[8], best, out[4], out[5], ntie, M, L)
         if c[0] < best:
             best = c[0]
             out = (c[0], -c[1], -c[2], -c[3], c[7], c[8], c[9], ds, dt, df)
@@ -439,11 +472,16 @@ def triangle_triangle(px, py, pz, qx, qy, qz, rx_, ry_, rz_, ax, ay, az, bx, by,
             gx, gy, gz, hx, hy, hz = _edge_vertices(f, ax, ay, az, bx, by, bz, cx, cy, cz)
             found, d2, rx, ry, rz, u, v = segment_segment_interior(ux, uy, uz, vx, vy, vz, gx, gy,
                                                                    gz, hx, hy, hz)
-            if found and d2 < best:
-                best = d2
+            if found:
                 qs, qt, qf = triangle_edge_point(e, u)
-                ds, dt, df = triangle_edge_point(f, v)
-                out = (d2, rx, ry, rz, qs, qt, qf, ds, dt, df)
+                ntie = count_ties(d2, qs, qt, best, out[4], out[5], ntie, M, L)
+                if d2 < best:
+                    best = d2
+                    ds, dt, df = triangle_edge_point(f, v)
+                    out = (d2, rx, ry, rz, qs, qt, qf, ds, dt, df)
+    if ntie > 1 and best > 0.0:
+        return tied_pair(2, _flat(px, py, pz, qx, qy, qz, rx_, ry_, rz_), 2,
+                         _flat(ax, ay, az, bx, by, bz, cx, cy, cz))
     return out
 
 
@@ -481,3 +519,306 @@ def closest_pair(kq, Q, kd, P):
                                 P[2], P[3], P[4], P[5])
     return triangle_triangle(Q[0], Q[1], Q[2], Q[3], Q[4], Q[5], Q[6], Q[7], Q[8], P[0], P[1],
                              P[2], P[3], P[4], P[5], P[6], P[7], P[8])
+
+
+# --- ties: a canonical closest pair where the closest set is not a single pair ----------------
+#
+# Two simplices at distance d > 0 have a unique closest *offset* r = x - y (the closest point of
+# the convex Minkowski difference), but where a query edge or face is parallel to a data edge or
+# face the closest *pairs* (x, x - r) form a segment or a polygon S. The candidates above find its
+# corners, all at the same distance up to rounding, and picking the first or the smallest of them
+# lets rounding choose an end of S: the data barycentrics, hence the weight and d_hat, jump as
+# the query moves (issue 37). Where several candidates tie, the pair reported is instead the
+# point of S nearest the query's centroid (a projection onto a convex set, so it moves
+# continuously with S). Each case of that rule moves the way :func:`smoothdist.mesh_query.
+# weight_gradient` assumes for the reported features: the centroid itself is fixed on the query;
+# a projection onto an edge of S that lies on a data edge slides along that edge; one onto a
+# crossing of a query and a data edge moves as that crossing does.
+
+#: candidates whose squared distances differ by at most ``TIE * M * (sqrt(d2) + L)`` are tied
+#: (``M`` the largest coordinate magnitude, ``L`` the pair's extent): rounding of the candidates'
+#: squared distances is about ``20 eps M |r|``, 2,000x below it, while a genuine near-tie that it
+#: merges is a tilt of the parallel features below ``1e-10 M / L`` radians
+TIE = 1e-10
+#: candidates one pair can have (triangle-triangle: 3 + 3 vertex pairs and 9 edge pairs)
+MAX_CANDIDATES = 15
+
+_TRI_MASK = (7, 3, 5, 6, 1, 2, 4)     # feature code -> vertex set (a = 1, b = 2, c = 4)
+_TRI_CODE = (0, 4, 5, 1, 6, 2, 3, 0)  # vertex set -> feature code
+_SEG_MASK = (3, 1, 2)
+_SEG_CODE = (0, 1, 2, 0)
+
+
+@numba.njit(**NJIT_INLINE)
+def pair_scale(px, py, pz, qx, qy, qz, rx_, ry_, rz_, ax, ay, az, bx, by, bz, cx, cy, cz):
+    """``(M, L)`` of the tie rule for the six vertices of a pair (a segment repeats a vertex)."""
+    lx = min(min(px, qx, rx_), min(ax, bx, cx))
+    hx = max(max(px, qx, rx_), max(ax, bx, cx))
+    ly = min(min(py, qy, ry_), min(ay, by, cy))
+    hy = max(max(py, qy, ry_), max(ay, by, cy))
+    lz = min(min(pz, qz, rz_), min(az, bz, cz))
+    hz = max(max(pz, qz, rz_), max(az, bz, cz))
+    M = max(max(-lx, hx), max(-ly, hy), max(-lz, hz))
+    L = max(hx - lx, hy - ly, hz - lz)
+    return M, L
+
+
+@numba.njit(**NJIT)
+def _flat(px, py, pz, qx, qy, qz, rx_, ry_, rz_):
+    X = np.empty(9)
+    X[0] = px
+    X[1] = py
+    X[2] = pz
+    X[3] = qx
+    X[4] = qy
+    X[5] = qz
+    X[6] = rx_
+    X[7] = ry_
+    X[8] = rz_
+    return X
+
+
+@numba.njit(**NJIT_INLINE)
+def is_tied(d2, best, M, L):
+    """True when squared distances ``d2`` and ``best`` are equal under the tie rule."""
+    return abs(d2 - best) <= TIE * M * (math.sqrt(min(d2, best)) + L)
+
+
+#: tied candidates whose query parameters differ by less than this are one pair found twice
+#: (a vertex pair is found from both sides), not a closest set
+SAME_PAIR = 1e-9
+
+
+@numba.njit(**NJIT_INLINE)
+def count_ties(d2, s, t, best, bs, bt, ntie, M, L):
+    """Running count of the distinct pairs tied with the running minimum: candidate ``d2`` at
+    query parameters ``(s, t)`` against ``best`` at ``(bs, bt)``, before ``d2`` is taken."""
+    if best == math.inf:
+        return 1
+    if is_tied(d2, best, M, L):
+        if abs(s - bs) + abs(t - bt) > SAME_PAIR:
+            return ntie + 1
+        return ntie
+    if d2 < best:
+        return 1
+    return ntie
+
+
+@numba.njit(**NJIT)
+def _vertex_params(kind, i):
+    """Parameters ``(s, t, feature)`` of vertex ``i`` of a segment (kind 1) or triangle."""
+    if kind == 1:
+        return float(i), 0.0, SEG_A if i == 0 else SEG_B
+    if i == 0:
+        return 0.0, 0.0, TRI_A
+    if i == 1:
+        return 1.0, 0.0, TRI_B
+    return 0.0, 1.0, TRI_C
+
+
+@numba.njit(**NJIT)
+def _point_to(kind, x, y, z, X):
+    """Closest point of primitive ``X`` (kind 1 or 2) to ``(x, y, z)``: ``(d2, r, s, t, f)`` with
+    ``r = (x, y, z) - closest point``."""
+    if kind == 1:
+        c = point_segment(x, y, z, X[0], X[1], X[2], X[3], X[4], X[5])
+    else:
+        c = point_triangle(x, y, z, X[0], X[1], X[2], X[3], X[4], X[5], X[6], X[7], X[8])
+    return c[0], c[1], c[2], c[3], c[7], c[8], c[9]
+
+
+@numba.njit(**NJIT)
+def _union_feature(kind, f, g):
+    """The smallest face of a segment or triangle holding both features ``f`` and ``g``."""
+    if kind == 1:
+        return _SEG_CODE[_SEG_MASK[f] | _SEG_MASK[g]]
+    return _TRI_CODE[_TRI_MASK[f] | _TRI_MASK[g]]
+
+
+@numba.njit(**NJIT)
+def _candidates(kq, Q, kd, P, C):
+    """Fill ``C`` (MAX_CANDIDATES, 10) with every candidate pair of query ``(kq, Q)`` and data
+    ``(kd, P)`` (kinds 1 or 2), as rows of the module's 10-tuple; returns their number."""
+    n = 0
+    for i in range(kq + 1):
+        d2, rx, ry, rz, s, t, f = _point_to(kd, Q[3 * i], Q[3 * i + 1], Q[3 * i + 2], P)
+        qs, qt, qf = _vertex_params(kq, i)
+        C[n, 0] = d2
+        C[n, 1] = rx
+        C[n, 2] = ry
+        C[n, 3] = rz
+        C[n, 4] = qs
+        C[n, 5] = qt
+        C[n, 6] = qf
+        C[n, 7] = s
+        C[n, 8] = t
+        C[n, 9] = f
+        n += 1
+    for j in range(kd + 1):
+        d2, rx, ry, rz, s, t, f = _point_to(kq, P[3 * j], P[3 * j + 1], P[3 * j + 2], Q)
+        ds, dt, df = _vertex_params(kd, j)
+        C[n, 0] = d2
+        C[n, 1] = -rx
+        C[n, 2] = -ry
+        C[n, 3] = -rz
+        C[n, 4] = s
+        C[n, 5] = t
+        C[n, 6] = f
+        C[n, 7] = ds
+        C[n, 8] = dt
+        C[n, 9] = df
+        n += 1
+    ne_q = 1 if kq == 1 else 3
+    ne_d = 1 if kd == 1 else 3
+    for e in range(ne_q):
+        ux, uy, uz, vx, vy, vz = _edge_vertices(e, Q[0], Q[1], Q[2], Q[3], Q[4], Q[5], Q[6],
+                                                Q[7], Q[8])
+        for g in range(ne_d):
+            gx, gy, gz, hx, hy, hz = _edge_vertices(g, P[0], P[1], P[2], P[3], P[4], P[5], P[6],
+                                                    P[7], P[8])
+            found, d2, rx, ry, rz, u, v = segment_segment_interior(ux, uy, uz, vx, vy, vz, gx,
+                                                                   gy, gz, hx, hy, hz)
+            if not found:
+                continue
+            if kq == 1:
+                qs, qt, qf = u, 0.0, SEG_INTERIOR
+            else:
+                qs, qt, qf = triangle_edge_point(e, u)
+            if kd == 1:
+                ds, dt, df = v, 0.0, SEG_INTERIOR
+            else:
+                ds, dt, df = triangle_edge_point(g, v)
+            C[n, 0] = d2
+            C[n, 1] = rx
+            C[n, 2] = ry
+            C[n, 3] = rz
+            C[n, 4] = qs
+            C[n, 5] = qt
+            C[n, 6] = qf
+            C[n, 7] = ds
+            C[n, 8] = dt
+            C[n, 9] = df
+            n += 1
+    return n
+
+
+@numba.njit(**NJIT)
+def tied_pair(kq, Q, kd, P):
+    """The canonical closest pair of query ``(kq, Q)`` and data ``(kd, P)`` (kinds 1 or 2; ``Q``,
+    ``P`` flat (9,) float64) where several candidates tie: the point of the closest set nearest
+    the query's centroid (see the comment above ``TIE``). Returns the module's 10-tuple; the
+    squared distance is the smallest candidate's."""
+    C = np.empty((MAX_CANDIDATES, 10))
+    n = _candidates(kq, Q, kd, P, C)
+    best = math.inf
+    ib = 0
+    for i in range(n):
+        if C[i, 0] < best:
+            best = C[i, 0]
+            ib = i
+    M, L = pair_scale(Q[0], Q[1], Q[2], Q[3], Q[4], Q[5], Q[6], Q[7], Q[8], P[0], P[1], P[2],
+                      P[3], P[4], P[5], P[6], P[7], P[8])
+    # the tied candidates' points on the query
+    X = np.empty((n, 3))
+    T = np.empty(n, dtype=np.int64)
+    m = 0
+    for i in range(n):
+        if is_tied(C[i, 0], best, M, L):
+            s = C[i, 4]
+            t = C[i, 5]
+            for a in range(3):
+                X[m, a] = Q[a] + s * (Q[3 + a] - Q[a])
+                if kq == 2:
+                    X[m, a] += t * (Q[6 + a] - Q[a])
+            T[m] = i
+            m += 1
+    if m <= 1:
+        c = C[ib]
+        return (c[0], c[1], c[2], c[3], c[4], c[5], int(c[6]), c[7], c[8], int(c[9]))
+    # the query's centroid, and its nearest point on the hull of the tied points: the nearest
+    # over every tied point and every segment between two (the hull's nearest point lies on an
+    # edge of the hull, and every such segment lies in the hull)
+    cx = cy = cz = 0.0
+    for i in range(kq + 1):
+        cx += Q[3 * i]
+        cy += Q[3 * i + 1]
+        cz += Q[3 * i + 2]
+    cx /= kq + 1
+    cy /= kq + 1
+    cz /= kq + 1
+    bd = math.inf
+    bi = bj = 0
+    bl = 0.0
+    for i in range(m):
+        for j in range(i, m):
+            ex = X[j, 0] - X[i, 0]
+            ey = X[j, 1] - X[i, 1]
+            ez = X[j, 2] - X[i, 2]
+            ee = ex * ex + ey * ey + ez * ez
+            lam = 0.0
+            if ee > 0.0:
+                lam = ((cx - X[i, 0]) * ex + (cy - X[i, 1]) * ey + (cz - X[i, 2]) * ez) / ee
+                lam = min(max(lam, 0.0), 1.0)
+            px = X[i, 0] + lam * ex - cx
+            py = X[i, 1] + lam * ey - cy
+            pz = X[i, 2] + lam * ez - cz
+            dd = px * px + py * py + pz * pz
+            if dd < bd:
+                bd, bi, bj, bl = dd, i, j, lam
+    px = X[bi, 0] + bl * (X[bj, 0] - X[bi, 0]) - cx
+    py = X[bi, 1] + bl * (X[bj, 1] - X[bi, 1]) - cy
+    pz = X[bi, 2] + bl * (X[bj, 2] - X[bi, 2]) - cz
+    # the centroid lies outside the hull iff every tied point is beyond the plane through the
+    # nearest point normal to (nearest - centroid); else it lies inside and is its own nearest
+    inside = False
+    slack = 1e-9 * L * L
+    for k in range(m):
+        if ((X[k, 0] - cx) * px + (X[k, 1] - cy) * py + (X[k, 2] - cz) * pz) < bd - slack:
+            inside = True
+            break
+    if inside:
+        d2, rx, ry, rz, ds, dt, df = _point_to(kd, cx, cy, cz, P)
+        if kq == 1:
+            return best, rx, ry, rz, 0.5, 0.0, SEG_INTERIOR, ds, dt, df
+        return best, rx, ry, rz, 1.0 / 3.0, 1.0 / 3.0, TRI_INTERIOR, ds, dt, df
+    a = C[T[bi]]
+    b = C[T[bj]]
+    if bl <= 0.0 or bi == bj:
+        return (best, a[1], a[2], a[3], a[4], a[5], int(a[6]), a[7], a[8], int(a[9]))
+    if bl >= 1.0:
+        return (best, b[1], b[2], b[3], b[4], b[5], int(b[6]), b[7], b[8], int(b[9]))
+    # an affine map takes the query's parameters to the data's on S: interpolate both sides
+    u = 1.0 - bl
+    return (best, u * a[1] + bl * b[1], u * a[2] + bl * b[2], u * a[3] + bl * b[3],
+            u * a[4] + bl * b[4], u * a[5] + bl * b[5], _union_feature(kq, int(a[6]), int(b[6])),
+            u * a[7] + bl * b[7], u * a[8] + bl * b[8], _union_feature(kd, int(a[9]), int(b[9])))
+
+
+@numba.njit(**NJIT)
+def distinct_ties(kq, Q, kd, P):
+    """Number of distinct candidate pairs of query ``(kq, Q)`` and data ``(kd, P)`` (kinds 1 or
+    2, flat (9,) coordinates, a segment's third vertex repeating its second) tied at the
+    smallest distance: 1 for a unique closest pair, more where :func:`tied_pair` decides; 0 at
+    distance 0. For tests and diagnostics."""
+    C = np.empty((MAX_CANDIDATES, 10))
+    n = _candidates(kq, Q, kd, P, C)
+    best = math.inf
+    for i in range(n):
+        best = min(best, C[i, 0])
+    if best == 0.0:
+        return 0
+    M, L = pair_scale(Q[0], Q[1], Q[2], Q[3], Q[4], Q[5], Q[6], Q[7], Q[8], P[0], P[1], P[2],
+                      P[3], P[4], P[5], P[6], P[7], P[8])
+    m = 0
+    for i in range(n):
+        if not is_tied(C[i, 0], best, M, L):
+            continue
+        new = True
+        for j in range(i):
+            if (is_tied(C[j, 0], best, M, L)
+                    and abs(C[i, 4] - C[j, 4]) + abs(C[i, 5] - C[j, 5]) <= SAME_PAIR):
+                new = False
+                break
+        if new:
+            m += 1
+    return m

@@ -1,0 +1,199 @@
+"""Whole-mesh distance under fine lines of motion through parallel configurations (issue 37).
+
+Where a query edge or face is parallel to a data edge or face, the closest pair of two primitives
+is not unique; the weight depends on where it lies, so a choice left to rounding made ``d_hat``
+jump (9.2e-4 between shifts 5e-7 apart in the issue's smallest case) while the query moved by
+less than a micron. ``smoothdist.closest_pair.tied_pair`` makes the choice continuous. Each scan
+below translates a query mesh in steps of 1e-7 and 1e-4 along the axes and a diagonal and fails
+on any step of ``d_hat`` larger than ``LIPSCHITZ`` times the step length; before the tie rule
+the icosphere scans stepped by 2-3e3 times it. The gradients are checked there against
+one-sided differences (aligned placements sit on kinks of the weight, where the two one-sided
+derivatives differ and the gradient must lie between them) and, off the aligned placements,
+against central differences.
+"""
+
+import numpy as np
+import pytest
+import trimesh
+
+from smoothdist import MeshDistance
+from smoothdist.closest_pair import distinct_ties, tied_pair, triangle_triangle
+
+#: ``|d_hat(x + h e) - d_hat(x)| <= LIPSCHITZ h``: d_hat's translation gradient has norm about 1
+#: (unit distance gradients, averaged, plus a weight term of order 1 / alpha); a jump from a
+#: closest-pair choice is 1e3-1e4 times the step at these step lengths
+LIPSCHITZ = 3.0
+KINDS = ("points", "edges", "triangles")
+
+
+def _grid(n=8, half=0.4):
+    xs = np.linspace(-half, half, n + 1)
+    X, Y = np.meshgrid(xs, xs, indexing="ij")
+    V = np.c_[X.ravel(), Y.ravel(), np.zeros(X.size)]
+    F = []
+    for i in range(n):
+        for j in range(n):
+            a = i * (n + 1) + j
+            F += [[a, a + n + 1, a + n + 2], [a, a + n + 2, a + 1]]
+    return V, np.array(F)
+
+
+def _edges(F):
+    E = np.sort(np.r_[F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]], axis=1)
+    return np.unique(E, axis=0)
+
+
+def _as(V, F, kind):
+    if kind == "points":
+        return V
+    return (V, _edges(F)) if kind == "edges" else (V, F)
+
+
+def _box():
+    b = trimesh.creation.box(extents=[0.3, 0.2, 0.15])
+    return np.asarray(b.vertices) + [0.013, -0.021, 0.175], np.asarray(b.faces)
+
+
+def _ball():
+    s = trimesh.creation.icosphere(subdivisions=2, radius=0.3)
+    return np.asarray(s.vertices) + [0.0, 0.0, 0.42], np.asarray(s.faces)
+
+
+GRID = _grid()
+QUERIES = {"box": _box(), "ball": _ball()}
+DIRECTIONS = (np.array([1.0, 0, 0]), np.array([0, 1.0, 0]), np.array([0, 0, 1.0]),
+              np.array([1.0, 1.0, 0]) / np.sqrt(2))
+
+
+def _largest_step(md, direction, h, n=20, start=np.zeros(3)):
+    d = np.array([md(None, start + direction * (k * h))[0] for k in range(n + 1)])
+    return np.abs(np.diff(d)).max() / h
+
+
+def _check_gradient(md, t, tol):
+    """The translation gradient against differences at ``t``: between the one-sided ones along
+    each axis (kinks), and equal to the central one where the two agree."""
+    d, G = md(None, t)
+    g = G.sum(axis=0)
+    h = 1e-6
+    for a, e in enumerate(np.eye(3)):
+        up = (md(None, t + h * e)[0] - d) / h
+        down = (d - md(None, t - h * e)[0]) / h
+        lo, hi = min(up, down), max(up, down)
+        # the one-sided differences carry O(h) curvature (|d''| h ~ alpha h): the slack
+        assert lo - tol <= g[a] <= hi + tol, (a, g[a], up, down)
+
+
+@pytest.mark.parametrize("qname", list(QUERIES))
+@pytest.mark.parametrize("qkind", KINDS)
+@pytest.mark.parametrize("dkind", KINDS)
+def test_no_jumps_along_lines_through_parallel_placements(dkind, qkind, qname):
+    V, F = QUERIES[qname]
+    md = MeshDistance(_as(*GRID, dkind), _as(V, F, qkind), alpha=50.0, alpha_q=50.0, beta=0.0,
+                      gradient="exact")
+    for direction in DIRECTIONS:
+        for h in (1e-7, 1e-4):
+            step = _largest_step(md, direction, h)
+            assert step <= LIPSCHITZ, (direction, h, step)
+    _check_gradient(md, np.zeros(3), tol=1e-3)
+
+
+def test_the_issues_smallest_case_is_continuous():
+    V = np.array([[-.2, -.2, 0], [0, -.2, 0], [.2, -.2, 0], [-.2, 0, 0], [0, 0, 0], [.2, 0, 0],
+                  [-.2, .2, 0], [0, .2, 0], [.2, .2, 0]])
+    F = [[0, 1, 4], [1, 2, 5], [3, 4, 7], [4, 5, 8], [0, 4, 3], [1, 5, 4], [3, 7, 6], [4, 8, 7]]
+    T = np.array([[0.00556722, 0.15222992, 0.14447174], [0.137, 0.071, 0.12],
+                  [0.00556722, -0.01022992, 0.14447174]])
+    for method in ("bvh", "brute"):
+        md = MeshDistance((V, F), (T, [[0, 1, 2]]), alpha=50.0, alpha_q=50.0, beta=0.0,
+                          gradient="exact")
+        x = np.linspace(-2e-6, 2e-6, 41)
+        d = np.array([md(None, [s, 0, 0], method=method)[0] for s in x])
+        # was: steps of 9.2e-4 between shifts 1e-7 apart
+        assert np.abs(np.diff(d)).max() <= LIPSCHITZ * (x[1] - x[0])
+    # the data edge under the query is parallel to the query face's level lines: a tie, and
+    # the canonical pair is interior to the closest segment (not one of its ends)
+    Q = T.ravel()
+    P = V[[3, 4, 7]].ravel()
+    assert distinct_ties(2, Q, 2, P) >= 2
+    c = triangle_triangle(*Q, *P)
+    assert c == tied_pair(2, Q, 2, P)
+    assert 0.0 < c[7] < 1.0 and 0.0 < c[8] < 1.0
+
+
+@pytest.mark.parametrize("h", [1e-7, 1e-4])
+def test_collinear_and_coplanar_pairs(h):
+    """A query edge above and parallel to a polyline of data edges (collinear directions), and a
+    query triangle in the data triangles' plane beside them with an edge parallel to theirs."""
+    xs = np.linspace(-0.5, 0.5, 11)
+    poly = (np.c_[xs, np.zeros(11), np.zeros(11)], np.c_[np.arange(10), np.arange(1, 11)])
+    seg = (np.array([[-0.123, 0.0, 0.1], [0.2345, 0.0, 0.1]]), [[0, 1]])
+    md = MeshDistance(poly, seg, alpha=40.0, alpha_q=40.0, beta=0.0, gradient="exact")
+    assert _largest_step(md, np.array([1.0, 0, 0]), h) <= LIPSCHITZ
+    V, F = GRID
+    tri = (np.array([[0.45, -0.1, 0.0], [0.45, 0.13, 0.0], [0.6, 0.0, 0.0]]), [[0, 1, 2]])
+    md = MeshDistance((V, F), tri, alpha=40.0, alpha_q=40.0, beta=0.0, gradient="exact")
+    for direction in (np.array([0, 1.0, 0]), np.array([1.0, 0, 0])):
+        assert _largest_step(md, direction, h) <= LIPSCHITZ
+    _check_gradient(md, np.zeros(3), tol=1e-3)
+
+
+def test_gradient_matches_central_differences_off_the_aligned_placements():
+    rng = np.random.default_rng(37)
+    V, F = QUERIES["box"]
+    for dkind in KINDS:
+        for qkind in ("edges", "triangles"):
+            md = MeshDistance(_as(*GRID, dkind), _as(V, F, qkind), alpha=50.0, alpha_q=50.0,
+                              beta=0.0, gradient="exact")
+            for _ in range(2):
+                t = rng.uniform(-1, 1, 3) * [0.03, 0.03, 0.01]
+                g = md(None, t)[1].sum(axis=0)
+                h = 1e-6
+                fd = [(md(None, t + h * e)[0] - md(None, t - h * e)[0]) / (2 * h)
+                      for e in np.eye(3)]
+                # central differences: O(h^2 alpha^2) truncation and 1e-16 / h rounding
+                np.testing.assert_allclose(g, fd, atol=1e-6 * np.abs(fd).max())
+
+
+def _point(kind, X, s, t):
+    """The point at parameters ``(s, t)`` of a segment (kind 1) or triangle ``X (9,)``."""
+    X = X.reshape(3, 3)
+    p = X[0] + s * (X[1] - X[0])
+    return p + t * (X[2] - X[0]) if kind == 2 else p
+
+
+@pytest.mark.parametrize("qkind, dkind", [(1, 1), (1, 2), (2, 1), (2, 2)])
+def test_tied_pairs_are_closest_pairs(qkind, dkind):
+    """Every pair the tie rule reports lies on both primitives at the minimum distance, which
+    :mod:`naive_pairs` (a face-by-face pseudo-inverse enumeration) finds independently."""
+    import naive_pairs
+    from smoothdist.closest_pair import closest_pair
+
+    V, F = QUERIES["box"]
+    GV, GF = GRID
+    shift = np.array([1e-7, -3e-7, 0.0])
+    Qs = V[F] + shift if qkind == 2 else V[_edges(F)] + shift
+    Ps = GV[GF] if dkind == 2 else GV[_edges(GF)]
+    n = 0
+    for Qv in Qs:
+        for Pv in Ps:
+            Q = np.zeros(9)
+            P = np.zeros(9)
+            Q[:Qv.size] = Qv.ravel()
+            P[:Pv.size] = Pv.ravel()
+            if qkind == 1:
+                Q[6:] = Q[3:6]
+            if dkind == 1:
+                P[6:] = P[3:6]
+            if distinct_ties(qkind, Q, dkind, P) < 2:
+                continue
+            n += 1
+            c = closest_pair(qkind, Q, dkind, P)
+            ref = naive_pairs.closest_pairs(qkind, Qv[None], dkind, Pv[None])[0][0]
+            # same minimum (the rule never changes the distance), and a real pair at it
+            x = _point(qkind, Q, c[4], c[5])
+            y = _point(dkind, P, c[7], c[8])
+            assert np.sqrt(c[0]) == pytest.approx(ref, abs=1e-12)
+            assert np.linalg.norm(x - y) == pytest.approx(ref, abs=1e-12)
+            np.testing.assert_allclose(x - y, c[1:4], atol=1e-12)
+    assert n > 10     # the box over the grid has many parallel pairs
