@@ -30,6 +30,8 @@ def as_points(X, name="Q"):
     A single point of shape ``(3,)`` is accepted and returned as ``(1, 3)``. Coordinates must
     be finite and at most :data:`COORD_LIMIT` in absolute value.
     """
+    if np.iscomplexobj(X):
+        raise ValueError(f"{name} must hold real coordinates, got a complex array")
     try:
         A = np.asarray(X, dtype=np.float64)
     except (TypeError, ValueError) as exc:

@@ -121,6 +121,8 @@ def _as_field(data, leaf_size):
 
 def as_rigid_transform(R=None, t=None):
     """Validate ``R (3, 3)`` (a rotation, None = identity) and ``t (3,)`` (None = 0)."""
+    if np.iscomplexobj(R) or np.iscomplexobj(t):
+        raise ValueError("R and t must be real, got a complex array")
     if R is None:
         Rm = np.eye(3)
     else:
@@ -539,6 +541,8 @@ def combine_distances(distances, alphas):
         ``d = -(1/a) log sum_i exp(-a d_i)`` (shifted, finite) and the softmax ``weights (k,)``:
         the combined gradient of any variable is ``sum_i weights[i] * grad d_i``.
     """
+    if np.iscomplexobj(distances) or np.iscomplexobj(alphas):
+        raise ValueError("distances and alphas must be real numbers")
     D = np.asarray(distances, dtype=np.float64).ravel()
     if D.size == 0:
         raise ValueError("distances is empty")
@@ -547,6 +551,9 @@ def combine_distances(distances, alphas):
     A = np.atleast_1d(np.asarray(alphas, dtype=np.float64)).ravel()
     if A.size == 0 or not np.all(np.isfinite(A)) or np.any(A <= 0):
         raise ValueError("alphas must be finite numbers > 0")
+    if A.size not in (1, D.size):
+        raise ValueError(f"alphas must be one number or one per distance: got {A.size} alphas "
+                         f"for {D.size} distances")
     a = float(A.max())
     m = float(D.min())
     e = np.exp(-a * (D - m))

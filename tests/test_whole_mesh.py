@@ -314,6 +314,17 @@ def test_combine_distances():
     assert np.isfinite(d) and d <= 1e4
 
 
+@pytest.mark.parametrize("distances, alphas, match", [
+    ([1.0, 2.0, 3.0], [1.0, 5.0], "one per distance"),
+    ([1.0, 2.0], [1.0, 5.0, 2.0], "one per distance"),
+    ([1.0 + 0j, 2.0], 5.0, "real"),
+    ([1.0, 2.0], [5.0 + 1j], "real"),
+])
+def test_combine_distances_refuses_bad_input(distances, alphas, match):
+    with pytest.raises(ValueError, match=match):
+        combine_distances(distances, alphas)
+
+
 def test_far_query_is_finite():
     md = MeshDistance(DATA["triangles"], QUERY["edges"], alpha=100.0, alpha_q=100.0)
     d, G = md(t=[1e5, 0, 0])
@@ -345,6 +356,8 @@ def test_bad_parameters(kwargs, match):
     ((np.eye(3), np.zeros((0, 2), dtype=int)), "no primitives"),
     ((np.eye(3), [[0, 1, 2, 0]]), "shape"),
     ((np.eye(3), [[0.5, 1]]), "integer"),
+    ((np.eye(3) + 0j, [[0, 1]]), "real"),
+    (np.zeros((2, 3), dtype=complex), "real"),
 ])
 def test_bad_query_mesh(query, match):
     with pytest.raises(ValueError, match=match):
@@ -365,6 +378,10 @@ def test_bad_data_and_transform():
         md(t=[1.0, 2.0])
     with pytest.raises(ValueError, match="NaN"):
         md(t=[1.0, np.nan, 0.0])
+    with pytest.raises(ValueError, match="real"):
+        md(t=np.array([1.0, 0.0, 0.0], dtype=complex))
+    with pytest.raises(ValueError, match="real"):
+        md(R=np.eye(3, dtype=complex))
     with pytest.raises(ValueError, match="transformed query vertices"):
         md(t=[1e60, 0.0, 0.0])
     with pytest.raises(ValueError, match="transformed query vertices"):
