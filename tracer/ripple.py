@@ -17,7 +17,8 @@ tessellation, so its angles show what the tessellation alone costs.
 
 ``benchmarks/bench_ripple.py`` renders the cases users meet (trimesh and pyvista shapes, as
 triangles, edges and points) and writes the table. Shapes take and return ``(n, 3)`` float64
-arrays; nothing here compiles a kernel.
+arrays; nothing here compiles a kernel (:class:`RoundedCube` needs scipy, the ``sim``
+extra).
 """
 
 import numpy as np
