@@ -22,7 +22,7 @@ The reference was written on one CPU and is checked on others, so each tolerance
 summed (the mesh's size for distances, 1 for gradients, which are weighted means of unit
 vectors), not to the result, which may be small because the terms cancel (issue 32: the mixed
 case's gradient, 0.046, moved by 5.8e-14 on an AMD EPYC). Measured on emulated CPUs: at most
-1/30 of each allowance (the table in that page).
+1/100 of any allowance (the table in that page).
 """
 
 from pathlib import Path
