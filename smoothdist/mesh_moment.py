@@ -17,6 +17,18 @@ the data-side closest point, which moves with the query's feature when that is a
 :func:`smoothdist.mesh_query.weight_gradient`'s notation (0 in its fallbacks). Far-field nodes
 use the moments of :mod:`smoothdist.box_moment`.
 
+The same traversal gives the derivative for a motion of one query vertex ``x_k`` alone (a
+deformation, :func:`smooth_vertex_primitive`): by the same envelope argument a pair distance
+changes through its closest point ``p_i = sum_k b_k x_k`` (``b_k`` the query barycentrics of
+the pair), and the weight through the stationarity conditions, whose query-edge row now also
+sees the edge direction ``q = sum_k (d b_k / d lambda) x_k`` change:
+
+    grad_k d_hat(g) = sum_i softmax_i [ b_k v_i + wgs y_i (d b_k / d lambda) r_i ].
+
+Summed over ``k`` this is the translation gradient, and ``sum_k (x_k - c) x grad_k`` the moment.
+A far-field node (Barnes-Hut, tol) has no closest point on ``g``: its term is split equally
+among the vertices, so the result is the exact derivative at ``beta = 0`` and ``tol = 0``.
+
 The paper's equal split (Eq. 7-8) applies every primitive's translation gradient at its centroid
 ``c``; ``M`` about the centroid is what it leaves out. Point queries have ``M = 0`` (their
 closest point is the point). Here ``c`` is the primitive's centroid, and ``d_hat`` and the
@@ -31,8 +43,8 @@ import numpy as np
 from numba import prange
 
 from smoothdist._config import NJIT, NJIT_PARALLEL
-from smoothdist.mesh_query import (TASKS, _accumulate, centroid, pair_terms,  # noqa: F401
-                                   query_coefficient, smooth_traverse)
+from smoothdist.mesh_query import (TASKS, VERTEX_1, VERTEX_2, _accumulate, centroid,  # noqa: F401
+                                   pair_terms, query_coefficient, smooth_traverse)
 from smoothdist.query import DEFAULT_TOL, smooth_distance_point
 
 
@@ -132,3 +144,95 @@ def smooth_moment_primitives_serial(tree, qkind, qpts, alpha, beta, S, wgs, brut
     """:func:`smooth_moment_primitives` on the calling thread (small query meshes)."""
     _moment_task(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g, out_m, out_nodes,
                  out_leaves, tol, 0, 1)
+
+
+@numba.njit(**NJIT)
+def smooth_vertex_primitive(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch,
+                            tol=DEFAULT_TOL):
+    """``(d_hat, g (3,), G (kq + 1, 3))`` of an edge or triangle query: the smooth distance, its
+    translation gradient and its derivative for a motion of each vertex alone (module notes).
+
+    One traversal per vertex beyond the first (vertex 0's is ``g`` less the others').
+    """
+    G = np.zeros((kq + 1, 3))
+    d, gx, gy, gz, ax, ay, az, nodes, leaves = smooth_traverse(
+        tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, tol, VERTEX_1)
+    G[1, 0] = ax
+    G[1, 1] = ay
+    G[1, 2] = az
+    if kq == 2:
+        _, _, _, _, ax, ay, az, _, _ = smooth_traverse(
+            tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, tol, VERTEX_2)
+        G[2, 0] = ax
+        G[2, 1] = ay
+        G[2, 2] = az
+    G[0, 0] = gx - G[1:, 0].sum()
+    G[0, 1] = gy - G[1:, 1].sum()
+    G[0, 2] = gz - G[1:, 2].sum()
+    return d, gx, gy, gz, G
+
+
+@numba.njit(**NJIT)
+def smooth_vertex_brute_primitive(tree, kq, Q, alpha, S, wgs):
+    """:func:`smooth_vertex_primitive` summing every data primitive (reference; no tree)."""
+    G = np.zeros((kq + 1, 3))
+    for v in range(1, kq + 1):
+        m = np.inf
+        s = 0.0
+        gx = gy = gz = 0.0
+        mx = my = mz = 0.0
+        for i in range(tree.kind.size):
+            d, W, vx, vy, vz, tx, ty, tz = pair_terms(tree.kind, tree.pts, tree.wc, tree.pwhi, i,
+                                                      kq, Q, S, wgs, VERTEX_1 + v - 1, 0.0, 0.0,
+                                                      0.0, tree.kind[i])
+            m, s, gx, gy, gz, mx, my, mz = _accumulate(m, s, gx, gy, gz, mx, my, mz, d, W, vx,
+                                                       vy, vz, tx, ty, tz, alpha, True)
+        G[v, 0] = mx / s
+        G[v, 1] = my / s
+        G[v, 2] = mz / s
+    G[0, 0] = gx / s - G[1:, 0].sum()
+    G[0, 1] = gy / s - G[1:, 1].sum()
+    G[0, 2] = gz / s - G[1:, 2].sum()
+    return m - math.log(s) / alpha, gx / s, gy / s, gz / s, G
+
+
+@numba.njit(**NJIT)
+def _vertex_task(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g, out_G, tol, task,
+                 ntasks):
+    """Query primitives ``task, task + ntasks, ...`` of :func:`smooth_vertex_primitives`."""
+    k = tree.depth + 4
+    stack = np.empty(k, dtype=np.int64)
+    dstack = np.empty(k)
+    scratch = np.empty(33)
+    for j in range(task, qkind.size, ntasks):
+        kq = qkind[j]
+        Q = qpts[j]
+        out_G[j] = 0.0
+        if kq == 0:
+            d, gx, gy, gz, _, _ = smooth_distance_point(tree, Q[0], Q[1], Q[2], alpha, beta, S,
+                                                        wgs, stack, dstack)
+            out_G[j, 0, 0] = gx
+            out_G[j, 0, 1] = gy
+            out_G[j, 0, 2] = gz
+        else:
+            if brute:
+                d, gx, gy, gz, G = smooth_vertex_brute_primitive(tree, kq, Q, alpha, S, wgs)
+            else:
+                d, gx, gy, gz, G = smooth_vertex_primitive(tree, kq, Q, alpha, beta, S, wgs,
+                                                           stack, dstack, scratch, tol)
+            out_G[j, :kq + 1] = G
+        out_d[j] = d
+        out_g[j, 0] = gx
+        out_g[j, 1] = gy
+        out_g[j, 2] = gz
+
+
+@numba.njit(**NJIT_PARALLEL)
+def smooth_vertex_primitives(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g, out_G,
+                             tol=DEFAULT_TOL, ntasks=TASKS):
+    """``d_hat``, translation gradient and per-vertex derivatives ``out_G (m, 3, 3)`` (slot ``k``
+    for the primitive's vertex ``k``; unused slots 0) of every query primitive."""
+    ntasks = max(1, min(qkind.size, ntasks))
+    for task in prange(ntasks):
+        _vertex_task(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g, out_G, tol,
+                     task, ntasks)

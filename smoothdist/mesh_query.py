@@ -54,6 +54,9 @@ from smoothdist.weights import eval_triangle_weight
 
 #: :func:`smoothdist.query._attenuate`, inlined (it calls no other kernel)
 _attenuate_inline = numba.njit(**NJIT_INLINE)(_attenuate.py_func)
+#: ``moment`` values of :func:`smooth_traverse` and :func:`_pair` beyond True (the moment):
+#: the derivative for a motion of query vertex 1 or 2 alone
+VERTEX_1, VERTEX_2 = 2, 3
 #: :func:`smoothdist.closest_pair.segment_segment`, inlined (the edge-edge leaves)
 _segment_segment_inline = numba.njit(**NJIT_INLINE)(segment_segment.py_func)
 
@@ -179,7 +182,9 @@ def _pair(kind, pts, wc, pwhi, i, kq, Q, S, wgs, moment, cx, cy, cz, k):
 
     Returns ``(d, W, vx, vy, vz, mx, my, mz)``: distance, attenuated weight, the gradient
     numerator ``v = W unit(r) - wgs grad W`` (for a translation of the query) and, with
-    ``moment``, the term's moment about ``c`` (:mod:`smoothdist.mesh_moment`; else 0).
+    ``moment`` True (or 1), the term's moment about ``c`` (:mod:`smoothdist.mesh_moment`), with
+    ``moment`` ``VERTEX_1`` or ``VERTEX_2`` the numerator for a motion of that query vertex
+    alone (:func:`smoothdist.mesh_moment.smooth_vertex_primitive`); else 0.
     """
     c = _closest(kind, pts, i, kq, Q, k)
     d = math.sqrt(c[0])
@@ -246,7 +251,26 @@ def _pair(kind, pts, wc, pwhi, i, kq, Q, S, wgs, moment, cx, cy, cz, k):
         vy = -wgs * gwy
         vz = -wgs * gwz
     mx = my = mz = 0.0
-    if moment:
+    if moment >= VERTEX_1:
+        # vertex mode: the term's derivative for a motion of query vertex 1 or 2 alone, b v +
+        # wgs y (d b / d lambda) r (module notes; b the vertex's barycentric at the pair)
+        b = c[4] if moment == VERTEX_1 else c[5]
+        db = 0.0
+        if y != 0.0:
+            qf = c[6]
+            if kq == 1:
+                db = 1.0 if moment == VERTEX_1 else 0.0
+            elif qf == TRI_AB:
+                db = 1.0 if moment == VERTEX_1 else 0.0
+            elif qf == TRI_AC:
+                db = 0.0 if moment == VERTEX_1 else 1.0
+            elif qf == TRI_BC:
+                db = -1.0 if moment == VERTEX_1 else 1.0
+        f = wgs * y * db
+        mx = b * vx + f * rx
+        my = b * vy + f * ry
+        mz = b * vz + f * rz
+    elif moment:
         # the closest point on the query, relative to c
         s = c[4]
         t = c[5]
@@ -421,8 +445,10 @@ def smooth_traverse(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, to
     qd = math.sqrt((h0 - l0) ** 2 + (h1 - l1) ** 2 + (h2 - l2) ** 2)
     b2 = beta * beta
     ib = (1.0 - 1e-9) / beta if beta > 0.0 else 0.0
+    # vertex modes: a far field's gradient is split equally among the query's vertices
+    split = 1.0 / (kq + 1)
     cx = cy = cz = 0.0
-    if moment:
+    if moment == 1:
         L = scratch[15:33]
         cx, cy, cz = centroid(kq, Q)
         extreme_levers(kq, Q, cx, cy, cz, L)
@@ -482,7 +508,9 @@ def smooth_traverse(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, to
                     ux = g0 / delta
                     uy = g1 / delta
                     uz = g2 / delta
-                if moment:
+                if moment >= VERTEX_1:
+                    ax, ay, az = ux * split, uy * split, uz * split
+                elif moment:
                     ax, ay, az = gap_moment(L, ux, uy, uz)
                 far = True
             else:
@@ -490,17 +518,21 @@ def smooth_traverse(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, to
                 if (x <= 0.0 or x * x < bd2) and dg < beta * _point_box(kq, Q, lo, hi, node):
                     # the box distance is at most any vertex's: only then can the finer bound
                     # help
-                    if moment:
+                    if moment == 1:
                         delta, ux, uy, uz, ax, ay, az = box_lower_bound_moment(
                             kq, Q, qlo, qhi, lo, hi, node, E, cx, cy, cz, L)
                     else:
                         delta, ux, uy, uz = box_lower_bound(kq, Q, qlo, qhi, lo, hi, node, E)
+                        if moment >= VERTEX_1:
+                            ax, ay, az = ux * split, uy * split, uz * split
                     far = dg < beta * delta
         if not far and tol > 0.0 and s > 0.0:
             W = _far_weight(whi, node, cnt, S)
             if W * math.exp(-alpha * (math.sqrt(bd2) - m)) <= tol * s:
                 delta, ux, uy, uz = box_box_offset(qlo, qhi, lo, hi, node)
-                if moment:
+                if moment >= VERTEX_1:
+                    ax, ay, az = ux * split, uy * split, uz * split
+                elif moment:
                     ax, ay, az = gap_moment(L, ux, uy, uz)
                 far = True
         if far:

@@ -243,8 +243,12 @@ class MeshDistance:
         primitive for ``k`` such nodes); applies to edge and triangle queries.
 
     Calling the object, ``d, G = md(R, t)``, returns the smooth distance (float) and the
-    gradient ``G (n_query_vertices, 3)`` with respect to the transformed query vertices
-    ``R x + t``. :meth:`exact` returns the exact minimum pairwise distance and its gradient.
+    paper's vertex gradients ``G (n_query_vertices, 3)`` (Eq. 7-8): each query primitive's
+    gradient for a rigid translation of it, weighted by its softmax and split equally among its
+    vertices. So ``G.sum(axis=0)`` is the derivative for translating the whole query, and
+    :meth:`rigid_gradient` gives force and torque; ``G[k]`` is not the derivative for moving
+    vertex ``k`` alone, which :meth:`vertex_gradient` returns (deformable bodies).
+    :meth:`exact` returns the exact minimum pairwise distance and its gradient.
 
     Examples
     --------
@@ -328,9 +332,47 @@ class MeshDistance:
         return d, g
 
     def __call__(self, R=None, t=None, *, method="bvh"):
-        """Smooth distance ``d_hat(M_d, M_q)`` (float) and vertex gradients ``(n, 3)``."""
+        """Smooth distance ``d_hat(M_d, M_q)`` (float) and the paper's vertex gradients
+        ``(n, 3)``: each primitive's translation gradient split equally among its vertices
+        (their sum is the translation gradient; see :meth:`vertex_gradient` for per-vertex
+        derivatives)."""
         d, g = self.primitive_distances(R, t, method=method)
         return split_to_vertices(d, g, self.query, self.alpha_q)
+
+    def vertex_gradient(self, R=None, t=None, *, method="bvh"):
+        """``(d_hat, G (n, 3))``: the smooth distance and its derivative with respect to each
+        transformed query vertex moved on its own, for deformable query meshes.
+
+        Calling the object returns the paper's equal split instead (Eq. 7-8), which is right
+        for rigid translations only. Here each pair term moves with its own closest point on the
+        query primitive (its barycentrics) and its weight follows the data-side closest point
+        (:mod:`smoothdist.mesh_moment`). With ``gradient="exact"``, ``beta=0`` and ``tol=0`` this
+        is the derivative of ``d_hat`` (checked against finite differences); Barnes-Hut and
+        tol far fields are split equally among a primitive's vertices, and
+        ``gradient="metric"`` divides the weights' part by alpha as everywhere. Its rows sum
+        to the translation gradient ``G.sum(axis=0)`` of the call. Costs one traversal per
+        vertex beyond the first of each primitive (about 2x a call for edges, 3x for
+        triangles).
+        """
+        if method not in ("bvh", "brute"):
+            raise ValueError(f"method must be 'bvh' or 'brute', got {method!r}")
+        pts = self._primitive_coords(R, t)
+        q = self.query
+        m = q.kind.size
+        d = np.empty(m)
+        g = np.empty((m, 3))
+        Gp = np.empty((m, 3, 3))
+        _mm.smooth_vertex_primitives(self.field.tree, q.kind, pts, self.alpha, self.beta, self.S,
+                                     self.wgs, method == "brute", d, g, Gp, self.tol,
+                                     parallel_tasks(m))
+        dmin = d.min()
+        e = np.exp(-self.alpha_q * (d - dmin))
+        w = e / e.sum()
+        G = np.zeros((q.V.shape[0], 3))
+        for c in range(3):
+            used = q.kind >= c
+            np.add.at(G, q.index[used, c], w[used, None] * Gp[used, c])
+        return float(dmin - math.log(e.sum()) / self.alpha_q), G
 
     def primitive_moments(self, R=None, t=None, *, method="bvh"):
         """Per query primitive: ``(d_hat (m,), translation gradient (m, 3), moment (m, 3))``.

@@ -197,3 +197,66 @@ def test_tied_pairs_are_closest_pairs(qkind, dkind):
             assert np.linalg.norm(x - y) == pytest.approx(ref, abs=1e-12)
             np.testing.assert_allclose(x - y, c[1:4], atol=1e-12)
     assert n > 10     # the box over the grid has many parallel pairs
+
+
+def _vertex_differences(md, h=1e-6):
+    """Central differences of ``d_hat`` for each query vertex coordinate moved alone."""
+    q = md.query
+    fd = np.zeros_like(q.V)
+    for k in range(len(q.V)):
+        for a in range(3):
+            ds = []
+            for sign in (1.0, -1.0):
+                X = q.V.copy()
+                X[k, a] += sign * h
+                ds.append(MeshDistance(md.field, type(q)(X, q.kind, q.index), alpha=md.alpha,
+                                       alpha_q=md.alpha_q, beta=md.beta, alpha_u=md.alpha_u,
+                                       gradient=md.gradient)()[0])
+            fd[k, a] = (ds[0] - ds[1]) / (2 * h)
+    return fd
+
+
+@pytest.mark.parametrize("qkind", ["edges", "triangles"])
+@pytest.mark.parametrize("dkind", KINDS + ("mixed",))
+def test_vertex_gradient_is_the_derivative_for_each_vertex(dkind, qkind):
+    """``vertex_gradient`` against central differences over every query vertex coordinate (the
+    equal split is 30-60 % off there), its rows summing to the translation gradient."""
+    from conftest import make_mixed
+
+    rng = np.random.default_rng(5)
+    s = trimesh.creation.icosphere(subdivisions=1, radius=0.2)
+    R = np.linalg.qr(rng.normal(size=(3, 3)))[0]
+    R *= np.sign(np.linalg.det(R))
+    V = np.asarray(s.vertices) @ R.T + [0.01, 0.02, 0.28]
+    if dkind == "mixed":
+        data, alpha_u = make_mixed(), 60.0
+        V = V * 2.0 + [0.0, 0.0, 1.2]
+    else:
+        data, alpha_u = _as(*GRID, dkind), None
+    md = MeshDistance(data, _as(V, np.asarray(s.faces), qkind), alpha=30.0, alpha_q=30.0,
+                      beta=0.0, alpha_u=alpha_u, gradient="exact")
+    d, G = md.vertex_gradient()
+    d_split, G_split = md()
+    assert d == pytest.approx(d_split, abs=1e-14)
+    np.testing.assert_allclose(G.sum(axis=0), G_split.sum(axis=0), atol=1e-13)
+    fd = _vertex_differences(md)
+    scale = np.abs(fd).max()
+    # central differences: O(h^2 alpha^2) truncation, 1e-16 / h rounding: about 1e-8 of scale
+    np.testing.assert_allclose(G, fd, atol=1e-6 * scale)
+    assert np.abs(G_split - fd).max() > 0.1 * scale      # the split is not this derivative
+    _, G_brute = md.vertex_gradient(method="brute")
+    np.testing.assert_allclose(G, G_brute, atol=1e-12 * scale)
+
+
+def test_vertex_gradient_with_barnes_hut_stays_close():
+    """With Barnes-Hut the far fields are split equally: still the derivative near contact,
+    where the terms that matter are evaluated exactly."""
+    V, F = QUERIES["ball"]
+    md0 = MeshDistance(GRID, (V, F), alpha=50.0, alpha_q=50.0, beta=0.0, gradient="exact")
+    md5 = MeshDistance(GRID, (V, F), alpha=50.0, alpha_q=50.0, beta=0.5, gradient="exact")
+    d0, G0 = md0.vertex_gradient()
+    d5, G5 = md5.vertex_gradient()
+    assert d5 < d0          # far fields were used (they only lower d_hat)
+    assert 0.0 < np.abs(G5 - G0).max() <= 0.05 * np.abs(G0).max()
+    with pytest.raises(ValueError, match="method"):
+        md0.vertex_gradient(method="tree")
