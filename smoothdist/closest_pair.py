@@ -563,19 +563,10 @@ def pair_scale(px, py, pz, qx, qy, qz, rx_, ry_, rz_, ax, ay, az, bx, by, bz, cx
     return M, L
 
 
-@numba.njit(**NJIT)
+@numba.njit(**NJIT_INLINE)
 def _flat(px, py, pz, qx, qy, qz, rx_, ry_, rz_):
-    X = np.empty(9)
-    X[0] = px
-    X[1] = py
-    X[2] = pz
-    X[3] = qx
-    X[4] = qy
-    X[5] = qz
-    X[6] = rx_
-    X[7] = ry_
-    X[8] = rz_
-    return X
+    """The nine coordinates as a tuple (indexable like an array, no allocation)."""
+    return (px, py, pz, qx, qy, qz, rx_, ry_, rz_)
 
 
 @numba.njit(**NJIT_INLINE)
@@ -637,7 +628,7 @@ def _union_feature(kind, f, g):
 
 @numba.njit(**NJIT)
 def _candidates(kq, Q, kd, P, C):
-    """Fill ``C`` (MAX_CANDIDATES, 10) with every candidate pair of query ``(kq, Q)`` and data
+    """Fill ``C`` (MAX_CANDIDATES, >= 10) with every candidate pair of query ``(kq, Q)`` and data
     ``(kd, P)`` (kinds 1 or 2), as rows of the module's 10-tuple; returns their number."""
     n = 0
     for i in range(kq + 1):
@@ -708,7 +699,9 @@ def tied_pair(kq, Q, kd, P):
     ``P`` flat (9,) float64) where several candidates tie: the point of the closest set nearest
     the query's centroid (see the comment above ``TIE``). Returns the module's 10-tuple; the
     squared distance is the smallest candidate's."""
-    C = np.empty((MAX_CANDIDATES, 10))
+    # one buffer: the candidates (columns 0-9), and in rows 0..m-1 the tied ones' points on the
+    # query (10-12) and row numbers (13)
+    C = np.empty((MAX_CANDIDATES, 14))
     n = _candidates(kq, Q, kd, P, C)
     best = math.inf
     ib = 0
@@ -718,9 +711,7 @@ def tied_pair(kq, Q, kd, P):
             ib = i
     M, L = pair_scale(Q[0], Q[1], Q[2], Q[3], Q[4], Q[5], Q[6], Q[7], Q[8], P[0], P[1], P[2],
                       P[3], P[4], P[5], P[6], P[7], P[8])
-    # the tied candidates' points on the query
-    X = np.empty((n, 3))
-    T = np.empty(n, dtype=np.int64)
+    X = C[:, 10:13]
     m = 0
     for i in range(n):
         if is_tied(C[i, 0], best, M, L):
@@ -730,7 +721,7 @@ def tied_pair(kq, Q, kd, P):
                 X[m, a] = Q[a] + s * (Q[3 + a] - Q[a])
                 if kq == 2:
                     X[m, a] += t * (Q[6 + a] - Q[a])
-            T[m] = i
+            C[m, 13] = i
             m += 1
     if m <= 1:
         c = C[ib]
@@ -781,8 +772,8 @@ def tied_pair(kq, Q, kd, P):
         if kq == 1:
             return best, rx, ry, rz, 0.5, 0.0, SEG_INTERIOR, ds, dt, df
         return best, rx, ry, rz, 1.0 / 3.0, 1.0 / 3.0, TRI_INTERIOR, ds, dt, df
-    a = C[T[bi]]
-    b = C[T[bj]]
+    a = C[int(C[bi, 13])]
+    b = C[int(C[bj, 13])]
     if bl <= 0.0 or bi == bj:
         return (best, a[1], a[2], a[3], a[4], a[5], int(a[6]), a[7], a[8], int(a[9]))
     if bl >= 1.0:
