@@ -40,6 +40,7 @@ COMMANDS = {
     "bh-switch": "tracer.studies.bh_switch",
     "simulate": "tracer.sim.cli_simulate",
     "animate": "tracer.sim.cli_animate",
+    "reproduce": "tracer.reproduce.cli",
 }
 
 

@@ -1,0 +1,214 @@
+"""``tracer reproduce`` (tracer/reproduce/): the committed report page against its results
+folder, numbers on it against independent recomputations from the raw CSVs, a page or result
+edited by hand caught, the smallest run end to end, bad input refused without output."""
+
+import json
+import math
+import re
+import shutil
+from pathlib import Path
+
+import pytest
+
+from tracer.cli import main
+from tracer.reproduce import report
+from tracer.reproduce.claims import evaluate
+from tracer.reproduce.experiments import TABLE3_PAPER
+
+REPO = Path(__file__).resolve().parents[1]
+RESULTS = REPO / "renders" / "reproduction" / "quick"
+PAGE = REPO / "docs" / "reproduction.md"
+SHOWN = "renders/reproduction/quick"
+
+
+# ------------------------------------------------------------------ independent checks
+def _table(text, heading):
+    """The rows (lists of cells) of the first Markdown table after ``## heading``."""
+    part = text.split(f"## {heading}\n", 1)[1]
+    rows = []
+    for line in part.splitlines():
+        if line.startswith("## "):
+            break
+        if line.startswith("|") and not line.startswith("|---"):
+            rows.append([c.strip() for c in re.split(r"(?<!\\)\|", line)[1:-1]])
+    return rows[1:]  # without the header
+
+
+def _pearson(x, y):
+    """Pearson's r in plain Python (not numpy's corrcoef, which the experiment uses)."""
+    n = len(x)
+    mx, my = sum(x) / n, sum(y) / n
+    sxy = sum((a - mx) * (b - my) for a, b in zip(x, y))
+    sxx = sum((a - mx) ** 2 for a in x)
+    syy = sum((b - my) ** 2 for b in y)
+    return sxy / math.sqrt(sxx * syy)
+
+
+def _csv_rows(path):
+    import csv
+
+    with open(path, newline="", encoding="utf-8") as fh:
+        return list(csv.DictReader(fh))
+
+
+def _same3(cell, value):
+    """A page cell (3 significant digits) shows ``value``."""
+    return math.isclose(float(cell), float(f"{value:.3g}"), rel_tol=1e-9)
+
+
+def disagreements(page_text, folder):
+    """What the page says that the results folder does not (empty when they agree)."""
+    out = []
+    if page_text != report.render_page(folder, SHOWN):
+        out.append("the page is not the one generated from the results folder")
+    with open(Path(folder) / "claims.json", encoding="utf-8") as fh:
+        if json.load(fh) != evaluate(report.load_results(folder)):
+            out.append("claims.json is not the claims judged from the experiments' JSON")
+    res = report.load_results(folder)
+    # Table 3: the page's ms against table3.json, read here without the report's code
+    if "table3" in res:
+        by_query = {q: n for n, (_, _, q, _, _) in TABLE3_PAPER.items()}
+        for cells in _table(page_text, "Table 3 as the paper states it"):
+            name = by_query.get(cells[1])
+            r = res["table3"]["rows"].get(name) if name else None
+            if r is None:
+                continue
+            run = next((x for x in r["runs"] if str(x["threads"]) == cells[5]), None)
+            if run is None or not _same3(cells[4], run["ms_mean"]):
+                out.append(f"Table 3 {name}: page {cells[4]} ms on {cells[5]} threads, "
+                           f"results {r['runs']}")
+    # the benchmark: Pearson r recomputed from the bench_grid.csv files
+    if "grid" in res:
+        g = res["grid"]
+        rows = [r for p in g["csv"] for r in _csv_rows(Path(folder) / p)
+                if r.get("status", "ok") == "ok"]
+        N3 = float(g["grid"]) ** 3
+        for cells in _table(page_text, "The benchmark figure"):
+            L = {"points": "v", "edges": "e", "triangles": "f"}[cells[0]]
+            pts = [(float(r[f"leaves_{L}"]), float(r[f"seconds_{L}"]) / N3) for r in rows
+                   if r.get(f"seconds_{L}")]
+            if len(pts) > 2 and not _same3(cells[2], _pearson(*zip(*pts))):
+                out.append(f"benchmark {cells[0]}: page r {cells[2]}, CSVs give "
+                           f"{_pearson(*zip(*pts))}")
+            if int(cells[1]) != len(pts):
+                out.append(f"benchmark {cells[0]}: page {cells[1]} meshes, CSVs {len(pts)}")
+    # the beta study: time(beta 0) / time(beta 0.2) from the study's CSV
+    if "beta" in res:
+        rows = _csv_rows(Path(folder) / res["beta"]["csv"])
+        claim = next(c for c in _table(page_text, "Claims") if "β=0.2" in c[1])
+        for kind in ("points", "edges", "triangles"):
+            t = {float(r["beta"]): float(r["seconds"]) for r in rows if r["type"] == kind
+                 and float(r.get("tol") or 0) == 0}
+            if f"{kind} {t[0.0] / t[0.2]:.3g}x" not in claim[4]:
+                out.append(f"beta {kind}: page {claim[4]!r}, CSV {t[0.0] / t[0.2]:.3g}x")
+    return out
+
+
+# ------------------------------------------------------------------ the committed report
+def test_committed_page_matches_results():
+    assert disagreements(PAGE.read_text(encoding="utf-8"), RESULTS) == []
+
+
+def test_committed_results_have_provenance_and_every_claim_a_row():
+    run = report.load_run(RESULTS)
+    for name, res in report.load_results(RESULTS).items():
+        p = res["provenance"]
+        assert re.fullmatch(r"[0-9a-f]{40}", p["commit"]), name
+        assert re.fullmatch(r"\d{4}-\d\d-\d\dT\d\d:\d\d:\d\dZ", p["date"]), name
+        assert p["machine"]["cpu"] and p["machine"]["cores"] >= 1 and p["numba_threads"] >= 1
+        assert res["settings"] and res["mode"] == run["mode"]
+    rows = evaluate(report.load_results(RESULTS))
+    page = PAGE.read_text(encoding="utf-8")
+    assert len(_table(page, "Claims")) == len(rows) >= 23
+    for r in rows:  # every claim is judged, and a verdict other than a match says why
+        assert r["verdict"] in ("match", "differs", "cannot be reproduced", "not run")
+        assert r["verdict"] == "match" or r["reason"]
+        if r["experiment"] is not None and r["verdict"] != "not run":
+            assert r["last_run"] and r["last_run"][:10] in page
+
+
+@pytest.mark.parametrize("where", ["page", "results"])
+def test_an_edited_number_is_caught(tmp_path, where):
+    folder = tmp_path / "quick"
+    shutil.copytree(RESULTS, folder)
+    page = PAGE.read_text(encoding="utf-8")
+    res = json.loads((folder / "table3.json").read_text())
+    name = next(iter(res["rows"]))
+    ms = res["rows"][name]["runs"][0]["ms_mean"]
+    if where == "page":
+        cell = f"{ms:.3g}"
+        row = next(line for line in page.splitlines()
+                   if line.startswith("| ") and f"| {cell} |" in line)
+        page = page.replace(row, row.replace(f"| {cell} |", f"| {float(cell) * 2:.3g} |"))
+    else:
+        res["rows"][name]["runs"][0]["ms_mean"] = ms * 2
+        (folder / "table3.json").write_text(json.dumps(res))
+    problems = disagreements(page, folder)
+    assert problems and any("Table 3" in p or "not the one generated" in p for p in problems)
+
+
+# ------------------------------------------------------------------ the command
+@pytest.mark.slow
+def test_smoke_run_end_to_end(tmp_path, capsys):
+    out = tmp_path / "res"
+    page = tmp_path / "page.md"
+    assert main(["reproduce", "--smoke", "--out", str(out), "--page", str(page), "-q"]) == 0
+    for name in ("underestimate", "table3", "grid", "bh_switch", "beta", "alpha"):
+        res = json.loads((out / f"{name}.json").read_text())
+        assert {"commit", "date", "machine", "numba_threads"} <= set(res["provenance"])
+        assert res["settings"] and res["mode"] == "smoke"
+    text = page.read_text(encoding="utf-8")
+    assert text == (out / "reproduction.md").read_text(encoding="utf-8")
+    assert report.render_page(out, str(out)) == text  # regenerated from the folder alone
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]  # no partial folder
+    # the underestimate experiment against the paper's bound, from its JSON
+    u = json.loads((out / "underestimate.json").read_text())
+    for kind, row in u["types"].items():
+        assert row["beta_0"]["min_gap"] >= 0 and row["beta_0"]["max_gap"] <= row["bound"]
+        assert row["beta_0.5"]["min_gap"] >= 0
+    # regenerating from the folder gives the same page
+    assert main(["reproduce", "--report-only", "--out", str(out), "-q"]) == 0
+    assert (out / "reproduction.md").read_text(encoding="utf-8") == text
+
+
+def test_failed_experiment_leaves_nothing(tmp_path, monkeypatch, capsys):
+    from tracer.reproduce import experiments
+
+    def boom(out, s, scheduler):
+        out.mkdir(parents=True)
+        (out / "half.csv").write_text("x\n")
+        raise ValueError("broken on purpose")
+
+    monkeypatch.setitem(experiments.EXPERIMENTS, "grid", boom)
+    out = tmp_path / "res"
+    assert main(["reproduce", "--smoke", "--only", "grid", "--out", str(out)]) == 2
+    assert "broken on purpose" in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("argv, text", [
+    (["--only", "nope"], "--only: unknown experiment(s) nope"),
+    (["--quick", "--smoke"], "exclude each other"),
+    (["--report-only"], "holds no results"),
+    (["--page", "."], "--page is a folder"),
+    (["--page", "no/such/dir/page.md"], "folder not found"),
+])
+def test_bad_input(tmp_path, capsys, argv, text):
+    out = tmp_path / "res"
+    assert main(["reproduce", "--out", str(out), *argv]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("error:") and text in err[0]
+    assert not out.exists()
+
+
+def test_existing_results_kept_without_overwrite(tmp_path, capsys):
+    out = tmp_path / "res"
+    out.mkdir()
+    (out / "keep.json").write_text("{}")
+    assert main(["reproduce", "--smoke", "--out", str(out)]) == 2
+    assert "--overwrite" in capsys.readouterr().err
+    assert [p.name for p in out.iterdir()] == ["keep.json"]
+    f = tmp_path / "file"
+    f.write_text("x")
+    assert main(["reproduce", "--smoke", "--out", str(f)]) == 2
+    assert "not a folder" in capsys.readouterr().err

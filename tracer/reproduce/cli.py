@@ -1,0 +1,150 @@
+"""``tracer reproduce``: run every reproducible experiment of the paper and write a results
+folder (``<experiment>.json`` each, with commit, date, machine, thread count and settings; the
+studies' own CSVs and plots in ``<experiment>/``), ``claims.json`` and ``reproduction.md``.
+
+``--quick`` runs everything at small sizes (a few minutes on 2 cores); the full run uses the
+paper's sizes (about an hour on 2 cores) and runs the studies' and the simulations' tasks on
+the Dask runner (:mod:`tracer.runner`, ``--scheduler``). The folder is built next to ``--out``
+under a temporary name and renamed when every experiment has finished, so an interrupted or
+failed run leaves no half-written results.
+"""
+
+import os
+import shutil
+import sys
+import time
+from pathlib import Path
+
+from tracer import runner
+from tracer.outputs import CLIError, write_json, write_text
+
+HELP = "run every reproducible experiment of the paper and write the results and the report"
+
+
+def add_arguments(p):
+    p.add_argument("--quick", action="store_true",
+                   help="small sizes: a few minutes on 2 cores (default: the paper's sizes, "
+                   "about an hour)")
+    p.add_argument("--smoke", action="store_true",
+                   help="smaller still than --quick (the test suite's run: every experiment "
+                   "once, at its smallest)")
+    p.add_argument("--out", metavar="DIR",
+                   help="results folder (default renders/reproduction/quick or "
+                   "renders/reproduction/full)")
+    p.add_argument("--page", metavar="PATH",
+                   help="also write the report page here (e.g. docs/reproduction.md)")
+    p.add_argument("--only", metavar="LIST",
+                   help="comma-separated experiments to run (default all: "
+                   "underestimate, table3, grid, bh_switch, beta, alpha)")
+    p.add_argument("--report-only", action="store_true",
+                   help="run nothing: regenerate claims.json and the page from --out")
+    p.add_argument("--overwrite", action="store_true", help="replace an existing results folder")
+    runner.add_arguments(p)
+    p.add_argument("--threads", type=int, help="numba threads of in-process work")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
+
+
+def _only(text, names):
+    if not text:
+        return list(names)
+    pick = [s.strip() for s in text.split(",") if s.strip()]
+    bad = [s for s in pick if s not in names]
+    if bad or not pick:
+        raise CLIError(f"--only: unknown experiment(s) {', '.join(bad) or '(none given)'} "
+                       f"(choose from {', '.join(names)})")
+    return [n for n in names if n in pick]
+
+
+def _shown(path):
+    from tracer.studies.common import REPO
+
+    p = Path(path).resolve()
+    try:
+        return str(p.relative_to(REPO))
+    except ValueError:
+        return str(path)
+
+
+def write_report(out, page=None, shown_as=None):
+    """``claims.json`` and ``reproduction.md`` in ``out`` (and the page at ``page``)."""
+    from tracer.reproduce.report import claims_rows, render_page
+
+    write_json(Path(out) / "claims.json", claims_rows(out))
+    text = render_page(out, shown_as or _shown(out))
+    write_text(Path(out) / "reproduction.md", text)
+    if page:
+        write_text(page, text)
+    return text
+
+
+def run(args):
+    from tracer.reproduce.experiments import EXPERIMENTS, SETTINGS, provenance
+
+    if args.quick and args.smoke:
+        raise CLIError("--quick and --smoke exclude each other")
+    mode = "smoke" if args.smoke else "quick" if args.quick else "full"
+    names = _only(args.only, list(EXPERIMENTS))
+    out = Path(args.out or os.path.join("renders", "reproduction", mode))
+    if out.exists() and not out.is_dir():
+        raise CLIError(f"--out exists and is not a folder: {out}")
+    if args.page and Path(args.page).is_dir():
+        raise CLIError(f"--page is a folder, not a file: {args.page}")
+    if args.page and not Path(args.page).resolve().parent.is_dir():
+        raise CLIError(f"--page: folder not found: {Path(args.page).parent}")
+    if args.report_only:
+        if not (out / "run.json").is_file():
+            raise CLIError(f"{out} holds no results of tracer reproduce (no run.json)")
+        write_report(out, args.page)
+        if not args.quiet:
+            print(f"Wrote {out / 'claims.json'} and {out / 'reproduction.md'}"
+                  + (f" and {args.page}" if args.page else ""))
+        return 0
+    sched, workers = runner.check_arguments(args)
+    if sched == "local" and mode != "full":
+        sched = "serial"  # the quick run's tasks are too small for a cluster
+    if out.exists() and any(out.iterdir()) and not args.overwrite:
+        raise CLIError(f"{out} exists (pass --overwrite to replace it)")
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = out.parent / f".{out.name}.partial-{os.getpid()}"
+    shutil.rmtree(tmp, ignore_errors=True)
+    tmp.mkdir()
+    say = (lambda s: None) if args.quiet else (lambda s: print(s, flush=True))
+    t_all = time.perf_counter()
+    try:
+        for name in names:
+            settings = SETTINGS[mode][name]
+            say(f"reproduce: {name} {settings}")
+            t0 = time.perf_counter()
+            res = EXPERIMENTS[name](tmp / name, settings, sched)
+            sec = time.perf_counter() - t0
+            write_json(tmp / f"{name}.json", dict(res, experiment=name, mode=mode,
+                                                   settings=settings, seconds=round(sec, 2),
+                                                   provenance=provenance()))
+            say(f"reproduce: {name} done in {runner.duration(sec)}")
+        prov = provenance()
+        write_json(tmp / "run.json", dict(prov, mode=mode, experiments=names,
+                                          scheduler=sched if sched in ("serial", "local")
+                                          else "address",
+                                          seconds=round(time.perf_counter() - t_all, 1)))
+        write_report(tmp, None, _shown(out))
+        if out.exists():
+            old = out.parent / f".{out.name}.old-{os.getpid()}"
+            out.rename(old)
+            tmp.rename(out)
+            shutil.rmtree(old, ignore_errors=True)
+        else:
+            tmp.rename(out)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    if args.page:
+        write_text(args.page, (out / "reproduction.md").read_text(encoding="utf-8"))
+    say(f"Wrote {out} ({runner.duration(time.perf_counter() - t_all)})"
+        + (f" and {args.page}" if args.page else ""))
+    return 0
+
+
+if __name__ == "__main__":  # pragma: no cover
+    from tracer.cli import main
+
+    sys.exit(main(["reproduce", *sys.argv[1:]]))

@@ -1,0 +1,436 @@
+"""The experiments of ``tracer reproduce``: each reuses a study or benchmark that exists already
+and returns a small dict of results, which :mod:`tracer.reproduce.cli` writes as
+``<name>.json`` (with the provenance of :func:`provenance`) into the results folder.
+
+Each experiment is ``fn(out, settings, scheduler) -> dict``: ``out`` is the experiment's own
+folder (the study's CSV, JSON and plots go there), ``settings`` the experiment's entry of
+:data:`SETTINGS` (``quick`` or ``full``), ``scheduler`` the runner's ``--scheduler`` (the studies
+and the simulations run their tasks through :mod:`tracer.runner`).
+"""
+
+import datetime
+import importlib
+import math
+import os
+import platform
+import shutil
+import subprocess
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from tracer.studies.common import REPO, TYPE_LETTER, TYPES
+
+#: the bunny of the paper's beta study
+BUNNY = REPO / "scenes" / "data" / "bunny.off"
+#: the Thingi10K meshes of the paper's benchmark, where the shared data folder has them
+THINGI = REPO.parent / "shared" / "data" / "thingi10k"
+TABLE3 = REPO / "scenes" / "simulations" / "table3"
+
+#: the paper's Table 3 (Sec. 5.5): scene file -> (row, data, query, paper ms at 28 threads, dt)
+TABLE3_PAPER = {
+    "ico_bowl": (1, "Bowl, 736 edges", "Icosphere, 120 edges", 2.72934, "1/200"),
+    "spikeball_bowl": (2, "Bowl, 736 edges", "Spiky Sphere, 966 tris+edges", 34.7789, "1/1000"),
+    "bunny_lidar": (3, "Terrain, 6,591,087 points", "Bunny, 3,485 points", 250.0031, "1/100"),
+    "octopus_lidar": (4, "Terrain, 6,591,087 points", "Octopus, 4,432 tris", 189.5989, "1/100"),
+    "bunny_bunny": (5, "Bunny, 6,966 tris", "Bunny, 6,966 tris", 92.5717, "1/400"),
+    "bunny_bunny_plane": (6, "Bumpy Plane, 800 tris", "Bunny, 6,966 tris", 470.3857, "1/400"),
+    "sphere_slide": (7, "Slide, 615 edges", "Sphere, 960 tris", 33.5601, "1/100"),
+    "trefoil_ringtoss": (8, "Ring Toss, 12,400 points", "Trefoil, 100 edges", 1.4727, "1/200"),
+}
+
+#: settings per mode. ``steps`` None: the simulation file's own count (the paper's, except where
+#: scenes/simulations/table3/README.md says why not); the terrain scenes build 6.6M points.
+SETTINGS = {
+    "quick": {
+        "beta": {"size": 24, "betas": [0.0, 0.2, 0.5, 1.0]},
+        "alpha": {"study": "underestimate", "size": 24},
+        "underestimate": {"queries": 2000, "seed": 0, "alpha": 200.0},
+        "bh_switch": {"trials": 40},
+        "grid": {"grid": 24, "generated": [100, 1000], "thingi10k": False},
+        "table3": {"scenes": ["ico_bowl", "trefoil_ringtoss", "sphere_slide"], "steps": 100,
+                   "threads": [1, None]},
+    },
+    "smoke": {  # the test suite's: every experiment at its smallest (seconds, once compiled)
+        "beta": {"size": 12, "betas": [0.0, 0.2, 0.5]},
+        "alpha": {"study": "underestimate", "size": 12},
+        "underestimate": {"queries": 300, "seed": 0, "alpha": 200.0},
+        "bh_switch": {"trials": 20},
+        "grid": {"grid": 8, "generated": [100], "thingi10k": False},
+        "table3": {"scenes": ["trefoil_ringtoss"], "steps": 10, "threads": [1, None]},
+    },
+    "full": {
+        "beta": {"size": 512, "betas": [0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0]},
+        "alpha": {"study": "all", "size": 512},
+        "underestimate": {"queries": 100000, "seed": 0, "alpha": 200.0},
+        "bh_switch": {"trials": 500},
+        "grid": {"grid": 100, "generated": [100, 1000, 10000, 100000, 1000000],
+                 "thingi10k": True},
+        "table3": {"scenes": list(TABLE3_PAPER), "steps": None, "threads": [1, None],
+                   "step_caps": {"octopus_lidar": 263}},
+    },
+}
+
+
+# ============================================================================ provenance
+def _git(*args):
+    try:
+        return subprocess.run(["git", *args], cwd=REPO, capture_output=True, text=True,
+                              timeout=10).stdout.strip()
+    except (OSError, subprocess.SubprocessError):
+        return ""
+
+
+def cpu_model():
+    """The CPU's model name (lscpu, else /proc/cpuinfo, else platform.processor())."""
+    try:
+        out = subprocess.run(["lscpu"], capture_output=True, text=True, timeout=10).stdout
+        for line in out.splitlines():
+            if line.startswith("Model name:"):
+                return line.split(":", 1)[1].strip()
+    except (OSError, subprocess.SubprocessError):
+        pass
+    try:
+        with open("/proc/cpuinfo", encoding="utf-8") as fh:
+            for line in fh:
+                if line.startswith("model name"):
+                    return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or "unknown"
+
+
+def provenance():
+    """Commit (and whether the tree had changes), UTC date, machine and thread count."""
+    import numba
+
+    from tracer.runner import cpu_count
+
+    return {"commit": _git("rev-parse", "HEAD") or "unknown",
+            "dirty": bool(_git("status", "--porcelain", "--untracked-files=no")),
+            "date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
+            "machine": {"cpu": cpu_model(), "cores": cpu_count(), "platform": platform.platform(),
+                        "python": platform.python_version(), "numba": numba.__version__},
+            "numba_threads": int(numba.get_num_threads()),
+            "load_average": [round(x, 2) for x in os.getloadavg()]
+            if hasattr(os, "getloadavg") else None}
+
+
+# ============================================================================ helpers
+def run_command(argv):
+    """Run a ``tracer`` sub-command in this process; its errors propagate (no ``error:``
+    printing here: the caller reports)."""
+    from tracer.cli import build_parser
+
+    args = build_parser(only=argv[0]).parse_args(argv)
+    status = int(importlib.import_module(args._module).run(args) or 0)
+    if status:
+        raise RuntimeError(f"tracer {argv[0]} exited with status {status}")
+
+
+def read_csv(path):
+    import csv
+
+    def num(v):
+        try:
+            return float(v)
+        except (TypeError, ValueError):
+            return v
+
+    with open(path, newline="", encoding="utf-8") as fh:
+        return [{k: num(v) for k, v in r.items()} for r in csv.DictReader(fh)]
+
+
+# ============================================================================ beta (Sec. 4.3)
+def beta(out, s, scheduler):
+    """The beta ablation on the bunny (``tracer ablate-beta``): seconds and isosurface error
+    (fraction of the bbox diagonal) per type and beta."""
+    run_command(["ablate-beta", str(BUNNY), "-o", str(out), "--size", str(s["size"]),
+                 "--betas", ",".join(f"{b:g}" for b in s["betas"]), "--grid-betas",
+                 ",".join(f"{b:g}" for b in s["betas"]), "--overwrite", "-q",
+                 "--scheduler", scheduler])
+    shutil.rmtree(out / "cache", ignore_errors=True)  # depth buffers: large, not a result
+    rows = [r for r in read_csv(out / "beta_ablation.csv") if float(r.get("tol") or 0) == 0]
+    res = {"size": s["size"], "alpha": 200.0, "alpha_u": 1200.0, "betas": s["betas"],
+           "render_seconds": {}, "error_rel_diag": {}, "csv": "beta/beta_ablation.csv"}
+    for kind in TYPES:
+        rs = sorted((r for r in rows if r["type"] == kind), key=lambda r: r["beta"])
+        res["render_seconds"][kind] = {f"{r['beta']:g}": r["seconds"] for r in rs}
+        res["error_rel_diag"][kind] = {f"{r['beta']:g}": r["error_rel_diag"] for r in rs}
+    res["threads"] = int(rows[0]["threads"]) if rows else None
+    return res
+
+
+# ============================================================================ alpha (Sec. 3)
+def alpha(out, s, scheduler):
+    """The alpha studies (``tracer ablate-alpha``); the underestimate study's nesting and
+    exact-distance checks are the numbers."""
+    import json
+
+    run_command(["ablate-alpha", s["study"], "-o", str(out), "--size", str(s["size"]),
+                 "--overwrite", "-q", "--scheduler", scheduler])
+    with open(out / "underestimate.json", encoding="utf-8") as fh:
+        u = json.load(fh)
+    n = u["nesting"]
+    return {"study": s["study"], "size": s["size"], "data": u["data"], "alphas": u["alphas"],
+            "beta": u["beta"], "slice_samples": n["slice_samples"],
+            "alpha_pairs": n["alpha_pairs"],
+            "nesting_violations_beta_0.5": n["violations_beta_0.5"],
+            "exact_check_samples": n["exact_check_samples"],
+            "nesting_violations_beta_0": n["violations_beta_0"],
+            "json": "alpha/underestimate.json"}
+
+
+# ============================================================================ BH switch
+def bh_switch(out, s, scheduler):
+    """The Barnes-Hut switch study (``tracer bh-switch``) on the shipped Autzen cloud."""
+    import json
+
+    run_command(["bh-switch", "-o", str(out), "--trials", str(s["trials"]), "--overwrite", "-q",
+                 "--scheduler", scheduler])
+    with open(out / "bh_switch.json", encoding="utf-8") as fh:
+        j = json.load(fh)
+    k = j["kept"]
+    return {"cloud": os.path.relpath(j["cloud"], REPO) if os.path.isabs(j["cloud"])
+            else j["cloud"], "points": j["points"], "trials": j["trials"], "hits": j["hits"],
+            "alpha": j["alpha"], "beta": j["beta"], "dbeta": j["dbeta"],
+            "kept_points": k["count"], "mean_discrepancy": k["mean_discrepancy"],
+            "max_discrepancy": k["max_discrepancy"], "mean_cosine": k["mean_cosine"],
+            "min_cosine": k["min_cosine"], "json": "bh_switch/bh_switch.json"}
+
+
+# ============================================================================ grid (Sec. 4.4)
+def heightfield_off(path, n_triangles):
+    """A bumpy height-field grid with about ``n_triangles`` triangles, written as OFF."""
+    n = max(2, int(round(math.sqrt(n_triangles / 2.0))))
+    x = np.linspace(0.0, 1.0, n + 1)
+    X, Y = np.meshgrid(x, x, indexing="ij")
+    Z = 0.08 * np.sin(7.0 * X) * np.cos(5.0 * Y) + 0.03 * np.sin(23.0 * X + 11.0 * Y)
+    V = np.stack([X.ravel(), Y.ravel(), Z.ravel()], axis=1)
+    i, j = np.meshgrid(np.arange(n), np.arange(n), indexing="ij")
+    a = (i * (n + 1) + j).ravel()
+    b, c, d = a + (n + 1), a + 1, a + n + 2
+    F = np.concatenate([np.stack([a, b, c], 1), np.stack([c, b, d], 1)])
+    with open(path, "w", encoding="ascii") as fh:
+        fh.write(f"OFF\n{len(V)} {len(F)} 0\n")
+        np.savetxt(fh, V, fmt="%.9g")
+        np.savetxt(fh, np.concatenate([np.full((len(F), 1), 3), F], 1), fmt="%d")
+    return len(F)
+
+
+def grid_fit(rows, grid):
+    """Per type: Pearson r of seconds against mean leaves, ns per leaf per query (least squares
+    through the origin of seconds per query against leaves), and the share of leaves visited
+    (mean leaves / primitives) at the smallest and the largest mesh, the largest mean leaves."""
+    Q = float(grid) ** 3
+    out = {}
+    for kind in TYPES:
+        L = TYPE_LETTER[kind]
+        cnt = {"points": "nV", "edges": "nE", "triangles": "nF"}[kind]
+        rs = [r for r in rows if isinstance(r.get(f"seconds_{L}"), float)
+              and isinstance(r.get(cnt), float) and r[cnt] > 0]
+        if not rs:
+            continue
+        lv = np.array([r[f"leaves_{L}"] for r in rs])
+        sq = np.array([r[f"seconds_{L}"] for r in rs]) / Q
+        n = np.array([r[cnt] for r in rs])
+        share = lv / n
+        small, large = int(np.argmin(n)), int(np.argmax(n))
+        per = sq / np.maximum(lv, 1e-300) * 1e9
+        out[kind] = {
+            "meshes": len(rs),
+            "pearson_r": float(np.corrcoef(lv, sq)[0, 1]) if len(rs) > 2 else None,
+            "ns_per_leaf_fit": float(1e9 * (lv @ sq) / (lv @ lv)),
+            "ns_per_leaf_min": float(per.min()), "ns_per_leaf_max": float(per.max()),
+            "us_per_query_mean": float(1e6 * sq.mean()),
+            "leaves_max": float(lv.max()),
+            "share_smallest": float(share[small]), "primitives_smallest": int(n[small]),
+            "share_largest": float(share[large]), "primitives_largest": int(n[large]),
+            "meshes_over_10pct_near_1000": int(np.sum((share > 0.10) & (n >= 500)
+                                                      & (n <= 2000))),
+        }
+    return out
+
+
+def grid(out, s, scheduler):
+    """The grid benchmark (``tracer bench-grid``) over the shipped meshes, the Thingi10K
+    meshes where present and generated height fields of 1e2.. primitives; the fit."""
+    sets = [("shipped", REPO / "scenes" / "data" / "meshes")]
+    if s["thingi10k"] and THINGI.is_dir():
+        sets.append(("thingi10k", THINGI))
+    tmp = tempfile.mkdtemp(prefix="reproduce-meshes-")
+    try:
+        gen = Path(tmp)
+        made = {f"grid_{n:07d}.off": heightfield_off(gen / f"grid_{n:07d}.off", n)
+                for n in s["generated"]}
+        sets.append(("generated", gen))
+        rows = []
+        for name, folder in sets:
+            run_command(["bench-grid", str(folder), "-o", str(out / name), "--grid",
+                         str(s["grid"]), "--overwrite", "-q", "--scheduler", scheduler])
+            for r in read_csv(out / name / "bench_grid.csv"):
+                if r.get("status", "ok") == "ok":
+                    rows.append(dict(r, set=name))
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    return {"grid": s["grid"], "alpha": 1.0, "beta": 0.5,
+            "sets": [n for n, _ in sets], "generated_triangles": sorted(made.values()),
+            "thingi10k_present": THINGI.is_dir(), "meshes": len(rows),
+            "fit": grid_fit(rows, s["grid"]),
+            "csv": [f"grid/{n}/bench_grid.csv" for n, _ in sets]}
+
+
+# ============================================================================ Table 3
+class _Timed:
+    """A MeshDistance whose smooth evaluations (``__call__``, ``with_couple``) are timed."""
+
+    def __init__(self, md, log):
+        self._md, self._log = md, log
+
+    def __getattr__(self, name):
+        return getattr(self._md, name)
+
+    def _timed(self, f, *a, **k):
+        t0 = time.perf_counter()
+        r = f(*a, **k)
+        self._log.append(time.perf_counter() - t0)
+        return r
+
+    def __call__(self, *a, **k):
+        return self._timed(self._md, *a, **k)
+
+    def with_couple(self, *a, **k):
+        return self._timed(self._md.with_couple, *a, **k)
+
+
+def _timed_run(path, steps, cap, threads):
+    """One simulation at ``threads`` numba threads (at most the process's); the mean and
+    median milliseconds of its smooth distance evaluations."""
+    import numba
+
+    from tracer.sim import run as simrun
+    from tracer.sim.constraint import mesh_distance_factory
+    from tracer.sim.simfile import load_simulation
+
+    before = numba.get_num_threads()
+    n = min(int(threads or numba.config.NUMBA_NUM_THREADS), numba.config.NUMBA_NUM_THREADS)
+    t0 = time.perf_counter()
+    sim = load_simulation(path)
+    load_s = time.perf_counter() - t0
+    log = []
+    cls = mesh_distance_factory()
+
+    def factory(*a, **k):
+        return _Timed(cls(*a, **k), log)
+
+    steps = sim.steps if steps is None else int(steps)
+    steps = min(steps, cap or steps)
+    numba.set_num_threads(n)
+    try:
+        con, integ = simrun.build(sim, factory)
+        # warm-up: compile (or load) every kernel the run calls before timing anything
+        X = np.array([b.x for b in sim.bodies])
+        Rs = np.array([b.R for b in sim.bodies])
+        for p in con.pairs:
+            R, t = p.relative(X, Rs)
+            p.md(R, t)
+            if hasattr(p.md, "with_couple"):
+                p.md.with_couple(R, t)
+        con.evaluate(X, Rs, gradient=False)
+        con.evaluate(X, Rs)
+        del log[:]
+        load0 = os.getloadavg()[0] if hasattr(os, "getloadavg") else None
+        t0 = time.perf_counter()
+        with tempfile.TemporaryDirectory() as tmp:
+            simrun.simulate(sim, os.path.join(tmp, "trajectory.npz"), steps=steps,
+                            built=(con, integ))
+        wall = time.perf_counter() - t0
+    finally:
+        numba.set_num_threads(before)
+    ev = np.array(log)
+    return sim, steps, {
+        "threads": n, "evaluations": int(ev.size),
+        "ms_mean": float(1e3 * ev.mean()) if ev.size else None,
+        "ms_median": float(1e3 * np.median(ev)) if ev.size else None,
+        "simulate_seconds": round(wall, 3), "load_seconds": round(load_s, 3),
+        "load_average_before": None if load0 is None else round(load0, 2)}
+
+
+def table3_task(task):
+    """One Table 3 simulation, run once per entry of ``threads`` (None: all of the process's
+    numba threads): ``steps`` steps (the file's when None, at most ``cap``); per run the mean
+    and median milliseconds of one smooth distance evaluation (distance and every query
+    vertex's gradient) over the whole run. Every kernel is called once at the initial state
+    before a run, so compilation is not timed."""
+    import numba
+
+    most = numba.config.NUMBA_NUM_THREADS  # 1 in a Dask worker
+    counts = list(dict.fromkeys(min(int(t or most), most) for t in task["threads"]))
+    runs = []
+    for threads in counts:
+        sim, steps, r = _timed_run(task["path"], task["steps"], task.get("cap"), threads)
+        runs.append(r)
+    return {"scene": task["key"], "steps": steps, "file_steps": int(sim.steps), "dt": sim.dt,
+            "runs": runs}
+
+
+def table3(out, s, scheduler):
+    """The paper's Table 3 simulations, each a task on the runner."""
+    from tracer import runner
+    from tracer.outputs import write_json
+
+    caps = s.get("step_caps", {})
+    tasks = [{"key": n, "path": str(TABLE3 / f"{n}.json"), "steps": s["steps"],
+              "cap": caps.get(n), "threads": s["threads"], "weight": 1.0} for n in s["scenes"]]
+    rows = {}
+    failed = []
+    info = runner.run_tasks(table3_task, tasks, on_result=lambda t, r: rows.__setitem__(t["key"], r),
+                            on_failure=lambda t, e: failed.append((t["key"], e)),
+                            scheduler=scheduler, label="table3", quiet=True,
+                            estimate=30.0 * len(tasks))
+    if failed:
+        raise RuntimeError(f"table3: {failed[0][0]} failed: {failed[0][1]}")
+    out.mkdir(parents=True, exist_ok=True)
+    for n, r in rows.items():
+        row, data, query, paper_ms, dt = TABLE3_PAPER[n]
+        r.update(paper_row=row, data=data, query=query, paper_ms_28_threads=paper_ms,
+                 paper_dt=dt)
+    write_json(out / "table3_rows.json", rows)
+    return {"scenes": s["scenes"], "steps": s["steps"], "step_caps": caps,
+            "scheduler": info.describe(), "rows": {n: rows[n] for n in s["scenes"]},
+            "not_run": [n for n in TABLE3_PAPER if n not in s["scenes"]]}
+
+
+# ============================================================================ underestimate
+def underestimate(out, s, scheduler):
+    """Sec. 3 and App. A: ``0 <= d - d_hat <= log(A N) / alpha`` at random queries around the
+    bunny, per type, at beta 0 and 0.5 (exact distance from the library's exact query)."""
+    from smoothdist import DataMesh, SmoothDistanceField
+
+    mesh = DataMesh.load(BUNNY)
+    lo, hi = mesh.V.min(0), mesh.V.max(0)
+    diag = float(np.linalg.norm(hi - lo))
+    rng = np.random.default_rng(s["seed"])
+    Q = rng.uniform(lo - 0.1 * diag, hi + 0.1 * diag, (s["queries"], 3))
+    res = {"mesh": "scenes/data/bunny.off", "queries": s["queries"], "seed": s["seed"],
+           "alpha": s["alpha"], "types": {}}
+    for kind in TYPES:
+        f = SmoothDistanceField(mesh.as_kind(kind))
+        d, _ = f.exact_distance(Q)
+        bound = f.inflation(s["alpha"])
+        row = {"primitives": f.num_primitives, "bound": bound}
+        for b in (0.0, 0.5):
+            dh, _ = f.smooth_distance(Q, alpha=s["alpha"], beta=b)
+            gap = d - dh
+            row[f"beta_{b:g}"] = {"min_gap": float(gap.min()), "max_gap": float(gap.max()),
+                                  "over_bound": int(np.sum(gap > bound * (1 + 1e-12))),
+                                  "negative": int(np.sum(gap < -1e-12 * np.maximum(1, d)))}
+        res["types"][kind] = row
+    return res
+
+
+#: name -> experiment, in the order they run (quick first where they are quick)
+EXPERIMENTS = {"underestimate": underestimate, "table3": table3, "grid": grid, "bh_switch": bh_switch, "beta": beta,
+               "alpha": alpha}
