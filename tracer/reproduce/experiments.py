@@ -49,7 +49,7 @@ SETTINGS = {
         "alpha": {"study": "underestimate", "size": 24},
         "underestimate": {"queries": 2000, "seed": 0, "alpha": 200.0},
         "bh_switch": {"trials": 40},
-        "grid": {"grid": 24, "generated": [100, 1000], "thingi10k": False},
+        "grid": {"grid": 24, "generated": [100, 1000, 10000], "thingi10k": True},
         "table3": {"scenes": ["ico_bowl", "trefoil_ringtoss", "sphere_slide"], "steps": 100,
                    "threads": [1, None]},
     },
