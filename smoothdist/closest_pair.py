@@ -184,6 +184,8 @@ def segment_segment(px, py, pz, qx, qy, qz, ax, ay, az, bx, by, bz):
     bu = bv = 0.0
     M, L = pair_scale(px, py, pz, qx, qy, qz, qx, qy, qz, ax, ay, az, bx, by, bz, bx, by, bz)
     ntie = 0
+    # the other of two tied pairs (the common case of a tie: handled without tied_pair)
+    r2x = r2y = r2z = u2 = v2 = 0.0
     if den > 0.0 and den > 1e-30 * A * E:
         u = (B * F - C * E) / den
         v = (A * F - B * C) / den
@@ -221,11 +223,23 @@ def segment_segment(px, py, pz, qx, qy, qz, ax, ay, az, bx, by, bz):
             rz = cz - bz
             v = 1.0
         d2 = rx * rx + ry * ry + rz * rz
-        ntie = count_ties(d2, u, 0.0, best, bu, 0.0, ntie, M, L)
+        nt = count_ties(d2, u, 0.0, best, bu, 0.0, ntie, M, L)
+        if nt == 2 and ntie == 1:
+            if d2 < best:
+                r2x, r2y, r2z, u2, v2 = brx, bry, brz, bu, bv
+            else:
+                r2x, r2y, r2z, u2, v2 = rx, ry, rz, u, v
+        ntie = nt
         if d2 < best:
             best = d2
             brx, bry, brz, bu, bv = rx, ry, rz, u, v
-    if ntie > 1 and best > 0.0:
+    if ntie == 2 and best > 0.0:
+        return tie_of_two(1, _flat(px, py, pz, qx, qy, qz, qx, qy, qz), 1, best,
+                          (best, brx, bry, brz, bu, 0.0, segment_feature(bu), bv, 0.0,
+                           segment_feature(bv)),
+                          (best, r2x, r2y, r2z, u2, 0.0, segment_feature(u2), v2, 0.0,
+                           segment_feature(v2)))
+    if ntie > 2 and best > 0.0:
         return tied_pair(1, _flat(px, py, pz, qx, qy, qz, qx, qy, qz), 1,
                          _flat(ax, ay, az, bx, by, bz, bx, by, bz))
     return (best, brx, bry, brz, bu, 0.0, segment_feature(bu), bv, 0.0, segment_feature(bv))
@@ -340,11 +354,16 @@ def _segment_triangle(px, py, pz, qx, qy, qz, ax, ay, az, bx, by, bz, cx, cy, cz
     out = (math.inf, 0.0, 0.0, 0.0, 0.0, 0.0, 0, 0.0, 0.0, 0)
     M, L = pair_scale(px, py, pz, qx, qy, qz, qx, qy, qz, ax, ay, az, bx, by, bz, cx, cy, cz)
     ntie = 0
+    out2 = out
     # the segment's endpoints against the triangle
     for k in range(2):
         ex, ey, ez = (px, py, pz) if k == 0 else (qx, qy, qz)
         c = point_triangle(ex, ey, ez, ax, ay, az, bx, by, bz, cx, cy, cz)
-        ntie = count_ties(c[0], float(k), 0.0, best, out[4], 0.0, ntie, M, L)
+        nt = count_ties(c[0], float(k), 0.0, best, out[4], 0.0, ntie, M, L)
+        if nt == 2 and ntie == 1:
+            out2 = out if c[0] < best else (c[0], c[1], c[2], c[3], float(k), 0.0,
+                                            SEG_A if k == 0 else SEG_B, c[7], c[8], c[9])
+        ntie = nt
         if c[0] < best:
             best = c[0]
             out = (c[0], c[1], c[2], c[3], float(k), 0.0, SEG_A if k == 0 else SEG_B,
@@ -362,7 +381,10 @@ def _segment_triangle(px, py, pz, qx, qy, qz, ax, ay, az, bx, by, bz, cx, cy, cz
         ry = gy - ey
         rz = gz - ez
         d2 = rx * rx + ry * ry + rz * rz
-        ntie = count_ties(d2, u, 0.0, best, out[4], 0.0, ntie, M, L)
+        nt = count_ties(d2, u, 0.0, best, out[4], 0.0, ntie, M, L)
+        if nt == 2 and ntie == 1:
+            out2 = out if d2 < best else (d2, rx, ry, rz, u, 0.0, f, ds, dt, df)
+        ntie = nt
         if d2 < best:
             best = d2
             out = (d2, rx, ry, rz, u, 0.0, f, ds, dt, df)
@@ -372,7 +394,14 @@ def _segment_triangle(px, py, pz, qx, qy, qz, ax, ay, az, bx, by, bz, cx, cy, cz
         found, d2, rx, ry, rz, u, v = segment_segment_interior(px, py, pz, qx, qy, qz, ux, uy,
                                                                uz, vx, vy, vz)
         if found:
-            ntie = count_ties(d2, u, 0.0, best, out[4], 0.0, ntie, M, L)
+            nt = count_ties(d2, u, 0.0, best, out[4], 0.0, ntie, M, L)
+            if nt == 2 and ntie == 1:
+                if d2 < best:
+                    out2 = out
+                else:
+                    s, t, f = triangle_edge_point(e, v)
+                    out2 = (d2, rx, ry, rz, u, 0.0, SEG_INTERIOR, s, t, f)
+            ntie = nt
             if d2 < best:
                 best = d2
                 s, t, f = triangle_edge_point(e, v)
@@ -381,9 +410,14 @@ def _segment_triangle(px, py, pz, qx, qy, qz, ax, ay, az, bx, by, bz, cx, cy, cz
         S = _flat(px, py, pz, qx, qy, qz, qx, qy, qz)
         T = _flat(ax, ay, az, bx, by, bz, cx, cy, cz)
         if seg_query:
+            if ntie == 2:
+                return tie_of_two(1, S, 2, best, out, out2)
             return tied_pair(1, S, 2, T)
-        c = tied_pair(2, T, 1, S)
-        return c[0], -c[1], -c[2], -c[3], c[7], c[8], c[9], c[4], c[5], c[6]
+        if ntie == 2:
+            c = tie_of_two(2, T, 1, best, _swap(out), _swap(out2))
+        else:
+            c = tied_pair(2, T, 1, S)
+        return _swap(c)
     return out
 
 
@@ -440,6 +474,7 @@ def triangle_triangle(px, py, pz, qx, qy, qz, rx_, ry_, rz_, ax, ay, az, bx, by,
     out = (math.inf, 0.0, 0.0, 0.0, 0.0, 0.0, 0, 0.0, 0.0, 0)
     M, L = pair_scale(px, py, pz, qx, qy, qz, rx_, ry_, rz_, ax, ay, az, bx, by, bz, cx, cy, cz)
     ntie = 0
+    out2 = out
     # vertices of each against the other
     for k in range(3):
         if k == 0:
@@ -449,7 +484,11 @@ def triangle_triangle(px, py, pz, qx, qy, qz, rx_, ry_, rz_, ax, ay, az, bx, by,
         else:
             ex, ey, ez, qs, qt, qf = rx_, ry_, rz_, 0.0, 1.0, TRI_C
         c = point_triangle(ex, ey, ez, ax, ay, az, bx, by, bz, cx, cy, cz)
-        ntie = count_ties(c[0], qs, qt, best, out[4], out[5], ntie, M, L)
+        nt = count_ties(c[0], qs, qt, best, out[4], out[5], ntie, M, L)
+        if nt == 2 and ntie == 1:
+            out2 = out if c[0] < best else (c[0], c[1], c[2], c[3], qs, qt, qf, c[7], c[8],
+                                            c[9])
+        ntie = nt
         if c[0] < best:
             best = c[0]
             out = (c[0], c[1], c[2], c[3], qs, qt, qf, c[7], c[8], c[9])
@@ -461,7 +500,11 @@ def triangle_triangle(px, py, pz, qx, qy, qz, rx_, ry_, rz_, ax, ay, az, bx, by,
         else:
             ex, ey, ez, ds, dt, df = cx, cy, cz, 0.0, 1.0, TRI_C
         c = point_triangle(ex, ey, ez, px, py, pz, qx, qy, qz, rx_, ry_, rz_)
-        ntie = count_ties(c[0], c[7], c[8], best, out[4], out[5], ntie, M, L)
+        nt = count_ties(c[0], c[7], c[8], best, out[4], out[5], ntie, M, L)
+        if nt == 2 and ntie == 1:
+            out2 = out if c[0] < best else (c[0], -c[1], -c[2], -c[3], c[7], c[8], c[9], ds,
+                                            dt, df)
+        ntie = nt
         if c[0] < best:
             best = c[0]
             out = (c[0], -c[1], -c[2], -c[3], c[7], c[8], c[9], ds, dt, df)
@@ -474,12 +517,21 @@ def triangle_triangle(px, py, pz, qx, qy, qz, rx_, ry_, rz_, ax, ay, az, bx, by,
                                                                    gz, hx, hy, hz)
             if found:
                 qs, qt, qf = triangle_edge_point(e, u)
-                ntie = count_ties(d2, qs, qt, best, out[4], out[5], ntie, M, L)
+                nt = count_ties(d2, qs, qt, best, out[4], out[5], ntie, M, L)
+                if nt == 2 and ntie == 1:
+                    if d2 < best:
+                        out2 = out
+                    else:
+                        ds, dt, df = triangle_edge_point(f, v)
+                        out2 = (d2, rx, ry, rz, qs, qt, qf, ds, dt, df)
+                ntie = nt
                 if d2 < best:
                     best = d2
                     ds, dt, df = triangle_edge_point(f, v)
                     out = (d2, rx, ry, rz, qs, qt, qf, ds, dt, df)
-    if ntie > 1 and best > 0.0:
+    if ntie == 2 and best > 0.0:
+        return tie_of_two(2, _flat(px, py, pz, qx, qy, qz, rx_, ry_, rz_), 2, best, out, out2)
+    if ntie > 2 and best > 0.0:
         return tied_pair(2, _flat(px, py, pz, qx, qy, qz, rx_, ry_, rz_), 2,
                          _flat(ax, ay, az, bx, by, bz, cx, cy, cz))
     return out
@@ -567,6 +619,53 @@ def pair_scale(px, py, pz, qx, qy, qz, rx_, ry_, rz_, ax, ay, az, bx, by, bz, cx
 def _flat(px, py, pz, qx, qy, qz, rx_, ry_, rz_):
     """The nine coordinates as a tuple (indexable like an array, no allocation)."""
     return (px, py, pz, qx, qy, qz, rx_, ry_, rz_)
+
+
+@numba.njit(**NJIT_INLINE)
+def _swap(c):
+    """A result with the roles of the two primitives exchanged."""
+    return c[0], -c[1], -c[2], -c[3], c[7], c[8], c[9], c[4], c[5], c[6]
+
+
+@numba.njit(**NJIT)
+def tie_of_two(kq, Q, kd, best, a, b):
+    """:func:`tied_pair` where exactly two distinct candidates ``a`` and ``b`` (10-tuples) tie:
+    the closest set is the segment between them, and its point nearest the query's centroid
+    is a clamped projection (no candidate is computed again)."""
+    xa0 = Q[0] + a[4] * (Q[3] - Q[0])
+    xa1 = Q[1] + a[4] * (Q[4] - Q[1])
+    xa2 = Q[2] + a[4] * (Q[5] - Q[2])
+    xb0 = Q[0] + b[4] * (Q[3] - Q[0])
+    xb1 = Q[1] + b[4] * (Q[4] - Q[1])
+    xb2 = Q[2] + b[4] * (Q[5] - Q[2])
+    c0 = (Q[0] + Q[3]) * 0.5
+    c1 = (Q[1] + Q[4]) * 0.5
+    c2 = (Q[2] + Q[5]) * 0.5
+    if kq == 2:
+        xa0 += a[5] * (Q[6] - Q[0])
+        xa1 += a[5] * (Q[7] - Q[1])
+        xa2 += a[5] * (Q[8] - Q[2])
+        xb0 += b[5] * (Q[6] - Q[0])
+        xb1 += b[5] * (Q[7] - Q[1])
+        xb2 += b[5] * (Q[8] - Q[2])
+        c0 = (Q[0] + Q[3] + Q[6]) / 3.0
+        c1 = (Q[1] + Q[4] + Q[7]) / 3.0
+        c2 = (Q[2] + Q[5] + Q[8]) / 3.0
+    e0 = xb0 - xa0
+    e1 = xb1 - xa1
+    e2 = xb2 - xa2
+    ee = e0 * e0 + e1 * e1 + e2 * e2
+    lam = 0.0
+    if ee > 0.0:
+        lam = min(max(((c0 - xa0) * e0 + (c1 - xa1) * e1 + (c2 - xa2) * e2) / ee, 0.0), 1.0)
+    if lam <= 0.0:
+        return best, a[1], a[2], a[3], a[4], a[5], a[6], a[7], a[8], a[9]
+    if lam >= 1.0:
+        return best, b[1], b[2], b[3], b[4], b[5], b[6], b[7], b[8], b[9]
+    u = 1.0 - lam
+    return (best, u * a[1] + lam * b[1], u * a[2] + lam * b[2], u * a[3] + lam * b[3],
+            u * a[4] + lam * b[4], u * a[5] + lam * b[5], _union_feature(kq, a[6], b[6]),
+            u * a[7] + lam * b[7], u * a[8] + lam * b[8], _union_feature(kd, a[9], b[9]))
 
 
 @numba.njit(**NJIT_INLINE)

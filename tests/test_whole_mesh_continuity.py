@@ -196,6 +196,11 @@ def test_tied_pairs_are_closest_pairs(qkind, dkind):
             assert np.sqrt(c[0]) == pytest.approx(ref, abs=1e-12)
             assert np.linalg.norm(x - y) == pytest.approx(ref, abs=1e-12)
             np.testing.assert_allclose(x - y, c[1:4], atol=1e-12)
+            # two tied candidates take a short path (tie_of_two): the same pair as the general
+            # rule's (rounding apart)
+            ref_pair = tied_pair(qkind, Q, dkind, P)
+            np.testing.assert_allclose(c[:6] + c[7:9], ref_pair[:6] + ref_pair[7:9], atol=1e-12)
+            assert (c[6], c[9]) == (ref_pair[6], ref_pair[9])
     assert n > 10     # the box over the grid has many parallel pairs
 
 
