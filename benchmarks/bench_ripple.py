@@ -13,13 +13,18 @@ A setting is ``NAME:key=value,...`` with keys
 * ``alpha``: ``auto``, a number, ``M/c`` (M divided by the offset c) or ``M/h`` (M divided by
   the spacing h: the data's mean edge length, or the points' median spacing);
 * ``alpha_u``: ``auto``, ``off`` or ``Kx`` (K x alpha);
-* ``offset``: a number (scene units) or ``Kh`` (K x h), the smooth surface ``d_hat = c``.
+* ``offset``: ``auto``, a number (scene units) or ``Kh`` (K x h), the smooth surface
+  ``d_hat = c``;
+* ``cap``: a fraction F of the bbox diagonal: ``c = min(c, F x diagonal)``.
 
-``default`` is today's ``render_mesh`` defaults (``alpha=auto,alpha_u=auto,offset=0``).
+``default`` is ``render_mesh``'s defaults (``alpha=auto,alpha_u=auto,offset=auto``: for edges
+and triangles :meth:`smoothdist.SmoothDistanceField.auto_surface` picks all three, issue 35);
+``today`` is the defaults before that (``alpha=auto,alpha_u=auto,offset=0``: the zero set).
 
 Usage::
 
     python benchmarks/bench_ripple.py                              # today's defaults, all cases
+    python benchmarks/bench_ripple.py --settings today default --out renders/ripple/auto.csv
     python benchmarks/bench_ripple.py --settings default "c1:offset=1h,alpha=4/c,alpha_u=off"
     python benchmarks/bench_ripple.py --cases ico2 circle64 --size 128
 
@@ -150,12 +155,14 @@ def build_cases():
 def parse_setting(text):
     """``NAME:key=value,...`` (or ``default``) as ``(name, dict)``."""
     name, _, body = text.partition(":")
-    spec = {"alpha": "auto", "alpha_u": "auto", "offset": "0"}
+    spec = {"alpha": "auto", "alpha_u": "auto", "offset": "auto", "cap": ""}
+    if name == "today" and not body:
+        spec["offset"] = "0"
     for item in filter(None, body.split(",")):
         key, _, value = item.partition("=")
         if key not in spec or not value:
             raise SystemExit(f"error: setting {text!r}: unknown or empty key {key!r} "
-                             f"(keys: alpha, alpha_u, offset)")
+                             f"(keys: alpha, alpha_u, offset, cap)")
         spec[key] = value
     return name, spec
 
@@ -172,11 +179,18 @@ def spacing(field):
     return float(np.mean(np.linalg.norm(m.V[E[:, 0]] - m.V[E[:, 1]], axis=1)))
 
 
-def resolve(spec, h):
-    """``(alpha, alpha_u, offset)`` arguments of ``render_mesh`` for a setting."""
+def resolve(spec, h, diagonal):
+    """``(alpha, alpha_u, offset)`` arguments of ``render_mesh`` for a setting (offset None:
+    ``"auto"``)."""
     o = spec["offset"]
-    c = float(o[:-1]) * h if o.endswith("h") else float(o)
+    c = None if o == "auto" else float(o[:-1]) * h if o.endswith("h") else float(o)
+    if spec["cap"]:
+        if c is None:
+            raise SystemExit("error: cap needs a numeric offset")
+        c = min(c, float(spec["cap"]) * diagonal)
     a = spec["alpha"]
+    if a.endswith("/c") and c is None:
+        raise SystemExit("error: alpha=M/c needs a numeric offset")
     if a.endswith("/c"):
         alpha = float(a[:-2]) / c
     elif a.endswith("/h"):
@@ -198,11 +212,12 @@ def run_case(name, case, setting, size, beta):
     label, kind, data, shape = case
     field = SmoothDistanceField(data)
     h = spacing(field)
-    alpha, alpha_u, c = resolve(setting[1], h)
+    alpha, alpha_u, c = resolve(setting[1], h, field.diagonal)
     common = dict(kind=kind, size=(size, size), shading="normals", beta=beta, up="z")
     res = tracer.render_mesh(field.mesh, view="iso", alpha=alpha, alpha_u=alpha_u, offset=c,
                              **common)
     o = res.scene.objects[0]
+    c = o.smooth_offset
     smooth = rp.ripple(res, shape)
     r = rp.mean_offset(res, field)
     cam = (res.scene.camera_origin, res.scene.camera_dest, res.scene.camera_up)

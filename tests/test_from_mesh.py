@@ -55,8 +55,8 @@ def test_render_mesh_frames_the_whole_surface(scale, shift, view):
     assert border_hits(res.hit) == 0
     assert res.hit.mean() > 0.08  # and it is not a speck
     o = res.scene.objects[0]
-    assert o.alpha == pytest.approx(o.field.auto_alpha())
-    assert o.alpha_u == pytest.approx(20.0 * o.alpha)
+    # alpha, alpha_U and the offset chosen together (issue 35)
+    assert (o.alpha, o.alpha_u, o.smooth_offset) == pytest.approx(o.field.auto_surface())
 
 
 @pytest.mark.parametrize("view", ["front", "back", "left", "right", "top", "iso"])
@@ -114,13 +114,14 @@ def test_cli_renders_a_mesh_file_framed_and_saves_its_scene(tmp_path, capsys):
     assert (~bg).mean() > 0.1
     # the summary states the parameters "auto" chose, and the saved scene renders the same
     field = sd.SmoothDistanceField(sd.load_mesh(stl))
-    a = field.auto_alpha()
-    assert f"alpha {a:.4g}, alpha_U {20 * a:.4g}, inflation <= " \
-        f"{field.inflation(a, 20 * a):.3g}" in summary
+    a, au, c = field.auto_surface()
+    assert f"alpha {a:.4g}, alpha_U {au:.4g}, inflation <= " \
+        f"{field.inflation(a, au):.3g}" in summary and f"offset {c:.3g} " in summary
     data = json.loads(saved.read_text())
     assert data["shading"] == "lit" and data["lighting"] == {"ground": False}
     assert data["objects"][0]["path"] == "../ico.stl"
     assert data["objects"][0]["alpha"] == pytest.approx(a, rel=1e-5)
+    assert data["objects"][0]["offset"] == pytest.approx(c, rel=1e-5)
     out2 = tmp_path / "again.png"
     assert main(["render", str(saved), "-o", str(out2), "-q"]) == 0
     assert np.abs(load_png(out2).astype(int) - img).max() <= 2
@@ -262,17 +263,28 @@ def _mean_offset(res):
 @pytest.mark.parametrize("path,kind", SHIPPED)
 @pytest.mark.slow
 def test_auto_alpha_offset_is_within_two_percent_of_the_diagonal(path, kind):
+    """``auto_alpha``'s zero set (``offset=0``; the renderer's default for point clouds):
+    within 2 % of the diagonal. The renderer's default for edges and triangles, the level
+    set ``d_hat = C`` of :meth:`~smoothdist.SmoothDistanceField.auto_surface` (issue 35),
+    lies within ``2 C`` (about 1.5 mean edge lengths)."""
     for view in ("front", "iso"):
-        res = tracer.render_mesh(DATA / path, kind=kind, size=(40, 40), view=view)
+        res = tracer.render_mesh(DATA / path, kind=kind, size=(40, 40), view=view, offset=0.0)
         assert res.hit.sum() > 20
         assert _mean_offset(res) <= 0.02, (path, kind, view, _mean_offset(res))
+    res = tracer.render_mesh(DATA / path, kind=kind, size=(40, 40), view="iso")
+    c = res.scene.objects[0].smooth_offset
+    assert res.hit.sum() > 20
+    assert (c > 0) == (kind != "points")
+    r = _mean_offset(res) * res.scene.objects[0].field.diagonal
+    assert (r <= 2.0 * c) if c > 0 else (r <= 0.02 * res.scene.objects[0].field.diagonal), \
+        (path, kind, r, c)
 
 
 @pytest.mark.parametrize("kind", ["triangles", "edges"])
 def test_auto_alpha_on_a_unit_icosphere(kind):
     """The issue's case: a 642-vertex unit icosphere got alpha 7.23 and a radius of 1.85."""
     V, F = icosphere(3)
-    res = tracer.render_mesh((V, F), kind=kind, size=(48, 48))
+    res = tracer.render_mesh((V, F), kind=kind, size=(48, 48), offset=0.0)   # the zero set
     assert _mean_offset(res) <= 0.02
     r = np.linalg.norm(hit_points(res), axis=1)
     assert r.max() < 1.0 + 0.02 * 2 * np.sqrt(3)
@@ -363,9 +375,14 @@ def test_alpha_u_auto_everywhere():
     np.testing.assert_array_equal(a, b)
     from tracer.scene import scene_from_field
 
-    s = scene_from_field(field, alpha="auto", alpha_u="auto", width=8, height=8, camera="iso")
+    s = scene_from_field(field, alpha="auto", alpha_u="auto", width=8, height=8, camera="iso",
+                         offset=0.0)
     assert s.objects[0].alpha == field.auto_alpha()
     assert s.objects[0].alpha_u == pytest.approx(20 * field.auto_alpha())
+    # all three left to "auto": chosen together (issue 35)
+    s = scene_from_field(field, alpha="auto", alpha_u="auto", width=8, height=8, camera="iso")
+    o = s.objects[0]
+    assert (o.alpha, o.alpha_u, o.smooth_offset) == field.auto_surface()
     # scene_from_field keeps None = no attenuation (alpha_u = alpha)
     assert scene_from_field(field, alpha=5.0, width=8, height=8).objects[0].alpha_u == 5.0
 

@@ -27,8 +27,10 @@ def add_arguments(p):
     p.add_argument("--beta", type=float, help="Barnes-Hut beta (0 = exact; default: scene's, "
                    "0.5 for a mesh)")
     p.add_argument("--alpha", type=_auto_or_number("--alpha"), metavar="auto|A",
-                   help="alpha of the (first) object, or 'auto': mean surface offset <= 2%% "
-                   "of the bbox diagonal (default for a mesh: auto)")
+                   help="alpha of the (first) object, or 'auto' (default for a mesh): for "
+                   "edges and triangles with --alpha-u and --offset left out too, 6/C at the "
+                   "level set d_hat = C, C = 0.75 mean edge lengths (no dimples along the "
+                   "edges); otherwise mean surface offset <= 2%% of the bbox diagonal")
     p.add_argument("--alpha-u", type=_auto_or_number("--alpha-u", "off"),
                    metavar="auto|off|U",
                    help="alpha_U (attenuation) of the (first) object, or 'auto' = 20 x alpha, "
@@ -65,7 +67,8 @@ def add_arguments(p):
     p.add_argument("--mode", choices=("smooth", "exact"),
                    help="smooth distance, or exact distance offset surface")
     p.add_argument("--offset", type=float, metavar="C",
-                   help="the surface's offset C >= 0: smooth mode d_hat = C (default 0), "
+                   help="the surface's offset C >= 0: smooth mode d_hat = C (default 0; "
+                   "with alpha and alpha_U auto, edges and triangles: see --alpha), "
                    "exact mode d = C (default 1/alpha per object)")
     p.add_argument("--eps", type=float, help="hit threshold in scene units "
                    "(default 1e-4 x bbox diagonal)")

@@ -80,7 +80,11 @@ def mesh_scene(mesh, F=None, *, kind=None, alpha="auto", alpha_u="auto", beta=0.
         Reduce the data to one primitive kind; None or "mixed" keep what it holds.
     alpha : float or "auto"
         Sharpness (1 / scene units). ``"auto"``: mean surface offset <= 2 % of the bbox
-        diagonal (:meth:`~smoothdist.SmoothDistanceField.auto_alpha`).
+        diagonal (:meth:`~smoothdist.SmoothDistanceField.auto_alpha`); with ``alpha_u`` and
+        ``offset`` left out too, edges and triangles get ``alpha``, ``alpha_u`` and the
+        offset chosen together (:meth:`~smoothdist.SmoothDistanceField.auto_surface`: the
+        level set ``d_hat = C`` about 0.75 mean edge lengths out, ``alpha = 6 / C``, no
+        attenuation; no dimples along the mesh edges).
     alpha_u : float, "auto" or None
         Attenuation threshold; ``"auto"`` is 20 x alpha (no ribbing); None: no attenuation.
     beta : float

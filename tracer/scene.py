@@ -263,7 +263,7 @@ def load_scene(path, overrides=None):
     if shading == "matcap" and not matcap:
         raise file_error(path, "shading", "is 'matcap' but no matcap file is given (key 'matcap')")
     # everything checked: now read the meshes and build the fields
-    objects = [_build_object(sp, path, gradient) for sp in specs]
+    objects = [_build_object(dict(sp, mode=mode), path, gradient) for sp in specs]
     desc = data.get("description", "")
     scene = Scene(path=path, camera_origin=origin, camera_dest=dest, camera_up=up,
                   objects=objects, width=width, height=height, beta=beta, eps=eps, mode=mode,
@@ -422,11 +422,18 @@ def _build_object(spec, path, gradient):
     else:
         mesh = meshes[0]
     fld = SmoothDistanceField(mesh)
-    alpha = fld.auto_alpha() if spec["alpha"] == "auto" else spec["alpha"]
-    alpha_u = (fld.auto_alpha_u(alpha) if spec["alpha_u"] == "auto" else
-               alpha if spec["alpha_u"] == "off" else spec["alpha_u"])
-    offset = spec["offset"] if spec["offset"] is not None else 1.0 / alpha
-    smooth_offset = spec["offset"] if spec["offset"] is not None else 0.0
+    if spec["alpha"] == "auto" and spec["alpha_u"] == "auto" and spec["offset"] is None \
+            and spec.get("mode") == "smooth":
+        # all three left to "auto": chosen together (edges and triangles: a level set
+        # about an edge length out, without dimples; issue 35)
+        alpha, alpha_u, smooth_offset = fld.auto_surface()
+        offset = 1.0 / alpha
+    else:
+        alpha = fld.auto_alpha() if spec["alpha"] == "auto" else spec["alpha"]
+        alpha_u = (fld.auto_alpha_u(alpha) if spec["alpha_u"] == "auto" else
+                   alpha if spec["alpha_u"] == "off" else spec["alpha_u"])
+        offset = spec["offset"] if spec["offset"] is not None else 1.0 / alpha
+        smooth_offset = spec["offset"] if spec["offset"] is not None else 0.0
     try:
         fld.check_alpha(alpha)
     except ValueError as exc:
@@ -526,6 +533,12 @@ def scene_from_field(field, *, alpha, alpha_u=None, beta=0.5, camera=None, width
         raise ValueError(f"mode must be one of {MODES}, got {mode!r}")
     if shading not in SHADINGS:
         raise ValueError(f"shading must be one of {SHADINGS}, got {shading!r}")
+    if (isinstance(alpha, str) and alpha == "auto" and isinstance(alpha_u, str)
+            and alpha_u == "auto" and offset is None and mode == "smooth"):
+        # all three left to "auto": chosen together (issue 35; see
+        # SmoothDistanceField.auto_surface)
+        alpha, alpha_u, offset = field.auto_surface()
+        offset = offset if offset > 0 else None
     if isinstance(alpha, str) and alpha == "auto":
         alpha = field.auto_alpha()
     if isinstance(alpha_u, str) and alpha_u == "auto":
