@@ -174,7 +174,7 @@ def test_smoke_run_end_to_end(tmp_path, capsys):
 def test_failed_experiment_leaves_nothing(tmp_path, monkeypatch, capsys):
     from tracer.reproduce import experiments
 
-    def boom(out, s, scheduler):
+    def boom(out, s, where):
         out.mkdir(parents=True)
         (out / "half.csv").write_text("x\n")
         raise ValueError("broken on purpose")

@@ -101,7 +101,7 @@ def run(args):
         return 0
     sched, workers = runner.check_arguments(args)
     if sched == "local" and mode != "full":
-        sched = "serial"  # the quick run's tasks are too small for a cluster
+        sched, workers = "serial", None  # the quick run's tasks are too small for a cluster
     if out.exists() and any(out.iterdir()) and not args.overwrite:
         raise CLIError(f"{out} exists (pass --overwrite to replace it)")
     out.parent.mkdir(parents=True, exist_ok=True)
@@ -115,7 +115,8 @@ def run(args):
             settings = SETTINGS[mode][name]
             say(f"reproduce: {name} {settings}")
             t0 = time.perf_counter()
-            res = EXPERIMENTS[name](tmp / name, settings, sched)
+            res = EXPERIMENTS[name](tmp / name, settings,
+                                    {"scheduler": sched, "workers": workers})
             sec = time.perf_counter() - t0
             write_json(tmp / f"{name}.json", dict(res, experiment=name, mode=mode,
                                                    settings=settings, seconds=round(sec, 2),

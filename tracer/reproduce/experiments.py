@@ -2,10 +2,11 @@
 and returns a small dict of results, which :mod:`tracer.reproduce.cli` writes as
 ``<name>.json`` (with the provenance of :func:`provenance`) into the results folder.
 
-Each experiment is ``fn(out, settings, scheduler) -> dict``: ``out`` is the experiment's own
+Each experiment is ``fn(out, settings, where) -> dict``: ``out`` is the experiment's own
 folder (the study's CSV, JSON and plots go there), ``settings`` the experiment's entry of
-:data:`SETTINGS` (``quick`` or ``full``), ``scheduler`` the runner's ``--scheduler`` (the studies
-and the simulations run their tasks through :mod:`tracer.runner`).
+:data:`SETTINGS` (``smoke``, ``quick`` or ``full``), ``where`` the runner's ``{"scheduler": ...,
+"workers": ...}`` (the studies and the simulations run their tasks through
+:mod:`tracer.runner`).
 """
 
 import datetime
@@ -130,6 +131,14 @@ def run_command(argv):
         raise RuntimeError(f"tracer {argv[0]} exited with status {status}")
 
 
+def runner_args(where):
+    """``--scheduler`` (and ``--workers``) of a study's command line."""
+    out = ["--scheduler", where["scheduler"]]
+    if where.get("workers") is not None:
+        out += ["--workers", str(where["workers"])]
+    return out
+
+
 def read_csv(path):
     import csv
 
@@ -144,13 +153,13 @@ def read_csv(path):
 
 
 # ============================================================================ beta (Sec. 4.3)
-def beta(out, s, scheduler):
+def beta(out, s, where):
     """The beta ablation on the bunny (``tracer ablate-beta``): seconds and isosurface error
     (fraction of the bbox diagonal) per type and beta."""
     run_command(["ablate-beta", str(BUNNY), "-o", str(out), "--size", str(s["size"]),
                  "--betas", ",".join(f"{b:g}" for b in s["betas"]), "--grid-betas",
                  ",".join(f"{b:g}" for b in s["betas"]), "--overwrite", "-q",
-                 "--scheduler", scheduler])
+                 *runner_args(where)])
     shutil.rmtree(out / "cache", ignore_errors=True)  # depth buffers: large, not a result
     rows = [r for r in read_csv(out / "beta_ablation.csv") if float(r.get("tol") or 0) == 0]
     res = {"size": s["size"], "alpha": 200.0, "alpha_u": 1200.0, "betas": s["betas"],
@@ -164,13 +173,13 @@ def beta(out, s, scheduler):
 
 
 # ============================================================================ alpha (Sec. 3)
-def alpha(out, s, scheduler):
+def alpha(out, s, where):
     """The alpha studies (``tracer ablate-alpha``); the underestimate study's nesting and
     exact-distance checks are the numbers."""
     import json
 
     run_command(["ablate-alpha", s["study"], "-o", str(out), "--size", str(s["size"]),
-                 "--overwrite", "-q", "--scheduler", scheduler])
+                 "--overwrite", "-q", *runner_args(where)])
     with open(out / "underestimate.json", encoding="utf-8") as fh:
         u = json.load(fh)
     n = u["nesting"]
@@ -184,12 +193,12 @@ def alpha(out, s, scheduler):
 
 
 # ============================================================================ BH switch
-def bh_switch(out, s, scheduler):
+def bh_switch(out, s, where):
     """The Barnes-Hut switch study (``tracer bh-switch``) on the shipped Autzen cloud."""
     import json
 
     run_command(["bh-switch", "-o", str(out), "--trials", str(s["trials"]), "--overwrite", "-q",
-                 "--scheduler", scheduler])
+                 *runner_args(where)])
     with open(out / "bh_switch.json", encoding="utf-8") as fh:
         j = json.load(fh)
     k = j["kept"]
@@ -254,7 +263,7 @@ def grid_fit(rows, grid):
     return out
 
 
-def grid(out, s, scheduler):
+def grid(out, s, where):
     """The grid benchmark (``tracer bench-grid``) over the shipped meshes, the Thingi10K
     meshes where present and generated height fields of 1e2.. primitives; the fit."""
     sets = [("shipped", REPO / "scenes" / "data" / "meshes")]
@@ -269,12 +278,17 @@ def grid(out, s, scheduler):
         rows = []
         for name, folder in sets:
             run_command(["bench-grid", str(folder), "-o", str(out / name), "--grid",
-                         str(s["grid"]), "--overwrite", "-q", "--scheduler", scheduler])
+                         str(s["grid"]), "--overwrite", "-q", *runner_args(where)])
             for r in read_csv(out / name / "bench_grid.csv"):
                 if r.get("status", "ok") == "ok":
                     rows.append(dict(r, set=name))
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
+    from tracer.studies.plots import bench_plots
+
+    threads = sorted({int(r["threads"]) for r in rows if isinstance(r.get("threads"), float)})
+    bench_plots(out, rows, {"grid": s["grid"], "alpha": 1.0, "beta": 0.5,  # every set together
+                            "threads": "/".join(map(str, threads)) or "?"})
     return {"grid": s["grid"], "alpha": 1.0, "beta": 0.5,
             "sets": [n for n, _ in sets], "generated_triangles": sorted(made.values()),
             "thingi10k_present": THINGI.is_dir(), "meshes": len(rows),
@@ -376,7 +390,7 @@ def table3_task(task):
             "runs": runs}
 
 
-def table3(out, s, scheduler):
+def table3(out, s, where):
     """The paper's Table 3 simulations, each a task on the runner."""
     from tracer import runner
     from tracer.outputs import write_json
@@ -388,7 +402,8 @@ def table3(out, s, scheduler):
     failed = []
     info = runner.run_tasks(table3_task, tasks, on_result=lambda t, r: rows.__setitem__(t["key"], r),
                             on_failure=lambda t, e: failed.append((t["key"], e)),
-                            scheduler=scheduler, label="table3", quiet=True,
+                            scheduler=where["scheduler"], workers=where.get("workers"),
+                            label="table3", quiet=True,
                             estimate=30.0 * len(tasks))
     if failed:
         raise RuntimeError(f"table3: {failed[0][0]} failed: {failed[0][1]}")
@@ -404,7 +419,7 @@ def table3(out, s, scheduler):
 
 
 # ============================================================================ underestimate
-def underestimate(out, s, scheduler):
+def underestimate(out, s, where):
     """Sec. 3 and App. A: ``0 <= d - d_hat <= log(A N) / alpha`` at random queries around the
     bunny, per type, at beta 0 and 0.5 (exact distance from the library's exact query)."""
     from smoothdist import DataMesh, SmoothDistanceField

@@ -113,8 +113,9 @@ def render_page(folder, shown_as):
         L += ["", "## The benchmark figure", "",
               f"`tracer bench-grid` over {g['meshes']} meshes ({', '.join(g['sets'])}; "
               f"generated height fields of {', '.join(str(n) for n in g['generated_triangles'])} "
-              f"triangles), {g['grid']}³ queries. Plots: `{shown_as}/grid/<set>/"
-              "bench_time_vs_leaves.png` and `bench_leaf_fraction.png`.", "",
+              f"triangles), {g['grid']}³ queries. The paper's two plots over every mesh: "
+              f"`{shown_as}/grid/bench_time_vs_leaves.png` and `bench_leaf_fraction.png` (and "
+              "per set in `grid/<set>/`).", "",
               "| type | meshes | Pearson r (time, leaves) | ns per leaf (fit) | ns per leaf "
               "(range) | leaves at most | share of leaves, smallest mesh | largest mesh |",
               "|---|---:|---:|---:|---|---:|---|---|"]
