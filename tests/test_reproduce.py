@@ -56,10 +56,10 @@ def _same3(cell, value):
     return math.isclose(float(cell), float(f"{value:.3g}"), rel_tol=1e-9)
 
 
-def disagreements(page_text, folder):
+def disagreements(page_text, folder, shown=SHOWN):
     """What the page says that the results folder does not (empty when they agree)."""
     out = []
-    if page_text != report.render_page(folder, SHOWN):
+    if page_text != report.render_page(folder, shown):
         out.append("the page is not the one generated from the results folder")
     with open(Path(folder) / "claims.json", encoding="utf-8") as fh:
         if json.load(fh) != evaluate(report.load_results(folder)):
@@ -107,6 +107,14 @@ def disagreements(page_text, folder):
 # ------------------------------------------------------------------ the committed report
 def test_committed_page_matches_results():
     assert disagreements(PAGE.read_text(encoding="utf-8"), RESULTS) == []
+
+
+@pytest.mark.parametrize("folder", sorted(p.name for p in RESULTS.parent.iterdir()
+                                          if (p / "run.json").is_file()))
+def test_every_committed_results_folder_matches_its_page(folder):
+    path = RESULTS.parent / folder
+    text = (path / "reproduction.md").read_text(encoding="utf-8")
+    assert disagreements(text, path, f"renders/reproduction/{folder}") == []
 
 
 def test_committed_results_have_provenance_and_every_claim_a_row():

@@ -10,7 +10,7 @@ import json
 from pathlib import Path
 
 from tracer.reproduce.claims import evaluate, g3
-from tracer.reproduce.experiments import TABLE3_PAPER
+from tracer.reproduce.experiments import EXPERIMENTS, TABLE3_PAPER
 
 #: the files of a results folder that are not an experiment's
 NOT_EXPERIMENTS = {"claims.json", "run.json"}
@@ -64,6 +64,10 @@ def render_page(folder, shown_as):
          "there; the paper's values are quoted from it. Rerun with "
          f"`python -m tracer reproduce{'' if run['mode'] == 'full' else ' --' + run['mode']} "
          "--out DIR --page docs/reproduction.md`.", ""]
+    missing = [n for n in EXPERIMENTS if n not in run["experiments"]]
+    if missing:
+        L += [f"This run did not run {', '.join(missing)} (`--only`): their claims say "
+              "\"not run\".", ""]
     if run["mode"] != "full":
         L += [f"**This is the {run['mode']} run** (small renders, a small query grid, a few simulation "
               "steps): it shows that every experiment runs and how each claim is judged; its "
