@@ -131,7 +131,9 @@ def _grid_linear(R):
     ours = "; ".join(f"{k} r = {g3(v['pearson_r'])}, {g3(v['ns_per_leaf_fit'])} ns per leaf "
                      f"({g3(v['ns_per_leaf_min'])}-{g3(v['ns_per_leaf_max'])})"
                      for k, v in f.items())
-    why = "" if ok else "Pearson r below 0.95 for some type"
+    low = [k for k, v in f.items() if v["pearson_r"] is None or v["pearson_r"] < 0.95]
+    why = "" if ok else (f"Pearson r below 0.95 for {', '.join(low)}; the time per leaf is not "
+                         "one constant across mesh sizes (see the ns per leaf range)")
     if R["grid"]["grid"] != 100:
         why += " (this run: a small grid, where fixed costs weigh)"
     return ours, _grid_setting(R), MATCH if ok else DIFFERS, why.strip()
