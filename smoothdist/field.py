@@ -46,8 +46,13 @@ AUTO_SURFACE_MAX = 0.08
 #: ... and, when there are edges, at least this fraction of it (a tube of a finely sampled
 #: curve stays as thick as ``alpha="auto"``'s zero set made it) ...
 AUTO_SURFACE_MIN_TUBE = 0.01
-#: ... at ``alpha = AUTO_SURFACE_SHARPNESS / C``, without attenuation
+#: ... at ``alpha = AUTO_SURFACE_SHARPNESS / C``, without attenuation; a net of edges (the
+#: wireframe of a surface: vertices of more than ``AUTO_WIRE_DEGREE`` edges on average) is
+#: drawn as wires of radius ``AUTO_WIRE_RADIUS`` mean edge lengths instead, so that it stays
+#: a net (0.75 closed it into a ribbed surface)
 AUTO_SURFACE_SHARPNESS = 6.0
+AUTO_WIRE_DEGREE = 2.5
+AUTO_WIRE_RADIUS = 0.1
 #: :meth:`SmoothDistanceField.exact_distance` switches to :attr:`SmoothDistanceField.exact_tree`
 #: once it has answered this many queries per primitive (its build costs about as much as
 #: one or two exact queries per primitive save)
@@ -291,6 +296,17 @@ class SmoothDistanceField:
         E = np.unique(np.sort(E, axis=1), axis=0)
         return float(np.mean(np.linalg.norm(m.V[E[:, 1]] - m.V[E[:, 0]], axis=1)))
 
+    def is_wire_net(self):
+        """Edges only, and their vertices join more than ``AUTO_WIRE_DEGREE`` edges on
+        average: the wireframe of a surface rather than curves (polylines, trees and
+        networks join 2, a few 3)."""
+        m = self.mesh
+        if not m.edges.size or m.triangles.size or m.points.size:
+            return False
+        E = np.unique(np.sort(m.edges, axis=1), axis=0)
+        deg = np.bincount(E.ravel())
+        return float(deg[deg > 0].mean()) > AUTO_WIRE_DEGREE
+
     def auto_surface(self):
         """The renderer's automatic ``(alpha, alpha_u, offset)``: what ``alpha``,
         ``alpha_u`` and the smooth offset left to ``"auto"`` render (issue 35).
@@ -298,7 +314,8 @@ class SmoothDistanceField:
         Edges and triangles (no points): the level set ``d_hat = C`` with
         ``C = min(AUTO_SURFACE_SPACINGS x mean edge length, AUTO_SURFACE_MAX x diagonal)``
         (0.75 edge lengths, at most 8 % of the diagonal; with edges at least
-        ``AUTO_SURFACE_MIN_TUBE x diagonal``, 1 %: the tube's radius),
+        ``AUTO_SURFACE_MIN_TUBE x diagonal``, 1 %: the tube's radius; the wireframe of a
+        surface, :meth:`is_wire_net`, ``AUTO_WIRE_RADIUS`` = 0.1 edge lengths: wires),
         ``alpha = AUTO_SURFACE_SHARPNESS / C`` and no attenuation (``alpha_u = alpha``). The
         zero set of ``d_hat`` runs in a groove along every mesh edge (dimples on a coarse
         sphere, rings on a tube); the level set about one edge length out is as smooth as the
@@ -313,13 +330,17 @@ class SmoothDistanceField:
             return cached
         h = self.mean_edge_length()
         L = self.diagonal
+        value = None
         if self.mesh.points.size or h is None or not h > 0 or not L > 0:
             alpha = self.auto_alpha()
             value = (alpha, self.auto_alpha_u(alpha), 0.0)
+        elif self.is_wire_net():
+            C = AUTO_WIRE_RADIUS * h
         else:
             C = min(AUTO_SURFACE_SPACINGS * h, AUTO_SURFACE_MAX * L)
             if self.mesh.edges.size:
                 C = max(C, AUTO_SURFACE_MIN_TUBE * L)
+        if value is None:
             alpha = AUTO_SURFACE_SHARPNESS / C
             value = (float(alpha), float(alpha), float(C))
         self._auto_surface_value = value

@@ -140,3 +140,83 @@ def test_scene_files_auto_and_numeric(tmp_path):
     assert (o.alpha, o.alpha_u, o.smooth_offset) == (40.0, 800.0, 0.0)
     o = load("auto", offset=0.0)
     assert o.smooth_offset == 0.0 and o.alpha_u == 20.0 * o.alpha
+
+
+def test_a_wire_net_stays_a_net():
+    """Edges whose vertices join more than 2.5 of them on average (a surface's wireframe)
+    are drawn as wires of radius 0.1 mean edge lengths (0.75 closed the README's torus.obj
+    wireframe into a ribbed surface); curves (2 per vertex) keep the tube rule."""
+    trimesh = pytest.importorskip("trimesh")
+    m = trimesh.creation.icosphere(1)
+    E = np.asarray(m.edges_unique)
+    net = SmoothDistanceField(DataMesh(np.asarray(m.vertices, float), E))
+    assert net.is_wire_net() and not SmoothDistanceField(circle()).is_wire_net()
+    h = np.mean(np.linalg.norm(m.vertices[E[:, 0]] - m.vertices[E[:, 1]], axis=1))
+    np.testing.assert_allclose(net.auto_surface(), (60.0 / h, 60.0 / h, 0.1 * h), rtol=1e-12)
+    # holes: a flat triangulated grid's wireframe, seen face on, is mostly background
+    # inside its outline (a closed sheet: none)
+    n = 6
+    g = np.linspace(0.0, 1.0, n)
+    V = np.c_[np.repeat(g, n), np.tile(g, n), np.zeros(n * n)]
+    k = np.arange(n * n).reshape(n, n)
+    T = np.r_[np.c_[k[:-1, :-1].ravel(), k[1:, :-1].ravel(), k[1:, 1:].ravel()],
+              np.c_[k[:-1, :-1].ravel(), k[1:, 1:].ravel(), k[:-1, 1:].ravel()]]
+    grid = trimesh.Trimesh(V, T, process=False)
+    wires = DataMesh(V, np.asarray(grid.edges_unique))
+    assert SmoothDistanceField(wires).is_wire_net()
+    cam = ([0.5, 0.5, 3.0], [0.5, 0.5, 0.0], [0.0, 1.0, 0.0])
+    res = tracer.render_mesh(wires, size=(64, 64), shading="normals", camera=cam)
+    rows, cols = np.nonzero(res.hit)
+    box = res.hit[rows.min():rows.max() + 1, cols.min():cols.max() + 1]
+    assert (~box).mean() > 0.15, (~box).mean()
+    hg = SmoothDistanceField(wires).mean_edge_length()
+    closed = tracer.render_mesh(wires, size=(64, 64), shading="normals", camera=cam,
+                                offset=0.75 * hg, alpha=8.0 / hg, alpha_u="off")
+    rows, cols = np.nonzero(closed.hit)
+    box = closed.hit[rows.min():rows.max() + 1, cols.min():cols.max() + 1]
+    assert (~box).mean() < 0.05, (~box).mean()
+
+
+def helix(turns=3, per_turn=48):
+    s = np.linspace(0.0, 2 * np.pi * turns, turns * per_turn + 1)
+    V = np.c_[np.cos(s), np.sin(s), 0.8 * s / (2 * np.pi)]
+    n = len(V)
+    return DataMesh(V, np.c_[np.arange(n - 1), np.arange(1, n)])
+
+
+def test_tubes_thinner_than_half_a_pixel_give_a_warning(tmp_path, capsys):
+    """Issue 35 item 5: ``--alpha 500 --kind edges`` on a helix drew a tube thinner than a
+    pixel without a word. The warning gives an alpha that shows the tube, and at that alpha
+    (and at "auto") there is none."""
+    import warnings
+
+    from tracer.errors import ThinFeatureWarning
+
+    mesh = helix()
+    with pytest.warns(ThinFeatureWarning, match=r"144 edges .* thinner than half a pixel") \
+            as rec:
+        tracer.mesh_scene(mesh, alpha=500.0, size=(512, 512), view="iso")
+    suggested = float(str(rec[0].message).split("; alpha ")[1].split(" or lower")[0])
+    assert suggested < 500.0
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ThinFeatureWarning)
+        tracer.mesh_scene(mesh, alpha=suggested, size=(512, 512), view="iso")
+        tracer.mesh_scene(mesh, size=(512, 512), view="iso")
+        # the tube is visible once the probes half a pixel out are inside the surface
+        sc = tracer.mesh_scene(mesh, alpha=suggested, size=(512, 512), view="iso")
+    o = sc.objects[0]
+    half = 0.5 * np.linalg.norm(sc.camera_dest - sc.camera_origin) / 512
+    q, _ = o.field._offset_probes(half, count=128)
+    dh = o.field.smooth_distance(q, alpha=o.alpha, alpha_u=o.alpha_u, beta=0.5).distance
+    assert np.median(dh) <= 0.0
+    # on the command line: one warning line, and the render goes on
+    obj = tmp_path / "helix.obj"
+    obj.write_text("".join(f"v {x} {y} {z}\n" for x, y, z in mesh.V)
+                   + "".join(f"l {a + 1} {b + 1}\n" for a, b in mesh.edges))
+    from tracer.cli import main
+
+    assert main(["render", str(obj), "--alpha", "500", "--size", "96", "96", "-q",
+                 "-o", str(tmp_path / "h.png"), "--shading", "normals"]) == 0
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("warning: the 144 edges are drawn as tubes")
+    assert (tmp_path / "h.png").exists()

@@ -18,7 +18,13 @@ imported here.
 """
 
 __all__ = ["TracerError", "CLIError", "SceneError", "SimFileError", "RenderError",
-           "OverlapError", "InfeasibleStart"]
+           "OverlapError", "InfeasibleStart", "ThinFeatureWarning"]
+
+
+class ThinFeatureWarning(UserWarning):
+    """A render whose tubes (edges) are thinner than half a pixel: they show as specks. The
+    message gives the alpha that would show them (``tracer render`` prints it as one
+    ``warning: ...`` line)."""
 
 
 class TracerError(Exception):

@@ -119,13 +119,55 @@ def mesh_scene(mesh, F=None, *, kind=None, alpha="auto", alpha_u="auto", beta=0.
     except (TypeError, ValueError):
         raise ValueError(f"size must be (width, height), got {size!r}") from None
     field = SmoothDistanceField(data)
-    return scene_from_field(field, alpha=alpha, alpha_u=alpha_u, beta=beta,
+    scene = scene_from_field(field, alpha=alpha, alpha_u=alpha_u, beta=beta,
                             camera=view if camera is None else camera, width=width,
                             height=height, mode=mode, eps=eps, offset=offset, shading=shading,
                             matcap=matcap, name=name or os.path.splitext(data.name)[0], tol=tol,
                             newton=newton, up=up, samples=samples, adaptive=adaptive,
                             transparent=transparent, lighting=lighting, color=color,
                             background=background)
+    warn_thin_tubes(scene)
+    return scene
+
+
+def warn_thin_tubes(scene, probes=128):
+    """Warn (:class:`~tracer.errors.ThinFeatureWarning`) when the first object is edges only
+    and its smooth surface is thinner than half a pixel: at most points half a pixel from
+    the edges (the pixel at the camera's distance to ``dest``: the shorter image axis spans
+    that distance) ``d_hat`` is above the surface's level. The message gives the largest
+    alpha (alpha_U in the same ratio), found in steps of 0.8, at which they are covered."""
+    import warnings
+
+    from tracer.errors import ThinFeatureWarning
+
+    o = scene.objects[0]
+    fld = o.field
+    m = fld.mesh
+    if scene.mode != "smooth" or not m.edges.size or m.triangles.size or m.points.size \
+            or not fld.diagonal > 0:
+        return
+    dist = float(np.linalg.norm(np.asarray(scene.camera_dest) - scene.camera_origin))
+    half = 0.5 * dist / min(scene.width, scene.height)
+    q, _ = fld._offset_probes(half, count=probes)
+    c = o.level("smooth")
+    ratio = o.alpha_u / o.alpha
+
+    def covered(a):
+        dh = fld.smooth_distance(q, alpha=a, alpha_u=ratio * a, beta=scene.beta).distance
+        return float(np.median(dh)) <= c
+
+    if covered(o.alpha):
+        return
+    a = o.alpha
+    for _ in range(60):
+        a *= 0.8
+        if a * fld.diagonal < 1.0 or covered(a):
+            break
+    warnings.warn(f"the {m.edges.shape[0]} edges are drawn as tubes thinner than half a pixel "
+                  f"({half:.3g} scene units at {scene.width}x{scene.height}) at alpha "
+                  f"{o.alpha:.4g}: they show as specks; alpha {a:.3g} or lower, or a larger "
+                  f"offset (--offset {half:.3g}), would show them", ThinFeatureWarning,
+                  stacklevel=3)
 
 
 def render_mesh(mesh, F=None, *, kind=None, alpha="auto", alpha_u="auto", beta=0.5,
