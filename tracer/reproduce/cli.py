@@ -3,7 +3,7 @@ folder (``<experiment>.json`` each, with commit, date, machine, thread count and
 studies' own CSVs and plots in ``<experiment>/``), ``claims.json`` and ``reproduction.md``.
 
 ``--quick`` runs everything at small sizes (a few minutes on 2 cores); the full run uses the
-paper's sizes (about an hour on 2 cores) and runs the studies' and the simulations' tasks on
+paper's sizes (an hour or more on 2 cores: the beta study at 512² alone takes half an hour) and runs the studies' and the simulations' tasks on
 the Dask runner (:mod:`tracer.runner`, ``--scheduler``). The folder is built next to ``--out``
 under a temporary name and renamed when every experiment has finished, so an interrupted or
 failed run leaves no half-written results.
@@ -24,7 +24,7 @@ HELP = "run every reproducible experiment of the paper and write the results and
 def add_arguments(p):
     p.add_argument("--quick", action="store_true",
                    help="small sizes: a few minutes on 2 cores (default: the paper's sizes, "
-                   "about an hour)")
+                   "an hour or more)")
     p.add_argument("--smoke", action="store_true",
                    help="smaller still than --quick (the test suite's run: every experiment "
                    "once, at its smallest)")

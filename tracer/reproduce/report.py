@@ -72,7 +72,7 @@ def render_page(folder, shown_as):
         L += [f"**This is the {run['mode']} run** (small renders, a small query grid, a few simulation "
               "steps): it shows that every experiment runs and how each claim is judged; its "
               "sizes are not the paper's, and the verdicts say where that matters. The full run "
-              "(`tracer reproduce`, about an hour on 2 cores) uses the paper's sizes.", ""]
+              "(`tracer reproduce`, an hour or more on 2 cores) uses the paper's sizes.", ""]
     L += ["Verdicts: " + ", ".join(f"{v}: {n}" for v, n in sorted(counts.items())) + ".", "",
           "## Claims", "",
           "| # | claim (quoted) | section | paper | ours | setting | verdict | last run |",
