@@ -3,8 +3,9 @@ folder (``<experiment>.json`` each, with commit, date, machine, thread count and
 studies' own CSVs and plots in ``<experiment>/``), ``claims.json`` and ``reproduction.md``.
 
 ``--quick`` runs everything at small sizes (a few minutes on 2 cores); the full run uses the
-paper's sizes (an hour or more on 2 cores: the beta study at 512² alone takes half an hour) and runs the studies' and the simulations' tasks on
-the Dask runner (:mod:`tracer.runner`, ``--scheduler``). The folder is built next to ``--out``
+paper's sizes (an hour or more on 2 cores: the beta study at 512² alone takes half an hour)
+and runs the studies' and the simulations' tasks on the Dask runner (:mod:`tracer.runner`,
+``--scheduler``). The folder is built next to ``--out``
 under a temporary name and renamed when every experiment has finished, so an interrupted or
 failed run leaves no half-written results.
 """
