@@ -400,7 +400,8 @@ def table3(out, s, where):
               "cap": caps.get(n), "threads": s["threads"], "weight": 1.0} for n in s["scenes"]]
     rows = {}
     failed = []
-    info = runner.run_tasks(table3_task, tasks, on_result=lambda t, r: rows.__setitem__(t["key"], r),
+    info = runner.run_tasks(table3_task, tasks,
+                            on_result=lambda t, r: rows.__setitem__(t["key"], r),
                             on_failure=lambda t, e: failed.append((t["key"], e)),
                             scheduler=where["scheduler"], workers=where.get("workers"),
                             label="table3", quiet=True,
@@ -447,5 +448,6 @@ def underestimate(out, s, where):
 
 
 #: name -> experiment, in the order they run (quick first where they are quick)
-EXPERIMENTS = {"underestimate": underestimate, "table3": table3, "grid": grid, "bh_switch": bh_switch, "beta": beta,
+EXPERIMENTS = {"underestimate": underestimate, "table3": table3, "grid": grid,
+               "bh_switch": bh_switch, "beta": beta,
                "alpha": alpha}

@@ -69,7 +69,8 @@ def render_page(folder, shown_as):
         L += [f"This run did not run {', '.join(missing)} (`--only`): their claims say "
               "\"not run\".", ""]
     if run["mode"] != "full":
-        L += [f"**This is the {run['mode']} run** (small renders, a small query grid, a few simulation "
+        L += [f"**This is the {run['mode']} run** (small renders, a small query grid, a few "
+              "simulation "
               "steps): it shows that every experiment runs and how each claim is judged; its "
               "sizes are not the paper's, and the verdicts say where that matters. The full run "
               "(`tracer reproduce`, an hour or more on 2 cores) uses the paper's sizes.", ""]
