@@ -69,6 +69,8 @@ TINY = {
     "tracer bh-switch": ["--trials", "4", "--samples", "11"],
     "benchmarks/bench_render.py": ["--sizes", "8", "--repeat", "1", "--types", "points"],
     "benchmarks/bench_grid.py": ["--grid", "4", "--repeat", "1"],
+    "benchmarks/bench_ripple.py": ["--cases", "circle64", "--size", "16"],
+    "benchmarks/bench_specks.py": ["--no-clouds", "--scenes", "trefoil"],
     "benchmarks/bench_mesh_distance.py": ["--repeat", "1", "--case", "ring-toss"],
     "examples/mesh_distance_demo.py": ["--size", "16", "--out", "out/demo"],
     "benchmarks/bench_authors.py": ["--sizes", "8", "--repeat", "1", "--types", "points"],
