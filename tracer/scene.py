@@ -22,6 +22,9 @@ an object may list ``parts``: ``[{"path": ..., "bvh_type": ..., "scale": s,
 "translate": [x, y, z]}, ...]`` merged into one mixed mesh (one BVH). ``alpha`` may be
 ``"auto"``; ``max_alpha`` (alpha_U) may be ``"auto"``, its default (20 x alpha, see
 ``SmoothDistanceField.auto_alpha_u``; the authors' files without it meant no attenuation).
+An object whose ``alpha`` is ``"auto"`` with ``max_alpha`` and ``offset`` left out, in smooth
+mode, gets all three from ``SmoothDistanceField.auto_surface`` (edges and triangles: the level
+set ``d_hat = C`` about 0.75 mean edge lengths out, without dimples; issue 35).
 Several objects are combined by LogSumExp with the largest alpha (paper Sec. 3.6).
 
 The complete reference (every key: type, default, example) is the JSON Schema
