@@ -54,7 +54,7 @@ from smoothdist.weights import eval_triangle_weight
 
 #: :func:`smoothdist.query._attenuate`, inlined (it calls no other kernel)
 _attenuate_inline = numba.njit(**NJIT_INLINE)(_attenuate.py_func)
-#: ``moment`` values of :func:`smooth_traverse` and :func:`_pair` beyond True (the moment):
+#: ``moment`` values of :func:`smooth_traverse` (and its pair terms) beyond True (the moment):
 #: the derivative for a motion of query vertex 1 or 2 alone
 VERTEX_1, VERTEX_2 = 2, 3
 #: :func:`smoothdist.closest_pair.segment_segment`, inlined (the edge-edge leaves)
