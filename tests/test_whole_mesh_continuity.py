@@ -265,3 +265,40 @@ def test_vertex_gradient_with_barnes_hut_stays_close():
     assert 0.0 < np.abs(G5 - G0).max() <= 0.05 * np.abs(G0).max()
     with pytest.raises(ValueError, match="method"):
         md0.vertex_gradient(method="tree")
+
+
+@pytest.mark.parametrize("qkind, dkind", [(1, 1), (1, 2), (2, 1), (2, 2)])
+def test_random_parallel_pairs(qkind, dkind):
+    """Random parallel configurations (a query simplex in a plane parallel to the data's, or an
+    edge parallel to a data edge; some with duplicate vertices): the tie rule reports a real
+    pair at the minimum distance that :mod:`naive_pairs` finds, and never a NaN."""
+    import naive_pairs
+    from smoothdist.closest_pair import closest_pair
+
+    rng = np.random.default_rng(370 + 10 * qkind + dkind)
+    n_tied = 0
+    for case in range(150):
+        P = rng.uniform(-1, 1, (3, 3))
+        P[:, 2] = 0.0                                  # data in the plane z = 0
+        if dkind == 1:
+            P[2] = P[1]
+        Q = rng.uniform(-1, 1, (3, 3))
+        Q[:, 2] = rng.uniform(0.05, 0.5)               # query in a parallel plane
+        if qkind == 1:
+            Q[2] = Q[1]
+            if dkind == 1 and case % 2:
+                # parallel to the data edge too
+                Q[1] = Q[0] + rng.uniform(-2, 2) * (P[1] - P[0])
+        if case % 7 == 0:
+            Q[1] = Q[0]                                # a degenerate query
+        Qf, Pf = Q.ravel(), P.ravel()
+        c = closest_pair(qkind, Qf, dkind, Pf)
+        ref = naive_pairs.closest_pairs(qkind, Q[None, :qkind + 1], dkind,
+                                        P[None, :dkind + 1])[0][0]
+        assert np.all(np.isfinite(np.array(c, dtype=float)))
+        x = _point(qkind, Qf, c[4], c[5])
+        y = _point(dkind, Pf, c[7], c[8])
+        assert np.sqrt(c[0]) == pytest.approx(ref, abs=1e-12)
+        assert np.linalg.norm(x - y) == pytest.approx(ref, abs=1e-10)
+        n_tied += distinct_ties(qkind, Qf, dkind, Pf) > 1
+    assert n_tied > 20
