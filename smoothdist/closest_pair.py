@@ -725,6 +725,21 @@ def _union_feature(kind, f, g):
     return _TRI_CODE[_TRI_MASK[f] | _TRI_MASK[g]]
 
 
+@numba.njit(**NJIT_INLINE)
+def _put(C, n, d2, rx, ry, rz, qs, qt, qf, ds, dt, df):
+    """Write a candidate (the module's 10-tuple) into row ``n`` of ``C``."""
+    C[n, 0] = d2
+    C[n, 1] = rx
+    C[n, 2] = ry
+    C[n, 3] = rz
+    C[n, 4] = qs
+    C[n, 5] = qt
+    C[n, 6] = qf
+    C[n, 7] = ds
+    C[n, 8] = dt
+    C[n, 9] = df
+
+
 @numba.njit(**NJIT)
 def _candidates(kq, Q, kd, P, C):
     """Fill ``C`` (MAX_CANDIDATES, >= 10) with every candidate pair of query ``(kq, Q)`` and data
@@ -733,30 +748,12 @@ def _candidates(kq, Q, kd, P, C):
     for i in range(kq + 1):
         d2, rx, ry, rz, s, t, f = _point_to(kd, Q[3 * i], Q[3 * i + 1], Q[3 * i + 2], P)
         qs, qt, qf = _vertex_params(kq, i)
-        C[n, 0] = d2
-        C[n, 1] = rx
-        C[n, 2] = ry
-        C[n, 3] = rz
-        C[n, 4] = qs
-        C[n, 5] = qt
-        C[n, 6] = qf
-        C[n, 7] = s
-        C[n, 8] = t
-        C[n, 9] = f
+        _put(C, n, d2, rx, ry, rz, qs, qt, qf, s, t, f)
         n += 1
     for j in range(kd + 1):
         d2, rx, ry, rz, s, t, f = _point_to(kq, P[3 * j], P[3 * j + 1], P[3 * j + 2], Q)
         ds, dt, df = _vertex_params(kd, j)
-        C[n, 0] = d2
-        C[n, 1] = -rx
-        C[n, 2] = -ry
-        C[n, 3] = -rz
-        C[n, 4] = s
-        C[n, 5] = t
-        C[n, 6] = f
-        C[n, 7] = ds
-        C[n, 8] = dt
-        C[n, 9] = df
+        _put(C, n, d2, -rx, -ry, -rz, s, t, f, ds, dt, df)
         n += 1
     ne_q = 1 if kq == 1 else 3
     ne_d = 1 if kd == 1 else 3
@@ -778,16 +775,7 @@ def _candidates(kq, Q, kd, P, C):
                 ds, dt, df = v, 0.0, SEG_INTERIOR
             else:
                 ds, dt, df = triangle_edge_point(g, v)
-            C[n, 0] = d2
-            C[n, 1] = rx
-            C[n, 2] = ry
-            C[n, 3] = rz
-            C[n, 4] = qs
-            C[n, 5] = qt
-            C[n, 6] = qf
-            C[n, 7] = ds
-            C[n, 8] = dt
-            C[n, 9] = df
+            _put(C, n, d2, rx, ry, rz, qs, qt, qf, ds, dt, df)
             n += 1
     return n
 
