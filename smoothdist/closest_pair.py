@@ -658,6 +658,21 @@ def tie_of_two(kq, Q, kd, best, a, b):
     lam = 0.0
     if ee > 0.0:
         lam = min(max(((c0 - xa0) * e0 + (c1 - xa1) * e1 + (c2 - xa2) * e2) / ee, 0.0), 1.0)
+    return _between(kq, kd, best, a, b, lam)
+
+
+@numba.njit(**NJIT_INLINE)
+def _row(C, i):
+    """Row ``i`` of a candidate buffer as the module's 10-tuple."""
+    return (C[i, 0], C[i, 1], C[i, 2], C[i, 3], C[i, 4], C[i, 5], int(C[i, 6]), C[i, 7],
+            C[i, 8], int(C[i, 9]))
+
+
+@numba.njit(**NJIT_INLINE)
+def _between(kq, kd, best, a, b, lam):
+    """The pair at ``lam`` in [0, 1] between tied pairs ``a`` and ``b`` (10-tuples), at squared
+    distance ``best``: an affine map takes the query's parameters to the data's on the closest
+    set, so both sides interpolate; the features are the smallest faces holding both ends."""
     if lam <= 0.0:
         return best, a[1], a[2], a[3], a[4], a[5], a[6], a[7], a[8], a[9]
     if lam >= 1.0:
@@ -811,8 +826,7 @@ def tied_pair(kq, Q, kd, P):
             C[m, 13] = i
             m += 1
     if m <= 1:
-        c = C[ib]
-        return (c[0], c[1], c[2], c[3], c[4], c[5], int(c[6]), c[7], c[8], int(c[9]))
+        return _row(C, ib)
     # the query's centroid, and its nearest point on the hull of the tied points: the nearest
     # over every tied point and every segment between two (the hull's nearest point lies on an
     # edge of the hull, and every such segment lies in the hull)
@@ -859,17 +873,8 @@ def tied_pair(kq, Q, kd, P):
         if kq == 1:
             return best, rx, ry, rz, 0.5, 0.0, SEG_INTERIOR, ds, dt, df
         return best, rx, ry, rz, 1.0 / 3.0, 1.0 / 3.0, TRI_INTERIOR, ds, dt, df
-    a = C[int(C[bi, 13])]
-    b = C[int(C[bj, 13])]
-    if bl <= 0.0 or bi == bj:
-        return (best, a[1], a[2], a[3], a[4], a[5], int(a[6]), a[7], a[8], int(a[9]))
-    if bl >= 1.0:
-        return (best, b[1], b[2], b[3], b[4], b[5], int(b[6]), b[7], b[8], int(b[9]))
-    # an affine map takes the query's parameters to the data's on S: interpolate both sides
-    u = 1.0 - bl
-    return (best, u * a[1] + bl * b[1], u * a[2] + bl * b[2], u * a[3] + bl * b[3],
-            u * a[4] + bl * b[4], u * a[5] + bl * b[5], _union_feature(kq, int(a[6]), int(b[6])),
-            u * a[7] + bl * b[7], u * a[8] + bl * b[8], _union_feature(kd, int(a[9]), int(b[9])))
+    return _between(kq, kd, best, _row(C, int(C[bi, 13])), _row(C, int(C[bj, 13])),
+                    bl if bi != bj else 0.0)
 
 
 @numba.njit(**NJIT)
