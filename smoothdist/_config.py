@@ -11,8 +11,7 @@ greps for it).
   instead of raising ``ZeroDivisionError``. Kernels trust their (validated) input and never
   divide by zero on purpose, but under numba's default ``"python"`` model every division
   carries a zero test and an exception exit, which keeps LLVM from optimising the hot loops
-  around it: the same images bit for bit, and the lit 640x360 frame 0.92 -> 0.71 s, the exact
-  1e6 grid 2 % faster (2026-11-26, 2 threads).
+  around it: the same images bit for bit, and faster (performance guide, "Tuning constants").
 * ``NJIT_INLINE`` (``NJIT`` with ``forceinline``) is for small helpers that hot loops call
   (the whole-mesh traversal): numba does not inline njit calls on its own.
 * ``PARALLEL`` may be switched off with ``SMOOTHDIST_PARALLEL=0`` (serial reference runs).

@@ -46,8 +46,7 @@ from smoothdist.mesh import KIND_TRIANGLE
 #: queries handled by one parallel task (one stack and one seed chain each)
 CHUNK = 64
 #: consecutive queries traced together by :func:`exact_tree_batch` (one traversal, each node's
-#: boxes read once for all of them). Measured on the 1e6-point grid to the bunny's triangles
-#: (2026-11-26, CPU-s, best of 3): one query at a time 0.83, 2 0.74, 4 0.68, 8 0.70
+#: boxes read once for all of them; the fastest measured: performance guide, "Tuning constants")
 GROUP = 4
 #: largest leaf (the leaf code keeps the count in 4 bits)
 MAX_LEAF = 15

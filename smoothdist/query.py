@@ -291,11 +291,8 @@ def negligible_reach(tree, root, S, alpha):
 #: exports it)
 DEFAULT_TOL = 0.0
 #: tol mode: a node with at most this many primitives that is not accepted is evaluated
-#: primitive by primitive (they are contiguous in tree order) instead of being descended.
-#: 16 against 8 (256² bunny renders at beta 0, tol 3.5e-3, 2026-11-26, after the change to
-#: numpy's error model): V / E / F 0.75 / 5.35 / 3.65 -> 0.65 / 4.33 / 3.39 s (fewer steps
-#: per hit on the edges: 4.9 -> 4.2), depth error against beta 0 alike (0.92-0.95e-4 of the
-#: diagonal); 4: 30-45 % slower; 24 as 16; 32 and 64 slower on the triangles
+#: primitive by primitive (they are contiguous in tree order) instead of being descended
+#: (the fastest measured; performance guide, "Tuning constants")
 TOL_LEAF = 16
 
 
@@ -348,8 +345,8 @@ def smooth_distance_point_tol(tree, px, py, pz, alpha, beta, tol, S, wgs, stack,
     cannot exhaust the budget of the far part of the data (a greedy ``E + U_B <= tol * s_ex``
     does: it then opens almost every node). Invariant: ``E <= tol * s_ex * n_C / N`` (true at
     the start, kept by every acceptance and every evaluation, and kept as ``s_ex`` grows).
-    (Counting the accepted nodes' primitives only, as before 2026-11-26, left the evaluated
-    primitives' share unused: 11 % more leaves at the surface of the points bunny, tol 3e-3.)
+    (Counting the accepted nodes' primitives only left the evaluated primitives' share unused:
+    more leaves at the surface.)
 
     Proof. (1) Conservative: every primitive ``i`` below ``B`` has ``d_i >= delta_B`` (the
     box holds the primitive) and ``1 <= W_i <= A^S`` (the weight clamp), so its term

@@ -68,33 +68,19 @@ P_COLUMNS_POSED = P_T + 3
 #: bisection iterations when a step overshoots into d < 0 (halves the bracket each time)
 BISECT_ITERS = 40
 #: tol mode: a sphere-tracing step may under-estimate by up to this fraction of the previous
-#: distance (the evaluation's tolerance is loosened accordingly; 0 disables the relaxation).
-#: 0.1 against 0.25 (bunny, beta 0, 2026-11-25): 3-11 % fewer leaves per pixel (256² points
-#: tol 3e-3 / 0.1: 1,409 -> 1,310, 843 -> 753; 128² edges: 5,777 -> 5,470, 3,434 -> 3,342),
-#: fewer evaluations per hit pixel (6.1 -> 5.5); 0.05 as 0.1; 0.5: +10 % leaves; 0: a
-#: quarter more leaves (the misses' far evaluations at full accuracy). 0.05 against 0.1 once
-#: tol leaves are 16 (256², tol 3.5e-3, 2026-11-26): 0.65 / 4.33 / 3.39 -> 0.63 / 4.19 /
-#: 3.34 s, steps per hit 4.6 / 4.2 / 4.3 -> 4.2 / 3.8 / 3.8; 0.03 as 0.05; 0.2 slower
+#: distance (the evaluation's tolerance is loosened accordingly; 0 disables the relaxation;
+#: the fastest measured: performance guide, "Tuning constants")
 RELAX = 0.05
 #: tol mode: loosened evaluations (far from the surface) also use Barnes-Hut with at least
 #: this beta (conservative, so still safe); 0 disables
 FAR_BETA = 0.25
 #: cap of the over-relaxed sphere-tracing steps, as a multiple of ``d`` (1: plain sphere
-#: tracing); their length follows the slope of ``d`` along the ray, see march_ray. Measured
-#: on the 512^2 bunny renders (V / E / F, beta 0.5, one session, 2026-11-25): 2 against 1:
-#: 1.61 -> 1.39, 2.48 -> 2.16, 3.33 -> 2.83 s, 14 % fewer distance queries; against plain
-#: steps, 17 / 18 / 17 pixels' depth moved by more than 10 eps (none by 100 eps on E / F, 1
-#: on V) and 5 / 1 / 3 pixels' colour by more than 8 of 255, where a ray runs inside the band
-#: ``d <= eps`` and the two marches stop at different points of it; fewer than turning off the
-#: cone pass (127 / 72 / 87 beyond 10 eps) or the Newton steps (541 / 308 / 356) changes.
-#: The fixed factor of before (1.3: 7 % fewer queries on the points, 1.6 or more: falls back
-#: to 1 on its first step) was off
+#: tracing); their length follows the slope of ``d`` along the ray, see march_ray (measured:
+#: performance guide, "Tuning constants")
 OMEGA = 2.0
 #: an over-relaxed step is this fraction of the longest step whose end sphere still overlaps
-#: the start sphere if ``d`` changes linearly (see march_ray). Measured on the anti-aliasing
-#: samples of the 512^2 lit bunny (adaptive 16, omega 2): 0.65 / 0.8 / 0.9 / 1.0 -> 907 k /
-#: 828 k / 809 k / 883 k distance queries (the fixed factor 1.6 falling back to 1 for good
-#: after the first failed step, as before: 1.07 M)
+#: the start sphere if ``d`` changes linearly (see march_ray; measured: performance guide,
+#: "Tuning constants")
 OMEGA_SAFETY = 0.9
 #: Newton steps along the ray once ``d <= NEWTON x eps`` (0: plain sphere tracing), but never
 #: from farther than ``NEWTON_FAR`` x the scene box diagonal; see march_ray and newton_distance
@@ -102,34 +88,25 @@ NEWTON = 100.0
 NEWTON_FAR = 0.01
 #: a Newton step is at most this many times the sphere-tracing step ``d``
 NEWTON_CAP = 4.0
-#: rays meeting the surface at a smaller cosine (relative to ``|g|``) keep sphere steps.
-#: Tried 0.02 for camera rays (512^2 bunny V / E / F, 2026-11-25): 7-12 % faster (3.30 ->
-#: 2.89 s on triangles, 10 % fewer queries), but 136-230 pixels' depth moved by more than
-#: 1e-4 (up to 1.4 % of the diagonal: the Newton step crossed a thin part and hit the surface
-#: behind), a visible error in a one-sample image, so camera rays keep 0.2 (the anti-aliasing
-#: samples, weighted 1/N, use 0.02: ``tracer.film.SAMPLE_NEWTON_COS``). Again on top of the
-#: over-relaxed steps (OMEGA 2, same day): 5-6 % faster; 41-63 pixels' depth moved by more
-#: than 10 eps (1 eps is the band's own width), 0-2 by more than 100 eps, 3-4 pixels' colour
-#: by more than 32 of 255: still 0.2
+#: rays meeting the surface at a smaller cosine (relative to ``|g|``) keep sphere steps: a
+#: smaller value is faster but lets a Newton step cross a thin part in a one-sample image (the
+#: anti-aliasing samples use 0.02, ``tracer.film.SAMPLE_NEWTON_COS``; performance guide,
+#: "Tuning constants")
 NEWTON_COS = 0.2
 #: seed each tile's rays with a conservative start depth from a cone march (cone_start)
 CONE = True
 #: smooth mode, Newton steps on: where the cone pass ends within the Newton distance, each ray
 #: of the tile takes its first step to where the tangent plane of the cone's last evaluation
 #: meets it (:func:`cone_newton_step`), checked as a Newton step, instead of evaluating the
-#: distance at the cone's depth first. Bunny 512^2, beta 0.5 (2026-11-26): at our eps 5 % less
-#: time and 7 % fewer leaves on hit pixels; at the authors' eps 1e-3, where the cone ends about
-#: 1.6 eps from the surface, most hits take one evaluation instead of two (-38 % leaves on hit
-#: pixels). The depth error against a 100x tighter plain render is unchanged at both (our eps:
-#: mean 1.4-1.7e-5, theirs: 8.4-9.8e-4 before and 8.6-9.6e-4 after, scene units)
+#: distance at the cone's depth first (fewer evaluations per hit, the same depth error;
+#: performance guide, "Tuning constants")
 CONE_NEWTON = True
 #: largest number of distance evaluations of one tile's cone march
 CONE_STEPS = 64
 #: the cone passes of a tile: once one of its rays has missed after more than this many
 #: evaluations, the tile's :func:`cone_end` depth is computed and ends its later rays (misses
-#: then stop behind the silhouette instead of stepping out of the box). Bunny 512^2, beta 0.5,
-#: V / E / F (2026-11-26): 2-5 % less time, 3-4 % fewer leaves, the same images bit for bit;
-#: 1, 4 or 8 alike
+#: then stop behind the silhouette instead of stepping out of the box; performance guide,
+#: "Tuning constants")
 END_AFTER = 4
 #: pixels per side of the square tiles handed to threads (and of the cone pass; 4 beat 8 and 16
 #: by 16-18 % CPU time on the bunny at eps 1e-4 x diag, and 2: more cone marches than they save)
