@@ -6,7 +6,12 @@ surface) more than 40 grey levels darker than the median of that window: the iss
 Cases: the issue's two random clouds at 512² (3,000 normal points scaled (1, 0.6, 0.4),
 seed 0; 2,000 uniform points in a cube, seed 1) and shipped scenes at 256². On scenes with
 thin tubes in front of other geometry (``trefoil``, ``capillary``, ``mixed``) the measure also
-counts the tubes' darker outlines, which are not specks.
+counts the tubes' darker outlines, and on every shape the creases where two parts meet: those
+are geometry, not specks. To tell them apart each case is rendered a second time with shadows
+and ambient occlusion off: ``unlit`` counts the flagged pixels of that render (geometry alone),
+``added_by_light`` the pixels flagged with the light's rays on and not without them (what shadow
+and occlusion rays add: specks, and also true contact shadows, which the 5 x 5 test cannot tell
+from specks).
 
 Usage::
 
@@ -29,20 +34,34 @@ if str(ROOT) not in sys.path:  # run from a checkout without installing
     sys.path.insert(0, str(ROOT))
 
 import tracer  # noqa: E402
+from tracer.lighting import Lighting  # noqa: E402
 
 THRESHOLD = 40
+
+
+def speck_mask(rgb, hit, threshold=THRESHOLD):
+    """(H, W) bool: the pixels :func:`count_specks` counts."""
+    from numpy.lib.stride_tricks import sliding_window_view
+
+    g = np.asarray(rgb, dtype=np.float64)[..., :3].mean(axis=2)
+    win = sliding_window_view(np.pad(g, 2, mode="edge"), (5, 5))
+    med = np.median(win.reshape(*g.shape, 25), axis=2)
+    inside = sliding_window_view(np.pad(hit, 2, constant_values=False), (5, 5)).all(axis=(2, 3))
+    return inside & (g < med - threshold)
+
+
+def _row(name, size, res, off, seconds):
+    """One CSV row: the lit render ``res`` against the same render without shadows and AO."""
+    on, geometry = speck_mask(res.rgb, res.hit), speck_mask(off.rgb, off.hit)
+    return {"case": name, "size": size, "specks": int(on.sum()), "unlit": int(geometry.sum()),
+            "added_by_light": int((on & ~geometry).sum()), "hit_pixels": int(res.hit.sum()),
+            "seconds": seconds}
 
 
 def count_specks(rgb, hit, threshold=THRESHOLD):
     """Pixels inside the silhouette more than ``threshold`` grey levels darker than the
     median of their 5 x 5 window (the same measure as ``tests/test_lighting.py``)."""
-    from numpy.lib.stride_tricks import sliding_window_view
-
-    g = np.asarray(rgb, dtype=np.float64).mean(axis=2)
-    win = sliding_window_view(np.pad(g, 2, mode="edge"), (5, 5))
-    med = np.median(win.reshape(*g.shape, 25), axis=2)
-    inside = sliding_window_view(np.pad(hit, 2, constant_values=False), (5, 5)).all(axis=(2, 3))
-    return int(np.sum(inside & (g < med - threshold)))
+    return int(speck_mask(rgb, hit, threshold).sum())
 
 
 def clouds():
@@ -67,9 +86,10 @@ def main(argv=None):
         for name, P in clouds():
             t = time.perf_counter()
             res = tracer.render_mesh(P, size=(512, 512), view="iso")
-            rows.append({"case": name, "size": 512, "specks": count_specks(res.rgb, res.hit),
-                         "hit_pixels": int(res.hit.sum()),
-                         "seconds": round(time.perf_counter() - t, 2)})
+            sec = round(time.perf_counter() - t, 2)
+            off = tracer.render_mesh(P, size=(512, 512), view="iso",
+                                    lighting=Lighting(shadows=False, ao=False))
+            rows.append(_row(name, 512, res, off, sec))
             print(rows[-1], flush=True)
     for name in args.scenes:
         t = time.perf_counter()
@@ -77,9 +97,12 @@ def main(argv=None):
                         {"width": 256, "height": 256, "shading": "lit", "samples": 1,
                          "adaptive": False})
         res = render(sc)
-        rows.append({"case": name, "size": 256, "specks": count_specks(res.rgb, res.hit),
-                     "hit_pixels": int(res.hit.sum()),
-                     "seconds": round(time.perf_counter() - t, 2)})
+        sec = round(time.perf_counter() - t, 2)
+        off = render(load_scene(str(ROOT / "scenes" / f"{name}.json"),
+                                {"width": 256, "height": 256, "shading": "lit", "samples": 1,
+                                 "adaptive": False,
+                                 "lighting": {"shadows": False, "ao": False}}))
+        rows.append(_row(name, 256, res, off, sec))
         print(rows[-1], flush=True)
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
