@@ -74,7 +74,7 @@ sphinx_gallery_conf = {
     "examples_dirs": str(ROOT / "examples"),
     "gallery_dirs": "auto_examples",
     "filename_pattern": r"/plot_",   # every plot_*.py runs; its figures become the thumbnails
-    "ignore_pattern": r"(__init__|mesh_distance_demo)\.py",
+    "ignore_pattern": r"(__init__|mesh_distance_demo|make_gallery)\.py",
     "abort_on_example_error": True,
     "image_scrapers": ("matplotlib",),
     "download_all_examples": False,
