@@ -129,7 +129,8 @@ def kernels():
     global cuda
     if not _KERNELS:
         cuda = cuda_module()
-        _KERNELS.update(smooth=cuda.jit(_smooth_kernel), exact=cuda.jit(_exact_kernel))
+        _KERNELS.update(smooth=cuda.jit(_smooth_kernel, cache=True),
+                        exact=cuda.jit(_exact_kernel, cache=True))
     return _KERNELS
 
 
