@@ -33,7 +33,8 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 KINDS = ("points", "edges", "triangles")
-#: 24 x 24 renders of these scenes (the three bunnies, two objects by a second LogSumExp)
+#: 24 x 24 renders of these scenes (the three bunnies, two objects by a second LogSumExp; and
+#: the two objects at rigid poses, ``two_objects_posed``)
 RENDERS = tuple(f"bunny_{k}" for k in KINDS) + ("two_objects",)
 #: query points per field
 NQ = 300
@@ -76,12 +77,16 @@ def _worker(out):
             arrays[f"q_{name}_exact_{dev}_g"] = g
             arrays[f"q_{name}_exact_{dev}_prim"] = prim
         meta[f"q_{name}_diag"] = f.diagonal
-    for name in RENDERS:
-        scene = load_scene(ROOT / "scenes" / f"{name}.json", {"width": 24, "height": 24})
+    c, s = np.cos(0.3), np.sin(0.3)
+    posed = [(np.eye(3), np.zeros(3)),
+             (np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]), np.array([0.1, 0.0, 0.0]))]
+    for name in RENDERS + ("two_objects_posed",):
+        scene = load_scene(ROOT / "scenes" / f"{name.replace('_posed', '')}.json",
+                           {"width": 24, "height": 24})
         meta[f"r_{name}_diag"] = scene.diagonal
         meta[f"r_{name}_background"] = list(scene.background)
         for dev in ("cpu", "cuda"):
-            r = render(scene, device=dev)
+            r = render(scene, device=dev, transforms=posed if "posed" in name else None)
             for k in ("hit", "depth", "rgb", "normals"):
                 arrays[f"r_{name}_{dev}_{k}"] = getattr(r, k)
     # the GPU benchmark's measurements, tiny (its main() refuses the simulator)
@@ -143,7 +148,7 @@ def test_exact_distance_equals_cpu(sim, name):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", RENDERS)
+@pytest.mark.parametrize("name", RENDERS + ("two_objects_posed",))
 def test_render_equals_cpu(sim, name):
     cpu = {k: sim[f"r_{name}_cpu_{k}"] for k in ("hit", "depth", "rgb", "normals")}
     gpu = {k: sim[f"r_{name}_cuda_{k}"] for k in ("hit", "depth", "rgb", "normals")}
