@@ -507,7 +507,7 @@ class SmoothDistanceField:
         may depend on the tree searched and on the neighbouring rows of ``Q``, as each query
         starts its search from the previous row's closest primitive
         (:func:`smoothdist.exact_query.exact_tree_batch`). ``device="cuda"`` evaluates on the
-        GPU (:mod:`smoothdist.cuda`), searching :attr:`tree`.
+        GPU (:mod:`smoothdist.cuda`), searching the field's ``tree``.
         """
         Q = as_points(Q, "Q")
         if _check_device(device) == "cuda":
