@@ -428,7 +428,7 @@ class SmoothDistanceField:
 
     # ------------------------------------------------------------------ queries
     def smooth_distance(self, Q, *, alpha, beta=0.5, alpha_u=None, gradient="metric",
-                        method="bvh", return_stats=False, tol=_q.DEFAULT_TOL):
+                        method="bvh", return_stats=False, tol=_q.DEFAULT_TOL, device="cpu"):
         """Smooth distance ``d_hat`` (Eq. 3) and its gradient at query points.
 
         Parameters
@@ -455,6 +455,9 @@ class SmoothDistanceField:
             so far stay below ``tol`` times the exact part of the sum. With ``beta=0``,
             ``d_hat_0 - log(1 + tol) / alpha <= d_hat <= d_hat_0`` (error at most
             ``tol / alpha``; proof in :func:`smoothdist.query.smooth_distance_point_tol`).
+        device : {"cpu", "cuda"}
+            ``"cuda"``: evaluate on the GPU (:mod:`smoothdist.cuda`; needs the ``gpu`` extra
+            and a GPU, or numba's simulator), the same kernel code; ``method="bvh"`` only.
 
         Returns
         -------
@@ -473,6 +476,13 @@ class SmoothDistanceField:
             raise ValueError(f"method must be one of {METHODS}, got {method!r}")
         Q = as_points(Q, "Q")
         wgs = 1.0 / alpha if gradient == "exact" else 1.0 / (alpha * alpha)
+        if _check_device(device, method) == "cuda":
+            from smoothdist import cuda
+
+            d, g, nodes, leaves = cuda.smooth_distance(self.tree, Q, alpha, beta, S, wgs, tol,
+                                                       self._device_tree())
+            res = SmoothDistanceResult(d, g)
+            return (d, g, QueryStats(nodes, leaves)) if return_stats else res
         n = Q.shape[0]
         d = np.empty(n)
         g = np.empty((n, 3))
@@ -484,7 +494,7 @@ class SmoothDistanceField:
         res = SmoothDistanceResult(d, g)
         return (res.distance, res.gradient, QueryStats(nodes, leaves)) if return_stats else res
 
-    def exact_distance(self, Q, *, return_closest=False, return_stats=False):
+    def exact_distance(self, Q, *, return_closest=False, return_stats=False, device="cpu"):
         """Exact unsigned distance, unit gradient, and (optionally) the closest primitive.
 
         Returns ``(distance (q,), gradient (q, 3))``; with ``return_closest`` an
@@ -496,9 +506,16 @@ class SmoothDistanceField:
         vertex or an edge shared by several triangles), ``closest`` is one of them; which one
         may depend on the tree searched and on the neighbouring rows of ``Q``, as each query
         starts its search from the previous row's closest primitive
-        (:func:`smoothdist.exact_query.exact_tree_batch`).
+        (:func:`smoothdist.exact_query.exact_tree_batch`). ``device="cuda"`` evaluates on the
+        GPU (:mod:`smoothdist.cuda`), searching the field's ``tree``.
         """
         Q = as_points(Q, "Q")
+        if _check_device(device) == "cuda":
+            from smoothdist import cuda
+
+            d, g, prim, nodes, leaves = cuda.exact_distance(self.tree, Q, self._device_tree())
+            out = ExactDistanceResult(d, g, prim) if return_closest else SmoothDistanceResult(d, g)
+            return (*out, QueryStats(nodes, leaves)) if return_stats else out
         n = Q.shape[0]
         d = np.empty(n)
         g = np.empty((n, 3))
@@ -517,6 +534,14 @@ class SmoothDistanceField:
         out = ExactDistanceResult(d, g, prim) if return_closest else SmoothDistanceResult(d, g)
         return (*out, QueryStats(nodes, leaves)) if return_stats else out
 
+    def _device_tree(self):
+        """:attr:`tree` on the GPU (:func:`smoothdist.cuda.device_tree`), copied once."""
+        if "_cuda_tree" not in self.__dict__:
+            from smoothdist import cuda
+
+            self.__dict__["_cuda_tree"] = cuda.device_tree(self.tree)
+        return self.__dict__["_cuda_tree"]
+
     def kernel_args(self, alpha, beta=0.5, alpha_u=None, gradient="metric"):
         """Validated scalars for :func:`smoothdist.query.smooth_distance_point`.
 
@@ -532,6 +557,15 @@ class SmoothDistanceField:
     def __repr__(self):
         return (f"SmoothDistanceField({self.mesh!r}, {self.tree.lo.shape[0]} nodes, "
                 f"depth {self.tree.depth}, A={self.weight_bound:.4g})")
+
+
+def _check_device(device, method="bvh"):
+    """``device`` checked (``"cpu"`` or ``"cuda"``; the GPU has no brute-force method)."""
+    if device not in ("cpu", "cuda"):
+        raise ValueError(f"device must be one of ('cpu', 'cuda'), got {device!r}")
+    if device == "cuda" and method != "bvh":
+        raise ValueError(f"method {method!r} runs on the cpu only; device 'cuda' takes 'bvh'")
+    return device
 
 
 @numba.njit(**_q.NJIT_PARALLEL)

@@ -18,6 +18,7 @@ ROOT = Path(__file__).resolve().parents[1]
 TRACER = ("PIL", "trimesh")
 SIM = ("scipy", "imageio", "imageio_ffmpeg")
 STUDIES = ("matplotlib", "distributed", "dask", "pyvista", "vtk", "vtkmodules")
+GPU = ("numba_cuda", "cuda")
 
 PRELUDE = textwrap.dedent("""\
     import sys
@@ -48,6 +49,9 @@ def test_the_library_alone_needs_numpy_and_numba():
     assert {"tracer", "sim", "studies", "all", "docs", "test"} <= set(extras)
     # the README's command installs the test extra, which holds everything
     assert any("all" in d for d in extras["test"])
+    # the GPU path: numba-cuda, in the test extra too (its simulator runs the CUDA kernels)
+    assert [d.split(">")[0] for d in extras["gpu"]] == ["numba-cuda"]
+    assert any("gpu" in d for d in extras["test"])
 
 
 @pytest.mark.slow
@@ -67,9 +71,26 @@ def test_smoothdist_works_without_any_extra():
         bad = [k for k in sys.modules if k.split(".")[0] in BLOCKED]
         assert not bad, bad
         print("ok", float(d[0]) <= float(e[0]), m.num_primitives > 0, md > 0)
-    """, TRACER + SIM + STUDIES)
+    """, TRACER + SIM + STUDIES + GPU)
     assert p.returncode == 0, p.stderr
     assert p.stdout.split() == ["ok", "True", "True", "True"]
+
+
+def test_device_cuda_without_the_gpu_extra_says_what_to_install():
+    p = _run("""
+        import os
+        os.environ.pop("NUMBA_ENABLE_CUDASIM", None)
+        import numpy as np
+        import smoothdist as sd
+        from smoothdist.cuda import CudaUnavailable
+        f = sd.SmoothDistanceField(np.eye(3))
+        try:
+            f.smooth_distance(np.zeros((1, 3)), alpha=10.0, device="cuda")
+        except CudaUnavailable as exc:
+            print(exc)
+    """, GPU)
+    assert p.returncode == 0, p.stderr
+    assert p.stdout.strip() == "device 'cuda' needs numba-cuda: pip install 'smoothdist[gpu]'"
 
 
 def test_a_ply_file_without_trimesh_says_what_to_install():
@@ -90,7 +111,7 @@ def test_tracer_render_needs_only_the_tracer_extra(tmp_path):
         import runpy
         sys.argv = ["tracer"] + sys.argv[1:]
         runpy.run_module("tracer", run_name="__main__")
-    """, SIM + STUDIES, "render", "scenes/bunny_points.json", "--size", "16", "16",
+    """, SIM + STUDIES + GPU, "render", "scenes/bunny_points.json", "--size", "16", "16",
         "-o", str(out), "-q")
     assert p.returncode == 0, p.stderr
     assert out.stat().st_size > 0

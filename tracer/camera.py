@@ -24,6 +24,7 @@ with a symmetric pinhole camera (the view direction ``forward`` is hit by the sa
 gives the VTK window centre that reproduces this shift.
 """
 
+import math
 from numbers import Integral
 from typing import NamedTuple
 
@@ -242,7 +243,7 @@ def ray_direction(cam, row, col):
     rx = cam[3] + dx * cam[6] + dy * cam[9]
     ry = cam[4] + dx * cam[7] + dy * cam[10]
     rz = cam[5] + dx * cam[8] + dy * cam[11]
-    norm = np.sqrt(rx * rx + ry * ry + rz * rz)
+    norm = math.sqrt(rx * rx + ry * ry + rz * rz)
     return rx / norm, ry / norm, rz / norm
 
 

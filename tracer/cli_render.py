@@ -107,6 +107,9 @@ def add_arguments(p):
                    help="false-colour heat map of BVH leaves visited per pixel")
     p.add_argument("--stats", metavar="OUT.json", help="write the render statistics as JSON")
     p.add_argument("--threads", type=int, help="number of threads (default: all cores)")
+    p.add_argument("--device", choices=("cpu", "cuda"), default="cpu",
+                   help="trace on the CPU (default) or on an NVIDIA GPU (needs the gpu extra: "
+                        "pip install 'smoothdist[gpu]')")
     p.add_argument("--overwrite", action="store_true", help="replace existing output files")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
 
@@ -196,6 +199,13 @@ def run(args):
 
     source = input_kind(args.scene)
     check_options(args)
+    if args.device == "cuda":
+        from smoothdist.cuda import CudaUnavailable, cuda_module
+
+        try:
+            cuda_module()
+        except CudaUnavailable as exc:
+            raise CLIError(str(exc)) from None
     if source == "scene" and args.kind:
         raise CLIError("--kind applies to mesh files; a scene file sets bvh_type per object")
     if source == "scene" and args.up and not args.view:
@@ -233,7 +243,7 @@ def run(args):
         if args.background is not None:
             scene.background = tuple(args.background)
     bar = None if args.quiet else ProgressBar(f"render {name}")
-    result = render(scene, progress=bar)
+    result = render(scene, progress=bar, device=args.device)
     make_parents(outputs)
     written = [result.save(out, overwrite=args.overwrite)]
     if args.depth:

@@ -174,12 +174,12 @@ def render_mesh(mesh, F=None, *, kind=None, alpha="auto", alpha_u="auto", beta=0
                 size=(512, 512), view="front", camera=None, mode="smooth", offset=None,
                 eps=None, shading="lit", matcap="", progress=None, up="auto", samples=1,
                 adaptive=False, transparent=False, lighting=None, color=None,
-                background=(255, 255, 255), tol=DEFAULT_TOL, newton=None):
+                background=(255, 255, 255), tol=DEFAULT_TOL, newton=None, device="cpu"):
     """Sphere-trace the smooth-distance surface of ``mesh``; arrays back, nothing written.
 
     Parameters are those of :func:`mesh_scene` (the ``"lit"`` shading by default;
-    ``shading="normals"`` gives the paper's normal colours); ``progress`` as in
-    :func:`tracer.render.render`.
+    ``shading="normals"`` gives the paper's normal colours); ``progress`` and ``device``
+    (``"cpu"`` or ``"cuda"``) as in :func:`tracer.render.render`.
 
     Returns
     -------
@@ -205,7 +205,7 @@ def render_mesh(mesh, F=None, *, kind=None, alpha="auto", alpha_u="auto", beta=0
                        shading=shading, matcap=matcap, up=up, samples=samples,
                        adaptive=adaptive, transparent=transparent, lighting=lighting,
                        color=color, background=background, tol=tol, newton=newton)
-    return render(scene, progress=progress)
+    return render(scene, progress=progress, device=device)
 
 
 def describe_parameters(scene):

@@ -46,7 +46,7 @@ import numba
 import numpy as np
 from numba import prange
 from numba.core import types as nbtypes
-from numba.extending import intrinsic
+from numba.extending import intrinsic, overload
 
 from smoothdist.closest_point import box_distance2
 from smoothdist.kernels import (NJIT, NJIT_PARALLEL, exact_distance_point, logsumexp_accumulate,
@@ -115,6 +115,21 @@ TILE = 4
 STRIDE = 7919
 
 
+def _root_of(roots):
+    """The root node of an int ``roots`` (the lean path of :func:`scene_distance`)."""
+    raise NotImplementedError("_root_of is called from numba kernels only")
+
+
+@overload(_root_of)
+def _root_of_impl(roots):
+    # numba-cuda does not prune the ``isinstance(roots, int)`` branch of scene_distance at
+    # compile time (the CPU does), so the branch is typed with the (k,) array ``roots`` of the
+    # general path too (tracer/gpu_render.py): it must compile there, and is never taken
+    if isinstance(roots, nbtypes.Integer):
+        return lambda roots: roots
+    return lambda roots: roots[0]
+
+
 @numba.njit(**NJIT)
 def scene_distance(tree, roots, params, mode, tol, x, y, z, stack, dstack, slack=0.0):
     """Scene distance and gradient at ``(x, y, z)``.
@@ -136,7 +151,7 @@ def scene_distance(tree, roots, params, mode, tol, x, y, z, stack, dstack, slack
     if isinstance(roots, int):
         d, gx, gy, gz, nodes, leaves = smooth_distance_point(
             tree, x, y, z, params[0, P_ALPHA], params[0, P_BETA], params[0, P_S],
-            params[0, P_WGS], stack, dstack, roots)
+            params[0, P_WGS], stack, dstack, _root_of(roots))
         return d - params[0, P_OFFSET], gx, gy, gz, nodes, leaves, 0
     nobj = roots.size
     if params.shape[1] >= P_COLUMNS_POSED:

@@ -241,7 +241,7 @@ def distance_at_camera(scene, arrays=None):
 
 
 def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None, omega=None,
-           cone=None, newton=None, samples=None, adaptive=None):
+           cone=None, newton=None, samples=None, adaptive=None, device="cpu"):
     """Trace and shade ``scene``.
 
     Parameters
@@ -277,12 +277,22 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
     adaptive : bool, optional
         Give the extra samples only to pixels that disagree with a neighbour (default: the
         scene's ``adaptive``).
+    device : {"cpu", "cuda"}
+        ``"cuda"``: trace on the GPU (:mod:`tracer.gpu_render`; the ``gpu`` extra; one sample
+        per pixel, not the ``"lit"`` shading; ``cone`` and ``band_rows`` do not apply).
 
     Raises
     ------
     RenderError
         When the camera is inside the surface (distance <= eps at the camera).
     """
+    from smoothdist.cuda import check_device
+
+    if check_device(device) == "cuda":
+        from tracer.gpu_render import render_cuda
+
+        return render_cuda(scene, progress=progress, transforms=transforms, relax=relax,
+                           omega=omega, newton=newton, samples=samples, adaptive=adaptive)
     for name, value in (("newton", newton), ("relax", relax)):
         if value is not None and not (isinstance(value, (int, float, np.number))
                                       and not isinstance(value, bool)

@@ -1,0 +1,182 @@
+"""GPU benchmark: the CUDA path against the CPU path (all cores) on the same machine.
+
+Measures, on an NVIDIA GPU through numba-cuda (``pip install "smoothdist[gpu]"``):
+
+* the paper's bunny (``scenes/bunny_{points,edges,triangles}.json``: alpha 200, alpha_U 1200,
+  beta 0.5) sphere-traced at ``--size`` (default 1920 x 1080) with the ``"normals"`` shading,
+  at the authors' hit threshold eps = 1e-3 (absolute) unless ``--eps`` is given; the GPU
+  time is the best of ``--repeat`` launches of the render kernel with the scene already on
+  the device (kernel plus copying the image back), the CPU time the best ``tracer.render``;
+* the 1e6-point grid of ``benchmarks/bench_grid.py`` (``--grid 100``: the voxel centres of
+  the unit cube, the bunny normalised to a 0.5 diagonal, alpha = 1 / shortest edge, beta 0.5)
+  for the smooth distance of points, edges and triangles; GPU time: kernel plus copies;
+* image agreement: pixels whose hit differs, the largest depth difference over the common
+  hits (as a fraction of the scene diagonal; two marches that stop within eps of the
+  surface may differ by about ``2 eps / cos``, 8e-3 of the bunny's diagonal at eps 1e-3) and
+  the largest colour difference; for the grid the largest distance difference.
+
+It prints a markdown table (the card's name in its title) and writes the results as JSON
+(``--json``, default ``renders/gpu/bench_gpu.json``). Targets (issue 34): each 1080p frame
+<= 40 ms, the grid <= 10 ms.
+
+Without a usable GPU (no numba-cuda, no card, or numba's CUDA simulator switched on) it
+refuses: one line on stderr, exit status 2, nothing written.
+
+Usage (from the repository root)::
+
+    python benchmarks/bench_gpu.py                        # 1920 x 1080, grid 100
+    python benchmarks/bench_gpu.py --size 640 360 --grid 50 --repeat 3 --json out.json
+"""
+
+import argparse
+import json
+import os
+import platform
+import sys
+import time
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[1]
+if str(REPO) not in sys.path:
+    sys.path.insert(0, str(REPO))
+
+import numpy as np  # noqa: E402
+
+KINDS = ("points", "edges", "triangles")
+DEFAULT_JSON = REPO / "renders" / "gpu" / "bench_gpu.json"
+
+
+def gpu_or_exit():
+    """``numba.cuda`` on a real GPU, or exit 2 with one line."""
+    from smoothdist import cuda as sdcuda
+
+    if sdcuda.simulated():
+        print("bench_gpu: NUMBA_ENABLE_CUDASIM is set: the simulator is not a GPU; unset it",
+              file=sys.stderr)
+        sys.exit(2)
+    try:
+        return sdcuda.cuda_module()
+    except sdcuda.CudaUnavailable as exc:
+        print(f"bench_gpu: {exc}", file=sys.stderr)
+        sys.exit(2)
+
+
+def best(fn, repeat):
+    """``(best seconds, last result)`` of ``repeat`` calls."""
+    t, out = np.inf, None
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        out = fn()
+        t = min(t, time.perf_counter() - t0)
+    return t, out
+
+
+def bench_render(kind, size, eps, repeat):
+    from tracer import gpu_render
+    from tracer.render import render
+    from tracer.scene import load_scene
+
+    W, H = size
+    over = {"width": W, "height": H, "shading": "normals"}
+    if eps is not None:
+        over["eps"] = eps
+    scene = load_scene(REPO / "scenes" / f"bunny_{kind}.json", over)
+    cpu_s, cpu = best(lambda: render(scene), repeat)
+    # warm-up: compiles the kernel (or loads it from numba-cuda's cache)
+    gpu = render(scene, device="cuda")
+    camera, args, shape = gpu_render.prepare(scene)
+
+    def frame():
+        out = gpu_render.launch(args, shape)
+        return out[7].copy_to_host()         # the image; waits for the kernel
+
+    gpu_s, _ = best(frame, repeat)
+    both = cpu.hit & gpu.hit
+    depth = (float(np.abs(cpu.depth[both].astype(float) - gpu.depth[both]).max())
+             / scene.diagonal if both.any() else 0.0)
+    return dict(what=f"bunny {kind}", size=f"{W}x{H}", eps=scene.eps, diag=scene.diagonal,
+                primitives=scene.objects[0].field.num_primitives, cpu_s=cpu_s, gpu_s=gpu_s,
+                speedup=cpu_s / gpu_s, hit_differs=int((cpu.hit != gpu.hit).sum()),
+                depth_max_over_diag=depth,
+                rgb_max=int(np.abs(cpu.rgb.astype(int) - gpu.rgb)[both].max(initial=0)),
+                mean_steps_cpu=float(cpu.steps.mean()), mean_steps_gpu=float(gpu.steps.mean()))
+
+
+def bench_grid(kind, n, repeat):
+    from benchmarks.bench_grid import grid, normalise
+    from smoothdist import DataMesh, SmoothDistanceField
+    from smoothdist import cuda as sdcuda
+
+    source = DataMesh.load(REPO / "scenes" / "data" / "bunny.off")
+    mesh = normalise(source.as_kind(kind))
+    field = SmoothDistanceField(mesh)
+    e = mesh.min_edge_length()
+    alpha = 1.0 / e if e is not None else 1.0 / normalise(source).min_edge_length()
+    Q = grid(n)
+    kw = dict(alpha=alpha, beta=0.5)
+    field.smooth_distance(Q[:64], **kw)
+    field.smooth_distance(Q[:64], device="cuda", **kw)
+    cpu_s, cpu = best(lambda: field.smooth_distance(Q, **kw), repeat)
+    alpha, beta, S, wgs = field.kernel_args(alpha, 0.5)
+    dtree = field._device_tree()
+    gpu_s, gpu = best(lambda: sdcuda.smooth_distance(field.tree, Q, alpha, beta, S, wgs, 0.0,
+                                                     dtree), repeat)
+    return dict(what=f"grid {kind}", size=f"{n}^3", eps=None, primitives=field.num_primitives,
+                cpu_s=cpu_s, gpu_s=gpu_s, speedup=cpu_s / gpu_s, hit_differs=None,
+                depth_max_over_diag=None, rgb_max=None,
+                distance_max_diff=float(np.abs(cpu.distance - gpu[0]).max()))
+
+
+def markdown(card, rows, threads):
+    out = [f"GPU: {card}; CPU: {platform.processor() or platform.machine()}, {threads} threads",
+           "",
+           "| case | size | primitives | CPU ms | GPU ms | speed-up | hits differ "
+           "| depth / diag | colour | distance |",
+           "|---|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        def f(v, fmt):
+            return "" if v is None else format(v, fmt)
+        out.append(f"| {r['what']} | {r['size']} | {r['primitives']} | {1e3 * r['cpu_s']:.1f} "
+                   f"| {1e3 * r['gpu_s']:.2f} | {r['speedup']:.1f}x | {f(r['hit_differs'], 'd')} "
+                   f"| {f(r['depth_max_over_diag'], '.2g')} | {f(r['rgb_max'], 'd')} "
+                   f"| {f(r.get('distance_max_diff'), '.2g')} |")
+    return "\n".join(out)
+
+
+def main(argv=None):
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--size", nargs=2, type=int, default=(1920, 1080), metavar=("W", "H"))
+    p.add_argument("--eps", type=float, default=1e-3,
+                   help="hit threshold, absolute (default 1e-3, the authors'; 0: the scene's)")
+    p.add_argument("--grid", type=int, default=100, help="grid side N (N^3 queries)")
+    p.add_argument("--repeat", type=int, default=5)
+    p.add_argument("--json", default=str(DEFAULT_JSON))
+    args = p.parse_args(argv)
+    cuda = gpu_or_exit()
+    import numba
+
+    card = cuda.get_current_device().name
+    card = card.decode() if isinstance(card, bytes) else str(card)
+    rows = []
+    for kind in KINDS:
+        rows.append(bench_render(kind, tuple(args.size), args.eps or None, args.repeat))
+        print(rows[-1], flush=True)
+    for kind in KINDS:
+        rows.append(bench_grid(kind, args.grid, args.repeat))
+        print(rows[-1], flush=True)
+    table = markdown(card, rows, numba.get_num_threads())
+    print(table)
+    out = Path(args.json)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = out.with_suffix(".tmp")
+    tmp.write_text(json.dumps({"card": card, "threads": numba.get_num_threads(),
+                               "cpu": platform.processor() or platform.machine(),
+                               "load": os.getloadavg(), "rows": rows, "table": table},
+                              indent=2))
+    os.replace(tmp, out)
+    print(f"wrote {out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,92 @@
+"""Compile every CUDA kernel of the GPU path to PTX, without a GPU.
+
+numba's CUDA simulator (``tests/test_cuda_sim.py``) runs the kernels' launch code but calls the
+shared ``numba.njit`` functions compiled for the CPU, so it cannot show that numba-cuda
+compiles them for a GPU. This script does: it types and lowers ``smoothdist.cuda``'s query
+kernels and ``tracer.gpu_render``'s render kernel for a compute capability (default 9.0,
+H100 / H200) through NVIDIA's NVVM, as the first launch on a card would, and prints the size
+of the PTX and of each thread's local memory (the traversal stacks).
+
+Needs numba-cuda and the NVVM and NVRTC libraries, which pip installs without a GPU or a
+driver::
+
+    pip install "smoothdist[gpu]" nvidia-nvvm nvidia-cuda-nvrtc
+    LD_LIBRARY_PATH=<site-packages>/nvidia/cu13/lib python benchmarks/check_cuda_ptx.py
+
+Without a device, numba-cuda cannot ask one for its compute capability when it compiles a
+device function; the script answers for it (``--cc``). Exit status 0 when every kernel
+compiles, 1 otherwise (the error's first line printed).
+"""
+
+import argparse
+import re
+import sys
+import time
+import types
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[1]
+if str(REPO) not in sys.path:
+    sys.path.insert(0, str(REPO))
+
+
+def main(argv=None):
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--cc", default="9.0", help="compute capability (default 9.0)")
+    p.add_argument("--scene", default=str(REPO / "scenes" / "bunny_triangles.json"))
+    args = p.parse_args(argv)
+    cc = tuple(int(v) for v in args.cc.split("."))
+
+    import numba
+    import numpy as np
+
+    from smoothdist import cuda as sdcuda
+
+    sdcuda._numpy_compat()
+    from numba import cuda
+    import numba.cuda.dispatcher as dispatcher
+
+    # device functions are compiled for the current device's compute capability: answer it
+    dispatcher.get_current_device = lambda: types.SimpleNamespace(compute_capability=cc)
+    # the kernels' host-side preparation only needs the argument types: host arrays do
+    sdcuda.simulated = lambda: True
+    sdcuda.cuda_module = lambda: cuda
+    sdcuda.cuda = cuda
+    from tracer import gpu_render
+    from tracer.scene import load_scene
+
+    gpu_render.cuda = cuda
+    scene = load_scene(args.scene, {"width": 8, "height": 8})
+    tree = scene.objects[0].field.tree
+    ty = numba.typeof
+    f64 = numba.float64
+    Q, d, g = np.zeros((4, 3)), np.zeros(4), np.zeros((4, 3))
+    n = np.zeros(4, np.int64)
+    camera, rargs, (H, W) = gpu_render.prepare(scene)
+    outs = (np.zeros((H, W), np.bool_), np.zeros((H, W)), np.zeros((H, W, 3)),
+            np.zeros((H, W), np.int64), np.zeros((H, W), np.int64), np.zeros((H, W), np.int64),
+            np.zeros((H, W), np.int32), np.zeros((H, W, 3), np.uint8))
+    jobs = (("smoothdist.cuda smooth", sdcuda._smooth_kernel,
+             (ty(tree), ty(Q), f64, f64, f64, f64, f64, ty(d), ty(g), ty(n), ty(n))),
+            ("smoothdist.cuda exact", sdcuda._exact_kernel,
+             (ty(tree), ty(Q), ty(d), ty(g), ty(n), ty(n), ty(n))),
+            ("tracer.gpu_render render", gpu_render._render_kernel,
+             tuple(ty(a) for a in rargs) + tuple(ty(o) for o in outs)))
+    status = 0
+    for name, fn, sig in jobs:
+        t0 = time.perf_counter()
+        try:
+            ptx, _ = cuda.compile_ptx(fn, sig, cc=cc)
+        except Exception as exc:  # report and go on with the others
+            print(f"{name}: FAILED: {type(exc).__name__}: {str(exc).strip().splitlines()[0]}")
+            status = 1
+            continue
+        local = re.findall(r"__local_depot\d+\[(\d+)\]", ptx)
+        print(f"{name}: ok, sm_{cc[0]}{cc[1]}, {len(ptx) / 1e6:.2f} MB of PTX, "
+              f"{max(map(int, local), default=0)} bytes of local memory per thread, "
+              f"{time.perf_counter() - t0:.0f} s")
+    return status
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,200 @@
+"""Sphere tracing on an NVIDIA GPU: ``tracer.render(scene, device="cuda")``.
+
+One GPU thread marches one pixel's ray with :func:`tracer.march.march_ray`, the CPU's own
+kernel (numba-cuda compiles it, the scene distance and the smoothdist kernels below it as CUDA
+device functions from the same Python source; see :mod:`smoothdist.cuda`), with a fixed-size
+local traversal stack, and colours the pixel by its normal (:func:`normal_colour`, the
+``"normals"`` shading of :func:`tracer.shading.shade_normals`). The ``"matcap"`` and
+``"headlight"`` shadings are applied on the host to the normals that come back.
+
+What differs from the CPU path: no cone pass (the CPU's tiles of ``TILE x TILE`` rays share one
+conservative start and end depth; a GPU thread has one ray), so rays start at the scene box;
+same hit test, steps, Newton steps and bisection otherwise. Hits agree with the CPU's up to a
+grazing pixel, depths within ``eps``-sized differences (``tests/test_cuda_sim.py``). One sample
+per pixel; the ``"lit"`` shading, anti-aliasing and transparent backgrounds are CPU only.
+"""
+
+import math
+import time
+
+import numba
+import numpy as np
+
+from smoothdist import cuda as sdcuda
+from smoothdist.kernels import NJIT
+from tracer import march
+from tracer.camera import ray_direction
+
+__all__ = ["render_cuda", "normal_colour", "BLOCK"]
+
+#: entries of each thread's traversal stack (a constant of this module: a local array's size
+#: must be a compile-time constant)
+STACK = sdcuda.STACK
+#: threads per block, (columns, rows): 128 threads, neighbouring rays in one warp
+BLOCK = (16, 8)
+
+#: ``numba.cuda`` once the kernel exists (a module global: see ``smoothdist.cuda.cuda``)
+cuda = None
+_KERNELS = {}
+
+
+@numba.njit(**NJIT)
+def _channel(v):
+    """``127 v + 128`` clipped to 0..255 and truncated, as :func:`tracer.shading.shade_normals`."""
+    x = 127.0 * v + 128.0
+    if x < 0.0:
+        x = 0.0
+    elif x > 255.0:
+        x = 255.0
+    return int(x)
+
+
+@numba.njit(**NJIT)
+def normal_colour(gx, gy, gz, cam):
+    """The ``"normals"`` colour ``(r, g, b)`` of a hit with distance gradient ``g``: the unit
+    gradient in the camera frame ``(g . horizontal, g . vertical, -g . forward)``
+    (:func:`tracer.shading.view_normals`), ``127 n + 128`` per channel, truncated; a zero or
+    non-finite gradient gives the zero normal."""
+    n = math.sqrt(gx * gx + gy * gy + gz * gz)
+    ux = 0.0
+    uy = 0.0
+    uz = 0.0
+    if n > 0.0 and n < np.inf:
+        ux = gx / n
+        uy = gy / n
+        uz = gz / n
+    vx = ux * cam[6] + uy * cam[7] + uz * cam[8]
+    vy = ux * cam[9] + uy * cam[10] + uz * cam[11]
+    vz = -(ux * cam[3] + uy * cam[4] + uz * cam[5])
+    return _channel(vx), _channel(vy), _channel(vz)
+
+
+def _render_kernel(data, mode, tol, eps, max_steps, relax, omega, newton, hit, tbuf, grad,
+                   steps, leaves, bisect, objs, rgb):
+    # ``data = (tree, roots, params, cam, lo, hi, bg)``, one tuple: the simulator hands
+    # tuples to the kernel as they are (and top-level arrays as its own wrappers, which the
+    # CPU-compiled functions it calls cannot take)
+    tree, roots, params, cam, lo, hi, bg = data
+    c, r = cuda.grid(2)
+    if r < tbuf.shape[0] and c < tbuf.shape[1]:
+        stack = cuda.local.array(STACK, numba.int64)
+        dstack = cuda.local.array(STACK, numba.float64)
+        dx, dy, dz = ray_direction(cam, r, c)
+        h, t, gx, gy, gz, st, lv, bs, ob = march.march_ray(
+            tree, roots, params, mode, tol, cam[0], cam[1], cam[2], dx, dy, dz, lo, hi, eps,
+            max_steps, stack, dstack, relax, omega, 0.0, newton, np.inf, march.NEWTON_COS, 0.0,
+            0.0)
+        hit[r, c] = h == 1
+        tbuf[r, c] = t
+        grad[r, c, 0] = gx
+        grad[r, c, 1] = gy
+        grad[r, c, 2] = gz
+        steps[r, c] = st
+        leaves[r, c] = lv
+        bisect[r, c] = bs
+        objs[r, c] = ob
+        if h == 1:
+            cr, cg, cb = normal_colour(gx, gy, gz, cam)
+        else:
+            cr = bg[0]
+            cg = bg[1]
+            cb = bg[2]
+        rgb[r, c, 0] = cr
+        rgb[r, c, 1] = cg
+        rgb[r, c, 2] = cb
+
+
+def kernel():
+    """The render kernel as a CUDA kernel (compiled at its first launch)."""
+    global cuda
+    if not _KERNELS:
+        cuda = sdcuda.cuda_module()
+        _KERNELS["render"] = cuda.jit(_render_kernel, cache=True)
+    return _KERNELS["render"]
+
+
+def check_scene(scene, samples):
+    """A one-line ``ValueError`` for what the GPU path does not render."""
+    if samples != 1 or scene.shading == "lit" or scene.transparent:
+        raise ValueError("device 'cuda' renders one sample per pixel with the normals, matcap "
+                         f"or headlight shading (this scene: shading {scene.shading!r}, "
+                         f"{samples} sample(s)"
+                         f"{', transparent' if scene.transparent else ''}); use device 'cpu'")
+
+
+def prepare(scene, transforms=None, relax=None, omega=None, newton=None):
+    """Everything a launch needs, on the device: ``(camera, args, shape)`` with ``args`` the
+    kernel's leading arguments (up to ``newton``) and ``shape = (H, W)``. Checks the camera
+    as ``render`` does."""
+    from tracer.render import RenderError, camera_of, distance_at_camera, scene_arrays
+
+    cu = sdcuda.cuda_module()
+    kernel()
+    camera = camera_of(scene)
+    arrays = scene_arrays(scene, transforms)
+    tree, roots, params, mode, lo, hi, depth_max, tol = arrays
+    sdcuda.check_depth(int(depth_max))
+    d0 = distance_at_camera(scene, arrays)
+    if not d0 > scene.eps:
+        raise RenderError(f"the camera at {np.round(scene.camera_origin, 6).tolist()} is inside "
+                          f"the surface (distance there {d0:.4g} <= eps {scene.eps:.3g}); move "
+                          "camera.origin outside or lower alpha's blur")
+    on = (lambda a: a) if sdcuda.simulated() else cu.to_device
+    bg = tuple(int(v) for v in scene.background)
+    # roots as the (k,) array: the general path of tracer.march.scene_distance (the same values
+    # as the lean one that tracer.render.kernel_roots picks for the CPU with an int root)
+    data = (sdcuda.device_tree(tree), on(np.ascontiguousarray(roots, np.int64)), on(params),
+            on(camera.as_array()), on(np.asarray(lo, np.float64)),
+            on(np.asarray(hi, np.float64)), bg)
+    args = (data, int(mode), float(tol), float(scene.eps), int(scene.max_steps),
+            march.RELAX if relax is None else float(relax),
+            march.OMEGA if omega is None else max(1.0, float(omega)),
+            march.newton_distance(scene.eps, lo, hi,
+                                  max(0.0, float(scene.newton if newton is None else newton))))
+    return camera, args, (scene.height, scene.width)
+
+
+def launch(args, shape):
+    """Trace one frame on the device; returns the device output arrays ``(hit, tbuf, grad,
+    steps, leaves, bisect, objs, rgb)`` (the launch is asynchronous)."""
+    H, W = shape
+    out = (cuda.device_array((H, W), dtype=np.bool_), cuda.device_array((H, W)),
+           cuda.device_array((H, W, 3)), cuda.device_array((H, W), dtype=np.int64),
+           cuda.device_array((H, W), dtype=np.int64), cuda.device_array((H, W), dtype=np.int64),
+           cuda.device_array((H, W), dtype=np.int32),
+           cuda.device_array((H, W, 3), dtype=np.uint8))
+    grid = ((W + BLOCK[0] - 1) // BLOCK[0], (H + BLOCK[1] - 1) // BLOCK[1])
+    kernel()[grid, BLOCK](*args, *out)
+    return out
+
+
+def render_cuda(scene, *, progress=None, transforms=None, relax=None, omega=None, newton=None,
+                samples=None, adaptive=None):
+    """:func:`tracer.render.render` on the GPU (its arguments; ``cone`` and ``band_rows`` do
+    not apply). Returns a :class:`tracer.render.RenderResult`; ``seconds`` is the time of
+    the launch and the copies back."""
+    from tracer.render import RenderResult, _progress_callback, _samples, shade
+
+    samples = _samples(scene.samples if samples is None else samples)
+    check_scene(scene, samples)
+    for name, value in (("newton", newton), ("relax", relax)):
+        if value is not None and not (isinstance(value, (int, float, np.number))
+                                      and not isinstance(value, bool)
+                                      and math.isfinite(value) and value >= 0):
+            raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
+    progress = _progress_callback(progress, scene)
+    camera, args, (H, W) = prepare(scene, transforms, relax, omega, newton)
+    t0 = time.perf_counter()
+    out = launch(args, (H, W))
+    hit, tbuf, grad, steps, leaves, bis, objs, rgb = (a.copy_to_host() for a in out)
+    seconds = time.perf_counter() - t0
+    if progress is not None:
+        progress(H * W, H * W, seconds)
+    norm = np.linalg.norm(grad, axis=2, keepdims=True)
+    normals = np.where(norm > 0, grad / np.where(norm > 0, norm, 1.0), 0.0)
+    if scene.shading != "normals":
+        rgb = shade(scene, camera, normals, hit)
+    return RenderResult(rgb=rgb, hit=hit, depth=tbuf.astype(np.float32), normals=normals,
+                        steps=steps, leaves=leaves, bisections=bis, seconds=seconds,
+                        camera=camera, scene=scene, alpha=hit.astype(np.float32),
+                        samples=np.ones((H, W), np.int32), aovs={"rays": H * W})
