@@ -114,10 +114,12 @@ def test_threaded_tiles_equal_the_prange_kernel(name):
     assert trace(scene, threads=2, band=8) == ref, "bands of 8 rows"
 
 
-def test_chunk_size_does_not_change_the_image(monkeypatch):
+@pytest.mark.parametrize("per_thread", [1, 3, 10 ** 9])
+def test_chunk_size_does_not_change_the_image(monkeypatch, per_thread):
+    # one chunk per thread, a few, and chunks of one tile
     scene = load_scene(SCENES / "bunny_edges.json", SIZE)
     ref = trace(scene, kernel="rows")
-    monkeypatch.setattr(render_mod, "CHUNK_TILES", 1)
+    monkeypatch.setattr(render_mod, "CHUNKS_PER_THREAD", per_thread)
     assert trace(scene, threads=2) == ref
 
 
