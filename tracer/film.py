@@ -38,6 +38,7 @@ from smoothdist.schedule import parallel_tasks
 from tracer import lighting as _lighting
 from tracer import march
 from tracer.camera import box_corners, primary_rays
+from tracer.render import run_tasks
 from tracer.shading import (load_matcap, shade_headlight, shade_matcap, shade_normals,
                             view_normals)
 
@@ -178,13 +179,15 @@ class _Shader:
         if self.ground is not None:     # shadow rays may start on the ground, below the box
             lo, hi = _box_with_ground(lo, hi, self.up, self.ground)
         work = np.zeros((n, 2), dtype=np.int64)
-        _lighting.light_points(tree, roots, params, mode, tol, np.ascontiguousarray(P),
-                               np.ascontiguousarray(N), self.key, lo, hi, eps, depth_max,
-                               1.0 / self.light.penumbra,
-                               self.light.ao_distance * self.diag / _lighting.AO_SAMPLES,
-                               do_shadow, do_ao,
-                               self.slack, max(2.0 * eps, _lighting.SHADOW_START * self.diag),
-                               shadow, ao, work, parallel_tasks(n))
+        P = np.ascontiguousarray(P)
+        N = np.ascontiguousarray(N)
+        k = 1.0 / self.light.penumbra
+        delta = self.light.ao_distance * self.diag / _lighting.AO_SAMPLES
+        t_min = max(2.0 * eps, _lighting.SHADOW_START * self.diag)
+        ntasks = parallel_tasks(n)
+        run_tasks(lambda a, b: _lighting.light_tasks(
+            tree, roots, params, mode, tol, P, N, self.key, lo, hi, eps, depth_max, k, delta,
+            do_shadow, do_ao, self.slack, t_min, shadow, ao, work, ntasks, a, b), ntasks)
         self.queries += int(work[:, 0].sum())
         self.leaves += int(work[:, 1].sum())
         return shadow, ao
@@ -475,10 +478,12 @@ def _trace(kargs, options, pixels, W, offsets, bounds=None):
         bounds = (np.full(m, np.nan), np.full(m, np.nan))
     if m and K:
         rows, cols = np.divmod(pixels.astype(np.int64), W)
-        march.trace_samples(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, rows,
-                            cols, np.ascontiguousarray(offsets, dtype=np.float64), depth_max,
-                            hit, t, grad, steps, objs, bounds[0], bounds[1], relax, omega,
-                            cone, newton, EPS_PX, SAMPLE_NEWTON_COS, parallel_tasks(m))
+        offsets = np.ascontiguousarray(offsets, dtype=np.float64)
+        ntasks = parallel_tasks(m)
+        run_tasks(lambda a, b: march.sample_tasks(
+            tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, rows, cols, offsets,
+            depth_max, hit, t, grad, steps, objs, bounds[0], bounds[1], relax, omega, cone,
+            newton, EPS_PX, SAMPLE_NEWTON_COS, ntasks, a, b), ntasks)
     return hit.ravel(), t.ravel(), grad.reshape(-1, 3), steps.ravel(), objs.ravel()
 
 

@@ -240,6 +240,14 @@ def distance_at_camera(scene, arrays=None):
                                    tol, float(o[0]), float(o[1]), float(o[2]), depth_max))
 
 
+def _pixel_buffers(H, W):
+    """The tracing outputs ``(hit, tbuf, grad, steps, leaves, bisect, objs)`` of an ``H x W``
+    image, cleared (see :func:`trace_tiles`)."""
+    return (np.zeros((H, W), dtype=np.bool_), np.full((H, W), np.nan), np.zeros((H, W, 3)),
+            np.zeros((H, W), dtype=np.int64), np.zeros((H, W), dtype=np.int64),
+            np.zeros((H, W), dtype=np.int64), np.full((H, W), -1, dtype=np.int32))
+
+
 def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None, omega=None,
            cone=None, newton=None, samples=None, adaptive=None):
     """Trace and shade ``scene``.
@@ -298,19 +306,13 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
                           f"the surface (distance there {d0:.4g} <= eps {scene.eps:.3g}); move "
                           "camera.origin outside or lower alpha's blur")
     H, W = scene.height, scene.width
-    hit = np.zeros((H, W), dtype=np.bool_)
-    tbuf = np.full((H, W), np.nan)
-    grad = np.zeros((H, W, 3))
-    steps = np.zeros((H, W), dtype=np.int64)
-    leaves = np.zeros((H, W), dtype=np.int64)
-    bis = np.zeros((H, W), dtype=np.int64)
-    objs = np.full((H, W), -1, dtype=np.int32)
+    hit, tbuf, grad, steps, leaves, bis, objs = _pixel_buffers(H, W)
     cam = camera.as_array()
     args = (tree, kernel_roots(roots, params, mode, tol), params, mode, tol, cam, lo, hi,
             float(scene.eps), int(scene.max_steps))
-    options = (march.RELAX if relax is None else float(relax),
-               march.OMEGA if omega is None else max(1.0, float(omega)),
-               march.CONE if cone is None else bool(cone),
+    options = (float(march.RELAX if relax is None else relax),
+               float(march.OMEGA if omega is None else max(1.0, float(omega))),
+               bool(march.CONE if cone is None else cone),
                march.newton_distance(scene.eps, lo, hi,
                                      max(0.0, float(scene.newton if newton is None else newton))))
     band = band_rows or H
@@ -463,16 +465,26 @@ def in_bands(fn, rows, threads=None):
     """Call ``fn(r0, r1)`` for bands of rows covering ``0 <= r < rows``, one band per thread
     (default :func:`render_threads`), from Python threads: for per-pixel numpy work, whose
     array loops release the GIL. Bands of at least 16 rows; exceptions are re-raised here."""
-    threads = max(1, min(threads or render_threads(), rows // 16))
+    bands = max(1, min(threads or render_threads(), rows // 16))
+    run_tasks(lambda a, b: fn(rows * a // bands, rows * b // bands), bands, bands)
+
+
+def run_tasks(fn, ntasks, threads=None):
+    """Call ``fn(task0, task1)`` over tasks ``0 <= task < ntasks``, split into contiguous
+    groups, one per thread (at most :func:`render_threads`), from Python threads: for the
+    serial, GIL-free task kernels (``tracer.march.sample_tasks``,
+    ``tracer.lighting.light_tasks``), whose tasks are independent, so the result does not
+    depend on the split. Exceptions are re-raised here."""
+    threads = max(1, min(threads or render_threads(), ntasks))
     if threads == 1:
-        fn(0, rows)
+        fn(0, ntasks)
         return
-    edges = [rows * i // threads for i in range(threads + 1)]
+    edges = [ntasks * i // threads for i in range(threads + 1)]
     errors = []
 
-    def work(r0, r1):
+    def work(a, b):
         try:
-            fn(r0, r1)
+            fn(a, b)
         except BaseException as exc:  # handed to the calling thread
             errors.append(exc)
 
