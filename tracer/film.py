@@ -114,7 +114,7 @@ class _Shader:
         self.scene = scene
         self.camera = camera
         self.arrays = arrays
-        self.kargs = kargs                  # tree, roots (kernel form), params, mode, tol, ...
+        self.kargs = kargs                  # tracer.render.RayArgs: the render's own queries
         self.lit = scene.shading == "lit"
         self.transparent = bool(getattr(scene, "transparent", False))
         self.nobj = len(scene.objects)
@@ -173,7 +173,8 @@ class _Shader:
         ao = np.ones(n)
         if n == 0 or not (do_shadow or do_ao):
             return shadow, ao
-        tree, roots, params, mode, tol = self.kargs[:5]   # the render's own queries
+        k = self.kargs                      # the render's own queries
+        tree, roots, params, mode, tol = k.tree, k.roots, k.params, k.mode, k.tol
         lo, hi, depth_max = self.arrays.lo, self.arrays.hi, self.arrays.depth_max
         eps = float(self.scene.eps)
         if self.ground is not None:     # shadow rays may start on the ground, below the box
@@ -461,11 +462,11 @@ def _neighbour_flags(colour, record, shape):
     return flags.ravel(), edges.ravel()
 
 
-def _trace(kargs, options, pixels, W, offsets, bounds=None):
+def _trace(kargs, depth_max, options, pixels, W, offsets, bounds=None):
     """The samples ``offsets (K, 2)`` of the pixels ``pixels (m,)`` (flat indices), flattened
     pixel-major: ``hit, t, grad, steps, objs`` of length ``m K``. ``bounds = (t_lo, t_hi)``, each
     ``(m,)``: the pixels' cone bounds, read where finite, written where not (NaN)."""
-    tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, depth_max = kargs
+    tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps = kargs
     relax, omega, cone, newton = options
     omega = max(omega, SAMPLE_OMEGA)
     m, K = pixels.size, len(offsets)
@@ -491,9 +492,9 @@ def form_image(scene, camera, arrays, kargs, options, centre, samples=1, adaptiv
     """Shade the centre samples, add ``samples - 1`` more per pixel (all pixels, or the
     adaptive selection), and average.
 
-    ``kargs = (tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, depth_max)`` in the
-    march kernels' form; ``centre = (hit (H, W), t (H, W), grad (H, W, 3), objs (H, W))``
-    (``objs``: the object each hit shows, as the march found it). Returns
+    ``kargs``: :class:`tracer.render.RayArgs`, the march kernels' leading arguments;
+    ``options``: :class:`tracer.render.TraceOptions`; ``centre = (hit (H, W), t (H, W), grad
+    (H, W, 3), objs (H, W))`` (``objs``: the object each hit shows, as the march found it). Returns
     ``(rgb (H, W, 3) uint8, alpha (H, W) float32, spp (H, W) int32, info dict)``; ``info``
     holds the centre samples' ``shadow``, ``ao``, ``object`` and ``ground`` maps (lit only)
     and the ``rays`` and ``light_queries`` counts."""
@@ -522,9 +523,10 @@ def form_image(scene, camera, arrays, kargs, options, centre, samples=1, adaptiv
         kk = np.tile(ks, pixels.size)
         r = (pix // W).astype(np.float64) + offsets[kk, 0]
         c = (pix % W).astype(np.float64) + offsets[kk, 1]
-        d = _dir(kargs[5], r, c)
+        d = _dir(kargs.cam, r, c)
         bounds = (cone_lo[pixels], cone_hi[pixels])
-        hit, t, grad, st, obj = _trace(kargs, options, pixels, W, offsets[ks], bounds)
+        hit, t, grad, st, obj = _trace(kargs, arrays.depth_max, options, pixels, W, offsets[ks],
+                                       bounds)
         cone_lo[pixels], cone_hi[pixels] = bounds
         rays += pix.size
         work[0] += int(st.sum())

@@ -17,7 +17,8 @@ from tracer.shading import (load_matcap, shade_headlight, shade_matcap, shade_no
 from tracer.errors import RenderError  # noqa: F401  (defined there; imported from here too)
 
 __all__ = ["render", "RenderResult", "RenderError", "camera_of", "distance_at_camera",
-           "scene_arrays", "SceneArrays", "render_threads", "ProgressBar"]
+           "scene_arrays", "SceneArrays", "RayArgs", "TraceOptions", "render_threads",
+           "ProgressBar"]
 
 
 class RenderResult(NamedTuple):
@@ -110,6 +111,34 @@ class RenderResult(NamedTuple):
                 "hits": int(self.hit.sum()), "hit_fraction": float(self.hit.mean()),
                 "mean_steps": float(self.steps.mean()), "mean_leaves": float(self.leaves.mean()),
                 "bisections": int((self.bisections > 0).sum())}
+
+
+class RayArgs(NamedTuple):
+    """The leading arguments of the march kernels (:func:`tracer.march.render_tiles`,
+    :func:`tracer.march.sample_tasks`, ...), in their order: a render passes them on with
+    ``*args``."""
+
+    tree: object
+    #: the kernel form of the roots (:func:`kernel_roots`: an int on the lean path)
+    roots: object
+    params: np.ndarray
+    mode: int
+    tol: float
+    #: ``tracer.camera.Camera.as_array()``
+    cam: np.ndarray
+    lo: np.ndarray
+    hi: np.ndarray
+    eps: float
+    max_steps: int
+
+
+class TraceOptions(NamedTuple):
+    """The march kernels' trailing options (see :func:`render`)."""
+
+    relax: float
+    omega: float
+    cone: bool
+    newton: float
 
 
 class SceneArrays(NamedTuple):
@@ -308,13 +337,14 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
     H, W = scene.height, scene.width
     hit, tbuf, grad, steps, leaves, bis, objs = _pixel_buffers(H, W)
     cam = camera.as_array()
-    args = (tree, kernel_roots(roots, params, mode, tol), params, mode, tol, cam, lo, hi,
-            float(scene.eps), int(scene.max_steps))
-    options = (float(march.RELAX if relax is None else relax),
-               float(march.OMEGA if omega is None else max(1.0, float(omega))),
-               bool(march.CONE if cone is None else cone),
-               march.newton_distance(scene.eps, lo, hi,
-                                     max(0.0, float(scene.newton if newton is None else newton))))
+    args = RayArgs(tree, kernel_roots(roots, params, mode, tol), params, mode, tol, cam, lo, hi,
+                   float(scene.eps), int(scene.max_steps))
+    options = TraceOptions(
+        float(march.RELAX if relax is None else relax),
+        float(march.OMEGA if omega is None else max(1.0, float(omega))),
+        bool(march.CONE if cone is None else cone),
+        march.newton_distance(scene.eps, lo, hi,
+                              max(0.0, float(scene.newton if newton is None else newton))))
     band = band_rows or H
     t0 = time.perf_counter()
     for r0 in range(0, H, band):
@@ -348,8 +378,7 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
     else:
         from tracer.film import form_image
 
-        kargs = args[:10] + (depth_max,)
-        rgb, alpha, spp, aovs = form_image(scene, camera, arrays, kargs, options,
+        rgb, alpha, spp, aovs = form_image(scene, camera, arrays, args, options,
                                            (hit, tbuf, grad, objs), samples, adaptive)
         seconds = time.perf_counter() - t0
     depth = tbuf.astype(np.float32)
@@ -401,10 +430,10 @@ def render_threads():
 def trace_tiles(args, row0, row1, depth_max, outputs, options, report=None, threads=None):
     """Trace image rows ``row0 <= r < row1`` into ``outputs``.
 
-    ``args = (tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps)`` and ``outputs =
-    (hit, tbuf, grad, steps, leaves, bisect, objs)`` as for :func:`tracer.march.render_rows`,
-    ``options = (relax, omega, cone, newton)``. ``threads`` Python threads (default
-    :func:`render_threads`) take chunks of tiles from a shared counter and trace them with
+    ``args`` (:class:`RayArgs`) and ``outputs = (hit, tbuf, grad, steps, leaves, bisect,
+    objs)`` as for :func:`tracer.march.render_rows`, ``options`` (:class:`TraceOptions`).
+    ``threads`` Python threads (default :func:`render_threads`) take chunks of tiles
+    (:data:`CHUNKS_PER_THREAD`) from a shared counter and trace them with
     the serial, GIL-free kernel :func:`tracer.march.render_tiles`, so that a thread that
     drew cheap tiles takes more; every tile is traced by one thread start to finish, so the
     result does not depend on the number of threads or the chunking (it equals
@@ -414,8 +443,7 @@ def trace_tiles(args, row0, row1, depth_max, outputs, options, report=None, thre
     """
     from tracer.march import TILE, render_tiles
 
-    cam = args[5]
-    W = int(cam[12])
+    W = int(args.cam[12])
     n = -(-W // TILE) * -(-(row1 - row0) // TILE)
     threads = max(1, min(threads or render_threads(), n))
     chunk = max(1, n // (CHUNKS_PER_THREAD * threads))
