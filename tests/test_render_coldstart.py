@@ -193,12 +193,23 @@ def test_a_plain_render_is_lean(tmp_path):
         assert name not in sigs, sigs.get(name)
 
 
-#: compiled specialisations (all kernels, callees included, each counted once) of a first
-#: lit, adaptive render of the default scene with an empty kernel cache: measured LIT_COLD
-#: (``benchmarks/bench_coldstart.py`` reports the count with the cold seconds; it was 75
-#: with the prange samples and light and the general-path ground probe). Each one is compiled,
-#: optimised and written to the cache: more of them, a slower first render
-LIT_COLD = 0
+COLDSTART = ROOT / "benchmarks" / "data" / "coldstart.json"
+
+
+def coldstart():
+    """The measured first renders (``benchmarks/bench_coldstart.py``)."""
+    return json.loads(COLDSTART.read_text(encoding="utf-8"))["cases"]
+
+
+def test_the_readme_quotes_the_measured_first_render():
+    """The README's first-render figures are those of the results file (cold wall seconds and
+    CPU seconds of the mesh file, the point cloud and the lit adaptive render)."""
+    line = next(ln for ln in (ROOT / "README.md").read_text(encoding="utf-8").splitlines()
+                if "coldstart.json" in ln)
+    cases = coldstart()
+    for case in ("mesh", "cloud", "lit"):
+        cold = cases[case]["cold"]
+        assert f"{cold['wall_s']:.0f} s ({cold['cpu_s']:.0f} s CPU)" in line, (case, line)
 
 
 @pytest.mark.slow
@@ -217,7 +228,11 @@ def test_a_lit_adaptive_render_is_lean(tmp_path):
                  "tracer.march.render_rows", "smoothdist.query.smooth_distance_point_tol",
                  "smoothdist.query.exact_distance_point"):
         assert name not in sigs, sigs.get(name)
-    assert report["compiled"] <= LIT_COLD, report["compiled"]
+    # compiled specialisations (all kernels, callees included, each counted once; each one
+    # compiled, optimised and written to the cache): no more than the measured first render
+    # (16 samples there, 4 here: the same kernels). With prange samples and light and the
+    # general-path ground probe it was 57 (benchmarks/bench_coldstart.py, before)
+    assert report["compiled"] <= coldstart()["lit"]["cold"]["compiled"], report["compiled"]
 
 
 def _sample_outputs(m, K):
