@@ -38,7 +38,7 @@ from smoothdist.schedule import parallel_tasks
 from tracer import lighting as _lighting
 from tracer import march
 from tracer.camera import box_corners, primary_rays
-from tracer.render import run_tasks
+from tracer.render import in_bands, run_tasks
 from tracer.shading import (load_matcap, shade_headlight, shade_matcap, shade_normals,
                             view_normals)
 
@@ -345,40 +345,48 @@ def _fill_light(shape, want, coarse, key, depth, normals, shadow, ao):
     got_a = np.zeros(key.size, dtype=bool)
     if idx.size == 0:
         return got_s, got_a
-    r, c = np.divmod(idx, W)
-    r0, c0 = (r // s) * s, (c // s) * s
-    fr, fc = (r - r0) / s, (c - c0) / s
-    acc_s = np.zeros(idx.size)
-    acc_a = np.zeros(idx.size)
-    acc_w = np.zeros(idx.size)
-    s_lo = np.full(idx.size, np.inf)
-    s_hi = np.full(idx.size, -np.inf)
-    a_lo = np.full(idx.size, np.inf)
-    a_hi = np.full(idx.size, -np.inf)
-    for dr, dc, w in ((0, 0, (1 - fr) * (1 - fc)), (0, s, (1 - fr) * fc),
-                      (s, 0, fr * (1 - fc)), (s, s, fr * fc)):
-        rr, cc = r0 + dr, c0 + dc
-        inside = (rr < H) & (cc < W)
-        j = np.where(inside, rr * W + np.minimum(cc, W - 1), 0)
-        ok = inside & coarse[j] & (key[j] == key[idx]) & (w > 0)
-        ok &= np.abs(depth[j] - depth[idx]) <= FILL_DEPTH * depth[idx]
-        ok &= (normals[j] * normals[idx]).sum(axis=1) >= FILL_COS
-        wt = np.where(ok, w, 0.0)
-        acc_s += wt * shadow[j]
-        acc_a += wt * ao[j]
-        acc_w += wt
-        s_lo = np.where(ok, np.minimum(s_lo, shadow[j]), s_lo)
-        s_hi = np.where(ok, np.maximum(s_hi, shadow[j]), s_hi)
-        a_lo = np.where(ok, np.minimum(a_lo, ao[j]), a_lo)
-        a_hi = np.where(ok, np.maximum(a_hi, ao[j]), a_hi)
-    # across a shadow's edge, or where the occlusion changes fast, the neighbours disagree:
-    # no interpolation of that factor there
-    good_s = (acc_w > 0) & (s_hi - s_lo <= FILL_SHADOW)
-    good_a = (acc_w > 0) & (a_hi - a_lo <= FILL_SHADOW)
-    shadow[idx[good_s]] = acc_s[good_s] / acc_w[good_s]
-    ao[idx[good_a]] = acc_a[good_a] / acc_w[good_a]
-    got_s[idx[good_s]] = True
-    got_a[idx[good_a]] = True
+    # bands of the wanted pixels on the render's threads; they read the coarse pixels' light
+    # from these copies and write only their own pixels
+    src_s, src_a = shadow.copy(), ao.copy()
+
+    def fill(b0, b1):
+        i = idx[b0:b1]
+        r, c = np.divmod(i, W)
+        r0, c0 = (r // s) * s, (c // s) * s
+        fr, fc = (r - r0) / s, (c - c0) / s
+        acc_s = np.zeros(i.size)
+        acc_a = np.zeros(i.size)
+        acc_w = np.zeros(i.size)
+        s_lo = np.full(i.size, np.inf)
+        s_hi = np.full(i.size, -np.inf)
+        a_lo = np.full(i.size, np.inf)
+        a_hi = np.full(i.size, -np.inf)
+        for dr, dc, w in ((0, 0, (1 - fr) * (1 - fc)), (0, s, (1 - fr) * fc),
+                          (s, 0, fr * (1 - fc)), (s, s, fr * fc)):
+            rr, cc = r0 + dr, c0 + dc
+            inside = (rr < H) & (cc < W)
+            j = np.where(inside, rr * W + np.minimum(cc, W - 1), 0)
+            ok = inside & coarse[j] & (key[j] == key[i]) & (w > 0)
+            ok &= np.abs(depth[j] - depth[i]) <= FILL_DEPTH * depth[i]
+            ok &= (normals[j] * normals[i]).sum(axis=1) >= FILL_COS
+            wt = np.where(ok, w, 0.0)
+            acc_s += wt * src_s[j]
+            acc_a += wt * src_a[j]
+            acc_w += wt
+            s_lo = np.where(ok, np.minimum(s_lo, src_s[j]), s_lo)
+            s_hi = np.where(ok, np.maximum(s_hi, src_s[j]), s_hi)
+            a_lo = np.where(ok, np.minimum(a_lo, src_a[j]), a_lo)
+            a_hi = np.where(ok, np.maximum(a_hi, src_a[j]), a_hi)
+        # across a shadow's edge, or where the occlusion changes fast, the neighbours
+        # disagree: no interpolation of that factor there
+        good_s = (acc_w > 0) & (s_hi - s_lo <= FILL_SHADOW)
+        good_a = (acc_w > 0) & (a_hi - a_lo <= FILL_SHADOW)
+        shadow[i[good_s]] = acc_s[good_s] / acc_w[good_s]
+        ao[i[good_a]] = acc_a[good_a] / acc_w[good_a]
+        got_s[i[good_s]] = True
+        got_a[i[good_a]] = True
+
+    in_bands(fill, idx.size)
     return got_s, got_a
 
 
