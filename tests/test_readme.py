@@ -85,6 +85,7 @@ TINY = {
     "benchmarks/bench_studies.py": ["--size", "8", "--betas", "1", "--grid", "4",
                                     "--trivial", "4", "--folder", "scenes/data/meshes"],
     "benchmarks/bench_frame.py": ["--size", "16", "9", "--repeat", "1"],
+    "benchmarks/bench_scaling.py": ["--size", "16", "9", "--repeat", "1", "--threads", "1", "2"],
 }
 
 SHIM = textwrap.dedent('''\
@@ -120,6 +121,9 @@ PLACEHOLDERS = {
 }
 
 NOT_RUN = {
+    "python benchmarks/bench_coldstart.py":
+        "it compiles every kernel from an empty cache six times (minutes); "
+        "tests/test_render_coldstart.py runs a first lit render with an empty cache",
     "python benchmarks/bench_authors.py --authors-bin PATH":
         "it needs the authors' renderer built outside the repository "
         "(../shared/tools/authors-bench); the same script without --authors-bin is run",

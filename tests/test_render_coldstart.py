@@ -24,7 +24,8 @@ import pytest
 
 from smoothdist import DataMesh, SmoothDistanceField
 from tracer import march, render as render_mod
-from tracer.render import camera_of, kernel_roots, render, scene_arrays, trace_tiles
+from tracer.render import (RayArgs, TraceOptions, camera_of, kernel_roots, render, scene_arrays,
+                           trace_tiles)
 from tracer.scene import load_scene, scene_from_field
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -41,9 +42,10 @@ def trace(scene, roots=None, threads=None, band=None, kernel="tiles"):
     out = (np.zeros((H, W), dtype=np.bool_), np.full((H, W), np.nan), np.zeros((H, W, 3)),
            np.zeros((H, W), dtype=np.int64), np.zeros((H, W), dtype=np.int64),
            np.zeros((H, W), dtype=np.int64), np.full((H, W), -1, dtype=np.int32))
-    args = (tree, roots, params, mode, tol, camera_of(scene).as_array(), lo, hi,
-            float(scene.eps), int(scene.max_steps))
-    options = (march.RELAX, march.OMEGA, march.CONE, march.newton_distance(scene.eps, lo, hi))
+    args = RayArgs(tree, roots, params, mode, tol, camera_of(scene).as_array(), lo, hi,
+                   float(scene.eps), int(scene.max_steps))
+    options = TraceOptions(march.RELAX, march.OMEGA, march.CONE,
+                           march.newton_distance(scene.eps, lo, hi))
     band = band or H
     for r0 in range(0, H, band):
         r1 = min(H, r0 + band)
@@ -114,10 +116,12 @@ def test_threaded_tiles_equal_the_prange_kernel(name):
     assert trace(scene, threads=2, band=8) == ref, "bands of 8 rows"
 
 
-def test_chunk_size_does_not_change_the_image(monkeypatch):
+@pytest.mark.parametrize("per_thread", [1, 3, 10 ** 9])
+def test_chunk_size_does_not_change_the_image(monkeypatch, per_thread):
+    # one chunk per thread, a few, and chunks of one tile
     scene = load_scene(SCENES / "bunny_edges.json", SIZE)
     ref = trace(scene, kernel="rows")
-    monkeypatch.setattr(render_mod, "CHUNK_TILES", 1)
+    monkeypatch.setattr(render_mod, "CHUNKS_PER_THREAD", per_thread)
     assert trace(scene, threads=2) == ref
 
 
@@ -139,28 +143,42 @@ def test_a_failing_worker_raises_in_the_caller(monkeypatch):
         render(scene)
 
 
-PLAIN_RENDER = r"""
+CLI_RENDER = r"""
 import json, sys
 from numba.core.dispatcher import Dispatcher
 import tracer.cli
-rc = tracer.cli.main(["render", sys.argv[1], "--size", "16", "12", "-o", sys.argv[2], "-q"])
-sigs = {f"{name}.{attr}": [[str(t) for t in s] for s in obj.signatures]
-        for name, mod in list(sys.modules.items()) if name.split(".")[0] in ("smoothdist", "tracer")
-        for attr, obj in vars(mod).items() if isinstance(obj, Dispatcher) and obj.signatures}
-print(json.dumps({"rc": rc, "modules": sorted(sys.modules), "signatures": sigs}))
+rc = tracer.cli.main(["render", *sys.argv[1:], "--size", "16", "12", "-q"])
+found = [(f"{name}.{attr}", obj) for name, mod in list(sys.modules.items())
+         if name.split(".")[0] in ("smoothdist", "tracer")
+         for attr, obj in vars(mod).items() if isinstance(obj, Dispatcher) and obj.signatures]
+sigs = {key: [[str(t) for t in s] for s in obj.signatures] for key, obj in found}
+kernels = {id(obj): len(obj.signatures) for key, obj in found}   # each kernel once
+print(json.dumps({"rc": rc, "modules": sorted(sys.modules), "signatures": sigs,
+                  "compiled": sum(kernels.values())}))
 """
 
 
-def test_a_plain_render_is_lean(tmp_path):
+def cli_render(tmp_path, *args, cache=None):
+    """``tracer render ARGS --size 16 12 -q`` in a fresh process: its report (exit status,
+    modules imported, the signatures of every kernel it compiled or loaded, and their number,
+    ``compiled``). ``cache``: a folder for ``NUMBA_CACHE_DIR`` (new and empty: a first run,
+    every kernel and callee compiled)."""
     env = dict(os.environ)
+    if cache is not None:
+        env["NUMBA_CACHE_DIR"] = str(cache)
     env["PYTHONPATH"] = str(ROOT) + os.pathsep + env.get("PYTHONPATH", "")
     env.pop("MPLBACKEND", None)
-    p = subprocess.run([sys.executable, "-c", PLAIN_RENDER, str(SCENES / "bunny_triangles.json"),
-                        str(tmp_path / "x.png")], env=env, cwd=tmp_path, capture_output=True,
-                       text=True, timeout=300)
+    p = subprocess.run([sys.executable, "-c", CLI_RENDER, *map(str, args)], env=env,
+                       cwd=tmp_path, capture_output=True, text=True, timeout=600)
     assert p.returncode == 0, p.stderr
     report = json.loads(p.stdout.strip().splitlines()[-1])
-    assert report["rc"] == 0 and (tmp_path / "x.png").is_file()
+    assert report["rc"] == 0
+    return report
+
+
+def test_a_plain_render_is_lean(tmp_path):
+    report = cli_render(tmp_path, SCENES / "bunny_triangles.json", "-o", tmp_path / "x.png")
+    assert (tmp_path / "x.png").is_file()
     heavy = {"matplotlib", "pyvista", "trimesh", "dask", "distributed", "imageio", "vtk"}
     assert not heavy & {m.split(".")[0] for m in report["modules"]}
     sigs = report["signatures"]
@@ -173,6 +191,135 @@ def test_a_plain_render_is_lean(tmp_path):
                  "tracer.march.trace_pixels", "smoothdist.query.smooth_distance_point_tol",
                  "smoothdist.query.exact_distance_point"):
         assert name not in sigs, sigs.get(name)
+
+
+COLDSTART = ROOT / "benchmarks" / "data" / "coldstart.json"
+
+
+def coldstart():
+    """The measured first renders (``benchmarks/bench_coldstart.py``)."""
+    return json.loads(COLDSTART.read_text(encoding="utf-8"))["cases"]
+
+
+def test_the_readme_quotes_the_measured_first_render():
+    """The README's first-render figures are those of the results file (cold wall seconds and
+    CPU seconds of the mesh file, the point cloud and the lit adaptive render)."""
+    line = next(ln for ln in (ROOT / "README.md").read_text(encoding="utf-8").splitlines()
+                if "coldstart.json" in ln)
+    cases = coldstart()
+    for case in ("mesh", "cloud", "lit"):
+        cold = cases[case]["cold"]
+        assert f"{cold['wall_s']:.0f} s ({cold['cpu_s']:.0f} s CPU)" in line, (case, line)
+
+
+@pytest.mark.slow
+def test_a_lit_adaptive_render_is_lean(tmp_path):
+    report = cli_render(tmp_path, SCENES / "bunny_triangles.json", "--shading", "lit",
+                        "--samples", "4", "--adaptive", "-o", tmp_path / "x.png",
+                        cache=tmp_path / "numba-cache")
+    sigs = report["signatures"]
+    # samples, light and the ground probe on the lean path (an int root), one each
+    for name in ("tracer.march.render_tiles", "tracer.march.sample_tasks",
+                 "tracer.lighting.light_tasks", "tracer.lighting._lowest_hit"):
+        assert len(sigs[name]) == 1 and sigs[name][0][1] == "int64", sigs.get(name)
+    # no prange kernel (a parallel loop costs numba about as much again as its body), and
+    # nothing of the general path
+    for name in ("tracer.march.trace_samples", "tracer.lighting.light_points",
+                 "tracer.march.render_rows", "smoothdist.query.smooth_distance_point_tol",
+                 "smoothdist.query.exact_distance_point"):
+        assert name not in sigs, sigs.get(name)
+    # compiled specialisations (all kernels, callees included, each counted once; each one
+    # compiled, optimised and written to the cache): no more than the measured first render
+    # (16 samples there, 4 here: the same kernels). With prange samples and light and the
+    # general-path ground probe it was 57 (benchmarks/bench_coldstart.py, before)
+    assert report["compiled"] <= coldstart()["lit"]["cold"]["compiled"], report["compiled"]
+
+
+def _sample_outputs(m, K):
+    return (np.zeros((m, K), dtype=np.bool_), np.full((m, K), np.nan), np.zeros((m, K, 3)),
+            np.zeros((m, K), dtype=np.int64), np.full((m, K), -1, dtype=np.int32),
+            np.full(m, np.nan), np.full(m, np.nan))
+
+
+@pytest.mark.parametrize("name", ["bunny_triangles", "two_objects"])
+def test_task_kernels_equal_the_prange_kernels(name):
+    """``march.sample_tasks`` and ``lighting.light_tasks`` run from Python threads
+    (``render.run_tasks``, any split) give the prange kernels' values bit for bit."""
+    from tracer import lighting
+    from tracer.film import sample_offsets
+    from tracer.render import run_tasks
+
+    scene = load_scene(SCENES / f"{name}.json", SIZE)
+    tree, roots, params, mode, lo, hi, depth_max, tol = scene_arrays(scene)
+    roots = kernel_roots(roots, params, mode, tol)
+    cam = camera_of(scene).as_array()
+    rng = np.random.default_rng(1)
+    m = 37
+    rows = rng.integers(0, scene.height, m).astype(np.int64)
+    cols = rng.integers(0, scene.width, m).astype(np.int64)
+    off = sample_offsets(5)
+    head = (tree, roots, params, mode, tol, cam, lo, hi, float(scene.eps), 400, rows, cols, off,
+            depth_max)
+    tail = (march.RELAX, 2.0, True, march.newton_distance(scene.eps, lo, hi), 0.0, 0.02)
+    ref = _sample_outputs(m, len(off))
+    march.trace_samples(*head, *ref, *tail, 3)
+    for ntasks, threads in ((3, 1), (3, 2), (5, 3), (1, 1)):
+        got = _sample_outputs(m, len(off))
+        run_tasks(lambda a, b: march.sample_tasks(*head, *got, *tail, ntasks, a, b), ntasks,
+                  threads)
+        assert [x.tobytes() for x in got] == [x.tobytes() for x in ref], (ntasks, threads)
+    # light at the hits
+    hit = ref[0].ravel()
+    P = np.ascontiguousarray(cam[:3] + ref[1].ravel()[hit, None] * _dirs(cam, rows, cols, off,
+                                                                          hit))
+    g = ref[2].reshape(-1, 3)[hit]
+    N = np.ascontiguousarray(g / np.linalg.norm(g, axis=1, keepdims=True))
+    n = len(P)
+    assert n > 5
+    key = np.array([0.3, 0.8, 0.52])
+    key /= np.linalg.norm(key)
+    args = (tree, roots, params, mode, tol, P, N, key, lo, hi, float(scene.eps), depth_max,
+            8.0, 0.01 * scene.diagonal, True, True, 0.0, 2 * float(scene.eps))
+
+    def light_out():
+        return np.ones(n), np.ones(n), np.zeros((n, 2), dtype=np.int64)
+
+    ref_l = light_out()
+    lighting.light_points(*args, *ref_l, 2)
+    for ntasks, threads in ((2, 1), (2, 2), (4, 3)):
+        got = light_out()
+        run_tasks(lambda a, b: lighting.light_tasks(*args, *got, ntasks, a, b), ntasks, threads)
+        assert [x.tobytes() for x in got] == [x.tobytes() for x in ref_l], (ntasks, threads)
+
+
+def _dirs(cam, rows, cols, off, hit):
+    from tracer.film import _dir
+
+    r = (rows[:, None] + off[None, :, 0]).ravel()
+    c = (cols[:, None] + off[None, :, 1]).ravel()
+    return _dir(cam, r, c)[hit]
+
+
+def test_run_tasks_and_bands_cover_everything_once():
+    from tracer.render import in_bands, run_tasks
+
+    for ntasks in (1, 2, 5, 64):
+        for threads in (1, 2, 3, 8):
+            seen = []
+            run_tasks(lambda a, b: seen.extend(range(a, b)), ntasks, threads)
+            assert sorted(seen) == list(range(ntasks))
+    for rows in (1, 31, 32, 1080):
+        for threads in (1, 2, 7):
+            seen = []
+            in_bands(lambda a, b: seen.extend(range(a, b)), rows, threads)
+            assert sorted(seen) == list(range(rows))
+
+    def broken(a, b):
+        if a > 0:
+            raise RuntimeError("task failed")
+
+    with pytest.raises(RuntimeError, match="task failed"):
+        run_tasks(broken, 4, 2)
 
 
 # ----------------------------------------------------------------------------- BVH build

@@ -38,6 +38,7 @@ from smoothdist.schedule import parallel_tasks
 from tracer import lighting as _lighting
 from tracer import march
 from tracer.camera import box_corners, primary_rays
+from tracer.render import in_bands, run_tasks
 from tracer.shading import (load_matcap, shade_headlight, shade_matcap, shade_normals,
                             view_normals)
 
@@ -113,7 +114,7 @@ class _Shader:
         self.scene = scene
         self.camera = camera
         self.arrays = arrays
-        self.kargs = kargs                  # tree, roots (kernel form), params, mode, tol, ...
+        self.kargs = kargs                  # tracer.render.RayArgs: the render's own queries
         self.lit = scene.shading == "lit"
         self.transparent = bool(getattr(scene, "transparent", False))
         self.nobj = len(scene.objects)
@@ -172,19 +173,22 @@ class _Shader:
         ao = np.ones(n)
         if n == 0 or not (do_shadow or do_ao):
             return shadow, ao
-        tree, roots, params, mode, tol = self.kargs[:5]   # the render's own queries
+        k = self.kargs                      # the render's own queries
+        tree, roots, params, mode, tol = k.tree, k.roots, k.params, k.mode, k.tol
         lo, hi, depth_max = self.arrays.lo, self.arrays.hi, self.arrays.depth_max
         eps = float(self.scene.eps)
         if self.ground is not None:     # shadow rays may start on the ground, below the box
             lo, hi = _box_with_ground(lo, hi, self.up, self.ground)
         work = np.zeros((n, 2), dtype=np.int64)
-        _lighting.light_points(tree, roots, params, mode, tol, np.ascontiguousarray(P),
-                               np.ascontiguousarray(N), self.key, lo, hi, eps, depth_max,
-                               1.0 / self.light.penumbra,
-                               self.light.ao_distance * self.diag / _lighting.AO_SAMPLES,
-                               do_shadow, do_ao,
-                               self.slack, max(2.0 * eps, _lighting.SHADOW_START * self.diag),
-                               shadow, ao, work, parallel_tasks(n))
+        P = np.ascontiguousarray(P)
+        N = np.ascontiguousarray(N)
+        k = 1.0 / self.light.penumbra
+        delta = self.light.ao_distance * self.diag / _lighting.AO_SAMPLES
+        t_min = max(2.0 * eps, _lighting.SHADOW_START * self.diag)
+        ntasks = parallel_tasks(n)
+        run_tasks(lambda a, b: _lighting.light_tasks(
+            tree, roots, params, mode, tol, P, N, self.key, lo, hi, eps, depth_max, k, delta,
+            do_shadow, do_ao, self.slack, t_min, shadow, ao, work, ntasks, a, b), ntasks)
         self.queries += int(work[:, 0].sum())
         self.leaves += int(work[:, 1].sum())
         return shadow, ao
@@ -341,40 +345,48 @@ def _fill_light(shape, want, coarse, key, depth, normals, shadow, ao):
     got_a = np.zeros(key.size, dtype=bool)
     if idx.size == 0:
         return got_s, got_a
-    r, c = np.divmod(idx, W)
-    r0, c0 = (r // s) * s, (c // s) * s
-    fr, fc = (r - r0) / s, (c - c0) / s
-    acc_s = np.zeros(idx.size)
-    acc_a = np.zeros(idx.size)
-    acc_w = np.zeros(idx.size)
-    s_lo = np.full(idx.size, np.inf)
-    s_hi = np.full(idx.size, -np.inf)
-    a_lo = np.full(idx.size, np.inf)
-    a_hi = np.full(idx.size, -np.inf)
-    for dr, dc, w in ((0, 0, (1 - fr) * (1 - fc)), (0, s, (1 - fr) * fc),
-                      (s, 0, fr * (1 - fc)), (s, s, fr * fc)):
-        rr, cc = r0 + dr, c0 + dc
-        inside = (rr < H) & (cc < W)
-        j = np.where(inside, rr * W + np.minimum(cc, W - 1), 0)
-        ok = inside & coarse[j] & (key[j] == key[idx]) & (w > 0)
-        ok &= np.abs(depth[j] - depth[idx]) <= FILL_DEPTH * depth[idx]
-        ok &= (normals[j] * normals[idx]).sum(axis=1) >= FILL_COS
-        wt = np.where(ok, w, 0.0)
-        acc_s += wt * shadow[j]
-        acc_a += wt * ao[j]
-        acc_w += wt
-        s_lo = np.where(ok, np.minimum(s_lo, shadow[j]), s_lo)
-        s_hi = np.where(ok, np.maximum(s_hi, shadow[j]), s_hi)
-        a_lo = np.where(ok, np.minimum(a_lo, ao[j]), a_lo)
-        a_hi = np.where(ok, np.maximum(a_hi, ao[j]), a_hi)
-    # across a shadow's edge, or where the occlusion changes fast, the neighbours disagree:
-    # no interpolation of that factor there
-    good_s = (acc_w > 0) & (s_hi - s_lo <= FILL_SHADOW)
-    good_a = (acc_w > 0) & (a_hi - a_lo <= FILL_SHADOW)
-    shadow[idx[good_s]] = acc_s[good_s] / acc_w[good_s]
-    ao[idx[good_a]] = acc_a[good_a] / acc_w[good_a]
-    got_s[idx[good_s]] = True
-    got_a[idx[good_a]] = True
+    # bands of the wanted pixels on the render's threads; they read the coarse pixels' light
+    # from these copies and write only their own pixels
+    src_s, src_a = shadow.copy(), ao.copy()
+
+    def fill(b0, b1):
+        i = idx[b0:b1]
+        r, c = np.divmod(i, W)
+        r0, c0 = (r // s) * s, (c // s) * s
+        fr, fc = (r - r0) / s, (c - c0) / s
+        acc_s = np.zeros(i.size)
+        acc_a = np.zeros(i.size)
+        acc_w = np.zeros(i.size)
+        s_lo = np.full(i.size, np.inf)
+        s_hi = np.full(i.size, -np.inf)
+        a_lo = np.full(i.size, np.inf)
+        a_hi = np.full(i.size, -np.inf)
+        for dr, dc, w in ((0, 0, (1 - fr) * (1 - fc)), (0, s, (1 - fr) * fc),
+                          (s, 0, fr * (1 - fc)), (s, s, fr * fc)):
+            rr, cc = r0 + dr, c0 + dc
+            inside = (rr < H) & (cc < W)
+            j = np.where(inside, rr * W + np.minimum(cc, W - 1), 0)
+            ok = inside & coarse[j] & (key[j] == key[i]) & (w > 0)
+            ok &= np.abs(depth[j] - depth[i]) <= FILL_DEPTH * depth[i]
+            ok &= (normals[j] * normals[i]).sum(axis=1) >= FILL_COS
+            wt = np.where(ok, w, 0.0)
+            acc_s += wt * src_s[j]
+            acc_a += wt * src_a[j]
+            acc_w += wt
+            s_lo = np.where(ok, np.minimum(s_lo, src_s[j]), s_lo)
+            s_hi = np.where(ok, np.maximum(s_hi, src_s[j]), s_hi)
+            a_lo = np.where(ok, np.minimum(a_lo, src_a[j]), a_lo)
+            a_hi = np.where(ok, np.maximum(a_hi, src_a[j]), a_hi)
+        # across a shadow's edge, or where the occlusion changes fast, the neighbours
+        # disagree: no interpolation of that factor there
+        good_s = (acc_w > 0) & (s_hi - s_lo <= FILL_SHADOW)
+        good_a = (acc_w > 0) & (a_hi - a_lo <= FILL_SHADOW)
+        shadow[i[good_s]] = acc_s[good_s] / acc_w[good_s]
+        ao[i[good_a]] = acc_a[good_a] / acc_w[good_a]
+        got_s[i[good_s]] = True
+        got_a[i[good_a]] = True
+
+    in_bands(fill, idx.size)
     return got_s, got_a
 
 
@@ -458,11 +470,11 @@ def _neighbour_flags(colour, record, shape):
     return flags.ravel(), edges.ravel()
 
 
-def _trace(kargs, options, pixels, W, offsets, bounds=None):
+def _trace(kargs, depth_max, options, pixels, W, offsets, bounds=None):
     """The samples ``offsets (K, 2)`` of the pixels ``pixels (m,)`` (flat indices), flattened
     pixel-major: ``hit, t, grad, steps, objs`` of length ``m K``. ``bounds = (t_lo, t_hi)``, each
     ``(m,)``: the pixels' cone bounds, read where finite, written where not (NaN)."""
-    tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, depth_max = kargs
+    tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps = kargs
     relax, omega, cone, newton = options
     omega = max(omega, SAMPLE_OMEGA)
     m, K = pixels.size, len(offsets)
@@ -475,10 +487,12 @@ def _trace(kargs, options, pixels, W, offsets, bounds=None):
         bounds = (np.full(m, np.nan), np.full(m, np.nan))
     if m and K:
         rows, cols = np.divmod(pixels.astype(np.int64), W)
-        march.trace_samples(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, rows,
-                            cols, np.ascontiguousarray(offsets, dtype=np.float64), depth_max,
-                            hit, t, grad, steps, objs, bounds[0], bounds[1], relax, omega,
-                            cone, newton, EPS_PX, SAMPLE_NEWTON_COS, parallel_tasks(m))
+        offsets = np.ascontiguousarray(offsets, dtype=np.float64)
+        ntasks = parallel_tasks(m)
+        run_tasks(lambda a, b: march.sample_tasks(
+            tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, rows, cols, offsets,
+            depth_max, hit, t, grad, steps, objs, bounds[0], bounds[1], relax, omega, cone,
+            newton, EPS_PX, SAMPLE_NEWTON_COS, ntasks, a, b), ntasks)
     return hit.ravel(), t.ravel(), grad.reshape(-1, 3), steps.ravel(), objs.ravel()
 
 
@@ -486,9 +500,9 @@ def form_image(scene, camera, arrays, kargs, options, centre, samples=1, adaptiv
     """Shade the centre samples, add ``samples - 1`` more per pixel (all pixels, or the
     adaptive selection), and average.
 
-    ``kargs = (tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, depth_max)`` in the
-    march kernels' form; ``centre = (hit (H, W), t (H, W), grad (H, W, 3), objs (H, W))``
-    (``objs``: the object each hit shows, as the march found it). Returns
+    ``kargs``: :class:`tracer.render.RayArgs`, the march kernels' leading arguments;
+    ``options``: :class:`tracer.render.TraceOptions`; ``centre = (hit (H, W), t (H, W), grad
+    (H, W, 3), objs (H, W))`` (``objs``: the object each hit shows, as the march found it). Returns
     ``(rgb (H, W, 3) uint8, alpha (H, W) float32, spp (H, W) int32, info dict)``; ``info``
     holds the centre samples' ``shadow``, ``ao``, ``object`` and ``ground`` maps (lit only)
     and the ``rays`` and ``light_queries`` counts."""
@@ -517,9 +531,10 @@ def form_image(scene, camera, arrays, kargs, options, centre, samples=1, adaptiv
         kk = np.tile(ks, pixels.size)
         r = (pix // W).astype(np.float64) + offsets[kk, 0]
         c = (pix % W).astype(np.float64) + offsets[kk, 1]
-        d = _dir(kargs[5], r, c)
+        d = _dir(kargs.cam, r, c)
         bounds = (cone_lo[pixels], cone_hi[pixels])
-        hit, t, grad, st, obj = _trace(kargs, options, pixels, W, offsets[ks], bounds)
+        hit, t, grad, st, obj = _trace(kargs, arrays.depth_max, options, pixels, W, offsets[ks],
+                                       bounds)
         cone_lo[pixels], cone_hi[pixels] = bounds
         rays += pix.size
         work[0] += int(st.sum())

@@ -33,7 +33,7 @@ from numba import prange
 
 from smoothdist.kernels import NJIT, NJIT_PARALLEL
 from tracer.camera import box_corners
-from tracer.march import (march_ray, nearest_object, object_lower_bound, ray_box,
+from tracer.march import (_borrowed, march_ray, nearest_object, object_lower_bound, ray_box,
                           scene_distance, visiting_order)
 
 __all__ = ["Lighting", "DEFAULT_COLOR", "PALETTE", "soft_shadow", "ambient_occlusion",
@@ -211,35 +211,56 @@ def light_points(tree, roots, params, mode, tol, P, N, L, lo, hi, eps, depth_max
     and ``work (n, 2) int64``: distance queries and leaves visited. Every point is
     independent (no dependence on threads); ``ntasks`` strided tasks share them out
     (:mod:`smoothdist.schedule`)."""
+    ntasks = max(1, min(P.shape[0], ntasks))
+    for task in prange(ntasks):
+        _light_task(tree, roots, params, mode, tol, P, N, L, lo, hi, eps, depth_max, k, delta,
+                    do_shadow, do_ao, slack, t_min, shadow, ao, work, task, ntasks)
+
+
+@numba.njit(**NJIT)
+def light_tasks(tree, roots, params, mode, tol, P, N, L, lo, hi, eps, depth_max, k, delta,
+                do_shadow, do_ao, slack, t_min, shadow, ao, work, ntasks, task0, task1):
+    """Tasks ``task0 <= task < task1`` of :func:`light_points` (``ntasks`` of them), serial and
+    ``nogil``, for Python threads (``tracer.render.run_tasks``): the same values, and no
+    ``prange`` to compile (a parallel loop costs numba as much again as its body)."""
+    tree = _borrowed(tree)
+    params = _borrowed(params)
+    for task in range(task0, task1):
+        _light_task(tree, roots, params, mode, tol, P, N, L, lo, hi, eps, depth_max, k, delta,
+                    do_shadow, do_ao, slack, t_min, shadow, ao, work, task, ntasks)
+
+
+@numba.njit(**NJIT)
+def _light_task(tree, roots, params, mode, tol, P, N, L, lo, hi, eps, depth_max, k, delta,
+                do_shadow, do_ao, slack, t_min, shadow, ao, work, task, ntasks):
+    """Points ``task, task + ntasks, ...`` of :func:`light_points`."""
     bias = 2.0 * eps
     n = P.shape[0]
-    ntasks = max(1, min(n, ntasks))
-    for task in prange(ntasks):
-        stack = np.empty(depth_max + 4, dtype=np.int64)
-        dstack = np.empty(depth_max + 4)
-        for i in range(task, n, ntasks):  # every ntasks-th point
-            nx, ny, nz = N[i, 0], N[i, 1], N[i, 2]
-            px = P[i, 0] + bias * nx
-            py = P[i, 1] + bias * ny
-            pz = P[i, 2] + bias * nz
-            s = 1.0
-            q = 0
-            lv = 0
-            if do_shadow and nx * L[0] + ny * L[1] + nz * L[2] > 0.0:
-                s, q, lv = soft_shadow(tree, roots, params, mode, tol, px, py, pz, L[0], L[1],
-                                       L[2], lo, hi, eps, t_min, k, stack, dstack, slack)
-            elif do_shadow:
-                s = 0.0          # facing away from the light: no direct light anyway
-            a = 1.0
-            if do_ao:
-                a, la = ambient_occlusion(tree, roots, params, mode, tol, px, py, pz, nx, ny, nz,
-                                          delta, stack, dstack, slack)
-                q += AO_SAMPLES
-                lv += la
-            shadow[i] = s
-            ao[i] = a
-            work[i, 0] = q
-            work[i, 1] = lv
+    stack = np.empty(depth_max + 4, dtype=np.int64)
+    dstack = np.empty(depth_max + 4)
+    for i in range(task, n, ntasks):  # every ntasks-th point
+        nx, ny, nz = N[i, 0], N[i, 1], N[i, 2]
+        px = P[i, 0] + bias * nx
+        py = P[i, 1] + bias * ny
+        pz = P[i, 2] + bias * nz
+        s = 1.0
+        q = 0
+        lv = 0
+        if do_shadow and nx * L[0] + ny * L[1] + nz * L[2] > 0.0:
+            s, q, lv = soft_shadow(tree, roots, params, mode, tol, px, py, pz, L[0], L[1],
+                                   L[2], lo, hi, eps, t_min, k, stack, dstack, slack)
+        elif do_shadow:
+            s = 0.0          # facing away from the light: no direct light anyway
+        a = 1.0
+        if do_ao:
+            a, la = ambient_occlusion(tree, roots, params, mode, tol, px, py, pz, nx, ny, nz,
+                                      delta, stack, dstack, slack)
+            q += AO_SAMPLES
+            lv += la
+        shadow[i] = s
+        ao[i] = a
+        work[i, 0] = q
+        work[i, 1] = lv
 
 
 @numba.njit(**NJIT_PARALLEL)
@@ -308,15 +329,17 @@ def ground_height(arrays, data_vertices, up, eps, max_steps=400):
 
     ``arrays``: :class:`tracer.render.SceneArrays`. Falls back to the bottom of the scene box
     (which bounds the surface) if no ray lands."""
+    from tracer.render import kernel_roots
+
     tree, roots, params, mode, lo, hi, depth_max, tol = arrays
     up = np.asarray(up, dtype=np.float64)
     heights = data_vertices @ up
     lowest = data_vertices[np.argsort(heights)[:10]]
     box_bottom = float((box_corners(lo, hi) @ up).min())
     starts = lowest - ((lowest @ up) - box_bottom + eps)[:, None] * up
-    roots_arg = roots if np.ndim(roots) else np.asarray([roots], dtype=np.int64)
-    h = _lowest_hit(tree, roots_arg, params, mode, tol, np.ascontiguousarray(starts), up,
-                    lo, hi, eps, max_steps, depth_max)
+    # the render's own kernel form of the roots: the lean path when the render takes it
+    h = _lowest_hit(tree, kernel_roots(np.atleast_1d(roots), params, mode, tol), params, mode,
+                    tol, np.ascontiguousarray(starts), up, lo, hi, eps, max_steps, depth_max)
     return float(h) if np.isfinite(h) else box_bottom
 
 

@@ -864,41 +864,69 @@ def trace_samples(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, r
     of the pixel is covered, and a ray that comes within a fraction of a pixel of the surface
     covers it.
     """
+    ntasks = max(1, min(rows.size, ntasks))
+    for task in prange(ntasks):
+        _samples_task(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, rows, cols,
+                      offsets, depth_max, hit, tbuf, grad, steps, objs, t_lo, t_hi, relax, omega,
+                      cone, newton, eps_px, newton_cos, task, ntasks)
+
+
+@numba.njit(**NJIT)
+def sample_tasks(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, rows, cols,
+                 offsets, depth_max, hit, tbuf, grad, steps, objs, t_lo, t_hi, relax, omega,
+                 cone, newton, eps_px, newton_cos, ntasks, task0, task1):
+    """Tasks ``task0 <= task < task1`` of :func:`trace_samples` (``ntasks`` of them; every
+    argument is required here), serial and ``nogil``, for Python threads
+    (``tracer.render.run_tasks``): the same values, and no ``prange`` to compile."""
+    tree = _borrowed(tree)
+    params = _borrowed(params)
+    cam = _borrowed(cam)
+    lo = _borrowed(lo)
+    hi = _borrowed(hi)
+    for task in range(task0, task1):
+        _samples_task(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, rows, cols,
+                      offsets, depth_max, hit, tbuf, grad, steps, objs, t_lo, t_hi, relax, omega,
+                      cone, newton, eps_px, newton_cos, task, ntasks)
+
+
+@numba.njit(**NJIT)
+def _samples_task(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, rows, cols,
+                  offsets, depth_max, hit, tbuf, grad, steps, objs, t_lo, t_hi, relax, omega,
+                  cone, newton, eps_px, newton_cos, task, ntasks):
+    """Pixels ``task, task + ntasks, ...`` of :func:`trace_samples`."""
     pixel = 1.0 / min(cam[12], cam[13])      # a pixel's size at unit depth
     n = rows.size
-    ntasks = max(1, min(n, ntasks))
-    for task in prange(ntasks):
-        stack = np.empty(depth_max + 4, dtype=np.int64)
-        dstack = np.empty(depth_max + 4)
-        for i in range(task, n, ntasks):    # every ntasks-th pixel
-            r = rows[i]
-            c = cols[i]
-            c_ev = 0
-            if cone and not (np.isfinite(t_lo[i]) and np.isfinite(t_hi[i])):
-                t_lo[i], ev = cone_start(tree, roots, params, mode, tol, cam, lo, hi, eps,
-                                         r - 1, r + 2, c - 1, c + 2, stack, dstack, relax)[:2]
-                c_ev += ev
-                t_hi[i], ev, lv = cone_end(tree, roots, params, mode, tol, cam, lo, hi, eps, r - 1,
-                                           r + 2, c - 1, c + 2, stack, dstack, relax)
-                c_ev += ev
-            elif not cone:
-                t_lo[i] = 0.0
-                t_hi[i] = np.inf
-            t_min = t_lo[i]
-            e = max(eps, eps_px * pixel * t_min)
-            for k in range(offsets.shape[0]):
-                dx, dy, dz = ray_direction(cam, r + offsets[k, 0], c + offsets[k, 1])
-                h, t, gx, gy, gz, st, lv, bs, ob = march_ray(
-                    tree, roots, params, mode, tol, cam[0], cam[1], cam[2], dx, dy, dz, lo, hi,
-                    e, max_steps, stack, dstack, relax, omega, t_min, newton, t_hi[i],
-                    newton_cos)
-                hit[i, k] = h == 1
-                tbuf[i, k] = t
-                grad[i, k, 0] = gx
-                grad[i, k, 1] = gy
-                grad[i, k, 2] = gz
-                steps[i, k] = st + (c_ev if k == 0 else 0)
-                objs[i, k] = ob
+    stack = np.empty(depth_max + 4, dtype=np.int64)
+    dstack = np.empty(depth_max + 4)
+    for i in range(task, n, ntasks):    # every ntasks-th pixel
+        r = rows[i]
+        c = cols[i]
+        c_ev = 0
+        if cone and not (np.isfinite(t_lo[i]) and np.isfinite(t_hi[i])):
+            t_lo[i], ev = cone_start(tree, roots, params, mode, tol, cam, lo, hi, eps,
+                                     r - 1, r + 2, c - 1, c + 2, stack, dstack, relax)[:2]
+            c_ev += ev
+            t_hi[i], ev, lv = cone_end(tree, roots, params, mode, tol, cam, lo, hi, eps, r - 1,
+                                       r + 2, c - 1, c + 2, stack, dstack, relax)
+            c_ev += ev
+        elif not cone:
+            t_lo[i] = 0.0
+            t_hi[i] = np.inf
+        t_min = t_lo[i]
+        e = max(eps, eps_px * pixel * t_min)
+        for k in range(offsets.shape[0]):
+            dx, dy, dz = ray_direction(cam, r + offsets[k, 0], c + offsets[k, 1])
+            h, t, gx, gy, gz, st, lv, bs, ob = march_ray(
+                tree, roots, params, mode, tol, cam[0], cam[1], cam[2], dx, dy, dz, lo, hi,
+                e, max_steps, stack, dstack, relax, omega, t_min, newton, t_hi[i],
+                newton_cos)
+            hit[i, k] = h == 1
+            tbuf[i, k] = t
+            grad[i, k, 0] = gx
+            grad[i, k, 1] = gy
+            grad[i, k, 2] = gz
+            steps[i, k] = st + (c_ev if k == 0 else 0)
+            objs[i, k] = ob
 
 
 @intrinsic

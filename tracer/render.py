@@ -17,7 +17,8 @@ from tracer.shading import (load_matcap, shade_headlight, shade_matcap, shade_no
 from tracer.errors import RenderError  # noqa: F401  (defined there; imported from here too)
 
 __all__ = ["render", "RenderResult", "RenderError", "camera_of", "distance_at_camera",
-           "scene_arrays", "SceneArrays", "render_threads", "ProgressBar"]
+           "scene_arrays", "SceneArrays", "RayArgs", "TraceOptions", "render_threads",
+           "ProgressBar"]
 
 
 class RenderResult(NamedTuple):
@@ -110,6 +111,34 @@ class RenderResult(NamedTuple):
                 "hits": int(self.hit.sum()), "hit_fraction": float(self.hit.mean()),
                 "mean_steps": float(self.steps.mean()), "mean_leaves": float(self.leaves.mean()),
                 "bisections": int((self.bisections > 0).sum())}
+
+
+class RayArgs(NamedTuple):
+    """The leading arguments of the march kernels (:func:`tracer.march.render_tiles`,
+    :func:`tracer.march.sample_tasks`, ...), in their order: a render passes them on with
+    ``*args``."""
+
+    tree: object
+    #: the kernel form of the roots (:func:`kernel_roots`: an int on the lean path)
+    roots: object
+    params: np.ndarray
+    mode: int
+    tol: float
+    #: ``tracer.camera.Camera.as_array()``
+    cam: np.ndarray
+    lo: np.ndarray
+    hi: np.ndarray
+    eps: float
+    max_steps: int
+
+
+class TraceOptions(NamedTuple):
+    """The march kernels' trailing options (see :func:`render`)."""
+
+    relax: float
+    omega: float
+    cone: bool
+    newton: float
 
 
 class SceneArrays(NamedTuple):
@@ -240,6 +269,14 @@ def distance_at_camera(scene, arrays=None):
                                    tol, float(o[0]), float(o[1]), float(o[2]), depth_max))
 
 
+def _pixel_buffers(H, W):
+    """The tracing outputs ``(hit, tbuf, grad, steps, leaves, bisect, objs)`` of an ``H x W``
+    image, cleared (see :func:`trace_tiles`)."""
+    return (np.zeros((H, W), dtype=np.bool_), np.full((H, W), np.nan), np.zeros((H, W, 3)),
+            np.zeros((H, W), dtype=np.int64), np.zeros((H, W), dtype=np.int64),
+            np.zeros((H, W), dtype=np.int64), np.full((H, W), -1, dtype=np.int32))
+
+
 def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None, omega=None,
            cone=None, newton=None, samples=None, adaptive=None, device="cpu"):
     """Trace and shade ``scene``.
@@ -308,21 +345,16 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
                           f"the surface (distance there {d0:.4g} <= eps {scene.eps:.3g}); move "
                           "camera.origin outside or lower alpha's blur")
     H, W = scene.height, scene.width
-    hit = np.zeros((H, W), dtype=np.bool_)
-    tbuf = np.full((H, W), np.nan)
-    grad = np.zeros((H, W, 3))
-    steps = np.zeros((H, W), dtype=np.int64)
-    leaves = np.zeros((H, W), dtype=np.int64)
-    bis = np.zeros((H, W), dtype=np.int64)
-    objs = np.full((H, W), -1, dtype=np.int32)
+    hit, tbuf, grad, steps, leaves, bis, objs = _pixel_buffers(H, W)
     cam = camera.as_array()
-    args = (tree, kernel_roots(roots, params, mode, tol), params, mode, tol, cam, lo, hi,
-            float(scene.eps), int(scene.max_steps))
-    options = (march.RELAX if relax is None else float(relax),
-               march.OMEGA if omega is None else max(1.0, float(omega)),
-               march.CONE if cone is None else bool(cone),
-               march.newton_distance(scene.eps, lo, hi,
-                                     max(0.0, float(scene.newton if newton is None else newton))))
+    args = RayArgs(tree, kernel_roots(roots, params, mode, tol), params, mode, tol, cam, lo, hi,
+                   float(scene.eps), int(scene.max_steps))
+    options = TraceOptions(
+        float(march.RELAX if relax is None else relax),
+        float(march.OMEGA if omega is None else max(1.0, float(omega))),
+        bool(march.CONE if cone is None else cone),
+        march.newton_distance(scene.eps, lo, hi,
+                              max(0.0, float(scene.newton if newton is None else newton))))
     band = band_rows or H
     t0 = time.perf_counter()
     for r0 in range(0, H, band):
@@ -333,19 +365,30 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
                 progress(r0 * W + done, H * W, time.perf_counter() - t0)
         trace_tiles(args, r0, r1, depth_max, (hit, tbuf, grad, steps, leaves, bis, objs),
                     options, report)
-    norm = np.linalg.norm(grad, axis=2, keepdims=True)
-    normals = np.where(norm > 0, grad / np.where(norm > 0, norm, 1.0), 0.0)
+    normals = np.empty_like(grad)
+
+    def unit(r0, r1):
+        g = grad[r0:r1]
+        norm = np.linalg.norm(g, axis=2, keepdims=True)
+        normals[r0:r1] = np.where(norm > 0, g / np.where(norm > 0, norm, 1.0), 0.0)
+
+    in_bands(unit, H)
     samples = _samples(scene.samples if samples is None else samples)
     adaptive = bool(scene.adaptive if adaptive is None else adaptive)
     if samples == 1 and scene.shading != "lit" and not scene.transparent:
         seconds = time.perf_counter() - t0
-        rgb = shade(scene, camera, normals, hit)
+        rgb = np.empty((H, W, 3), dtype=np.uint8)
+        matcap = load_matcap(scene.matcap) if scene.shading == "matcap" else None
+
+        def colour(r0, r1):
+            rgb[r0:r1] = shade(scene, camera, normals[r0:r1], hit[r0:r1], matcap)
+
+        in_bands(colour, H)
         alpha, spp, aovs = hit.astype(np.float32), np.ones((H, W), np.int32), {"rays": H * W}
     else:
         from tracer.film import form_image
 
-        kargs = args[:10] + (depth_max,)
-        rgb, alpha, spp, aovs = form_image(scene, camera, arrays, kargs, options,
+        rgb, alpha, spp, aovs = form_image(scene, camera, arrays, args, options,
                                            (hit, tbuf, grad, objs), samples, adaptive)
         seconds = time.perf_counter() - t0
     depth = tbuf.astype(np.float32)
@@ -375,10 +418,13 @@ def _progress_callback(progress, scene):
                     f"elapsed_s), got {progress!r}")
 
 
-#: largest number of tiles a thread takes at once (a chunk is at most 1/16 of its share;
-#: a kernel call costs about 3 microseconds, and small chunks leave little idle time at the
-#: end of a render)
-CHUNK_TILES = 4
+#: a render's tiles are taken by the threads in chunks of ``1 / CHUNKS_PER_THREAD`` of a
+#: thread's share (at least one tile). The chunks follow the scattered tile order of
+#: ``tracer.march.render_rows``, so each is a sample of the whole image and costs about the
+#: same; a thread that drew expensive tiles takes fewer chunks. Each chunk is one kernel call
+#: (8 us of dispatch under the GIL, serial): chunks of 4 tiles gave a 1080p frame 32,400 calls
+#: (0.25 s serial); 64 chunks per thread leave at most 1/64 of a share idle at the end
+CHUNKS_PER_THREAD = 64
 #: seconds between progress reports while tracing
 REPORT_SECONDS = 0.25
 
@@ -394,10 +440,10 @@ def render_threads():
 def trace_tiles(args, row0, row1, depth_max, outputs, options, report=None, threads=None):
     """Trace image rows ``row0 <= r < row1`` into ``outputs``.
 
-    ``args = (tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps)`` and ``outputs =
-    (hit, tbuf, grad, steps, leaves, bisect, objs)`` as for :func:`tracer.march.render_rows`,
-    ``options = (relax, omega, cone, newton)``. ``threads`` Python threads (default
-    :func:`render_threads`) take chunks of tiles from a shared counter and trace them with
+    ``args`` (:class:`RayArgs`) and ``outputs = (hit, tbuf, grad, steps, leaves, bisect,
+    objs)`` as for :func:`tracer.march.render_rows`, ``options`` (:class:`TraceOptions`).
+    ``threads`` Python threads (default :func:`render_threads`) take chunks of tiles
+    (:data:`CHUNKS_PER_THREAD`) from a shared counter and trace them with
     the serial, GIL-free kernel :func:`tracer.march.render_tiles`, so that a thread that
     drew cheap tiles takes more; every tile is traced by one thread start to finish, so the
     result does not depend on the number of threads or the chunking (it equals
@@ -407,11 +453,10 @@ def trace_tiles(args, row0, row1, depth_max, outputs, options, report=None, thre
     """
     from tracer.march import TILE, render_tiles
 
-    cam = args[5]
-    W = int(cam[12])
+    W = int(args.cam[12])
     n = -(-W // TILE) * -(-(row1 - row0) // TILE)
     threads = max(1, min(threads or render_threads(), n))
-    chunk = max(1, min(CHUNK_TILES, n // (16 * threads)))
+    chunk = max(1, n // (CHUNKS_PER_THREAD * threads))
     pixels = W * (row1 - row0)
     lock = threading.Lock()
     state = {"next": 0, "done": 0, "error": None, "stop": False}
@@ -454,12 +499,52 @@ def trace_tiles(args, row0, row1, depth_max, outputs, options, report=None, thre
         report(pixels)
 
 
-def shade(scene, camera, normals, hit):
-    """Colour a render with the scene's shading mode; ``(H, W, 3)`` uint8."""
+def in_bands(fn, rows, threads=None):
+    """Call ``fn(r0, r1)`` for bands of rows covering ``0 <= r < rows``, one band per thread
+    (default :func:`render_threads`), from Python threads: for per-pixel numpy work, whose
+    array loops release the GIL. Bands of at least 16 rows; exceptions are re-raised here."""
+    bands = max(1, min(threads or render_threads(), rows // 16))
+    run_tasks(lambda a, b: fn(rows * a // bands, rows * b // bands), bands, bands)
+
+
+def run_tasks(fn, ntasks, threads=None):
+    """Call ``fn(task0, task1)`` over tasks ``0 <= task < ntasks``, split into contiguous
+    groups, one per thread (at most :func:`render_threads`), from Python threads: for the
+    serial, GIL-free task kernels (``tracer.march.sample_tasks``,
+    ``tracer.lighting.light_tasks``), whose tasks are independent, so the result does not
+    depend on the split. Exceptions are re-raised here."""
+    threads = max(1, min(threads or render_threads(), ntasks))
+    if threads == 1:
+        fn(0, ntasks)
+        return
+    edges = [ntasks * i // threads for i in range(threads + 1)]
+    errors = []
+
+    def work(a, b):
+        try:
+            fn(a, b)
+        except BaseException as exc:  # handed to the calling thread
+            errors.append(exc)
+
+    workers = [threading.Thread(target=work, args=(edges[i], edges[i + 1]), daemon=True)
+               for i in range(1, threads)]
+    for t in workers:
+        t.start()
+    work(edges[0], edges[1])
+    for t in workers:
+        t.join()
+    if errors:
+        raise errors[0]
+
+
+def shade(scene, camera, normals, hit, matcap=None):
+    """Colour a render with the scene's shading mode; ``(H, W, 3)`` uint8 (``matcap``: the
+    scene's texture, if already loaded)."""
     nv = view_normals(normals, camera)
     bg = tuple(scene.background)
     if scene.shading == "matcap":
-        return shade_matcap(nv, hit, load_matcap(scene.matcap), background=bg)
+        return shade_matcap(nv, hit, load_matcap(scene.matcap) if matcap is None else matcap,
+                            background=bg)
     if scene.shading == "headlight":
         return shade_headlight(nv, hit, background=bg)
     return shade_normals(nv, hit, background=bg)

@@ -11,6 +11,7 @@ Pillow. Every file is written to a temporary name and renamed (no partial output
 
 import os
 import time
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
@@ -68,13 +69,23 @@ def render_frames(sim, traj, frames_dir, *, every=None, progress=None, overwrite
     os.makedirs(frames_dir, exist_ok=True)
     images = []
     t0 = time.perf_counter()
-    for n, f in enumerate(idx):
-        poses = [(traj["rotations"][f, k], traj["centers"][f, k]) for k in range(len(sim.bodies))]
-        res = render(scene, transforms=poses)
-        save_png(os.path.join(frames_dir, f"frame_{n:05d}.png"), res.rgb, overwrite=overwrite)
-        images.append(res.rgb)
-        if progress is not None:
-            progress(n + 1, len(idx), time.perf_counter() - t0)
+    # each PNG is encoded in the background while the next frame is traced (zlib releases the
+    # GIL); one file at a time, and a failed write is raised here, in frame order
+    with ThreadPoolExecutor(1) as writer:
+        pending = None
+        for n, f in enumerate(idx):
+            poses = [(traj["rotations"][f, k], traj["centers"][f, k])
+                     for k in range(len(sim.bodies))]
+            res = render(scene, transforms=poses)
+            if pending is not None:
+                pending.result()
+            pending = writer.submit(save_png, os.path.join(frames_dir, f"frame_{n:05d}.png"),
+                                    res.rgb, overwrite=overwrite)
+            images.append(res.rgb)
+            if progress is not None:
+                progress(n + 1, len(idx), time.perf_counter() - t0)
+        if pending is not None:
+            pending.result()
     return images
 
 
