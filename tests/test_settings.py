@@ -37,6 +37,10 @@ def test_table_has_every_group_field_once_and_says_why_entries_differ():
         assert r.help, r.key
         if not (r.file == r.api == r.mesh):
             assert r.why, f"{r.key}: entry points differ without a reason"
+    # the module's prose names every setting whose entry points differ
+    for r in table():
+        if not (r.file == r.api == r.mesh):
+            assert f"``{r.key}``" in settings.__doc__, r.key
     # the frozen groups build with their defaults and refuse assignment
     for group in settings.GROUPS:
         obj = group()

@@ -16,24 +16,17 @@ one-line meaning the field's ``help``. The entry points read their defaults from
 Where an entry point deliberately differs, the field says so (``api=`` / ``mesh=``) and
 :func:`table` lists the reason:
 
-========== ==================== ============ ============ =====================================
-key        scene file           scene_from_  render_mesh  why they differ
-                                field        / CLI mesh
-========== ==================== ============ ============ =====================================
-shading    "normals" ("matcap"  "normals"    "lit"        scene files and the research API draw
-           with a matcap)                                 the paper's normal colours (golden
-                                                          images); a user's mesh gets a lit
-                                                          picture
-alpha      required             required     "auto"       the authors' format requires it
-alpha_u    "auto"               "off"        "auto"       the parameter studies (and golden
-                                                          images) vary alpha alone over the
-                                                          paper's unattenuated weights
-view       (camera required)    None         "front"      scene files carry their camera;
-                                                          the API's None is the paper's
-                                                          beta-study camera
-up         (camera required)    "y"          "auto"       a mesh file's extension tells its
-                                                          up axis
-========== ==================== ============ ============ =====================================
+* ``shading``: ``"normals"`` in scene files (``"matcap"`` when one names a matcap) and in
+  ``scene_from_field``, ``"lit"`` for the mesh entry points: scene files and the research API
+  draw the paper's normal colours (the golden images), a user's mesh gets a lit picture;
+* ``alpha``: required by scene files and ``scene_from_field`` (the authors' format names it),
+  ``"auto"`` for the mesh entry points;
+* ``alpha_u``: ``"auto"`` in scene files (an object without ``max_alpha``) and for the mesh
+  entry points, ``"off"`` in ``scene_from_field``: the parameter studies and golden images
+  vary alpha alone over the paper's unattenuated weights;
+* ``view`` and ``up``: scene files carry their camera; ``scene_from_field``'s ``camera=None``
+  is the paper's beta-study camera, with up ``"y"``; the mesh entry points frame the
+  ``"front"`` view with up ``"auto"`` (a mesh file's extension tells its up axis).
 
 Everything else has one default everywhere.
 """
@@ -45,8 +38,8 @@ from smoothdist.kernels import DEFAULT_TOL
 from tracer.lighting import Lighting
 from tracer.march import NEWTON
 
-__all__ = ["Camera", "March", "Film", "Surface", "Lighting", "GROUPS", "ENTRIES", "Row",
-           "table", "defaults", "default_text", "REQUIRED"]
+__all__ = ["Camera", "March", "Film", "Surface", "GROUPS", "ENTRIES", "Row", "table",
+           "defaults", "default_text", "REQUIRED", "SCENE_KEYS"]
 
 #: the entry points: scene files (and ``Scene``), ``scene_from_field``, the mesh entry points
 ENTRIES = ("file", "api", "mesh")

@@ -1,5 +1,6 @@
-"""What a loaded simulation file is: :class:`Simulation` and its :class:`Camera`, and the
-automatic camera (:func:`auto_camera`) of files that give none.
+"""What a loaded simulation file is: the simulation, its camera, and the automatic camera of
+files that give none (:class:`~tracer.sim.simulation.Simulation`,
+:class:`~tracer.sim.simulation.Camera`, :func:`~tracer.sim.simulation.auto_camera`).
 
 Both readers build these: :mod:`tracer.sim.simfile` (our format) and
 :mod:`tracer.sim.authors_format` (the authors' ``sims/*.json``); neither imports the other's
