@@ -163,6 +163,162 @@ def _leaf_code(s, e):
     return -1 - (s * 16 + (e - s))
 
 
+@numba.njit(**NJIT_INLINE)
+def _centroid_box(order, cent, s, e, out):
+    """``out (6,)``: the box of the centroids ``order[s:e]``."""
+    for a in range(3):
+        out[a] = np.inf
+        out[3 + a] = -np.inf
+    for k in range(s, e):
+        i = order[k]
+        for a in range(3):
+            out[a] = min(out[a], cent[i, a])
+            out[3 + a] = max(out[3 + a], cent[i, a])
+
+
+@numba.njit(**NJIT_INLINE)
+def _bin_axis(order, cent, plo, phi, s, e, a, lo, scale, nbins, bcnt, bbox):
+    """Count the primitives ``order[s:e]`` into ``nbins`` centroid bins along axis ``a`` and
+    grow each bin's box (``bcnt[a]``, ``bbox[a]``)."""
+    for b in range(nbins):
+        bcnt[a, b] = 0
+        for c in range(3):
+            bbox[a, b, c] = np.inf
+            bbox[a, b, 3 + c] = -np.inf
+    for k in range(s, e):
+        i = order[k]
+        b = min(nbins - 1, int((cent[i, a] - lo) * scale))
+        bcnt[a, b] += 1
+        for c in range(3):
+            bbox[a, b, c] = min(bbox[a, b, c], plo[i, c])
+            bbox[a, b, 3 + c] = max(bbox[a, b, 3 + c], phi[i, c])
+
+
+@numba.njit(**NJIT_INLINE)
+def _sweep_axis(a, nbins, bcnt, bbox, rarea, rcnt, best_cost, best_axis, best_split):
+    """The cheapest split between the bins of axis ``a`` by the surface area heuristic (area x
+    count on each side), against the best so far: ``(cost, axis, first bin of the right)``."""
+    # sweep from the right: area and count of bins b .. nbins-1
+    x0 = np.inf
+    y0 = np.inf
+    z0 = np.inf
+    x1 = -np.inf
+    y1 = -np.inf
+    z1 = -np.inf
+    rc = 0
+    for b in range(nbins - 1, 0, -1):
+        if bcnt[a, b] > 0:
+            x0 = min(x0, bbox[a, b, 0])
+            y0 = min(y0, bbox[a, b, 1])
+            z0 = min(z0, bbox[a, b, 2])
+            x1 = max(x1, bbox[a, b, 3])
+            y1 = max(y1, bbox[a, b, 4])
+            z1 = max(z1, bbox[a, b, 5])
+        rc += bcnt[a, b]
+        rcnt[b] = rc
+        rarea[b] = _area(x0, x1, y0, y1, z0, z1) if rc > 0 else 0.0
+    x0 = np.inf
+    y0 = np.inf
+    z0 = np.inf
+    x1 = -np.inf
+    y1 = -np.inf
+    z1 = -np.inf
+    lc = 0
+    for b in range(nbins - 1):
+        if bcnt[a, b] > 0:
+            x0 = min(x0, bbox[a, b, 0])
+            y0 = min(y0, bbox[a, b, 1])
+            z0 = min(z0, bbox[a, b, 2])
+            x1 = max(x1, bbox[a, b, 3])
+            y1 = max(y1, bbox[a, b, 4])
+            z1 = max(z1, bbox[a, b, 5])
+        lc += bcnt[a, b]
+        if lc == 0 or rcnt[b + 1] == 0:
+            continue
+        cost = _area(x0, x1, y0, y1, z0, z1) * lc + rarea[b + 1] * rcnt[b + 1]
+        if cost < best_cost:
+            best_cost = cost
+            best_axis = a
+            best_split = b + 1
+    return best_cost, best_axis, best_split
+
+
+@numba.njit(**NJIT_INLINE)
+def _best_split(order, cent, plo, phi, s, e, cbox, nbins, bcnt, bbox, rarea, rcnt):
+    """``(cost, axis, split bin)`` of the cheapest binned SAH split of ``order[s:e]`` (axis -1:
+    no axis has a centroid spread)."""
+    best_cost = np.inf
+    best_axis = -1
+    best_split = 0
+    for a in range(3):
+        ext = cbox[3 + a] - cbox[a]
+        if not ext > 0.0:
+            continue
+        _bin_axis(order, cent, plo, phi, s, e, a, cbox[a], nbins / ext, nbins, bcnt, bbox)
+        best_cost, best_axis, best_split = _sweep_axis(a, nbins, bcnt, bbox, rarea, rcnt,
+                                                       best_cost, best_axis, best_split)
+    return best_cost, best_axis, best_split
+
+
+@numba.njit(**NJIT_INLINE)
+def _is_leaf(order, kind, s, e, leaf_size, node_cost, best_cost, best_axis, parea):
+    """Whether ``order[s:e]`` becomes a leaf: one primitive, or small and the heuristic
+    prefers it (cost of a split: one node test plus the children's primitive tests weighted by
+    their area share), or small and points only."""
+    cnt = e - s
+    if cnt == 1:
+        return True
+    if cnt > leaf_size:
+        return False
+    split_cost = node_cost + (best_cost / parea if parea > 0.0 else cnt)
+    if best_axis < 0 or cnt <= split_cost:
+        return True
+    # points cost no more than a box test: keep up to leaf_size of them together (half the
+    # nodes of a point cloud, as fast)
+    for k in range(s, e):
+        if kind[order[k]] != 0:
+            return False
+    return True
+
+
+@numba.njit(**NJIT_INLINE)
+def _partition(order, cent, s, e, d, cbox, best_axis, best_split, nbins, sah_depth):
+    """Reorder ``order[s:e]`` into the two children's ranges; returns where the right one
+    starts."""
+    if best_axis < 0:
+        # no centroid spread (coincident centroids): split the range in half
+        return (s + e) // 2
+    if d >= sah_depth:
+        # deep already (very uneven data): object median on the widest centroid axis
+        a = 0
+        for c in range(1, 3):
+            if cbox[3 + c] - cbox[c] > cbox[3 + a] - cbox[a]:
+                a = c
+        cnt = e - s
+        sub = order[s:e].copy()
+        keys = np.empty(cnt)
+        for k in range(cnt):
+            keys[k] = cent[sub[k], a]
+        idx = np.argsort(keys, kind="mergesort")
+        for k in range(cnt):
+            order[s + k] = sub[idx[k]]
+        return (s + e) // 2
+    a = best_axis
+    scale = nbins / (cbox[3 + a] - cbox[a])
+    i0 = s
+    i1 = e - 1
+    while i0 <= i1:
+        b = min(nbins - 1, int((cent[order[i0], a] - cbox[a]) * scale))
+        if b < best_split:
+            i0 += 1
+        else:
+            tmp = order[i0]
+            order[i0] = order[i1]
+            order[i1] = tmp
+            i1 -= 1
+    return i0
+
+
 @numba.njit(**NJIT)
 def _build_sah(cent, plo, phi, kind, leaf_size, nbins, node_cost, sah_depth):
     m = cent.shape[0]
@@ -200,96 +356,16 @@ def _build_sah(cent, plo, phi, kind, leaf_size, nbins, node_cost, sah_depth):
         par = st_p[sp]
         slot = st_j[sp]
         d = st_d[sp]
-        cnt = e - s
         _range_box(order, plo, phi, s, e, nb)
         parea = _area(nb[0], nb[3], nb[1], nb[4], nb[2], nb[5])
-        # centroid bounds
-        for a in range(3):
-            cbox[a] = np.inf
-            cbox[3 + a] = -np.inf
-        for k in range(s, e):
-            i = order[k]
-            for a in range(3):
-                cbox[a] = min(cbox[a], cent[i, a])
-                cbox[3 + a] = max(cbox[3 + a], cent[i, a])
+        _centroid_box(order, cent, s, e, cbox)
         best_cost = np.inf
         best_axis = -1
         best_split = 0
-        if cnt > 1:
-            for a in range(3):
-                ext = cbox[3 + a] - cbox[a]
-                if not ext > 0.0:
-                    continue
-                scale = nbins / ext
-                for b in range(nbins):
-                    bcnt[a, b] = 0
-                    for c in range(3):
-                        bbox[a, b, c] = np.inf
-                        bbox[a, b, 3 + c] = -np.inf
-                for k in range(s, e):
-                    i = order[k]
-                    b = min(nbins - 1, int((cent[i, a] - cbox[a]) * scale))
-                    bcnt[a, b] += 1
-                    for c in range(3):
-                        bbox[a, b, c] = min(bbox[a, b, c], plo[i, c])
-                        bbox[a, b, 3 + c] = max(bbox[a, b, 3 + c], phi[i, c])
-                # sweep from the right: area and count of bins b .. nbins-1
-                x0 = np.inf
-                y0 = np.inf
-                z0 = np.inf
-                x1 = -np.inf
-                y1 = -np.inf
-                z1 = -np.inf
-                rc = 0
-                for b in range(nbins - 1, 0, -1):
-                    if bcnt[a, b] > 0:
-                        x0 = min(x0, bbox[a, b, 0])
-                        y0 = min(y0, bbox[a, b, 1])
-                        z0 = min(z0, bbox[a, b, 2])
-                        x1 = max(x1, bbox[a, b, 3])
-                        y1 = max(y1, bbox[a, b, 4])
-                        z1 = max(z1, bbox[a, b, 5])
-                    rc += bcnt[a, b]
-                    rcnt[b] = rc
-                    rarea[b] = _area(x0, x1, y0, y1, z0, z1) if rc > 0 else 0.0
-                x0 = np.inf
-                y0 = np.inf
-                z0 = np.inf
-                x1 = -np.inf
-                y1 = -np.inf
-                z1 = -np.inf
-                lc = 0
-                for b in range(nbins - 1):
-                    if bcnt[a, b] > 0:
-                        x0 = min(x0, bbox[a, b, 0])
-                        y0 = min(y0, bbox[a, b, 1])
-                        z0 = min(z0, bbox[a, b, 2])
-                        x1 = max(x1, bbox[a, b, 3])
-                        y1 = max(y1, bbox[a, b, 4])
-                        z1 = max(z1, bbox[a, b, 5])
-                    lc += bcnt[a, b]
-                    if lc == 0 or rcnt[b + 1] == 0:
-                        continue
-                    cost = _area(x0, x1, y0, y1, z0, z1) * lc + rarea[b + 1] * rcnt[b + 1]
-                    if cost < best_cost:
-                        best_cost = cost
-                        best_axis = a
-                        best_split = b + 1
-        # leaf when small and the heuristic prefers it (cost of a split: one node test plus
-        # the children's primitive tests weighted by their area share)
-        make_leaf = cnt == 1
-        if not make_leaf and cnt <= leaf_size:
-            split_cost = node_cost + (best_cost / parea if parea > 0.0 else cnt)
-            make_leaf = best_axis < 0 or cnt <= split_cost
-            if not make_leaf:
-                # points cost no more than a box test: keep up to leaf_size of them together
-                # (half the nodes of a point cloud, as fast)
-                make_leaf = True
-                for k in range(s, e):
-                    if kind[order[k]] != 0:
-                        make_leaf = False
-                        break
-        if make_leaf:
+        if e - s > 1:
+            best_cost, best_axis, best_split = _best_split(order, cent, plo, phi, s, e, cbox,
+                                                           nbins, bcnt, bbox, rarea, rcnt)
+        if _is_leaf(order, kind, s, e, leaf_size, node_cost, best_cost, best_axis, parea):
             code = _leaf_code(s, e)
             if par < 0:
                 root = code
@@ -304,38 +380,7 @@ def _build_sah(cent, plo, phi, kind, leaf_size, nbins, node_cost, sah_depth):
             child[par, slot] = node
         if d + 1 > depth:
             depth = d + 1
-        if best_axis < 0:
-            # no centroid spread (coincident centroids): split the range in half
-            mid = (s + e) // 2
-        elif d >= sah_depth:
-            # deep already (very uneven data): object median on the widest centroid axis
-            a = 0
-            for c in range(1, 3):
-                if cbox[3 + c] - cbox[c] > cbox[3 + a] - cbox[a]:
-                    a = c
-            sub = order[s:e].copy()
-            keys = np.empty(cnt)
-            for k in range(cnt):
-                keys[k] = cent[sub[k], a]
-            idx = np.argsort(keys, kind="mergesort")
-            for k in range(cnt):
-                order[s + k] = sub[idx[k]]
-            mid = (s + e) // 2
-        else:
-            a = best_axis
-            scale = nbins / (cbox[3 + a] - cbox[a])
-            i0 = s
-            i1 = e - 1
-            while i0 <= i1:
-                b = min(nbins - 1, int((cent[order[i0], a] - cbox[a]) * scale))
-                if b < best_split:
-                    i0 += 1
-                else:
-                    tmp = order[i0]
-                    order[i0] = order[i1]
-                    order[i1] = tmp
-                    i1 -= 1
-            mid = i0
+        mid = _partition(order, cent, s, e, d, cbox, best_axis, best_split, nbins, sah_depth)
         _range_box(order, plo, phi, s, mid, cbox)
         for c in range(6):
             box[node, c] = cbox[c]

@@ -10,12 +10,16 @@ from smoothdist.mesh import MESH_EXTENSIONS
 from tracer.camera import UP_AXES, VIEWS
 from tracer.from_mesh import KINDS
 from tracer.outputs import CLIError, atomic_write, check_outputs, make_parents
+from tracer.settings import default_text, defaults
 
 HELP = "sphere-trace a scene file to a PNG (and AOVs)"
 
 
 def add_arguments(p):
-    """Arguments of ``tracer render``."""
+    """Arguments of ``tracer render``; the defaults they name come from
+    :mod:`tracer.settings` (``_def(key)``: a scene file's, ``_def(key, "mesh")``: a mesh
+    file's)."""
+    _def = default_text
     p.add_argument("scene", metavar="PATH",
                    help="a scene JSON file (the authors' format, or ours; see "
                    "docs/scene-format.md) or a mesh / point-cloud file "
@@ -23,9 +27,9 @@ def add_arguments(p):
     p.add_argument("-o", "--output", help="output PNG (default: renders/<file name>.png)")
     p.add_argument("--size", nargs=2, type=int, metavar=("W", "H"),
                    help="image size in pixels (overrides the scene's width/height; "
-                   "mesh default 512 512)")
+                   f"mesh default {_def('width', 'mesh')} {_def('height', 'mesh')})")
     p.add_argument("--beta", type=float, help="Barnes-Hut beta (0 = exact; default: scene's, "
-                   "0.5 for a mesh)")
+                   f"{_def('beta', 'mesh')} for a mesh)")
     p.add_argument("--alpha", type=_auto_or_number("--alpha"), metavar="auto|A",
                    help="alpha of the (first) object, or 'auto' (default for a mesh): for "
                    "edges and triangles with --alpha-u and --offset left out too, 6/C at the "
@@ -42,7 +46,7 @@ def add_arguments(p):
                    "holds (mixed; the default)")
     p.add_argument("--view", choices=tuple(VIEWS),
                    help="camera framing the whole surface from this side (default for a mesh: "
-                   "front); with a scene file it replaces the scene's camera")
+                   f"{_def('view', 'mesh')}); with a scene file it replaces the scene's camera")
     p.add_argument("--up", choices=("auto",) + UP_AXES,
                    help="the data's up axis for --view (mesh files: auto = z for .stl and "
                    ".ply, y otherwise; scene files: y)")
@@ -54,13 +58,14 @@ def add_arguments(p):
                    "render again")
     p.add_argument("--tol", type=float, metavar="TOL",
                    help="tolerance-controlled pruning: d_hat within log(1 + TOL)/alpha of the "
-                        "exact sum, never above it (0 = off; default: scene's). With --beta 0 "
+                        f"exact sum, never above it (0 = off; default: scene's, else "
+                        f"{_def('tol')}). With --beta 0 "
                         "it is the only pruning")
     newton = p.add_mutually_exclusive_group()
     newton.add_argument("--newton", type=float, metavar="N",
                         help="smooth mode: Newton steps along the ray once the distance is "
                         "below N x eps (at most 1%% of the bbox diagonal; default: scene's, "
-                        "else 100)")
+                        f"else {_def('newton')})")
     newton.add_argument("--no-newton", dest="newton", action="store_const", const=0.0,
                         help="plain sphere tracing (= --newton 0); the images agree, Newton "
                         "steps only save distance evaluations")
@@ -71,14 +76,15 @@ def add_arguments(p):
                    "with alpha and alpha_U auto, edges and triangles: see --alpha), "
                    "exact mode d = C (default 1/alpha per object)")
     p.add_argument("--eps", type=float, help="hit threshold in scene units "
-                   "(default 1e-4 x bbox diagonal)")
+                   f"(default {_def('eps')})")
     p.add_argument("--shading", choices=("lit", "normals", "matcap", "headlight"),
                    help="lit: key and fill lights, soft shadows, ambient occlusion and a "
-                   "ground (default for a mesh file); normals: the paper's view-space normal "
-                   "colours (a scene file's default); matcap; diffuse headlight")
+                   "ground; normals: the paper's view-space normal colours; matcap; diffuse "
+                   f"headlight (default for a mesh file: {_def('shading', 'mesh')}; for a "
+                   f"scene file: {_def('shading')}, matcap when it names a matcap)")
     p.add_argument("--samples", type=int, metavar="N",
                    help="anti-aliasing: N samples per pixel, tent-filtered (default: scene's, "
-                   "1)")
+                   f"{_def('samples')})")
     p.add_argument("--adaptive", action="store_true", default=None,
                    help="give the extra samples only to pixels that differ from a neighbour "
                    "(edges, shadow borders)")
@@ -88,9 +94,10 @@ def add_arguments(p):
     p.add_argument("--color", nargs=3, type=int, metavar=("R", "G", "B"),
                    help="lit shading: base colour of the (first) object, 0-255")
     p.add_argument("--background", nargs=3, type=int, metavar=("R", "G", "B"),
-                   help="background colour, 0-255 (default white)")
+                   help=f"background colour, 0-255 (default {_def('background')})")
     p.add_argument("--penumbra", type=float,
-                   help="lit shading: shadow softness > 0 (0.02 nearly hard, default 0.08)")
+                   help="lit shading: shadow softness > 0 (0.02 nearly hard, default "
+                   f"{defaults('file')['lighting'].penumbra:g})")
     p.add_argument("--no-shadows", dest="shadows", action="store_false", default=None,
                    help="lit shading: no shadows")
     p.add_argument("--no-ao", dest="ao", action="store_false", default=None,
@@ -326,21 +333,23 @@ def _mesh_scene(args):
 def _build_mesh_scene(args):
     from tracer.from_mesh import mesh_scene
 
-    width, height = args.size or (512, 512)
-    return mesh_scene(args.scene, kind=args.kind,
-                      alpha=args.alpha if args.alpha is not None else "auto",
-                      alpha_u=args.alpha_u if args.alpha_u is not None else "auto",
-                      beta=args.beta if args.beta is not None else 0.5, size=(width, height),
-                      view=args.view or "front", up=args.up or "auto",
-                      camera=_camera_arg(args) if args.camera else None,
-                      mode=args.mode or "smooth", offset=args.offset, eps=args.eps,
-                      shading=args.shading or "lit",
-                      tol=args.tol if args.tol is not None else 0.0, newton=args.newton,
-                      samples=args.samples or 1, adaptive=bool(args.adaptive),
-                      transparent=bool(args.transparent),
+    d = defaults("mesh")  # the options left out: as render_mesh's
+
+    def given(key):
+        value = getattr(args, key)
+        return d[key] if value is None else value
+
+    width, height = args.size or (d["width"], d["height"])
+    return mesh_scene(args.scene, kind=args.kind, alpha=given("alpha"), alpha_u=given("alpha_u"),
+                      beta=given("beta"), size=(width, height), view=given("view"),
+                      up=given("up"), camera=_camera_arg(args) if args.camera else None,
+                      mode=given("mode"), offset=given("offset"), eps=given("eps"),
+                      shading=given("shading"), tol=given("tol"), newton=given("newton"),
+                      samples=given("samples"), adaptive=bool(given("adaptive")),
+                      transparent=bool(given("transparent")),
                       lighting={k: v for k, v in _lighting_args(args).items() if v is not None},
-                      color=args.color,
-                      background=tuple(args.background) if args.background else (255, 255, 255))
+                      color=given("color"),
+                      background=tuple(given("background")))
 
 
 def _replace_camera(scene, args):

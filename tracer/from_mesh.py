@@ -12,7 +12,10 @@ import os
 
 import numpy as np
 
-from smoothdist.kernels import DEFAULT_TOL
+from tracer.settings import defaults
+
+#: defaults of the mesh entry points (:mod:`tracer.settings`; ``tracer render MESH`` too)
+_MESH = defaults("mesh")
 
 __all__ = ["render_mesh", "mesh_scene", "load_geometry", "guess_up", "resolve_up",
            "describe_parameters", "scene_dict"]
@@ -65,11 +68,14 @@ def resolve_up(mesh, up):
     return up
 
 
-def mesh_scene(mesh, F=None, *, kind=None, alpha="auto", alpha_u="auto", beta=0.5,
-               size=(512, 512), view="front", camera=None, mode="smooth", offset=None,
-               eps=None, shading="lit", matcap="", name=None, tol=DEFAULT_TOL, newton=None,
-               up="auto", samples=1, adaptive=False, transparent=False, lighting=None,
-               color=None, background=(255, 255, 255)):
+def mesh_scene(mesh, F=None, *, kind=None, alpha=_MESH["alpha"], alpha_u=_MESH["alpha_u"],
+               beta=_MESH["beta"], size=(_MESH["width"], _MESH["height"]), view=_MESH["view"],
+               camera=None, mode=_MESH["mode"], offset=_MESH["offset"], eps=_MESH["eps"],
+               shading=_MESH["shading"], matcap=_MESH["matcap"], name=None, tol=_MESH["tol"],
+               newton=_MESH["newton"], up=_MESH["up"], samples=_MESH["samples"],
+               adaptive=_MESH["adaptive"], transparent=_MESH["transparent"],
+               lighting=_MESH["lighting"], color=_MESH["color"],
+               background=_MESH["background"]):
     """A one-object :class:`tracer.scene.Scene` for ``mesh``, camera framing the surface.
 
     Parameters
@@ -86,7 +92,8 @@ def mesh_scene(mesh, F=None, *, kind=None, alpha="auto", alpha_u="auto", beta=0.
         level set ``d_hat = C`` about 0.75 mean edge lengths out, ``alpha = 6 / C``, no
         attenuation; no dimples along the mesh edges).
     alpha_u : float, "auto" or None
-        Attenuation threshold; ``"auto"`` is 20 x alpha (no ribbing); None: no attenuation.
+        Attenuation threshold; ``"auto"`` is 20 x alpha (no ribbing); ``"off"`` or None: no
+        attenuation.
     beta : float
         Barnes-Hut parameter (0 = exact, slow on big meshes).
     size : (int, int)
@@ -170,11 +177,15 @@ def warn_thin_tubes(scene, probes=128):
                   stacklevel=3)
 
 
-def render_mesh(mesh, F=None, *, kind=None, alpha="auto", alpha_u="auto", beta=0.5,
-                size=(512, 512), view="front", camera=None, mode="smooth", offset=None,
-                eps=None, shading="lit", matcap="", progress=None, up="auto", samples=1,
-                adaptive=False, transparent=False, lighting=None, color=None,
-                background=(255, 255, 255), tol=DEFAULT_TOL, newton=None, device="cpu"):
+def render_mesh(mesh, F=None, *, kind=None, alpha=_MESH["alpha"], alpha_u=_MESH["alpha_u"],
+                beta=_MESH["beta"], size=(_MESH["width"], _MESH["height"]),
+                view=_MESH["view"], camera=None, mode=_MESH["mode"], offset=_MESH["offset"],
+                eps=_MESH["eps"], shading=_MESH["shading"], matcap=_MESH["matcap"],
+                progress=None, up=_MESH["up"], samples=_MESH["samples"],
+                adaptive=_MESH["adaptive"], transparent=_MESH["transparent"],
+                lighting=_MESH["lighting"], color=_MESH["color"],
+                background=_MESH["background"], tol=_MESH["tol"], newton=_MESH["newton"],
+                device="cpu"):
     """Sphere-trace the smooth-distance surface of ``mesh``; arrays back, nothing written.
 
     Parameters are those of :func:`mesh_scene` (the ``"lit"`` shading by default;
@@ -234,8 +245,7 @@ def scene_dict(scene, scene_path, source_paths):
     of ``scene_path`` (where the dict will be saved). ``tol`` and ``newton`` are written when
     they are not the defaults.
     """
-    from tracer.march import NEWTON
-
+    file = defaults("file")  # what a scene file means when a key is left out
     base = os.path.dirname(os.path.abspath(scene_path))
 
     def rel(p):
@@ -256,22 +266,20 @@ def scene_dict(scene, scene_path, source_paths):
            "beta": float(scene.beta), "mode": scene.mode, "shading": scene.shading}
     if scene.matcap:
         out["matcap"] = rel(scene.matcap)
-    if scene.tol:
+    if scene.tol != file["tol"]:
         out["tol"] = float(scene.tol)
-    if scene.samples != 1:
+    if scene.samples != file["samples"]:
         out["samples"] = int(scene.samples)
-    if scene.adaptive:
-        out["adaptive"] = True
-    if scene.transparent:
-        out["transparent"] = True
-    if tuple(scene.background) != (255, 255, 255):
+    if scene.adaptive != file["adaptive"]:
+        out["adaptive"] = bool(scene.adaptive)
+    if scene.transparent != file["transparent"]:
+        out["transparent"] = bool(scene.transparent)
+    if tuple(scene.background) != tuple(file["background"]):
         out["background"] = [int(v) for v in scene.background]
     if scene.shading == "lit":
         from dataclasses import asdict
 
-        from tracer.lighting import Lighting
-
-        default = asdict(Lighting())
+        default = asdict(file["lighting"])
         changed = {k: (list(v) if isinstance(v, tuple) else v)
                    for k, v in asdict(scene.lighting).items() if v != default[k]}
         if changed:
@@ -279,7 +287,7 @@ def scene_dict(scene, scene_path, source_paths):
     for od, o in zip(objs, scene.objects):
         if o.color is not None:
             od["color"] = [int(round(v)) for v in o.color]
-    if scene.newton != NEWTON:
+    if scene.newton != file["newton"]:
         out["newton"] = float(scene.newton)
     return out
 

@@ -42,7 +42,7 @@ no extent (a single point) the default ``eps`` is ``1e-4 x`` the surface's size
 """
 
 import os
-from dataclasses import dataclass, field as dc_field
+from dataclasses import dataclass, field as dc_field, fields
 
 import numpy as np
 
@@ -50,7 +50,7 @@ import smoothdist
 from smoothdist import DataMesh, SmoothDistanceField
 from tracer.film import MAX_SAMPLES
 from tracer.lighting import Lighting
-from tracer.march import NEWTON
+from tracer.settings import SCENE_KEYS, Film, March, defaults
 from tracer.validate import (SceneError, check_keys, choice, file_error, number, read_json,
                              resolve_path, show, vec3)
 
@@ -62,9 +62,12 @@ BVH_TYPES = {"faces": "triangles", "triangles": "triangles", "edges": "edges",
 SHADINGS = ("normals", "matcap", "headlight", "lit")
 MODES = ("smooth", "exact")
 
-_TOP_KEYS = {"camera", "objects", "width", "height", "beta", "eps", "mode", "offset", "shading",
-             "matcap", "background", "max_steps", "gradient", "description", "name", "tol",
-             "newton", "samples", "adaptive", "transparent", "lighting"}
+#: defaults of scene files and of ``Scene`` (:mod:`tracer.settings`)
+_FILE = defaults("file")
+#: defaults of :func:`scene_from_field` (:mod:`tracer.settings`)
+_API = defaults("api")
+#: the scene file's top-level keys: the settings table's, and the file's own
+_TOP_KEYS = set(SCENE_KEYS) | {"camera", "objects", "description", "name"}
 _LIGHTING_KEYS = {"shadows", "penumbra", "ao", "ao_distance", "ground", "ground_color", "key",
                   "exposure"}
 _CAMERA_KEYS = {"origin", "dest", "up"}
@@ -108,27 +111,37 @@ class Scene:
     camera_dest: np.ndarray
     camera_up: np.ndarray
     objects: list
-    width: int = 512
-    height: int = 512
-    beta: float = 0.5
-    eps: float = None
-    mode: str = "smooth"
-    shading: str = "normals"
-    matcap: str = ""
-    background: tuple = (255, 255, 255)
-    max_steps: int = 1000
-    gradient: str = "metric"
+    width: int = _FILE["width"]
+    height: int = _FILE["height"]
+    beta: float = _FILE["beta"]
+    eps: float = _FILE["eps"]
+    mode: str = _FILE["mode"]
+    shading: str = _FILE["shading"]
+    matcap: str = _FILE["matcap"]
+    background: tuple = _FILE["background"]
+    max_steps: int = _FILE["max_steps"]
+    gradient: str = _FILE["gradient"]
     description: str = ""
     extra: dict = dc_field(default_factory=dict)
-    tol: float = 0.0
-    newton: float = NEWTON
+    tol: float = _FILE["tol"]
+    newton: float = _FILE["newton"]
     #: anti-aliasing samples per pixel, and whether only disagreeing pixels get them all
-    samples: int = 1
-    adaptive: bool = False
+    samples: int = _FILE["samples"]
+    adaptive: bool = _FILE["adaptive"]
     #: RGBA output whose alpha is the pixel's coverage (background not painted)
-    transparent: bool = False
+    transparent: bool = _FILE["transparent"]
     #: settings of the ``"lit"`` shading
-    lighting: Lighting = dc_field(default_factory=Lighting)
+    lighting: Lighting = _FILE["lighting"]
+
+    @property
+    def march(self):
+        """The tracer's settings as a frozen :class:`tracer.settings.March`."""
+        return March(**{f.name: getattr(self, f.name) for f in fields(March)})
+
+    @property
+    def film(self):
+        """The image's settings as a frozen :class:`tracer.settings.Film`."""
+        return Film(**{f.name: getattr(self, f.name) for f in fields(Film)})
 
     @property
     def name(self):
@@ -210,28 +223,28 @@ def load_scene(path, overrides=None):
             return default
         return number(value, path, where, **kw)
 
-    width = top("width", 512, "--size width", positive=True, integer=True)
-    height = top("height", 512, "--size height", positive=True, integer=True)
+    width = top("width", _FILE["width"], "--size width", positive=True, integer=True)
+    height = top("height", _FILE["height"], "--size height", positive=True, integer=True)
     if width * height > MAX_PIXELS:
         raise file_error(path, "width x height", f"is {width}x{height}: larger than "
                                                  f"{MAX_PIXELS // 1_000_000} megapixels")
-    beta = top("beta", 0.5, non_negative=True)
-    tol = top("tol", 0.0, non_negative=True)
+    beta = top("beta", _FILE["beta"], non_negative=True)
+    tol = top("tol", _FILE["tol"], non_negative=True)
     if isinstance(data.get("newton"), bool) and overrides.get("newton") is None:
         raise file_error(path, "newton", f"must be a number (a multiple of eps; 0 turns Newton "
                                          f"steps off), got {show(data['newton'])}")
-    newton = top("newton", NEWTON, non_negative=True)
-    eps = top("eps", None, positive=True)
-    max_steps = top("max_steps", 1000, positive=True, integer=True)
+    newton = top("newton", _FILE["newton"], non_negative=True)
+    eps = top("eps", _FILE["eps"], positive=True)
+    max_steps = top("max_steps", _FILE["max_steps"], positive=True, integer=True)
     if max_steps > MAX_STEPS:
         raise file_error(path, "max_steps", f"must be at most {MAX_STEPS}, got {max_steps}")
-    mode = choice(overrides.get("mode") or data.get("mode", "smooth"), MODES, path, "mode")
-    gradient = choice(data.get("gradient", "metric"), ("metric", "exact"), path, "gradient")
-    bg = data.get("background", [255, 255, 255])
+    mode = choice(overrides.get("mode") or data.get("mode", _FILE["mode"]), MODES, path, "mode")
+    gradient = choice(data.get("gradient", _FILE["gradient"]), ("metric", "exact"), path, "gradient")
+    bg = data.get("background", list(_FILE["background"]))
     if (not isinstance(bg, list) or len(bg) != 3
             or not all(isinstance(v, int) and not isinstance(v, bool) and 0 <= v <= 255 for v in bg)):
         raise file_error(path, "background", f"must be [r, g, b] integers 0-255, got {show(bg)}")
-    samples = top("samples", 1, "--samples", positive=True, integer=True)
+    samples = top("samples", _FILE["samples"], "--samples", positive=True, integer=True)
     if samples > MAX_SAMPLES:
         where = "--samples" if overrides.get("samples") is not None else "samples"
         raise file_error(path, where, f"must be at most {MAX_SAMPLES}, got {samples}")
@@ -260,7 +273,7 @@ def load_scene(path, overrides=None):
     matcap = resolve_path(base, matcap, path, "matcap") if matcap else ""
     if not matcap:
         matcap = next((sp["matcap"] for sp in specs if sp["matcap"]), "")
-    default_shading = "matcap" if matcap else "normals"
+    default_shading = "matcap" if matcap else _FILE["shading"]
     shading = choice(overrides.get("shading") or data.get("shading", default_shading), SHADINGS,
                      path, "shading")
     if shading == "matcap" and not matcap:
@@ -292,7 +305,7 @@ def _flag(data, overrides, key, path):
     """A boolean top-level key (an override, when given, wins)."""
     if overrides.get(key) is not None:
         return bool(overrides[key])
-    value = data.get(key, False)
+    value = data.get(key, _FILE[key])
     if not isinstance(value, bool):
         raise file_error(path, key, f"must be true or false, got {show(value)}")
     return value
@@ -374,7 +387,7 @@ def _object_spec(od, i, base, path, data, overrides, beta):
     if i == 0 and overrides.get("alpha_u") is not None:
         alpha_u, au_where = overrides["alpha_u"], "--alpha-u"
     else:
-        alpha_u, au_where = od.get("max_alpha", "auto"), f"{where}.max_alpha"
+        alpha_u, au_where = od.get("max_alpha", _FILE["alpha_u"]), f"{where}.max_alpha"
     if alpha_u == "off" and au_where == "--alpha-u":
         pass  # no attenuation: alpha_U = alpha, once alpha is known (the command line only)
     elif alpha_u != "auto":
@@ -482,11 +495,15 @@ def merge_meshes(meshes, name="mixed"):
                     triangles=np.concatenate(T), name=name)
 
 
-def scene_from_field(field, *, alpha, alpha_u=None, beta=0.5, camera=None, width=512,
-                     height=512, mode="smooth", eps=None, offset=None, shading="normals",
-                     matcap="", gradient="metric", name="scene", max_steps=1000, tol=0.0,
-                     newton=None, up="y", samples=1, adaptive=False, transparent=False,
-                     lighting=None, color=None, background=(255, 255, 255)):
+def scene_from_field(field, *, alpha, alpha_u=_API["alpha_u"], beta=_API["beta"],
+                     camera=_API["view"], width=_API["width"], height=_API["height"],
+                     mode=_API["mode"], eps=_API["eps"], offset=_API["offset"],
+                     shading=_API["shading"], matcap=_API["matcap"],
+                     gradient=_API["gradient"], name="scene", max_steps=_API["max_steps"],
+                     tol=_API["tol"], newton=_API["newton"], up=_API["up"],
+                     samples=_API["samples"], adaptive=_API["adaptive"],
+                     transparent=_API["transparent"], lighting=_API["lighting"],
+                     color=_API["color"], background=_API["background"]):
     """Build a one-object :class:`Scene` in code (no JSON), e.g. for parameter studies.
 
     Parameters
@@ -497,7 +514,8 @@ def scene_from_field(field, *, alpha, alpha_u=None, beta=0.5, camera=None, width
         As in the scene file; ``"auto"`` is ``field.auto_alpha()``.
     alpha_u : float, "auto", "off" or None
         As ``max_alpha`` in the scene file; ``"auto"`` is ``field.auto_alpha_u(alpha)`` (no
-        ribbing); None (the default here) or ``"off"`` is ``alpha``, i.e. no attenuation.
+        ribbing); ``"off"`` (the default here, unlike scene files: see :mod:`tracer.settings`)
+        or None is ``alpha``, i.e. no attenuation.
     beta : float
         Barnes-Hut parameter.
     camera : (origin, dest, up), or a view name, optional
@@ -536,6 +554,42 @@ def scene_from_field(field, *, alpha, alpha_u=None, beta=0.5, camera=None, width
         raise ValueError(f"mode must be one of {MODES}, got {mode!r}")
     if shading not in SHADINGS:
         raise ValueError(f"shading must be one of {SHADINGS}, got {shading!r}")
+    alpha, alpha_u, beta, offset = _api_surface(field, alpha, alpha_u, beta, offset, mode,
+                                                gradient)
+    if eps is not None:
+        eps = _api_number(eps, "eps", positive=True)
+    tol = _api_number(tol, "tol", non_negative=True)
+    newton = _API["newton"] if newton is None else _api_number(newton, "newton", non_negative=True)
+    max_steps = int(_api_number(max_steps, "max_steps", positive=True, integer=True))
+    if max_steps > MAX_STEPS:
+        raise ValueError(f"max_steps must be at most {MAX_STEPS}, got {max_steps}")
+    width, height, samples = _api_film(width, height, samples)
+    from tracer.lighting import _check_color
+
+    lighting = _api_lighting(lighting)
+    if color is not None:
+        color = _check_color(color, "color")
+    background = tuple(int(round(v)) for v in _check_color(background, "background"))
+    origin, dest, up = _api_camera(field, camera, alpha, alpha_u, offset, eps, mode, width,
+                                   height, up)
+    obj = SceneObject(name=name, field=field, alpha=alpha, alpha_u=alpha_u, beta=beta,
+                      offset=offset if offset is not None else 1.0 / alpha,
+                      matcap=matcap, color=color,
+                      smooth_offset=offset if offset is not None else 0.0)
+    scene = Scene(path=f"{name}.json", camera_origin=origin, camera_dest=dest, camera_up=up,
+                  objects=[obj], width=width, height=height, beta=beta,
+                  eps=eps, mode=mode, shading=shading, matcap=matcap, max_steps=max_steps,
+                  gradient=gradient, tol=tol, newton=newton, samples=samples,
+                  adaptive=bool(adaptive), transparent=bool(transparent), lighting=lighting,
+                  background=background)
+    if scene.eps is None:
+        scene.eps = default_eps(scene)
+    return scene
+
+
+def _api_surface(field, alpha, alpha_u, beta, offset, mode, gradient):
+    """``(alpha, alpha_u, beta, offset)`` of :func:`scene_from_field`: ``"auto"`` and
+    ``"off"`` resolved, every value checked (``offset`` None: the mode's default level)."""
     if (isinstance(alpha, str) and alpha == "auto" and isinstance(alpha_u, str)
             and alpha_u == "auto" and offset is None and mode == "smooth"):
         # all three left to "auto": chosen together (issue 35; see
@@ -549,41 +603,44 @@ def scene_from_field(field, *, alpha, alpha_u=None, beta=0.5, camera=None, width
     alpha_u = alpha if alpha_u is None or (isinstance(alpha_u, str) and alpha_u == "off") \
         else alpha_u
     alpha, beta, _, _ = field.kernel_args(alpha, beta, alpha_u, gradient)  # validates all three
-    alpha_u = float(alpha_u)
     if offset is not None:
         offset = _api_number(offset, "offset", non_negative=True)
-    if eps is not None:
-        eps = _api_number(eps, "eps", positive=True)
-    tol = _api_number(tol, "tol", non_negative=True)
-    newton = NEWTON if newton is None else _api_number(newton, "newton", non_negative=True)
-    max_steps = int(_api_number(max_steps, "max_steps", positive=True, integer=True))
-    if max_steps > MAX_STEPS:
-        raise ValueError(f"max_steps must be at most {MAX_STEPS}, got {max_steps}")
+    return alpha, float(alpha_u), beta, offset
+
+
+def _api_film(width, height, samples):
+    """``(width, height, samples)`` of :func:`scene_from_field`, checked."""
     width = int(_api_number(width, "width", positive=True, integer=True))
     height = int(_api_number(height, "height", positive=True, integer=True))
     if width * height > MAX_PIXELS:
         raise ValueError(f"width x height is {width}x{height}: larger than "
                          f"{MAX_PIXELS // 1_000_000} megapixels")
-    from tracer.film import MAX_SAMPLES
-    from tracer.lighting import _check_color
-
     samples = int(_api_number(samples, "samples", positive=True, integer=True))
     if samples > MAX_SAMPLES:
         raise ValueError(f"samples must be at most {MAX_SAMPLES}, got {samples}")
+    return width, height, samples
+
+
+def _api_lighting(lighting):
+    """``lighting`` of :func:`scene_from_field` (None, a dict of fields or a
+    :class:`~tracer.lighting.Lighting`) as a ``Lighting``."""
     if lighting is None:
-        lighting = Lighting()
-    elif isinstance(lighting, dict):
+        return Lighting()
+    if isinstance(lighting, dict):
         unknown = sorted(set(lighting) - _LIGHTING_KEYS)
         if unknown:
             raise ValueError(f"lighting has unknown key(s) {', '.join(map(repr, unknown))} "
                              f"(allowed: {', '.join(sorted(_LIGHTING_KEYS))})")
-        lighting = Lighting(**lighting)
-    elif not isinstance(lighting, Lighting):
+        return Lighting(**lighting)
+    if not isinstance(lighting, Lighting):
         raise ValueError(f"lighting must be a tracer.lighting.Lighting or a dict, got "
                          f"{type(lighting).__name__}")
-    if color is not None:
-        color = _check_color(color, "color")
-    background = tuple(int(round(v)) for v in _check_color(background, "background"))
+    return lighting
+
+
+def _api_camera(field, camera, alpha, alpha_u, offset, eps, mode, width, height, up):
+    """``(origin, dest, up)`` of :func:`scene_from_field`'s ``camera``: three vectors, a view
+    name framing the surface, or None (the paper's beta-study camera); validated."""
     lo, hi = field.bounds
     if isinstance(camera, str):
         from tracer.camera import frame_points
@@ -609,19 +666,7 @@ def scene_from_field(field, *, alpha, alpha_u=None, beta=0.5, camera=None, width
     from tracer.camera import look_at
 
     look_at(origin, dest, up, width, height)  # validates the camera
-    obj = SceneObject(name=name, field=field, alpha=alpha, alpha_u=alpha_u, beta=beta,
-                      offset=offset if offset is not None else 1.0 / alpha,
-                      matcap=matcap, color=color,
-                      smooth_offset=offset if offset is not None else 0.0)
-    scene = Scene(path=f"{name}.json", camera_origin=origin, camera_dest=dest, camera_up=up,
-                  objects=[obj], width=width, height=height, beta=beta,
-                  eps=eps, mode=mode, shading=shading, matcap=matcap, max_steps=max_steps,
-                  gradient=gradient, tol=tol, newton=newton, samples=samples,
-                  adaptive=bool(adaptive), transparent=bool(transparent), lighting=lighting,
-                  background=background)
-    if scene.eps is None:
-        scene.eps = default_eps(scene)
-    return scene
+    return origin, dest, up
 
 
 def _api_number(value, name, **kw):

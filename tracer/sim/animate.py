@@ -29,7 +29,7 @@ def body_scene(sim, size=None, trajectory=None):
     """A :class:`~tracer.scene.Scene` with one object per body (body coordinates);
     ``size (W, H)`` overrides the camera's image size. A simulation without a camera of its
     own (``camera.auto``, the authors' files) is framed by
-    :func:`~tracer.sim.simfile.auto_camera` over ``trajectory`` (a dict with ``rotations``
+    :func:`~tracer.sim.simulation.auto_camera` over ``trajectory`` (a dict with ``rotations``
     and ``centers``), or at the initial state without one."""
     cam = sim.camera
     width, height = (cam.width, cam.height) if size is None else (int(size[0]), int(size[1]))

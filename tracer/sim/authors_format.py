@@ -1,7 +1,7 @@
 """The authors' simulation files (``sims/*.json`` of abhimadan/smoothdists), read unchanged.
 
 :func:`tracer.sim.simfile.load_simulation` hands a file with a top-level ``objects`` list here;
-:func:`build_simulation` turns it into the same :class:`~tracer.sim.simfile.Simulation` as our own
+:func:`build_simulation` turns it into the same :class:`~tracer.sim.simulation.Simulation` as our own
 format. Format (keys not listed are refused; lengths in scene units, times in seconds)::
 
     {
@@ -57,7 +57,7 @@ Semantics (those of their ``readJSONSimulationScene`` and ``rigid_body_simulator
 
 What differs: mesh paths resolve relative to the simulation file (theirs: to the working
 directory, so their files keep working when run from their ``sims/`` folder); the files have
-no camera, so frames get an automatic one (:func:`tracer.sim.simfile.auto_camera`: 640 x 360,
+no camera, so frames get an automatic one (:func:`tracer.sim.simulation.auto_camera`: 640 x 360,
 lit, up against gravity, framing every body over the whole trajectory); in smooth mode a pair
 whose data object is one mesh of one primitive keeps the smooth distance (theirs switches it to
 the exact one); resting contacts keep the integrator's gap ``gap_tol``
@@ -71,7 +71,10 @@ import numpy as np
 
 from smoothdist import DataMesh
 from smoothdist.mesh import read_mesh_file, unique_edges
+from tracer.errors import SimFileError
 from tracer.sim.bodies import INERTIA_FLOOR, Body
+from tracer.sim.simulation import DEFAULT_FRAMES, Camera, Simulation, auto_camera
+from tracer.sim.simulation import wrap_scene_error as _wrap
 from tracer.validate import SceneError, check_keys, choice, number, resolve_path, show, vec3
 
 __all__ = ["build_simulation", "EDGE_MASS_SCALE", "BVH_TYPES"]
@@ -90,8 +93,6 @@ DEFAULT_MAX_ALPHA = 1.0
 
 
 def _err(path, where, msg):
-    from tracer.sim.simfile import SimFileError
-
     return SimFileError(f"{os.path.basename(path)}: {where} {msg}")
 
 
@@ -344,12 +345,9 @@ def _object(od, i, path, base):
 
 
 def build_simulation(data, path):
-    """The :class:`~tracer.sim.simfile.Simulation` of an authors' file already parsed into
+    """The :class:`~tracer.sim.simulation.Simulation` of an authors' file already parsed into
     ``data`` (a dict with ``objects``); raises :class:`~tracer.errors.SimFileError` with a
     one-line message ``<file>: <key> <problem>``."""
-    from tracer.sim.simfile import (DEFAULT_FRAMES, Camera, Simulation, SimFileError, _wrap,
-                                    auto_camera)
-
     try:
         check_keys(data, _TOP, path, "the top level")
         for k in ("objects", "gravity", "timestep", "num_steps"):

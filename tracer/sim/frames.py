@@ -9,7 +9,7 @@
   trajectory by path and builds every body's tree **once** (cached, keyed by path, modification
   time and size), so only the task dict travels through the scheduler. A simulation without a
   camera (the authors' files) is framed on the whole trajectory
-  (:func:`tracer.sim.simfile.auto_camera`);
+  (:func:`tracer.sim.simulation.auto_camera`);
 * :func:`render_movie`: runs the tasks through :func:`tracer.runner.run_tasks` (in this
   process, on a local Dask cluster or on an existing one) and reduces the PNGs, in frame order,
   to an MP4 and a GIF.

@@ -1,4 +1,4 @@
-"""Run a :class:`~tracer.sim.simfile.Simulation` and write its trajectory.
+"""Run a :class:`~tracer.sim.simulation.Simulation` and write its trajectory.
 
 The trajectory is a compressed ``.npz`` with, for ``F`` frames (the initial state and one frame
 per step) and ``B`` bodies:

@@ -1,0 +1,160 @@
+"""The settings table (tracer/settings.py) is the one place a default is written: the Scene
+dataclass, scene_from_field, mesh_scene / render_mesh, ``tracer render`` (flags, help text and
+the mesh path), the scene loader and tracer/scene.schema.json agree with it."""
+
+import argparse
+import dataclasses
+import inspect
+import json
+
+import numpy as np
+import pytest
+
+from tracer import cli_render, from_mesh, scene as scene_mod, settings
+from tracer.scene_schema import load_schema
+from tracer.settings import REQUIRED, default_text, defaults, table
+
+FILE, API, MESH = defaults("file"), defaults("api"), defaults("mesh")
+
+def _signature_defaults(fn, renamed=None):
+    """Keyword-only defaults of ``fn`` by setting name (``renamed``: parameter -> setting)."""
+    renamed = renamed or {}
+    out = {}
+    for name, p in inspect.signature(fn).parameters.items():
+        if p.kind is not p.KEYWORD_ONLY:
+            continue
+        if name == "size":
+            out["width"], out["height"] = p.default
+            continue
+        out[renamed.get(name, name)] = REQUIRED if p.default is p.empty else p.default
+    return out
+
+
+def test_table_has_every_group_field_once_and_says_why_entries_differ():
+    keys = [r.key for r in table()]
+    assert len(keys) == len(set(keys))
+    for r in table():
+        assert r.help, r.key
+        if not (r.file == r.api == r.mesh):
+            assert r.why, f"{r.key}: entry points differ without a reason"
+    # the module's prose names every setting whose entry points differ
+    for r in table():
+        if not (r.file == r.api == r.mesh):
+            assert f"``{r.key}``" in settings.__doc__, r.key
+    # the frozen groups build with their defaults and refuse assignment
+    for group in settings.GROUPS:
+        obj = group()
+        with pytest.raises(dataclasses.FrozenInstanceError):
+            setattr(obj, dataclasses.fields(group)[0].name, 0)
+
+
+def test_scene_dataclass_defaults_are_the_file_defaults():
+    fields = {f.name: f for f in dataclasses.fields(scene_mod.Scene)}
+    shared = set(fields) & set(FILE)
+    assert {"width", "beta", "newton", "shading", "lighting", "background"} <= shared
+    for key in shared:
+        assert fields[key].default == FILE[key], key
+
+
+def test_scene_from_field_signature_is_the_api_column():
+    sig = _signature_defaults(scene_mod.scene_from_field, {"camera": "view"})
+    shared = set(sig) & set(API)
+    assert shared >= {"alpha", "alpha_u", "beta", "view", "shading", "tol", "newton", "up"}
+    for key in shared:
+        assert sig[key] == API[key], key
+
+
+@pytest.mark.parametrize("fn", [from_mesh.mesh_scene, from_mesh.render_mesh])
+def test_mesh_entry_points_are_the_mesh_column(fn):
+    sig = _signature_defaults(fn)
+    shared = set(sig) & set(MESH)
+    assert shared >= {"alpha", "alpha_u", "width", "height", "view", "up", "shading", "tol"}
+    for key in shared:
+        assert sig[key] == MESH[key], key
+
+
+def _render_parser():
+    p = argparse.ArgumentParser()
+    cli_render.add_arguments(p)
+    return p
+
+
+def test_cli_mesh_file_without_flags_gets_the_mesh_column(monkeypatch):
+    seen = {}
+
+    def fake(path, **kw):
+        seen.update(kw)
+        return "scene"
+
+    monkeypatch.setattr(from_mesh, "mesh_scene", fake)
+    args = _render_parser().parse_args(["bunny.obj"])
+    assert cli_render._build_mesh_scene(args) == "scene"
+    seen["width"], seen["height"] = seen.pop("size")
+    assert seen.pop("camera") is None and seen.pop("kind") is None
+    assert seen.pop("lighting") == {}  # no flag given: Lighting() inside scene_from_field
+    for key, value in seen.items():
+        assert value == MESH[key], key
+    # and a flag wins
+    cli_render._build_mesh_scene(_render_parser().parse_args(["bunny.obj", "--beta", "0.25"]))
+    assert seen["beta"] == 0.25
+
+
+def test_cli_help_names_the_table_defaults():
+    helps = {a.option_strings[0].lstrip("-"): " ".join((a.help or "").split())
+             for a in _render_parser()._actions if a.option_strings}
+    assert default_text("eps") in helps["eps"]
+    assert f"else {default_text('newton')}" in helps["newton"]
+    assert f"{default_text('beta', 'mesh')} for a mesh" in helps["beta"]
+    assert f"mesh default {MESH['width']} {MESH['height']}" in helps["size"]
+    assert f"for a mesh file: {MESH['shading']}" in helps["shading"]
+    assert f"for a scene file: {FILE['shading']}" in helps["shading"]
+    assert f"for a mesh: {MESH['view']}" in helps["view"]
+
+
+def _schema_default(node):
+    return node.get("default", node.get("x-default"))
+
+
+def _as_json(value):
+    if isinstance(value, settings.Lighting):
+        return {}  # the schema's lighting default: no key given
+    return json.loads(json.dumps(value))
+
+
+def test_schema_and_loader_keys_and_defaults_are_the_table():
+    schema = load_schema()
+    top = schema["properties"]
+    assert set(top) == scene_mod._TOP_KEYS
+    assert settings.SCENE_KEYS <= set(top)
+    for r in table():
+        if not r.scene_key:
+            continue
+        node = top[r.key]
+        if r.text:
+            assert node.get("x-default") == r.text, r.key
+        else:
+            assert _schema_default(node) == _as_json(r.file), r.key
+    obj = schema["$defs"]["object"]["properties"]
+    assert obj["max_alpha"]["default"] == FILE["alpha_u"]
+    assert "alpha" in schema["$defs"]["object"]["required"] or "alpha" in json.dumps(
+        schema["$defs"]["object"])  # alpha: required by the authors' format
+
+
+def test_loader_fills_left_out_keys_with_the_file_column(tmp_path):
+    (tmp_path / "tri.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+    (tmp_path / "s.json").write_text(json.dumps({
+        "camera": {"origin": [0.3, 0.3, 3], "dest": [0.3, 0.3, 0], "up": [0, 1, 0]},
+        "objects": [{"path": "tri.obj", "alpha": 20}]}))
+    sc = scene_mod.load_scene(tmp_path / "s.json")
+    for key in set(FILE) & {f.name for f in dataclasses.fields(sc)}:
+        if key == "eps":
+            assert sc.eps == pytest.approx(1e-4 * np.sqrt(2))  # the text's 1e-4 x diagonal
+            continue
+        assert getattr(sc, key) == FILE[key], key
+    o = sc.objects[0]
+    assert o.alpha_u == pytest.approx(o.field.auto_alpha_u(20.0))  # max_alpha "auto"
+    assert sc.march == settings.March(eps=sc.eps)
+    assert sc.film == settings.Film()
+    # the research API's deliberate difference: no attenuation unless asked
+    api = scene_mod.scene_from_field(o.field, alpha=20.0, width=8, height=8)
+    assert api.objects[0].alpha_u == 20.0 and api.shading == API["shading"]
