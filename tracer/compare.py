@@ -6,7 +6,7 @@ Two independent pipelines look at the same surface from the same camera:
   LogSumExp, several objects combined by a second LogSumExp with the largest alpha; or exact
   distance minus ``offset``, combined by the minimum).
 * **pyvista** -- the same scene distance is sampled on a regular ``N x N x N`` grid of points
-  spanning the tracer's grown scene box (:func:`tracer.render.scene_arrays`: the data's box
+  spanning the tracer's grown scene box (:func:`tracer.frame.scene_arrays`: the data's box
   plus the largest possible isosurface inflation, so every grid face is outside the surface
   and the contour is closed), the zero isosurface is extracted by VTK's flying-edges marching
   cubes, its points get the field's gradient as normals (evaluated *at the contour points*,
@@ -488,7 +488,7 @@ def render_isosurface(surface, camera, background=(255, 255, 255), focal_distanc
 
 # ------------------------------------------------------------------------ metrics and images
 def compare_renders(trace, pvr, diagonal):
-    """Metrics between a :class:`~tracer.render.RenderResult` and a :class:`PyvistaRender`.
+    """Metrics between a :class:`~tracer.frame.RenderResult` and a :class:`PyvistaRender`.
 
     Returns a dict: ``iou`` (hit masks; 1 when both are empty), ``tracer_only`` /
     ``pyvista_only`` (pixel counts), ``both_hit``, ``normal_angle_mean_deg``,
@@ -631,7 +631,7 @@ def compare_scene(scene, grid=128, trace=None):
         Its width and height are the image size.
     grid : int, default 128
         Grid points per axis over the grown scene box.
-    trace : tracer.render.RenderResult, optional
+    trace : tracer.frame.RenderResult, optional
         A render of ``scene`` to reuse (otherwise rendered here).
 
     Returns

@@ -2,7 +2,7 @@
 
 A render first traces one ray per pixel, through the pixel's own position (the tile kernels of
 :mod:`tracer.march`); those *centre samples* give the depth, normals and hit mask of a
-:class:`~tracer.render.RenderResult`. With ``samples = N > 1`` every pixel gets ``N - 1`` more
+:class:`~tracer.frame.RenderResult`. With ``samples = N > 1`` every pixel gets ``N - 1`` more
 rays (:func:`tracer.march.trace_samples`) at the offsets of :func:`sample_offsets`: a
 low-discrepancy (R2) sequence warped so that the offsets are distributed like a tent filter of
 radius one pixel. Every sample then carries the same weight and the pixel is their mean, which
@@ -38,14 +38,13 @@ from smoothdist.schedule import parallel_tasks
 from tracer import lighting as _lighting
 from tracer import march
 from tracer.camera import box_corners, primary_rays
-from tracer.render import in_bands, run_tasks
+from tracer.frame import MAX_SAMPLES  # noqa: F401  (the film's limit; defined in frame)
 from tracer.shading import (load_matcap, shade_headlight, shade_matcap, shade_normals,
                             view_normals)
+from tracer.threads import in_bands, run_tasks
 
 __all__ = ["sample_offsets", "form_image", "MAX_SAMPLES", "ADAPTIVE_FIRST", "ADAPTIVE_SECOND"]
 
-#: largest number of samples per pixel
-MAX_SAMPLES = 1024
 #: samples of a pixel flagged by the adaptive pass before its own samples are compared
 ADAPTIVE_FIRST = 4
 #: ... then this many where those disagree (and on every silhouette and object border), and
@@ -114,7 +113,7 @@ class _Shader:
         self.scene = scene
         self.camera = camera
         self.arrays = arrays
-        self.kargs = kargs                  # tracer.render.RayArgs: the render's own queries
+        self.kargs = kargs                  # tracer.frame.RayArgs: the render's own queries
         self.lit = scene.shading == "lit"
         self.transparent = bool(getattr(scene, "transparent", False))
         self.nobj = len(scene.objects)
@@ -500,8 +499,8 @@ def form_image(scene, camera, arrays, kargs, options, centre, samples=1, adaptiv
     """Shade the centre samples, add ``samples - 1`` more per pixel (all pixels, or the
     adaptive selection), and average.
 
-    ``kargs``: :class:`tracer.render.RayArgs`, the march kernels' leading arguments;
-    ``options``: :class:`tracer.render.TraceOptions`; ``centre = (hit (H, W), t (H, W), grad
+    ``kargs``: :class:`tracer.frame.RayArgs`, the march kernels' leading arguments;
+    ``options``: :class:`tracer.frame.TraceOptions`; ``centre = (hit (H, W), t (H, W), grad
     (H, W, 3), objs (H, W))`` (``objs``: the object each hit shows, as the march found it). Returns
     ``(rgb (H, W, 3) uint8, alpha (H, W) float32, spp (H, W) int32, info dict)``; ``info``
     holds the centre samples' ``shadow``, ``ao``, ``object`` and ``ground`` maps (lit only)

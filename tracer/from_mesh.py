@@ -4,7 +4,7 @@
 ``trimesh.Trimesh`` / ``PointCloud`` / ``path.Path3D``, a ``pyvista.PolyData`` or a
 :class:`smoothdist.DataMesh`, picks ``alpha="auto"`` and ``alpha_u="auto"`` (see
 :meth:`smoothdist.SmoothDistanceField.auto_alpha`), frames the whole surface with
-:func:`tracer.camera.frame_points` and returns a :class:`tracer.render.RenderResult` of numpy
+:func:`tracer.camera.frame_points` and returns a :class:`tracer.frame.RenderResult` of numpy
 arrays (``rgb``, ``depth``, ``normals``, ``hit``, ``steps``, ...; ``.save(path)``).
 """
 
@@ -194,7 +194,7 @@ def render_mesh(mesh, F=None, *, kind=None, alpha=_MESH["alpha"], alpha_u=_MESH[
 
     Returns
     -------
-    tracer.render.RenderResult
+    tracer.frame.RenderResult
         ``rgb (H, W, 3) uint8``, ``hit (H, W) bool``, ``depth (H, W) float32`` (ray
         parameter, NaN on misses), ``normals (H, W, 3)``, ``steps (H, W)``, ``leaves``,
         ``camera``, ``scene`` (``scene.objects[0].alpha`` / ``.alpha_u`` are the values used)

@@ -126,7 +126,8 @@ def prepare(scene, transforms=None, relax=None, omega=None, newton=None):
     """Everything a launch needs, on the device: ``(camera, args, shape)`` with ``args`` the
     kernel's leading arguments (up to ``newton``) and ``shape = (H, W)``. Checks the camera
     as ``render`` does."""
-    from tracer.render import RenderError, camera_of, distance_at_camera, scene_arrays
+    from tracer.errors import RenderError
+    from tracer.frame import camera_of, distance_at_camera, scene_arrays
 
     cu = sdcuda.cuda_module()
     kernel()
@@ -171,9 +172,9 @@ def launch(args, shape):
 def render_cuda(scene, *, progress=None, transforms=None, relax=None, omega=None, newton=None,
                 samples=None, adaptive=None):
     """:func:`tracer.render.render` on the GPU (its arguments; ``cone`` and ``band_rows`` do
-    not apply). Returns a :class:`tracer.render.RenderResult`; ``seconds`` is the time of
+    not apply). Returns a :class:`tracer.frame.RenderResult`; ``seconds`` is the time of
     the launch and the copies back."""
-    from tracer.render import RenderResult, _progress_callback, _samples, shade
+    from tracer.frame import RenderResult, _progress_callback, _samples, shade
 
     samples = _samples(scene.samples if samples is None else samples)
     check_scene(scene, samples)

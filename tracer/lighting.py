@@ -221,7 +221,7 @@ def light_points(tree, roots, params, mode, tol, P, N, L, lo, hi, eps, depth_max
 def light_tasks(tree, roots, params, mode, tol, P, N, L, lo, hi, eps, depth_max, k, delta,
                 do_shadow, do_ao, slack, t_min, shadow, ao, work, ntasks, task0, task1):
     """Tasks ``task0 <= task < task1`` of :func:`light_points` (``ntasks`` of them), serial and
-    ``nogil``, for Python threads (``tracer.render.run_tasks``): the same values, and no
+    ``nogil``, for Python threads (``tracer.threads.run_tasks``): the same values, and no
     ``prange`` to compile (a parallel loop costs numba as much again as its body)."""
     tree = _borrowed(tree)
     params = _borrowed(params)
@@ -327,9 +327,9 @@ def ground_height(arrays, data_vertices, up, eps, max_steps=400):
     """Height (along ``up``) of the surface's lowest point: upward rays from below the lowest
     data vertices (the ten lowest) to the surface; the smallest height where they land.
 
-    ``arrays``: :class:`tracer.render.SceneArrays`. Falls back to the bottom of the scene box
+    ``arrays``: :class:`tracer.frame.SceneArrays`. Falls back to the bottom of the scene box
     (which bounds the surface) if no ray lands."""
-    from tracer.render import kernel_roots
+    from tracer.frame import kernel_roots
 
     tree, roots, params, mode, lo, hi, depth_max, tol = arrays
     up = np.asarray(up, dtype=np.float64)

@@ -6,7 +6,7 @@ a ``(k, P_COLUMNS)`` float64 parameter table ``params``, one row per object, the
 ``mode`` (``MODE_SMOOTH`` or ``MODE_EXACT``) and its ``tol``: one scalar for the whole
 scene, the tolerance-controlled pruning of every object (0 = off, the default
 ``smoothdist.kernels.DEFAULT_TOL``; see ``smoothdist.kernels.smooth_distance_point_tol``).
-The columns of ``params`` (built by ``tracer.render.scene_arrays``; the kernels read them by
+The columns of ``params`` (built by ``tracer.frame.scene_arrays``; the kernels read them by
 these names only):
 
 =================== ======= =============================================================
@@ -877,7 +877,7 @@ def sample_tasks(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, ro
                  cone, newton, eps_px, newton_cos, ntasks, task0, task1):
     """Tasks ``task0 <= task < task1`` of :func:`trace_samples` (``ntasks`` of them; every
     argument is required here), serial and ``nogil``, for Python threads
-    (``tracer.render.run_tasks``): the same values, and no ``prange`` to compile."""
+    (``tracer.threads.run_tasks``): the same values, and no ``prange`` to compile."""
     tree = _borrowed(tree)
     params = _borrowed(params)
     cam = _borrowed(cam)

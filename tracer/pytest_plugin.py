@@ -46,7 +46,7 @@ def pytest_addoption(parser):
 
 
 def _as_rgb(image):
-    """A uint8 image from a :class:`tracer.render.RenderResult`, an array or a PNG path."""
+    """A uint8 image from a :class:`tracer.frame.RenderResult`, an array or a PNG path."""
     import numpy as np
 
     from tracer.image import load_png
