@@ -161,7 +161,7 @@ def test_smoke_run_end_to_end(tmp_path, capsys):
     out = tmp_path / "res"
     page = tmp_path / "page.md"
     assert main(["reproduce", "--smoke", "--out", str(out), "--page", str(page), "-q"]) == 0
-    for name in ("underestimate", "table3", "grid", "bh_switch", "beta", "alpha"):
+    for name in ("underestimate", "table3", "grid", "bh_switch", "box_test", "beta", "alpha"):
         res = json.loads((out / f"{name}.json").read_text())
         assert {"commit", "date", "machine", "numba_threads"} <= set(res["provenance"])
         assert res["settings"] and res["mode"] == "smoke"

@@ -36,7 +36,9 @@ def add_arguments(p):
                    help="also write the report page here (e.g. docs/reproduction.md)")
     p.add_argument("--only", metavar="LIST",
                    help="comma-separated experiments to run (default all: "
-                   "underestimate, table3, grid, bh_switch, beta, alpha)")
+                   "underestimate, table3, grid, bh_switch, box_test, beta, alpha); into an "
+                   "existing results folder of the same mode it updates those experiments and "
+                   "keeps the others (unless --overwrite)")
     p.add_argument("--report-only", action="store_true",
                    help="run nothing: regenerate claims.json and the page from --out")
     p.add_argument("--overwrite", action="store_true", help="replace an existing results folder")
@@ -103,8 +105,18 @@ def run(args):
     sched, workers = runner.check_arguments(args)
     if sched == "local" and mode != "full":
         sched, workers = "serial", None  # the quick run's tasks are too small for a cluster
+    keep = []  # --only into an existing results folder: the experiments it keeps
     if out.exists() and any(out.iterdir()) and not args.overwrite:
-        raise CLIError(f"{out} exists (pass --overwrite to replace it)")
+        if not (args.only and (out / "run.json").is_file()):
+            raise CLIError(f"{out} exists (pass --overwrite to replace it)")
+        from tracer.reproduce.report import load_run
+
+        old = load_run(out)
+        if old["mode"] != mode:
+            raise CLIError(f"{out} holds a {old['mode']} run, not a {mode} run; use another "
+                           "--out or --overwrite")
+        keep = [n for n in old["experiments"] if n not in names and n in EXPERIMENTS
+                and (out / f"{n}.json").is_file()]
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = out.parent / f".{out.name}.partial-{os.getpid()}"
     shutil.rmtree(tmp, ignore_errors=True)
@@ -123,8 +135,14 @@ def run(args):
                                                    settings=settings, seconds=round(sec, 2),
                                                    provenance=provenance()))
             say(f"reproduce: {name} done in {runner.duration(sec)}")
+        for n in keep:  # the experiments --only left as they were
+            shutil.copy2(out / f"{n}.json", tmp / f"{n}.json")
+            if (out / n).is_dir():
+                shutil.copytree(out / n, tmp / n)
         prov = provenance()
-        write_json(tmp / "run.json", dict(prov, mode=mode, experiments=names,
+        ran = [n for n in EXPERIMENTS if n in names or n in keep]
+        write_json(tmp / "run.json", dict(prov, mode=mode, experiments=ran,
+                                          updated=names if keep else ran,
                                           scheduler=sched if sched in ("serial", "local")
                                           else "address",
                                           seconds=round(time.perf_counter() - t_all, 1)))

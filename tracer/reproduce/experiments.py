@@ -53,6 +53,7 @@ SETTINGS = {
         "grid": {"grid": 24, "generated": [100, 1000, 10000], "thingi10k": True},
         "table3": {"scenes": ["ico_bowl", "trefoil_ringtoss", "sphere_slide"], "steps": 100,
                    "threads": [1, None]},
+        "box_test": {"cases": ["bowl-ico", "slide-sphere"], "repeat": 5},
     },
     "smoke": {  # the test suite's: every experiment at its smallest (seconds, once compiled)
         "beta": {"size": 12, "betas": [0.0, 0.2, 0.5]},
@@ -61,6 +62,7 @@ SETTINGS = {
         "bh_switch": {"trials": 20},
         "grid": {"grid": 8, "generated": [100], "thingi10k": False},
         "table3": {"scenes": ["trefoil_ringtoss"], "steps": 10, "threads": [1, None]},
+        "box_test": {"cases": ["bowl-ico"], "repeat": 2},
     },
     "full": {
         "beta": {"size": 512, "betas": [0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0]},
@@ -71,6 +73,7 @@ SETTINGS = {
                  "thingi10k": True},
         "table3": {"scenes": list(TABLE3_PAPER), "steps": None, "threads": [1, None],
                    "step_caps": {"octopus_lidar": 263}},
+        "box_test": {"cases": ["bowl-ico", "slide-sphere", "bunny-bunny"], "repeat": 7},
     },
 }
 
@@ -419,6 +422,78 @@ def table3(out, s, where):
             "not_run": [n for n in TABLE3_PAPER if n not in s["scenes"]]}
 
 
+# ============================================================================ box test
+def box_cases():
+    """The box test's cases: Table 3's whole-mesh pairs with edge and triangle queries, the
+    query at an exact gap of 1 / alpha from the data (as ``benchmarks/bench_mesh_distance.py``
+    places them). ``{name: (data (V, F), query (V, F), alpha, start, direction)}``."""
+    from smoothdist import DataMesh
+    from tracer.sim.primitives import bowl_edges, icosphere_edges, slide_edges, uv_sphere
+
+    bunny = DataMesh.load(BUNNY)
+    sl_V, sl_E = slide_edges()
+    down = np.array([0.0, -1.0, 0.0])
+    return {
+        "bowl-ico": (bowl_edges(), icosphere_edges(), 50.0, np.array([0.0, 0.5, 0.0]), down),
+        "slide-sphere": ((sl_V, sl_E), uv_sphere(), 100.0,
+                         sl_V[24 * 7 + 3] + np.array([0.0, 1.0, 0.0]), down),
+        "bunny-bunny": ((bunny.V, bunny.triangles), (bunny.V, bunny.triangles), 200.0,
+                        np.array([0.0, 0.3, 0.0]), down),
+    }
+
+
+def box_test(out, s, where):
+    """Sec. 3.5's box test on / off: the whole-mesh smooth distance (``MeshDistance``, beta 0.5)
+    with the paper's cheap box test (``box_test=True``, the default) and with the exact
+    primitive-box distance it avoids (``box_test=False``), timed back to back in one process
+    (alternating, median of ``repeat``). Both must be conservative (at most the beta = 0 value
+    per query primitive) and differ by no more than the Barnes-Hut error of the two (the
+    tolerance ``tests/test_box_test.py`` documents); the run fails otherwise."""
+    from smoothdist import MeshDistance
+
+    specs = box_cases()
+    res = {"beta": 0.5, "repeat": s["repeat"], "cases": {}}
+    for name in s["cases"]:
+        data, query, alpha, start, direction = specs[name]
+        on = MeshDistance(data, query, alpha=alpha, alpha_q=alpha, beta=0.5)
+        off = MeshDistance(on.field, query, alpha=alpha, alpha_q=alpha, beta=0.5,
+                           box_test=False)
+        exact = MeshDistance(on.field, query, alpha=alpha, alpha_q=alpha, beta=0.0)
+        t = on.translation_at_gap(1.0 / alpha, direction, start)
+        d = {}
+        for key, md in (("on", on), ("off", off), ("beta0", exact)):
+            d[key] = md.primitive_distances(t=t)[0]  # also compiles the kernels, untimed
+            d[key + "_leaves"] = float(md.last_stats[1].mean())
+        scale = 1e-12 * max(1.0, float(np.abs(d["beta0"]).max()))
+        conservative = bool(np.all(d["on"] <= d["beta0"] + scale)
+                            and np.all(d["off"] <= d["beta0"] + scale))
+        bh_err = d["beta0"] - np.minimum(d["on"], d["off"])
+        within = bool(np.all(np.abs(d["on"] - d["off"]) <= bh_err + scale))
+        if not (conservative and within):
+            raise RuntimeError(f"box_test {name}: the box test on and off disagree beyond the "
+                               "Barnes-Hut error (or one is not conservative)")
+        times = {"on": [], "off": []}
+        for _ in range(s["repeat"]):
+            for key, md in (("on", on), ("off", off)):
+                t0 = time.perf_counter()
+                md(t=t)
+                times[key].append(time.perf_counter() - t0)
+        ms_on, ms_off = (1e3 * float(np.median(times[k])) for k in ("on", "off"))
+        q = on.query
+        res["cases"][name] = {
+            "data_primitives": on.field.num_primitives, "data_kind": on.field.mesh.kind,
+            "query_primitives": int(q.kind.size),
+            "query_kind": ["points", "edges", "triangles"][int(q.kind.max())],
+            "alpha": alpha, "ms_on": ms_on, "ms_off": ms_off, "speedup": ms_off / ms_on,
+            "leaves_on": d["on_leaves"], "leaves_off": d["off_leaves"],
+            "leaves_beta0": d["beta0_leaves"],
+            "max_abs_diff_x_alpha": float(alpha * np.abs(d["on"] - d["off"]).max()),
+            "max_bh_error_x_alpha": float(alpha * bh_err.max()),
+            "conservative": conservative, "within_bh_error": within}
+    res["threads"] = int(__import__("numba").get_num_threads())
+    return res
+
+
 # ============================================================================ underestimate
 def underestimate(out, s, where):
     """Sec. 3 and App. A: ``0 <= d - d_hat <= log(A N) / alpha`` at random queries around the
@@ -449,5 +524,5 @@ def underestimate(out, s, where):
 
 #: name -> experiment, in the order they run (quick first where they are quick)
 EXPERIMENTS = {"underestimate": underestimate, "table3": table3, "grid": grid,
-               "bh_switch": bh_switch, "beta": beta,
+               "bh_switch": bh_switch, "box_test": box_test, "beta": beta,
                "alpha": alpha}
