@@ -214,6 +214,11 @@ def _table3_row(name):
             f"{g3(x['ms_mean'])} ms on {x['threads']} thread{'s' if x['threads'] > 1 else ''} "
             f"(median {g3(x['ms_median'])}; {g3(x['ms_mean'] / paper_ms)} x the paper's)"
             for x in r["runs"])
+        a = r.get("authors")
+        if a:
+            ours += ("; the authors' simulator on this machine: " + (
+                f"{g3(a['ms_mean'])} ms on {a['threads']} threads ({a['evaluations']} "
+                "evaluations, same steps)" if a["status"] == "ok" else a["status"]))
         loads = ", ".join(g3(x["load_average_before"]) for x in r["runs"])
         return (ours, f"{steps}, dt {dt}, {r['runs'][0]['evaluations']} evaluations timed, "
                 f"load average {loads}", CANNOT,

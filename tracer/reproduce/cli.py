@@ -39,6 +39,11 @@ def add_arguments(p):
                    "underestimate, table3, grid, bh_switch, box_test, beta, alpha); into an "
                    "existing results folder of the same mode it updates those experiments and "
                    "keeps the others (unless --overwrite)")
+    p.add_argument("--authors-bin", metavar="PATH",
+                   help="the authors' rigid_body_simulator (built as "
+                   "/work/shared/tools/authors-bench/README.md says): Table 3 then also runs "
+                   "their simulator on the same files and steps, on this machine, in the same "
+                   "run (rows it cannot finish within the timeout say so)")
     p.add_argument("--report-only", action="store_true",
                    help="run nothing: regenerate claims.json and the page from --out")
     p.add_argument("--overwrite", action="store_true", help="replace an existing results folder")
@@ -103,6 +108,11 @@ def run(args):
                   + (f" and {args.page}" if args.page else ""))
         return 0
     sched, workers = runner.check_arguments(args)
+    authors = None
+    if args.authors_bin:
+        authors = str(Path(args.authors_bin).resolve())
+        if not (os.path.isfile(authors) and os.access(authors, os.X_OK)):
+            raise CLIError(f"--authors-bin: not an executable file: {args.authors_bin}")
     if sched == "local" and mode != "full":
         sched, workers = "serial", None  # the quick run's tasks are too small for a cluster
     keep = []  # --only into an existing results folder: the experiments it keeps
@@ -129,7 +139,8 @@ def run(args):
             say(f"reproduce: {name} {settings}")
             t0 = time.perf_counter()
             res = EXPERIMENTS[name](tmp / name, settings,
-                                    {"scheduler": sched, "workers": workers})
+                                    {"scheduler": sched, "workers": workers,
+                                     "authors_bin": authors})
             sec = time.perf_counter() - t0
             write_json(tmp / f"{name}.json", dict(res, experiment=name, mode=mode,
                                                    settings=settings, seconds=round(sec, 2),

@@ -52,7 +52,7 @@ SETTINGS = {
         "bh_switch": {"trials": 40},
         "grid": {"grid": 24, "generated": [100, 1000, 10000], "thingi10k": True},
         "table3": {"scenes": ["ico_bowl", "trefoil_ringtoss", "sphere_slide"], "steps": 100,
-                   "threads": [1, None]},
+                   "threads": [1, None], "authors_timeout": 600.0},
         "box_test": {"cases": ["bowl-ico", "slide-sphere"], "repeat": 5},
     },
     "smoke": {  # the test suite's: every experiment at its smallest (seconds, once compiled)
@@ -72,7 +72,7 @@ SETTINGS = {
         "grid": {"grid": 100, "generated": [100, 1000, 10000, 100000, 1000000],
                  "thingi10k": True},
         "table3": {"scenes": list(TABLE3_PAPER), "steps": None, "threads": [1, None],
-                   "step_caps": {"octopus_lidar": 263}},
+                   "step_caps": {"octopus_lidar": 263}, "authors_timeout": 3600.0},
         "box_test": {"cases": ["bowl-ico", "slide-sphere", "bunny-bunny"], "repeat": 7},
     },
 }
@@ -375,6 +375,46 @@ def _timed_run(path, steps, cap, threads):
         "load_average_before": None if load0 is None else round(load0, 2)}
 
 
+def _authors_bench():
+    """``benchmarks/bench_authors_sim.py`` as a module (its ``prepared_copy`` and
+    ``run_theirs``: the same file, meshes and step count for their simulator as for ours)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location(
+        "_bench_authors_sim", REPO / "benchmarks" / "bench_authors_sim.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+#: the authors' simulator runs on this many threads (the project machine's cores)
+AUTHORS_THREADS = 2
+
+
+def authors_run(path, steps, binary, timeout):
+    """The authors' ``rigid_body_simulator`` on the simulation file ``path`` for ``steps``
+    steps (``/work/shared/tools/authors-bench/README.md``), in a scratch folder: their mean
+    milliseconds per distance evaluation (one ``meshDistance`` call: the lines of their
+    ``__times.txt`` files, microseconds each), the count and the wall time; or why not."""
+    import subprocess
+
+    bench = _authors_bench()
+    load0 = round(os.getloadavg()[0], 2) if hasattr(os, "getloadavg") else None
+    with tempfile.TemporaryDirectory() as tmp:
+        sim_path, spec = bench.prepared_copy(path, tmp, steps)
+        try:
+            wall, _, n, us = bench.run_theirs(binary, sim_path, spec, AUTHORS_THREADS, timeout)
+        except subprocess.TimeoutExpired:
+            return {"status": f"did not finish within {timeout:.0f} s", "steps": steps,
+                    "threads": AUTHORS_THREADS}
+        except (OSError, subprocess.CalledProcessError, RuntimeError) as exc:
+            return {"status": f"failed: {str(exc).splitlines()[0] if str(exc) else exc!r}",
+                    "steps": steps, "threads": AUTHORS_THREADS}
+    return {"status": "ok", "steps": steps, "threads": AUTHORS_THREADS, "evaluations": n,
+            "ms_mean": us / 1e3 if n else None, "wall_seconds": round(wall, 2),
+            "load_average_before": load0}
+
+
 def table3_task(task):
     """One Table 3 simulation, run once per entry of ``threads`` (None: all of the process's
     numba threads): ``steps`` steps (the file's when None, at most ``cap``); per run the mean
@@ -389,8 +429,12 @@ def table3_task(task):
     for threads in counts:
         sim, steps, r = _timed_run(task["path"], task["steps"], task.get("cap"), threads)
         runs.append(r)
-    return {"scene": task["key"], "steps": steps, "file_steps": int(sim.steps), "dt": sim.dt,
-            "runs": runs}
+    out = {"scene": task["key"], "steps": steps, "file_steps": int(sim.steps), "dt": sim.dt,
+           "runs": runs}
+    if task.get("authors_bin"):  # their simulator, same file and steps, after ours
+        out["authors"] = authors_run(task["path"], steps, task["authors_bin"],
+                                     task.get("authors_timeout", 3600.0))
+    return out
 
 
 def table3(out, s, where):
@@ -399,8 +443,13 @@ def table3(out, s, where):
     from tracer.outputs import write_json
 
     caps = s.get("step_caps", {})
+    authors = where.get("authors_bin")
+    skip = set(s.get("authors_skip", ()))
     tasks = [{"key": n, "path": str(TABLE3 / f"{n}.json"), "steps": s["steps"],
-              "cap": caps.get(n), "threads": s["threads"], "weight": 1.0} for n in s["scenes"]]
+              "cap": caps.get(n), "threads": s["threads"], "weight": 1.0,
+              "authors_bin": authors if authors and n not in skip else None,
+              "authors_timeout": float(s.get("authors_timeout", 3600.0))}
+             for n in s["scenes"]]
     rows = {}
     failed = []
     info = runner.run_tasks(table3_task, tasks,
@@ -419,6 +468,10 @@ def table3(out, s, where):
     write_json(out / "table3_rows.json", rows)
     return {"scenes": s["scenes"], "steps": s["steps"], "step_caps": caps,
             "scheduler": info.describe(), "rows": {n: rows[n] for n in s["scenes"]},
+            "authors_simulator": ("their rigid_body_simulator (abhimadan/smoothdists a2706a2, "
+                                  "CPU build of /work/shared/tools/authors-bench), the same "
+                                  f"files and steps, {AUTHORS_THREADS} threads, after ours in "
+                                  "the same task" if authors else "not run (no --authors-bin)"),
             "not_run": [n for n in TABLE3_PAPER if n not in s["scenes"]]}
 
 
