@@ -44,6 +44,9 @@ def add_arguments(p):
                    "/work/shared/tools/authors-bench/README.md says): Table 3 then also runs "
                    "their simulator on the same files and steps, on this machine, in the same "
                    "run (rows it cannot finish within the timeout say so)")
+    p.add_argument("--docs", action="store_true",
+                   help="also rewrite the guides' figures that the report measures (their "
+                   "reproduce: blocks) from the committed results (tracer/reproduce/docs.py)")
     p.add_argument("--report-only", action="store_true",
                    help="run nothing: regenerate claims.json and the page from --out")
     p.add_argument("--overwrite", action="store_true", help="replace an existing results folder")
@@ -106,6 +109,7 @@ def run(args):
         if not args.quiet:
             print(f"Wrote {out / 'claims.json'} and {out / 'reproduction.md'}"
                   + (f" and {args.page}" if args.page else ""))
+        _docs(args)
         return 0
     sched, workers = runner.check_arguments(args)
     authors = None
@@ -172,7 +176,22 @@ def run(args):
         write_text(args.page, (out / "reproduction.md").read_text(encoding="utf-8"))
     say(f"Wrote {out} ({runner.duration(time.perf_counter() - t_all)})"
         + (f" and {args.page}" if args.page else ""))
+    _docs(args)
     return 0
+
+
+def _docs(args):
+    """``--docs``: the guides' generated blocks rewritten from the committed results."""
+    if not args.docs:
+        return
+    from tracer.reproduce import docs
+
+    try:
+        changed = docs.update()
+    except (OSError, KeyError, ValueError, RuntimeError) as exc:
+        raise CLIError(f"--docs: {exc}") from None
+    if not args.quiet:
+        print("Rewrote " + (", ".join(changed) if changed else "nothing (the guides agree)"))
 
 
 if __name__ == "__main__":  # pragma: no cover

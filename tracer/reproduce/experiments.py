@@ -73,7 +73,8 @@ SETTINGS = {
                  "thingi10k": True},
         "table3": {"scenes": list(TABLE3_PAPER), "steps": None, "threads": [1, None],
                    "step_caps": {"octopus_lidar": 263}, "authors_timeout": 3600.0},
-        "box_test": {"cases": ["bowl-ico", "slide-sphere", "bunny-bunny"], "repeat": 7},
+        "box_test": {"cases": ["bunny-bunny", "ring-toss", "bowl-ico", "slide-sphere"],
+                     "repeat": 9},
     },
 }
 
@@ -481,12 +482,18 @@ def box_cases():
     query at an exact gap of 1 / alpha from the data (as ``benchmarks/bench_mesh_distance.py``
     places them). ``{name: (data (V, F), query (V, F), alpha, start, direction)}``."""
     from smoothdist import DataMesh
-    from tracer.sim.primitives import bowl_edges, icosphere_edges, slide_edges, uv_sphere
+    from tracer.sim.primitives import (bowl_edges, icosphere_edges, ring_toss_points,
+                                       slide_edges, trefoil_100, uv_sphere)
 
     bunny = DataMesh.load(BUNNY)
     sl_V, sl_E = slide_edges()
+    tref_V, tref_E = trefoil_100(REPO / "scenes" / "data" / "curves" / "trefoil.obj")
+    # thread the trefoil's central hole on the peg at the origin
+    tref_V = tref_V - [tref_V[:, 0].mean(), 0.0, tref_V[:, 2].mean()]
     down = np.array([0.0, -1.0, 0.0])
     return {
+        "ring-toss": ((ring_toss_points(), None), (tref_V, tref_E), 20.0,
+                      np.array([0.0, 1.2, 0.0]), down),
         "bowl-ico": (bowl_edges(), icosphere_edges(), 50.0, np.array([0.0, 0.5, 0.0]), down),
         "slide-sphere": ((sl_V, sl_E), uv_sphere(), 100.0,
                          sl_V[24 * 7 + 3] + np.array([0.0, 1.0, 0.0]), down),
