@@ -44,6 +44,9 @@ def add_arguments(p):
                    "/work/shared/tools/authors-bench/README.md says): Table 3 then also runs "
                    "their simulator on the same files and steps, on this machine, in the same "
                    "run (rows it cannot finish within the timeout say so)")
+    p.add_argument("--table3-scenes", metavar="LIST",
+                   help="comma-separated Table 3 scenes to run (default: the mode's; the full "
+                   "run's are all eight, hours on 2 cores)")
     p.add_argument("--docs", action="store_true",
                    help="also rewrite the guides' figures that the report measures (their "
                    "reproduce: blocks) from the committed results (tracer/reproduce/docs.py)")
@@ -55,13 +58,13 @@ def add_arguments(p):
     p.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
 
 
-def _only(text, names):
+def _only(text, names, flag="--only", what="experiment(s)"):
     if not text:
         return list(names)
     pick = [s.strip() for s in text.split(",") if s.strip()]
     bad = [s for s in pick if s not in names]
     if bad or not pick:
-        raise CLIError(f"--only: unknown experiment(s) {', '.join(bad) or '(none given)'} "
+        raise CLIError(f"{flag}: unknown {what} {', '.join(bad) or '(none given)'} "
                        f"(choose from {', '.join(names)})")
     return [n for n in names if n in pick]
 
@@ -112,6 +115,11 @@ def run(args):
         _docs(args)
         return 0
     sched, workers = runner.check_arguments(args)
+    scenes = None
+    if args.table3_scenes:
+        from tracer.reproduce.experiments import TABLE3_PAPER
+
+        scenes = _only(args.table3_scenes, list(TABLE3_PAPER), "--table3-scenes", "scene(s)")
     authors = None
     if args.authors_bin:
         authors = str(Path(args.authors_bin).resolve())
@@ -140,6 +148,8 @@ def run(args):
     try:
         for name in names:
             settings = SETTINGS[mode][name]
+            if name == "table3" and scenes:
+                settings = dict(settings, scenes=scenes)
             say(f"reproduce: {name} {settings}")
             t0 = time.perf_counter()
             res = EXPERIMENTS[name](tmp / name, settings,
