@@ -137,7 +137,7 @@ def render_page(folder, shown_as):
               "exact gap of 1/alpha. Both are conservative; per query primitive they differ by "
               "no more than the Barnes-Hut error (the largest of each, times alpha, below).", "",
               "| case | query | data | alpha | on (ms) | off (ms) | speed-up | leaves on / off "
-              "| max \|on − off\| × alpha | max BH error × alpha |",
+              "| max \\|on − off\\| × alpha | max BH error × alpha |",
               "|---|---|---|---:|---:|---:|---:|---|---:|---:|"]
         for name, c in b["cases"].items():
             L.append("| " + " | ".join(_cell(x) for x in (
