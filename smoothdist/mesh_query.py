@@ -434,9 +434,10 @@ def smooth_traverse(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, to
     could: a cheap test that rejects most nodes before the per-vertex one.
 
     ``exact_box`` (``moment`` False only): the box test off, i.e. every Barnes-Hut candidate's
-    distance is the exact primitive-box distance (:func:`smoothdist.box_distance.
-    box_distance_exact`, the quadratic program the paper's halfspace test avoids) instead of
-    the box-box distance or the halfspace bound; the same traversal otherwise.
+    distance is the exact primitive-box distance
+    (:func:`smoothdist.box_distance.box_distance_exact`, the quadratic program the paper's
+    halfspace test avoids) instead of the box-box distance or the halfspace bound; the same
+    traversal otherwise.
     """
     qlo = scratch[0:3]
     qhi = scratch[3:6]

@@ -206,8 +206,9 @@ def _table3_row(name):
         row, data, query, paper_ms, dt = TABLE3_PAPER[name]
         r = t["rows"].get(name)
         if r is None:
-            return ("-", "-", NOT_RUN, "not part of this run (quick runs skip the 6.6M-point "
-                    "terrain and the larger scenes)")
+            return ("-", "-", NOT_RUN, "not part of this run (quick runs and runs with "
+                    "--table3-scenes leave it out: the 6.6M-point terrain and the larger "
+                    "scenes take hours on 2 cores)")
         steps = f"{r['steps']} steps" + ("" if r["steps"] == r["file_steps"]
                                          else f" of the file's {r['file_steps']}")
         ours = "; ".join(
