@@ -205,3 +205,51 @@ def box_lower_bound(kq, Q, qlo, qhi, lo, hi, node, E):
                 uy = sgn * ny
                 uz = sgn * nz
     return best, ux, uy, uz
+
+
+@numba.njit(**NJIT)
+def box_distance_exact(kq, Q, lo, hi, node, E):
+    """The exact distance from query primitive ``(kq, Q)`` to node ``node``'s box, and its
+    derivative for a translation of the query: the quadratic program that the paper's
+    halfspace test (:func:`box_lower_bound`) avoids (Sec. 3.5), here for measuring what that
+    test saves (``MeshDistance(box_test=False)``).
+
+    0 when a query vertex lies in the box (the primitive meets it); otherwise the primitive
+    meets the box, if at all, on its surface, so the distance is the smallest to the box's 12
+    face triangles (:func:`smoothdist.closest_pair.closest_pair`). ``E`` (9,) scratch.
+    Returns ``(delta, ux, uy, uz)`` as :func:`box_lower_bound`, with ``delta`` >= its value.
+    """
+    for v in range(kq + 1):
+        inside = True
+        for a in range(3):
+            x = Q[3 * v + a]
+            if x < lo[node, a] or x > hi[node, a]:
+                inside = False
+        if inside:
+            return 0.0, 0.0, 0.0, 0.0
+    best = math.inf
+    bx = by = bz = 0.0
+    for a in range(3):          # the face's normal axis
+        b = (a + 1) % 3
+        c = (a + 2) % 3
+        for side in range(2):
+            fa = lo[node, a] if side == 0 else hi[node, a]
+            for t in range(2):  # the face's two triangles: corners (0,0)(1,0)(1,1), (0,0)(1,1)(0,1)
+                for k in range(3):
+                    if k == 0:
+                        ub, uc = 0, 0
+                    elif k == 1:
+                        ub, uc = (1, 0) if t == 0 else (1, 1)
+                    else:
+                        ub, uc = (1, 1) if t == 0 else (0, 1)
+                    E[3 * k + a] = fa
+                    E[3 * k + b] = hi[node, b] if ub else lo[node, b]
+                    E[3 * k + c] = hi[node, c] if uc else lo[node, c]
+                r = closest_pair(kq, Q, 2, E)
+                if r[0] < best:
+                    best = r[0]
+                    bx, by, bz = r[1], r[2], r[3]
+    d = math.sqrt(best)
+    if d > 0.0:
+        return d, bx / d, by / d, bz / d
+    return 0.0, 0.0, 0.0, 0.0

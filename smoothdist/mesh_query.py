@@ -42,7 +42,8 @@ import numpy as np
 from numba import prange
 
 from smoothdist._config import NJIT, NJIT_INLINE, NJIT_PARALLEL
-from smoothdist.box_distance import box_box_distance, box_box_offset, box_lower_bound
+from smoothdist.box_distance import (box_box_distance, box_box_offset, box_distance_exact,
+                                     box_lower_bound)
 from smoothdist.box_moment import box_lower_bound_moment, extreme_levers, gap_moment
 from smoothdist.closest_pair import (closest_pair, segment_point, segment_segment, segment_triangle,
                                      triangle_point, triangle_segment, triangle_triangle)
@@ -416,7 +417,8 @@ def _far_weight(whi, node, cnt, S):
 
 
 @numba.njit(**NJIT)
-def smooth_traverse(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, tol, moment):
+def smooth_traverse(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, tol, moment,
+                    exact_box=False):
     """The traversal of :func:`smooth_distance_primitive` and, with ``moment``,
     :func:`smoothdist.mesh_moment.smooth_moment_primitive` (one code for both, so that their
     ``d_hat`` and gradients agree bit for bit; inlined, so that a constant ``moment`` folds).
@@ -430,6 +432,12 @@ def smooth_traverse(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, to
     is tried only if the smallest query-vertex distance to the box could qualify the node, and
     that only if the box-box distance plus the query box's diagonal (an upper bound of it)
     could: a cheap test that rejects most nodes before the per-vertex one.
+
+    ``exact_box`` (``moment`` False only): the box test off, i.e. every Barnes-Hut candidate's
+    distance is the exact primitive-box distance
+    (:func:`smoothdist.box_distance.box_distance_exact`, the quadratic program the paper's
+    halfspace test avoids) instead of the box-box distance or the halfspace bound; the same
+    traversal otherwise.
     """
     qlo = scratch[0:3]
     qhi = scratch[3:6]
@@ -498,7 +506,10 @@ def smooth_traverse(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, to
         ax = ay = az = 0.0
         if cnt > 1 and beta > 0.0:
             dg = diag[node]
-            if dg * dg < b2 * bd2:
+            if exact_box and dg * dg < b2 * bd2:
+                delta, ux, uy, uz = box_distance_exact(kq, Q, lo, hi, node, E)
+                far = True
+            elif dg * dg < b2 * bd2:
                 # the box-box distance (a lower bound) already qualifies the node
                 g0 = _signed_gap(l0, h0, lo[node, 0], hi[node, 0])
                 g1 = _signed_gap(l1, h1, lo[node, 1], hi[node, 1])
@@ -521,6 +532,8 @@ def smooth_traverse(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, to
                     if moment == 1:
                         delta, ux, uy, uz, ax, ay, az = box_lower_bound_moment(
                             kq, Q, qlo, qhi, lo, hi, node, E, cx, cy, cz, L)
+                    elif exact_box:
+                        delta, ux, uy, uz = box_distance_exact(kq, Q, lo, hi, node, E)
                     else:
                         delta, ux, uy, uz = box_lower_bound(kq, Q, qlo, qhi, lo, hi, node, E)
                         if moment >= VERTEX_1:
@@ -584,7 +597,7 @@ def smooth_traverse(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, to
 
 @numba.njit(**NJIT)
 def smooth_distance_primitive(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch,
-                              tol=DEFAULT_TOL):
+                              tol=DEFAULT_TOL, exact_box=False):
     """Smooth distance ``d_hat(g)`` and its translation gradient for an edge or triangle query.
 
     ``Q (9,)`` the query's vertices, ``kq`` 1 or 2; ``scratch (15,)`` float64 work space; other
@@ -596,9 +609,11 @@ def smooth_distance_primitive(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, s
     distance) is at most ``tol`` times the sum so far is replaced by that term. It is the same
     overestimate of the subtree's sum as Barnes-Hut's, so ``d_hat`` only decreases, by at most
     ``-log(1 - k tol) / alpha`` for ``k`` such nodes (``k tol < 1``).
+
+    ``exact_box``: the paper's box test off (see :func:`smooth_traverse`).
     """
     d, gx, gy, gz, _, _, _, nodes, leaves = smooth_traverse(
-        tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, tol, False)
+        tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, tol, False, exact_box)
     return d, gx, gy, gz, nodes, leaves
 
 
@@ -707,7 +722,7 @@ def exact_distance_primitive(tree, kq, Q, stack, dstack, scratch, bound2=np.inf)
 
 @numba.njit(**NJIT)
 def _smooth_task(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g, out_nodes,
-                 out_leaves, tol, task, ntasks):
+                 out_leaves, tol, task, ntasks, exact_box=False):
     """Query primitives ``task, task + ntasks, ...`` of :func:`smooth_distance_primitives`."""
     k = tree.depth + 4
     stack = np.empty(k, dtype=np.int64)
@@ -725,7 +740,7 @@ def _smooth_task(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g, ou
                 tree, Q[0], Q[1], Q[2], alpha, beta, S, wgs, stack, dstack)
         else:
             d, gx, gy, gz, nodes, leaves = smooth_distance_primitive(
-                tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, tol)
+                tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, tol, exact_box)
         out_d[j] = d
         out_g[j, 0] = gx
         out_g[j, 1] = gy
@@ -736,26 +751,29 @@ def _smooth_task(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g, ou
 
 @numba.njit(**NJIT_PARALLEL)
 def smooth_distance_primitives(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g,
-                               out_nodes, out_leaves, tol=DEFAULT_TOL, ntasks=TASKS):
+                               out_nodes, out_leaves, tol=DEFAULT_TOL, ntasks=TASKS,
+                               exact_box=False):
     """``d_hat`` and translation gradient of every query primitive, in parallel.
 
     ``qkind (m,)`` int64, ``qpts (m, 9)`` float64; fills ``out_d (m,)``, ``out_g (m, 3)``,
     ``out_nodes``, ``out_leaves (m,)``. ``brute`` sums every data primitive (reference).
     ``tol``: see :func:`smooth_distance_primitive` (edge and triangle queries only).
     ``ntasks``: the number of strided tasks (:func:`smoothdist.schedule.parallel_tasks`).
+    ``exact_box``: the paper's box test off (:func:`smooth_traverse`).
     """
     ntasks = max(1, min(qkind.size, ntasks))
     for task in prange(ntasks):
         _smooth_task(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g, out_nodes,
-                     out_leaves, tol, task, ntasks)
+                     out_leaves, tol, task, ntasks, exact_box)
 
 
 @numba.njit(**NJIT)
 def smooth_distance_primitives_serial(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d,
-                                      out_g, out_nodes, out_leaves, tol=DEFAULT_TOL):
+                                      out_g, out_nodes, out_leaves, tol=DEFAULT_TOL,
+                                      exact_box=False):
     """:func:`smooth_distance_primitives` on the calling thread (small query meshes)."""
     _smooth_task(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g, out_nodes,
-                 out_leaves, tol, 0, 1)
+                 out_leaves, tol, 0, 1, exact_box)
 
 
 @numba.njit(**NJIT)

@@ -241,6 +241,14 @@ class MeshDistance:
         far-field term is below ``tol`` times the running sum is replaced by that term. Still
         conservative (``d_hat`` only decreases, by at most ``-log(1 - k tol) / alpha`` per query
         primitive for ``k`` such nodes); applies to edge and triangle queries.
+    box_test : bool
+        The paper's cheap box test (Sec. 3.5; default True): a Barnes-Hut candidate's distance
+        for an edge or triangle query is a lower bound from the box-box gap or the halfspace
+        test. False computes the exact primitive-box distance instead (the quadratic program
+        the paper avoids; only for measuring what the test saves: ``tracer reproduce``'s
+        ``box_test`` experiment). Both are conservative; they accept slightly different far
+        fields, so values differ within the Barnes-Hut error. Applies to ``md(...)`` and
+        :meth:`primitive_distances`.
 
     Calling the object, ``d, G = md(R, t)``, returns the smooth distance (float) and the
     paper's vertex gradients ``G (n_query_vertices, 3)`` (Eq. 7-8): each query primitive's
@@ -261,9 +269,12 @@ class MeshDistance:
     """
 
     def __init__(self, data, query, *, alpha, alpha_q, beta=0.5, alpha_u=None,
-                 gradient="metric", leaf_size=1, tol=DEFAULT_TOL):
+                 gradient="metric", leaf_size=1, tol=DEFAULT_TOL, box_test=True):
         self.field = _as_field(data, leaf_size)
         self.tol = non_negative(tol, "tol")
+        if not isinstance(box_test, (bool, np.bool_)):
+            raise ValueError(f"box_test must be True or False, got {box_test!r}")
+        self.box_test = bool(box_test)
         self.alpha, self.beta, self.S, self.wgs = self.field.kernel_args(alpha, beta, alpha_u,
                                                                          gradient)
         self.alpha_q = positive(alpha_q, "alpha_q")
@@ -323,11 +334,12 @@ class MeshDistance:
         if m < SERIAL_BELOW["smooth"]:
             _mq.smooth_distance_primitives_serial(
                 self.field.tree, self.query.kind, pts, self.alpha, self.beta, self.S, self.wgs,
-                method == "brute", d, g, nodes, leaves, self.tol)
+                method == "brute", d, g, nodes, leaves, self.tol, not self.box_test)
         else:
             _mq.smooth_distance_primitives(
                 self.field.tree, self.query.kind, pts, self.alpha, self.beta, self.S, self.wgs,
-                method == "brute", d, g, nodes, leaves, self.tol, parallel_tasks(m))
+                method == "brute", d, g, nodes, leaves, self.tol, parallel_tasks(m),
+                not self.box_test)
         self.last_stats = (nodes, leaves)
         return d, g
 
@@ -338,6 +350,11 @@ class MeshDistance:
         derivatives)."""
         d, g = self.primitive_distances(R, t, method=method)
         return split_to_vertices(d, g, self.query, self.alpha_q)
+
+    def _box_test_on(self, what):
+        if not self.box_test:
+            raise ValueError(f"{what} needs box_test=True (box_test=False measures the "
+                             "distance and translation gradient only)")
 
     def vertex_gradient(self, R=None, t=None, *, method="bvh"):
         """``(d_hat, G (n, 3))``: the smooth distance and its derivative with respect to each
@@ -356,6 +373,7 @@ class MeshDistance:
         """
         if method not in ("bvh", "brute"):
             raise ValueError(f"method must be 'bvh' or 'brute', got {method!r}")
+        self._box_test_on("vertex_gradient")
         pts = self._primitive_coords(R, t)
         q = self.query
         m = q.kind.size
@@ -383,6 +401,7 @@ class MeshDistance:
         """
         if method not in ("bvh", "brute"):
             raise ValueError(f"method must be 'bvh' or 'brute', got {method!r}")
+        self._box_test_on("primitive_moments")
         pts = self._primitive_coords(R, t)
         m = self.query.kind.size
         d = np.empty(m)

@@ -155,13 +155,63 @@ def test_an_edited_number_is_caught(tmp_path, where):
     assert problems and any("Table 3" in p or "not the one generated" in p for p in problems)
 
 
+# ------------------------------------------------------------------ the guides
+FULL = REPO / "renders" / "reproduction" / "full"
+
+
+def _guide(name):
+    return (REPO / "docs" / "guide" / name).read_text(encoding="utf-8")
+
+
+def test_guides_show_the_committed_results():
+    """The guides' figures that the report also measures are the generated blocks, and their
+    numbers are those of the results files (read here without the generator's code)."""
+    from tracer.reproduce import docs
+
+    assert docs.disagreements() == []
+    box = json.loads((FULL / "box_test.json").read_text())
+    text = _guide("whole-mesh.md")
+    for name, c in box["cases"].items():
+        row = next(ln for ln in text.splitlines() if ln.startswith(f"| {name} |"))
+        cells = [x.strip() for x in row.strip("|").split("|")]
+        for cell, v in ((cells[5], c["ms_on"]), (cells[6], c["ms_off"])):
+            shown = float(cell.split()[0].replace(",", ""))
+            assert math.isclose(shown, v, rel_tol=5e-3 if v < 1000 else 5e-4), (cell, v)
+    h = json.loads((FULL / "bh_switch.json").read_text())
+    text = _guide("studies.md")
+    for key in ("mean_discrepancy", "max_discrepancy"):
+        assert f"{h[key]:.3g}" in text
+    assert f"{h['kept_points']} switch points" in text and f"{h['min_cosine']:.4f}" in text
+    # the 512² beta table against its CSV
+    rows, path, _ = docs._beta_rows()
+    r = next(r for r in rows if r["type"] == "edges" and float(r["beta"]) == 0.5)
+    assert f" s ({100 * float(r['error_rel_diag']):.3g})" in text
+    block = docs.current("docs/guide/studies.md", "beta-512")
+    cell = next(ln for ln in block.splitlines() if ln.startswith("| edges |")).split("|")[3]
+    assert math.isclose(float(cell.split()[0]), float(r["seconds"]), rel_tol=5e-3)
+
+
+def test_an_edited_guide_figure_is_caught():
+    from tracer.reproduce import docs
+
+    box = json.loads((FULL / "box_test.json").read_text())
+    ms = f"{box['cases']['bowl-ico']['ms_on']:.3g} ms"
+    text = _guide("whole-mesh.md")
+    assert ms in text
+    edited = text.replace(ms, "0.001 ms", 1)
+    problems = docs.disagreements(lambda g: edited if g.endswith("whole-mesh.md")
+                                  else (REPO / g).read_text(encoding="utf-8"))
+    assert problems == ["docs/guide/whole-mesh.md: block whole-mesh-speed is not the one "
+                        "generated from the results"]
+
+
 # ------------------------------------------------------------------ the command
 @pytest.mark.slow
 def test_smoke_run_end_to_end(tmp_path, capsys):
     out = tmp_path / "res"
     page = tmp_path / "page.md"
     assert main(["reproduce", "--smoke", "--out", str(out), "--page", str(page), "-q"]) == 0
-    for name in ("underestimate", "table3", "grid", "bh_switch", "beta", "alpha"):
+    for name in ("underestimate", "table3", "grid", "bh_switch", "box_test", "beta", "alpha"):
         res = json.loads((out / f"{name}.json").read_text())
         assert {"commit", "date", "machine", "numba_threads"} <= set(res["provenance"])
         assert res["settings"] and res["mode"] == "smoke"

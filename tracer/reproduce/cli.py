@@ -36,7 +36,20 @@ def add_arguments(p):
                    help="also write the report page here (e.g. docs/reproduction.md)")
     p.add_argument("--only", metavar="LIST",
                    help="comma-separated experiments to run (default all: "
-                   "underestimate, table3, grid, bh_switch, beta, alpha)")
+                   "underestimate, table3, grid, bh_switch, box_test, beta, alpha); into an "
+                   "existing results folder of the same mode it updates those experiments and "
+                   "keeps the others (unless --overwrite)")
+    p.add_argument("--authors-bin", metavar="PATH",
+                   help="the authors' rigid_body_simulator (built as "
+                   "/work/shared/tools/authors-bench/README.md says): Table 3 then also runs "
+                   "their simulator on the same files and steps, on this machine, in the same "
+                   "run (rows it cannot finish within the timeout say so)")
+    p.add_argument("--table3-scenes", metavar="LIST",
+                   help="comma-separated Table 3 scenes to run (default: the mode's; the full "
+                   "run's are all eight, hours on 2 cores)")
+    p.add_argument("--docs", action="store_true",
+                   help="also rewrite the guides' figures that the report measures (their "
+                   "reproduce: blocks) from the committed results (tracer/reproduce/docs.py)")
     p.add_argument("--report-only", action="store_true",
                    help="run nothing: regenerate claims.json and the page from --out")
     p.add_argument("--overwrite", action="store_true", help="replace an existing results folder")
@@ -45,13 +58,13 @@ def add_arguments(p):
     p.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
 
 
-def _only(text, names):
+def _only(text, names, flag="--only", what="experiment(s)"):
     if not text:
         return list(names)
     pick = [s.strip() for s in text.split(",") if s.strip()]
     bad = [s for s in pick if s not in names]
     if bad or not pick:
-        raise CLIError(f"--only: unknown experiment(s) {', '.join(bad) or '(none given)'} "
+        raise CLIError(f"{flag}: unknown {what} {', '.join(bad) or '(none given)'} "
                        f"(choose from {', '.join(names)})")
     return [n for n in names if n in pick]
 
@@ -99,12 +112,33 @@ def run(args):
         if not args.quiet:
             print(f"Wrote {out / 'claims.json'} and {out / 'reproduction.md'}"
                   + (f" and {args.page}" if args.page else ""))
+        _docs(args)
         return 0
     sched, workers = runner.check_arguments(args)
+    scenes = None
+    if args.table3_scenes:
+        from tracer.reproduce.experiments import TABLE3_PAPER
+
+        scenes = _only(args.table3_scenes, list(TABLE3_PAPER), "--table3-scenes", "scene(s)")
+    authors = None
+    if args.authors_bin:
+        authors = str(Path(args.authors_bin).resolve())
+        if not (os.path.isfile(authors) and os.access(authors, os.X_OK)):
+            raise CLIError(f"--authors-bin: not an executable file: {args.authors_bin}")
     if sched == "local" and mode != "full":
         sched, workers = "serial", None  # the quick run's tasks are too small for a cluster
+    keep = []  # --only into an existing results folder: the experiments it keeps
     if out.exists() and any(out.iterdir()) and not args.overwrite:
-        raise CLIError(f"{out} exists (pass --overwrite to replace it)")
+        if not (args.only and (out / "run.json").is_file()):
+            raise CLIError(f"{out} exists (pass --overwrite to replace it)")
+        from tracer.reproduce.report import load_run
+
+        old = load_run(out)
+        if old["mode"] != mode:
+            raise CLIError(f"{out} holds a {old['mode']} run, not a {mode} run; use another "
+                           "--out or --overwrite")
+        keep = [n for n in old["experiments"] if n not in names and n in EXPERIMENTS
+                and (out / f"{n}.json").is_file()]
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = out.parent / f".{out.name}.partial-{os.getpid()}"
     shutil.rmtree(tmp, ignore_errors=True)
@@ -114,17 +148,26 @@ def run(args):
     try:
         for name in names:
             settings = SETTINGS[mode][name]
+            if name == "table3" and scenes:
+                settings = dict(settings, scenes=scenes)
             say(f"reproduce: {name} {settings}")
             t0 = time.perf_counter()
             res = EXPERIMENTS[name](tmp / name, settings,
-                                    {"scheduler": sched, "workers": workers})
+                                    {"scheduler": sched, "workers": workers,
+                                     "authors_bin": authors})
             sec = time.perf_counter() - t0
             write_json(tmp / f"{name}.json", dict(res, experiment=name, mode=mode,
                                                    settings=settings, seconds=round(sec, 2),
                                                    provenance=provenance()))
             say(f"reproduce: {name} done in {runner.duration(sec)}")
+        for n in keep:  # the experiments --only left as they were
+            shutil.copy2(out / f"{n}.json", tmp / f"{n}.json")
+            if (out / n).is_dir():
+                shutil.copytree(out / n, tmp / n)
         prov = provenance()
-        write_json(tmp / "run.json", dict(prov, mode=mode, experiments=names,
+        ran = [n for n in EXPERIMENTS if n in names or n in keep]
+        write_json(tmp / "run.json", dict(prov, mode=mode, experiments=ran,
+                                          updated=names if keep else ran,
                                           scheduler=sched if sched in ("serial", "local")
                                           else "address",
                                           seconds=round(time.perf_counter() - t_all, 1)))
@@ -143,7 +186,22 @@ def run(args):
         write_text(args.page, (out / "reproduction.md").read_text(encoding="utf-8"))
     say(f"Wrote {out} ({runner.duration(time.perf_counter() - t_all)})"
         + (f" and {args.page}" if args.page else ""))
+    _docs(args)
     return 0
+
+
+def _docs(args):
+    """``--docs``: the guides' generated blocks rewritten from the committed results."""
+    if not args.docs:
+        return
+    from tracer.reproduce import docs
+
+    try:
+        changed = docs.update()
+    except (OSError, KeyError, ValueError, RuntimeError) as exc:
+        raise CLIError(f"--docs: {exc}") from None
+    if not args.quiet:
+        print("Rewrote " + (", ".join(changed) if changed else "nothing (the guides agree)"))
 
 
 if __name__ == "__main__":  # pragma: no cover

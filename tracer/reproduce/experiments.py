@@ -52,7 +52,8 @@ SETTINGS = {
         "bh_switch": {"trials": 40},
         "grid": {"grid": 24, "generated": [100, 1000, 10000], "thingi10k": True},
         "table3": {"scenes": ["ico_bowl", "trefoil_ringtoss", "sphere_slide"], "steps": 100,
-                   "threads": [1, None]},
+                   "threads": [1, None], "authors_timeout": 600.0},
+        "box_test": {"cases": ["bowl-ico", "slide-sphere"], "repeat": 5},
     },
     "smoke": {  # the test suite's: every experiment at its smallest (seconds, once compiled)
         "beta": {"size": 12, "betas": [0.0, 0.2, 0.5]},
@@ -61,6 +62,7 @@ SETTINGS = {
         "bh_switch": {"trials": 20},
         "grid": {"grid": 8, "generated": [100], "thingi10k": False},
         "table3": {"scenes": ["trefoil_ringtoss"], "steps": 10, "threads": [1, None]},
+        "box_test": {"cases": ["bowl-ico"], "repeat": 2},
     },
     "full": {
         "beta": {"size": 512, "betas": [0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0]},
@@ -70,7 +72,9 @@ SETTINGS = {
         "grid": {"grid": 100, "generated": [100, 1000, 10000, 100000, 1000000],
                  "thingi10k": True},
         "table3": {"scenes": list(TABLE3_PAPER), "steps": None, "threads": [1, None],
-                   "step_caps": {"octopus_lidar": 263}},
+                   "step_caps": {"octopus_lidar": 263}, "authors_timeout": 3600.0},
+        "box_test": {"cases": ["bunny-bunny", "ring-toss", "bowl-ico", "slide-sphere"],
+                     "repeat": 9},
     },
 }
 
@@ -372,6 +376,46 @@ def _timed_run(path, steps, cap, threads):
         "load_average_before": None if load0 is None else round(load0, 2)}
 
 
+def _authors_bench():
+    """``benchmarks/bench_authors_sim.py`` as a module (its ``prepared_copy`` and
+    ``run_theirs``: the same file, meshes and step count for their simulator as for ours)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location(
+        "_bench_authors_sim", REPO / "benchmarks" / "bench_authors_sim.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+#: the authors' simulator runs on this many threads (the project machine's cores)
+AUTHORS_THREADS = 2
+
+
+def authors_run(path, steps, binary, timeout):
+    """The authors' ``rigid_body_simulator`` on the simulation file ``path`` for ``steps``
+    steps (``/work/shared/tools/authors-bench/README.md``), in a scratch folder: their mean
+    milliseconds per distance evaluation (one ``meshDistance`` call: the lines of their
+    ``__times.txt`` files, microseconds each), the count and the wall time; or why not."""
+    import subprocess
+
+    bench = _authors_bench()
+    load0 = round(os.getloadavg()[0], 2) if hasattr(os, "getloadavg") else None
+    with tempfile.TemporaryDirectory() as tmp:
+        sim_path, spec = bench.prepared_copy(path, tmp, steps)
+        try:
+            wall, _, n, us = bench.run_theirs(binary, sim_path, spec, AUTHORS_THREADS, timeout)
+        except subprocess.TimeoutExpired:
+            return {"status": f"did not finish within {timeout:.0f} s", "steps": steps,
+                    "threads": AUTHORS_THREADS}
+        except (OSError, subprocess.CalledProcessError, RuntimeError) as exc:
+            return {"status": f"failed: {str(exc).splitlines()[0] if str(exc) else exc!r}",
+                    "steps": steps, "threads": AUTHORS_THREADS}
+    return {"status": "ok", "steps": steps, "threads": AUTHORS_THREADS, "evaluations": n,
+            "ms_mean": us / 1e3 if n else None, "wall_seconds": round(wall, 2),
+            "load_average_before": load0}
+
+
 def table3_task(task):
     """One Table 3 simulation, run once per entry of ``threads`` (None: all of the process's
     numba threads): ``steps`` steps (the file's when None, at most ``cap``); per run the mean
@@ -386,8 +430,12 @@ def table3_task(task):
     for threads in counts:
         sim, steps, r = _timed_run(task["path"], task["steps"], task.get("cap"), threads)
         runs.append(r)
-    return {"scene": task["key"], "steps": steps, "file_steps": int(sim.steps), "dt": sim.dt,
-            "runs": runs}
+    out = {"scene": task["key"], "steps": steps, "file_steps": int(sim.steps), "dt": sim.dt,
+           "runs": runs}
+    if task.get("authors_bin"):  # their simulator, same file and steps, after ours
+        out["authors"] = authors_run(task["path"], steps, task["authors_bin"],
+                                     task.get("authors_timeout", 3600.0))
+    return out
 
 
 def table3(out, s, where):
@@ -396,8 +444,13 @@ def table3(out, s, where):
     from tracer.outputs import write_json
 
     caps = s.get("step_caps", {})
+    authors = where.get("authors_bin")
+    skip = set(s.get("authors_skip", ()))
     tasks = [{"key": n, "path": str(TABLE3 / f"{n}.json"), "steps": s["steps"],
-              "cap": caps.get(n), "threads": s["threads"], "weight": 1.0} for n in s["scenes"]]
+              "cap": caps.get(n), "threads": s["threads"], "weight": 1.0,
+              "authors_bin": authors if authors and n not in skip else None,
+              "authors_timeout": float(s.get("authors_timeout", 3600.0))}
+             for n in s["scenes"]]
     rows = {}
     failed = []
     info = runner.run_tasks(table3_task, tasks,
@@ -416,7 +469,89 @@ def table3(out, s, where):
     write_json(out / "table3_rows.json", rows)
     return {"scenes": s["scenes"], "steps": s["steps"], "step_caps": caps,
             "scheduler": info.describe(), "rows": {n: rows[n] for n in s["scenes"]},
+            "authors_simulator": ("their rigid_body_simulator (abhimadan/smoothdists a2706a2, "
+                                  "CPU build of /work/shared/tools/authors-bench), the same "
+                                  f"files and steps, {AUTHORS_THREADS} threads, after ours in "
+                                  "the same task" if authors else "not run (no --authors-bin)"),
             "not_run": [n for n in TABLE3_PAPER if n not in s["scenes"]]}
+
+
+# ============================================================================ box test
+def box_cases():
+    """The box test's cases: Table 3's whole-mesh pairs with edge and triangle queries, the
+    query at an exact gap of 1 / alpha from the data (as ``benchmarks/bench_mesh_distance.py``
+    places them). ``{name: (data (V, F), query (V, F), alpha, start, direction)}``."""
+    from smoothdist import DataMesh
+    from tracer.sim.primitives import (bowl_edges, icosphere_edges, ring_toss_points,
+                                       slide_edges, trefoil_100, uv_sphere)
+
+    bunny = DataMesh.load(BUNNY)
+    sl_V, sl_E = slide_edges()
+    tref_V, tref_E = trefoil_100(REPO / "scenes" / "data" / "curves" / "trefoil.obj")
+    # thread the trefoil's central hole on the peg at the origin
+    tref_V = tref_V - [tref_V[:, 0].mean(), 0.0, tref_V[:, 2].mean()]
+    down = np.array([0.0, -1.0, 0.0])
+    return {
+        "ring-toss": ((ring_toss_points(), None), (tref_V, tref_E), 20.0,
+                      np.array([0.0, 1.2, 0.0]), down),
+        "bowl-ico": (bowl_edges(), icosphere_edges(), 50.0, np.array([0.0, 0.5, 0.0]), down),
+        "slide-sphere": ((sl_V, sl_E), uv_sphere(), 100.0,
+                         sl_V[24 * 7 + 3] + np.array([0.0, 1.0, 0.0]), down),
+        "bunny-bunny": ((bunny.V, bunny.triangles), (bunny.V, bunny.triangles), 200.0,
+                        np.array([0.0, 0.3, 0.0]), down),
+    }
+
+
+def box_test(out, s, where):
+    """Sec. 3.5's box test on / off: the whole-mesh smooth distance (``MeshDistance``, beta 0.5)
+    with the paper's cheap box test (``box_test=True``, the default) and with the exact
+    primitive-box distance it avoids (``box_test=False``), timed back to back in one process
+    (alternating, median of ``repeat``). Both must be conservative (at most the beta = 0 value
+    per query primitive) and differ by no more than the Barnes-Hut error of the two (the
+    tolerance ``tests/test_box_test.py`` documents); the run fails otherwise."""
+    from smoothdist import MeshDistance
+
+    specs = box_cases()
+    res = {"beta": 0.5, "repeat": s["repeat"], "cases": {}}
+    for name in s["cases"]:
+        data, query, alpha, start, direction = specs[name]
+        on = MeshDistance(data, query, alpha=alpha, alpha_q=alpha, beta=0.5)
+        off = MeshDistance(on.field, query, alpha=alpha, alpha_q=alpha, beta=0.5,
+                           box_test=False)
+        exact = MeshDistance(on.field, query, alpha=alpha, alpha_q=alpha, beta=0.0)
+        t = on.translation_at_gap(1.0 / alpha, direction, start)
+        d = {}
+        for key, md in (("on", on), ("off", off), ("beta0", exact)):
+            d[key] = md.primitive_distances(t=t)[0]  # also compiles the kernels, untimed
+            d[key + "_leaves"] = float(md.last_stats[1].mean())
+        scale = 1e-12 * max(1.0, float(np.abs(d["beta0"]).max()))
+        conservative = bool(np.all(d["on"] <= d["beta0"] + scale)
+                            and np.all(d["off"] <= d["beta0"] + scale))
+        bh_err = d["beta0"] - np.minimum(d["on"], d["off"])
+        within = bool(np.all(np.abs(d["on"] - d["off"]) <= bh_err + scale))
+        if not (conservative and within):
+            raise RuntimeError(f"box_test {name}: the box test on and off disagree beyond the "
+                               "Barnes-Hut error (or one is not conservative)")
+        times = {"on": [], "off": []}
+        for _ in range(s["repeat"]):
+            for key, md in (("on", on), ("off", off)):
+                t0 = time.perf_counter()
+                md(t=t)
+                times[key].append(time.perf_counter() - t0)
+        ms_on, ms_off = (1e3 * float(np.median(times[k])) for k in ("on", "off"))
+        q = on.query
+        res["cases"][name] = {
+            "data_primitives": on.field.num_primitives, "data_kind": on.field.mesh.kind,
+            "query_primitives": int(q.kind.size),
+            "query_kind": ["points", "edges", "triangles"][int(q.kind.max())],
+            "alpha": alpha, "ms_on": ms_on, "ms_off": ms_off, "speedup": ms_off / ms_on,
+            "leaves_on": d["on_leaves"], "leaves_off": d["off_leaves"],
+            "leaves_beta0": d["beta0_leaves"],
+            "max_abs_diff_x_alpha": float(alpha * np.abs(d["on"] - d["off"]).max()),
+            "max_bh_error_x_alpha": float(alpha * bh_err.max()),
+            "conservative": conservative, "within_bh_error": within}
+    res["threads"] = int(__import__("numba").get_num_threads())
+    return res
 
 
 # ============================================================================ underestimate
@@ -449,5 +584,5 @@ def underestimate(out, s, where):
 
 #: name -> experiment, in the order they run (quick first where they are quick)
 EXPERIMENTS = {"underestimate": underestimate, "table3": table3, "grid": grid,
-               "bh_switch": bh_switch, "beta": beta,
+               "bh_switch": bh_switch, "box_test": box_test, "beta": beta,
                "alpha": alpha}

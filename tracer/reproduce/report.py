@@ -60,7 +60,10 @@ def render_page(folder, shown_as):
          f"`{run['commit'][:12]}`{' with local changes' if run.get('dirty') else ''}, "
          f"{run['machine']['cpu']}, {run['machine']['cores']} cores, "
          f"{run['numba_threads']} numba threads, scheduler {run['scheduler']}; "
-         f"{run['seconds']:.0f} s in all). Every number below is read from the JSON files "
+         f"{run['seconds']:.0f} s in all"
+         + (f"; it updated {', '.join(run['updated'])} and kept the others' earlier results"
+            if run.get("updated", run["experiments"]) != run["experiments"] else "")
+         + "). Every number below is read from the JSON files "
          "there; the paper's values are quoted from it. Rerun with "
          f"`python -m tracer reproduce{'' if run['mode'] == 'full' else ' --' + run['mode']} "
          "--out DIR --page docs/reproduction.md`.", ""]
@@ -99,20 +102,50 @@ def render_page(folder, shown_as):
               "before the run, so compilation is not timed. The paper's on 28 threads, ours on "
               "this machine at each thread count (a machine shared with other work makes "
               "several threads wait on each other: compare the load averages).", "",
+              f"The last column: {t.get('authors_simulator', 'not run')}. Their evaluations "
+              "are their `meshDistance` calls (one per mesh pair and orientation, every "
+              "line-search trial of their interior-point solver included), ours the "
+              "`MeshDistance` calls of our simulator: the same simulation and steps, not the "
+              "same number of calls.", "",
               "| data | query | dt | paper (ms, 28 threads) | ours (ms) | threads | load "
-              "average | steps | evaluations |", "|---|---|---|---:|---:|---:|---:|---:|---:|"]
+              "average | steps | evaluations | authors' simulator here (ms) |",
+              "|---|---|---|---:|---:|---:|---:|---:|---:|---|"]
         for name, (row, data, query, paper_ms, dt) in TABLE3_PAPER.items():
             r = t["rows"].get(name)
             if r is None:
                 L.append("| " + " | ".join(_cell(x) for x in (
-                    data, query, dt, paper_ms, "not run", "-", "-", "-", "-")) + " |")
+                    data, query, dt, paper_ms, "not run", "-", "-", "-", "-", "-")) + " |")
                 continue
+            a = r.get("authors")
+            theirs = "-" if not a else (
+                f"{g3(a['ms_mean'])} on {a['threads']} threads ({a['evaluations']} "
+                f"evaluations, load {g3(a['load_average_before'])})"
+                if a["status"] == "ok" else a["status"])
             for x in r["runs"]:
                 L.append("| " + " | ".join(_cell(v) for v in (
                     data, query, dt, paper_ms, g3(x["ms_mean"]), x["threads"],
-                    g3(x["load_average_before"]), r["steps"], x["evaluations"])) + " |")
+                    g3(x["load_average_before"]), r["steps"], x["evaluations"], theirs)) + " |")
         L.append("| City Street, 6,747,648 points | Motorcycle, 8,800 tris | 1/100 | 581.2362 "
-                 "| data not available | - | - | - | - |")
+                 "| data not available | - | - | - | - | - |")
+    if "box_test" in results:
+        b = results["box_test"]
+        L += ["", "## The box test on and off", "",
+              "Sec. 3.5: the whole-mesh smooth distance (`MeshDistance`, beta "
+              f"{b['beta']:g}) with the paper's cheap box test (on, the default) and with the "
+              "exact primitive-box distance it avoids (`box_test=False`), timed alternately in "
+              f"one process (median of {b['repeat']}, {b['threads']} threads), the query at an "
+              "exact gap of 1/alpha. Both are conservative; per query primitive they differ by "
+              "no more than the Barnes-Hut error (the largest of each, times alpha, below).", "",
+              "| case | query | data | alpha | on (ms) | off (ms) | speed-up | leaves on / off "
+              "| max \\|on − off\\| × alpha | max BH error × alpha |",
+              "|---|---|---|---:|---:|---:|---:|---|---:|---:|"]
+        for name, c in b["cases"].items():
+            L.append("| " + " | ".join(_cell(x) for x in (
+                name, f"{c['query_primitives']} {c['query_kind']}",
+                f"{c['data_primitives']} {c['data_kind']}", f"{c['alpha']:g}", g3(c["ms_on"]),
+                g3(c["ms_off"]), f"{g3(c['speedup'])}x",
+                f"{g3(c['leaves_on'])} / {g3(c['leaves_off'])}",
+                g3(c["max_abs_diff_x_alpha"]), g3(c["max_bh_error_x_alpha"]))) + " |")
     if "grid" in results:
         g = results["grid"]
         L += ["", "## The benchmark figure", "",

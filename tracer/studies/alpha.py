@@ -28,7 +28,8 @@ from tracer import runner
 from tracer.outputs import (CLIError, check_size, float_list, non_negative, output_folder,
                             positive, write_bytes, write_json, write_text)
 from tracer.runner import duration
-from tracer.studies.common import REPO, TYPES, add_common, field_of, load_mesh, unweighted_field
+from tracer.studies.common import (REPO, TYPES, add_common, add_view_arguments, field_of,
+                                   load_mesh, resolve_view, unweighted_field, view_camera)
 from tracer.studies.plots import pyplot
 
 HELP = "the paper's alpha studies as image grids"
@@ -71,8 +72,8 @@ def add_arguments(p):
                    "renders/ablation/alpha-<size>)")
     p.add_argument("--size", type=int, default=256, help="render size per panel (default 256)")
     p.add_argument("--mesh", help="use this mesh instead of the study's default data (camera: "
-                   "the paper's beta-study camera, framed; alphas scaled from the mesh's auto "
-                   "alpha)")
+                   "--view, else the paper's beta-study camera, framed; alphas scaled from the "
+                   "mesh's auto alpha)")
     p.add_argument("--kind", choices=TYPES,
                    help="with --mesh: primitive type to use (default: points for underestimate "
                    "and exact-smooth, triangles (else edges) for metric and attenuate)")
@@ -86,17 +87,22 @@ def add_arguments(p):
     p.add_argument("--no-frame", action="store_true",
                    help="keep the study's camera as is (default: move it so that the union of "
                    "the panels' silhouettes fills the frame)")
+    add_view_arguments(p, "the default data's scene camera; with --mesh the paper's "
+                       "beta-study camera")
     p.add_argument("--overwrite", action="store_true", help="replace earlier results of a study")
     runner.add_arguments(p)
     add_common(p)
 
 
-def list_tasks(studies, *, size, alphas, mesh, kind, beta, shading, alpha_u, no_frame):
-    """One task per figure (a dict of its parameters); weights are rough relative costs."""
+def list_tasks(studies, *, size, alphas, mesh, kind, beta, shading, alpha_u, no_frame,
+               view=None, up=None):
+    """One task per figure (a dict of its parameters); weights are rough relative costs.
+    ``view`` and ``up`` (None, ``"auto"``, ``"x"``, ``"y"`` or ``"z"``): frame the data as
+    ``tracer render --view --up`` does instead of the study's camera."""
     mesh = os.path.abspath(mesh) if mesh else None
     return [{"key": s, "study": s, "size": int(size), "alphas": alphas, "mesh": mesh,
              "kind": kind, "beta": float(beta), "shading": shading, "alpha_u": alpha_u,
-             "no_frame": bool(no_frame),
+             "no_frame": bool(no_frame), "view": view, "view_up": up,
              "weight": {"underestimate": 3.0, "exact-smooth": 3.0}.get(s, 1.0)}
             for s in studies]
 
@@ -131,10 +137,12 @@ def run(args):
                 raise CLIError(f"{p} exists (pass --overwrite to replace it)")
     if args.mesh:
         load_mesh(args.mesh)  # validate early
+    # the up axis is resolved per figure, from its data file (auto: as tracer render guesses)
+    view, up = (args.view or "front", args.up) if (args.view or args.up) else (None, None)
     out.mkdir(parents=True, exist_ok=True)
     tasks = list_tasks(studies, size=size, alphas=alphas, mesh=args.mesh, kind=args.kind,
                        beta=args.beta, shading=args.shading, alpha_u=args.alpha_u,
-                       no_frame=args.no_frame)
+                       no_frame=args.no_frame, view=view, up=up)
     # about a second per 256^2 panel: a cluster pays off for "all" at larger sizes only
     estimate = 8.0 * len(studies) * (size / 256) ** 2
 
@@ -195,6 +203,19 @@ def _alphas_for(study, alphas, field, override):
         a0 = field.paper_alpha()
         return [float(f"{a0 * f:.4g}") for f in d["factors"]]
     return list(d["alphas"])
+
+
+def _camera(args, src, field, camera, alphas):
+    """The figure's camera: with ``--view``, the data file ``src`` framed as ``tracer render``
+    frames it (its vertices grown by the inflation bound at the smallest alpha; ``--up``
+    auto guessed from the file's format); else ``camera`` (the default data's scene camera)
+    or the paper's beta-study camera."""
+    if getattr(args, "view", None):
+        view, up = resolve_view(SimpleNamespace(view=args.view, up=args.view_up),
+                                src if os.path.isabs(src) else REPO / src)
+        grow = field.inflation(min(alphas))
+        return tuple(np.asarray(v, float) for v in view_camera(field, view, up, grow, args.size))
+    return camera or _default_camera(field)
 
 
 def _default_camera(field):
@@ -267,8 +288,8 @@ def _render_group(specs, camera, size, frame=True):
 def _study_underestimate(args, size, alphas):
     src, mesh, camera, override = _study_data(args, _LION, args.kind or "points")
     field = field_of(mesh)
-    camera = camera or _default_camera(field)
     alphas = _alphas_for("underestimate", alphas, field, override)
+    camera = _camera(args, src, field, camera, alphas)
     specs = [(field, dict(alpha=a, beta=args.beta, shading=args.shading)) for a in alphas]
     res, cam = _render_group(specs, camera, size, frame=not args.no_frame)
     row = [(f"α = {a:g}  ({r.seconds:.1f} s)", r.rgb) for a, r in zip(alphas, res)]
@@ -356,8 +377,8 @@ def _nesting_slice(field, alphas, beta, camera, size, n=160, exact_n=32):
 def _study_exact_smooth(args, size, alphas):
     src, mesh, camera, override = _study_data(args, _LION, args.kind or "points")
     field = field_of(mesh)
-    camera = camera or _default_camera(field)
     alphas = _alphas_for("exact-smooth", alphas, field, override)
+    camera = _camera(args, src, field, camera, alphas)
     specs = []
     for a in alphas:
         specs.append((field, dict(alpha=a, beta=args.beta, mode="exact", offset=1.0 / a,
@@ -396,13 +417,13 @@ def _study_weights(args, size, alphas):
     rows, stats = [], []
     for i, (kind, src, mesh, camera) in enumerate(cases):
         field = field_of(mesh)
-        camera = camera or _default_camera(field)
         if alphas:
             a = alphas[min(i, len(alphas) - 1)]
         elif args.mesh:
             a = float(f"{field.paper_alpha() * STUDY_DEFAULTS['weights']['factors'][0]:.4g}")
         else:
             a = default[i]
+        camera = _camera(args, src, field, camera, [a])
         kw = dict(alpha=a, beta=args.beta, shading=args.shading)
         (off, on), cam = _render_group([(unweighted_field(field), kw), (field, kw)], camera,
                                        size, frame=not args.no_frame)
@@ -422,8 +443,8 @@ def _study_weights(args, size, alphas):
 def _study_metric(args, size, alphas):
     src, mesh, camera, override = _study_data(args, _TORUS, "triangles")
     field = field_of(mesh)
-    camera = camera or _default_camera(field)
     alphas = _alphas_for("metric", alphas, field, override)
+    camera = _camera(args, src, field, camera, alphas)
     specs = []
     for a in alphas:
         for g in ("exact", "metric"):
@@ -449,8 +470,8 @@ def _study_metric(args, size, alphas):
 def _study_attenuate(args, size, alphas):
     src, mesh, camera, override = _study_data(args, _OCTOPUS, "triangles")
     field = field_of(mesh)
-    camera = camera or _default_camera(field)
     alphas = _alphas_for("attenuate", alphas, field, override)
+    camera = _camera(args, src, field, camera, alphas)
     if args.alpha_u is not None:
         alpha_u = args.alpha_u
     elif override:

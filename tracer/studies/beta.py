@@ -2,7 +2,9 @@
 
 Render the mesh's vertices, edges and triangles with the authors' camera at every beta, and
 record the wall time and the isosurface error along each ray against the exact (beta = 0)
-render, relative to the bounding-box diagonal. Protocol of the authors' ``app/beta_error_test``:
+render, relative to the bounding-box diagonal. ``--view`` / ``--up`` frame a mesh as ``tracer
+render`` does instead of the authors' camera; the report shows the authors' errors and times
+only for their data and protocol (the paper's bunny, alpha 200, alpha_U 1200, their camera). Protocol of the authors' ``app/beta_error_test``:
 alpha = 200, alpha_U = 1200, beta in {0, 0.1, ..., 1}, camera at the bbox centre + 2 x the
 largest extent along +z looking at the centre (up +y); the error over the pixels that both
 renders hit is ``mean |t_beta - t_0|`` with its population standard deviation.
@@ -37,8 +39,9 @@ from tracer import runner
 from tracer.outputs import (CLIError, check_size, float_list, output_folder, positive,
                             write_bytes, write_json)
 from tracer.runner import duration
-from tracer.studies.common import (TYPES, add_common, beta_tag, cached_field, close, load_mesh,
-                                   parse_types)
+from tracer.studies.common import (TYPES, add_common, add_view_arguments, beta_tag,
+                                   cached_field, close, is_paper_bunny, load_mesh, parse_types,
+                                   resolve_view, view_camera)
 
 HELP = "the paper's beta ablation: time and error vs beta"
 
@@ -99,6 +102,8 @@ def add_arguments(p):
     p.add_argument("--depth-cache", metavar="DIR",
                    help="where the depth buffers (depth_<type>_beta<b>.npy) and the full-size "
                    "renders are kept (default: DIR/cache)")
+    add_view_arguments(p, "the authors' camera: bbox centre + 2 x the largest extent along +z, "
+                       "looking at the centre, up +y")
     p.add_argument("--note", help="a line of text for report.md (e.g. the machine's load)")
     g = p.add_mutually_exclusive_group()
     g.add_argument("--overwrite", action="store_true",
@@ -120,17 +125,20 @@ def file_stem(kind, beta, tol):
     return f"{kind}_beta{beta_tag(beta)}" + (f"_tol{beta_tag(tol)}" if tol else "")
 
 
-def list_tasks(mesh, types, betas, tols, *, size, alpha, alpha_u, eps, tol_betas=(0.0,)):
+def list_tasks(mesh, types, betas, tols, *, size, alpha, alpha_u, eps, tol_betas=(0.0,),
+               camera=None):
     """One task per (type, beta, tol): a dict of render parameters and its ``key``. ``tol``
     0 is rendered at every beta, each ``tol > 0`` at the betas ``tol_betas`` (None: every
-    beta). The reference (beta 0, tol 0) of every type is always included."""
+    beta). The reference (beta 0, tol 0) of every type is always included. ``camera``:
+    ``(origin, dest, up)`` shared by every render, or None for the authors' camera."""
     betas = sorted(set(betas) | {0.0})
     tols = sorted(set(tols) | {0.0})
     tol_betas = betas if tol_betas is None else sorted(set(tol_betas))
     mesh = os.path.abspath(mesh)
     return [{"key": task_key(k, b, t), "mesh": mesh, "type": k, "beta": float(b),
              "tol": float(t), "size": int(size), "alpha": float(alpha),
-             "alpha_u": float(alpha_u), "eps": None if eps is None else float(eps)}
+             "alpha_u": float(alpha_u), "eps": None if eps is None else float(eps),
+             "camera": camera}
             for k in types for t in tols for b in (tol_betas if t else betas)]
 
 
@@ -142,7 +150,8 @@ def _scene(field, task, size=None):
 
     size = size or task["size"]
     return scene_from_field(field, alpha=task["alpha"], alpha_u=task["alpha_u"],
-                            beta=task["beta"], width=size, height=size, eps=task["eps"],
+                            beta=task["beta"], camera=task.get("camera"), width=size,
+                            height=size, eps=task["eps"],
                             tol=task.get("tol", 0.0), name=f"{task['type']}-beta{task['beta']:g}")
 
 
@@ -293,13 +302,31 @@ def run(args):
         if kind != "points":
             load_mesh(args.mesh, kind)
     diag = float(np.linalg.norm(np.subtract(*mesh_all.bounds[::-1])))
+    eps_abs = args.eps if args.eps is not None else 1e-4 * diag
+    view, up = resolve_view(args, args.mesh)
+    camera = None
+    if view:  # one camera for every type: the largest surface of them all in view
+        fields = [cached_field(os.path.abspath(args.mesh), k) for k in types]
+        grow = max(f.inflation(alpha, alpha_u) for f in fields) + 2.0 * eps_abs
+        camera = view_camera(fields, view, up, grow, size)
+    bunny = is_paper_bunny(args.mesh)
+    # the authors' beta_error_test numbers hold for their bunny, alpha, alpha_U and camera
+    reference = bunny and close(alpha, 200.0) and close(alpha_u, 1200.0) and camera is None
     params = {"mesh": str(args.mesh), "mesh_name": os.path.basename(args.mesh),
               "alpha": alpha, "alpha_u": alpha_u, "width": size, "height": size,
-              "eps": args.eps if args.eps is not None else 1e-4 * diag,
+              "eps": eps_abs,
               "eps_rule": "given" if args.eps is not None else "1e-4 x bbox diagonal",
               "diag": diag, "camera": "bbox centre + 2 x largest extent along +z, looking at "
-              "the centre, up +y (authors' beta_error_test)", "depth_cache": str(cache),
-              "note": args.note or ""}
+              "the centre, up +y (authors' beta_error_test)" if camera is None else
+              f"--view {view}, up {up}: the whole surface in view, as tracer render frames it "
+              f"(origin {_vec(camera[0])}, looking at {_vec(camera[1])}, up {_vec(camera[2])})",
+              "view": view, "up": up, "camera_vectors": camera,
+              "authors_reference": reference,
+              "reference_rule": "the authors' errors and times are shown for the paper's bunny "
+              "at alpha 200, alpha_U 1200 and their camera only" + (
+                  "" if reference else (" (this mesh is not the bunny)" if not bunny else
+                                        " (this study changes alpha, alpha_U or the camera)")),
+              "depth_cache": str(cache), "note": args.note or ""}
     log = runner.TaskLog(csv_path, BETA_FIELDS)
     rows = []
     if args.resume and csv_path.exists():
@@ -317,6 +344,9 @@ def run(args):
                 prev = json.loads(old.read_text(encoding="utf-8"))
             except ValueError:
                 prev = {}
+            if prev.get("camera_vectors", camera) != camera:
+                raise CLIError(f"{out} was rendered with another camera ({prev.get('camera')}); "
+                               "rerun with the same --view / --up or use --overwrite")
             if prev.get("mesh_name") not in (None, params["mesh_name"]):
                 raise CLIError(f"{out} holds results for {prev.get('mesh_name')}, not "
                                f"{params['mesh_name']}; use another folder or --overwrite")
@@ -332,7 +362,7 @@ def run(args):
     rows = [r for r in rows if r["key"] in done]
     log.start(rows)
     tasks = list_tasks(args.mesh, types, betas, tols, size=size, alpha=alpha, alpha_u=alpha_u,
-                       eps=args.eps, tol_betas=tol_betas)
+                       eps=args.eps, tol_betas=tol_betas, camera=camera)
     todo = [t for t in tasks if t["key"] not in done]
     label = f"ablate-beta {params['mesh_name']}"
     say = (lambda s: None) if args.quiet else (lambda s: print(s, flush=True))
@@ -371,6 +401,10 @@ def run(args):
               f"{csv_path}); rerun with --resume to retry them", flush=True)
         return 1
     return 0
+
+
+def _vec(v):
+    return "(" + ", ".join(f"{x:.4g}" for x in v) + ")"
 
 
 def _estimate(todo, size, sched, workers, say):

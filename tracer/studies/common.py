@@ -56,6 +56,67 @@ def add_common(p):
     return p
 
 
+def add_view_arguments(p, default):
+    """``--view`` and ``--up`` of ``tracer render`` (the same choices, the same framing:
+    :func:`tracer.camera.frame_points`, and the same up axis guess:
+    :func:`tracer.from_mesh.resolve_up`); ``default`` says which camera the study uses
+    without them."""
+    from tracer.camera import UP_AXES, VIEWS
+
+    p.add_argument("--view", choices=tuple(VIEWS),
+                   help="camera framing the whole surface from this side, as in tracer render "
+                   f"(default: {default})")
+    p.add_argument("--up", choices=("auto",) + UP_AXES,
+                   help="the data's up axis for --view, as in tracer render (auto = z for .stl "
+                   "and .ply, y otherwise); given alone, it implies --view front")
+
+
+def resolve_view(args, mesh):
+    """``(view, up)`` of the study's ``--view`` / ``--up`` for the mesh file ``mesh``, or
+    ``(None, None)`` when neither is given (the study's own camera)."""
+    from tracer.from_mesh import resolve_up
+
+    view, up = getattr(args, "view", None), getattr(args, "up", None)
+    if not view and not up:
+        return None, None
+    return view or "front", resolve_up(os.fspath(mesh), up)
+
+
+def view_camera(fields, view, up, grow, size):
+    """The camera of ``tracer render --view VIEW --up UP`` for the data of ``fields`` (one
+    field or several, framed together) at ``size`` x ``size`` pixels: their vertices grown by
+    ``grow`` (scene units: the surface's inflation bound and eps) all in view. Returns
+    ``(origin, dest, up)`` as lists."""
+    from tracer.camera import frame_points
+
+    if not isinstance(fields, (list, tuple)):
+        fields = [fields]
+    P = np.concatenate([f.mesh.used_vertices() for f in fields])
+    return [np.asarray(v, float).tolist()
+            for v in frame_points(P, grow, view, size, size, up=up)]
+
+
+def is_paper_bunny(mesh):
+    """Whether the mesh file ``mesh`` holds the paper's bunny (``scenes/data/bunny.off``:
+    the same vertices and triangles, in any file format), whose beta-study errors the
+    authors published."""
+    ref = REPO / "scenes" / "data" / "bunny.off"
+    if not ref.is_file():
+        return False
+    try:
+        if os.path.samefile(mesh, ref):
+            return True
+    except OSError:
+        pass
+    a, b = load_mesh(mesh), load_mesh(ref)
+    if a.V.shape != b.V.shape or a.triangles.shape != b.triangles.shape:
+        return False
+    # another file format may round the coordinates (e.g. 6 significant digits)
+    diag = float(np.linalg.norm(b.V.max(0) - b.V.min(0)))
+    return bool(np.array_equal(a.triangles, b.triangles)
+                and np.allclose(a.V, b.V, rtol=0, atol=1e-5 * diag))
+
+
 # =============================================================================== meshes
 def load_mesh(path, kind=None):
     """Load a mesh file as a DataMesh (``kind`` as in ``DataMesh.as_kind``), one-line errors

@@ -40,13 +40,28 @@ AUTHORS_TIMES_SETUP = ("authors' C++ (beta_error_test) run side by side with our
                        "machine, 2 threads each, eps 1e-3 absolute, N x N px")
 
 
+def has_reference(params):
+    """Whether the study is the authors' own (``params["authors_reference"]``: the paper's
+    bunny at alpha 200, alpha_U 1200 with their camera; parameter files written before that
+    key existed: the bunny's file name). Only then do their errors and times apply."""
+    return bool(params.get("authors_reference", params.get("mesh_name") == "bunny.off"))
+
+
 def authors_times(params):
     """``{beta: (points, edges, triangles) seconds}`` of the authors' renderer for a study with
-    ``params`` (``width``, ``height``, ``eps``), or ``{}`` unless a side-by-side measurement
-    exists at that square size *and* eps."""
-    if params["width"] != params["height"] or not close(float(params["eps"]), AUTHORS_EPS):
+    ``params`` (``width``, ``height``, ``eps``), or ``{}`` unless the study is theirs
+    (:func:`has_reference`) and a side-by-side measurement exists at that square size *and*
+    eps."""
+    if (not has_reference(params) or params["width"] != params["height"]
+            or not close(float(params["eps"]), AUTHORS_EPS)):
         return {}
     return AUTHORS_TIMES.get(int(params["width"]), {})
+
+
+def authors_errors(params):
+    """:data:`PAPER_BETA_ERROR` for the authors' own study (:func:`has_reference`), else
+    ``{}``: their errors were measured on their bunny, not on a user's mesh."""
+    return PAPER_BETA_ERROR if has_reference(params) else {}
 
 
 #: the paper's Barnes-Hut switch numbers on its city LiDAR scan (Sec. 4.3)
@@ -164,9 +179,11 @@ def beta_plots(out, rows, params):
         sd = 100 * np.array([r["error_std_rel_diag"] for r in rs])
         ax.plot(b, m, "o-", color=TYPE_COLORS[k], label=f"{k} (ours)")
         ax.fill_between(b, np.maximum(m - sd, 0), m + sd, color=TYPE_COLORS[k], alpha=0.12)
-        ref_b = sorted(PAPER_BETA_ERROR)
-        ax.plot(ref_b, [PAPER_BETA_ERROR[x][TYPES.index(k)] for x in ref_b], "s--",
-                color=TYPE_COLORS[k], mfc="none", alpha=0.7, label=f"{k} (authors' C++)")
+        ref_e = authors_errors(params)
+        if ref_e:
+            ref_b = sorted(ref_e)
+            ax.plot(ref_b, [ref_e[x][TYPES.index(k)] for x in ref_b], "s--",
+                    color=TYPE_COLORS[k], mfc="none", alpha=0.7, label=f"{k} (authors' C++)")
         tol_series(ax, k, "error_rel_diag", 100.0)
     ax.set_xlabel("β")
     ax.set_ylabel("mean |t_β − t_0| (% of bbox diagonal)")
@@ -443,38 +460,49 @@ def beta_report(rows, params, present, diff=False, front=False):
              *(["![error against time, beta and tol](beta_frontier.png)", ""] if front else []),
              "![renders](beta_grid.png)", "",
              *(["![depth difference to beta = 0](beta_diff.png)", ""] if diff else []),
-             "## Measured vs reference", "",
-             f"Reference times: {AUTHORS_TIMES_SETUP}; shown only for a study at the size "
-             f"({', '.join(f'{n}²' for n in sorted(AUTHORS_TIMES))}) and eps "
-             f"({AUTHORS_EPS:g}) they were measured at, and only for "
-             "the betas measured. Reference errors: the authors' `beta_error_test`.", "",
-             "| type | β | tol | time (s) | ref. time (s) | speed-up vs β=0 | "
-             "error (% diag) | ref. error (% diag) | error std (% diag) | hits | mean leaves/px "
-             "| leaves/eval |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+             *_reference_lines(params)]
+    ref = has_reference(params)
+    head = ["type", "β", "tol", "time (s)", *(["ref. time (s)"] if ref else []),
+            "speed-up vs β=0", "error (% diag)", *(["ref. error (% diag)"] if ref else []),
+            "error std (% diag)", "hits", "mean leaves/px", "leaves/eval"]
+    lines += ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    times, errors = authors_times(params), authors_errors(params)
     for k in present:
         rs = sorted((r for r in rows if r["type"] == k),
                     key=lambda r: (r.get("tol", 0.0), r["beta"]))
         t0 = next((r["seconds"] for r in rs if r["beta"] == 0.0 and not r.get("tol", 0.0)),
                   float("nan"))
         ti = TYPES.index(k)
-        times = authors_times(params)
         for r in rs:
             plain = not r.get("tol", 0.0)
             ref_t = next((v[ti] for b, v in times.items() if close(b, r["beta"])), None) \
                 if plain else None
-            ref_e = next((v[ti] for b, v in PAPER_BETA_ERROR.items() if close(b, r["beta"])),
+            ref_e = next((v[ti] for b, v in errors.items() if close(b, r["beta"])),
                          None) if plain else None
-            lines.append(
-                f"| {k} | {r['beta']:g} | {r.get('tol', 0.0):g} | {r['seconds']:.3g} | {fmt(ref_t, 3) or '–'} | "
-                f"{t0 / r['seconds']:.3g}× | "
-                f"{100 * r['error_rel_diag']:.3f} | {fmt(ref_e, 3) or '–'} | "
-                f"{100 * r['error_std_rel_diag']:.3f} | {r['hits']} | {r['mean_leaves']:.0f} | "
-                f"{r['leaves_per_eval']:.1f} |")
+            cells = [k, f"{r['beta']:g}", f"{r.get('tol', 0.0):g}", f"{r['seconds']:.3g}",
+                     *([fmt(ref_t, 3) or "–"] if ref else []), f"{t0 / r['seconds']:.3g}×",
+                     f"{100 * r['error_rel_diag']:.3f}", *([fmt(ref_e, 3) or "–"] if ref else []),
+                     f"{100 * r['error_std_rel_diag']:.3f}", str(r["hits"]),
+                     f"{r['mean_leaves']:.0f}", f"{r['leaves_per_eval']:.1f}"]
+            lines.append("| " + " | ".join(cells) + " |")
     lines += ["", *frontier_lines(rows, present),
               "The raw numbers are in `beta_ablation.csv`; the parameters in "
               "`beta_params.json`.", ""]
     return "\n".join(lines)
+
+
+def _reference_lines(params):
+    """The heading and the sentence before the beta report's table."""
+    if not has_reference(params):
+        return ["## Measured", "",
+                "No reference columns: the authors' errors and times were measured on the "
+                "paper's bunny at α = 200, α_U = 1200 with their camera "
+                f"({params.get('reference_rule', 'not this study')}).", ""]
+    return ["## Measured vs reference", "",
+            f"Reference times: {AUTHORS_TIMES_SETUP}; shown only for a study at the size "
+            f"({', '.join(f'{n}²' for n in sorted(AUTHORS_TIMES))}) and eps "
+            f"({AUTHORS_EPS:g}) they were measured at, and only for "
+            "the betas measured. Reference errors: the authors' `beta_error_test`.", ""]
 
 
 def panel_grid_png(panels, title, cell=2.3):
