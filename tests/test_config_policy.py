@@ -72,7 +72,12 @@ def test_no_hard_coded_fastmath_or_parallel(path):
 
 
 def _numba_name(node):
-    """``"njit"`` for ``numba.njit`` / ``njit`` / ``nb.njit`` ..., else None."""
+    """``"njit"`` for ``numba.njit`` / ``njit`` / ``nb.njit`` ..., else None. ``cuda.jit`` is
+    not a CPU kernel: numba-cuda compiles it for the device with options of its own (the
+    CPU's ``NJIT`` options do not apply there), so it is not checked here."""
+    if isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name) \
+            and node.value.id == "cuda":
+        return None
     if isinstance(node, ast.Attribute) and node.attr in NUMBA_DECORATORS:
         return node.attr
     if isinstance(node, ast.Name) and node.id in NUMBA_DECORATORS:

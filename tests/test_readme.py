@@ -118,6 +118,7 @@ PLACEHOLDERS = {
     "OUT_DIR": "out/grid",
     "A.png": "a.png",
     "B.png": "b.png",
+    "part.stl": "scenes/data/meshes/torus.obj",
 }
 
 NOT_RUN = {
@@ -146,6 +147,17 @@ NOT_RUN = {
     "--rounds 5 --repeat 10 --threads 2":
         "it needs the authors' mesh_bench built outside the repository "
         "(../shared/tools/authors-bench); the same script without --authors-bin is run",
+    "python -m tracer render scenes/bunny_points.json --size 1920 1080 --shading normals "
+    "--device cuda":
+        "it needs an NVIDIA GPU; tests/test_cuda_sim.py runs the same path under numba's CUDA "
+        "simulator, and the error without a GPU",
+    "python benchmarks/bench_gpu.py":
+        "it needs an NVIDIA GPU; tests/test_cuda_sim.py runs its measurement functions under "
+        "the simulator, and its refusal without a GPU",
+    "python -m tracer reproduce --report-only --docs":
+        "it rewrites the result blocks of the repository's own guides; "
+        "tests/test_reproduce.py checks the guides against the committed results with the "
+        "same code",
     "bash .ci/run": "it runs this test suite (CI runs it)",
     'bash .ci/run -m "not slow"': "it runs the quick part of this test suite",
     "python -m pytest tests/test_render_golden.py --regen-baselines":

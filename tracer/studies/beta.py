@@ -328,30 +328,7 @@ def run(args):
                                         " (this study changes alpha, alpha_U or the camera)")),
               "depth_cache": str(cache), "note": args.note or ""}
     log = runner.TaskLog(csv_path, BETA_FIELDS)
-    rows = []
-    if args.resume and csv_path.exists():
-        rows = log.read(["type", "beta", "alpha", "alpha_u", "width"])
-        for r in rows:
-            if r["status"] == "ok" and not (close(r["alpha"], alpha)
-                                            and close(r["alpha_u"], alpha_u)
-                                            and int(r["width"]) == size):
-                raise CLIError(f"{csv_path} was measured with alpha {r['alpha']}, alpha_u "
-                               f"{r['alpha_u']}, size {r['width']}; rerun with those values or "
-                               "use --overwrite")
-        old = out / BETA_PARAMS
-        if old.exists():
-            try:
-                prev = json.loads(old.read_text(encoding="utf-8"))
-            except ValueError:
-                prev = {}
-            if prev.get("camera_vectors", camera) != camera:
-                raise CLIError(f"{out} was rendered with another camera ({prev.get('camera')}); "
-                               "rerun with the same --view / --up or use --overwrite")
-            if prev.get("mesh_name") not in (None, params["mesh_name"]):
-                raise CLIError(f"{out} holds results for {prev.get('mesh_name')}, not "
-                               f"{params['mesh_name']}; use another folder or --overwrite")
-            if not args.note and prev.get("note"):
-                params["note"] = prev["note"]
+    rows = _resumed_rows(args, log, out, csv_path, params, camera, alpha, alpha_u, size)
     out.mkdir(parents=True, exist_ok=True)
     cache.mkdir(parents=True, exist_ok=True)
     write_json(out / BETA_PARAMS, params)
@@ -401,6 +378,37 @@ def run(args):
               f"{csv_path}); rerun with --resume to retry them", flush=True)
         return 1
     return 0
+
+
+def _resumed_rows(args, log, out, csv_path, params, camera, alpha, alpha_u, size):
+    """The rows of an earlier run to resume (``--resume``), checked against this run's
+    settings: the same alpha, alpha_U, size, camera and mesh (a one-line error otherwise);
+    the earlier note is kept unless a new one is given."""
+    if not (args.resume and csv_path.exists()):
+        return []
+    rows = log.read(["type", "beta", "alpha", "alpha_u", "width"])
+    for r in rows:
+        if r["status"] == "ok" and not (close(r["alpha"], alpha)
+                                        and close(r["alpha_u"], alpha_u)
+                                        and int(r["width"]) == size):
+            raise CLIError(f"{csv_path} was measured with alpha {r['alpha']}, alpha_u "
+                           f"{r['alpha_u']}, size {r['width']}; rerun with those values or "
+                           "use --overwrite")
+    old = out / BETA_PARAMS
+    if old.exists():
+        try:
+            prev = json.loads(old.read_text(encoding="utf-8"))
+        except ValueError:
+            prev = {}
+        if prev.get("camera_vectors", camera) != camera:
+            raise CLIError(f"{out} was rendered with another camera ({prev.get('camera')}); "
+                           "rerun with the same --view / --up or use --overwrite")
+        if prev.get("mesh_name") not in (None, params["mesh_name"]):
+            raise CLIError(f"{out} holds results for {prev.get('mesh_name')}, not "
+                           f"{params['mesh_name']}; use another folder or --overwrite")
+        if not args.note and prev.get("note"):
+            params["note"] = prev["note"]
+    return rows
 
 
 def _vec(v):
