@@ -164,19 +164,6 @@ def _leaf_code(s, e):
 
 
 @numba.njit(**NJIT_INLINE)
-def _centroid_box(order, cent, s, e, out):
-    """``out (6,)``: the box of the centroids ``order[s:e]``."""
-    for a in range(3):
-        out[a] = np.inf
-        out[3 + a] = -np.inf
-    for k in range(s, e):
-        i = order[k]
-        for a in range(3):
-            out[a] = min(out[a], cent[i, a])
-            out[3 + a] = max(out[3 + a], cent[i, a])
-
-
-@numba.njit(**NJIT_INLINE)
 def _bin_axis(order, cent, plo, phi, s, e, a, lo, scale, nbins, bcnt, bbox):
     """Count the primitives ``order[s:e]`` into ``nbins`` centroid bins along axis ``a`` and
     grow each bin's box (``bcnt[a]``, ``bbox[a]``)."""
@@ -358,7 +345,7 @@ def _build_sah(cent, plo, phi, kind, leaf_size, nbins, node_cost, sah_depth):
         d = st_d[sp]
         _range_box(order, plo, phi, s, e, nb)
         parea = _area(nb[0], nb[3], nb[1], nb[4], nb[2], nb[5])
-        _centroid_box(order, cent, s, e, cbox)
+        _range_box(order, cent, cent, s, e, cbox)    # the centroids' box
         best_cost = np.inf
         best_axis = -1
         best_split = 0
