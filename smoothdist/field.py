@@ -53,6 +53,24 @@ AUTO_SURFACE_MIN_TUBE = 0.01
 AUTO_SURFACE_SHARPNESS = 6.0
 AUTO_WIRE_DEGREE = 2.5
 AUTO_WIRE_RADIUS = 0.1
+#: how many data sets' ``auto_alpha`` values are remembered by content (the search costs
+#: seconds on a 100k-point cloud; a key costs a hash of the arrays, ~1 ms per MB)
+AUTO_CACHE_SIZE = 8
+_AUTO_ALPHA_CACHE = {}
+
+
+def _data_key(field):
+    """A key for what ``auto_alpha`` depends on: the vertex and primitive arrays (a BLAKE2
+    digest of their bytes, shapes and dtypes) and the tree's leaf size."""
+    import hashlib
+
+    m = field.mesh
+    h = hashlib.blake2b(digest_size=20)
+    for a in (m.V, m.points, m.edges, m.triangles):
+        a = np.ascontiguousarray(a)
+        h.update(str((a.shape, a.dtype.str)).encode())
+        h.update(a.data)
+    return h.hexdigest(), field.leaf_size
 #: :meth:`SmoothDistanceField.exact_distance` switches to :attr:`SmoothDistanceField.exact_tree`
 #: once it has answered this many queries per primitive (its build costs about as much as
 #: one or two exact queries per primitive save)
@@ -123,7 +141,8 @@ class SmoothDistanceField:
         if isinstance(leaf_size, bool) or not isinstance(leaf_size, (int, np.integer)) or leaf_size < 1:
             raise ValueError(f"leaf_size must be an integer >= 1, got {leaf_size!r}")
         self.mesh = mesh
-        self.tree = build_tree(mesh, leaf_size=int(leaf_size), progress=progress)
+        self.leaf_size = int(leaf_size)
+        self.tree = build_tree(mesh, leaf_size=self.leaf_size, progress=progress)
 
     # ------------------------------------------------------------------ properties
     @property
@@ -210,11 +229,17 @@ class SmoothDistanceField:
         :meth:`paper_alpha` ``= 1 / median spacing``, beyond which neighbouring blobs stop
         merging into one surface, and then lowered until the widest gaps between sampled
         points are closed too (:meth:`closing_alpha`: random samples of a surface have gaps
-        several median spacings wide). The result is cached.
+        several median spacings wide). The result is cached, on the field and by the data's
+        content (:func:`_data_key`), so a second field of the same data (a second
+        ``render_mesh`` of the same file, another view) does not search again.
         """
         cached = getattr(self, "_auto_alpha_value", None)
         if cached is not None:
             return cached
+        key = _data_key(self)
+        if key in _AUTO_ALPHA_CACHE:
+            self._auto_alpha_value = _AUTO_ALPHA_CACHE[key]
+            return self._auto_alpha_value
         L = self.diagonal
         if not L > 0:
             value = self.paper_alpha()
@@ -235,6 +260,9 @@ class SmoothDistanceField:
             if self.mesh.points.size >= 2:
                 value = self.closing_alpha(min(value, 1.0 / self.point_spacing()))
         self._auto_alpha_value = value
+        while len(_AUTO_ALPHA_CACHE) >= AUTO_CACHE_SIZE:
+            _AUTO_ALPHA_CACHE.pop(next(iter(_AUTO_ALPHA_CACHE)))   # the oldest
+        _AUTO_ALPHA_CACHE[key] = value
         return value
 
     def closing_alpha(self, alpha, samples=AUTO_GAP_SAMPLES, seed=0):

@@ -293,6 +293,29 @@ def test_auto_alpha_on_a_unit_icosphere(kind):
     assert field.paper_alpha() < 8 and field.auto_alpha() > 5 * field.paper_alpha()
 
 
+def test_auto_alpha_is_remembered_by_content(monkeypatch):
+    """A second field of the same data (another ``render_mesh`` of the same file) takes the
+    first one's ``auto_alpha`` without searching; other data, or the same data with one
+    coordinate changed or another leaf size, searches again and may differ."""
+    from smoothdist import field as field_mod
+
+    X = np.random.default_rng(11).normal(size=(300, 3))
+    searches = []
+    real = field_mod.SmoothDistanceField.closing_alpha
+    monkeypatch.setattr(field_mod.SmoothDistanceField, "closing_alpha",
+                        lambda self, *a, **k: searches.append(1) or real(self, *a, **k))
+    a0 = sd.SmoothDistanceField(X).auto_alpha()
+    assert sd.SmoothDistanceField(X.copy()).auto_alpha() == a0 and len(searches) == 1
+    Y = X.copy()
+    Y[0, 0] += 1e-3
+    sd.SmoothDistanceField(Y).auto_alpha()
+    sd.SmoothDistanceField(X, leaf_size=2).auto_alpha()
+    assert len(searches) == 3
+    # an independent search of the same data (the cache emptied) gives the same value
+    monkeypatch.setattr(field_mod, "_AUTO_ALPHA_CACHE", {})
+    assert sd.SmoothDistanceField(X).auto_alpha() == a0 and len(searches) == 4
+
+
 @pytest.mark.parametrize("name,data", [
     ("icosphere-4", None), ("bunny", "bunny.off"), ("torus", "meshes/torus.obj"),
     ("octopus", "meshes/octopus_low.obj")])

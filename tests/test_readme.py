@@ -85,6 +85,7 @@ TINY = {
     "benchmarks/bench_studies.py": ["--size", "8", "--betas", "1", "--grid", "4",
                                     "--trivial", "4", "--folder", "scenes/data/meshes"],
     "benchmarks/bench_frame.py": ["--size", "16", "9", "--repeat", "1"],
+    "tracer.sim.vbowl -o": ["--steps", "20"],
     "benchmarks/bench_scaling.py": ["--size", "16", "9", "--repeat", "1", "--threads", "1", "2"],
 }
 
@@ -158,6 +159,13 @@ NOT_RUN = {
         "it rewrites the result blocks of the repository's own guides; "
         "tests/test_reproduce.py checks the guides against the committed results with the "
         "same code",
+    "for s in scenes/*.json; do python -m tracer render $s -o renders/gallery/$(basename "
+    "${s%.json}).png --size 512 512 --shading lit --samples 16 --adaptive --overwrite; done":
+        "it starts one interpreter per scene (14); tests/test_render_golden.py runs the same "
+        "command line for every scene in-process (test_every_scene_renders_lit_from_the_"
+        "command_line)",
+    "python benchmarks/bench_studies.py --grid 50":
+        "with the test's tiny options appended (--grid 4) it is the command above, which runs",
     "bash .ci/run": "it runs this test suite (CI runs it)",
     'bash .ci/run -m "not slow"': "it runs the quick part of this test suite",
     "python -m pytest tests/test_render_golden.py --regen-baselines":

@@ -99,6 +99,24 @@ def test_golden_image(scene_path, mode, image_regression):
     image_regression.check(rgb, name=name, **TOLERANCES.get(name, DEFAULT_TOLERANCE)._asdict())
 
 
+@pytest.mark.parametrize("scene_path", SCENES, ids=[p.stem for p in SCENES])
+def test_every_scene_renders_lit_from_the_command_line(scene_path, tmp_path):
+    """The gallery's command (docs/guide/rendering.md: every scene, lit, adaptive samples),
+    in-process at 24 x 24 (the page's own command, run as a test of that page, would start 14
+    interpreters): it exits 0 and writes an image with shading (more than 8 colours; a render
+    that failed to hit anything is the background and the ground's fade)."""
+    from tracer.cli import main
+
+    out = tmp_path / f"{scene_path.stem}.png"
+    rc = main(["render", str(scene_path), "-o", str(out), "--size", "24", "24", "--shading",
+               "lit", "--samples", "4", "--adaptive", "--overwrite", "-q"])
+    assert rc == 0 and out.is_file()
+    rgb = load_png(out)
+    assert rgb.shape[:2] == (24, 24)
+    colours = np.unique(rgb.reshape(-1, rgb.shape[-1]), axis=0)
+    assert len(colours) > 8, scene_path.stem     # shading varies over the object
+
+
 def test_every_scene_has_baselines(request):
     assert SCENES, "no scenes/*.json found"
     if request.config.getoption("--regen-baselines"):
