@@ -53,9 +53,9 @@ AUTO_SURFACE_MIN_TUBE = 0.01
 AUTO_SURFACE_SHARPNESS = 6.0
 AUTO_WIRE_DEGREE = 2.5
 AUTO_WIRE_RADIUS = 0.1
-#: how many data sets' ``auto_alpha`` values are remembered by content (the search costs
-#: seconds on a 100k-point cloud; a key costs a hash of the arrays, ~1 ms per MB)
-AUTO_CACHE_SIZE = 8
+#: how many data sets' ``auto_alpha`` values are remembered by content (a key and a float each;
+#: the search costs seconds on a 100k-point cloud, a key a hash of the arrays, ~1 ms per MB)
+AUTO_CACHE_SIZE = 64
 _AUTO_ALPHA_CACHE = {}
 
 
