@@ -166,6 +166,9 @@ NOT_RUN = {
         "command_line)",
     "python benchmarks/bench_studies.py --grid 50":
         "with the test's tiny options appended (--grid 4) it is the command above, which runs",
+    "python scenes/simulations/table3/make_meshes.py --check "
+    "# the committed meshes, regenerated and compared":
+        "tests/test_sim_table3.py::test_make_meshes_is_reproducible runs this very command",
     "bash .ci/run": "it runs this test suite (CI runs it)",
     'bash .ci/run -m "not slow"': "it runs the quick part of this test suite",
     "python -m pytest tests/test_render_golden.py --regen-baselines":
