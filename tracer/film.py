@@ -32,7 +32,7 @@ the other samples take theirs bilinearly from the centre samples around them tha
 object (or ground), and are lit afresh where none does.
 
 Lit renders in smooth mode take the normal of every hit from the field at Barnes-Hut beta
-:data:`BETA_SHADE` at the same hit point (:func:`_shading_args`, :func:`_shading_normals`):
+:data:`BETA_SHADE` at the same hit point (``_shading_args``, ``_shading_normals``):
 the render's own gradient jumps where a far field switches on, which drew ribs across thin
 tubes. The centre samples' are computed at every :data:`SHADE_STRIDE`-th pixel of every
 :data:`SHADE_STRIDE`-th row and interpolated between where they agree, the other samples'
@@ -505,7 +505,7 @@ def _trace(kargs, depth_max, options, pixels, W, offsets, bounds=None, eps_px=EP
 
 
 #: lit renders in smooth mode take the normal of each hit sample from the field at Barnes-Hut
-#: beta at most this (:func:`_shading_normals`): the far field switches where ``diag < beta
+#: beta at most this (``_shading_normals``): the far field switches where ``diag < beta
 #: x dist``, and the gradient jumps there, which draws ribs across thin tubes in the light
 #: (issue 35). Measured: performance guide, "Publication images"
 BETA_SHADE = 0.2
@@ -659,7 +659,7 @@ def form_image(scene, camera, arrays, kargs, options, centre, samples=1, adaptiv
     and the ``rays``, ``light_queries`` and ``shading_queries`` counts.
 
     Lit renders in smooth mode whose beta exceeds :data:`BETA_SHADE` shade every hit with the
-    normal of the field at that beta (:func:`_shading_normals`), and write the centre's into
+    normal of the field at that beta (``_shading_normals``), and write the centre's into
     ``centre``'s ``grad`` (in place: the render's normals are those the image is lit with)."""
     H, W = scene.height, scene.width
     hit0, t0, grad0, objs0 = (np.asarray(a) for a in centre)
