@@ -30,6 +30,14 @@ neighbours agree, each of the two on its own (``_fill_light``; shadow edges, occ
 creases and object borders are computed in full);
 the other samples take theirs bilinearly from the centre samples around them that see the same
 object (or ground), and are lit afresh where none does.
+
+Lit renders in smooth mode take the normal of every hit from the field at Barnes-Hut beta
+:data:`BETA_SHADE` at the same hit point (``_shading_args``, ``_shading_normals``):
+the render's own gradient jumps where a far field switches on, which drew ribs across thin
+tubes. The centre samples' are computed at every :data:`SHADE_STRIDE`-th pixel of every
+:data:`SHADE_STRIDE`-th row and interpolated between where they agree, the other samples'
+likewise from the centre samples around them; hit points, coverage and light stay the
+render's own.
 """
 
 import numpy as np
@@ -469,10 +477,11 @@ def _neighbour_flags(colour, record, shape):
     return flags.ravel(), edges.ravel()
 
 
-def _trace(kargs, depth_max, options, pixels, W, offsets, bounds=None):
+def _trace(kargs, depth_max, options, pixels, W, offsets, bounds=None, eps_px=EPS_PX):
     """The samples ``offsets (K, 2)`` of the pixels ``pixels (m,)`` (flat indices), flattened
     pixel-major: ``hit, t, grad, steps, objs`` of length ``m K``. ``bounds = (t_lo, t_hi)``, each
-    ``(m,)``: the pixels' cone bounds, read where finite, written where not (NaN)."""
+    ``(m,)``: the pixels' cone bounds, read where finite, written where not (NaN). ``eps_px``:
+    the rays' hit threshold in pixels (:func:`tracer.march.trace_samples`)."""
     tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps = kargs
     relax, omega, cone, newton = options
     omega = max(omega, SAMPLE_OMEGA)
@@ -491,8 +500,151 @@ def _trace(kargs, depth_max, options, pixels, W, offsets, bounds=None):
         run_tasks(lambda a, b: march.sample_tasks(
             tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, rows, cols, offsets,
             depth_max, hit, t, grad, steps, objs, bounds[0], bounds[1], relax, omega, cone,
-            newton, EPS_PX, SAMPLE_NEWTON_COS, ntasks, a, b), ntasks)
+            newton, eps_px, SAMPLE_NEWTON_COS, ntasks, a, b), ntasks)
     return hit.ravel(), t.ravel(), grad.reshape(-1, 3), steps.ravel(), objs.ravel()
+
+
+#: lit renders in smooth mode take the normal of each hit sample from the field at Barnes-Hut
+#: beta at most this (``_shading_normals``): the far field switches where ``diag < beta
+#: x dist``, and the gradient jumps there, which draws ribs across thin tubes in the light
+#: (issue 35). Measured: performance guide, "Publication images"
+BETA_SHADE = 0.2
+#: the centre samples' shading normals are computed at every SHADE_STRIDE-th pixel of every
+#: SHADE_STRIDE-th row and interpolated in between where the four around agree ...
+SHADE_STRIDE = 3
+#: ... on the object, the depth (:data:`FILL_DEPTH`) and the normal, each within
+#: ``acos(SHADE_FILL_COS)`` (5 degrees) of their blend; the other samples take theirs from
+#: the centre samples around them in the same way
+SHADE_FILL_COS = 0.996
+#: :func:`_shading_normals` marches with a hit threshold of this many pixels: any distance is
+#: a hit, so the march stops at its first evaluation, at the sample's own hit
+_ANY_DISTANCE = 1e300
+
+
+def _shading_args(kargs):
+    """``kargs`` (:class:`tracer.frame.RayArgs`) with the Barnes-Hut beta of every object
+    lowered to :data:`BETA_SHADE` (a copy of ``params``), or None where that changes nothing
+    (exact-offset mode, or every beta already that low)."""
+    params = kargs.params
+    if kargs.mode != march.MODE_SMOOTH or not (params[:, march.P_BETA] > BETA_SHADE).any():
+        return None
+    low = np.array(params, dtype=np.float64, order="C")
+    low[:, march.P_BETA] = np.minimum(low[:, march.P_BETA], BETA_SHADE)
+    return kargs._replace(params=low)
+
+
+def _shading_normals(skargs, depth_max, options, pixels, W, offsets, hit, t, grad):
+    """The gradient of the shading field ``skargs`` (:func:`_shading_args`) at every hit
+    sample, written over ``grad`` in place; ``hit (n,), t (n,), grad (n, 3)`` are flat,
+    pixel-major over ``pixels (m,)`` x ``offsets (K, 2)``, as :func:`_trace` returns them.
+    The hit points ``t`` stay those of the render's own field (its silhouettes, its light).
+
+    The samples' own kernel (:func:`tracer.march.sample_tasks`, compiled already) does it:
+    each ray marches from its hit ``t`` to ``t`` with a hit threshold that any distance
+    meets, so it stops at its first evaluation, and returns the gradient there. Returns the
+    distance evaluations made (one per hit; two where ``tol > 0`` loosens the first)."""
+    K = len(offsets)
+    evals = 0
+    for k in range(K):          # one kernel call per offset: a sample's ray is (pixel, offset)
+        idx = np.flatnonzero(hit[k::K]) * K + k
+        if idx.size == 0:
+            continue
+        at = t[idx]
+        h, _, g, steps, _ = _trace(skargs, depth_max, options, pixels[idx // K], W,
+                                   offsets[k:k + 1], (at.copy(), at.copy()), _ANY_DISTANCE)
+        evals += int(steps.sum())
+        grad[idx[h]] = g[h]
+    return evals
+
+
+def _unit(v):
+    n = np.linalg.norm(v, axis=-1, keepdims=True)
+    return np.where(n > 0, v / np.where(n > 0, n, 1.0), 0.0)
+
+
+def _blend_normals(corners, normals, key, depth, my_key, my_depth):
+    """Bilinear normals from centre pixels: ``corners``, a list of ``(j (n,) flat pixel or -1,
+    w (n,))``; ``normals (H W, 3)`` unit, ``key``/``depth (H W,)`` of those pixels. Returns
+    ``(n (n, 3) unit, ok (n,) bool)``; ``ok`` where every corner of weight > 0 sees the same
+    object (``my_key``) at a depth within :data:`FILL_DEPTH` of ``my_depth`` and its normal
+    lies within ``acos(SHADE_FILL_COS)`` of the blend (an interpolation, never across an
+    edge, a crease or a fold)."""
+    n = my_key.size
+    acc = np.zeros((n, 3))
+    ok = np.ones(n, dtype=bool)
+    for j, w in corners:
+        used = w > 0
+        jj = np.where(j >= 0, j, 0)
+        ok &= ~used | ((j >= 0) & (key[jj] == my_key)
+                       & (np.abs(depth[jj] - my_depth) <= FILL_DEPTH * my_depth))
+        acc += np.where(used, w, 0.0)[:, None] * normals[jj]
+    m = _unit(acc)
+    for j, w in corners:
+        jj = np.where(j >= 0, j, 0)
+        ok &= (w <= 0) | ((normals[jj] * m).sum(axis=1) >= SHADE_FILL_COS)
+    return m, ok
+
+
+def _centre_shading_normals(skargs, depth_max, options, shape, hit, t, grad, objs):
+    """:func:`_shading_normals` of the centre samples ``(H W,)`` (``grad (H W, 3)`` written
+    in place, as unit normals where interpolated): computed at every :data:`SHADE_STRIDE`-th
+    pixel of every :data:`SHADE_STRIDE`-th row, interpolated bilinearly in between where the
+    four around agree (:func:`_blend_normals`), computed where they do not. The shading field
+    is smooth, so its normals interpolate; the render's own do not (they jump). Returns the
+    distance evaluations made."""
+    H, W = shape
+    s = SHADE_STRIDE
+    r, c = np.divmod(np.arange(H * W), W)
+    coarse = hit & (r % s == 0) & (c % s == 0)
+    cpix = np.flatnonzero(coarse)
+    g = grad[cpix]
+    evals = _shading_normals(skargs, depth_max, options, cpix, W, np.zeros((1, 2)),
+                             np.ones(cpix.size, dtype=bool), t[cpix], g)
+    grad[cpix] = g
+    rest = np.flatnonzero(hit & ~coarse)
+    if rest.size:
+        rr, cc = r[rest], c[rest]
+        r0, c0 = (rr // s) * s, (cc // s) * s
+        fr, fc = (rr - r0) / s, (cc - c0) / s
+        corners = []
+        for dr, dc, w in ((0, 0, (1 - fr) * (1 - fc)), (0, s, (1 - fr) * fc),
+                          (s, 0, fr * (1 - fc)), (s, s, fr * fc)):
+            ri, ci = r0 + dr, c0 + dc
+            j = np.where((ri < H) & (ci < W), ri * W + np.minimum(ci, W - 1), -1)
+            corners.append((np.where((j >= 0) & coarse[np.maximum(j, 0)], j, -1), w))
+        key = np.where(hit, objs, -1)
+        n, ok = _blend_normals(corners, _unit(grad), key, t, key[rest], t[rest])
+        grad[rest[ok]] = n[ok]
+        todo = rest[~ok]
+        g = grad[todo]
+        evals += _shading_normals(skargs, depth_max, options, todo, W, np.zeros((1, 2)),
+                                  np.ones(todo.size, dtype=bool), t[todo], g)
+        grad[todo] = g
+    return evals
+
+
+def _sample_shading_normals(skargs, depth_max, options, pixels, W, offsets, position, centre,
+                            hit, t, grad, objs):
+    """:func:`_shading_normals` of extra samples (arguments as there; ``position = (rows,
+    cols)`` their fractional image positions, ``centre = (H, W, key, depth, normals)`` of
+    the centre samples, normals unit and final): bilinear from the four centre pixels
+    around a sample where they agree (:func:`_blend_normals`), computed elsewhere."""
+    H, W_, key, depth, normals = centre
+    rows, cols = position
+    r0 = np.floor(rows).astype(np.int64)
+    c0 = np.floor(cols).astype(np.int64)
+    fr, fc = rows - r0, cols - c0
+    corners = []
+    for dr, dc, w in ((0, 0, (1 - fr) * (1 - fc)), (0, 1, (1 - fr) * fc),
+                      (1, 0, fr * (1 - fc)), (1, 1, fr * fc)):
+        ri, ci = r0 + dr, c0 + dc
+        inside = (ri >= 0) & (ri < H) & (ci >= 0) & (ci < W_)
+        corners.append((np.where(inside, ri * W_ + ci, -1), w))
+    my_key = np.where(hit, objs, -2)
+    n, ok = _blend_normals(corners, normals, key, depth, my_key, np.where(hit, t, 0.0))
+    ok &= hit
+    grad[ok] = n[ok]
+    return _shading_normals(skargs, depth_max, options, pixels, W, offsets, hit & ~ok, t, grad)
 
 
 def form_image(scene, camera, arrays, kargs, options, centre, samples=1, adaptive=False):
@@ -504,13 +656,24 @@ def form_image(scene, camera, arrays, kargs, options, centre, samples=1, adaptiv
     (H, W, 3), objs (H, W))`` (``objs``: the object each hit shows, as the march found it). Returns
     ``(rgb (H, W, 3) uint8, alpha (H, W) float32, spp (H, W) int32, info dict)``; ``info``
     holds the centre samples' ``shadow``, ``ao``, ``object`` and ``ground`` maps (lit only)
-    and the ``rays`` and ``light_queries`` counts."""
+    and the ``rays``, ``light_queries`` and ``shading_queries`` counts.
+
+    Lit renders in smooth mode whose beta exceeds :data:`BETA_SHADE` shade every hit with the
+    normal of the field at that beta (``_shading_normals``), and write the centre's into
+    ``centre``'s ``grad`` (in place: the render's normals are those the image is lit with)."""
     H, W = scene.height, scene.width
     hit0, t0, grad0, objs0 = (np.asarray(a) for a in centre)
+    hit0, t0, objs0 = hit0.ravel(), t0.ravel(), objs0.ravel()
+    grad0 = grad0.reshape(-1, 3)        # a view: written in place
     dirs = primary_rays(camera).reshape(-1, 3)
+    skargs = _shading_args(kargs) if scene.shading == "lit" else None
+    shade_evals = 0
+    if skargs is not None:
+        shade_evals += _centre_shading_normals(skargs, arrays.depth_max, options, (H, W), hit0,
+                                               t0, grad0, objs0)
+        centre_normals = (H, W, np.where(hit0, objs0, -1), t0, _unit(grad0))
     shader = _Shader(scene, camera, arrays, kargs)
-    colour0, alpha0, rec0 = shader.shade(hit0.ravel(), t0.ravel(), grad0.reshape(-1, 3), dirs,
-                                         grid=(H, W), objs=objs0.ravel())
+    colour0, alpha0, rec0 = shader.shade(hit0, t0, grad0, dirs, grid=(H, W), objs=objs0)
     acc = colour0 * alpha0[:, None]
     acc_a = alpha0.copy()
     spp = np.ones(H * W, dtype=np.int32)
@@ -522,7 +685,7 @@ def form_image(scene, camera, arrays, kargs, options, centre, samples=1, adaptiv
     cone_hi = np.full(H * W, np.nan)
 
     def add(pixels, ks):
-        nonlocal rays
+        nonlocal rays, shade_evals
         if pixels.size == 0 or len(ks) == 0:
             return None
         ks = np.asarray(ks)
@@ -535,6 +698,10 @@ def form_image(scene, camera, arrays, kargs, options, centre, samples=1, adaptiv
         hit, t, grad, st, obj = _trace(kargs, arrays.depth_max, options, pixels, W, offsets[ks],
                                        bounds)
         cone_lo[pixels], cone_hi[pixels] = bounds
+        if skargs is not None:
+            shade_evals += _sample_shading_normals(skargs, arrays.depth_max, options, pixels,
+                                                   W, offsets[ks], (r, c), centre_normals,
+                                                   hit, t, grad, obj)
         rays += pix.size
         work[0] += int(st.sum())
         reuse = None
@@ -586,7 +753,7 @@ def form_image(scene, camera, arrays, kargs, options, centre, samples=1, adaptiv
     else:
         colour = mean + (1.0 - cover)[:, None] * shader.bg
     rgb = np.round(255.0 * shader.encode(colour)).astype(np.uint8).reshape(H, W, 3)
-    info = {"rays": int(H * W + rays), "sample_steps": work[0]}
+    info = {"rays": int(H * W + rays), "sample_steps": work[0], "shading_queries": shade_evals}
     if shader.lit:
         info.update(shadow=rec0["shadow"].reshape(H, W), ao=rec0["ao"].reshape(H, W),
                     object=rec0["obj"].reshape(H, W), ground=rec0["on_ground"].reshape(H, W),

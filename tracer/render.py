@@ -121,10 +121,10 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
         norm = np.linalg.norm(g, axis=2, keepdims=True)
         normals[r0:r1] = np.where(norm > 0, g / np.where(norm > 0, norm, 1.0), 0.0)
 
-    in_bands(unit, H)
     samples = _samples(scene.samples if samples is None else samples)
     adaptive = bool(scene.adaptive if adaptive is None else adaptive)
     if samples == 1 and scene.shading != "lit" and not scene.transparent:
+        in_bands(unit, H)
         seconds = time.perf_counter() - t0
         rgb = np.empty((H, W, 3), dtype=np.uint8)
         matcap = load_matcap(scene.matcap) if scene.shading == "matcap" else None
@@ -139,6 +139,7 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
 
         rgb, alpha, spp, aovs = form_image(scene, camera, arrays, args, options,
                                            (hit, tbuf, grad, objs), samples, adaptive)
+        in_bands(unit, H)       # after the film: a lit render's normals are its shading's
         seconds = time.perf_counter() - t0
     depth = tbuf.astype(np.float32)
     return RenderResult(rgb=rgb, hit=hit, depth=depth, normals=normals, steps=steps,
