@@ -241,7 +241,7 @@ def smooth_distance_point(tree, px, py, pz, alpha, beta, S, wgs, stack, dstack, 
             # count * whi**S * exp(-alpha bd) as count * exp(-alpha (bd - S log(whi) / alpha))
             f = cnt / bd
             m, s, gx, gy, gz = logsumexp_accumulate(m, s, gx, gy, gz, bd - sa * tree.lwhi[node],
-                                                    cnt, f * (px - cx), f * (py - cy),
+                                                    float(cnt), f * (px - cx), f * (py - cy),
                                                     f * (pz - cz), alpha)
             leaves += 1
             cut = m + reach
