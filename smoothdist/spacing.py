@@ -15,6 +15,7 @@ import numba
 import numpy as np
 
 from smoothdist._config import NJIT
+from smoothdist.closest_point import box_distance2
 from smoothdist.schedule import parallel_tasks, run_tasks
 
 __all__ = ["points_within", "gap_probes", "local_smooth_distance"]
@@ -31,13 +32,7 @@ def _points_within_one(tree, px, py, pz, r2, out, stack):
     while sp > 0:
         sp -= 1
         node = stack[sp]
-        d2 = 0.0
-        for a, v in enumerate((px, py, pz)):
-            if v < tree.lo[node, a]:
-                d2 += (tree.lo[node, a] - v) ** 2
-            elif v > tree.hi[node, a]:
-                d2 += (v - tree.hi[node, a]) ** 2
-        if d2 > r2:
+        if box_distance2(px, py, pz, tree.lo, tree.hi, node)[0] > r2:   # the march's kernel
             continue
         if tree.left[node] < 0:
             for i in range(tree.start[node], tree.start[node] + tree.count[node]):
