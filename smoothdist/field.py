@@ -582,10 +582,10 @@ def _check_device(device, method="bvh"):
 
 def _tasks(kernel, n, *args):
     """Run the serial task kernel ``kernel(*args, ntasks, task0, task1)`` over ``n`` queries
-    from Python threads (:func:`smoothdist.schedule.run_tasks`, one strided task per thread,
-    :func:`smoothdist.query.chunk_tasks`)."""
+    from the persistent worker threads (:func:`smoothdist.schedule.run_tasks` with ``pool``;
+    one strided task per thread, :func:`smoothdist.query.chunk_tasks`)."""
     ntasks = _q.chunk_tasks(n)
-    run_tasks(lambda a, b: kernel(*args, ntasks, a, b), ntasks)
+    run_tasks(lambda a, b: kernel(*args, ntasks, a, b), ntasks, pool=True)
 
 
 def _exact_bvh(tree, P, floor=-1.0):

@@ -75,7 +75,7 @@ def points_within(tree, P, radius, max_count):
         ntasks = parallel_tasks(P.shape[0])
         r2, k = float(radius) ** 2, 2 * tree.depth + 4
         run_tasks(lambda a, b: _points_within_tasks(tree, P, r2, out, counts, k, ntasks, a, b),
-                  ntasks)
+                  ntasks, pool=True)
     coords = tree.pts[np.maximum(out, 0), :3]
     return coords, counts
 

@@ -91,3 +91,21 @@ def test_task_kernels_equal_the_prange_kernels(bunny, ntasks, threads, monkeypat
               lambda X: SmoothDistanceField(bunny.mesh).exact_distance(X)):
         small, large = f(Q), f(big)
         assert all(np.array_equal(x, y[:n]) for x, y in zip(small, large))
+
+
+@pytest.mark.parametrize("pool", [False, True])
+def test_run_tasks_covers_every_task_once(pool):
+    from smoothdist.schedule import run_tasks
+
+    for ntasks in (1, 2, 5, 64):
+        for threads in (1, 2, 3, 8):
+            seen = []
+            run_tasks(lambda a, b: seen.extend(range(a, b)), ntasks, threads, pool=pool)
+            assert sorted(seen) == list(range(ntasks))
+
+    def broken(a, b):
+        if a > 0:
+            raise RuntimeError("task failed")
+
+    with pytest.raises(RuntimeError, match="task failed"):
+        run_tasks(broken, 4, 2, pool=pool)
