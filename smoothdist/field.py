@@ -3,7 +3,6 @@
 import math
 from typing import NamedTuple
 
-import numba
 import numpy as np
 
 from smoothdist import query as _q
@@ -11,7 +10,7 @@ from smoothdist._cast import as_points, non_negative, positive
 from smoothdist.bvh import build_tree
 from smoothdist.exact_query import build_exact_tree, exact_tree_batch
 from smoothdist.mesh import as_data_mesh
-from smoothdist.schedule import parallel_tasks
+from smoothdist.schedule import parallel_tasks, run_tasks
 
 GRADIENTS = ("metric", "exact")
 METHODS = ("bvh", "brute")
@@ -75,6 +74,11 @@ def _data_key(field):
 #: once it has answered this many queries per primitive (its build costs about as much as
 #: one or two exact queries per primitive save)
 EXACT_TREE_AFTER = 1.0
+#: batches of at most this many queries (``smooth_distance`` without ``tol``, ``exact_distance``
+#: on the BVH) run as serial task kernels from Python threads (``smoothdist.query.*_tasks``:
+#: about half the compile time of a ``prange`` kernel, which a fresh install's first call
+#: pays); larger batches use the ``prange`` kernels (``*_batch``). The same values either way.
+TASK_BATCH = 1 << 14
 
 
 class SmoothDistanceResult(NamedTuple):
@@ -289,7 +293,7 @@ class SmoothDistanceField:
         probes, radii = gap_probes(self.tree, np.ascontiguousarray(pick),
                                    AUTO_GAP_RADIUS * self.point_spacing())
         if probes.shape[0]:  # gap centres: no sample closer than the triangle's corners
-            probes = probes[self.exact_distance(probes).distance >= (1.0 - 1e-9) * radii]
+            probes = probes[_exact_bvh(self.tree, probes)[0] >= (1.0 - 1e-9) * radii]
 
         radius = AUTO_GAP_RADIUS * self.point_spacing()
 
@@ -402,7 +406,9 @@ class SmoothDistanceField:
     def _offset_probes(self, target, count=None, seed=0):
         """Probe points at exact distance about ``target`` from random spots of the data.
 
-        Returns ``(probes (k, 3), exact distance (k,))``.
+        The exact distances search the smooth-distance tree (these few hundred probes are not
+        the caller's queries: they neither count towards :attr:`exact_tree`'s build nor
+        compile its kernels). Returns ``(probes (k, 3), exact distance (k,))``.
         """
         count = count or AUTO_PROBES
         rng = np.random.default_rng(seed)
@@ -425,10 +431,10 @@ class SmoothDistanceField:
         dirs = rng.normal(size=(count, 3))
         dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
         q = spots + target * dirs
-        d, g = self.exact_distance(q)
+        d, g = _exact_bvh(self.tree, q)
         ok = d > 1e-9 * target
-        q = (q - d[:, None] * g)[ok] + target * g[ok]  # closest point + target x outward
-        return np.ascontiguousarray(q), self.exact_distance(q).distance
+        q = np.ascontiguousarray((q - d[:, None] * g)[ok] + target * g[ok])  # closest + outward
+        return q, _exact_bvh(self.tree, q)[0]
 
     def offset_estimate(self, alpha, alpha_u="auto", beta=0.5, probes=None):
         """Estimated mean offset of the surface ``d_hat = 0`` from the data (scene units).
@@ -450,7 +456,7 @@ class SmoothDistanceField:
         rng = np.random.default_rng(seed)
         pick = pts if pts.shape[0] <= samples else pts[rng.choice(pts.shape[0], samples,
                                                                    replace=False)]
-        d = _nearest_other(self.tree, np.ascontiguousarray(pick), parallel_tasks(len(pick)))
+        d = _nearest_other(self.tree, np.ascontiguousarray(pick))
         d = d[np.isfinite(d) & (d > 0)]
         return float(np.median(d)) if d.size else max(self.diagonal, 1.0)
 
@@ -516,7 +522,10 @@ class SmoothDistanceField:
         g = np.empty((n, 3))
         nodes = np.empty(n, dtype=np.int64)
         leaves = np.empty(n, dtype=np.int64)
-        if n:
+        if 0 < n <= TASK_BATCH and method == "bvh" and tol == 0.0:
+            _tasks(_q.smooth_distance_tasks, n, self.tree, Q, alpha, beta, S, wgs, d, g, nodes,
+                   leaves, 0)
+        elif n:
             _q.smooth_distance_batch(self.tree, Q, alpha, beta, S, wgs, method == "brute", d, g,
                                      nodes, leaves, tol, parallel_tasks(n))
         res = SmoothDistanceResult(d, g)
@@ -556,6 +565,9 @@ class SmoothDistanceField:
                     or self._exact_queries >= EXACT_TREE_AFTER * self.num_primitives):
                 exact_tree_batch(self.exact_tree, Q, True, d, g, prim, nodes, leaves,
                                  parallel_tasks(n), bool(return_stats))
+            elif n <= TASK_BATCH:
+                _tasks(_q.exact_distance_tasks, n, self.tree, Q, -1.0, d, g, prim, nodes, leaves,
+                       0)
             else:
                 _q.exact_distance_batch(self.tree, Q, d, g, prim, nodes, leaves,
                                         parallel_tasks(n))
@@ -596,17 +608,27 @@ def _check_device(device, method="bvh"):
     return device
 
 
-@numba.njit(**_q.NJIT_PARALLEL)
-def _nearest_other(tree, P, ntasks=1):
-    """Distance from each row of ``P (n, 3)`` to the nearest primitive at distance > 0."""
-    out = np.empty(P.shape[0])
-    k = tree.depth + 4
+def _tasks(kernel, n, *args):
+    """Run the serial task kernel ``kernel(*args, ntasks, task0, task1)`` over ``n`` queries
+    from the persistent worker threads (:func:`smoothdist.schedule.run_tasks` with ``pool``;
+    one strided task per thread, :func:`smoothdist.query.chunk_tasks`)."""
+    ntasks = _q.chunk_tasks(n)
+    run_tasks(lambda a, b: kernel(*args, ntasks, a, b), ntasks, pool=True)
+
+
+def _exact_bvh(tree, P, floor=-1.0):
+    """Exact distance and unit gradient from each row of ``P (n, 3)`` searching ``tree`` (the
+    smooth-distance BVH: no exact tree built or compiled), ignoring primitives at squared
+    distance ``<= floor`` (``0.0``: the nearest primitive at distance > 0). Returns
+    ``(d (n,), g (n, 3))``."""
     n = P.shape[0]
-    ntasks = max(1, min(n, ntasks))
-    for task in numba.prange(ntasks):
-        stack = np.empty(k, dtype=np.int64)
-        dstack = np.empty(k)
-        for i in range(task, n, ntasks):
-            out[i] = _q.exact_distance_point(tree, P[i, 0], P[i, 1], P[i, 2], stack, dstack, 0,
-                                             0.0)[0]
-    return out
+    d, g = np.empty(n), np.empty((n, 3))
+    if n:
+        prim, nodes, leaves = (np.empty(n, dtype=np.int64) for _ in range(3))
+        _tasks(_q.exact_distance_tasks, n, tree, P, float(floor), d, g, prim, nodes, leaves, 0)
+    return d, g
+
+
+def _nearest_other(tree, P):
+    """Distance from each row of ``P (n, 3)`` to the nearest primitive at distance > 0."""
+    return _exact_bvh(tree, P, 0.0)[0]

@@ -5,7 +5,9 @@ Three layers, as in the rest of the package:
 * ``primitive_term``: one primitive's distance, attenuated weight and gradient numerator;
 * ``smooth_distance_point`` / ``exact_distance_point``: one query point, an explicit stack,
   nearest-child-first traversal (public: other njit code, e.g. the tracer, calls these);
-* ``*_batch``: ``prange`` over chunks of query points, one stack per chunk.
+* ``*_batch``: ``prange`` over chunks of query points, one stack per chunk;
+  ``*_tasks``: the same loops as serial task kernels, run from Python threads
+  (:func:`smoothdist.schedule.run_tasks`; they compile in about half the time).
 
 Conventions: distances are unsigned, in scene units; gradients are with respect to the query
 point. The smooth sum is accumulated in float64 relative to a running shift ``m`` (the smallest
@@ -239,7 +241,7 @@ def smooth_distance_point(tree, px, py, pz, alpha, beta, S, wgs, stack, dstack, 
             # count * whi**S * exp(-alpha bd) as count * exp(-alpha (bd - S log(whi) / alpha))
             f = cnt / bd
             m, s, gx, gy, gz = logsumexp_accumulate(m, s, gx, gy, gz, bd - sa * tree.lwhi[node],
-                                                    cnt, f * (px - cx), f * (py - cy),
+                                                    float(cnt), f * (px - cx), f * (py - cy),
                                                     f * (pz - cz), alpha)
             leaves += 1
             cut = m + reach
@@ -635,3 +637,64 @@ def exact_distance_batch(tree, Q, out_d, out_g, out_prim, out_nodes, out_leaves,
                 out_prim[i] = p
                 out_nodes[i] = nodes
                 out_leaves[i] = leaves
+
+
+@numba.njit(**NJIT)
+def smooth_distance_tasks(tree, Q, alpha, beta, S, wgs, out_d, out_g, out_nodes, out_leaves,
+                          root, ntasks, task0, task1):
+    """:func:`smooth_distance_batch` without ``tol`` (0) nor ``brute``, as a serial task kernel:
+    tasks ``task0 <= t < task1`` of ``ntasks`` strided tasks over the chunks (run from Python
+    threads by :func:`smoothdist.schedule.run_tasks`; GIL-free). The same values: with
+    ``tol = 0``, :func:`smooth_distance_point_tol` is :func:`smooth_distance_point`, called
+    here with ``root`` an int argument (0 for the whole tree: the renderer's specialisation,
+    compiled once for both; a constant would be typed as a literal, another one)."""
+    n = Q.shape[0]
+    nchunks = (n + CHUNK - 1) // CHUNK
+    k = tree.depth + 4
+    stack = np.empty(k, dtype=np.int64)
+    dstack = np.empty(k)
+    for task in range(task0, task1):
+        for c in range(task, nchunks, ntasks):    # every ntasks-th chunk
+            for i in range(c * CHUNK, min(n, (c + 1) * CHUNK)):
+                d, gx, gy, gz, nodes, leaves = smooth_distance_point(
+                    tree, Q[i, 0], Q[i, 1], Q[i, 2], alpha, beta, S, wgs, stack, dstack, root)
+                out_d[i] = d
+                out_g[i, 0] = gx
+                out_g[i, 1] = gy
+                out_g[i, 2] = gz
+                out_nodes[i] = nodes
+                out_leaves[i] = leaves
+
+
+@numba.njit(**NJIT)
+def exact_distance_tasks(tree, Q, floor, out_d, out_g, out_prim, out_nodes, out_leaves, root,
+                         ntasks, task0, task1):
+    """:func:`exact_distance_batch` as a serial task kernel (tasks ``task0 <= t < task1`` of
+    ``ntasks``, ``root`` as in :func:`smooth_distance_tasks`), ignoring primitives at squared distance
+    ``<= floor`` (``-1.0``: none; ``0.0``: the nearest *other* point, see
+    :func:`exact_distance_point`)."""
+    n = Q.shape[0]
+    nchunks = (n + CHUNK - 1) // CHUNK
+    k = tree.depth + 4
+    stack = np.empty(k, dtype=np.int64)
+    dstack = np.empty(k)
+    for task in range(task0, task1):
+        for c in range(task, nchunks, ntasks):    # every ntasks-th chunk
+            for i in range(c * CHUNK, min(n, (c + 1) * CHUNK)):
+                d, gx, gy, gz, p, nodes, leaves = exact_distance_point(
+                    tree, Q[i, 0], Q[i, 1], Q[i, 2], stack, dstack, root, floor)
+                out_d[i] = d
+                out_g[i, 0] = gx
+                out_g[i, 1] = gy
+                out_g[i, 2] = gz
+                out_prim[i] = p
+                out_nodes[i] = nodes
+                out_leaves[i] = leaves
+
+
+def chunk_tasks(n):
+    """Strided tasks for ``n`` queries in chunks of :data:`CHUNK`: one per thread
+    (:func:`smoothdist.schedule.parallel_tasks`), at most one per chunk."""
+    from smoothdist.schedule import parallel_tasks
+
+    return max(1, min(parallel_tasks(n), (n + CHUNK - 1) // CHUNK))

@@ -14,7 +14,9 @@ the probes in numpy.
 import numba
 import numpy as np
 
-from smoothdist._config import NJIT, NJIT_PARALLEL
+from smoothdist._config import NJIT
+from smoothdist.closest_point import box_distance2
+from smoothdist.schedule import parallel_tasks, run_tasks
 
 __all__ = ["points_within", "gap_probes", "local_smooth_distance"]
 
@@ -30,13 +32,7 @@ def _points_within_one(tree, px, py, pz, r2, out, stack):
     while sp > 0:
         sp -= 1
         node = stack[sp]
-        d2 = 0.0
-        for a, v in enumerate((px, py, pz)):
-            if v < tree.lo[node, a]:
-                d2 += (tree.lo[node, a] - v) ** 2
-            elif v > tree.hi[node, a]:
-                d2 += (v - tree.hi[node, a]) ** 2
-        if d2 > r2:
+        if box_distance2(px, py, pz, tree.lo, tree.hi, node)[0] > r2:   # the march's kernel
             continue
         if tree.left[node] < 0:
             for i in range(tree.start[node], tree.start[node] + tree.count[node]):
@@ -55,11 +51,14 @@ def _points_within_one(tree, px, py, pz, r2, out, stack):
     return n
 
 
-@numba.njit(**NJIT_PARALLEL)
-def _points_within_batch(tree, P, r2, out, counts, stack_len):
-    for q in numba.prange(P.shape[0]):
-        stack = np.empty(stack_len, dtype=np.int64)
-        counts[q] = _points_within_one(tree, P[q, 0], P[q, 1], P[q, 2], r2, out[q], stack)
+@numba.njit(**NJIT)
+def _points_within_tasks(tree, P, r2, out, counts, stack_len, ntasks, task0, task1):
+    """:func:`_points_within_one` for rows ``q = t, t + ntasks, ...`` of ``P`` for the tasks
+    ``task0 <= t < task1`` (a serial task kernel, :func:`smoothdist.schedule.run_tasks`)."""
+    stack = np.empty(stack_len, dtype=np.int64)
+    for task in range(task0, task1):
+        for q in range(task, P.shape[0], ntasks):
+            counts[q] = _points_within_one(tree, P[q, 0], P[q, 1], P[q, 2], r2, out[q], stack)
 
 
 def points_within(tree, P, radius, max_count):
@@ -72,7 +71,11 @@ def points_within(tree, P, radius, max_count):
     P = np.ascontiguousarray(P, dtype=np.float64).reshape(-1, 3)
     out = np.full((P.shape[0], max_count), -1, dtype=np.int64)
     counts = np.zeros(P.shape[0], dtype=np.int64)
-    _points_within_batch(tree, P, float(radius) ** 2, out, counts, 2 * tree.depth + 4)
+    if P.shape[0]:
+        ntasks = parallel_tasks(P.shape[0])
+        r2, k = float(radius) ** 2, 2 * tree.depth + 4
+        run_tasks(lambda a, b: _points_within_tasks(tree, P, r2, out, counts, k, ntasks, a, b),
+                  ntasks, pool=True)
     coords = tree.pts[np.maximum(out, 0), :3]
     return coords, counts
 

@@ -261,7 +261,8 @@ def test_serial_runs_do_not_load_the_parallel_kernels(tmp_path):
         "from smoothdist import DataMesh, SmoothDistanceField\n"
         "import smoothdist.query as q\n"
         "f = SmoothDistanceField(DataMesh(np.random.default_rng(0).random((50, 3))))\n"
-        "f.smooth_distance(np.zeros((3, 3)), alpha=20.0, beta=0.5)\n"
+        "from smoothdist.field import TASK_BATCH\n"
+        "f.smooth_distance(np.zeros((TASK_BATCH + 1, 3)), alpha=20.0, beta=0.5)  # prange\n"
         "k = q.smooth_distance_batch\n"
         "print(k.targetoptions['parallel'], sum(k.stats.cache_hits.values()))\n")
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"))

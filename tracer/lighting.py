@@ -33,8 +33,8 @@ from numba import prange
 
 from smoothdist.kernels import NJIT, NJIT_PARALLEL
 from tracer.camera import box_corners
-from tracer.march import (_borrowed, march_ray, nearest_object, object_lower_bound, ray_box,
-                          scene_distance, visiting_order)
+from tracer.march import (NEWTON_COS, OMEGA, RELAX, _borrowed, march_ray, nearest_object,
+                          object_lower_bound, ray_box, scene_distance, visiting_order)
 
 __all__ = ["Lighting", "DEFAULT_COLOR", "PALETTE", "soft_shadow", "ambient_occlusion",
            "light_points", "object_ids", "ground_height", "light_directions", "shade_lit",
@@ -298,9 +298,11 @@ def _lowest_hit(tree, roots, params, mode, tol, starts, up, lo, hi, eps, max_ste
     dstack = np.empty(depth_max + 4)
     best = np.inf
     for i in range(starts.shape[0]):
+        # every argument given (the defaults' values): the camera rays' specialisation of
+        # march_ray, compiled once for both
         h, t = march_ray(tree, roots, params, mode, tol, starts[i, 0], starts[i, 1],
                          starts[i, 2], up[0], up[1], up[2], lo, hi, eps, max_steps, stack,
-                         dstack)[:2]
+                         dstack, RELAX, OMEGA, 0.0, 0.0, np.inf, NEWTON_COS, 0.0, 0.0)[:2]
         if h == 1:
             z = (starts[i, 0] + t * up[0]) * up[0] + (starts[i, 1] + t * up[1]) * up[1] \
                 + (starts[i, 2] + t * up[2]) * up[2]

@@ -1,9 +1,8 @@
 """Python threads for a render's per-pixel work: the serial, GIL-free task kernels and numpy
 loops that release the GIL (:func:`~tracer.threads.run_tasks`, :func:`~tracer.threads.in_bands`), with numba's thread count."""
 
-import threading
-
 from smoothdist.kernels import PARALLEL
+from smoothdist.schedule import run_tasks as _run_tasks
 
 __all__ = ["render_threads", "in_bands", "run_tasks"]
 
@@ -29,26 +28,6 @@ def run_tasks(fn, ntasks, threads=None):
     groups, one per thread (at most :func:`render_threads`), from Python threads: for the
     serial, GIL-free task kernels (``tracer.march.sample_tasks``,
     ``tracer.lighting.light_tasks``), whose tasks are independent, so the result does not
-    depend on the split. Exceptions are re-raised here."""
-    threads = max(1, min(threads or render_threads(), ntasks))
-    if threads == 1:
-        fn(0, ntasks)
-        return
-    edges = [ntasks * i // threads for i in range(threads + 1)]
-    errors = []
-
-    def work(a, b):
-        try:
-            fn(a, b)
-        except BaseException as exc:  # handed to the calling thread
-            errors.append(exc)
-
-    workers = [threading.Thread(target=work, args=(edges[i], edges[i + 1]), daemon=True)
-               for i in range(1, threads)]
-    for t in workers:
-        t.start()
-    work(edges[0], edges[1])
-    for t in workers:
-        t.join()
-    if errors:
-        raise errors[0]
+    depend on the split (:func:`smoothdist.schedule.run_tasks`). Exceptions are re-raised
+    here."""
+    _run_tasks(fn, ntasks, threads or render_threads())
