@@ -916,10 +916,12 @@ def _samples_task(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, r
         e = max(eps, eps_px * pixel * t_min)
         for k in range(offsets.shape[0]):
             dx, dy, dz = ray_direction(cam, r + offsets[k, 0], c + offsets[k, 1])
+            # every argument given (t_pred and d_lb at their defaults' values): the camera
+            # rays' specialisation of march_ray, compiled once for both
             h, t, gx, gy, gz, st, lv, bs, ob = march_ray(
                 tree, roots, params, mode, tol, cam[0], cam[1], cam[2], dx, dy, dz, lo, hi,
                 e, max_steps, stack, dstack, relax, omega, t_min, newton, t_hi[i],
-                newton_cos)
+                newton_cos, 0.0, 0.0)
             hit[i, k] = h == 1
             tbuf[i, k] = t
             grad[i, k, 0] = gx
