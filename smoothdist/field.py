@@ -234,7 +234,7 @@ class SmoothDistanceField:
         merging into one surface, and then lowered until the widest gaps between sampled
         points are closed too (:meth:`closing_alpha`: random samples of a surface have gaps
         several median spacings wide). The result is cached, on the field and by the data's
-        content (:func:`_data_key`), so a second field of the same data (a second
+        content (``_data_key``), so a second field of the same data (a second
         ``render_mesh`` of the same file, another view) does not search again.
         """
         cached = getattr(self, "_auto_alpha_value", None)
