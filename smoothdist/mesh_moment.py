@@ -135,7 +135,7 @@ def smooth_moment_primitives(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_
     ntasks = max(1, min(qkind.size, ntasks))
     for task in prange(ntasks):
         _moment_task(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g, out_m,
-                     out_nodes, out_leaves, tol, task, ntasks)
+                     out_nodes, out_leaves, tol, np.int64(task), ntasks)
 
 
 @numba.njit(**NJIT)
@@ -143,7 +143,7 @@ def smooth_moment_primitives_serial(tree, qkind, qpts, alpha, beta, S, wgs, brut
                                     out_m, out_nodes, out_leaves, tol=DEFAULT_TOL):
     """:func:`smooth_moment_primitives` on the calling thread (small query meshes)."""
     _moment_task(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g, out_m, out_nodes,
-                 out_leaves, tol, 0, 1)
+                 out_leaves, tol, np.int64(0), np.int64(1))
 
 
 @numba.njit(**NJIT)

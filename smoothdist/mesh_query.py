@@ -763,8 +763,10 @@ def smooth_distance_primitives(tree, qkind, qpts, alpha, beta, S, wgs, brute, ou
     """
     ntasks = max(1, min(qkind.size, ntasks))
     for task in prange(ntasks):
+        # the task index as int64 (prange's is uint64): one specialisation of the task for
+        # the parallel kernel, the serial one and the thread runner
         _smooth_task(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g, out_nodes,
-                     out_leaves, tol, task, ntasks, exact_box)
+                     out_leaves, tol, np.int64(task), ntasks, exact_box)
 
 
 @numba.njit(**NJIT)
@@ -773,7 +775,7 @@ def smooth_distance_primitives_serial(tree, qkind, qpts, alpha, beta, S, wgs, br
                                       exact_box=False):
     """:func:`smooth_distance_primitives` on the calling thread (small query meshes)."""
     _smooth_task(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g, out_nodes,
-                 out_leaves, tol, 0, 1, exact_box)
+                 out_leaves, tol, np.int64(0), np.int64(1), exact_box)
 
 
 @numba.njit(**NJIT)
@@ -810,13 +812,13 @@ def exact_distance_primitives(tree, qkind, qpts, bound2, out_d, out_g, out_prim,
     """
     ntasks = max(1, min(qkind.size, ntasks))
     for task in prange(ntasks):
-        _exact_task(tree, qkind, qpts, bound2, out_d, out_g, out_prim, task, ntasks)
+        _exact_task(tree, qkind, qpts, bound2, out_d, out_g, out_prim, np.int64(task), ntasks)
 
 
 @numba.njit(**NJIT)
 def exact_distance_primitives_serial(tree, qkind, qpts, bound2, out_d, out_g, out_prim):
     """:func:`exact_distance_primitives` on the calling thread (small query meshes)."""
-    _exact_task(tree, qkind, qpts, bound2, out_d, out_g, out_prim, 0, 1)
+    _exact_task(tree, qkind, qpts, bound2, out_d, out_g, out_prim, np.int64(0), np.int64(1))
 
 
 @numba.njit(**NJIT)
