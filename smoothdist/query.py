@@ -619,24 +619,36 @@ def smooth_distance_batch(tree, Q, alpha, beta, S, wgs, brute, out_d, out_g, out
 def exact_distance_batch(tree, Q, out_d, out_g, out_prim, out_nodes, out_leaves, ntasks=1):
     """Exact distance for every row of ``Q (q, 3)`` into the output arrays (``ntasks`` strided
     tasks over the chunks, as in :func:`smooth_distance_batch`)."""
-    n = Q.shape[0]
-    nchunks = (n + CHUNK - 1) // CHUNK
+    nchunks = (Q.shape[0] + CHUNK - 1) // CHUNK
     k = tree.depth + 4
     ntasks = max(1, min(nchunks, ntasks))
     for task in prange(ntasks):
         stack = np.empty(k, dtype=np.int64)
         dstack = np.empty(k)
-        for c in range(task, nchunks, ntasks):    # every ntasks-th chunk
-            for i in range(c * CHUNK, min(n, (c + 1) * CHUNK)):
-                d, gx, gy, gz, p, nodes, leaves = exact_distance_point(tree, Q[i, 0], Q[i, 1],
-                                                                       Q[i, 2], stack, dstack)
-                out_d[i] = d
-                out_g[i, 0] = gx
-                out_g[i, 1] = gy
-                out_g[i, 2] = gz
-                out_prim[i] = p
-                out_nodes[i] = nodes
-                out_leaves[i] = leaves
+        # the task index and root as int64 (prange's is uint64, a constant a literal): the
+        # specialisation exact_distance_tasks compiles too
+        _exact_chunks(tree, Q, -1.0, out_d, out_g, out_prim, out_nodes, out_leaves,
+                      np.int64(0), ntasks, np.int64(task), stack, dstack)
+
+
+@numba.njit(**NJIT)
+def _exact_chunks(tree, Q, floor, out_d, out_g, out_prim, out_nodes, out_leaves, root, ntasks,
+                  task, stack, dstack):
+    """Chunks ``task, task + ntasks, ...`` of :func:`exact_distance_batch` /
+    :func:`exact_distance_tasks` (``stack``, ``dstack``: the task's traversal buffers)."""
+    n = Q.shape[0]
+    nchunks = (n + CHUNK - 1) // CHUNK
+    for c in range(task, nchunks, ntasks):    # every ntasks-th chunk
+        for i in range(c * CHUNK, min(n, (c + 1) * CHUNK)):
+            d, gx, gy, gz, p, nodes, leaves = exact_distance_point(
+                tree, Q[i, 0], Q[i, 1], Q[i, 2], stack, dstack, root, floor)
+            out_d[i] = d
+            out_g[i, 0] = gx
+            out_g[i, 1] = gy
+            out_g[i, 2] = gz
+            out_prim[i] = p
+            out_nodes[i] = nodes
+            out_leaves[i] = leaves
 
 
 @numba.njit(**NJIT)
@@ -673,23 +685,12 @@ def exact_distance_tasks(tree, Q, floor, out_d, out_g, out_prim, out_nodes, out_
     ``ntasks``, ``root`` as in :func:`smooth_distance_tasks`), ignoring primitives at squared distance
     ``<= floor`` (``-1.0``: none; ``0.0``: the nearest *other* point, see
     :func:`exact_distance_point`)."""
-    n = Q.shape[0]
-    nchunks = (n + CHUNK - 1) // CHUNK
     k = tree.depth + 4
     stack = np.empty(k, dtype=np.int64)
     dstack = np.empty(k)
     for task in range(task0, task1):
-        for c in range(task, nchunks, ntasks):    # every ntasks-th chunk
-            for i in range(c * CHUNK, min(n, (c + 1) * CHUNK)):
-                d, gx, gy, gz, p, nodes, leaves = exact_distance_point(
-                    tree, Q[i, 0], Q[i, 1], Q[i, 2], stack, dstack, root, floor)
-                out_d[i] = d
-                out_g[i, 0] = gx
-                out_g[i, 1] = gy
-                out_g[i, 2] = gz
-                out_prim[i] = p
-                out_nodes[i] = nodes
-                out_leaves[i] = leaves
+        _exact_chunks(tree, Q, floor, out_d, out_g, out_prim, out_nodes, out_leaves, root,
+                      ntasks, task, stack, dstack)
 
 
 def chunk_tasks(n):
