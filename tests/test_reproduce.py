@@ -270,3 +270,34 @@ def test_existing_results_kept_without_overwrite(tmp_path, capsys):
     f.write_text("x")
     assert main(["reproduce", "--smoke", "--out", str(f)]) == 2
     assert "not a folder" in capsys.readouterr().err
+
+
+def test_table3_scenes_add_rows_to_the_earlier_ones(tmp_path, monkeypatch, capsys):
+    """A run of some Table 3 scenes (``--table3-scenes``) into a results folder keeps the
+    rows of the scenes it did not run, each with the date and commit of its own run."""
+    from tracer.reproduce import experiments
+
+    def fake(out, s, where):  # one row per scene, ms = the paper's row number
+        rows = {n: {"scene": n, "steps": 3, "file_steps": 3, "dt": 0.01,
+                    "runs": [{"threads": 1, "evaluations": 5, "ms_mean": float(row),
+                              "ms_median": float(row), "load_average_before": 0.0}],
+                    "run": {"date": f"2026-01-0{row}T12:00:00Z", "commit": "c" * 40}}
+                for n, (row, *_rest) in experiments.TABLE3_PAPER.items() if n in s["scenes"]}
+        return {"scenes": s["scenes"], "rows": rows, "authors_simulator": "not run",
+                "not_run": [n for n in experiments.TABLE3_PAPER if n not in rows]}
+
+    monkeypatch.setitem(experiments.EXPERIMENTS, "table3", fake)
+    out = tmp_path / "res"
+    base = ["reproduce", "--smoke", "--only", "table3", "--out", str(out), "-q"]
+    assert main(base + ["--table3-scenes", "ico_bowl,sphere_slide"]) == 0
+    assert main(base + ["--table3-scenes", "sphere_slide,bunny_bunny"]) == 0
+    res = json.loads((out / "table3.json").read_text())
+    assert list(res["rows"]) == ["ico_bowl", "bunny_bunny", "sphere_slide"]  # the paper's order
+    assert [res["rows"][n]["runs"][0]["ms_mean"] for n in res["rows"]] == [1.0, 5.0, 7.0]
+    assert "ico_bowl" not in res["not_run"] and "bunny_lidar" in res["not_run"]
+    page = (out / "reproduction.md").read_text(encoding="utf-8")
+    assert "run 2026-01-01 at commit cccccccccccc" in page  # ico_bowl's, from the first run
+    # without --table3-scenes the run is the whole table again: nothing old is kept
+    assert main(base) == 0
+    res = json.loads((out / "table3.json").read_text())
+    assert list(res["rows"]) == ["trefoil_ringtoss"]

@@ -221,8 +221,11 @@ def _table3_row(name):
                 f"{g3(a['ms_mean'])} ms on {a['threads']} threads ({a['evaluations']} "
                 "evaluations, same steps)" if a["status"] == "ok" else a["status"]))
         loads = ", ".join(g3(x["load_average_before"]) for x in r["runs"])
+        when = r.get("run") or {}
+        when = (f"; run {when['date'][:10]} at commit {when['commit'][:12]}"
+                if when.get("date") and when.get("commit") else "")
         return (ours, f"{steps}, dt {dt}, {r['runs'][0]['evaluations']} evaluations timed, "
-                f"load average {loads}", CANNOT,
+                f"load average {loads}{when}", CANNOT,
                 "the paper's is an absolute time on 28 threads; ours on this machine's "
                 + " and ".join(str(x["threads"]) for x in r["runs"]))
     return ev

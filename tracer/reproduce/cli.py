@@ -10,6 +10,7 @@ under a temporary name and renamed when every experiment has finished, so an int
 failed run leaves no half-written results.
 """
 
+import json
 import os
 import shutil
 import sys
@@ -92,7 +93,7 @@ def write_report(out, page=None, shown_as=None):
 
 
 def run(args):
-    from tracer.reproduce.experiments import EXPERIMENTS, SETTINGS, provenance
+    from tracer.reproduce.experiments import EXPERIMENTS, SETTINGS, merge_table3, provenance
 
     if args.quick and args.smoke:
         raise CLIError("--quick and --smoke exclude each other")
@@ -128,6 +129,7 @@ def run(args):
     if sched == "local" and mode != "full":
         sched, workers = "serial", None  # the quick run's tasks are too small for a cluster
     keep = []  # --only into an existing results folder: the experiments it keeps
+    keep_rows = []
     if out.exists() and any(out.iterdir()) and not args.overwrite:
         if not (args.only and (out / "run.json").is_file()):
             raise CLIError(f"{out} exists (pass --overwrite to replace it)")
@@ -139,6 +141,9 @@ def run(args):
                            "--out or --overwrite")
         keep = [n for n in old["experiments"] if n not in names and n in EXPERIMENTS
                 and (out / f"{n}.json").is_file()]
+        # a run of some Table 3 scenes adds its rows to the earlier ones
+        keep_rows = [n for n in old["experiments"] if n == "table3"
+                     and (out / "table3.json").is_file()]
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = out.parent / f".{out.name}.partial-{os.getpid()}"
     shutil.rmtree(tmp, ignore_errors=True)
@@ -156,6 +161,8 @@ def run(args):
                                     {"scheduler": sched, "workers": workers,
                                      "authors_bin": authors})
             sec = time.perf_counter() - t0
+            if name == "table3" and scenes and name in keep_rows:
+                res = merge_table3(json.loads((out / "table3.json").read_text()), res)
             write_json(tmp / f"{name}.json", dict(res, experiment=name, mode=mode,
                                                    settings=settings, seconds=round(sec, 2),
                                                    provenance=provenance()))

@@ -466,6 +466,9 @@ def table3(out, s, where):
         row, data, query, paper_ms, dt = TABLE3_PAPER[n]
         r.update(paper_row=row, data=data, query=query, paper_ms_28_threads=paper_ms,
                  paper_dt=dt)
+    stamp = provenance()
+    for r in rows.values():  # each row says when and from which commit it ran
+        r["run"] = {"date": stamp["date"], "commit": stamp["commit"]}
     write_json(out / "table3_rows.json", rows)
     return {"scenes": s["scenes"], "steps": s["steps"], "step_caps": caps,
             "scheduler": info.describe(), "rows": {n: rows[n] for n in s["scenes"]},
@@ -474,6 +477,26 @@ def table3(out, s, where):
                                   f"files and steps, {AUTHORS_THREADS} threads, after ours in "
                                   "the same task" if authors else "not run (no --authors-bin)"),
             "not_run": [n for n in TABLE3_PAPER if n not in s["scenes"]]}
+
+
+def merge_table3(old, new):
+    """``new`` Table 3 results with the rows of ``old`` (an earlier ``table3.json`` of the
+    same results folder) for the scenes ``new`` did not run: a run of some scenes
+    (``--table3-scenes``) adds to the table instead of replacing it. Kept rows keep their own
+    ``run`` (date and commit; rows written before rows carried one get the old file's)."""
+    prov = old.get("provenance", {})
+    rows = {}
+    for n in TABLE3_PAPER:
+        if n in new["rows"]:
+            rows[n] = new["rows"][n]
+        elif n in old.get("rows", {}):
+            rows[n] = dict(old["rows"][n])
+            rows[n].setdefault("run", {"date": prov.get("date"), "commit": prov.get("commit")})
+    merged = dict(new, rows=rows, scenes=list(rows),
+                  not_run=[n for n in TABLE3_PAPER if n not in rows])
+    if any(r.get("authors") for r in rows.values()) and "not run" in new["authors_simulator"]:
+        merged["authors_simulator"] = old["authors_simulator"] + " (where a row has a figure)"
+    return merged
 
 
 # ============================================================================ box test
