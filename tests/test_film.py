@@ -287,7 +287,7 @@ def test_bad_sample_counts_are_one_line_errors(bad):
 
 
 # ----------------------------------------------------------------------------- light stride
-def _fill_case(shadows, aos, keys=(0, 0, 0, 0)):
+def _fill_case(shadows, aos, keys=(0, 0, 0, 0), lit_side=None):
     """A 4 x 4 image with stride 3: coarse pixels at (0, 0), (0, 3), (3, 0), (3, 3) holding
     ``shadows`` / ``aos`` / ``keys``; pixel (1, 1) wanted (same key 0, depth, normal)."""
     H = W = 4
@@ -305,7 +305,11 @@ def _fill_case(shadows, aos, keys=(0, 0, 0, 0)):
     want[5] = True
     depth = np.ones(n)
     normals = np.tile([0.0, 0.0, 1.0], (n, 1))
-    got = film._fill_light((H, W), want, coarse, key, depth, normals, shadow, ao)
+    side = None
+    if lit_side is not None:
+        side = np.ones(n, dtype=bool)
+        side[corners] = lit_side
+    got = film._fill_light((H, W), want, coarse, key, depth, normals, shadow, ao, side)
     return got, shadow[5], ao[5]
 
 
@@ -355,3 +359,18 @@ def test_light_at_every_third_pixel_against_every_pixel(octopus, monkeypatch):
         assert (a < 0.5).any() if k == "shadow" else (a < 0.9).any()     # something to fill
     colour = np.abs(strided.rgb.astype(int) - full.rgb.astype(int)).max(axis=2)
     assert (colour > 8).mean() <= 0.04
+
+
+def test_light_fill_takes_no_shadow_from_across_the_terminator(monkeypatch):
+    """A coarse neighbour that faces away from the key light (its shadow 0 set, not traced)
+    fills neither the shadow of a pixel that faces the light (the rest agree: filled from
+    them) nor makes them disagree; its occlusion still counts (bilinear weights as above)."""
+    monkeypatch.setattr(film, "LIGHT_STRIDE", 3)
+    w = np.array([4, 2, 2, 1]) / 9
+    s, a = [0.0, 1.0, 1.0, 0.96], [0.5, 0.52, 0.55, 0.58]
+    (got_s, got_a), sh, oc = _fill_case(s, a, lit_side=(False, True, True, True))
+    assert got_s[5] and got_a[5]
+    assert sh == pytest.approx(w[1:] @ s[1:] / w[1:].sum()) and oc == pytest.approx(w @ a)
+    # all four on the other side (all 0, agreeing): the pixel's shadow is traced on its own
+    (got_s, got_a), sh, oc = _fill_case([0.0] * 4, a, lit_side=(False,) * 4)
+    assert not got_s[5] and got_a[5] and sh == -1.0

@@ -282,7 +282,7 @@ class _Shader:
             light(np.flatnonzero(coarse))
             key = np.where(hit, obj_all, np.where(on_ground, -2, -1))
             got_s, got_a = _fill_light((H, W), fresh & ~coarse, coarse, key, depth, facing,
-                                       shadow, ao)
+                                       shadow, ao, facing @ self.key > 0.0)
             rest = fresh & ~coarse
             light(np.flatnonzero(rest & ~got_s & ~got_a))
             light(np.flatnonzero(rest & ~got_s & got_a), occlusion=False)
@@ -334,7 +334,7 @@ FADE = 0.9
 GROUND_MIN_FADE = 0.01
 
 
-def _fill_light(shape, want, coarse, key, depth, normals, shadow, ao):
+def _fill_light(shape, want, coarse, key, depth, normals, shadow, ao, lit_side=None):
     """Shadow and occlusion of the pixels ``want`` from the coarse pixels around them.
 
     Each wanted pixel takes the bilinear-weighted mean of the (up to four) surrounding coarse
@@ -342,9 +342,13 @@ def _fill_light(shape, want, coarse, key, depth, normals, shadow, ao):
     normal within ``acos(FILL_COS)`` of its own, for its shadow where those neighbours'
     shadows differ by at most :data:`FILL_SHADOW`, and for its occlusion where their
     occlusions do (each factor on its own: a shadow edge over an open floor still takes its
-    occlusion from the neighbours). Pixels without such a neighbour, or where the neighbours
-    disagree, are left out to be lit on their own. Edits ``shadow`` and ``ao`` in place;
-    returns the masks ``(shadow filled, occlusion filled)``."""
+    occlusion from the neighbours). ``lit_side (n,) bool``: the normal faces the key light;
+    a coarse pixel fills a pixel's shadow only from the same side of that terminator (facing
+    away, the kernel sets the shadow to 0 without tracing a ray: that 0 is no measurement of
+    the light on the other side, and filled in there it drew dark specks on the last pixels
+    that face the light). Pixels without such a neighbour, or where the neighbours disagree,
+    are left out to be lit on their own. Edits ``shadow`` and ``ao`` in place; returns the
+    masks ``(shadow filled, occlusion filled)``."""
     H, W = shape
     s = LIGHT_STRIDE
     idx = np.flatnonzero(want)
@@ -364,6 +368,7 @@ def _fill_light(shape, want, coarse, key, depth, normals, shadow, ao):
         acc_s = np.zeros(i.size)
         acc_a = np.zeros(i.size)
         acc_w = np.zeros(i.size)
+        acc_ws = np.zeros(i.size)
         s_lo = np.full(i.size, np.inf)
         s_hi = np.full(i.size, -np.inf)
         a_lo = np.full(i.size, np.inf)
@@ -377,18 +382,21 @@ def _fill_light(shape, want, coarse, key, depth, normals, shadow, ao):
             ok &= np.abs(depth[j] - depth[i]) <= FILL_DEPTH * depth[i]
             ok &= (normals[j] * normals[i]).sum(axis=1) >= FILL_COS
             wt = np.where(ok, w, 0.0)
-            acc_s += wt * src_s[j]
+            ok_s = ok if lit_side is None else ok & (lit_side[j] == lit_side[i])
+            wt_s = np.where(ok_s, w, 0.0)
+            acc_s += wt_s * src_s[j]
             acc_a += wt * src_a[j]
             acc_w += wt
-            s_lo = np.where(ok, np.minimum(s_lo, src_s[j]), s_lo)
-            s_hi = np.where(ok, np.maximum(s_hi, src_s[j]), s_hi)
+            acc_ws += wt_s
+            s_lo = np.where(ok_s, np.minimum(s_lo, src_s[j]), s_lo)
+            s_hi = np.where(ok_s, np.maximum(s_hi, src_s[j]), s_hi)
             a_lo = np.where(ok, np.minimum(a_lo, src_a[j]), a_lo)
             a_hi = np.where(ok, np.maximum(a_hi, src_a[j]), a_hi)
         # across a shadow's edge, or where the occlusion changes fast, the neighbours
         # disagree: no interpolation of that factor there
-        good_s = (acc_w > 0) & (s_hi - s_lo <= FILL_SHADOW)
+        good_s = (acc_ws > 0) & (s_hi - s_lo <= FILL_SHADOW)
         good_a = (acc_w > 0) & (a_hi - a_lo <= FILL_SHADOW)
-        shadow[i[good_s]] = acc_s[good_s] / acc_w[good_s]
+        shadow[i[good_s]] = acc_s[good_s] / acc_ws[good_s]
         ao[i[good_a]] = acc_a[good_a] / acc_w[good_a]
         got_s[i[good_s]] = True
         got_a[i[good_a]] = True
