@@ -281,7 +281,8 @@ def test_task_kernels_equal_the_prange_kernels(name):
     key = np.array([0.3, 0.8, 0.52])
     key /= np.linalg.norm(key)
     args = (tree, roots, params, mode, tol, P, N, key, lo, hi, float(scene.eps), depth_max,
-            8.0, 0.01 * scene.diagonal, True, True, 0.0, 2 * float(scene.eps))
+            8.0, 0.01 * scene.diagonal, True, True, 0.0, 2 * float(scene.eps),
+            20 * float(scene.eps))
 
     def light_out():
         return np.ones(n), np.ones(n), np.zeros((n, 2), dtype=np.int64)

@@ -170,9 +170,12 @@ class _Shader:
                              depth_max, out, parallel_tasks(len(P)))
         return out
 
-    def light_at(self, P, N, shadows=True, ao=True):
+    def light_at(self, P, N, shadows=True, ao=True, ground=False):
         """Shadow and occlusion at points with normals (the kernel, batched); ``shadows`` /
-        ``ao`` False: that factor is not computed (returned as 1)."""
+        ``ao`` False: that factor is not computed (returned as 1). ``ground``: the points are
+        on the ground, whose shadow rays judge the light from their start (the surface above
+        is an occluder there, not the start's own relief: marched through, it left the ground
+        lit under a point cloud's base)."""
         n = len(P)
         do_shadow = bool(shadows and self.light.shadows)
         do_ao = bool(ao and self.light.ao)
@@ -192,10 +195,12 @@ class _Shader:
         k = 1.0 / self.light.penumbra
         delta = self.light.ao_distance * self.diag / _lighting.AO_SAMPLES
         t_min = max(2.0 * eps, _lighting.SHADOW_START * self.diag)
+        t_judge = t_min if ground else _lighting.SHADOW_JUDGE * t_min
         ntasks = parallel_tasks(n)
         run_tasks(lambda a, b: _lighting.light_tasks(
             tree, roots, params, mode, tol, P, N, self.key, lo, hi, eps, depth_max, k, delta,
-            do_shadow, do_ao, self.slack, t_min, shadow, ao, work, ntasks, a, b), ntasks)
+            do_shadow, do_ao, self.slack, t_min, t_judge, shadow, ao, work, ntasks, a, b),
+            ntasks)
         self.queries += int(work[:, 0].sum())
         self.leaves += int(work[:, 1].sum())
         return shadow, ao
@@ -267,13 +272,13 @@ class _Shader:
         depth = np.where(hit, t, np.linalg.norm(G - self.origin, axis=1))
 
         def light(idx, shadows=True, occlusion=True):
-            if idx.size:
-                pts = np.where(hit[idx, None], P[idx], G[idx])
-                s_i, a_i = self.light_at(pts, facing[idx], shadows, occlusion)
-                if shadows:
-                    shadow[idx] = s_i
-                if occlusion:
-                    ao[idx] = a_i
+            for part, pts, ground in ((idx[hit[idx]], P, False), (idx[~hit[idx]], G, True)):
+                if part.size:
+                    s_i, a_i = self.light_at(pts[part], facing[part], shadows, occlusion, ground)
+                    if shadows:
+                        shadow[part] = s_i
+                    if occlusion:
+                        ao[part] = a_i
 
         if grid is not None and LIGHT_STRIDE > 1:
             H, W = grid
