@@ -22,7 +22,8 @@ import numpy as np
 import pytest
 
 from tracer.scenes import scene as scene_mod
-from tracer.scenes.scene_schema import SCHEMA_PATH, _resolve, load_schema, markdown, validate
+from tracer.scenes.scene_schema import (SCHEMA_PATH, _resolve, load_schema, markdown, sections,
+                                        validate)
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -40,7 +41,8 @@ def schema():
 def test_schema_is_package_data():
     assert os.path.dirname(SCHEMA_PATH) == os.path.dirname(scene_mod.__file__)
     text = (ROOT / "pyproject.toml").read_text()
-    assert '"scene.schema.json"' in text.split("[tool.setuptools.package-data]")[1]
+    data = text.split("[tool.setuptools.package-data]")[1].split("\n[")[0]
+    assert '"tracer.scenes" = ["scene.schema.json"]' in data
 
 
 def test_docs_are_generated_from_the_schema():
@@ -48,7 +50,7 @@ def test_docs_are_generated_from_the_schema():
     assert doc == markdown(), ("docs/scene-format.md is out of date: run "
                                "python -m tracer.scenes.scene_schema > docs/scene-format.md")
     # and the docs name every key of every level
-    for _, prefix, node in __import__("tracer.scenes.scene_schema").scene_schema.sections():
+    for _, prefix, node in sections():
         for key in _resolve(load_schema(), node)["properties"]:
             assert f"`{prefix}{key}`" in doc
 
