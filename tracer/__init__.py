@@ -12,7 +12,7 @@ The parts are rooms (docs/design-notes.md has the map): the base modules at the 
 (errors, checks of values, output files, PNG files, the task runner), :mod:`tracer.rendering`
 (rays, kernels, film, ``render``), :mod:`tracer.scenes` (settings, scene files,
 ``render_mesh``), :mod:`tracer.checks` (image comparisons), the command line
-(:mod:`tracer.cli`), and :mod:`tracer.sim`, :mod:`tracer.studies`, :mod:`tracer.reproduce`.
+(:mod:`tracer.cli`), and :mod:`tracer.sim`, :mod:`tracer.studies` and ``tracer.reproduce``.
 """
 
 _LAZY = {
