@@ -28,7 +28,7 @@ LOOK = {"width": 512, "height": 512, "shading": "lit", "samples": 16, "adaptive"
 
 def render_scene(name, out_dir, overrides=LOOK):
     """Render ``scenes/<name>.json`` with ``overrides`` to ``out_dir/<name>.png``; return it."""
-    from tracer.rendering.renderer import render
+    from tracer import render
     from tracer.scenes.scene import load_scene
 
     res = render(load_scene(str(ROOT / "scenes" / f"{name}.json"), dict(overrides)))
@@ -44,7 +44,7 @@ def side_by_side(out_dir):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from tracer.rendering.renderer import render
+    from tracer import render
     from tracer.scenes.scene import load_scene
 
     path = str(ROOT / "scenes" / "bunny_triangles.json")
