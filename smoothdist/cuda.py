@@ -16,7 +16,7 @@ same kernels on the CPU, slowly; the test suite uses it (``tests/test_cuda_sim.p
 
 Use it through ``SmoothDistanceField.smooth_distance(..., device="cuda")`` and
 ``exact_distance(..., device="cuda")``, or ``tracer.render(scene, device="cuda")``
-(``tracer/gpu_render.py``).
+(``tracer/rendering/gpu_render.py``).
 """
 
 import os

@@ -1,10 +1,10 @@
-"""Anti-aliasing (:mod:`tracer.film`) against geometry with known answers.
+"""Anti-aliasing (:mod:`tracer.rendering.film`) against geometry with known answers.
 
 The test surface is an exact sphere: one data point in exact-offset mode with ``offset = R``
 has the distance ``|p - c| - R``, so whether a camera ray hits it is a quadratic's
 discriminant. Every expected value here is computed from that in numpy, with the camera's
 pixel-to-ray mapping written out again (and checked against
-:func:`tracer.camera.ray_direction`):
+:func:`tracer.rendering.camera.ray_direction`):
 
 * **coverage**: a pixel's alpha is the tent-filtered coverage of its footprint; the reference
   integrates the tent weight ``(1 - |x|)(1 - |y|)`` over ``[-1, 1]^2`` pixels around the
@@ -22,11 +22,11 @@ import numpy as np
 import pytest
 
 from smoothdist import SmoothDistanceField
-from tracer import film
-from tracer.camera import ray_direction
-from tracer.film import MAX_SAMPLES, sample_offsets
-from tracer.render import camera_of, render
-from tracer.scene import scene_from_field
+from tracer.rendering import film
+from tracer.rendering.camera import ray_direction
+from tracer.rendering.film import MAX_SAMPLES, sample_offsets
+from tracer.rendering.renderer import camera_of, render
+from tracer.scenes.scene import scene_from_field
 
 CENTRE = np.array([0.3, -0.2, 0.1])
 RADIUS = 1.0
@@ -205,7 +205,7 @@ def test_alpha_is_the_fraction_of_samples_that_hit(tmp_path):
 def test_images_do_not_depend_on_the_thread_count(adaptive, octopus):
     """A lit render with 8 samples of a real mesh (a deep BVH: the kernels' scratch stacks
     are in use) is the same with 1 and 2 threads, every image and AOV."""
-    from tracer.from_mesh import mesh_scene
+    from tracer.scenes.from_mesh import mesh_scene
 
     if numba.config.NUMBA_NUM_THREADS < 2:
         pytest.skip("numba has a single thread here")
@@ -344,7 +344,7 @@ def test_light_at_every_third_pixel_against_every_pixel(octopus, monkeypatch):
     stays close to the light computed at every pixel: the coarse pixels are the same, and
     few others differ (measured: 2.0 % of the shadows and 2.7 % of the occlusions by more
     than 0.05, 2.3 % of the pixels' colour by more than 8 of 255, on this 64 x 64 octopus)."""
-    from tracer.from_mesh import mesh_scene
+    from tracer.scenes.from_mesh import mesh_scene
 
     scene = mesh_scene(octopus, size=(64, 64), view="iso", alpha=150.0, alpha_u=300.0)
     strided = render(scene)

@@ -1,4 +1,4 @@
-"""The "lit" shading (:mod:`tracer.lighting`) against analytic geometry and numpy.
+"""The "lit" shading (:mod:`tracer.rendering.lighting`) against analytic geometry and numpy.
 
 Exact-offset mode makes the distance analytic: one data point with ``offset = r`` is a sphere,
 ``|p - c| - r``; a two-triangle quad with a tiny offset ``e`` is a thin slab,
@@ -6,7 +6,7 @@ Exact-offset mode makes the distance analytic: one data point with ``offset = r`
 
 * **shadows**: the soft shadow of a sphere on the ground is the cone test
   ``min_t min(1, k (|p + t L - c| - r) / t)`` (``k = 1 / penumbra``), evaluated here on a dense
-  ``t`` grid; the render's shadow AOV and the :func:`~tracer.lighting.soft_shadow` kernel must
+  ``t`` grid; the render's shadow AOV and the :func:`~tracer.rendering.lighting.soft_shadow` kernel must
   follow it, and the shadow must lie around ``q = c - L (c . up - h) / (L . up)``, the
   sphere's centre projected along the light onto the ground ``h``;
 * **ambient occlusion** of a sphere resting on a slab is the module's formula
@@ -23,13 +23,13 @@ import numpy as np
 import pytest
 
 from smoothdist import DataMesh, SmoothDistanceField
-from tracer import lighting
-from tracer.camera import primary_rays
-from tracer.lighting import (AO_SAMPLES, Lighting, ambient_occlusion, light_directions,
+from tracer.rendering import lighting
+from tracer.rendering.camera import primary_rays
+from tracer.rendering.lighting import (AO_SAMPLES, Lighting, ambient_occlusion, light_directions,
                              linear_to_srgb, shade_ground, shade_lit, soft_shadow,
                              srgb_to_linear)
-from tracer.render import camera_of, kernel_roots, render, scene_arrays
-from tracer.scene import Scene, SceneObject, default_eps, load_scene, scene_from_field
+from tracer.rendering.renderer import camera_of, kernel_roots, render, scene_arrays
+from tracer.scenes.scene import Scene, SceneObject, default_eps, load_scene, scene_from_field
 
 UP = np.array([0.0, 1.0, 0.0])
 TREFOIL = Path(__file__).resolve().parents[1] / "scenes" / "trefoil.json"
@@ -130,9 +130,9 @@ def test_ground_pixels_are_where_the_rays_meet_the_plane(ball):
     oc = res.camera.origin - BALL_C
     b = d @ oc
     sphere = b * b - (oc @ oc - BALL_R ** 2) >= 0
-    # the ground fades out (tracer.film.FADE, GROUND_MIN_FADE) around the surface's box
-    from tracer import film
-    from tracer.render import scene_arrays
+    # the ground fades out (tracer.rendering.film.FADE, GROUND_MIN_FADE) around the surface's box
+    from tracer.rendering import film
+    from tracer.rendering.renderer import scene_arrays
 
     arrays = scene_arrays(scene)
     centre = 0.5 * (arrays.lo + arrays.hi)
@@ -435,7 +435,7 @@ def write_scene(folder, **edits):
     (dict(object={"color": [0, 0, 0.5]}), "objects[0].color must be [r, g, b] integers"),
 ])
 def test_bad_scene_file_values(tmp_path, edits, message):
-    from tracer.scene import SceneError
+    from tracer.scenes.scene import SceneError
 
     path = write_scene(tmp_path, **edits)
     with pytest.raises(SceneError) as info:
@@ -596,7 +596,7 @@ def test_lit_normals_at_a_low_beta_are_the_renders_own():
     """At beta <= BETA_SHADE (and in exact-offset mode) there is no smoother field to take:
     the lit render's normals are the normal-coloured render's, bit for bit, and no shading
     query is made."""
-    from tracer import film
+    from tracer.rendering import film
 
     lit, plain = trefoil_pair(size=24, beta=film.BETA_SHADE)
     assert lit.aovs["shading_queries"] == 0

@@ -1,7 +1,7 @@
 """Light for publication images: key and fill lights, soft shadows, ambient occlusion, a ground.
 
 The ``"lit"`` shading. Everything is computed from the same distance the tracer marches, with
-the same kernels (:func:`tracer.march.scene_distance`), so Barnes-Hut, ``tol``, posed objects
+the same kernels (:func:`tracer.rendering.march.scene_distance`), so Barnes-Hut, ``tol``, posed objects
 and exact-offset mode apply to every shadow and occlusion query as they do to camera rays.
 
 * **Soft shadows** (:func:`soft_shadow`): a ray from the surface towards the key light is
@@ -21,7 +21,7 @@ and exact-offset mode apply to every shadow and occlusion query as they do to ca
 Cost, in distance queries per lit pixel: one shadow ray (typically 10-40 queries, at most
 :data:`SHADOW_STEPS`) and :data:`AO_SAMPLES` (5) occlusion queries, on top of the camera ray.
 Ground pixels pay the same. Anti-aliasing samples reuse the pixel's own shadow and occlusion
-when they hit the same object (:mod:`tracer.film`).
+when they hit the same object (:mod:`tracer.rendering.film`).
 """
 
 import math
@@ -32,8 +32,8 @@ import numpy as np
 from numba import prange
 
 from smoothdist.kernels import NJIT, NJIT_PARALLEL
-from tracer.camera import box_corners
-from tracer.march import (NEWTON_COS, OMEGA, RELAX, _borrowed, march_ray, nearest_object,
+from tracer.rendering.camera import box_corners
+from tracer.rendering.march import (NEWTON_COS, OMEGA, RELAX, _borrowed, march_ray, nearest_object,
                           object_lower_bound, ray_box, scene_distance, visiting_order)
 
 __all__ = ["Lighting", "DEFAULT_COLOR", "PALETTE", "soft_shadow", "ambient_occlusion",
@@ -209,8 +209,9 @@ def light_points(tree, roots, params, mode, tol, P, N, L, lo, hi, eps, depth_max
     ``L (3,)``: unit direction towards the key light; ``k = 1 / penumbra``; ``delta``: the
     occlusion step (scene units); ``slack`` (scene units): each query may be that much below
     the render's own distance (tolerance pruning loosened as in
-    :func:`tracer.march.scene_distance`; ``roots`` must then be an array and ``tol > 0``).
-    ``t_min``, ``t_judge``: where shadow rays start and judge the light (:func:`soft_shadow`).
+    :func:`tracer.rendering.march.scene_distance`; ``roots`` must then be an array and
+    ``tol > 0``). ``t_min``, ``t_judge``: where shadow rays start and judge the light
+    (:func:`soft_shadow`).
     Writes ``shadow (n,)``, ``ao (n,)`` (1 where not asked for)
     and ``work (n, 2) int64``: distance queries and leaves visited. Every point is
     independent (no dependence on threads); ``ntasks`` strided tasks share them out
@@ -225,7 +226,7 @@ def light_points(tree, roots, params, mode, tol, P, N, L, lo, hi, eps, depth_max
 def light_tasks(tree, roots, params, mode, tol, P, N, L, lo, hi, eps, depth_max, k, delta,
                 do_shadow, do_ao, slack, t_min, t_judge, shadow, ao, work, ntasks, task0, task1):
     """Tasks ``task0 <= task < task1`` of :func:`light_points` (``ntasks`` of them), serial and
-    ``nogil``, for Python threads (``tracer.threads.run_tasks``): the same values, and no
+    ``nogil``, for Python threads (``tracer.rendering.threads.run_tasks``): the same values, and no
     ``prange`` to compile (a parallel loop costs numba as much again as its body)."""
     tree = _borrowed(tree)
     params = _borrowed(params)
@@ -334,9 +335,9 @@ def ground_height(arrays, data_vertices, up, eps, max_steps=400):
     """Height (along ``up``) of the surface's lowest point: upward rays from below the lowest
     data vertices (the ten lowest) to the surface; the smallest height where they land.
 
-    ``arrays``: :class:`tracer.frame.SceneArrays`. Falls back to the bottom of the scene box
+    ``arrays``: :class:`tracer.rendering.frame.SceneArrays`. Falls back to the bottom of the scene box
     (which bounds the surface) if no ray lands."""
-    from tracer.frame import kernel_roots
+    from tracer.rendering.frame import kernel_roots
 
     tree, roots, params, mode, lo, hi, depth_max, tol = arrays
     up = np.asarray(up, dtype=np.float64)
