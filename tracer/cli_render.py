@@ -116,7 +116,7 @@ def add_arguments(p):
     p.add_argument("--threads", type=int, help="number of threads (default: all cores)")
     p.add_argument("--device", choices=("cpu", "cuda"), default="cpu",
                    help="trace on the CPU (default) or on an NVIDIA GPU (needs the gpu extra: "
-                        "pip install 'smoothdist[gpu]')")
+                        "pip install -e '.[gpu]' in the clone)")
     p.add_argument("--overwrite", action="store_true", help="replace existing output files")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
 
