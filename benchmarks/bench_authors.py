@@ -4,7 +4,7 @@ The setup is the authors' ``app/beta_error_test.cpp`` (Madan & Levin 2022, beta 
 bunny (``scenes/data/bunny.off``) as points, edges and triangles, alpha 200, alpha_U 1200,
 beta 0.5, hit threshold eps = 1e-3 (absolute, the authors' value), the camera at the bbox
 centre + 2 x the largest extent along +z, 2 threads each. Their number is their own timer
-(per-pixel sphere tracing only); ours is the wall time of one ``tracer.render.render`` call
+(per-pixel sphere tracing only); ours is the wall time of one ``tracer.render`` call
 (tracing, setup and shading: it can only flatter them). Each size is run ``--repeat`` times,
 theirs and ours alternating, and the best of each is kept, so that a shared machine's load
 hits both sides alike; the load average is printed before and after.
@@ -53,8 +53,8 @@ import numba  # noqa: E402
 
 import smoothdist  # noqa: E402
 from smoothdist import SmoothDistanceField  # noqa: E402
-from tracer.render import render  # noqa: E402
-from tracer.scene import scene_from_field  # noqa: E402
+from tracer.rendering.renderer import render  # noqa: E402
+from tracer.scenes.scene import scene_from_field  # noqa: E402
 
 TYPES = ("points", "edges", "triangles")
 THEIR_NAMES = {"point": "points", "edge": "edges", "face": "triangles"}

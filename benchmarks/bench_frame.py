@@ -35,7 +35,7 @@ if str(ROOT) not in sys.path:  # run from a checkout without installing
 
 import numba  # noqa: E402
 
-from tracer.render import render  # noqa: E402
+from tracer.rendering.renderer import render  # noqa: E402
 from tracer.sim.animate import body_scene  # noqa: E402
 from tracer.sim.simfile import load_simulation  # noqa: E402
 

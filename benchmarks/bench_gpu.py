@@ -6,7 +6,7 @@ Measures, on an NVIDIA GPU through numba-cuda (``pip install "smoothdist[gpu]"``
   beta 0.5) sphere-traced at ``--size`` (default 1920 x 1080) with the ``"normals"`` shading,
   at the authors' hit threshold eps = 1e-3 (absolute) unless ``--eps`` is given; the GPU
   time is the best of ``--repeat`` launches of the render kernel with the scene already on
-  the device (kernel plus copying the image back), the CPU time the best ``tracer.render``;
+  the device (kernel plus copying the image back), the CPU time the best ``tracer.rendering.renderer``;
 * the 1e6-point grid of ``benchmarks/bench_grid.py`` (``--grid 100``: the voxel centres of
   the unit cube, the bunny normalised to a 0.5 diagonal, alpha = 1 / shortest edge, beta 0.5)
   for the smooth distance of points, edges and triangles; GPU time: kernel plus copies;
@@ -72,9 +72,9 @@ def best(fn, repeat):
 
 
 def bench_render(kind, size, eps, repeat):
-    from tracer import gpu_render
-    from tracer.render import render
-    from tracer.scene import load_scene
+    from tracer.rendering import gpu_render
+    from tracer.rendering.renderer import render
+    from tracer.scenes.scene import load_scene
 
     W, H = size
     over = {"width": W, "height": H, "shading": "normals"}

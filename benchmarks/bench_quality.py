@@ -39,8 +39,8 @@ if str(ROOT) not in sys.path:  # run from a checkout without installing
 
 import numba  # noqa: E402
 
-from tracer.render import render  # noqa: E402
-from tracer.scene import load_scene  # noqa: E402
+from tracer.rendering.renderer import render  # noqa: E402
+from tracer.scenes.scene import load_scene  # noqa: E402
 
 
 def parse_args(argv=None):

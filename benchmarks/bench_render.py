@@ -40,8 +40,8 @@ import numba  # noqa: E402
 
 import smoothdist  # noqa: E402
 from smoothdist import SmoothDistanceField  # noqa: E402
-from tracer.render import render  # noqa: E402
-from tracer.scene import scene_from_field  # noqa: E402
+from tracer.rendering.renderer import render  # noqa: E402
+from tracer.scenes.scene import scene_from_field  # noqa: E402
 
 TYPES = ("points", "edges", "triangles")
 ALPHA, ALPHA_U = 200.0, 1200.0

@@ -5,7 +5,7 @@ triangles, polylines and wireframes as edges, samples as points) and each settin
 smooth render at ``--size`` (256 x 256), view ``iso``, normal shading, and one exact-distance
 render from the same camera at the smooth surface's mean offset (the mean exact distance from
 its hit points to the data); for both, the p50 / p95 angle between the rendered normals and
-the analytic shape's normal at the point closest to each hit (:mod:`tracer.ripple`). A row
+the analytic shape's normal at the point closest to each hit (:mod:`tracer.rendering.ripple`). A row
 meets the target when the smooth p95 is at most ``max(6, 1.5 x the exact p95)`` degrees.
 
 A setting is ``NAME:key=value,...`` with keys
@@ -52,7 +52,7 @@ import numba  # noqa: E402
 
 import tracer  # noqa: E402
 from smoothdist import DataMesh, MeshRepairWarning, SmoothDistanceField  # noqa: E402
-from tracer import ripple as rp  # noqa: E402
+from tracer.rendering import ripple as rp  # noqa: E402
 
 TARGET_DEG = 6.0
 TARGET_RATIO = 1.5

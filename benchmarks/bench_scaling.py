@@ -6,7 +6,7 @@ threads up to the machine's cores (``numba.set_num_threads`` in this one process
 thread counts alternate within each repeat, so that their ratios are measured back to back),
 best of ``--repeat`` (3) per count. Two times per render:
 
-* ``seconds``: :attr:`tracer.render.RenderResult.seconds`, what ``tracer render --stats``
+* ``seconds``: :attr:`tracer.rendering.renderer.RenderResult.seconds`, what ``tracer render --stats``
   reports (tracing, normals and, for the ``lit`` kind, the shading and samples), and
 * ``frame``: the whole frame in this process: ``render()`` plus writing the PNG.
 
@@ -40,8 +40,8 @@ import numba  # noqa: E402
 import numpy as np  # noqa: E402
 
 from tracer.image import save_png  # noqa: E402
-from tracer.render import render  # noqa: E402
-from tracer.scene import load_scene  # noqa: E402
+from tracer.rendering.renderer import render  # noqa: E402
+from tracer.scenes.scene import load_scene  # noqa: E402
 
 KINDS = ("points", "edges", "triangles", "lit")
 DEFAULT_OUT = ROOT / "benchmarks" / "data" / "scaling.json"

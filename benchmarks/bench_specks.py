@@ -34,7 +34,7 @@ if str(ROOT) not in sys.path:  # run from a checkout without installing
     sys.path.insert(0, str(ROOT))
 
 import tracer  # noqa: E402
-from tracer.lighting import Lighting  # noqa: E402
+from tracer.rendering.lighting import Lighting  # noqa: E402
 
 THRESHOLD = 40
 
@@ -78,8 +78,8 @@ def main(argv=None):
     p.add_argument("--no-clouds", action="store_true")
     p.add_argument("--out", default=str(ROOT / "renders" / "ripple" / "specks.csv"))
     args = p.parse_args(argv)
-    from tracer.render import render
-    from tracer.scene import load_scene
+    from tracer.rendering.renderer import render
+    from tracer.scenes.scene import load_scene
 
     rows = []
     if not args.no_clouds:

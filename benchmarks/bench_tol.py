@@ -3,7 +3,7 @@
 The bunny (``scenes/data/bunny.off``) as points, edges and triangles, alpha 200, alpha_U 1200,
 the paper's camera, ``--size`` squared pixels (default 512), 2 threads, our default eps
 (1e-4 x the bbox diagonal) unless ``--eps`` is given. For each ``--tol``: the render time
-(one ``tracer.render.render`` call, best of ``--repeat``), mean leaves per pixel, and the
+(one ``tracer.render`` call, best of ``--repeat``), mean leaves per pixel, and the
 depth error against a ``beta = 0`` reference, in units of the bbox diagonal: mean and max
 of ``|t_tol - t_0|`` over pixels where both hit (the authors' metric), and the number of
 pixels whose hit/miss differs. A full ``beta = 0`` render takes minutes (about 0.3 / 2.3 /
@@ -38,9 +38,9 @@ import numba  # noqa: E402
 
 import smoothdist  # noqa: E402
 from smoothdist import SmoothDistanceField  # noqa: E402
-from tracer import march  # noqa: E402
-from tracer.render import camera_of, render, scene_arrays  # noqa: E402
-from tracer.scene import scene_from_field  # noqa: E402
+from tracer.rendering import march  # noqa: E402
+from tracer.rendering.renderer import camera_of, render, scene_arrays  # noqa: E402
+from tracer.scenes.scene import scene_from_field  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_authors import ALPHA, ALPHA_U, MESH, PUBLISHED, TYPES, load, paper_camera  # noqa: E402

@@ -3,7 +3,7 @@
 numba's CUDA simulator (``tests/test_cuda_sim.py``) runs the kernels' launch code but calls the
 shared ``numba.njit`` functions compiled for the CPU, so it cannot show that numba-cuda
 compiles them for a GPU. This script does: it types and lowers ``smoothdist.cuda``'s query
-kernels and ``tracer.gpu_render``'s render kernel for a compute capability (default 9.0,
+kernels and ``tracer.rendering.gpu_render``'s render kernel for a compute capability (default 9.0,
 H100 / H200) through NVIDIA's NVVM, as the first launch on a card would, and prints the size
 of the PTX and of each thread's local memory (the traversal stacks).
 
@@ -52,8 +52,8 @@ def main(argv=None):
     sdcuda.simulated = lambda: True
     sdcuda.cuda_module = lambda: cuda
     sdcuda.cuda = cuda
-    from tracer import gpu_render
-    from tracer.scene import load_scene
+    from tracer.rendering import gpu_render
+    from tracer.scenes.scene import load_scene
 
     gpu_render.cuda = cuda
     scene = load_scene(args.scene, {"width": 8, "height": 8})
@@ -70,7 +70,7 @@ def main(argv=None):
              (ty(tree), ty(Q), f64, f64, f64, f64, f64, ty(d), ty(g), ty(n), ty(n))),
             ("smoothdist.cuda exact", sdcuda._exact_kernel,
              (ty(tree), ty(Q), ty(d), ty(g), ty(n), ty(n), ty(n))),
-            ("tracer.gpu_render render", gpu_render._render_kernel,
+            ("tracer.rendering.gpu_render render", gpu_render._render_kernel,
              tuple(ty(a) for a in rargs) + tuple(ty(o) for o in outs)))
     status = 0
     for name, fn, sig in jobs:

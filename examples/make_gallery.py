@@ -28,8 +28,8 @@ LOOK = {"width": 512, "height": 512, "shading": "lit", "samples": 16, "adaptive"
 
 def render_scene(name, out_dir, overrides=LOOK):
     """Render ``scenes/<name>.json`` with ``overrides`` to ``out_dir/<name>.png``; return it."""
-    from tracer.render import render
-    from tracer.scene import load_scene
+    from tracer import render
+    from tracer.scenes.scene import load_scene
 
     res = render(load_scene(str(ROOT / "scenes" / f"{name}.json"), dict(overrides)))
     res.save(str(out_dir / f"{name}.png"))
@@ -44,8 +44,8 @@ def side_by_side(out_dir):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from tracer.render import render
-    from tracer.scene import load_scene
+    from tracer import render
+    from tracer.scenes.scene import load_scene
 
     path = str(ROOT / "scenes" / "bunny_triangles.json")
     size = {"width": 384, "height": 384}

@@ -26,11 +26,11 @@ if str(REPO) not in sys.path:
 import numpy as np  # noqa: E402
 
 from smoothdist import DataMesh, MeshDistance, SmoothDistanceField  # noqa: E402
-from tracer.camera import primary_rays  # noqa: E402
+from tracer.rendering.camera import primary_rays  # noqa: E402
 from tracer.image import save_png  # noqa: E402
 from tracer.outputs import atomic_write  # noqa: E402
-from tracer.render import render  # noqa: E402
-from tracer.scene import Scene, SceneObject  # noqa: E402
+from tracer.rendering.renderer import render  # noqa: E402
+from tracer.scenes.scene import Scene, SceneObject  # noqa: E402
 
 BUNNY = REPO / "scenes" / "data" / "bunny.off"
 

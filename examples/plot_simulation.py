@@ -14,7 +14,7 @@ import tempfile
 import matplotlib.pyplot as plt
 import numpy as np
 
-from tracer.render import render
+from tracer import render
 from tracer.sim.animate import body_scene
 from tracer.sim.run import simulate
 from tracer.sim.simfile import load_simulation

@@ -10,13 +10,13 @@ any tree of depth ``<= STACK - 4``); the tree is the same flat :class:`~smoothdi
 structure of arrays, copied to the device once per field. All arithmetic is float64 as on the
 CPU (the exponential sums need it; data-centre GPUs run float64 at half the float32 rate).
 
-Install: ``pip install "smoothdist[gpu]"`` (numba-cuda). Without a GPU, numba's CUDA
+Install: ``pip install -e ".[gpu]"`` in the clone (numba-cuda). Without a GPU, numba's CUDA
 simulator (``NUMBA_ENABLE_CUDASIM=1`` set before ``numba.cuda`` is first imported) runs the
 same kernels on the CPU, slowly; the test suite uses it (``tests/test_cuda_sim.py``).
 
 Use it through ``SmoothDistanceField.smooth_distance(..., device="cuda")`` and
 ``exact_distance(..., device="cuda")``, or ``tracer.render(scene, device="cuda")``
-(``tracer/gpu_render.py``).
+(``tracer/rendering/gpu_render.py``).
 """
 
 import os
@@ -72,8 +72,9 @@ def cuda_module():
         try:
             import numba_cuda  # noqa: F401  (the maintained CUDA target, not numba's own)
         except ImportError:
-            raise CudaUnavailable("device 'cuda' needs numba-cuda: pip install "
-                                  "'smoothdist[gpu]'") from None
+            raise CudaUnavailable("device 'cuda' needs numba-cuda: pip install numba-cuda "
+                                  "(or the gpu extra in the clone: pip install -e '.[gpu]')"
+                                  ) from None
     try:
         from numba import cuda
         ok = cuda.is_available()

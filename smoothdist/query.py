@@ -289,7 +289,7 @@ def negligible_reach(tree, root, S, alpha):
 
 
 #: ``tol`` when none is given: tolerance-controlled pruning off. The one definition of that
-#: default (the library's functions, ``tracer.frame.scene_arrays``; ``smoothdist.kernels``
+#: default (the library's functions, ``tracer.rendering.frame.scene_arrays``; ``smoothdist.kernels``
 #: exports it)
 DEFAULT_TOL = 0.0
 #: tol mode: a node with at most this many primitives that is not accepted is evaluated

@@ -190,8 +190,8 @@ def test_the_default_covers_smoothdist_and_tracer():
     dirs = cache_guard.default_package_dirs()
     assert dirs == [str(ROOT / "smoothdist"), str(ROOT / "tracer")]
     files = set(cache_guard.source_files(dirs))
-    for rel in ("smoothdist/query.py", "smoothdist/weights.py", "tracer/march.py",
-                "tracer/camera.py", "tracer/sim/ipm.py"):
+    for rel in ("smoothdist/query.py", "smoothdist/weights.py", "tracer/rendering/march.py",
+                "tracer/rendering/camera.py", "tracer/sim/ipm.py"):
         assert str(ROOT / rel) in files
 
 

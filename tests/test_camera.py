@@ -1,10 +1,10 @@
-"""Tests for tracer.camera: the authors' lookAt frame and pixel-to-ray mapping."""
+"""Tests for tracer.rendering.camera: the authors' lookAt frame and pixel-to-ray mapping."""
 
 import numpy as np
 import numpy.testing as npt
 import pytest
 
-from tracer.camera import (
+from tracer.rendering.camera import (
     Camera,
     default_camera_for_bounds,
     look_at,

@@ -35,8 +35,8 @@ import tracer.validate
 from smoothdist import DataMesh, MeshRepairWarning, SmoothDistanceField
 from tracer.image import save_npy, save_png
 from tracer.outputs import atomic_write
-from tracer.render import RenderResult, render
-from tracer.scene import load_scene, scene_from_field
+from tracer.rendering.renderer import RenderResult, render
+from tracer.scenes.scene import load_scene, scene_from_field
 
 REPO = Path(__file__).resolve().parents[1]
 LIDAR = REPO / "scenes" / "lidar_autzen.json"
@@ -994,7 +994,7 @@ compiled = sorted(f"{name}.{attr}" for name, mod in list(sys.modules.items())
                   for attr, obj in vars(mod).items()
                   if isinstance(obj, Dispatcher) and obj.overloads)
 print(json.dumps({"bad": bad, "compiled": compiled,
-                  "loaded": sorted(m for m in sys.modules if m.startswith("tracer.march"))}))
+                  "loaded": sorted(m for m in sys.modules if m.startswith("tracer.rendering.march"))}))
 """
     p = subprocess.run([sys.executable, "-c", script, str(spec)], env=cli_env(), cwd=tmp_path,
                        capture_output=True, text=True, timeout=240)

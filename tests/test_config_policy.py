@@ -139,7 +139,8 @@ def test_the_checks_catch_violations():
     assert not keyword_uses("if parallel == 1:\n    pass\n")
 
 
-@pytest.mark.parametrize("package", ["smoothdist", "tracer", "tracer.sim", "tracer.studies"])
+@pytest.mark.parametrize("package", ["smoothdist", "tracer", "tracer.rendering", "tracer.scenes",
+                                     "tracer.checks", "tracer.sim", "tracer.studies"])
 def test_no_public_name_shadows_a_submodule(package):
     """``tracer.mesh_scene`` was a function until its module was imported, then the module
     (issue 22); ``smoothdist.mesh_distance`` likewise. A name a package exports (``__all__``,

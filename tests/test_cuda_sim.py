@@ -1,4 +1,4 @@
-"""The CUDA path (smoothdist.cuda, tracer.gpu_render) under numba's CUDA simulator.
+"""The CUDA path (smoothdist.cuda, tracer.rendering.gpu_render) under numba's CUDA simulator.
 
 No GPU is needed: ``NUMBA_ENABLE_CUDASIM=1`` runs the CUDA kernels on the CPU. The simulator
 must be switched on before ``numba.cuda`` is first imported, and it stays on for the whole
@@ -52,8 +52,8 @@ def _worker(out):
     os.environ["NUMBA_ENABLE_CUDASIM"] = "1"
     from smoothdist import cuda as sdcuda
     from tracer.cli import main
-    from tracer.render import render
-    from tracer.scene import load_scene
+    from tracer.rendering.renderer import render
+    from tracer.scenes.scene import load_scene
 
     assert sdcuda.simulated()
     arrays, meta = {}, {}
@@ -218,8 +218,8 @@ def _no_cuda():
 
 def test_device_argument_checked():
     from smoothdist import SmoothDistanceField
-    from tracer.render import render
-    from tracer.scene import load_scene
+    from tracer.rendering.renderer import render
+    from tracer.scenes.scene import load_scene
 
     f = SmoothDistanceField(np.eye(3))
     with pytest.raises(ValueError, match="device must be one of"):

@@ -55,6 +55,6 @@ def test_docstring_examples(name):
 
 def test_the_public_api_has_examples():
     """The entry points a reader meets first carry runnable examples."""
-    documented = {t.name for name in ("smoothdist", "tracer.notebook") for t in _tests(name)}
+    documented = {t.name for name in ("smoothdist", "tracer.checks.notebook") for t in _tests(name)}
     assert "smoothdist.smooth_distance" in documented
-    assert "tracer.notebook.show_animation" in documented
+    assert "tracer.checks.notebook.show_animation" in documented

@@ -1,10 +1,10 @@
-"""Anti-aliasing (:mod:`tracer.film`) against geometry with known answers.
+"""Anti-aliasing (:mod:`tracer.rendering.film`) against geometry with known answers.
 
 The test surface is an exact sphere: one data point in exact-offset mode with ``offset = R``
 has the distance ``|p - c| - R``, so whether a camera ray hits it is a quadratic's
 discriminant. Every expected value here is computed from that in numpy, with the camera's
 pixel-to-ray mapping written out again (and checked against
-:func:`tracer.camera.ray_direction`):
+:func:`tracer.rendering.camera.ray_direction`):
 
 * **coverage**: a pixel's alpha is the tent-filtered coverage of its footprint; the reference
   integrates the tent weight ``(1 - |x|)(1 - |y|)`` over ``[-1, 1]^2`` pixels around the
@@ -22,11 +22,11 @@ import numpy as np
 import pytest
 
 from smoothdist import SmoothDistanceField
-from tracer import film
-from tracer.camera import ray_direction
-from tracer.film import MAX_SAMPLES, sample_offsets
-from tracer.render import camera_of, render
-from tracer.scene import scene_from_field
+from tracer.rendering import film
+from tracer.rendering.camera import ray_direction
+from tracer.rendering.film import MAX_SAMPLES, sample_offsets
+from tracer.rendering.renderer import camera_of, render
+from tracer.scenes.scene import scene_from_field
 
 CENTRE = np.array([0.3, -0.2, 0.1])
 RADIUS = 1.0
@@ -205,7 +205,7 @@ def test_alpha_is_the_fraction_of_samples_that_hit(tmp_path):
 def test_images_do_not_depend_on_the_thread_count(adaptive, octopus):
     """A lit render with 8 samples of a real mesh (a deep BVH: the kernels' scratch stacks
     are in use) is the same with 1 and 2 threads, every image and AOV."""
-    from tracer.from_mesh import mesh_scene
+    from tracer.scenes.from_mesh import mesh_scene
 
     if numba.config.NUMBA_NUM_THREADS < 2:
         pytest.skip("numba has a single thread here")
@@ -287,7 +287,7 @@ def test_bad_sample_counts_are_one_line_errors(bad):
 
 
 # ----------------------------------------------------------------------------- light stride
-def _fill_case(shadows, aos, keys=(0, 0, 0, 0)):
+def _fill_case(shadows, aos, keys=(0, 0, 0, 0), lit_side=None):
     """A 4 x 4 image with stride 3: coarse pixels at (0, 0), (0, 3), (3, 0), (3, 3) holding
     ``shadows`` / ``aos`` / ``keys``; pixel (1, 1) wanted (same key 0, depth, normal)."""
     H = W = 4
@@ -305,7 +305,11 @@ def _fill_case(shadows, aos, keys=(0, 0, 0, 0)):
     want[5] = True
     depth = np.ones(n)
     normals = np.tile([0.0, 0.0, 1.0], (n, 1))
-    got = film._fill_light((H, W), want, coarse, key, depth, normals, shadow, ao)
+    side = None
+    if lit_side is not None:
+        side = np.ones(n, dtype=bool)
+        side[corners] = lit_side
+    got = film._fill_light((H, W), want, coarse, key, depth, normals, shadow, ao, side)
     return got, shadow[5], ao[5]
 
 
@@ -340,7 +344,7 @@ def test_light_at_every_third_pixel_against_every_pixel(octopus, monkeypatch):
     stays close to the light computed at every pixel: the coarse pixels are the same, and
     few others differ (measured: 2.0 % of the shadows and 2.7 % of the occlusions by more
     than 0.05, 2.3 % of the pixels' colour by more than 8 of 255, on this 64 x 64 octopus)."""
-    from tracer.from_mesh import mesh_scene
+    from tracer.scenes.from_mesh import mesh_scene
 
     scene = mesh_scene(octopus, size=(64, 64), view="iso", alpha=150.0, alpha_u=300.0)
     strided = render(scene)
@@ -355,3 +359,18 @@ def test_light_at_every_third_pixel_against_every_pixel(octopus, monkeypatch):
         assert (a < 0.5).any() if k == "shadow" else (a < 0.9).any()     # something to fill
     colour = np.abs(strided.rgb.astype(int) - full.rgb.astype(int)).max(axis=2)
     assert (colour > 8).mean() <= 0.04
+
+
+def test_light_fill_takes_no_shadow_from_across_the_terminator(monkeypatch):
+    """A coarse neighbour that faces away from the key light (its shadow 0 set, not traced)
+    fills neither the shadow of a pixel that faces the light (the rest agree: filled from
+    them) nor makes them disagree; its occlusion still counts (bilinear weights as above)."""
+    monkeypatch.setattr(film, "LIGHT_STRIDE", 3)
+    w = np.array([4, 2, 2, 1]) / 9
+    s, a = [0.0, 1.0, 1.0, 0.96], [0.5, 0.52, 0.55, 0.58]
+    (got_s, got_a), sh, oc = _fill_case(s, a, lit_side=(False, True, True, True))
+    assert got_s[5] and got_a[5]
+    assert sh == pytest.approx(w[1:] @ s[1:] / w[1:].sum()) and oc == pytest.approx(w @ a)
+    # all four on the other side (all 0, agreeing): the pixel's shadow is traced on its own
+    (got_s, got_a), sh, oc = _fill_case([0.0] * 4, a, lit_side=(False,) * 4)
+    assert not got_s[5] and got_a[5] and sh == -1.0

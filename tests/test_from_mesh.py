@@ -18,7 +18,7 @@ import pytest
 
 import smoothdist as sd
 import tracer
-from tracer.camera import primary_rays
+from tracer.rendering.camera import primary_rays
 from tracer.cli import main
 from tracer.image import load_png
 
@@ -61,7 +61,7 @@ def test_render_mesh_frames_the_whole_surface(scale, shift, view):
 
 @pytest.mark.parametrize("view", ["front", "back", "left", "right", "top", "iso"])
 def test_frame_points_keeps_every_ball_in_view(view):
-    from tracer.camera import frame_points, look_at, project
+    from tracer.rendering.camera import frame_points, look_at, project
 
     rng = np.random.default_rng(5)
     P = rng.normal(size=(50, 3)) * [3.0, 0.2, 1.0] + [1e4, -2.0, 7.0]
@@ -396,7 +396,7 @@ def test_alpha_u_auto_everywhere():
     a = field.smooth_distance(V * 1.3, alpha=10.0, alpha_u="auto").distance
     b = field.smooth_distance(V * 1.3, alpha=10.0, alpha_u=200.0).distance
     np.testing.assert_array_equal(a, b)
-    from tracer.scene import scene_from_field
+    from tracer.scenes.scene import scene_from_field
 
     s = scene_from_field(field, alpha="auto", alpha_u="auto", width=8, height=8, camera="iso",
                          offset=0.0)
@@ -428,7 +428,7 @@ def test_compare_panels_are_titled_with_a_colour_bar():
     pytest.importorskip("matplotlib")
     from matplotlib import colormaps
 
-    from tracer.compare import PANEL_TITLES, labelled_side_by_side
+    from tracer.checks.compare import PANEL_TITLES, labelled_side_by_side
 
     assert PANEL_TITLES == ("sphere tracer", "pyvista marching cubes", "difference")
     a = np.full((20, 30, 3), 255, np.uint8)
@@ -501,7 +501,7 @@ def _extent(hit):
 
 
 def test_up_axis_turns_the_named_views():
-    from tracer.camera import VIEWS, view_vectors
+    from tracer.rendering.camera import VIEWS, view_vectors
 
     for view in VIEWS:
         d, u = view_vectors(view, "y")
@@ -522,7 +522,7 @@ def test_a_z_up_capsule_is_seen_from_the_side():
     """trimesh's capsule runs along z: seen end-on with y up (a disc), from the side with z
     up (three times taller than wide). ``up="auto"`` picks z for trimesh objects and STL
     files (issue 22), y for arrays."""
-    from tracer.from_mesh import guess_up
+    from tracer.scenes.from_mesh import guess_up
 
     cap = trimesh.creation.capsule(height=1.0, radius=0.15)
     h_y, w_y = _extent(tracer.render_mesh(cap, size=(48, 48), up="y").hit)

@@ -5,7 +5,7 @@
   mean edge length, 0.08 x diagonal)``, ``alpha = 6 / C``, ``alpha_U = alpha``; point clouds
   and explicit values keep what they were (``auto_alpha``, 20 x alpha, offset 0);
 * the target, on small renders: the 95th percentile of the angle between the rendered normals
-  and the true shape's (:mod:`tracer.ripple`) is at most ``max(6 degrees, 1.5 x`` the exact
+  and the true shape's (:mod:`tracer.rendering.ripple`) is at most ``max(6 degrees, 1.5 x`` the exact
   distance's offset surface at the same mean offset``)`` for a trimesh icosphere(2) as
   triangles and a 64-edge circle as edges, where the zero set of the old defaults misses it;
 * scene files: ``"alpha": "auto"`` gets the same choice, a numeric alpha (the authors' files)
@@ -19,8 +19,8 @@ import pytest
 
 import tracer
 from smoothdist import DataMesh, SmoothDistanceField
-from tracer import ripple as rp
-from tracer.scene import load_scene
+from tracer.rendering import ripple as rp
+from tracer.scenes.scene import load_scene
 
 TARGET_DEG, TARGET_RATIO = 6.0, 1.5
 SIZE = 96

@@ -11,7 +11,7 @@ LIMIT = 120
 ALLOWED = {"smoothdist.query:smooth_distance_point_tol": 167,
            "smoothdist.mesh_query:smooth_traverse": 176,  # + the box test switch (issue 36)
            "smoothdist.box_distance:box_lower_bound": 122,
-           "tracer.march:march_ray": 153}
+           "tracer.rendering.march:march_ray": 153}
 
 
 def long_functions():

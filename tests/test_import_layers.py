@@ -67,8 +67,10 @@ def test_no_arrow_from_a_lower_room_up():
     assert not up, "imports that run back up: " + ", ".join(sorted(up))
 
 
-@pytest.mark.parametrize("edge", ["smoothdist.query -> tracer.render",
-                                  "tracer.camera -> tracer.scene"])
+@pytest.mark.parametrize("edge", ["smoothdist.query -> tracer.rendering.renderer",
+                                  "tracer.rendering.camera -> tracer.scenes.scene",
+                                  "tracer.runner -> tracer.rendering",
+                                  "tracer.scenes.from_mesh -> tracer.checks.imagediff"])
 def test_an_arrow_up_would_be_seen(edge):
     src, dst = edge.split(" -> ")
     floor = {m: i for i, (_, mods) in enumerate(rooms()) for m in mods}

@@ -22,12 +22,12 @@ import numpy as np
 import pytest
 
 from smoothdist import DataMesh, SmoothDistanceField
-from tracer import march
-from tracer.camera import primary_rays
+from tracer.rendering import march
+from tracer.rendering.camera import primary_rays
 from tracer.cli import main
 from tracer.image import load_png
-from tracer.render import camera_of, render, scene_arrays
-from tracer.scene import SceneError, load_scene, scene_from_field
+from tracer.rendering.renderer import camera_of, render, scene_arrays
+from tracer.scenes.scene import SceneError, load_scene, scene_from_field
 from test_query_tol import BUNNY, ROOT
 
 SCENES = ROOT / "scenes"
@@ -364,7 +364,7 @@ def _thin_shell_cases():
 @pytest.mark.parametrize("index", [0, 1, 2])
 @pytest.mark.slow
 def test_newton_steps_never_step_over_a_thin_shell(index):
-    from tracer.from_mesh import mesh_scene
+    from tracer.scenes.from_mesh import mesh_scene
 
     name, mesh, alpha, view = _thin_shell_cases()[index]
     scene = mesh_scene(mesh, alpha=alpha, size=(96, 96), view=view)
@@ -436,7 +436,7 @@ def test_samples_equal_a_plain_march(bunny_points, newton):
     """``trace_samples`` (cone passes both ways, over-relaxed steps, bounds reused by a second
     call; with ``newton``: Newton steps down to the film's grazing cosine) finds the hits of
     plain sphere tracing at the same sub-pixel positions."""
-    from tracer.film import SAMPLE_NEWTON_COS, SAMPLE_OMEGA, sample_offsets
+    from tracer.rendering.film import SAMPLE_NEWTON_COS, SAMPLE_OMEGA, sample_offsets
 
     scene = _scene(bunny_points, size=32, eps=1e-4 * bunny_points.diagonal)
     arrays = scene_arrays(scene)

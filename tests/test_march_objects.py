@@ -1,6 +1,6 @@
-"""Scenes of several objects (tracer.march): the object skip against a plain combination.
+"""Scenes of several objects (tracer.rendering.march): the object skip against a plain combination.
 
-``tracer.march.scene_distance`` evaluates the object with the nearest root box first and skips
+``tracer.rendering.march.scene_distance`` evaluates the object with the nearest root box first and skips
 an object whose lower bound (``object_lower_bound``) shows that it cannot change the result:
 in exact-offset mode when the bound is not below the minimum so far, in smooth mode when its
 LogSumExp term would be below one unit in the last place of the sum. The reference here
@@ -14,9 +14,9 @@ import numpy as np
 import pytest
 
 from smoothdist import DataMesh, SmoothDistanceField
-from tracer import march
-from tracer.render import scene_arrays
-from tracer.scene import Scene, SceneObject
+from tracer.rendering import march
+from tracer.rendering.renderer import scene_arrays
+from tracer.scenes.scene import Scene, SceneObject
 
 
 def _rot(axis, angle):
@@ -158,12 +158,12 @@ def test_object_lower_bound_is_below_each_object(rng):
 @pytest.mark.parametrize("mode", ["smooth", "exact"])
 def test_render_object_map_is_the_nearest_object(mode, samples, rng):
     """A lit render's object map (``aovs["object"]``), which the march finds at each hit, is
-    what ``tracer.lighting.object_ids`` computes at the hit points on its own (each object's
+    what ``tracer.rendering.lighting.object_ids`` computes at the hit points on its own (each object's
     own distance, smallest); the anti-aliasing samples colour their hits the same way (an
     image with the samples' colours from ``object_ids`` is the same image)."""
-    from tracer import film, lighting
-    from tracer.camera import primary_rays
-    from tracer.render import render
+    from tracer.rendering import film, lighting
+    from tracer.rendering.camera import primary_rays
+    from tracer.rendering.renderer import render
 
     meshes = _objects(rng)
     # blunt enough for the wire and the cloud to cover pixels at 48 x 48

@@ -11,7 +11,7 @@ from PIL import Image
 
 import tracer
 from tracer.image import save_png
-from tracer.notebook import Animation, show_animation
+from tracer.checks.notebook import Animation, show_animation
 
 
 def _frames(n=5, shape=(12, 20)):

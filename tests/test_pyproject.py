@@ -90,7 +90,8 @@ def test_device_cuda_without_the_gpu_extra_says_what_to_install():
             print(exc)
     """, GPU)
     assert p.returncode == 0, p.stderr
-    assert p.stdout.strip() == "device 'cuda' needs numba-cuda: pip install 'smoothdist[gpu]'"
+    assert p.stdout.strip() == ("device 'cuda' needs numba-cuda: pip install numba-cuda (or the "
+                                "gpu extra in the clone: pip install -e '.[gpu]')")
 
 
 def test_a_ply_file_without_trimesh_says_what_to_install():

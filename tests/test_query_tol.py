@@ -172,8 +172,8 @@ def test_module_function_passes_tol(rng):
 
 # ----------------------------------------------------------------------------- renders
 def _render(field, tol, beta=0.0, size=32, eps=None, relax=None, alpha=200.0, alpha_u=1200.0):
-    from tracer.render import render
-    from tracer.scene import scene_from_field
+    from tracer.rendering.renderer import render
+    from tracer.scenes.scene import scene_from_field
 
     return render(scene_from_field(field, alpha=alpha, alpha_u=alpha_u, beta=beta, tol=tol,
                                    width=size, height=size, eps=eps), relax=relax)
@@ -182,7 +182,7 @@ def _render(field, tol, beta=0.0, size=32, eps=None, relax=None, alpha=200.0, al
 def _band(result, mask, eps, bound):
     """Per-pixel allowance ``2 (eps + bound) / |cos|``: the hit band plus the value error,
     stretched along the ray by the incidence angle (``|cos| >= 0.05``)."""
-    from tracer.camera import primary_rays
+    from tracer.rendering.camera import primary_rays
 
     cos = np.abs(np.einsum("ij,ij->i", result.normals[mask], primary_rays(result.camera)[mask]))
     return 2.0 * (eps + bound) / np.maximum(cos, 0.05)
@@ -237,7 +237,7 @@ def _scene_file(tmp_path, **extra):
 
 
 def test_scene_key_tol(tmp_path):
-    from tracer.scene import SceneError, load_scene
+    from tracer.scenes.scene import SceneError, load_scene
 
     assert load_scene(_scene_file(tmp_path)).tol == 0.0
     assert load_scene(_scene_file(tmp_path, tol=1e-3)).tol == 1e-3

@@ -152,6 +152,9 @@ NOT_RUN = {
     "--device cuda":
         "it needs an NVIDIA GPU; tests/test_cuda_sim.py runs the same path under numba's CUDA "
         "simulator, and the error without a GPU",
+    'pip install -e ".[gpu]" # in the clone: numba-cuda; a CUDA driver on the machine':
+        "it installs the optional GPU extra into the environment that runs the tests (whose "
+        "test extra already holds numba-cuda); tests/test_cuda_sim.py runs the CUDA path",
     "python benchmarks/bench_gpu.py":
         "it needs an NVIDIA GPU; tests/test_cuda_sim.py runs its measurement functions under "
         "the simulator, and its refusal without a GPU",

@@ -1,9 +1,9 @@
-"""End-to-end tests of ``tracer.render``: tiny renders checked against independent computations.
+"""End-to-end tests of ``tracer.rendering.renderer``: tiny renders checked against independent computations.
 
 Every render here is at most 64 x 64 (most are 32 x 32) so that the whole file runs in seconds on
 a shared 2-core machine. The expected images are computed without the march kernels: ray-sphere
-intersections in numpy over :func:`tracer.camera.primary_rays`, silhouettes through
-:func:`tracer.camera.project`, and the isosurface radius found by bisection on
+intersections in numpy over :func:`tracer.rendering.camera.primary_rays`, silhouettes through
+:func:`tracer.rendering.camera.project`, and the isosurface radius found by bisection on
 ``SmoothDistanceField.smooth_distance`` (the batch query path, not the tracer's).
 """
 
@@ -18,9 +18,9 @@ import numpy.testing as npt
 import pytest
 
 from smoothdist import SmoothDistanceField
-from tracer.camera import look_at, primary_rays, project
-from tracer.render import RenderError, render
-from tracer.scene import Scene, SceneObject, load_scene, scene_from_field
+from tracer.rendering.camera import look_at, primary_rays, project
+from tracer.rendering.renderer import RenderError, render
+from tracer.scenes.scene import Scene, SceneObject, load_scene, scene_from_field
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENES = ROOT / "scenes"
@@ -152,7 +152,7 @@ def test_smooth_point_sphere_is_the_analytic_disc(fib_field):
     bad = (res.hit != ana) & ~band
     assert not bad.any(), f"{bad.sum()} pixels off the analytic disc outside the boundary band"
 
-    # (2) the same disc from the projected silhouette circle (tracer.camera.project)
+    # (2) the same disc from the projected silhouette circle (tracer.rendering.camera.project)
     sil_z = r_axis ** 2 / D
     sil_rho = r_axis * np.sqrt(1.0 - (r_axis / D) ** 2)
     ang = np.linspace(0.0, 2.0 * np.pi, 90, endpoint=False)

@@ -1,13 +1,13 @@
 """What keeps the first render short, checked as behaviour (never as time).
 
 * The lean path (one unposed object in smooth mode without ``tol``, its root passed to the
-  march kernels as an int, ``tracer.render.kernel_roots``) gives bit-identical images, depths,
+  march kernels as an int, ``tracer.rendering.renderer.kernel_roots``) gives bit-identical images, depths,
   normals and counters to the general path (the ``(k,)`` roots array) for points, edges,
   triangles and mixed meshes, with and without Barnes-Hut and attenuation, and both weight
   gradients; every other scene (exact mode, several objects, poses, ``tol > 0``) keeps the
   general path.
 * Tiles traced by Python threads over the serial kernel ``march.render_tiles``
-  (``tracer.render.trace_tiles``) equal the ``prange`` kernel ``march.render_rows`` bit for
+  (``tracer.rendering.renderer.trace_tiles``) equal the ``prange`` kernel ``march.render_rows`` bit for
   bit, for any number of threads, bands and chunk size.
 * A plain ``tracer render`` of the default scene imports none of matplotlib, pyvista,
   trimesh, dask, imageio and compiles (or loads) only the lean kernels, one signature each.
@@ -23,10 +23,10 @@ import numpy as np
 import pytest
 
 from smoothdist import DataMesh, SmoothDistanceField
-from tracer import march, render as render_mod
-from tracer.render import (RayArgs, TraceOptions, camera_of, kernel_roots, render, scene_arrays,
+from tracer.rendering import march, renderer as render_mod
+from tracer.rendering.renderer import (RayArgs, TraceOptions, camera_of, kernel_roots, render, scene_arrays,
                            trace_tiles)
-from tracer.scene import load_scene, scene_from_field
+from tracer.scenes.scene import load_scene, scene_from_field
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENES = ROOT / "scenes"
@@ -183,12 +183,12 @@ def test_a_plain_render_is_lean(tmp_path):
     assert not heavy & {m.split(".")[0] for m in report["modules"]}
     sigs = report["signatures"]
     # the march kernels ran with an int root (the lean path), one specialisation each
-    for name in ("tracer.march.render_tiles", "tracer.march.distance_at"):
+    for name in ("tracer.rendering.march.render_tiles", "tracer.rendering.march.distance_at"):
         assert len(sigs[name]) == 1, sigs[name]
         assert sigs[name][0][1] == "int64", sigs[name]
     # nothing of the general path was compiled or loaded
-    for name in ("tracer.march.render_rows", "tracer.march._scene_distance_posed",
-                 "tracer.march.trace_pixels", "smoothdist.query.smooth_distance_point_tol",
+    for name in ("tracer.rendering.march.render_rows", "tracer.rendering.march._scene_distance_posed",
+                 "tracer.rendering.march.trace_pixels", "smoothdist.query.smooth_distance_point_tol",
                  "smoothdist.query.exact_distance_point"):
         assert name not in sigs, sigs.get(name)
 
@@ -221,13 +221,13 @@ def test_a_lit_adaptive_render_is_lean(tmp_path):
     # show only where compiled, i.e. where the cache was cold for them
     sigs = report["signatures"]
     # samples, light and the ground probe on the lean path (an int root), one each
-    for name in ("tracer.march.render_tiles", "tracer.march.sample_tasks",
-                 "tracer.lighting.light_tasks", "tracer.lighting._lowest_hit"):
+    for name in ("tracer.rendering.march.render_tiles", "tracer.rendering.march.sample_tasks",
+                 "tracer.rendering.lighting.light_tasks", "tracer.rendering.lighting._lowest_hit"):
         assert len(sigs[name]) == 1 and sigs[name][0][1] == "int64", sigs.get(name)
     # no prange kernel (a parallel loop costs numba about as much again as its body), and
     # nothing of the general path
-    for name in ("tracer.march.trace_samples", "tracer.lighting.light_points",
-                 "tracer.march.render_rows", "smoothdist.query.smooth_distance_point_tol",
+    for name in ("tracer.rendering.march.trace_samples", "tracer.rendering.lighting.light_points",
+                 "tracer.rendering.march.render_rows", "smoothdist.query.smooth_distance_point_tol",
                  "smoothdist.query.exact_distance_point"):
         assert name not in sigs, sigs.get(name)
     # compiled specialisations (all kernels, callees included, each counted once; each one
@@ -246,10 +246,10 @@ def _sample_outputs(m, K):
 @pytest.mark.parametrize("name", ["bunny_triangles", "two_objects"])
 def test_task_kernels_equal_the_prange_kernels(name):
     """``march.sample_tasks`` and ``lighting.light_tasks`` run from Python threads
-    (``render.run_tasks``, any split) give the prange kernels' values bit for bit."""
-    from tracer import lighting
-    from tracer.film import sample_offsets
-    from tracer.render import run_tasks
+    (``renderer.run_tasks``, any split) give the prange kernels' values bit for bit."""
+    from tracer.rendering import lighting
+    from tracer.rendering.film import sample_offsets
+    from tracer.rendering.renderer import run_tasks
 
     scene = load_scene(SCENES / f"{name}.json", SIZE)
     tree, roots, params, mode, lo, hi, depth_max, tol = scene_arrays(scene)
@@ -281,7 +281,8 @@ def test_task_kernels_equal_the_prange_kernels(name):
     key = np.array([0.3, 0.8, 0.52])
     key /= np.linalg.norm(key)
     args = (tree, roots, params, mode, tol, P, N, key, lo, hi, float(scene.eps), depth_max,
-            8.0, 0.01 * scene.diagonal, True, True, 0.0, 2 * float(scene.eps))
+            8.0, 0.01 * scene.diagonal, True, True, 0.0, 2 * float(scene.eps),
+            20 * float(scene.eps))
 
     def light_out():
         return np.ones(n), np.ones(n), np.zeros((n, 2), dtype=np.int64)
@@ -295,7 +296,7 @@ def test_task_kernels_equal_the_prange_kernels(name):
 
 
 def _dirs(cam, rows, cols, off, hit):
-    from tracer.film import _dir
+    from tracer.rendering.film import _dir
 
     r = (rows[:, None] + off[None, :, 0]).ravel()
     c = (cols[:, None] + off[None, :, 1]).ravel()
@@ -303,7 +304,7 @@ def _dirs(cam, rows, cols, off, hit):
 
 
 def test_run_tasks_and_bands_cover_everything_once():
-    from tracer.render import in_bands, run_tasks
+    from tracer.rendering.renderer import in_bands, run_tasks
 
     for ntasks in (1, 2, 5, 64):
         for threads in (1, 2, 3, 8):

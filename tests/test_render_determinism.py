@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 from smoothdist import SmoothDistanceField
-from tracer.render import render
-from tracer.scene import load_scene, scene_from_field
+from tracer.rendering.renderer import render
+from tracer.scenes.scene import load_scene, scene_from_field
 
 SCENES = Path(__file__).resolve().parents[1] / "scenes"
 SIZE = {"width": 40, "height": 32}

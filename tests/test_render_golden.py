@@ -36,7 +36,7 @@ TESTS = Path(__file__).resolve().parent
 ROOT = TESTS.parent
 
 from tracer.image import load_png, save_png
-from tracer.imagediff import check_images
+from tracer.checks.imagediff import check_images
 
 SCENES = sorted((ROOT / "scenes").glob("*.json"))
 MODES = ("smooth", "exact")
@@ -46,7 +46,7 @@ REGEN_COMMAND = "python -m pytest tests/test_render_golden.py --regen-baselines"
 
 
 class Tolerance(NamedTuple):
-    """Pass criteria of a golden-image comparison (see :func:`tracer.imagediff.check_images`).
+    """Pass criteria of a golden-image comparison (see :func:`tracer.checks.imagediff.check_images`).
 
     The default allows a handful of silhouette pixels to flip (a hit / miss decision at a
     grazing ray can change with the CPU's floating point, e.g. FMA contraction) but not a
@@ -77,14 +77,14 @@ CASE_IDS = [case_name(p, m) for p, m in CASES]
 @functools.lru_cache(maxsize=None)
 def load_small(scene_path, size=SIZE):
     """The scene at ``size x size`` pixels (loaded and its BVHs built once per session)."""
-    from tracer.scene import load_scene
+    from tracer.scenes.scene import load_scene
 
     return load_scene(str(scene_path), {"width": size, "height": size})
 
 
 def render_case(scene_path, mode, size=SIZE):
     """The golden render of a case: ``(size, size, 3)`` uint8."""
-    from tracer.render import render
+    from tracer.rendering.renderer import render
 
     scene = dataclasses.replace(load_small(scene_path, size), mode=mode)
     return render(scene).rgb
@@ -141,7 +141,7 @@ CHECK_SCENE = ROOT / "scenes" / "bunny_triangles.json"
 @pytest.fixture(scope="module")
 def reference():
     """The unperturbed render of the checkers' scene and its scene object."""
-    from tracer.render import render
+    from tracer.rendering.renderer import render
 
     scene = load_small(CHECK_SCENE)
     return scene, render(scene).rgb
@@ -152,7 +152,7 @@ def _verdict(image, reference_rgb):
 
 
 def test_identical_render_passes(reference):
-    from tracer.render import render
+    from tracer.rendering.renderer import render
 
     scene, rgb = reference
     verdict = _verdict(render(scene).rgb, rgb)   # deterministic, whatever the thread count
@@ -162,7 +162,7 @@ def test_identical_render_passes(reference):
 
 def test_shifted_camera_fails(reference):
     """Moving the camera sideways by 1.5 pixels' worth must be caught."""
-    from tracer.render import camera_of, render
+    from tracer.rendering.renderer import camera_of, render
 
     scene, rgb = reference
     cam = camera_of(scene)
@@ -177,7 +177,7 @@ def test_shifted_camera_fails(reference):
 
 def test_changed_alpha_fails(reference):
     """A 20 % larger alpha (thinner blur) must be caught."""
-    from tracer.render import render
+    from tracer.rendering.renderer import render
 
     scene, rgb = reference
     objs = [dataclasses.replace(o, alpha=1.2 * o.alpha) for o in scene.objects]
@@ -237,16 +237,16 @@ def test_diff_cli_as_a_process(pngs, tmp_path):
 # --------------------------------------------------------------------------- pyvista
 @pytest.fixture(scope="module")
 def compare_mod():
-    """``tracer.compare`` (needs pyvista for the marching cubes)."""
+    """``tracer.checks.compare`` (needs pyvista for the marching cubes)."""
     pytest.importorskip("pyvista")
-    from tracer import compare
+    from tracer.checks import compare
 
     return compare
 
 
 @pytest.fixture(scope="module")
 def compare_render(compare_mod):
-    """``tracer.compare`` where VTK can render off-screen (skipped, with the reason, if not)."""
+    """``tracer.checks.compare`` where VTK can render off-screen (skipped, with the reason, if not)."""
     problem = compare_mod.offscreen_problem()
     if problem is not None:
         pytest.skip(f"VTK cannot render off-screen here: {problem}")
@@ -257,7 +257,7 @@ def compare_render(compare_mod):
 #: at a 64^3 grid and 64 x 64 pixels. Measured: bunny_points 0.996 / 0.5 / 6.9e-4, two_objects
 #: 0.994 / 1.0 / 9.3e-4, trefoil 0.985 / 2.4 / 3.8e-3, capillary_exact 0.968 / 10.0 / 2.1e-3.
 #: The bounds leave room for the marching-cubes rim of a pixel or two (thin tubes: trefoil,
-#: capillaries; see the tracer.compare docstring) but not for a camera or field mismatch (a
+#: capillaries; see the tracer.checks.compare docstring) but not for a camera or field mismatch (a
 #: half-pixel camera shift alone costs more). The exact-offset surface of the capillary
 #: network is a union of capsules with concave creases wherever two tubes meet; Gouraud-
 #: interpolated vertex normals straddle those creases, hence its larger normal error.
@@ -279,8 +279,8 @@ def test_pyvista_isosurface_matches_tracer(compare_render, name, min_iou, max_an
 
 def test_scene_field_matches_the_tracer_kernel(compare_mod):
     """The grid sampler evaluates exactly the function the tracer marches."""
-    from tracer import march
-    from tracer.render import scene_arrays
+    from tracer.rendering import march
+    from tracer.rendering.renderer import scene_arrays
 
     rng = np.random.default_rng(3)
     for name in ("two_objects", "capillary_exact", "bunny_points"):
@@ -297,7 +297,7 @@ def test_scene_field_matches_the_tracer_kernel(compare_mod):
 def _sphere_cloud_scene(beta=0.5, size=64):
     """1500 Fibonacci points on the unit sphere at alpha 20: a closed, hollow, bumpy sphere."""
     from smoothdist import SmoothDistanceField
-    from tracer.scene import scene_from_field
+    from tracer.scenes.scene import scene_from_field
 
     field = SmoothDistanceField(fibonacci_sphere(1500))
     return scene_from_field(field, alpha=20.0, beta=beta, width=size, height=size,
@@ -336,8 +336,8 @@ def test_sphere_point_cloud_matches_analytic_disc(compare_render):
     """1500 Fibonacci points on the unit sphere at alpha 20 close into a bumpy sphere of radius
     r_iso ~ 1.08 (the 'continuum' estimate: density 1500 / 4 pi, sum of exp(-alpha r) over
     the sphere = 1). Both pipelines' silhouettes must match the analytic disc of radius r_iso."""
-    from tracer.camera import primary_rays
-    from tracer.render import camera_of, render
+    from tracer.rendering.camera import primary_rays
+    from tracer.rendering.renderer import camera_of, render
 
     alpha, beta = 20.0, 0.5           # beta as in the scenes (0 would take ~20 x longer)
     scene = _sphere_cloud_scene(beta=beta)

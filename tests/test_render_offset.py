@@ -1,8 +1,8 @@
-"""Smooth mode at an offset: the surface ``d_hat = c`` (``offset`` of ``tracer.render``,
+"""Smooth mode at an offset: the surface ``d_hat = c`` (``offset`` of ``tracer.rendering.renderer``,
 ``tracer.render_mesh``, scene files and ``tracer render --offset``).
 
 Every hit is checked against the library's brute-force smooth distance (``method="brute"``,
-beta 0) at the hit point, for each path of :func:`tracer.march.scene_distance`: one object
+beta 0) at the hit point, for each path of :func:`tracer.rendering.march.scene_distance`: one object
 without ``tol`` (the lean kernel), one object with ``tol``, several objects (LogSumExp of
 ``d_hat_k - c_k``), and posed objects. Renders are 40 x 40 or smaller.
 """
@@ -14,12 +14,12 @@ import pytest
 
 import tracer
 from smoothdist import SmoothDistanceField
-from tracer import lighting
-from tracer.camera import primary_rays
+from tracer.rendering import lighting
+from tracer.rendering.camera import primary_rays
 from tracer.cli import main
-from tracer.from_mesh import describe_parameters, mesh_scene
-from tracer.render import render, scene_arrays
-from tracer.scene import Scene, SceneError, SceneObject, load_scene, scene_from_field
+from tracer.scenes.from_mesh import describe_parameters, mesh_scene
+from tracer.rendering.renderer import render, scene_arrays
+from tracer.scenes.scene import Scene, SceneError, SceneObject, load_scene, scene_from_field
 
 SIZE = 40
 CAMERA = ((0.6, 0.8, 3.2), (0.0, 0.0, 0.0), (0.0, 1.0, 0.0))

@@ -1,4 +1,4 @@
-"""The ripple metric (tracer/ripple.py): its shapes' normals and the angles it reports.
+"""The ripple metric (tracer/rendering/ripple.py): its shapes' normals and the angles it reports.
 
 The analytic normals are checked against central differences of each shape's own distance
 function (and the curves' closest points against dense sampling and the library's exact
@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 from smoothdist import DataMesh, SmoothDistanceField
-from tracer import ripple as rp
-from tracer.scene import scene_from_field
-from tracer.render import render
+from tracer.rendering import ripple as rp
+from tracer.scenes.scene import scene_from_field
+from tracer.rendering.renderer import render
 
 RNG = np.random.default_rng(35)
 

@@ -1,14 +1,14 @@
 """The scene-format reference cannot drift from the loader.
 
-Three descriptions of the scene format exist: the loader (:mod:`tracer.scene`), the JSON
-Schema shipped in the package (``tracer/scene.schema.json``) and the Markdown reference
+Three descriptions of the scene format exist: the loader (:mod:`tracer.scenes.scene`), the JSON
+Schema shipped in the package (``tracer/scenes/scene.schema.json``) and the Markdown reference
 generated from it (``docs/scene-format.md``). These tests check that
 
 * the docs are exactly what the schema generates;
 * the schema lists the same keys as the loader accepts, at every level, with the same
   required keys and the same enumerations;
 * every default the schema states is the loader's: a scene that omits the key loads to the
-  same :class:`~tracer.scene.Scene` as one that gives the schema's default explicitly;
+  same :class:`~tracer.scenes.scene.Scene` as one that gives the schema's default explicitly;
 * every shipped scene is valid under the schema, and bad values the loader refuses the
   schema refuses too.
 """
@@ -21,8 +21,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tracer import scene as scene_mod
-from tracer.scene_schema import SCHEMA_PATH, _resolve, load_schema, markdown, validate
+from tracer.scenes import scene as scene_mod
+from tracer.scenes.scene_schema import (SCHEMA_PATH, _resolve, load_schema, markdown, sections,
+                                        validate)
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -40,15 +41,16 @@ def schema():
 def test_schema_is_package_data():
     assert os.path.dirname(SCHEMA_PATH) == os.path.dirname(scene_mod.__file__)
     text = (ROOT / "pyproject.toml").read_text()
-    assert '"scene.schema.json"' in text.split("[tool.setuptools.package-data]")[1]
+    data = text.split("[tool.setuptools.package-data]")[1].split("\n[")[0]
+    assert '"tracer.scenes" = ["scene.schema.json"]' in data
 
 
 def test_docs_are_generated_from_the_schema():
     doc = (ROOT / "docs" / "scene-format.md").read_text(encoding="utf-8")
     assert doc == markdown(), ("docs/scene-format.md is out of date: run "
-                               "python -m tracer.scene_schema > docs/scene-format.md")
+                               "python -m tracer.scenes.scene_schema > docs/scene-format.md")
     # and the docs name every key of every level
-    for _, prefix, node in __import__("tracer.scene_schema").scene_schema.sections():
+    for _, prefix, node in sections():
         for key in _resolve(load_schema(), node)["properties"]:
             assert f"`{prefix}{key}`" in doc
 

@@ -1,6 +1,6 @@
-"""The settings table (tracer/settings.py) is the one place a default is written: the Scene
+"""The settings table (tracer/scenes/settings.py) is the one place a default is written: the Scene
 dataclass, scene_from_field, mesh_scene / render_mesh, ``tracer render`` (flags, help text and
-the mesh path), the scene loader and tracer/scene.schema.json agree with it."""
+the mesh path), the scene loader and tracer/scenes/scene.schema.json agree with it."""
 
 import argparse
 import dataclasses
@@ -10,9 +10,10 @@ import json
 import numpy as np
 import pytest
 
-from tracer import cli_render, from_mesh, scene as scene_mod, settings
-from tracer.scene_schema import load_schema
-from tracer.settings import REQUIRED, default_text, defaults, table
+from tracer import cli_render
+from tracer.scenes import from_mesh, scene as scene_mod, settings
+from tracer.scenes.scene_schema import load_schema
+from tracer.scenes.settings import REQUIRED, default_text, defaults, table
 
 FILE, API, MESH = defaults("file"), defaults("api"), defaults("mesh")
 

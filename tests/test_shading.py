@@ -1,12 +1,12 @@
-"""Tests for tracer.shading: view-space normals and the three shaders."""
+"""Tests for tracer.rendering.shading: view-space normals and the three shaders."""
 
 import numpy as np
 import numpy.testing as npt
 import pytest
 
-from tracer.camera import look_at
+from tracer.rendering.camera import look_at
 from tracer.image import save_png
-from tracer.shading import (
+from tracer.rendering.shading import (
     load_matcap,
     shade_headlight,
     shade_matcap,

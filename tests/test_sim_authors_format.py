@@ -329,7 +329,7 @@ def test_their_files_run_unchanged_through_tracer_simulate(tmp_path, name):
 def test_the_automatic_camera_frames_every_pose_of_the_trajectory():
     """Up is the axis against gravity; every body's box at every pose projects inside the
     image; a flat scene (point_v, in the xy plane) is seen face on."""
-    from tracer.camera import look_at, project
+    from tracer.rendering.camera import look_at, project
 
     sim = load_simulation(os.path.join(DATA, "point_v.json"))
     F = 30
@@ -353,7 +353,7 @@ def test_the_automatic_camera_focuses_on_the_motion_over_terrain(tmp_path, plane
     """A static body far larger than the motion (terrain; AUTO_CAMERA_FOCUS) is cut by the
     frame: the moving cube's swept box fills a good part of the image, seen from higher up.
     A static body of the motion's size is framed whole, as before."""
-    from tracer.camera import look_at, project
+    from tracer.rendering.camera import look_at, project
     from tracer.sim.simfile import AUTO_CAMERA_ELEVATION, AUTO_CAMERA_FOCUS_ELEVATION
 
     spec = _spec()

@@ -1,4 +1,4 @@
-"""Rendering rigid bodies through per-object transforms (tracer.march pose columns).
+"""Rendering rigid bodies through per-object transforms (tracer.rendering.march pose columns).
 
 A frame rendered with the bodies posed by a rigid transform of the query points must equal the
 frame rendered from meshes whose vertices were transformed and whose trees were rebuilt.
@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from smoothdist import DataMesh, SmoothDistanceField
-from tracer.render import render
-from tracer.scene import Scene, SceneObject, default_eps
+from tracer.rendering.renderer import render
+from tracer.scenes.scene import Scene, SceneObject, default_eps
 
 
 def _rot(axis, angle):

@@ -280,7 +280,7 @@ def test_beta_existing_folder_needs_overwrite(beta_run, capsys):
 def test_beta_resume_skips_rows(beta_run, tmp_path, monkeypatch):
     import shutil
 
-    import tracer.render
+    import tracer.rendering.renderer
 
     out = tmp_path / "copy"
     shutil.copytree(beta_run, out)
@@ -292,14 +292,14 @@ def test_beta_resume_skips_rows(beta_run, tmp_path, monkeypatch):
         w.writeheader()
         w.writerows(rows[:-1])
     calls = []
-    real = tracer.render.render
+    real = tracer.rendering.renderer.render
 
     def counting(scene, **kw):
         if scene.width == 32:  # not the 8 x 8 warm-up render
             calls.append(scene.beta)
         return real(scene, **kw)
 
-    monkeypatch.setattr(tracer.render, "render", counting)
+    monkeypatch.setattr(tracer.rendering.renderer, "render", counting)
     assert main(["ablate-beta", str(OCTOPUS), "-o", str(out), *BETA_ARGS, "--resume"]) == 0
     assert calls == [1.0]
     new = _rows(csv_path)
@@ -316,9 +316,9 @@ def test_beta_resume_skips_rows(beta_run, tmp_path, monkeypatch):
 
 
 def test_beta_interrupt_keeps_completed_rows(tmp_path, monkeypatch):
-    import tracer.render
+    import tracer.rendering.renderer
 
-    real = tracer.render.render
+    real = tracer.rendering.renderer.render
     calls = []
 
     def interrupting(scene, **kw):
@@ -328,7 +328,7 @@ def test_beta_interrupt_keeps_completed_rows(tmp_path, monkeypatch):
             raise KeyboardInterrupt
         return real(scene, **kw)
 
-    monkeypatch.setattr(tracer.render, "render", interrupting)
+    monkeypatch.setattr(tracer.rendering.renderer, "render", interrupting)
     out = tmp_path / "cut"
     assert main(["ablate-beta", str(OCTOPUS), "-o", str(out), *BETA_ARGS,
                  "--types", "points"]) == 130
@@ -487,9 +487,9 @@ def test_default_output_folders(tmp_path, monkeypatch):
 
 
 def test_beta_estimate_is_printed_before_the_renders(tmp_path, capsys, monkeypatch):
-    import tracer.render
+    import tracer.rendering.renderer
 
-    real = tracer.render.render
+    real = tracer.rendering.renderer.render
     seen = []
 
     def spying(scene, **kw):
@@ -497,7 +497,7 @@ def test_beta_estimate_is_printed_before_the_renders(tmp_path, capsys, monkeypat
             seen.append(capsys.readouterr().out)
         return real(scene, **kw)
 
-    monkeypatch.setattr(tracer.render, "render", spying)
+    monkeypatch.setattr(tracer.rendering.renderer, "render", spying)
     assert main(["ablate-beta", str(OCTOPUS), "-o", str(tmp_path / "b"), "--size", "72",
                  "--betas", "1", "--types", "points", "--alpha", "40", "--alpha-u", "300",
                  "--scheduler", "serial"]) == 0

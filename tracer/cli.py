@@ -32,8 +32,8 @@ from tracer.outputs import CLIError
 #: command name -> the module that implements it (see the module docstring)
 COMMANDS = {
     "render": "tracer.cli_render",
-    "compare": "tracer.compare",
-    "diff": "tracer.imagediff",
+    "compare": "tracer.checks.compare",
+    "diff": "tracer.checks.imagediff",
     "ablate-beta": "tracer.studies.beta",
     "ablate-alpha": "tracer.studies.alpha",
     "bench-grid": "tracer.studies.grid",

@@ -7,17 +7,17 @@ import sys
 import numpy as np
 
 from smoothdist.mesh import MESH_EXTENSIONS
-from tracer.camera import UP_AXES, VIEWS
-from tracer.from_mesh import KINDS
+from tracer.rendering.camera import UP_AXES, VIEWS
+from tracer.scenes.from_mesh import KINDS
 from tracer.outputs import CLIError, atomic_write, check_outputs, make_parents
-from tracer.settings import default_text, defaults
+from tracer.scenes.settings import default_text, defaults
 
 HELP = "sphere-trace a scene file to a PNG (and AOVs)"
 
 
 def add_arguments(p):
     """Arguments of ``tracer render``; the defaults they name come from
-    :mod:`tracer.settings` (``_def(key)``: a scene file's, ``_def(key, "mesh")``: a mesh
+    :mod:`tracer.scenes.settings` (``_def(key)``: a scene file's, ``_def(key, "mesh")``: a mesh
     file's)."""
     _def = default_text
     p.add_argument("scene", metavar="PATH",
@@ -116,7 +116,7 @@ def add_arguments(p):
     p.add_argument("--threads", type=int, help="number of threads (default: all cores)")
     p.add_argument("--device", choices=("cpu", "cuda"), default="cpu",
                    help="trace on the CPU (default) or on an NVIDIA GPU (needs the gpu extra: "
-                        "pip install 'smoothdist[gpu]')")
+                        "pip install -e '.[gpu]' in the clone)")
     p.add_argument("--overwrite", action="store_true", help="replace existing output files")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
 
@@ -162,7 +162,7 @@ def check_options(args):
             raise CLIError(f"{flag} must be finite, got {v}")
         if v < low or (v == low and not closed):
             raise CLIError(f"{flag} must be {'>=' if closed else '>'} {low:g}, got {v}")
-    from tracer.film import MAX_SAMPLES
+    from tracer.rendering.film import MAX_SAMPLES
 
     if args.samples is not None and args.samples > MAX_SAMPLES:
         raise CLIError(f"--samples must be at most {MAX_SAMPLES}, got {args.samples}")
@@ -201,8 +201,8 @@ def input_kind(path):
 def run(args):
     """Render; returns the exit status."""
     from tracer.image import false_color, save_npy, save_png
-    from tracer.render import ProgressBar, render
-    from tracer.scene import load_scene
+    from tracer.rendering.renderer import ProgressBar, render
+    from tracer.scenes.scene import load_scene
 
     source = input_kind(args.scene)
     check_options(args)
@@ -281,13 +281,13 @@ def run(args):
                 json.dump(stats, fh, indent=2)
         written.append(args.stats)
     if not args.quiet:
-        from tracer.from_mesh import describe_parameters
+        from tracer.scenes.from_mesh import describe_parameters
 
         s = stats
         prims = sum(o["primitives"] for o in s["objects"])
         view = ""
         if source == "mesh" and not args.camera:
-            from tracer.from_mesh import resolve_up
+            from tracer.scenes.from_mesh import resolve_up
 
             view = (f", view {args.view or 'front'} with {resolve_up(args.scene, args.up)} up"
                     + ("" if args.up not in (None, "auto") else " (guessed; --up to change)"))
@@ -331,7 +331,7 @@ def _mesh_scene(args):
 
 
 def _build_mesh_scene(args):
-    from tracer.from_mesh import mesh_scene
+    from tracer.scenes.from_mesh import mesh_scene
 
     d = defaults("mesh")  # the options left out: as render_mesh's
 
@@ -355,8 +355,8 @@ def _build_mesh_scene(args):
 def _replace_camera(scene, args):
     """``--view`` / ``--camera`` for a scene file: a new camera (for ``--view``, framing every
     object's vertices grown by the tracer's conservative margin, which contains the surface)."""
-    from tracer.camera import frame_points, look_at
-    from tracer.render import scene_arrays
+    from tracer.rendering.camera import frame_points, look_at
+    from tracer.rendering.renderer import scene_arrays
 
     if args.camera:
         origin, dest, up = _camera_arg(args)
@@ -371,8 +371,8 @@ def _replace_camera(scene, args):
 
 def _save_scene(args, scene, source):
     """Write ``--save-scene``: a scene file that renders the same picture."""
-    from tracer.from_mesh import scene_dict
-    from tracer.scene import read_scene_json
+    from tracer.scenes.from_mesh import scene_dict
+    from tracer.scenes.scene import read_scene_json
 
     if source == "mesh":
         data = scene_dict(scene, args.save_scene, [args.scene])

@@ -11,7 +11,7 @@ package::
   ``image_baseline_dir`` (default ``tests/baseline``, relative to the rootdir); ``name``
   defaults to the test's name (parameters included).
 * ``pytest --regen-baselines`` writes them (never implicitly: a missing baseline fails).
-* A comparison (:func:`tracer.imagediff.check_images`: mean absolute error ``<= tol``, and at
+* A comparison (:func:`tracer.checks.imagediff.check_images`: mean absolute error ``<= tol``, and at
   most ``max_fraction`` of pixels differing by more than ``threshold``) that fails writes the
   result, the baseline and the difference heat map to ``<image_failed_dir>/<name>/`` (ini
   option, default ``.image-regression``) and names them in the assertion.
@@ -46,7 +46,7 @@ def pytest_addoption(parser):
 
 
 def _as_rgb(image):
-    """A uint8 image from a :class:`tracer.frame.RenderResult`, an array or a PNG path."""
+    """A uint8 image from a :class:`tracer.rendering.frame.RenderResult`, an array or a PNG path."""
     import numpy as np
 
     from tracer.image import load_png
@@ -83,10 +83,10 @@ class ImageRegression:
     def check(self, image, name=None, tol=1.0, threshold=16, max_fraction=None):
         """Compare ``image`` with the baseline ``name`` (default: the test's name, with
         ``-1``, ``-2``, ... for further checks in the same test). Returns the
-        :class:`tracer.imagediff.DiffVerdict`; fails the test when the images differ beyond
+        :class:`tracer.checks.imagediff.DiffVerdict`; fails the test when the images differ beyond
         the criteria, when the baseline is missing, or when the shapes differ."""
         from tracer.image import save_png
-        from tracer.imagediff import check_images
+        from tracer.checks.imagediff import check_images
 
         rgb = _as_rgb(image)
         if name is None:

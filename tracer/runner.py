@@ -209,7 +209,7 @@ class StudyProgress:
 
     Each task has an a-priori weight (its expected cost). ``item(w)`` returns a callback that an
     in-process task reports its own progress to (``done, total, elapsed`` like
-    :class:`tracer.frame.ProgressBar`); ``finish(w, line)`` marks a task done and logs a line,
+    :class:`tracer.rendering.frame.ProgressBar`); ``finish(w, line)`` marks a task done and logs a line,
     ``fail(w, line)`` marks it failed. On a terminal the bar redraws in place; in a log it
     prints one line per finished task.
     """

@@ -6,7 +6,7 @@ and raises :class:`~tracer.errors.SceneError` (a ``ValueError``) with the messag
 ``<file name>: <where> <problem>`` (:func:`file_error`). :func:`read_json` reads a file into a
 dict with one-line errors for a missing, unreadable, binary, empty, oversized or malformed file.
 
-:mod:`tracer.scene` and :mod:`tracer.sim.simfile` (whose :class:`~tracer.errors.SimFileError`
+:mod:`tracer.scenes.scene` and :mod:`tracer.sim.simfile` (whose :class:`~tracer.errors.SimFileError`
 is a :class:`~tracer.errors.SceneError`) validate their files with these.
 """
 

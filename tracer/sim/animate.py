@@ -1,7 +1,7 @@
 """Render a trajectory: every body at its pose, frame by frame, then an MP4 and a GIF.
 
 Each body's tree is built **once**, in body coordinates; a frame poses the bodies through the
-tracer's per-object rigid transforms (:func:`tracer.render.render` ``transforms``: object ``k``
+tracer's per-object rigid transforms (:func:`tracer.render` ``transforms``: object ``k``
 is evaluated at ``R_k^T (p - x_k)``), so no tree is rebuilt per frame. The bodies are combined
 as any multi-object scene: LogSumExp with the largest alpha, each with its own alpha / alpha_U.
 
@@ -17,16 +17,16 @@ import numpy as np
 
 from smoothdist import SmoothDistanceField
 from tracer.image import gif_frame, save_png
-from tracer.lighting import Lighting
+from tracer.rendering.lighting import Lighting
 from tracer.outputs import atomic_write
-from tracer.render import ProgressBar, render
-from tracer.scene import Scene, SceneObject, default_eps
+from tracer.rendering.renderer import ProgressBar, render
+from tracer.scenes.scene import Scene, SceneObject, default_eps
 
 __all__ = ["animate", "body_scene", "render_frames", "frame_indices", "write_mp4", "write_gif"]
 
 
 def body_scene(sim, size=None, trajectory=None):
-    """A :class:`~tracer.scene.Scene` with one object per body (body coordinates);
+    """A :class:`~tracer.scenes.scene.Scene` with one object per body (body coordinates);
     ``size (W, H)`` overrides the camera's image size. A simulation without a camera of its
     own (``camera.auto``, the authors' files) is framed by
     :func:`~tracer.sim.simulation.auto_camera` over ``trajectory`` (a dict with ``rotations``

@@ -37,7 +37,7 @@ def add_arguments(p):
 
 def run(args):
     """Simulate (and render); returns the exit status."""
-    from tracer.render import ProgressBar
+    from tracer.rendering.renderer import ProgressBar
     from tracer.sim import run
     from tracer.sim.frames import render_movie
     from tracer.sim.simfile import load_simulation

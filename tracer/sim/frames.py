@@ -84,7 +84,7 @@ def _poses(traj_stamp):
 def frame_task(task):
     """Render ``task["frame"]`` of the trajectory; write ``task["png"]``; return a record."""
     from tracer.image import save_png
-    from tracer.render import render
+    from tracer.rendering.renderer import render
 
     size = tuple(task["size"]) if task.get("size") else None
     traj_stamp = file_stamp(task["trajectory"])

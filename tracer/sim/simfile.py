@@ -68,7 +68,7 @@ import os
 import numpy as np
 
 from smoothdist import DataMesh
-from tracer.scene import SHADINGS
+from tracer.scenes.scene import SHADINGS
 from tracer.sim import primitives
 from tracer.sim.bodies import (AUTO_THICKNESS_OFFSET, Body, auto_alpha, rotation_matrix,
                                thickness)
@@ -147,7 +147,7 @@ def _camera(cd, path):
         if ((bg < 0) | (bg > 255)).any():
             raise _err(path, "camera.background", f"must hold values 0-255, got {cd['background']}")
         cam.background = tuple(int(v) for v in bg)
-    from tracer.camera import look_at
+    from tracer.rendering.camera import look_at
 
     try:
         look_at(cam.origin, cam.dest, cam.up, cam.width, cam.height)

@@ -63,12 +63,12 @@ def auto_camera(bodies, gravity, rotations=None, centers=None, width=640, height
     without gravity). The view looks across the thinner horizontal extent of the bodies'
     swept bounding box (so a 2D scene in a vertical plane is seen face on, wide axis to the
     right), from :data:`AUTO_CAMERA_ELEVATION` degrees above unless the box is flat, and is
-    as close as :func:`tracer.camera.frame_points` allows with every drawn surface (within
+    as close as :func:`tracer.rendering.camera.frame_points` allows with every drawn surface (within
     about ``(1 + log n) / alpha`` of its mesh) in view. A static body far larger than the
     motion (:data:`AUTO_CAMERA_FOCUS`: terrain) is cut by the frame instead: the view holds the
     moving bodies' swept box with a border and looks down on it from higher.
     """
-    from tracer.camera import box_corners, frame_points
+    from tracer.rendering.camera import box_corners, frame_points
 
     if rotations is None:
         rotations = np.array([[b.R for b in bodies]])

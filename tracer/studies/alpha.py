@@ -227,7 +227,7 @@ def _default_camera(field):
 
 def _scene(field, *, camera, size, alpha, alpha_u=None, beta, mode="smooth", shading="normals",
            gradient="metric", offset=None):
-    from tracer.scene import scene_from_field
+    from tracer.scenes.scene import scene_from_field
 
     return scene_from_field(field, alpha=alpha, alpha_u=alpha_u, beta=beta, camera=camera,
                             width=size, height=size, mode=mode, shading=shading,
@@ -238,7 +238,7 @@ def _frame_camera(specs, camera, fill=0.86, probe=48):
     """Move ``camera`` (pan and dolly, same orientation) so that the union of the silhouettes
     of ``specs`` (``(field, scene kwargs)``, probed at ``probe`` px) fills ``fill`` of the
     frame. Never moves it back; returns the original camera when nothing is hit."""
-    from tracer.render import RenderError, render
+    from tracer.rendering.renderer import RenderError, render
 
     union = np.zeros((probe, probe), bool)
     for field, kw in specs:
@@ -249,7 +249,7 @@ def _frame_camera(specs, camera, fill=0.86, probe=48):
     if not union.any():
         return camera
     rows, cols = np.nonzero(union)
-    # the authors' image-plane coordinates (see tracer.camera): dx = col/W - 1/2,
+    # the authors' image-plane coordinates (see tracer.rendering.camera): dx = col/W - 1/2,
     # dy = (H - 1 - row)/H - 1/2, at unit distance along `forward`
     dx0, dx1 = cols.min() / probe - 0.5, (cols.max() + 1) / probe - 0.5
     dy0, dy1 = (probe - 1 - rows.max()) / probe - 0.5, (probe - rows.min()) / probe - 0.5
@@ -271,7 +271,7 @@ def _frame_camera(specs, camera, fill=0.86, probe=48):
 
 def _render_group(specs, camera, size, frame=True):
     """Render ``specs`` (``(field, scene kwargs)``) with one shared, optionally framed camera."""
-    from tracer.render import RenderError, render
+    from tracer.rendering.renderer import RenderError, render
 
     cam = _frame_camera(specs, camera, probe=min(48, size)) if frame else camera
     out = []

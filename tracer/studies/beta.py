@@ -146,7 +146,7 @@ _WARM = set()
 
 
 def _scene(field, task, size=None):
-    from tracer.scene import scene_from_field
+    from tracer.scenes.scene import scene_from_field
 
     size = size or task["size"]
     return scene_from_field(field, alpha=task["alpha"], alpha_u=task["alpha_u"],
@@ -156,7 +156,7 @@ def _scene(field, task, size=None):
 
 
 def _render(scene, task, progress=None):
-    from tracer.render import render
+    from tracer.rendering.renderer import render
 
     return render(scene, progress=progress)
 

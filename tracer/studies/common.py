@@ -58,10 +58,10 @@ def add_common(p):
 
 def add_view_arguments(p, default):
     """``--view`` and ``--up`` of ``tracer render`` (the same choices, the same framing:
-    :func:`tracer.camera.frame_points`, and the same up axis guess:
-    :func:`tracer.from_mesh.resolve_up`); ``default`` says which camera the study uses
+    :func:`tracer.rendering.camera.frame_points`, and the same up axis guess:
+    :func:`tracer.scenes.from_mesh.resolve_up`); ``default`` says which camera the study uses
     without them."""
-    from tracer.camera import UP_AXES, VIEWS
+    from tracer.rendering.camera import UP_AXES, VIEWS
 
     p.add_argument("--view", choices=tuple(VIEWS),
                    help="camera framing the whole surface from this side, as in tracer render "
@@ -74,7 +74,7 @@ def add_view_arguments(p, default):
 def resolve_view(args, mesh):
     """``(view, up)`` of the study's ``--view`` / ``--up`` for the mesh file ``mesh``, or
     ``(None, None)`` when neither is given (the study's own camera)."""
-    from tracer.from_mesh import resolve_up
+    from tracer.scenes.from_mesh import resolve_up
 
     view, up = getattr(args, "view", None), getattr(args, "up", None)
     if not view and not up:
@@ -87,7 +87,7 @@ def view_camera(fields, view, up, grow, size):
     field or several, framed together) at ``size`` x ``size`` pixels: their vertices grown by
     ``grow`` (scene units: the surface's inflation bound and eps) all in view. Returns
     ``(origin, dest, up)`` as lists."""
-    from tracer.camera import frame_points
+    from tracer.rendering.camera import frame_points
 
     if not isinstance(fields, (list, tuple)):
         fields = [fields]

@@ -59,7 +59,7 @@ def view_normals(normals_world, camera):
     ----------
     normals_world : (H, W, 3) array_like of float
         Surface normals or unnormalised gradients ``g`` (for a smooth distance, its gradient).
-    camera : tracer.camera.Camera
+    camera : tracer.rendering.camera.Camera
 
     Returns
     -------

@@ -256,7 +256,7 @@ class Segments:
 # ---------------------------------------------------------------------------- the metric
 def hit_points(res):
     """World positions ``(n, 3)`` of a render's hit pixels (row-major order of ``res.hit``)."""
-    from tracer.camera import primary_rays
+    from tracer.rendering.camera import primary_rays
 
     rays = primary_rays(res.camera)
     return (res.camera.origin + res.depth.astype(np.float64)[..., None] * rays)[res.hit]

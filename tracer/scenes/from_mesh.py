@@ -4,7 +4,7 @@
 ``trimesh.Trimesh`` / ``PointCloud`` / ``path.Path3D``, a ``pyvista.PolyData`` or a
 :class:`smoothdist.DataMesh`, picks ``alpha="auto"`` and ``alpha_u="auto"`` (see
 :meth:`smoothdist.SmoothDistanceField.auto_alpha`), frames the whole surface with
-:func:`tracer.camera.frame_points` and returns a :class:`tracer.frame.RenderResult` of numpy
+:func:`tracer.rendering.camera.frame_points` and returns a :class:`tracer.rendering.frame.RenderResult` of numpy
 arrays (``rgb``, ``depth``, ``normals``, ``hit``, ``steps``, ...; ``.save(path)``).
 """
 
@@ -12,9 +12,9 @@ import os
 
 import numpy as np
 
-from tracer.settings import defaults
+from tracer.scenes.settings import defaults
 
-#: defaults of the mesh entry points (:mod:`tracer.settings`; ``tracer render MESH`` too)
+#: defaults of the mesh entry points (:mod:`tracer.scenes.settings`; ``tracer render MESH`` too)
 _MESH = defaults("mesh")
 
 __all__ = ["render_mesh", "mesh_scene", "load_geometry", "guess_up", "resolve_up",
@@ -58,8 +58,8 @@ def guess_up(mesh):
 
 
 def resolve_up(mesh, up):
-    """``up`` checked (``"x"``, ``"y"``, ``"z"``), or :func:`~tracer.from_mesh.guess_up` for ``"auto"`` / None."""
-    from tracer.camera import UP_AXES
+    """``up`` checked (``"x"``, ``"y"``, ``"z"``), or :func:`~tracer.scenes.from_mesh.guess_up` for ``"auto"`` / None."""
+    from tracer.rendering.camera import UP_AXES
 
     if up is None or up == "auto":
         return guess_up(mesh)
@@ -76,7 +76,7 @@ def mesh_scene(mesh, F=None, *, kind=None, alpha=_MESH["alpha"], alpha_u=_MESH["
                adaptive=_MESH["adaptive"], transparent=_MESH["transparent"],
                lighting=_MESH["lighting"], color=_MESH["color"],
                background=_MESH["background"]):
-    """A one-object :class:`tracer.scene.Scene` for ``mesh``, camera framing the surface.
+    """A one-object :class:`tracer.scenes.scene.Scene` for ``mesh``, camera framing the surface.
 
     Parameters
     ----------
@@ -100,24 +100,24 @@ def mesh_scene(mesh, F=None, *, kind=None, alpha=_MESH["alpha"], alpha_u=_MESH["
         Image ``(width, height)`` in pixels.
     view : str
         ``front``, ``back``, ``left``, ``right``, ``top`` or ``iso`` (see
-        :data:`tracer.camera.VIEWS`, turned to ``up``): the camera frames, from there, the
+        :data:`tracer.rendering.camera.VIEWS`, turned to ``up``): the camera frames, from there, the
         region the surface can occupy (the data's vertices grown by the largest possible
-        inflation; :func:`tracer.camera.frame_points`).
+        inflation; :func:`tracer.rendering.camera.frame_points`).
     up : {"auto", "x", "y", "z"}
-        The data's up axis for ``view``. ``"auto"`` (:func:`~tracer.from_mesh.guess_up`): z for STL and PLY
+        The data's up axis for ``view``. ``"auto"`` (:func:`~tracer.scenes.from_mesh.guess_up`): z for STL and PLY
         files and for trimesh / pyvista objects, y otherwise (OBJ, OFF, arrays).
     camera : (origin, dest, up), optional
         An explicit camera instead of ``view``.
     shading : {"lit", "normals", "matcap", "headlight"}
         ``"lit"`` (the default here): key and fill lights, soft shadows, ambient occlusion
-        and a ground (:mod:`tracer.lighting`); ``"normals"``: the paper's normal colours.
+        and a ground (:mod:`tracer.rendering.lighting`); ``"normals"``: the paper's normal colours.
     mode, offset, eps, matcap, tol, newton, samples, adaptive, transparent, lighting, color :
-        As in :func:`tracer.scene.scene_from_field` (``background`` too).
+        As in :func:`tracer.scenes.scene.scene_from_field` (``background`` too).
     name : str, optional
         The scene's name (default: the mesh's).
     """
     from smoothdist import SmoothDistanceField
-    from tracer.scene import scene_from_field
+    from tracer.scenes.scene import scene_from_field
 
     up = resolve_up(mesh, up)
     data = load_geometry(mesh, F, kind)
@@ -190,11 +190,11 @@ def render_mesh(mesh, F=None, *, kind=None, alpha=_MESH["alpha"], alpha_u=_MESH[
 
     Parameters are those of :func:`mesh_scene` (the ``"lit"`` shading by default;
     ``shading="normals"`` gives the paper's normal colours); ``progress`` and ``device``
-    (``"cpu"`` or ``"cuda"``) as in :func:`tracer.render.render`.
+    (``"cpu"`` or ``"cuda"``) as in :func:`tracer.render`.
 
     Returns
     -------
-    tracer.frame.RenderResult
+    tracer.rendering.frame.RenderResult
         ``rgb (H, W, 3) uint8``, ``hit (H, W) bool``, ``depth (H, W) float32`` (ray
         parameter, NaN on misses), ``normals (H, W, 3)``, ``steps (H, W)``, ``leaves``,
         ``camera``, ``scene`` (``scene.objects[0].alpha`` / ``.alpha_u`` are the values used)
@@ -209,7 +209,7 @@ def render_mesh(mesh, F=None, *, kind=None, alpha=_MESH["alpha"], alpha_u=_MESH[
                                  samples=8, adaptive=True)     # anti-aliased, lit
         res.save("renders/ico.png")         # res.rgb, res.depth, res.hit, ... are arrays
     """
-    from tracer.render import render
+    from tracer.rendering.renderer import render
 
     scene = mesh_scene(mesh, F, kind=kind, alpha=alpha, alpha_u=alpha_u, beta=beta, size=size,
                        view=view, camera=camera, mode=mode, offset=offset, eps=eps,

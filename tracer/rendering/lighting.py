@@ -1,7 +1,7 @@
 """Light for publication images: key and fill lights, soft shadows, ambient occlusion, a ground.
 
 The ``"lit"`` shading. Everything is computed from the same distance the tracer marches, with
-the same kernels (:func:`tracer.march.scene_distance`), so Barnes-Hut, ``tol``, posed objects
+the same kernels (:func:`tracer.rendering.march.scene_distance`), so Barnes-Hut, ``tol``, posed objects
 and exact-offset mode apply to every shadow and occlusion query as they do to camera rays.
 
 * **Soft shadows** (:func:`soft_shadow`): a ray from the surface towards the key light is
@@ -21,7 +21,7 @@ and exact-offset mode apply to every shadow and occlusion query as they do to ca
 Cost, in distance queries per lit pixel: one shadow ray (typically 10-40 queries, at most
 :data:`SHADOW_STEPS`) and :data:`AO_SAMPLES` (5) occlusion queries, on top of the camera ray.
 Ground pixels pay the same. Anti-aliasing samples reuse the pixel's own shadow and occlusion
-when they hit the same object (:mod:`tracer.film`).
+when they hit the same object (:mod:`tracer.rendering.film`).
 """
 
 import math
@@ -32,8 +32,8 @@ import numpy as np
 from numba import prange
 
 from smoothdist.kernels import NJIT, NJIT_PARALLEL
-from tracer.camera import box_corners
-from tracer.march import (NEWTON_COS, OMEGA, RELAX, _borrowed, march_ray, nearest_object,
+from tracer.rendering.camera import box_corners
+from tracer.rendering.march import (NEWTON_COS, OMEGA, RELAX, _borrowed, march_ray, nearest_object,
                           object_lower_bound, ray_box, scene_distance, visiting_order)
 
 __all__ = ["Lighting", "DEFAULT_COLOR", "PALETTE", "soft_shadow", "ambient_occlusion",
@@ -124,12 +124,14 @@ def _check_color(color, name):
 # =============================================================================== kernels
 @numba.njit(**NJIT)
 def soft_shadow(tree, roots, params, mode, tol, px, py, pz, lx, ly, lz, lo, hi, eps, t_min,
-                k, stack, dstack, slack=0.0):
+                k, stack, dstack, slack=0.0, t_judge=-1.0):
     """Fraction of the key light reaching ``p`` (0 in full shadow, 1 lit), the queries made
     and the leaves they visited. ``l`` is the unit direction towards the light,
     ``k = 1 / penumbra``.
 
-    The ray starts at ``t_min`` and judges the light from ``SHADOW_JUDGE x t_min`` on: before
+    The ray starts at ``t_min`` and judges the light from ``t_judge`` on (negative: the
+    default, ``SHADOW_JUDGE x t_min``, for a point on the surface; a ground point passes
+    ``t_min``: the surface above it is an occluder, not its own relief). Before
     that it only marches, through the surface it starts on too (a neighbouring bump of a
     point cloud's surface under a grazing light: the ray starts ``t_min`` out along the light,
     barely above the surface, and may dip into it), so that the surface's own relief next to
@@ -139,7 +141,8 @@ def soft_shadow(tree, roots, params, mode, tol, px, py, pz, lx, ly, lz, lo, hi, 
     t0, t1 = ray_box(px, py, pz, lx, ly, lz, lo, hi)
     if t0 > t1:
         return 1.0, 0, 0
-    t_judge = SHADOW_JUDGE * t_min
+    if t_judge < 0.0:
+        t_judge = SHADOW_JUDGE * t_min
     t = max(t_min, t0)
     res = 1.0
     n = 0
@@ -200,13 +203,15 @@ def _ao_total(delta):
 
 @numba.njit(**NJIT_PARALLEL)
 def light_points(tree, roots, params, mode, tol, P, N, L, lo, hi, eps, depth_max, k, delta,
-                 do_shadow, do_ao, slack, t_min, shadow, ao, work, ntasks=1):
+                 do_shadow, do_ao, slack, t_min, t_judge, shadow, ao, work, ntasks=1):
     """Shadow and occlusion at points ``P (n, 3)`` with unit normals ``N (n, 3)``.
 
     ``L (3,)``: unit direction towards the key light; ``k = 1 / penumbra``; ``delta``: the
     occlusion step (scene units); ``slack`` (scene units): each query may be that much below
     the render's own distance (tolerance pruning loosened as in
-    :func:`tracer.march.scene_distance`; ``roots`` must then be an array and ``tol > 0``).
+    :func:`tracer.rendering.march.scene_distance`; ``roots`` must then be an array and
+    ``tol > 0``). ``t_min``, ``t_judge``: where shadow rays start and judge the light
+    (:func:`soft_shadow`).
     Writes ``shadow (n,)``, ``ao (n,)`` (1 where not asked for)
     and ``work (n, 2) int64``: distance queries and leaves visited. Every point is
     independent (no dependence on threads); ``ntasks`` strided tasks share them out
@@ -214,25 +219,25 @@ def light_points(tree, roots, params, mode, tol, P, N, L, lo, hi, eps, depth_max
     ntasks = max(1, min(P.shape[0], ntasks))
     for task in prange(ntasks):
         _light_task(tree, roots, params, mode, tol, P, N, L, lo, hi, eps, depth_max, k, delta,
-                    do_shadow, do_ao, slack, t_min, shadow, ao, work, task, ntasks)
+                    do_shadow, do_ao, slack, t_min, t_judge, shadow, ao, work, task, ntasks)
 
 
 @numba.njit(**NJIT)
 def light_tasks(tree, roots, params, mode, tol, P, N, L, lo, hi, eps, depth_max, k, delta,
-                do_shadow, do_ao, slack, t_min, shadow, ao, work, ntasks, task0, task1):
+                do_shadow, do_ao, slack, t_min, t_judge, shadow, ao, work, ntasks, task0, task1):
     """Tasks ``task0 <= task < task1`` of :func:`light_points` (``ntasks`` of them), serial and
-    ``nogil``, for Python threads (``tracer.threads.run_tasks``): the same values, and no
+    ``nogil``, for Python threads (``tracer.rendering.threads.run_tasks``): the same values, and no
     ``prange`` to compile (a parallel loop costs numba as much again as its body)."""
     tree = _borrowed(tree)
     params = _borrowed(params)
     for task in range(task0, task1):
         _light_task(tree, roots, params, mode, tol, P, N, L, lo, hi, eps, depth_max, k, delta,
-                    do_shadow, do_ao, slack, t_min, shadow, ao, work, task, ntasks)
+                    do_shadow, do_ao, slack, t_min, t_judge, shadow, ao, work, task, ntasks)
 
 
 @numba.njit(**NJIT)
 def _light_task(tree, roots, params, mode, tol, P, N, L, lo, hi, eps, depth_max, k, delta,
-                do_shadow, do_ao, slack, t_min, shadow, ao, work, task, ntasks):
+                do_shadow, do_ao, slack, t_min, t_judge, shadow, ao, work, task, ntasks):
     """Points ``task, task + ntasks, ...`` of :func:`light_points`."""
     bias = 2.0 * eps
     n = P.shape[0]
@@ -248,7 +253,8 @@ def _light_task(tree, roots, params, mode, tol, P, N, L, lo, hi, eps, depth_max,
         lv = 0
         if do_shadow and nx * L[0] + ny * L[1] + nz * L[2] > 0.0:
             s, q, lv = soft_shadow(tree, roots, params, mode, tol, px, py, pz, L[0], L[1],
-                                   L[2], lo, hi, eps, t_min, k, stack, dstack, slack)
+                                   L[2], lo, hi, eps, t_min, k, stack, dstack, slack,
+                                   t_judge)
         elif do_shadow:
             s = 0.0          # facing away from the light: no direct light anyway
         a = 1.0
@@ -329,9 +335,9 @@ def ground_height(arrays, data_vertices, up, eps, max_steps=400):
     """Height (along ``up``) of the surface's lowest point: upward rays from below the lowest
     data vertices (the ten lowest) to the surface; the smallest height where they land.
 
-    ``arrays``: :class:`tracer.frame.SceneArrays`. Falls back to the bottom of the scene box
+    ``arrays``: :class:`tracer.rendering.frame.SceneArrays`. Falls back to the bottom of the scene box
     (which bounds the surface) if no ray lands."""
-    from tracer.frame import kernel_roots
+    from tracer.rendering.frame import kernel_roots
 
     tree, roots, params, mode, lo, hi, depth_max, tol = arrays
     up = np.asarray(up, dtype=np.float64)

@@ -1,8 +1,8 @@
-"""Render a :class:`~tracer.scene.Scene`: trace, shade, and collect per-pixel buffers.
+"""Render a :class:`~tracer.scenes.scene.Scene`: trace, shade, and collect per-pixel buffers.
 
 :func:`render` and the tile scheduler (:func:`trace_tiles`); the pieces a frame is made of
-(:class:`~tracer.frame.RenderResult`, :func:`~tracer.frame.scene_arrays`, ...) live in :mod:`tracer.frame` and the thread
-helpers in :mod:`tracer.threads`, below the film, the light and the GPU path that use them;
+(:class:`~tracer.rendering.frame.RenderResult`, :func:`~tracer.rendering.frame.scene_arrays`, ...) live in :mod:`tracer.rendering.frame` and the thread
+helpers in :mod:`tracer.rendering.threads`, below the film, the light and the GPU path that use them;
 their names are importable from here as before.
 """
 
@@ -12,14 +12,14 @@ import time
 
 import numpy as np
 
-from tracer import march
+from tracer.rendering import march
 from tracer.errors import RenderError  # noqa: F401  (defined there; imported from here too)
-from tracer.frame import (MAX_SAMPLES, ProgressBar, RayArgs, RenderResult,  # noqa: F401
+from tracer.rendering.frame import (MAX_SAMPLES, ProgressBar, RayArgs, RenderResult,  # noqa: F401
                           SceneArrays, TraceOptions, _pixel_buffers, _posed, _progress_callback,
                           _samples, camera_of, distance_at_camera, kernel_roots, object_level,
                           scene_arrays, shade)
-from tracer.shading import load_matcap
-from tracer.threads import in_bands, render_threads, run_tasks  # noqa: F401
+from tracer.rendering.shading import load_matcap
+from tracer.rendering.threads import in_bands, render_threads, run_tasks  # noqa: F401
 
 __all__ = ["render", "RenderResult", "RenderError", "camera_of", "distance_at_camera",
            "scene_arrays", "SceneArrays", "RayArgs", "TraceOptions", "render_threads",
@@ -32,39 +32,39 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
 
     Parameters
     ----------
-    scene : tracer.scene.Scene
+    scene : tracer.scenes.scene.Scene
     transforms : list of (R (3, 3), t (3,)), optional
-        A rigid pose per object (see :func:`~tracer.frame.scene_arrays`); the trees are not rebuilt.
+        A rigid pose per object (see :func:`~tracer.rendering.frame.scene_arrays`); the trees are not rebuilt.
     progress : bool, callable(done_pixels, total_pixels, elapsed_s) or None
         A callable is called a few times a second while tracing, and at the end; ``True``
-        shows a text progress bar on stderr (:class:`~tracer.frame.ProgressBar`); ``None`` or ``False``:
+        shows a text progress bar on stderr (:class:`~tracer.rendering.frame.ProgressBar`); ``None`` or ``False``:
         none.
     band_rows : int, optional
         Trace the image in bands of this many rows, one after the other (default: one band;
-        the image does not depend on it when it is a multiple of ``tracer.march.TILE``).
+        the image does not depend on it when it is a multiple of ``tracer.rendering.march.TILE``).
     relax : float, optional
         Scenes with ``tol > 0``: a sphere-tracing step may under-estimate the distance by up
-        to ``relax`` x the previous step (default ``tracer.march.RELAX``; 0: never).
+        to ``relax`` x the previous step (default ``tracer.rendering.march.RELAX``; 0: never).
     omega : float, optional
         Cap of the over-relaxed sphere-tracing steps, as a multiple of the distance (>= 1;
         1: plain steps; each relaxed step is checked, with a safe fallback; smooth mode only;
-        default ``tracer.march.OMEGA``); see :func:`tracer.march.march_ray`.
+        default ``tracer.rendering.march.OMEGA``); see :func:`tracer.rendering.march.march_ray`.
     cone : bool, optional
         Seed each tile's rays with a conservative start depth from a cone march (default
-        ``tracer.march.CONE``).
+        ``tracer.rendering.march.CONE``).
     newton : float, optional
         Newton steps along the ray once the distance is below ``newton x eps`` (at most 1 % of
         the scene box diagonal; 0: plain sphere tracing; default: the scene's ``newton``,
-        ``tracer.march.NEWTON`` unless the scene file sets it); see
-        :func:`tracer.march.march_ray`.
+        ``tracer.rendering.march.NEWTON`` unless the scene file sets it); see
+        :func:`tracer.rendering.march.march_ray`.
     samples : int, optional
         Anti-aliasing samples per pixel (default: the scene's ``samples``, 1); see
-        :mod:`tracer.film`.
+        :mod:`tracer.rendering.film`.
     adaptive : bool, optional
         Give the extra samples only to pixels that disagree with a neighbour (default: the
         scene's ``adaptive``).
     device : {"cpu", "cuda"}
-        ``"cuda"``: trace on the GPU (:mod:`tracer.gpu_render`; the ``gpu`` extra; one sample
+        ``"cuda"``: trace on the GPU (:mod:`tracer.rendering.gpu_render`; the ``gpu`` extra; one sample
         per pixel, not the ``"lit"`` shading; ``cone`` and ``band_rows`` do not apply).
 
     Raises
@@ -75,7 +75,7 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
     from smoothdist.cuda import check_device
 
     if check_device(device) == "cuda":
-        from tracer.gpu_render import render_cuda
+        from tracer.rendering.gpu_render import render_cuda
 
         return render_cuda(scene, progress=progress, transforms=transforms, relax=relax,
                            omega=omega, newton=newton, samples=samples, adaptive=adaptive)
@@ -135,7 +135,7 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
         in_bands(colour, H)
         alpha, spp, aovs = hit.astype(np.float32), np.ones((H, W), np.int32), {"rays": H * W}
     else:
-        from tracer.film import form_image
+        from tracer.rendering.film import form_image
 
         rgb, alpha, spp, aovs = form_image(scene, camera, arrays, args, options,
                                            (hit, tbuf, grad, objs), samples, adaptive)
@@ -149,7 +149,7 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
 
 #: a render's tiles are taken by the threads in chunks of ``1 / CHUNKS_PER_THREAD`` of a
 #: thread's share (at least one tile). The chunks follow the scattered tile order of
-#: ``tracer.march.render_rows``, so each is a sample of the whole image and costs about the
+#: ``tracer.rendering.march.render_rows``, so each is a sample of the whole image and costs about the
 #: same; a thread that drew expensive tiles takes fewer chunks. Each chunk is one kernel call
 #: (8 us of dispatch under the GIL, serial): chunks of 4 tiles gave a 1080p frame 32,400 calls
 #: (0.25 s serial); 64 chunks per thread leave at most 1/64 of a share idle at the end
@@ -161,18 +161,18 @@ REPORT_SECONDS = 0.25
 def trace_tiles(args, row0, row1, depth_max, outputs, options, report=None, threads=None):
     """Trace image rows ``row0 <= r < row1`` into ``outputs``.
 
-    ``args`` (:class:`~tracer.frame.RayArgs`) and ``outputs = (hit, tbuf, grad, steps, leaves, bisect,
-    objs)`` as for :func:`tracer.march.render_rows`, ``options`` (:class:`~tracer.frame.TraceOptions`).
-    ``threads`` Python threads (default :func:`~tracer.threads.render_threads`) take chunks of tiles
+    ``args`` (:class:`~tracer.rendering.frame.RayArgs`) and ``outputs = (hit, tbuf, grad, steps, leaves, bisect,
+    objs)`` as for :func:`tracer.rendering.march.render_rows`, ``options`` (:class:`~tracer.rendering.frame.TraceOptions`).
+    ``threads`` Python threads (default :func:`~tracer.rendering.threads.render_threads`) take chunks of tiles
     (:data:`CHUNKS_PER_THREAD`) from a shared counter and trace them with
-    the serial, GIL-free kernel :func:`tracer.march.render_tiles`, so that a thread that
+    the serial, GIL-free kernel :func:`tracer.rendering.march.render_tiles`, so that a thread that
     drew cheap tiles takes more; every tile is traced by one thread start to finish, so the
     result does not depend on the number of threads or the chunking (it equals
     ``render_rows``'). ``report(done_pixels)`` is called from the calling thread a few times
     a second and at the end. Ctrl-C (KeyboardInterrupt) stops the workers after their
     current chunk and is re-raised.
     """
-    from tracer.march import TILE, render_tiles
+    from tracer.rendering.march import TILE, render_tiles
 
     W = int(args.cam[12])
     n = -(-W // TILE) * -(-(row1 - row0) // TILE)

@@ -1,4 +1,4 @@
-"""The scene format's machine-readable reference: ``tracer/scene.schema.json``.
+"""The scene format's machine-readable reference: ``tracer/scenes/scene.schema.json``.
 
 The JSON Schema (draft 2020-12) lists every key of a scene file with its type, default,
 whether it is required, a description and an example. Editors use it for completion and
@@ -10,9 +10,9 @@ module
 * checks a parsed scene against it with a small validator covering the keywords the schema
   uses (:func:`validate`; the loader's own checks stay the authority), and
 * renders it as the Markdown reference ``docs/scene-format.md`` (:func:`markdown`):
-  ``python -m tracer.scene_schema > docs/scene-format.md``.
+  ``python -m tracer.scenes.scene_schema > docs/scene-format.md``.
 
-``tests/test_scene_schema.py`` keeps the schema, the docs and :mod:`tracer.scene` equal.
+``tests/test_scene_schema.py`` keeps the schema, the docs and :mod:`tracer.scenes.scene` equal.
 """
 
 import json
@@ -159,7 +159,7 @@ def markdown(schema=None):
     """The Markdown reference of the scene format (``docs/scene-format.md``)."""
     schema = schema or load_schema()
     out = ["# Scene file format", "",
-           "<!-- Generated from tracer/scene.schema.json by `python -m tracer.scene_schema > "
+           "<!-- Generated from tracer/scenes/scene.schema.json by `python -m tracer.scenes.scene_schema > "
            "docs/scene-format.md`; do not edit by hand (tests/test_scene_schema.py checks it). "
            "-->", "",
            schema["description"], "",
@@ -186,7 +186,7 @@ def markdown(schema=None):
 
 
 def main(argv=None):
-    """``python -m tracer.scene_schema [--check FILE]``: print the Markdown reference, or
+    """``python -m tracer.scenes.scene_schema [--check FILE]``: print the Markdown reference, or
     exit 1 when FILE differs from it."""
     argv = list(sys.argv[1:] if argv is None else argv)
     text = markdown()

@@ -2,16 +2,16 @@
 
 Two independent pipelines look at the same surface from the same camera:
 
-* **tracer** -- :func:`tracer.render.render` sphere-traces the scene distance (smooth
+* **tracer** -- :func:`tracer.render` sphere-traces the scene distance (smooth
   LogSumExp, several objects combined by a second LogSumExp with the largest alpha; or exact
   distance minus ``offset``, combined by the minimum).
 * **pyvista** -- the same scene distance is sampled on a regular ``N x N x N`` grid of points
-  spanning the tracer's grown scene box (:func:`tracer.frame.scene_arrays`: the data's box
+  spanning the tracer's grown scene box (:func:`tracer.rendering.frame.scene_arrays`: the data's box
   plus the largest possible isosurface inflation, so every grid face is outside the surface
   and the contour is closed), the zero isosurface is extracted by VTK's flying-edges marching
   cubes, its points get the field's gradient as normals (evaluated *at the contour points*,
   the same gradient the tracer shades with) and VTK rasterises it from the same camera
-  (:func:`tracer.camera.pyvista_camera_params`, window centre included) without lighting,
+  (:func:`tracer.rendering.camera.pyvista_camera_params`, window centre included) without lighting,
   each vertex coloured ``127 n + 128`` by its view-space normal.
 
 Per pixel we compare the hit masks (silhouette IoU), the normals over pixels both hit (the
@@ -194,7 +194,7 @@ def scene_field(scene, points, chunk=_CHUNK):
 
     Parameters
     ----------
-    scene : tracer.scene.Scene
+    scene : tracer.scenes.scene.Scene
     points : (q, 3) array_like of float
 
     Returns
@@ -202,11 +202,11 @@ def scene_field(scene, points, chunk=_CHUNK):
     d : (q,) float64
     grad : (q, 3) float64
         Not normalised (the metric gradient of the smooth distance, or the exact distance's
-        unit gradient), as in :func:`tracer.march.scene_distance`.
+        unit gradient), as in :func:`tracer.rendering.march.scene_distance`.
 
     Notes
     -----
-    Same formula as :func:`tracer.march.scene_distance`, evaluated with the library's
+    Same formula as :func:`tracer.rendering.march.scene_distance`, evaluated with the library's
     parallel batch queries per object: smooth mode ``d_k = field_k.smooth_distance(alpha_k,
     beta_k, alpha_u_k, scene.gradient) - c_k`` (``c_k`` the object's smooth offset), combined for several objects by
     ``m - log(sum exp(-a (d_k - m))) / a`` with ``a`` the largest alpha and ``m = min d_k``
@@ -326,7 +326,7 @@ def sample_grid(scene, n, prune=True):
 
     Parameters
     ----------
-    scene : tracer.scene.Scene
+    scene : tracer.scenes.scene.Scene
     n : int
         Grid points per axis (>= 2).
     prune : bool, default True
@@ -423,14 +423,14 @@ def render_isosurface(surface, camera, background=(255, 255, 255), focal_distanc
 
     Lighting, anti-aliasing and multisampling are off, so every pixel is the colour of the
     surface point on its pixel centre, and the window centre reproduces the authors' half-pixel
-    shift (:func:`tracer.camera.pyvista_camera_params`).
+    shift (:func:`tracer.rendering.camera.pyvista_camera_params`).
 
     Raises
     ------
     tracer.outputs.CLIError
         ``VTK cannot render off-screen here: ...`` when VTK fails.
     """
-    from tracer.camera import primary_rays, pyvista_camera_params
+    from tracer.rendering.camera import primary_rays, pyvista_camera_params
 
     W, H = camera.width, camera.height
     params = pyvista_camera_params(camera, focal_distance=focal_distance)
@@ -488,7 +488,7 @@ def render_isosurface(surface, camera, background=(255, 255, 255), focal_distanc
 
 # ------------------------------------------------------------------------ metrics and images
 def compare_renders(trace, pvr, diagonal):
-    """Metrics between a :class:`~tracer.frame.RenderResult` and a :class:`PyvistaRender`.
+    """Metrics between a :class:`~tracer.rendering.frame.RenderResult` and a :class:`PyvistaRender`.
 
     Returns a dict: ``iou`` (hit masks; 1 when both are empty), ``tracer_only`` /
     ``pyvista_only`` (pixel counts), ``both_hit``, ``normal_angle_mean_deg``,
@@ -496,7 +496,7 @@ def compare_renders(trace, pvr, diagonal):
     ``|t_pyvista - t_tracer|`` over pixels both hit / ``diagonal``),
     ``depth_error_p95_rel_diag``. Metrics over an empty set of pixels are None.
     """
-    from tracer.shading import view_normals
+    from tracer.rendering.shading import view_normals
 
     a = np.asarray(trace.hit, dtype=bool)
     b = np.asarray(pvr.hit, dtype=bool)
@@ -627,11 +627,11 @@ def compare_scene(scene, grid=128, trace=None):
 
     Parameters
     ----------
-    scene : tracer.scene.Scene
+    scene : tracer.scenes.scene.Scene
         Its width and height are the image size.
     grid : int, default 128
         Grid points per axis over the grown scene box.
-    trace : tracer.frame.RenderResult, optional
+    trace : tracer.rendering.frame.RenderResult, optional
         A render of ``scene`` to reuse (otherwise rendered here).
 
     Returns
@@ -639,8 +639,8 @@ def compare_scene(scene, grid=128, trace=None):
     Comparison
     """
     from tracer.image import compare_images
-    from tracer.render import camera_of, render
-    from tracer.shading import shade_normals, view_normals
+    from tracer.rendering.renderer import camera_of, render
+    from tracer.rendering.shading import shade_normals, view_normals
 
     t_start = time.perf_counter()
     camera = camera_of(scene)
@@ -680,7 +680,7 @@ def compare_scene(scene, grid=128, trace=None):
 
 def scene_box(scene):
     """The grown scene box ``(lo, hi)`` that the grid spans (the tracer's ray box)."""
-    from tracer.render import scene_arrays
+    from tracer.rendering.renderer import scene_arrays
 
     return scene_arrays(scene)[4:6]
 
@@ -705,7 +705,7 @@ def add_arguments(p):
 def run(args):
     """Compare; returns the exit status (0, or 2 with one ``error:`` line)."""
     from tracer.image import save_png
-    from tracer.scene import load_scene
+    from tracer.scenes.scene import load_scene
 
     if not 2 <= args.grid <= 512:
         raise CLIError(f"--grid must be between 2 and 512, got {args.grid}")

@@ -1,11 +1,11 @@
 """What one frame is made of: the scene as the march kernels take it, the camera, the result.
 
-The pieces that :func:`tracer.render.render`, the film (:mod:`tracer.film`), the light
-(:mod:`tracer.lighting`) and the GPU path (:mod:`tracer.gpu_render`) share, kept below all of
+The pieces that :func:`tracer.render`, the film (:mod:`tracer.rendering.film`), the light
+(:mod:`tracer.rendering.lighting`) and the GPU path (:mod:`tracer.rendering.gpu_render`) share, kept below all of
 them so that none imports another sideways: :class:`RenderResult`, :class:`SceneArrays` and
 :func:`scene_arrays`, the march kernels' named arguments (:class:`RayArgs`,
 :class:`TraceOptions`), the camera checks, the plain shadings (:func:`shade`) and the
-progress bar. :mod:`tracer.render` re-exports every name.
+progress bar. :mod:`tracer.rendering.renderer` re-exports every name.
 """
 
 import math
@@ -16,16 +16,16 @@ from typing import NamedTuple
 import numpy as np
 
 from smoothdist.kernels import DEFAULT_TOL, concatenate_trees
-from tracer import march
-from tracer.camera import box_corners, look_at
-from tracer.shading import (load_matcap, shade_headlight, shade_matcap, shade_normals,
+from tracer.rendering import march
+from tracer.rendering.camera import box_corners, look_at
+from tracer.rendering.shading import (load_matcap, shade_headlight, shade_matcap, shade_normals,
                             view_normals)
 
 __all__ = ["RenderResult", "RayArgs", "TraceOptions", "SceneArrays", "scene_arrays",
            "object_level", "kernel_roots", "camera_of", "distance_at_camera", "shade",
            "ProgressBar", "MAX_SAMPLES"]
 
-#: the most anti-aliasing samples per pixel (:mod:`tracer.film`)
+#: the most anti-aliasing samples per pixel (:mod:`tracer.rendering.film`)
 MAX_SAMPLES = 1024
 
 
@@ -45,8 +45,8 @@ class RenderResult(NamedTuple):
         bisections per pixel.
     seconds : float
         Wall time of the tracing (shading excluded).
-    camera : tracer.camera.Camera
-    scene : tracer.scene.Scene or None
+    camera : tracer.rendering.camera.Camera
+    scene : tracer.scenes.scene.Scene or None
         The scene rendered (its objects hold the alpha and alpha_U used).
     alpha : (H, W) float32
         Coverage: the fraction of the pixel's samples that hit the surface (with a
@@ -122,8 +122,8 @@ class RenderResult(NamedTuple):
 
 
 class RayArgs(NamedTuple):
-    """The leading arguments of the march kernels (:func:`tracer.march.render_tiles`,
-    :func:`tracer.march.sample_tasks`, ...), in their order: a render passes them on with
+    """The leading arguments of the march kernels (:func:`tracer.rendering.march.render_tiles`,
+    :func:`tracer.rendering.march.sample_tasks`, ...), in their order: a render passes them on with
     ``*args``."""
 
     tree: object
@@ -132,7 +132,7 @@ class RayArgs(NamedTuple):
     params: np.ndarray
     mode: int
     tol: float
-    #: ``tracer.camera.Camera.as_array()``
+    #: ``tracer.rendering.camera.Camera.as_array()``
     cam: np.ndarray
     lo: np.ndarray
     hi: np.ndarray
@@ -141,7 +141,7 @@ class RayArgs(NamedTuple):
 
 
 class TraceOptions(NamedTuple):
-    """The march kernels' trailing options (see :func:`tracer.render.render`)."""
+    """The march kernels' trailing options (see :func:`tracer.render`)."""
 
     relax: float
     omega: float
@@ -153,17 +153,17 @@ class SceneArrays(NamedTuple):
     """A scene as the march kernels take it (:func:`scene_arrays`).
 
     The kernels' leading arguments are ``tree, roots, params, mode, tol`` (see
-    :mod:`tracer.march`). ``tol`` comes last here so that positions 0-6 are those of the
+    :mod:`tracer.rendering.march`). ``tol`` comes last here so that positions 0-6 are those of the
     7-tuple this used to be (``[4:6]`` is still ``lo, hi``).
 
     tree : smoothdist.kernels.TreeData
         The objects' trees, concatenated into one forest when there are several.
     roots : (k,) int64
         Root node of each object.
-    params : (k, tracer.march.P_COLUMNS) or (k, tracer.march.P_COLUMNS_POSED) float64
-        The per-object parameter table, columns ``tracer.march.P_*``.
+    params : (k, tracer.rendering.march.P_COLUMNS) or (k, tracer.rendering.march.P_COLUMNS_POSED) float64
+        The per-object parameter table, columns ``tracer.rendering.march.P_*``.
     mode : int
-        ``tracer.march.MODE_SMOOTH`` or ``MODE_EXACT``.
+        ``tracer.rendering.march.MODE_SMOOTH`` or ``MODE_EXACT``.
     lo, hi : (3,) float64
         The grown scene box the rays march in.
     depth_max : int
@@ -192,7 +192,7 @@ def scene_arrays(scene, transforms=None):
     scene's mode (:func:`object_level`).
     ``transforms`` (optional): per object a rigid pose ``(R (3, 3), t (3,))``; object ``k`` is
     drawn at ``R_k x + t_k`` (``params`` gets the 12 pose columns ``P_R``, ``P_T`` of
-    :mod:`tracer.march`, and the box is the union of the posed, grown object boxes).
+    :mod:`tracer.rendering.march`, and the box is the union of the posed, grown object boxes).
     """
     trees = [o.field.tree for o in scene.objects]
     params = np.empty((len(scene.objects), march.P_COLUMNS))
@@ -222,7 +222,7 @@ def scene_arrays(scene, transforms=None):
 
 def object_level(obj, mode):
     """The offset ``c`` an object's surface is drawn at (``d - c = 0`` exact, ``d_hat - c = 0``
-    smooth; :meth:`tracer.scene.SceneObject.level`), checked: finite and ``>= 0``."""
+    smooth; :meth:`tracer.scenes.scene.SceneObject.level`), checked: finite and ``>= 0``."""
     c = float(obj.level(mode))
     if not (math.isfinite(c) and c >= 0.0):
         raise ValueError(f"{obj.name}: offset must be a finite number >= 0, got {c}")
@@ -253,9 +253,9 @@ def _posed(scene, transforms, params, grow):
 
 
 def kernel_roots(roots, params, mode, tol):
-    """The ``roots`` argument for :mod:`tracer.march`: one unposed object in smooth mode
+    """The ``roots`` argument for :mod:`tracer.rendering.march`: one unposed object in smooth mode
     without tolerance pruning (``tol`` 0) is passed as its root node (an int), which selects
-    the kernels' lean path (:func:`tracer.march.scene_distance`; same values, far less code
+    the kernels' lean path (:func:`tracer.rendering.march.scene_distance`; same values, far less code
     to compile); anything else as the ``(k,)`` array."""
     if (mode == march.MODE_SMOOTH and roots.size == 1 and params.shape[1] == march.P_COLUMNS
             and not tol > 0.0):
@@ -264,7 +264,7 @@ def kernel_roots(roots, params, mode, tol):
 
 
 def camera_of(scene):
-    """The scene's :class:`~tracer.camera.Camera` (validated)."""
+    """The scene's :class:`~tracer.rendering.camera.Camera` (validated)."""
     return look_at(scene.camera_origin, scene.camera_dest, scene.camera_up, scene.width,
                    scene.height)
 
@@ -293,7 +293,7 @@ def _samples(value):
 
 
 def _progress_callback(progress, scene):
-    """``render``'s ``progress`` argument as a callable or None (see :func:`tracer.render.render`)."""
+    """``render``'s ``progress`` argument as a callable or None (see :func:`tracer.render`)."""
     if progress is None or progress is False:
         return None
     if progress is True:

@@ -1,9 +1,9 @@
 """Pixels from samples: anti-aliasing, adaptive refinement, shading of every sample, alpha.
 
 A render first traces one ray per pixel, through the pixel's own position (the tile kernels of
-:mod:`tracer.march`); those *centre samples* give the depth, normals and hit mask of a
-:class:`~tracer.frame.RenderResult`. With ``samples = N > 1`` every pixel gets ``N - 1`` more
-rays (:func:`tracer.march.trace_samples`) at the offsets of :func:`sample_offsets`: a
+:mod:`tracer.rendering.march`); those *centre samples* give the depth, normals and hit mask of a
+:class:`~tracer.rendering.frame.RenderResult`. With ``samples = N > 1`` every pixel gets ``N - 1`` more
+rays (:func:`tracer.rendering.march.trace_samples`) at the offsets of :func:`sample_offsets`: a
 low-discrepancy (R2) sequence warped so that the offsets are distributed like a tent filter of
 radius one pixel. Every sample then carries the same weight and the pixel is their mean, which
 is the tent-filtered image (filter importance sampling); sample 0 is the centre.
@@ -16,11 +16,11 @@ object, another object, nothing), get :data:`ADAPTIVE_SECOND` (8); those whose 8
 different things get all ``N``. Elsewhere one sample is enough. The samples of a pixel are
 traced together between two cone passes over its 3 x 3 block, one from the camera and one back
 from beyond the box, which bound where any of them can meet the surface
-(:func:`tracer.march.trace_samples`, done once per pixel), with over-relaxed steps
+(:func:`tracer.rendering.march.trace_samples`, done once per pixel), with over-relaxed steps
 (:data:`SAMPLE_OMEGA`), Newton steps down to a grazing cosine of :data:`SAMPLE_NEWTON_COS`
 and the scene's hit threshold (:data:`EPS_PX`).
 
-Every sample is shaded (:mod:`tracer.shading`, or :mod:`tracer.lighting` for ``"lit"``) and
+Every sample is shaded (:mod:`tracer.rendering.shading`, or :mod:`tracer.rendering.lighting` for ``"lit"``) and
 averaged with its coverage: lit colours in linear light (encoded to sRGB at the end), the
 other shadings in display values, as they were defined. The alpha of a pixel is the fraction of
 its samples that hit the surface (or, transparent with a ground, the ground's shadow: a shadow
@@ -43,13 +43,13 @@ render's own.
 import numpy as np
 
 from smoothdist.schedule import parallel_tasks
-from tracer import lighting as _lighting
-from tracer import march
-from tracer.camera import box_corners, primary_rays
-from tracer.frame import MAX_SAMPLES  # noqa: F401  (the film's limit; defined in frame)
-from tracer.shading import (load_matcap, shade_headlight, shade_matcap, shade_normals,
+from tracer.rendering import lighting as _lighting
+from tracer.rendering import march
+from tracer.rendering.camera import box_corners, primary_rays
+from tracer.rendering.frame import MAX_SAMPLES  # noqa: F401  (the film's limit; defined in frame)
+from tracer.rendering.shading import (load_matcap, shade_headlight, shade_matcap, shade_normals,
                             view_normals)
-from tracer.threads import in_bands, run_tasks
+from tracer.rendering.threads import in_bands, run_tasks
 
 __all__ = ["sample_offsets", "form_image", "MAX_SAMPLES", "ADAPTIVE_FIRST", "ADAPTIVE_SECOND"]
 
@@ -68,23 +68,23 @@ COLOR_CONTRAST = 0.08
 #: samples of a pixel that spread by more than this (display values, any channel) disagree
 SAMPLE_SPREAD = 0.02
 
-#: hit threshold of the extra samples, in pixels (see :func:`tracer.march.trace_samples`).
+#: hit threshold of the extra samples, in pixels (see :func:`tracer.rendering.march.trace_samples`).
 #: 0: the scene's eps, unbiased coverage. Measured on the 512^2 lit bunny, adaptive 16: 0.1
 #: pixel saves 10 % of the time (0.25: 22 %) but fattens silhouettes (coverage +0.036 on
 #: edge pixels at 0.1), so it is off
 EPS_PX = 0.0
-#: cap of the extra samples' over-relaxed sphere-tracing steps (:func:`tracer.march.march_ray`:
+#: cap of the extra samples' over-relaxed sphere-tracing steps (:func:`tracer.rendering.march.march_ray`:
 #: steps lengthened by the slope of the distance along the ray, each one checked). Silhouette
 #: samples graze the surface and then leave it, where plain steps grow slowly. Measured on
 #: the 512^2 lit bunny, adaptive 16: the samples' distance queries (with the cone passes)
 #: 1.07 M with the fixed factor 1.6 of before (which fell back to 1 for good after its first
 #: failed step); with the slope rule at ``OMEGA_SAFETY`` 0.9, 809 k capped at 2 or at 3 (at
 #: 0.8: 842 k capped at 1.6, 828 k at 3). Camera rays take the same rule
-#: (:data:`tracer.march.OMEGA`, also 2)
+#: (:data:`tracer.rendering.march.OMEGA`, also 2)
 SAMPLE_OMEGA = 2.0
 
-#: the extra samples take Newton steps (:func:`tracer.march.march_ray`) unless
-#: ``-(g . dir) < SAMPLE_NEWTON_COS |g|`` (camera rays: :data:`tracer.march.NEWTON_COS`, 0.2).
+#: the extra samples take Newton steps (:func:`tracer.rendering.march.march_ray`) unless
+#: ``-(g . dir) < SAMPLE_NEWTON_COS |g|`` (camera rays: :data:`tracer.rendering.march.NEWTON_COS`, 0.2).
 #: Silhouette samples graze the surface, where sphere steps converge slowly. Measured on the
 #: 512^2 lit bunny, adaptive 16 (before the middle stage): 0.2 -> 27.3 queries per extra ray
 #: (30 on hits, 22 on misses), 0.05 -> 22.0, 0.02 -> 19.8 (12 on hits), 0.005 -> 19.4; 18.0 ->
@@ -121,7 +121,7 @@ class _Shader:
         self.scene = scene
         self.camera = camera
         self.arrays = arrays
-        self.kargs = kargs                  # tracer.frame.RayArgs: the render's own queries
+        self.kargs = kargs                  # tracer.rendering.frame.RayArgs: the render's own queries
         self.lit = scene.shading == "lit"
         self.transparent = bool(getattr(scene, "transparent", False))
         self.nobj = len(scene.objects)
@@ -170,9 +170,12 @@ class _Shader:
                              depth_max, out, parallel_tasks(len(P)))
         return out
 
-    def light_at(self, P, N, shadows=True, ao=True):
+    def light_at(self, P, N, shadows=True, ao=True, ground=False):
         """Shadow and occlusion at points with normals (the kernel, batched); ``shadows`` /
-        ``ao`` False: that factor is not computed (returned as 1)."""
+        ``ao`` False: that factor is not computed (returned as 1). ``ground``: the points are
+        on the ground, whose shadow rays judge the light from their start (the surface above
+        is an occluder there, not the start's own relief: marched through, it left the ground
+        lit under a point cloud's base)."""
         n = len(P)
         do_shadow = bool(shadows and self.light.shadows)
         do_ao = bool(ao and self.light.ao)
@@ -192,10 +195,12 @@ class _Shader:
         k = 1.0 / self.light.penumbra
         delta = self.light.ao_distance * self.diag / _lighting.AO_SAMPLES
         t_min = max(2.0 * eps, _lighting.SHADOW_START * self.diag)
+        t_judge = t_min if ground else _lighting.SHADOW_JUDGE * t_min
         ntasks = parallel_tasks(n)
         run_tasks(lambda a, b: _lighting.light_tasks(
             tree, roots, params, mode, tol, P, N, self.key, lo, hi, eps, depth_max, k, delta,
-            do_shadow, do_ao, self.slack, t_min, shadow, ao, work, ntasks, a, b), ntasks)
+            do_shadow, do_ao, self.slack, t_min, t_judge, shadow, ao, work, ntasks, a, b),
+            ntasks)
         self.queries += int(work[:, 0].sum())
         self.leaves += int(work[:, 1].sum())
         return shadow, ao
@@ -227,7 +232,7 @@ class _Shader:
         record of what each sample saw (for reuse by later samples of the same pixel).
 
         ``objs (n,)``: the object each hit shows, as the march found it at the hit
-        (:func:`tracer.march.march_ray`); None: found here (:meth:`objects_at`).
+        (:func:`tracer.rendering.march.march_ray`); None: found here (:meth:`objects_at`).
 
         ``grid = (H, W)``: the samples are an image's centre samples, whose light is computed
         at every LIGHT_STRIDE-th pixel of every LIGHT_STRIDE-th row and filled in between
@@ -267,13 +272,13 @@ class _Shader:
         depth = np.where(hit, t, np.linalg.norm(G - self.origin, axis=1))
 
         def light(idx, shadows=True, occlusion=True):
-            if idx.size:
-                pts = np.where(hit[idx, None], P[idx], G[idx])
-                s_i, a_i = self.light_at(pts, facing[idx], shadows, occlusion)
-                if shadows:
-                    shadow[idx] = s_i
-                if occlusion:
-                    ao[idx] = a_i
+            for part, pts, ground in ((idx[hit[idx]], P, False), (idx[~hit[idx]], G, True)):
+                if part.size:
+                    s_i, a_i = self.light_at(pts[part], facing[part], shadows, occlusion, ground)
+                    if shadows:
+                        shadow[part] = s_i
+                    if occlusion:
+                        ao[part] = a_i
 
         if grid is not None and LIGHT_STRIDE > 1:
             H, W = grid
@@ -282,7 +287,7 @@ class _Shader:
             light(np.flatnonzero(coarse))
             key = np.where(hit, obj_all, np.where(on_ground, -2, -1))
             got_s, got_a = _fill_light((H, W), fresh & ~coarse, coarse, key, depth, facing,
-                                       shadow, ao)
+                                       shadow, ao, facing @ self.key > 0.0)
             rest = fresh & ~coarse
             light(np.flatnonzero(rest & ~got_s & ~got_a))
             light(np.flatnonzero(rest & ~got_s & got_a), occlusion=False)
@@ -334,7 +339,7 @@ FADE = 0.9
 GROUND_MIN_FADE = 0.01
 
 
-def _fill_light(shape, want, coarse, key, depth, normals, shadow, ao):
+def _fill_light(shape, want, coarse, key, depth, normals, shadow, ao, lit_side=None):
     """Shadow and occlusion of the pixels ``want`` from the coarse pixels around them.
 
     Each wanted pixel takes the bilinear-weighted mean of the (up to four) surrounding coarse
@@ -342,9 +347,13 @@ def _fill_light(shape, want, coarse, key, depth, normals, shadow, ao):
     normal within ``acos(FILL_COS)`` of its own, for its shadow where those neighbours'
     shadows differ by at most :data:`FILL_SHADOW`, and for its occlusion where their
     occlusions do (each factor on its own: a shadow edge over an open floor still takes its
-    occlusion from the neighbours). Pixels without such a neighbour, or where the neighbours
-    disagree, are left out to be lit on their own. Edits ``shadow`` and ``ao`` in place;
-    returns the masks ``(shadow filled, occlusion filled)``."""
+    occlusion from the neighbours). ``lit_side (n,) bool``: the normal faces the key light;
+    a coarse pixel fills a pixel's shadow only from the same side of that terminator (facing
+    away, the kernel sets the shadow to 0 without tracing a ray: that 0 is no measurement of
+    the light on the other side, and filled in there it drew dark specks on the last pixels
+    that face the light). Pixels without such a neighbour, or where the neighbours disagree,
+    are left out to be lit on their own. Edits ``shadow`` and ``ao`` in place; returns the
+    masks ``(shadow filled, occlusion filled)``."""
     H, W = shape
     s = LIGHT_STRIDE
     idx = np.flatnonzero(want)
@@ -364,6 +373,7 @@ def _fill_light(shape, want, coarse, key, depth, normals, shadow, ao):
         acc_s = np.zeros(i.size)
         acc_a = np.zeros(i.size)
         acc_w = np.zeros(i.size)
+        acc_ws = np.zeros(i.size)
         s_lo = np.full(i.size, np.inf)
         s_hi = np.full(i.size, -np.inf)
         a_lo = np.full(i.size, np.inf)
@@ -377,18 +387,21 @@ def _fill_light(shape, want, coarse, key, depth, normals, shadow, ao):
             ok &= np.abs(depth[j] - depth[i]) <= FILL_DEPTH * depth[i]
             ok &= (normals[j] * normals[i]).sum(axis=1) >= FILL_COS
             wt = np.where(ok, w, 0.0)
-            acc_s += wt * src_s[j]
+            ok_s = ok if lit_side is None else ok & (lit_side[j] == lit_side[i])
+            wt_s = np.where(ok_s, w, 0.0)
+            acc_s += wt_s * src_s[j]
             acc_a += wt * src_a[j]
             acc_w += wt
-            s_lo = np.where(ok, np.minimum(s_lo, src_s[j]), s_lo)
-            s_hi = np.where(ok, np.maximum(s_hi, src_s[j]), s_hi)
+            acc_ws += wt_s
+            s_lo = np.where(ok_s, np.minimum(s_lo, src_s[j]), s_lo)
+            s_hi = np.where(ok_s, np.maximum(s_hi, src_s[j]), s_hi)
             a_lo = np.where(ok, np.minimum(a_lo, src_a[j]), a_lo)
             a_hi = np.where(ok, np.maximum(a_hi, src_a[j]), a_hi)
         # across a shadow's edge, or where the occlusion changes fast, the neighbours
         # disagree: no interpolation of that factor there
-        good_s = (acc_w > 0) & (s_hi - s_lo <= FILL_SHADOW)
+        good_s = (acc_ws > 0) & (s_hi - s_lo <= FILL_SHADOW)
         good_a = (acc_w > 0) & (a_hi - a_lo <= FILL_SHADOW)
-        shadow[i[good_s]] = acc_s[good_s] / acc_w[good_s]
+        shadow[i[good_s]] = acc_s[good_s] / acc_ws[good_s]
         ao[i[good_a]] = acc_a[good_a] / acc_w[good_a]
         got_s[i[good_s]] = True
         got_a[i[good_a]] = True
@@ -481,7 +494,7 @@ def _trace(kargs, depth_max, options, pixels, W, offsets, bounds=None, eps_px=EP
     """The samples ``offsets (K, 2)`` of the pixels ``pixels (m,)`` (flat indices), flattened
     pixel-major: ``hit, t, grad, steps, objs`` of length ``m K``. ``bounds = (t_lo, t_hi)``, each
     ``(m,)``: the pixels' cone bounds, read where finite, written where not (NaN). ``eps_px``:
-    the rays' hit threshold in pixels (:func:`tracer.march.trace_samples`)."""
+    the rays' hit threshold in pixels (:func:`tracer.rendering.march.trace_samples`)."""
     tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps = kargs
     relax, omega, cone, newton = options
     omega = max(omega, SAMPLE_OMEGA)
@@ -522,7 +535,7 @@ _ANY_DISTANCE = 1e300
 
 
 def _shading_args(kargs):
-    """``kargs`` (:class:`tracer.frame.RayArgs`) with the Barnes-Hut beta of every object
+    """``kargs`` (:class:`tracer.rendering.frame.RayArgs`) with the Barnes-Hut beta of every object
     lowered to :data:`BETA_SHADE` (a copy of ``params``), or None where that changes nothing
     (exact-offset mode, or every beta already that low)."""
     params = kargs.params
@@ -539,7 +552,7 @@ def _shading_normals(skargs, depth_max, options, pixels, W, offsets, hit, t, gra
     pixel-major over ``pixels (m,)`` x ``offsets (K, 2)``, as :func:`_trace` returns them.
     The hit points ``t`` stay those of the render's own field (its silhouettes, its light).
 
-    The samples' own kernel (:func:`tracer.march.sample_tasks`, compiled already) does it:
+    The samples' own kernel (:func:`tracer.rendering.march.sample_tasks`, compiled already) does it:
     each ray marches from its hit ``t`` to ``t`` with a hit threshold that any distance
     meets, so it stops at its first evaluation, and returns the gradient there. Returns the
     distance evaluations made (one per hit; two where ``tol > 0`` loosens the first)."""
@@ -651,8 +664,8 @@ def form_image(scene, camera, arrays, kargs, options, centre, samples=1, adaptiv
     """Shade the centre samples, add ``samples - 1`` more per pixel (all pixels, or the
     adaptive selection), and average.
 
-    ``kargs``: :class:`tracer.frame.RayArgs`, the march kernels' leading arguments;
-    ``options``: :class:`tracer.frame.TraceOptions`; ``centre = (hit (H, W), t (H, W), grad
+    ``kargs``: :class:`tracer.rendering.frame.RayArgs`, the march kernels' leading arguments;
+    ``options``: :class:`tracer.rendering.frame.TraceOptions`; ``centre = (hit (H, W), t (H, W), grad
     (H, W, 3), objs (H, W))`` (``objs``: the object each hit shows, as the march found it). Returns
     ``(rgb (H, W, 3) uint8, alpha (H, W) float32, spp (H, W) int32, info dict)``; ``info``
     holds the centre samples' ``shadow``, ``ao``, ``object`` and ``ground`` maps (lit only)
@@ -763,8 +776,8 @@ def form_image(scene, camera, arrays, kargs, options, centre, samples=1, adaptiv
 
 def _dir(cam, rows, cols):
     """Unit ray directions through fractional image positions (vectorised
-    :func:`tracer.camera.ray_direction`)."""
-    from tracer.camera import _scales
+    :func:`tracer.rendering.camera.ray_direction`)."""
+    from tracer.rendering.camera import _scales
 
     width, height = cam[12], cam[13]
     sx, sy = _scales(width, height)

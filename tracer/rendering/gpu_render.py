@@ -1,10 +1,10 @@
 """Sphere tracing on an NVIDIA GPU: ``tracer.render(scene, device="cuda")``.
 
-One GPU thread marches one pixel's ray with :func:`tracer.march.march_ray`, the CPU's own
+One GPU thread marches one pixel's ray with :func:`tracer.rendering.march.march_ray`, the CPU's own
 kernel (numba-cuda compiles it, the scene distance and the smoothdist kernels below it as CUDA
 device functions from the same Python source; see :mod:`smoothdist.cuda`), with a fixed-size
 local traversal stack, and colours the pixel by its normal (:func:`normal_colour`, the
-``"normals"`` shading of :func:`tracer.shading.shade_normals`). The ``"matcap"`` and
+``"normals"`` shading of :func:`tracer.rendering.shading.shade_normals`). The ``"matcap"`` and
 ``"headlight"`` shadings are applied on the host to the normals that come back.
 
 What differs from the CPU path: no cone pass (the CPU's tiles of ``TILE x TILE`` rays share one
@@ -22,8 +22,8 @@ import numpy as np
 
 from smoothdist import cuda as sdcuda
 from smoothdist.kernels import NJIT
-from tracer import march
-from tracer.camera import ray_direction
+from tracer.rendering import march
+from tracer.rendering.camera import ray_direction
 
 __all__ = ["render_cuda", "normal_colour", "BLOCK"]
 
@@ -40,7 +40,7 @@ _KERNELS = {}
 
 @numba.njit(**NJIT)
 def _channel(v):
-    """``127 v + 128`` clipped to 0..255 and truncated, as :func:`tracer.shading.shade_normals`."""
+    """``127 v + 128`` clipped to 0..255 and truncated, as :func:`tracer.rendering.shading.shade_normals`."""
     x = 127.0 * v + 128.0
     if x < 0.0:
         x = 0.0
@@ -53,7 +53,7 @@ def _channel(v):
 def normal_colour(gx, gy, gz, cam):
     """The ``"normals"`` colour ``(r, g, b)`` of a hit with distance gradient ``g``: the unit
     gradient in the camera frame ``(g . horizontal, g . vertical, -g . forward)``
-    (:func:`tracer.shading.view_normals`), ``127 n + 128`` per channel, truncated; a zero or
+    (:func:`tracer.rendering.shading.view_normals`), ``127 n + 128`` per channel, truncated; a zero or
     non-finite gradient gives the zero normal."""
     n = math.sqrt(gx * gx + gy * gy + gz * gz)
     ux = 0.0
@@ -127,7 +127,7 @@ def prepare(scene, transforms=None, relax=None, omega=None, newton=None):
     kernel's leading arguments (up to ``newton``) and ``shape = (H, W)``. Checks the camera
     as ``render`` does."""
     from tracer.errors import RenderError
-    from tracer.frame import camera_of, distance_at_camera, scene_arrays
+    from tracer.rendering.frame import camera_of, distance_at_camera, scene_arrays
 
     cu = sdcuda.cuda_module()
     kernel()
@@ -142,8 +142,8 @@ def prepare(scene, transforms=None, relax=None, omega=None, newton=None):
                           "camera.origin outside or lower alpha's blur")
     on = (lambda a: a) if sdcuda.simulated() else cu.to_device
     bg = tuple(int(v) for v in scene.background)
-    # roots as the (k,) array: the general path of tracer.march.scene_distance (the same values
-    # as the lean one that tracer.render.kernel_roots picks for the CPU with an int root)
+    # roots as the (k,) array: the general path of tracer.rendering.march.scene_distance (the same values
+    # as the lean one that tracer.rendering.renderer.kernel_roots picks for the CPU with an int root)
     data = (sdcuda.device_tree(tree), on(np.ascontiguousarray(roots, np.int64)), on(params),
             on(camera.as_array()), on(np.asarray(lo, np.float64)),
             on(np.asarray(hi, np.float64)), bg)
@@ -171,10 +171,10 @@ def launch(args, shape):
 
 def render_cuda(scene, *, progress=None, transforms=None, relax=None, omega=None, newton=None,
                 samples=None, adaptive=None):
-    """:func:`tracer.render.render` on the GPU (its arguments; ``cone`` and ``band_rows`` do
-    not apply). Returns a :class:`tracer.frame.RenderResult`; ``seconds`` is the time of
+    """:func:`tracer.render` on the GPU (its arguments; ``cone`` and ``band_rows`` do
+    not apply). Returns a :class:`tracer.rendering.frame.RenderResult`; ``seconds`` is the time of
     the launch and the copies back."""
-    from tracer.frame import RenderResult, _progress_callback, _samples, shade
+    from tracer.rendering.frame import RenderResult, _progress_callback, _samples, shade
 
     samples = _samples(scene.samples if samples is None else samples)
     check_scene(scene, samples)

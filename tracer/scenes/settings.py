@@ -1,16 +1,16 @@
 """A scene's settings and their defaults, written once.
 
 Every option of a render is a field of one of the frozen dataclasses below (plus the
-existing :class:`~tracer.lighting.Lighting`); its default is the field's default and its
+existing :class:`~tracer.rendering.lighting.Lighting`); its default is the field's default and its
 one-line meaning the field's ``help``. The entry points read their defaults from here:
 
-* the scene file loader (:func:`tracer.scene.load_scene`, its keys ``_TOP_KEYS``) and the
-  :class:`~tracer.scene.Scene` dataclass: ``defaults("file")``;
-* :func:`tracer.scene.scene_from_field`, the research API over a built field:
+* the scene file loader (:func:`tracer.scenes.scene.load_scene`, its keys ``_TOP_KEYS``) and the
+  :class:`~tracer.scenes.scene.Scene` dataclass: ``defaults("file")``;
+* :func:`tracer.scenes.scene.scene_from_field`, the research API over a built field:
   ``defaults("api")``;
 * :func:`tracer.render_mesh`, :func:`tracer.mesh_scene` and ``tracer render MESH``:
   ``defaults("mesh")``;
-* the JSON Schema ``tracer/scene.schema.json`` and the command line's help text are checked
+* the JSON Schema ``tracer/scenes/scene.schema.json`` and the command line's help text are checked
   against this table by ``tests/test_settings.py``.
 
 Where an entry point deliberately differs, the field says so (``api=`` / ``mesh=``) and
@@ -35,8 +35,8 @@ import dataclasses
 from dataclasses import dataclass
 
 from smoothdist.kernels import DEFAULT_TOL
-from tracer.lighting import Lighting
-from tracer.march import NEWTON
+from tracer.rendering.lighting import Lighting
+from tracer.rendering.march import NEWTON
 
 __all__ = ["Camera", "March", "Film", "Surface", "GROUPS", "ENTRIES", "Row", "table",
            "defaults", "default_text", "REQUIRED", "SCENE_KEYS"]
@@ -117,7 +117,7 @@ class Film:
                             "colours (golden images); a user's mesh gets a lit picture")
     matcap: str = _opt("", "matcap image (PNG) for the matcap shading; \"\" for none")
     lighting: Lighting = _opt(Lighting(), "settings of the lit shading "
-                              "(tracer.lighting.Lighting)")
+                              "(tracer.rendering.lighting.Lighting)")
 
 
 @dataclass(frozen=True)

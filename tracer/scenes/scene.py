@@ -14,8 +14,8 @@ object; smooth mode ``d_hat = offset``, default 0), ``shading`` (``"normals"``,
 ``gradient`` (``"metric"`` or ``"exact"``), ``description``, ``tol`` (tolerance-controlled
 pruning, a number >= 0, default 0 = off; see ``smoothdist.query.smooth_distance_point_tol``),
 ``newton`` (smooth mode: Newton steps along the ray once the distance is below ``newton x eps``,
-a number >= 0, default ``tracer.march.NEWTON``; 0 = plain sphere tracing; see
-``tracer.march.march_ray``).
+a number >= 0, default ``tracer.rendering.march.NEWTON``; 0 = plain sphere tracing; see
+``tracer.rendering.march.march_ray``).
 Per object: ``beta``, ``offset``,
 ``bvh_type`` may also be ``"mixed"`` (keep all primitives of the file), and instead of ``path``
 an object may list ``parts``: ``[{"path": ..., "bvh_type": ..., "scale": s,
@@ -28,7 +28,7 @@ set ``d_hat = C`` about 0.75 mean edge lengths out, without dimples; issue 35).
 Several objects are combined by LogSumExp with the largest alpha (paper Sec. 3.6).
 
 The complete reference (every key: type, default, example) is the JSON Schema
-``tracer/scene.schema.json``, rendered as ``docs/scene-format.md``; a test keeps both equal to
+``tracer/scenes/scene.schema.json``, rendered as ``docs/scene-format.md``; a test keeps both equal to
 what this loader accepts.
 
 Relative paths resolve against the scene file's folder.
@@ -48,9 +48,9 @@ import numpy as np
 
 import smoothdist
 from smoothdist import DataMesh, SmoothDistanceField
-from tracer.film import MAX_SAMPLES
-from tracer.lighting import Lighting
-from tracer.settings import SCENE_KEYS, Film, March, defaults
+from tracer.rendering.film import MAX_SAMPLES
+from tracer.rendering.lighting import Lighting
+from tracer.scenes.settings import SCENE_KEYS, Film, March, defaults
 from tracer.validate import (SceneError, check_keys, choice, file_error, number, read_json,
                              resolve_path, show, vec3)
 
@@ -62,9 +62,9 @@ BVH_TYPES = {"faces": "triangles", "triangles": "triangles", "edges": "edges",
 SHADINGS = ("normals", "matcap", "headlight", "lit")
 MODES = ("smooth", "exact")
 
-#: defaults of scene files and of ``Scene`` (:mod:`tracer.settings`)
+#: defaults of scene files and of ``Scene`` (:mod:`tracer.scenes.settings`)
 _FILE = defaults("file")
-#: defaults of :func:`scene_from_field` (:mod:`tracer.settings`)
+#: defaults of :func:`scene_from_field` (:mod:`tracer.scenes.settings`)
 _API = defaults("api")
 #: the scene file's top-level keys: the settings table's, and the file's own
 _TOP_KEYS = set(SCENE_KEYS) | {"camera", "objects", "description", "name"}
@@ -135,12 +135,12 @@ class Scene:
 
     @property
     def march(self):
-        """The tracer's settings as a frozen :class:`tracer.settings.March`."""
+        """The tracer's settings as a frozen :class:`tracer.scenes.settings.March`."""
         return March(**{f.name: getattr(self, f.name) for f in fields(March)})
 
     @property
     def film(self):
-        """The image's settings as a frozen :class:`tracer.settings.Film`."""
+        """The image's settings as a frozen :class:`tracer.scenes.settings.Film`."""
         return Film(**{f.name: getattr(self, f.name) for f in fields(Film)})
 
     @property
@@ -191,7 +191,7 @@ def load_scene(path, overrides=None):
         object; a number or "auto"), ``alpha_u`` (first object's ``max_alpha``; a number or
         "auto"), ``mode``, ``eps``, ``shading``, ``offset``, ``tol``, ``newton``,
         ``samples``, ``adaptive``, ``transparent`` and ``lighting`` (a dict of
-        :class:`~tracer.lighting.Lighting` fields).
+        :class:`~tracer.rendering.lighting.Lighting` fields).
 
     Raises
     ------
@@ -255,7 +255,7 @@ def load_scene(path, overrides=None):
         if key in data and not isinstance(data[key], str):
             raise file_error(path, key, f"must be a string, got {show(data[key])}")
     # the camera, before any mesh is loaded
-    from tracer.camera import look_at
+    from tracer.rendering.camera import look_at
 
     try:
         look_at(origin, dest, up, width, height)
@@ -321,7 +321,7 @@ def color(value, path, where):
 
 
 def _lighting(ld, override, path):
-    """The ``lighting`` object as :class:`~tracer.lighting.Lighting` (``override``: a dict of
+    """The ``lighting`` object as :class:`~tracer.rendering.lighting.Lighting` (``override``: a dict of
     already-checked values from the command line, applied on top)."""
     check_keys(ld, _LIGHTING_KEYS, path, "lighting")
     kw = {}
@@ -514,13 +514,13 @@ def scene_from_field(field, *, alpha, alpha_u=_API["alpha_u"], beta=_API["beta"]
         As in the scene file; ``"auto"`` is ``field.auto_alpha()``.
     alpha_u : float, "auto", "off" or None
         As ``max_alpha`` in the scene file; ``"auto"`` is ``field.auto_alpha_u(alpha)`` (no
-        ribbing); ``"off"`` (the default here, unlike scene files: see :mod:`tracer.settings`)
+        ribbing); ``"off"`` (the default here, unlike scene files: see :mod:`tracer.scenes.settings`)
         or None is ``alpha``, i.e. no attenuation.
     beta : float
         Barnes-Hut parameter.
     camera : (origin, dest, up), or a view name, optional
-        Three 3-vectors, or a key of :data:`tracer.camera.VIEWS` (``"front"``, ``"iso"``,
-        ...) to frame the whole surface (:func:`tracer.camera.frame_points`: the data's
+        Three 3-vectors, or a key of :data:`tracer.rendering.camera.VIEWS` (``"front"``, ``"iso"``,
+        ...) to frame the whole surface (:func:`tracer.rendering.camera.frame_points`: the data's
         vertices grown by the inflation bound, which contains the surface). Default: the
         paper's beta-study camera (bbox centre + 2 x the
         largest extent along +z, looking at the centre, up +y), which may crop a blurry
@@ -534,16 +534,16 @@ def scene_from_field(field, *, alpha, alpha_u=_API["alpha_u"], beta=_API["beta"]
         Tolerance-controlled pruning (>= 0; 0 = off), as the scene key ``tol``.
     newton : float, optional
         Smooth mode: Newton steps once the distance is below ``newton x eps`` (>= 0; 0 =
-        plain sphere tracing; default ``tracer.march.NEWTON``), as the scene key ``newton``.
+        plain sphere tracing; default ``tracer.rendering.march.NEWTON``), as the scene key ``newton``.
     up : {"x", "y", "z"}
-        The data's up axis, for a view name ``camera`` (:func:`tracer.camera.view_vectors`).
+        The data's up axis, for a view name ``camera`` (:func:`tracer.rendering.camera.view_vectors`).
     samples : int
-        Anti-aliasing samples per pixel (1 to ``tracer.film.MAX_SAMPLES``), as the scene key.
+        Anti-aliasing samples per pixel (1 to ``tracer.rendering.film.MAX_SAMPLES``), as the scene key.
     adaptive : bool
-        Extra samples only where neighbouring pixels disagree (:mod:`tracer.film`).
+        Extra samples only where neighbouring pixels disagree (:mod:`tracer.rendering.film`).
     transparent : bool
         Leave the background transparent: RGBA PNGs whose alpha is the coverage.
-    lighting : tracer.lighting.Lighting or dict, optional
+    lighting : tracer.rendering.lighting.Lighting or dict, optional
         Settings of the ``"lit"`` shading (a dict of its fields; default ``Lighting()``).
     color : (3,) int, optional
         Base colour of the object in the ``"lit"`` shading, sRGB 0-255.
@@ -564,7 +564,7 @@ def scene_from_field(field, *, alpha, alpha_u=_API["alpha_u"], beta=_API["beta"]
     if max_steps > MAX_STEPS:
         raise ValueError(f"max_steps must be at most {MAX_STEPS}, got {max_steps}")
     width, height, samples = _api_film(width, height, samples)
-    from tracer.lighting import _check_color
+    from tracer.rendering.lighting import _check_color
 
     lighting = _api_lighting(lighting)
     if color is not None:
@@ -623,7 +623,7 @@ def _api_film(width, height, samples):
 
 def _api_lighting(lighting):
     """``lighting`` of :func:`scene_from_field` (None, a dict of fields or a
-    :class:`~tracer.lighting.Lighting`) as a ``Lighting``."""
+    :class:`~tracer.rendering.lighting.Lighting`) as a ``Lighting``."""
     if lighting is None:
         return Lighting()
     if isinstance(lighting, dict):
@@ -633,7 +633,7 @@ def _api_lighting(lighting):
                              f"(allowed: {', '.join(sorted(_LIGHTING_KEYS))})")
         return Lighting(**lighting)
     if not isinstance(lighting, Lighting):
-        raise ValueError(f"lighting must be a tracer.lighting.Lighting or a dict, got "
+        raise ValueError(f"lighting must be a tracer.rendering.lighting.Lighting or a dict, got "
                          f"{type(lighting).__name__}")
     return lighting
 
@@ -643,7 +643,7 @@ def _api_camera(field, camera, alpha, alpha_u, offset, eps, mode, width, height,
     name framing the surface, or None (the paper's beta-study camera); validated."""
     lo, hi = field.bounds
     if isinstance(camera, str):
-        from tracer.camera import frame_points
+        from tracer.rendering.camera import frame_points
 
         # the surface lies within its inflation bound plus its offset (exact mode: the
         # offset) of the data
@@ -663,7 +663,7 @@ def _api_camera(field, camera, alpha, alpha_u, offset, eps, mode, width, height,
     except (TypeError, ValueError):
         raise ValueError(f"camera must be (origin, dest, up), three 3-vectors; got {camera!r}") \
             from None
-    from tracer.camera import look_at
+    from tracer.rendering.camera import look_at
 
     look_at(origin, dest, up, width, height)  # validates the camera
     return origin, dest, up

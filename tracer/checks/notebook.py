@@ -1,6 +1,6 @@
 """Show renders and animations inline in Jupyter (and in the documentation's notebooks).
 
-A :class:`tracer.frame.RenderResult` shows itself (it has ``_repr_png_``). For motion,
+A :class:`tracer.rendering.frame.RenderResult` shows itself (it has ``_repr_png_``). For motion,
 :func:`show_animation` wraps a simulation's movie, a folder of frames or a list of images in an
 :class:`Animation`, which Jupyter displays as a looping ``<video>`` (MP4) or ``<img>`` (GIF)
 embedded in the notebook, so that the notebook stays viewable without the files beside it.
@@ -104,7 +104,7 @@ def show_animation(source, fps=25.0, width=None):
     source : str or path-like, or sequence
         An ``.mp4`` or ``.gif`` file (as ``tracer animate`` writes), a folder of PNG frames
         (played in name order), or a sequence of ``(H, W, 3)`` uint8 images or
-        :class:`~tracer.frame.RenderResult`\\ s.
+        :class:`~tracer.rendering.frame.RenderResult`\\ s.
     fps : float
         Frames per second when frames are given (ignored for a movie file).
     width : int, optional

@@ -6,7 +6,7 @@ a ``(k, P_COLUMNS)`` float64 parameter table ``params``, one row per object, the
 ``mode`` (``MODE_SMOOTH`` or ``MODE_EXACT``) and its ``tol``: one scalar for the whole
 scene, the tolerance-controlled pruning of every object (0 = off, the default
 ``smoothdist.kernels.DEFAULT_TOL``; see ``smoothdist.kernels.smooth_distance_point_tol``).
-The columns of ``params`` (built by ``tracer.frame.scene_arrays``; the kernels read them by
+The columns of ``params`` (built by ``tracer.rendering.frame.scene_arrays``; the kernels read them by
 these names only):
 
 =================== ======= =============================================================
@@ -51,7 +51,7 @@ from numba.extending import intrinsic, overload
 from smoothdist.closest_point import box_distance2
 from smoothdist.kernels import (NJIT, NJIT_PARALLEL, exact_distance_point, logsumexp_accumulate,
                                 smooth_distance_point, smooth_distance_point_tol)
-from tracer.camera import ray_direction
+from tracer.rendering.camera import ray_direction
 
 MODE_SMOOTH, MODE_EXACT = 0, 1
 #: columns of the per-object parameter table ``params`` (see the module docstring); numba
@@ -90,7 +90,7 @@ NEWTON_FAR = 0.01
 NEWTON_CAP = 4.0
 #: rays meeting the surface at a smaller cosine (relative to ``|g|``) keep sphere steps: a
 #: smaller value is faster but lets a Newton step cross a thin part in a one-sample image (the
-#: anti-aliasing samples use 0.02, ``tracer.film.SAMPLE_NEWTON_COS``; performance guide,
+#: anti-aliasing samples use 0.02, ``tracer.rendering.film.SAMPLE_NEWTON_COS``; performance guide,
 #: "Tuning constants")
 NEWTON_COS = 0.2
 #: seed each tile's rays with a conservative start depth from a cone march (cone_start)
@@ -124,7 +124,7 @@ def _root_of(roots):
 def _root_of_impl(roots):
     # numba-cuda does not prune the ``isinstance(roots, int)`` branch of scene_distance at
     # compile time (the CPU does), so the branch is typed with the (k,) array ``roots`` of the
-    # general path too (tracer/gpu_render.py): it must compile there, and is never taken
+    # general path too (tracer/rendering/gpu_render.py): it must compile there, and is never taken
     if isinstance(roots, nbtypes.Integer):
         return lambda roots: roots
     return lambda roots: roots[0]
@@ -144,7 +144,7 @@ def scene_distance(tree, roots, params, mode, tol, x, y, z, stack, dstack, slack
     ``_scene_distance_objects``), so that a ray's hit knows what it shows.
 
     ``roots`` may also be one root node, an int: one unposed object in smooth mode without
-    tolerance pruning (``tracer.render.kernel_roots``), the same value as the general path
+    tolerance pruning (``tracer.rendering.renderer.kernel_roots``), the same value as the general path
     with ``roots = [root]``. Numba then compiles only that branch (``isinstance`` is resolved
     at compile time), which is what keeps the first render of such a scene short.
     """
@@ -268,7 +268,7 @@ def _scene_distance_objects(tree, roots, params, mode, tol, x, y, z, stack, dsta
     smooth mode a bound past ``m + (SKIP_LOG + log k) / a`` (its term is below one unit in
     the last place of the sum). The last value returned is the object whose own distance is
     the smallest (the first of equals in visiting order; a skipped object cannot be it: its
-    bound is not below the minimum), what :func:`tracer.lighting.object_ids` computes."""
+    bound is not below the minimum), what :func:`tracer.rendering.lighting.object_ids` computes."""
     nobj = roots.size
     nodes = 0
     leaves = 0
@@ -877,7 +877,7 @@ def sample_tasks(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, ro
                  cone, newton, eps_px, newton_cos, ntasks, task0, task1):
     """Tasks ``task0 <= task < task1`` of :func:`trace_samples` (``ntasks`` of them; every
     argument is required here), serial and ``nogil``, for Python threads
-    (``tracer.threads.run_tasks``): the same values, and no ``prange`` to compile."""
+    (``tracer.rendering.threads.run_tasks``): the same values, and no ``prange`` to compile."""
     tree = _borrowed(tree)
     params = _borrowed(params)
     cam = _borrowed(cam)
@@ -967,7 +967,7 @@ def render_tiles(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, ro
     ``row0 <= r < row1``, in the calling thread (same arguments and outputs as
     ``render_rows``; ``relax, omega, cone, newton`` are required here).
 
-    Serial and ``nogil``: ``tracer.render`` runs it from a few Python threads that take
+    Serial and ``nogil``: ``tracer.rendering.renderer`` runs it from a few Python threads that take
     chunks of tiles as they finish (the tiles, hence the pixels, are exactly those of
     ``render_rows``). Without ``prange`` numba compiles the render in seconds less. The tree
     and parameters are passed down as borrowed views (``_borrowed``), as ``prange``

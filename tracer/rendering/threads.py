@@ -1,5 +1,5 @@
 """Python threads for a render's per-pixel work: the serial, GIL-free task kernels and numpy
-loops that release the GIL (:func:`~tracer.threads.run_tasks`, :func:`~tracer.threads.in_bands`), with numba's thread count."""
+loops that release the GIL (:func:`~tracer.rendering.threads.run_tasks`, :func:`~tracer.rendering.threads.in_bands`), with numba's thread count."""
 
 from smoothdist.kernels import PARALLEL
 from smoothdist.schedule import run_tasks as _run_tasks
@@ -26,8 +26,8 @@ def in_bands(fn, rows, threads=None):
 def run_tasks(fn, ntasks, threads=None):
     """Call ``fn(task0, task1)`` over tasks ``0 <= task < ntasks``, split into contiguous
     groups, one per thread (at most :func:`render_threads`), from Python threads: for the
-    serial, GIL-free task kernels (``tracer.march.sample_tasks``,
-    ``tracer.lighting.light_tasks``), whose tasks are independent, so the result does not
+    serial, GIL-free task kernels (``tracer.rendering.march.sample_tasks``,
+    ``tracer.rendering.lighting.light_tasks``), whose tasks are independent, so the result does not
     depend on the split (:func:`smoothdist.schedule.run_tasks`). Exceptions are re-raised
     here."""
     _run_tasks(fn, ntasks, threads or render_threads())
