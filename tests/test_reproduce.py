@@ -16,9 +16,9 @@ from tracer.reproduce.claims import evaluate
 from tracer.reproduce.experiments import TABLE3_PAPER
 
 REPO = Path(__file__).resolve().parents[1]
-RESULTS = REPO / "renders" / "reproduction" / "quick"
+RESULTS = REPO / "renders" / "reproduction" / "full"
 PAGE = REPO / "docs" / "reproduction.md"
-SHOWN = "renders/reproduction/quick"
+SHOWN = "renders/reproduction/full"
 
 
 # ------------------------------------------------------------------ independent checks
@@ -67,9 +67,10 @@ def disagreements(page_text, folder, shown=SHOWN):
     res = report.load_results(folder)
     # Table 3: the page's ms against table3.json, read here without the report's code
     if "table3" in res:
-        by_query = {q: n for n, (_, _, q, _, _) in TABLE3_PAPER.items()}
+        # two rows share a query (the bunny), so a row is its data and query together
+        by_pair = {(d, q): n for n, (_, d, q, _, _) in TABLE3_PAPER.items()}
         for cells in _table(page_text, "Table 3 as the paper states it"):
-            name = by_query.get(cells[1])
+            name = by_pair.get((cells[0], cells[1]))
             r = res["table3"]["rows"].get(name) if name else None
             if r is None:
                 continue
