@@ -51,6 +51,11 @@ nitpick_ignore_regex = [
 
 # ---------------------------------------------------------------------------- API reference
 autosummary_generate = True
+# The stubs are written anew on every build: a stub left from an earlier build names a module
+# that may have moved since (tracer's modules moved into rooms), and Sphinx reads every stub.
+import shutil  # noqa: E402
+
+shutil.rmtree(Path(__file__).resolve().parent / "api" / "generated", ignore_errors=True)
 templates_path = ["_templates"]
 autosummary_imported_members = False
 autodoc_default_options = {"members": True, "inherited-members": False}
