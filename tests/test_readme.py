@@ -158,6 +158,10 @@ NOT_RUN = {
     "python benchmarks/bench_gpu.py":
         "it needs an NVIDIA GPU; tests/test_cuda_sim.py runs its measurement functions under "
         "the simulator, and its refusal without a GPU",
+    "python -m tracer reproduce --only beta":
+        "it is the full reproduction's beta study at the paper's 512² (minutes); "
+        "tests/test_reproduce.py::test_smoke_run_end_to_end runs the same experiment at its "
+        "smallest, and python -m tracer ablate-beta, which it runs, is run from this page",
     "python -m tracer reproduce --report-only --docs":
         "it rewrites the result blocks of the repository's own guides; "
         "tests/test_reproduce.py checks the guides against the committed results with the "
