@@ -172,6 +172,8 @@ def beta(out, s, where):
         rs = sorted((r for r in rows if r["type"] == kind), key=lambda r: r["beta"])
         res["render_seconds"][kind] = {f"{r['beta']:g}": r["seconds"] for r in rs}
         res["error_rel_diag"][kind] = {f"{r['beta']:g}": r["error_rel_diag"] for r in rs}
+        res.setdefault("leaves_per_eval", {})[kind] = {
+            f"{r['beta']:g}": r["leaves_per_eval"] for r in rs if "leaves_per_eval" in r}
     res["threads"] = int(rows[0]["threads"]) if rows else None
     return res
 
