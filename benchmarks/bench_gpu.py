@@ -13,7 +13,9 @@ Measures, on an NVIDIA GPU through numba-cuda (``pip install "smoothdist[gpu]"``
 * image agreement: pixels whose hit differs, the largest depth difference over the common
   hits (as a fraction of the scene diagonal; two marches that stop within eps of the
   surface may differ by about ``2 eps / cos``, 8e-3 of the bunny's diagonal at eps 1e-3) and
-  the largest colour difference; for the grid the largest distance difference.
+  the largest colour difference; for the grid the largest distance difference;
+* the first GPU call of each case (compiling the kernel, or loading it from numba-cuda's
+  disk cache, plus copying the tree), as ``gpu_first_s``.
 
 It prints a markdown table (the card's name in its title) and writes the results as JSON
 (``--json``, default ``renders/gpu/bench_gpu.json``). Targets (issue 34): each 1080p frame
@@ -71,7 +73,7 @@ def best(fn, repeat):
     return t, out
 
 
-def bench_render(kind, size, eps, repeat):
+def bench_render(kind, size, eps, repeat, blocks=()):
     from tracer.rendering import gpu_render
     from tracer.rendering.renderer import render
     from tracer.scenes.scene import load_scene
@@ -82,21 +84,31 @@ def bench_render(kind, size, eps, repeat):
         over["eps"] = eps
     scene = load_scene(REPO / "scenes" / f"bunny_{kind}.json", over)
     cpu_s, cpu = best(lambda: render(scene), repeat)
-    # warm-up: compiles the kernel (or loads it from numba-cuda's cache)
+    # warm-up: compiles the kernel (or loads it from numba-cuda's cache); its time is kept
+    t0 = time.perf_counter()
     gpu = render(scene, device="cuda")
+    first_s = time.perf_counter() - t0
     camera, args, shape = gpu_render.prepare(scene)
 
-    def frame():
-        out = gpu_render.launch(args, shape)
+    def frame(cone=True, block=gpu_render.BLOCK, out=None):
+        out = gpu_render.launch(args, shape, cone, block, out)
         return out[7].copy_to_host()         # the image; waits for the kernel
 
     gpu_s, _ = best(frame, repeat)
+    # without the cone pass; and with the output arrays of an earlier launch (no allocation)
+    nocone_s, _ = best(lambda: frame(cone=False), repeat)
+    kept = gpu_render.launch(args, shape)
+    reuse_s, _ = best(lambda: frame(out=kept), repeat)
+    by_block = {f"{b[0]}x{b[1]}": best(lambda: frame(block=b, out=kept), repeat)[0]
+                for b in blocks}
     both = cpu.hit & gpu.hit
     depth = (float(np.abs(cpu.depth[both].astype(float) - gpu.depth[both]).max())
              / scene.diagonal if both.any() else 0.0)
     return dict(what=f"bunny {kind}", size=f"{W}x{H}", eps=scene.eps, diag=scene.diagonal,
                 primitives=scene.objects[0].field.num_primitives, cpu_s=cpu_s, gpu_s=gpu_s,
-                speedup=cpu_s / gpu_s, hit_differs=int((cpu.hit != gpu.hit).sum()),
+                speedup=cpu_s / gpu_s, gpu_first_s=first_s, gpu_nocone_s=nocone_s,
+                gpu_reuse_s=reuse_s, gpu_by_block=by_block,
+                hit_differs=int((cpu.hit != gpu.hit).sum()),
                 depth_max_over_diag=depth,
                 rgb_max=int(np.abs(cpu.rgb.astype(int) - gpu.rgb)[both].max(initial=0)),
                 mean_steps_cpu=float(cpu.steps.mean()), mean_steps_gpu=float(gpu.steps.mean()))
@@ -115,14 +127,17 @@ def bench_grid(kind, n, repeat):
     Q = grid(n)
     kw = dict(alpha=alpha, beta=0.5)
     field.smooth_distance(Q[:64], **kw)
+    t0 = time.perf_counter()
     field.smooth_distance(Q[:64], device="cuda", **kw)
+    first_s = time.perf_counter() - t0
     cpu_s, cpu = best(lambda: field.smooth_distance(Q, **kw), repeat)
     alpha, beta, S, wgs = field.kernel_args(alpha, 0.5)
     dtree = field._device_tree()
     gpu_s, gpu = best(lambda: sdcuda.smooth_distance(field.tree, Q, alpha, beta, S, wgs, 0.0,
                                                      dtree), repeat)
     return dict(what=f"grid {kind}", size=f"{n}^3", eps=None, primitives=field.num_primitives,
-                cpu_s=cpu_s, gpu_s=gpu_s, speedup=cpu_s / gpu_s, hit_differs=None,
+                cpu_s=cpu_s, gpu_s=gpu_s, speedup=cpu_s / gpu_s, gpu_first_s=first_s,
+                hit_differs=None,
                 depth_max_over_diag=None, rgb_max=None,
                 distance_max_diff=float(np.abs(cpu.distance - gpu[0]).max()))
 
@@ -130,14 +145,17 @@ def bench_grid(kind, n, repeat):
 def markdown(card, rows, threads):
     out = [f"GPU: {card}; CPU: {platform.processor() or platform.machine()}, {threads} threads",
            "",
-           "| case | size | primitives | CPU ms | GPU ms | speed-up | hits differ "
-           "| depth / diag | colour | distance |",
-           "|---|---|---|---|---|---|---|---|---|---|"]
+           "| case | size | primitives | CPU ms | GPU ms | speed-up | GPU ms, no cone pass "
+           "| GPU first call s | hits differ | depth / diag | colour | distance |",
+           "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         def f(v, fmt):
             return "" if v is None else format(v, fmt)
         out.append(f"| {r['what']} | {r['size']} | {r['primitives']} | {1e3 * r['cpu_s']:.1f} "
-                   f"| {1e3 * r['gpu_s']:.2f} | {r['speedup']:.1f}x | {f(r['hit_differs'], 'd')} "
+                   f"| {1e3 * r['gpu_s']:.2f} | {r['speedup']:.1f}x "
+                   f"| {f(r.get('gpu_nocone_s') and 1e3 * r['gpu_nocone_s'], '.2f')} "
+                   f"| {r['gpu_first_s']:.1f} "
+                   f"| {f(r['hit_differs'], 'd')} "
                    f"| {f(r['depth_max_over_diag'], '.2g')} | {f(r['rgb_max'], 'd')} "
                    f"| {f(r.get('distance_max_diff'), '.2g')} |")
     return "\n".join(out)
@@ -150,6 +168,9 @@ def main(argv=None):
                    help="hit threshold, absolute (default 1e-3, the authors'; 0: the scene's)")
     p.add_argument("--grid", type=int, default=100, help="grid side N (N^3 queries)")
     p.add_argument("--repeat", type=int, default=5)
+    p.add_argument("--blocks", nargs="*", default=[], metavar="CxR",
+                   help="also time the render kernel with these thread blocks (columns x rows, "
+                        "e.g. 32x4 8x8), the outputs kept between launches")
     p.add_argument("--json", default=str(DEFAULT_JSON))
     args = p.parse_args(argv)
     cuda = gpu_or_exit()
@@ -159,7 +180,8 @@ def main(argv=None):
     card = card.decode() if isinstance(card, bytes) else str(card)
     rows = []
     for kind in KINDS:
-        rows.append(bench_render(kind, tuple(args.size), args.eps or None, args.repeat))
+        blocks = [tuple(int(v) for v in b.lower().split("x")) for b in args.blocks]
+        rows.append(bench_render(kind, tuple(args.size), args.eps or None, args.repeat, blocks))
         print(rows[-1], flush=True)
     for kind in KINDS:
         rows.append(bench_grid(kind, args.grid, args.repeat))

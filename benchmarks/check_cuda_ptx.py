@@ -3,7 +3,7 @@
 numba's CUDA simulator (``tests/test_cuda_sim.py``) runs the kernels' launch code but calls the
 shared ``numba.njit`` functions compiled for the CPU, so it cannot show that numba-cuda
 compiles them for a GPU. This script does: it types and lowers ``smoothdist.cuda``'s query
-kernels and ``tracer.rendering.gpu_render``'s render kernel for a compute capability (default 9.0,
+kernels and ``tracer.rendering.gpu_render``'s cone and render kernels for a compute capability (default 9.0,
 H100 / H200) through NVIDIA's NVVM, as the first launch on a card would, and prints the size
 of the PTX and of each thread's local memory (the traversal stacks).
 
@@ -66,12 +66,16 @@ def main(argv=None):
     outs = (np.zeros((H, W), np.bool_), np.zeros((H, W)), np.zeros((H, W, 3)),
             np.zeros((H, W), np.int64), np.zeros((H, W), np.int64), np.zeros((H, W), np.int64),
             np.zeros((H, W), np.int32), np.zeros((H, W, 3), np.uint8))
+    cone_f, cone_n = np.zeros((2, 2, 6)), np.zeros((2, 2, 2), np.int64)
     jobs = (("smoothdist.cuda smooth", sdcuda._smooth_kernel,
              (ty(tree), ty(Q), f64, f64, f64, f64, f64, ty(d), ty(g), ty(n), ty(n))),
             ("smoothdist.cuda exact", sdcuda._exact_kernel,
              (ty(tree), ty(Q), ty(d), ty(g), ty(n), ty(n), ty(n))),
+            ("tracer.rendering.gpu_render cone", gpu_render._cone_kernel,
+             (ty(rargs.data), ty(rargs.mode), f64, f64, f64, f64, ty(cone_f), ty(cone_n))),
             ("tracer.rendering.gpu_render render", gpu_render._render_kernel,
-             tuple(ty(a) for a in rargs) + tuple(ty(o) for o in outs)))
+             tuple(ty(a) for a in rargs) + (ty(cone_f), ty(cone_n))
+             + tuple(ty(o) for o in outs)))
     status = 0
     for name, fn, sig in jobs:
         t0 = time.perf_counter()

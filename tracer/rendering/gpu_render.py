@@ -7,15 +7,19 @@ local traversal stack, and colours the pixel by its normal (:func:`normal_colour
 ``"normals"`` shading of :func:`tracer.rendering.shading.shade_normals`). The ``"matcap"`` and
 ``"headlight"`` shadings are applied on the host to the normals that come back.
 
-What differs from the CPU path: no cone pass (the CPU's tiles of ``TILE x TILE`` rays share one
-conservative start and end depth; a GPU thread has one ray), so rays start at the scene box;
-same hit test, steps, Newton steps and bisection otherwise. Hits agree with the CPU's up to a
-grazing pixel, depths within ``eps``-sized differences (``tests/test_cuda_sim.py``). One sample
-per pixel; the ``"lit"`` shading, anti-aliasing and transparent backgrounds are CPU only.
+The cone pass runs first, one thread per ``TILE x TILE`` tile (:func:`_cone_kernel`, the CPU's
+:func:`tracer.rendering.march.tile_cone`): the tile's rays then start at its conservative
+depth with the same predicted first step as on the CPU. What differs from the CPU path: no
+common end depth (the CPU's ``cone_end``, marched once a ray of the tile has missed; it
+only shortens misses); the same hit test, steps, Newton steps and bisection otherwise. Hits
+agree with the CPU's up to a grazing pixel, depths within ``eps``-sized differences
+(``tests/test_cuda_sim.py``). One sample per pixel; the ``"lit"`` shading, anti-aliasing and
+transparent backgrounds are CPU only.
 """
 
 import math
 import time
+from typing import NamedTuple
 
 import numba
 import numpy as np
@@ -32,6 +36,19 @@ __all__ = ["render_cuda", "normal_colour", "BLOCK"]
 STACK = sdcuda.STACK
 #: threads per block, (columns, rows): 128 threads, neighbouring rays in one warp
 BLOCK = (16, 8)
+
+class GpuArgs(NamedTuple):
+    """The render kernel's leading arguments (:func:`prepare`): the scene on the device and
+    the march's settings."""
+    data: tuple        # (tree, roots, params, cam, lo, hi, bg), device arrays and the colour
+    mode: int
+    tol: float
+    eps: float
+    max_steps: int
+    relax: float
+    omega: float
+    newton: float
+
 
 #: ``numba.cuda`` once the kernel exists (a module global: see ``smoothdist.cuda.cuda``)
 cuda = None
@@ -69,21 +86,62 @@ def normal_colour(gx, gy, gz, cam):
     return _channel(vx), _channel(vy), _channel(vz)
 
 
-def _render_kernel(data, mode, tol, eps, max_steps, relax, omega, newton, hit, tbuf, grad,
-                   steps, leaves, bisect, objs, rgb):
+def _cone_kernel(data, mode, tol, eps, relax, newton, cone, cone_n):
+    # one thread per TILE x TILE tile: the CPU's cone pass (march.tile_cone) into
+    # ``cone[ty, tx] = (first, t_min, D, gx, gy, gz)`` and ``cone_n[ty, tx] = (evals, leaves)``
+    tree, roots, params, cam, lo, hi, bg = data
+    tx, ty = cuda.grid(2)
+    if ty < cone.shape[0] and tx < cone.shape[1]:
+        stack = cuda.local.array(STACK, numba.int64)
+        dstack = cuda.local.array(STACK, numba.float64)
+        r_lo, r_hi, c_lo, c_hi = _tile_of(cam, ty, tx)
+        first, t_min, D, gx, gy, gz, ev, lv = march.tile_cone(
+            tree, roots, params, mode, tol, cam, lo, hi, eps, r_lo, r_hi, c_lo, c_hi, stack,
+            dstack, relax, newton)
+        cone[ty, tx, 0] = first
+        cone[ty, tx, 1] = t_min
+        cone[ty, tx, 2] = D
+        cone[ty, tx, 3] = gx
+        cone[ty, tx, 4] = gy
+        cone[ty, tx, 5] = gz
+        cone_n[ty, tx, 0] = ev
+        cone_n[ty, tx, 1] = lv
+
+
+@numba.njit(**NJIT)
+def _tile_of(cam, ty, tx):
+    """Pixel rectangle ``(r_lo, r_hi, c_lo, c_hi)`` of tile ``(ty, tx)`` (``march.TILE``
+    square, clipped to the image)."""
+    T = march.TILE
+    return (ty * T, min(int(cam[13]), (ty + 1) * T), tx * T, min(int(cam[12]), (tx + 1) * T))
+
+
+def _render_kernel(data, mode, tol, eps, max_steps, relax, omega, newton, cone, cone_n, hit,
+                   tbuf, grad, steps, leaves, bisect, objs, rgb):
     # ``data = (tree, roots, params, cam, lo, hi, bg)``, one tuple: the simulator hands
     # tuples to the kernel as they are (and top-level arrays as its own wrappers, which the
-    # CPU-compiled functions it calls cannot take)
+    # CPU-compiled functions it calls cannot take). ``cone``: the tile kernel's results (no
+    # cone pass: ``first = -1``, ``t_min = 0``, ``D = -1`` everywhere)
     tree, roots, params, cam, lo, hi, bg = data
     c, r = cuda.grid(2)
     if r < tbuf.shape[0] and c < tbuf.shape[1]:
         stack = cuda.local.array(STACK, numba.int64)
         dstack = cuda.local.array(STACK, numba.float64)
         dx, dy, dz = ray_direction(cam, r, c)
+        ty = r // march.TILE
+        tx = c // march.TILE
+        r_lo, r_hi, c_lo, c_hi = _tile_of(cam, ty, tx)
+        t_min = cone[ty, tx, 1]
+        t_pred, d_lb = march.cone_first_step(cam, r_lo, r_hi, c_lo, c_hi, t_min,
+                                             cone[ty, tx, 2], cone[ty, tx, 3], cone[ty, tx, 4],
+                                             cone[ty, tx, 5], dx, dy, dz)
         h, t, gx, gy, gz, st, lv, bs, ob = march.march_ray(
             tree, roots, params, mode, tol, cam[0], cam[1], cam[2], dx, dy, dz, lo, hi, eps,
-            max_steps, stack, dstack, relax, omega, 0.0, newton, np.inf, march.NEWTON_COS, 0.0,
-            0.0)
+            max_steps, stack, dstack, relax, omega, t_min, newton, np.inf, march.NEWTON_COS,
+            t_pred, d_lb)
+        if (r - r_lo) * (c_hi - c_lo) + c - c_lo == int(cone[ty, tx, 0]):
+            st += cone_n[ty, tx, 0]
+            lv += cone_n[ty, tx, 1]
         hit[r, c] = h == 1
         tbuf[r, c] = t
         grad[r, c, 0] = gx
@@ -104,13 +162,15 @@ def _render_kernel(data, mode, tol, eps, max_steps, relax, omega, newton, hit, t
         rgb[r, c, 2] = cb
 
 
-def kernel():
-    """The render kernel as a CUDA kernel (compiled at its first launch)."""
+def kernel(name="render"):
+    """The ``"render"`` (one thread per pixel) or ``"cone"`` (one thread per tile) kernel as
+    a CUDA kernel (compiled at its first launch)."""
     global cuda
     if not _KERNELS:
         cuda = sdcuda.cuda_module()
         _KERNELS["render"] = cuda.jit(_render_kernel, cache=True)
-    return _KERNELS["render"]
+        _KERNELS["cone"] = cuda.jit(_cone_kernel, cache=True)
+    return _KERNELS[name]
 
 
 def check_scene(scene, samples):
@@ -147,32 +207,53 @@ def prepare(scene, transforms=None, relax=None, omega=None, newton=None):
     data = (sdcuda.device_tree(tree), on(np.ascontiguousarray(roots, np.int64)), on(params),
             on(camera.as_array()), on(np.asarray(lo, np.float64)),
             on(np.asarray(hi, np.float64)), bg)
-    args = (data, int(mode), float(tol), float(scene.eps), int(scene.max_steps),
-            march.RELAX if relax is None else float(relax),
-            march.OMEGA if omega is None else max(1.0, float(omega)),
-            march.newton_distance(scene.eps, lo, hi,
-                                  max(0.0, float(scene.newton if newton is None else newton))))
+    args = GpuArgs(data, int(mode), float(tol), float(scene.eps), int(scene.max_steps),
+                   march.RELAX if relax is None else float(relax),
+                   march.OMEGA if omega is None else max(1.0, float(omega)),
+                   march.newton_distance(scene.eps, lo, hi,
+                                         max(0.0, float(scene.newton if newton is None
+                                                        else newton))))
     return camera, args, (scene.height, scene.width)
 
 
-def launch(args, shape):
+def _launch_grid(W, H, block):
+    return ((W + block[0] - 1) // block[0], (H + block[1] - 1) // block[1])
+
+
+def launch(args, shape, cone=True, block=BLOCK, out=None):
     """Trace one frame on the device; returns the device output arrays ``(hit, tbuf, grad,
-    steps, leaves, bisect, objs, rgb)`` (the launch is asynchronous)."""
+    steps, leaves, bisect, objs, rgb)`` (the launches are asynchronous). ``cone``: the tile
+    kernel's cone pass first (as the CPU's ``cone``); ``block``: threads per block of the
+    render kernel, (columns, rows); ``out``: the output arrays of an earlier launch of the
+    same shape, to be written again (none: new ones)."""
     H, W = shape
-    out = (cuda.device_array((H, W), dtype=np.bool_), cuda.device_array((H, W)),
-           cuda.device_array((H, W, 3)), cuda.device_array((H, W), dtype=np.int64),
-           cuda.device_array((H, W), dtype=np.int64), cuda.device_array((H, W), dtype=np.int64),
-           cuda.device_array((H, W), dtype=np.int32),
-           cuda.device_array((H, W, 3), dtype=np.uint8))
-    grid = ((W + BLOCK[0] - 1) // BLOCK[0], (H + BLOCK[1] - 1) // BLOCK[1])
-    kernel()[grid, BLOCK](*args, *out)
+    T = march.TILE
+    nty, ntx = (H + T - 1) // T, (W + T - 1) // T
+    if cone:
+        cone_f = cuda.device_array((nty, ntx, 6))
+        cone_n = cuda.device_array((nty, ntx, 2), dtype=np.int64)
+        kernel("cone")[_launch_grid(ntx, nty, BLOCK), BLOCK](
+            args.data, args.mode, args.tol, args.eps, args.relax, args.newton, cone_f, cone_n)
+    else:
+        none = np.zeros((nty, ntx, 6))
+        none[:, :, 0] = -1.0
+        none[:, :, 2] = -1.0
+        cone_f = cuda.to_device(none)
+        cone_n = cuda.to_device(np.zeros((nty, ntx, 2), dtype=np.int64))
+    if out is None:
+        out = (cuda.device_array((H, W), dtype=np.bool_), cuda.device_array((H, W)),
+               cuda.device_array((H, W, 3)), cuda.device_array((H, W), dtype=np.int64),
+               cuda.device_array((H, W), dtype=np.int64),
+               cuda.device_array((H, W), dtype=np.int64),
+               cuda.device_array((H, W), dtype=np.int32),
+               cuda.device_array((H, W, 3), dtype=np.uint8))
+    kernel()[_launch_grid(W, H, block), block](*args, cone_f, cone_n, *out)
     return out
 
 
 def render_cuda(scene, *, progress=None, transforms=None, relax=None, omega=None, newton=None,
-                samples=None, adaptive=None):
-    """:func:`tracer.render` on the GPU (its arguments; ``cone`` and ``band_rows`` do
-    not apply). Returns a :class:`tracer.rendering.frame.RenderResult`; ``seconds`` is the time of
+                samples=None, adaptive=None, cone=None):
+    """:func:`tracer.render` on the GPU (its arguments; ``band_rows`` does not apply). Returns a :class:`tracer.rendering.frame.RenderResult`; ``seconds`` is the time of
     the launch and the copies back."""
     from tracer.rendering.frame import RenderResult, _progress_callback, _samples, shade
 
@@ -186,7 +267,7 @@ def render_cuda(scene, *, progress=None, transforms=None, relax=None, omega=None
     progress = _progress_callback(progress, scene)
     camera, args, (H, W) = prepare(scene, transforms, relax, omega, newton)
     t0 = time.perf_counter()
-    out = launch(args, (H, W))
+    out = launch(args, (H, W), bool(march.CONE if cone is None else cone))
     hit, tbuf, grad, steps, leaves, bis, objs, rgb = (a.copy_to_host() for a in out)
     seconds = time.perf_counter() - t0
     if progress is not None:

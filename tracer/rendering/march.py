@@ -704,6 +704,48 @@ def cone_end(tree, roots, params, mode, tol, cam, lo, hi, eps, r_lo, r_hi, c_lo,
 
 
 @numba.njit(**NJIT)
+def tile_cone(tree, roots, params, mode, tol, cam, lo, hi, eps, r_lo, r_hi, c_lo, c_hi, stack,
+              dstack, relax, newton):
+    """The cone pass of the tile ``[r_lo, r_hi) x [c_lo, c_hi)``, as every tile's rays start.
+
+    Returns ``(first, t_min, D, gx, gy, gz, evals, leaves)``: ``first`` the tile-local index
+    (``(r - r_lo) * (c_hi - c_lo) + c - c_lo``) of the first ray, in row order, that meets the
+    scene box (-1: none, and no cone is marched: every ray misses); ``t_min`` the rays'
+    common start depth (:func:`cone_start`); ``D`` and ``g`` the distance and gradient there
+    on the central ray when they may seed :func:`cone_newton_step` (``0 < D <= newton`` with
+    :data:`CONE_NEWTON`), else ``D = -1``; the cone's evaluations and leaves (booked on the
+    ray ``first``). Shared by the CPU tiles and the GPU's tile kernel."""
+    first = -1
+    k = 0
+    for r in range(r_lo, r_hi):
+        for c in range(c_lo, c_hi):
+            if first < 0:
+                dx, dy, dz = ray_direction(cam, r, c)
+                t_in, t_out = ray_box(cam[0], cam[1], cam[2], dx, dy, dz, lo, hi)
+                if t_in <= t_out:
+                    first = k
+            k += 1
+    if first < 0:
+        return -1, 0.0, -1.0, 0.0, 0.0, 0.0, 0, 0
+    t_min, evals, leaves, D, gx, gy, gz = cone_start(tree, roots, params, mode, tol, cam, lo,
+                                                     hi, eps, r_lo, r_hi, c_lo, c_hi, stack,
+                                                     dstack, relax)
+    if not (CONE_NEWTON and 0.0 < D <= newton):
+        D = -1.0
+    return first, t_min, D, gx, gy, gz, evals, leaves
+
+
+@numba.njit(**NJIT)
+def cone_first_step(cam, r_lo, r_hi, c_lo, c_hi, t_min, D, gx, gy, gz, dx, dy, dz):
+    """``(t_pred, d_lb)`` of a ray ``(dx, dy, dz)`` of the tile from its :func:`tile_cone`
+    result (``D <= 0``: none, ``(0, 0)``); see :func:`cone_newton_step`."""
+    if not D > 0.0:
+        return 0.0, 0.0
+    ux, uy, uz, delta = _cone_axis(cam, r_lo, r_hi, c_lo, c_hi)
+    return cone_newton_step(t_min, D, gx, gy, gz, ux, uy, uz, delta, dx, dy, dz)
+
+
+@numba.njit(**NJIT)
 def _render_tile(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, r_lo, r_hi, c_lo,
                  c_hi, depth_max, hit, tbuf, grad, steps, leaves, bisect, objs, relax, omega,
                  cone, newton):
@@ -712,35 +754,26 @@ def _render_tile(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, r_
     ox = cam[0]
     oy = cam[1]
     oz = cam[2]
+    first = -1
     t_min = 0.0
     t_max = np.inf
     D = -1.0
-    cgx = cgy = cgz = ux = uy = uz = delta = 0.0
-    pending = cone
+    cgx = cgy = cgz = 0.0
+    c_ev0 = c_lv0 = 0
+    if cone:
+        first, t_min, D, cgx, cgy, cgz, c_ev0, c_lv0 = tile_cone(
+            tree, roots, params, mode, tol, cam, lo, hi, eps, r_lo, r_hi, c_lo, c_hi, stack,
+            dstack, relax, newton)
     pending_end = cone
+    k = 0
     for r in range(r_lo, r_hi):
         for c in range(c_lo, c_hi):
             dx, dy, dz = ray_direction(cam, r, c)
-            c_ev = 0
-            c_lv = 0
-            if pending:
-                t_in, t_out = ray_box(ox, oy, oz, dx, dy, dz, lo, hi)
-                if t_in <= t_out:
-                    # the first ray of the tile that meets the box runs the cone pass (and its
-                    # work is booked on that pixel)
-                    t_min, c_ev, c_lv, D, cgx, cgy, cgz = cone_start(
-                        tree, roots, params, mode, tol, cam, lo, hi, eps, r_lo, r_hi, c_lo,
-                        c_hi, stack, dstack, relax)
-                    pending = False
-                    if not (CONE_NEWTON and 0.0 < D <= newton):
-                        D = -1.0
-                    else:
-                        ux, uy, uz, delta = _cone_axis(cam, r_lo, r_hi, c_lo, c_hi)
-            t_pred = 0.0
-            d_lb = 0.0
-            if D > 0.0:
-                t_pred, d_lb = cone_newton_step(t_min, D, cgx, cgy, cgz, ux, uy, uz, delta, dx,
-                                                dy, dz)
+            c_ev = c_ev0 if k == first else 0
+            c_lv = c_lv0 if k == first else 0
+            k += 1
+            t_pred, d_lb = cone_first_step(cam, r_lo, r_hi, c_lo, c_hi, t_min, D, cgx, cgy,
+                                           cgz, dx, dy, dz)
             h, t, gx, gy, gz, st, lv, bs, ob = march_ray(tree, roots, params, mode, tol, ox, oy,
                                                          oz, dx, dy, dz, lo, hi, eps, max_steps,
                                                          stack, dstack, relax, omega, t_min,

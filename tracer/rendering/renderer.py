@@ -65,7 +65,7 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
         scene's ``adaptive``).
     device : {"cpu", "cuda"}
         ``"cuda"``: trace on the GPU (:mod:`tracer.rendering.gpu_render`; the ``gpu`` extra; one sample
-        per pixel, not the ``"lit"`` shading; ``cone`` and ``band_rows`` do not apply).
+        per pixel, not the ``"lit"`` shading; ``band_rows`` does not apply).
 
     Raises
     ------
@@ -78,7 +78,8 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
         from tracer.rendering.gpu_render import render_cuda
 
         return render_cuda(scene, progress=progress, transforms=transforms, relax=relax,
-                           omega=omega, newton=newton, samples=samples, adaptive=adaptive)
+                           omega=omega, newton=newton, samples=samples, adaptive=adaptive,
+                           cone=cone)
     for name, value in (("newton", newton), ("relax", relax)):
         if value is not None and not (isinstance(value, (int, float, np.number))
                                       and not isinstance(value, bool)

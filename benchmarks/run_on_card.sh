@@ -1,0 +1,84 @@
+#!/usr/bin/env bash
+# The measurements that need a machine with an NVIDIA card and many cores, in one script.
+#
+#   bash benchmarks/run_on_card.sh OUTDIR STEP...
+#
+# Steps, in the order given:
+#   machine     the card, the CPU, the versions (machine.txt)
+#   gpu-small   the GPU benchmark at 320x180 twice: an empty kernel cache, then a warm one
+#               (the first-call compile time, and that numba-cuda's disk cache keeps the kernels)
+#   gpu         the GPU benchmark of issue 34: the bunny at 1920x1080 and the 1e6-point grid,
+#               GPU against every CPU core, with the thread blocks of $BLOCKS timed too
+#   scaling     the 1080p thread-scaling table of issue 32 for 1, 2, 4, ... up to every core
+#   stored      the stored-value and golden-image tests on this CPU (pytest-xdist, 8 workers)
+#   all         every step above
+#
+# Each step has its own time limit and writes its log and JSON into OUTDIR as it goes, so that
+# a step that runs out of time leaves the others' results. Kernels are cached in
+# $NUMBA_CACHE_DIR (default /tmp/smoothdist-numba-cache), shared by the steps. The package is
+# used from the checkout (PYTHONPATH); numpy, numba, numba-cuda, pillow and trimesh must be
+# importable.
+set -u
+out=${1:?output folder}
+shift
+mkdir -p "$out"
+export PYTHONUNBUFFERED=1
+export NUMBA_CACHE_DIR=${NUMBA_CACHE_DIR:-/tmp/smoothdist-numba-cache}
+export PYTHONPATH=$PWD${PYTHONPATH:+:$PYTHONPATH}
+py=${PYTHON:-python3}
+cores=$(nproc)
+threads=""
+n=1
+while [ "$n" -lt "$cores" ]; do threads="$threads $n"; n=$((n * 2)); done
+threads="$threads $cores"
+
+step() {  # step NAME SECONDS COMMAND...: runs it with a limit, its output to NAME.log
+    local name=$1 limit=$2
+    shift 2
+    local t0=$SECONDS
+    timeout "$limit" "$@" >"$out/$name.log" 2>&1
+    local rc=$?
+    echo "== $name: exit $rc in $((SECONDS - t0)) s"
+    tail -n 25 "$out/$name.log"
+}
+
+steps=("$@")
+[ "${steps[*]}" = all ] && steps=(machine gpu-small gpu scaling stored)
+for s in "${steps[@]}"; do
+    case $s in
+    machine)
+        {
+            nvidia-smi -L
+            lscpu | grep -E 'Model name|^CPU\(s\)|Thread\(s\)|Socket'
+            "$py" -c "import sys, numpy, numba, numba_cuda; print(sys.version.split()[0], 'numpy', numpy.__version__, 'numba', numba.__version__, 'numba-cuda', numba_cuda.__version__)"
+        } >"$out/machine.txt" 2>&1
+        cat "$out/machine.txt"
+        ;;
+    gpu-small)
+        for cache in cold warm; do
+            step "gpu_small_$cache" 200 "$py" benchmarks/bench_gpu.py --size 320 180 --grid 20 \
+                --repeat 2 --json "$out/bench_gpu_small_$cache.json"
+        done
+        ;;
+    gpu)
+        # shellcheck disable=SC2086
+        step gpu_1080p 200 "$py" benchmarks/bench_gpu.py --repeat 3 --blocks ${BLOCKS:-32x4 8x8 32x8} \
+            --json "$out/bench_gpu.json"
+        ;;
+    scaling)
+        # shellcheck disable=SC2086
+        step scaling 200 "$py" benchmarks/bench_scaling.py --kinds points edges triangles \
+            --threads $threads --repeat 2 --out "$out/scaling.json"
+        ;;
+    stored)
+        step stored_values 300 "$py" -m pytest -p tracer.pytest_plugin -n 8 -q \
+            -p no:cacheprovider tests/test_mesh_distance_unchanged.py \
+            tests/test_mesh_distance_reference.py tests/test_render_golden.py \
+            tests/test_render_determinism.py tests/test_weights.py
+        ;;
+    *)
+        echo "unknown step $s" >&2
+        exit 2
+        ;;
+    esac
+done
