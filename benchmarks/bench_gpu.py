@@ -9,7 +9,9 @@ Measures, on an NVIDIA GPU through numba-cuda (``pip install "smoothdist[gpu]"``
   the device (kernel plus copying the image back), the CPU time the best ``tracer.rendering.renderer``;
 * the 1e6-point grid of ``benchmarks/bench_grid.py`` (``--grid 100``: the voxel centres of
   the unit cube, the bunny normalised to a 0.5 diagonal, alpha = 1 / shortest edge, beta 0.5)
-  for the smooth distance of points, edges and triangles; GPU time: kernel plus copies;
+  for the smooth distance of points, edges and triangles; GPU time: kernel plus copies (the
+  queries in, distances, gradients and counters out), and the kernel alone with everything
+  already on the device (``gpu_kernel_s``);
 * image agreement: pixels whose hit differs, the largest depth difference over the common
   hits (as a fraction of the scene diagonal; two marches that stop within eps of the
   surface may differ by about ``2 eps / cos``, 8e-3 of the bunny's diagonal at eps 1e-3) and
@@ -135,25 +137,52 @@ def bench_grid(kind, n, repeat):
     dtree = field._device_tree()
     gpu_s, gpu = best(lambda: sdcuda.smooth_distance(field.tree, Q, alpha, beta, S, wgs, 0.0,
                                                      dtree), repeat)
+    # the kernel alone, the queries and the outputs already on the device (no copies)
+    cu = sdcuda.cuda_module()
+    dQ = cu.to_device(Q)
+    outs = (cu.device_array(len(Q)), cu.device_array((len(Q), 3)),
+            cu.device_array(len(Q), dtype=np.int64), cu.device_array(len(Q), dtype=np.int64))
+
+    def kernel_only():
+        sdcuda.kernels()["smooth"][sdcuda._blocks(len(Q)), sdcuda.THREADS](
+            dtree, dQ, float(alpha), float(beta), 0.0, float(S), float(wgs), *outs)
+        cu.synchronize()
+
+    kernel_s, _ = best(kernel_only, repeat)
     return dict(what=f"grid {kind}", size=f"{n}^3", eps=None, primitives=field.num_primitives,
                 cpu_s=cpu_s, gpu_s=gpu_s, speedup=cpu_s / gpu_s, gpu_first_s=first_s,
+                gpu_kernel_s=kernel_s,
                 hit_differs=None,
                 depth_max_over_diag=None, rgb_max=None,
                 distance_max_diff=float(np.abs(cpu.distance - gpu[0]).max()))
 
 
-def markdown(card, rows, threads):
-    out = [f"GPU: {card}; CPU: {platform.processor() or platform.machine()}, {threads} threads",
+def cpu_name():
+    """The CPU's model name (``/proc/cpuinfo``), else what ``platform`` knows."""
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or platform.machine()
+
+
+def markdown(card, rows, threads, cpu=None):
+    """The results as a markdown table; ``cpu``: the CPU's name (default: this machine's)."""
+    out = [f"GPU: {card}; CPU: {cpu or cpu_name()}, {threads} threads",
            "",
            "| case | size | primitives | CPU ms | GPU ms | speed-up | GPU ms, no cone pass "
-           "| GPU first call s | hits differ | depth / diag | colour | distance |",
-           "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+           "| GPU ms, kernel only | GPU first call s | hits differ | depth / diag | colour "
+           "| distance |",
+           "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         def f(v, fmt):
             return "" if v is None else format(v, fmt)
         out.append(f"| {r['what']} | {r['size']} | {r['primitives']} | {1e3 * r['cpu_s']:.1f} "
                    f"| {1e3 * r['gpu_s']:.2f} | {r['speedup']:.1f}x "
                    f"| {f(r.get('gpu_nocone_s') and 1e3 * r['gpu_nocone_s'], '.2f')} "
+                   f"| {f(r.get('gpu_kernel_s') and 1e3 * r['gpu_kernel_s'], '.2f')} "
                    f"| {r['gpu_first_s']:.1f} "
                    f"| {f(r['hit_differs'], 'd')} "
                    f"| {f(r['depth_max_over_diag'], '.2g')} | {f(r['rgb_max'], 'd')} "
@@ -186,13 +215,13 @@ def main(argv=None):
     for kind in KINDS:
         rows.append(bench_grid(kind, args.grid, args.repeat))
         print(rows[-1], flush=True)
-    table = markdown(card, rows, numba.get_num_threads())
+    table = markdown(card, rows, numba.get_num_threads(), cpu_name())
     print(table)
     out = Path(args.json)
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = out.with_suffix(".tmp")
     tmp.write_text(json.dumps({"card": card, "threads": numba.get_num_threads(),
-                               "cpu": platform.processor() or platform.machine(),
+                               "cpu": cpu_name(),
                                "load": os.getloadavg(), "rows": rows, "table": table},
                               indent=2))
     os.replace(tmp, out)
