@@ -99,8 +99,8 @@ def write_png_bands(fh, arr, threads=None, level=PNG_LEVEL):
     """Write ``arr`` ((H, W, 3), (H, W, 4) or (H, W) uint8, checked by the caller) to the
     binary file ``fh`` as an 8-bit PNG, one band of rows per thread, as pigz does.
 
-    Every row gets the Up filter (its difference from the row above: as small as Pillow's
-    per-row choice on renders, and the bands need nothing but the row above them). Each
+    Every row gets the Up filter (its difference from the row above: files within a few per
+    cent of Pillow's per-row choice on renders, and a band needs only the row above it). Each
     thread filters its band and deflates it with a raw ``zlib.compressobj`` (zlib releases
     the GIL), ending with a full flush (the last band: the stream's end), so the pieces,
     behind a zlib header and before the Adler-32 of all the filtered bytes (combined from the
