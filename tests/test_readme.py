@@ -87,6 +87,8 @@ TINY = {
     "benchmarks/bench_frame.py": ["--size", "16", "9", "--repeat", "1"],
     "tracer.sim.vbowl -o": ["--steps", "20"],
     "benchmarks/bench_scaling.py": ["--size", "16", "9", "--repeat", "1", "--threads", "1", "2"],
+    "benchmarks/bench_png.py": ["--size", "16", "9", "--repeat", "1", "--threads", "1", "2",
+                                "--kinds", "points"],
 }
 
 SHIM = textwrap.dedent('''\
