@@ -1,0 +1,91 @@
+"""The performance guide's scaling and GPU tables, and the figures its prose takes from them,
+are those of the committed results files (``benchmarks/tables.py`` makes the tables).
+
+A rerun that writes new results files cannot leave the page behind: the test fails until the
+tables are pasted again (``python benchmarks/tables.py scaling|gpu FILE``) and the sentences
+below agree. Figures are compared as the page rounds them.
+"""
+
+import json
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+GUIDE = ROOT / "docs" / "guide" / "performance.md"
+DATA = ROOT / "benchmarks" / "data"
+sys.path.insert(0, str(ROOT))
+
+from benchmarks.tables import gpu_table, scaling_table  # noqa: E402
+
+
+def _guide():
+    return GUIDE.read_text(encoding="utf-8")
+
+
+def _flat(text):
+    return " ".join(text.split())
+
+
+def _load(name):
+    return json.loads((DATA / name).read_text(encoding="utf-8"))
+
+
+@pytest.mark.parametrize("kind, name", [("scaling", "scaling_xeon16.json"),
+                                        ("scaling", "scaling_xeon16_before_png.json"),
+                                        ("scaling", "scaling.json"),
+                                        ("gpu", "gpu_h100.json")])
+def test_the_guide_holds_the_table_of_the_results_file(kind, name):
+    table = {"scaling": scaling_table, "gpu": gpu_table}[kind](DATA / name)
+    guide = _guide()
+    # the GPU table sits in a list item, indented: compare line by line, stripped
+    lines = [ln.strip() for ln in guide.splitlines()]
+    want = [ln.strip() for ln in table.splitlines()]
+    starts = [i for i, ln in enumerate(lines) if ln == want[0]]
+    assert any(lines[i:i + len(want)] == want for i in starts), f"{name}: paste it again"
+
+
+def _range(values, fmt):
+    lo, hi = format(min(values), fmt), format(max(values), fmt)
+    return lo if lo == hi else f"{lo}-{hi}"
+
+
+def test_the_scaling_sentences_follow_the_files():
+    text = _flat(_guide())
+    for name, sentence in (("scaling_xeon16.json", "the whole frame with its PNG reaches {}."),
+                           ("scaling_xeon16_before_png.json", "the frame speedups were {}")):
+        d = _load(name)
+        top = str(d["threads"][-1])
+        frame = [k["frame"]["speedup"][top] for k in d["kinds"].values()]
+        assert sentence.format(_range(frame, ".1f")) in text, name
+    d = _load("scaling_xeon16.json")
+    top = str(d["threads"][-1])
+    # "met for the --stats seconds of all three kinds"
+    assert all(k["seconds"]["speedup"][top] >= 12 for k in d["kinds"].values())
+    assert "is met for the `--stats` seconds of all three kinds" in text
+
+
+def test_the_gpu_sentences_follow_the_file():
+    text = _flat(_guide())
+    rows = {r["what"]: r for r in _load("gpu_h100.json")["rows"]}
+    bunnies = [rows[f"bunny {k}"] for k in ("points", "edges", "triangles")]
+    above = [100 * (r["gpu_s"] / 0.040 - 1) for r in bunnies[1:]]
+    assert f"the edges and triangles are {_range(above, '.0f')} % above it" in text
+    assert rows["bunny points"]["gpu_s"] <= 0.0415       # "at the first" (40 ms)
+    assert all(rows[f"grid {k}"]["gpu_kernel_s"] <= 0.010 for k in ("points", "edges", "triangles"))
+    assert all(rows[f"grid {k}"]["gpu_s"] > 0.010 for k in ("points", "edges", "triangles"))
+    speed = [r["speedup"] for r in bunnies]
+    assert f"about {_range(speed, '.0f')}x over our own 16 CPU threads" in text
+    assert f"compiles both kernels ({bunnies[0]['gpu_first_s']:.0f} s here)" in text
+    spread = max(max(r["gpu_by_block"].values()) / r["gpu_reuse_s"] - 1 for r in bunnies)
+    assert f"differ by at most {100 * spread:.0f} %" in text
+    gains = [100 * (1 - r["gpu_by_block"]["8x8"] / r["gpu_reuse_s"]) for r in bunnies]
+    assert all(r["gpu_by_block"]["8x8"] == min(r["gpu_by_block"].values()) for r in bunnies)
+    assert f"by {_range(gains, '.1f')} %" in text
+    before = _load("gpu_h100_before_gpu_cone.json")["rows"]
+    differ = [r["hit_differs"] for r in before if r["hit_differs"] is not None]
+    assert f"without it {_range(differ, 'd')} pixels of each bunny's hit mask differed" in text
+    assert [r["hit_differs"] for r in bunnies] == [0, 1, 0]   # "one grazing pixel of the edges"
+    warm = _load("gpu_h100_small_warm.json")["rows"][0]["gpu_first_s"]
+    assert f"the first call took {warm:.2f} s" in text
