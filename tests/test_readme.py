@@ -157,9 +157,10 @@ NOT_RUN = {
     'pip install -e ".[gpu]" # in the clone: numba-cuda; a CUDA driver on the machine':
         "it installs the optional GPU extra into the environment that runs the tests (whose "
         "test extra already holds numba-cuda); tests/test_cuda_sim.py runs the CUDA path",
-    "python benchmarks/bench_gpu.py":
-        "it needs an NVIDIA GPU; tests/test_cuda_sim.py runs its measurement functions under "
-        "the simulator, and its refusal without a GPU",
+    "bash benchmarks/run_on_card.sh OUT machine gpu scaling":
+        "it needs an NVIDIA GPU (nvidia-smi, numba-cuda on a card) and takes minutes; "
+        "tests/test_cuda_sim.py runs bench_gpu's measurement functions under the simulator, "
+        "and its refusal without a GPU",
     "python -m tracer reproduce --only beta":
         "it is the full reproduction's beta study at the paper's 512² (minutes); "
         "tests/test_reproduce.py::test_smoke_run_end_to_end runs the same experiment at its "

@@ -7,7 +7,7 @@ local traversal stack, and colours the pixel by its normal (:func:`normal_colour
 ``"normals"`` shading of :func:`tracer.rendering.shading.shade_normals`). The ``"matcap"`` and
 ``"headlight"`` shadings are applied on the host to the normals that come back.
 
-The cone pass runs first, one thread per ``TILE x TILE`` tile (:func:`_cone_kernel`, the CPU's
+The cone pass runs first, one thread per ``TILE x TILE`` tile (``_cone_kernel``, the CPU's
 :func:`tracer.rendering.march.tile_cone`): the tile's rays then start at its conservative
 depth with the same predicted first step as on the CPU. What differs from the CPU path: no
 common end depth (the CPU's ``cone_end``, marched once a ray of the tile has missed; it
