@@ -89,3 +89,18 @@ def test_the_gpu_sentences_follow_the_file():
     assert [r["hit_differs"] for r in bunnies] == [0, 1, 0]   # "one grazing pixel of the edges"
     warm = _load("gpu_h100_small_warm.json")["rows"][0]["gpu_first_s"]
     assert f"the first call took {warm:.2f} s" in text
+
+
+def test_the_readme_quotes_the_files():
+    """The README's 16-core and GPU sentence, figure by figure, from the same files."""
+    text = _flat((ROOT / "README.md").read_text(encoding="utf-8"))
+    d = _load("scaling_xeon16.json")
+    top = str(d["threads"][-1])
+    speed = [k["seconds"]["speedup"][top] for k in d["kinds"].values()]
+    assert (f"on a {d['machine']['cores']}-core Intel Xeon the 1080p bunny traces "
+            f"{_range(speed, '.1f')}x faster on {top} threads than on 1") in text
+    rows = [r for r in _load("gpu_h100.json")["rows"] if r["what"].startswith("bunny")]
+    ms = [1e3 * r["gpu_s"] for r in rows]
+    assert (f"a 1080p frame takes {_range(ms, '.0f')} ms, "
+            f"{_range([r['speedup'] for r in rows], '.0f')}x its 16 CPU threads") in text
+    assert sum(r["hit_differs"] for r in rows) <= 1      # "with the same image"
