@@ -104,3 +104,22 @@ def test_the_readme_quotes_the_files():
     assert (f"a 1080p frame takes {_range(ms, '.0f')} ms, "
             f"{_range([r['speedup'] for r in rows], '.0f')}x its 16 CPU threads") in text
     assert sum(r["hit_differs"] for r in rows) <= 1      # "with the same image"
+
+
+def test_the_cold_start_paragraph_follows_the_files():
+    text = _flat(_guide())
+    cases = _load("coldstart.json")["cases"]
+    for case in ("mesh", "cloud", "lit"):
+        cold = cases[case]["cold"]
+        assert f"{cold['wall_s']:.1f} ({cold['cpu_s']:.1f}, {cold['compiled']})" in text, case
+    warm = " / ".join(f"{cases[c]['warm']['wall_s']:.1f}" for c in ("mesh", "cloud", "lit"))
+    assert f"warm {warm} s" in text
+    runs = {r["opt"]: r for r in _load("compile_profile.json")["runs"]}
+    r3 = runs[3]
+    own = list(r3["own_s"].items())
+    assert (f"{r3['compilations']} compilations, {r3['compile_s']:.1f} s of a "
+            f"{r3['wall_s']:.1f} s first render, none above {own[0][1]:.2f} s") in text
+    assert (f"`NUMBA_OPT=2` and `1` (default 3) took {runs[2]['wall_s']:.1f} and "
+            f"{runs[1]['wall_s']:.1f} s") in text
+    # "not the cost": a lower optimisation level saves no more than a tenth
+    assert min(runs[2]["wall_s"], runs[1]["wall_s"]) > 0.9 * r3["wall_s"]

@@ -125,6 +125,10 @@ PLACEHOLDERS = {
 }
 
 NOT_RUN = {
+    "python benchmarks/profile_compile.py":
+        "it compiles every kernel three times over with empty caches (a minute); "
+        "tests/test_docs_tables.py checks the guide against its results file and "
+        "tests/test_render_coldstart.py the compiled kernels of a first render",
     "python benchmarks/bench_coldstart.py":
         "it compiles every kernel from an empty cache six times (minutes); "
         "tests/test_render_coldstart.py runs a first lit render with an empty cache",
