@@ -62,7 +62,8 @@ def as_indices(F, n_vertices, k, name="F"):
     if A.ndim != 2 or A.shape[1] != k:
         raise ValueError(f"{name} must have shape (m, {k}), got {A.shape}")
     if not np.issubdtype(A.dtype, np.integer):
-        if np.issubdtype(A.dtype, np.floating) and np.all(np.isfinite(A)) and np.all(A == np.round(A)):
+        if (np.issubdtype(A.dtype, np.floating) and np.all(np.isfinite(A))
+                and np.all(A == np.round(A))):
             A = A.astype(np.int64)
         else:
             raise ValueError(f"{name} must hold integer vertex indices, got dtype {A.dtype}")

@@ -194,8 +194,8 @@ def box_lower_bound(kq, Q, qlo, qhi, lo, hi, node, E):
             cx = 0.5 * (lo[node, 0] + hi[node, 0])
             cy = 0.5 * (lo[node, 1] + hi[node, 1])
             cz = 0.5 * (lo[node, 2] + hi[node, 2])
-            rad = 0.5 * (abs(nx) * (hi[node, 0] - lo[node, 0]) + abs(ny) * (hi[node, 1] - lo[node, 1])
-                         + abs(nz) * (hi[node, 2] - lo[node, 2]))
+            rad = 0.5 * (abs(nx) * (hi[node, 0] - lo[node, 0]) + abs(ny)
+                         * (hi[node, 1] - lo[node, 1]) + abs(nz) * (hi[node, 2] - lo[node, 2]))
             off = h - (nx * cx + ny * cy + nz * cz)
             g = abs(off) - rad
             if g > best:

@@ -23,9 +23,9 @@ endpoint-segment pairs (computed by clamping, Ericson 2005 Sec. 5.1.9, when the 
 well away from parallel); segment-triangle is a crossing or the best of the two endpoint-triangle,
 three vertex-segment and three interior edge-edge pairs; triangle-triangle an edge-triangle
 crossing or the best of six vertex-triangle and nine interior edge-edge pairs (an edge pair's
-boundary candidates are vertex-edge pairs, which the vertex-triangle pairs dominate). Every candidate's distance is measured between two actual
-points of the primitives, so rounding can only overestimate by an ulp-level amount, never report a
-pair that does not exist.
+boundary candidates are vertex-edge pairs, which the vertex-triangle pairs dominate). Every
+candidate's distance is measured between two actual points of the primitives, so rounding can only
+overestimate by an ulp-level amount, never report a pair that does not exist.
 
 Robustness: zero-length segments and zero-area triangles (possible on the query side, which is not
 repaired) reduce to their vertices and edges; parallel segments and a segment parallel to a
@@ -96,7 +96,8 @@ def triangle_is_degenerate(ax, ay, az, bx, by, bz, cx, cy, cz):
     ny = abz * acx - abx * acz
     nz = abx * acy - aby * acx
     n2 = nx * nx + ny * ny + nz * nz
-    return n2 <= DEGENERATE * (abx * abx + aby * aby + abz * abz) * (acx * acx + acy * acy + acz * acz)
+    return n2 <= (DEGENERATE * (abx * abx + aby * aby + abz * abz)
+                  * (acx * acx + acy * acy + acz * acz))
 
 
 @numba.njit(**NJIT)

@@ -142,7 +142,8 @@ class SmoothDistanceField:
 
     def __init__(self, mesh, F=None, *, leaf_size=1, progress=None, **mesh_kwargs):
         mesh = as_data_mesh(mesh, F, **mesh_kwargs)
-        if isinstance(leaf_size, bool) or not isinstance(leaf_size, (int, np.integer)) or leaf_size < 1:
+        if (isinstance(leaf_size, bool) or not isinstance(leaf_size, (int, np.integer))
+                or leaf_size < 1):
             raise ValueError(f"leaf_size must be an integer >= 1, got {leaf_size!r}")
         self.mesh = mesh
         self.leaf_size = int(leaf_size)

@@ -25,7 +25,8 @@ _KIND_NAMES = {"points": KIND_POINT, "edges": KIND_EDGE, "triangles": KIND_TRIAN
 
 
 class MeshRepairWarning(UserWarning):
-    """Emitted when input geometry is repaired (duplicates merged, degenerate primitives dropped)."""
+    """Emitted when input geometry is repaired (duplicates merged, degenerate primitives
+    dropped)."""
 
 
 class DataMesh:
@@ -454,7 +455,8 @@ def _read_obj(path):
                 raise _MeshFileError(f"{path}:{lineno}: malformed OBJ record "
                                      f"{line.strip()[:60]!r} ({exc})") from None
     V = np.array(verts, dtype=np.float64).reshape(-1, 3)
-    return V, np.array(edges, dtype=np.int64).reshape(-1, 2), np.array(tris, dtype=np.int64).reshape(-1, 3)
+    return (V, np.array(edges, dtype=np.int64).reshape(-1, 2),
+            np.array(tris, dtype=np.int64).reshape(-1, 3))
 
 
 def _is_ascii_off(path):

@@ -682,8 +682,8 @@ def smooth_distance_tasks(tree, Q, alpha, beta, S, wgs, out_d, out_g, out_nodes,
 def exact_distance_tasks(tree, Q, floor, out_d, out_g, out_prim, out_nodes, out_leaves, root,
                          ntasks, task0, task1):
     """:func:`exact_distance_batch` as a serial task kernel (tasks ``task0 <= t < task1`` of
-    ``ntasks``, ``root`` as in :func:`smooth_distance_tasks`), ignoring primitives at squared distance
-    ``<= floor`` (``-1.0``: none; ``0.0``: the nearest *other* point, see
+    ``ntasks``, ``root`` as in :func:`smooth_distance_tasks`), ignoring primitives at squared
+    distance ``<= floor`` (``-1.0``: none; ``0.0``: the nearest *other* point, see
     :func:`exact_distance_point`)."""
     k = tree.depth + 4
     stack = np.empty(k, dtype=np.int64)

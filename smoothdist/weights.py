@@ -222,7 +222,8 @@ _STORED = (0, 3, 6, 10, 12, 15, 17, 21, 23, 24, 28, 30, 31)
 
 #: monomials forced to zero by the axis normal-derivative constraints:
 #: s t^j and s^j t for j = 0..6 (the st term is shared): 13 monomials
-_AXIS_ZERO = tuple(sorted({_mono_index(1, j) for j in range(7)} | {_mono_index(j, 1) for j in range(7)}))
+_AXIS_ZERO = tuple(sorted({_mono_index(1, j) for j in range(7)}
+                          | {_mono_index(j, 1) for j in range(7)}))
 
 
 def _hypotenuse_rows(swap):
@@ -470,8 +471,12 @@ def eval_triangle_weight(c, s, t):
     # univariate part P(x) and P'(x)
     ps_in = c1 + s * (c2 + s * (c3 + s * (c5 + s * (c7 + s * c10))))
     pt_in = c1 + t * (c2 + t * (c3 + t * (c5 + t * (c7 + t * c10))))
-    dps = s * (2.0 * c1 + s * (3.0 * c2 + s * (4.0 * c3 + s * (5.0 * c5 + s * (6.0 * c7 + s * (7.0 * c10))))))
-    dpt = t * (2.0 * c1 + t * (3.0 * c2 + t * (4.0 * c3 + t * (5.0 * c5 + t * (6.0 * c7 + t * (7.0 * c10))))))
+    dps = s * (2.0 * c1 + s * (3.0 * c2 + s * (4.0 * c3
+                                               + s * (5.0 * c5 + s * (6.0 * c7
+                                                                      + s * (7.0 * c10))))))
+    dpt = t * (2.0 * c1 + t * (3.0 * c2 + t * (4.0 * c3
+                                               + t * (5.0 * c5 + t * (6.0 * c7
+                                                                      + t * (7.0 * c10))))))
 
     # mixed part s²t² R(s, t)
     r = c4 + c6 * spt + c8 * (s2 + t2) + c9 * st + c11 * (s2 * s + t2 * t) + c12 * st * spt

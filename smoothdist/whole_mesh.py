@@ -10,7 +10,8 @@ primitive (:mod:`smoothdist.mesh_query`). The gradient with respect to query ver
 paper's equal split (Eq. 7-8): primitive ``j``'s softmax weight times its translation gradient,
 divided among its ``n_j + 1`` vertices,
 
-    grad_k = sum_{j ∋ k} exp(-alpha_q d_hat_j) grad d_hat_j / (n_j + 1) / sum_j exp(-alpha_q d_hat_j).
+    grad_k = sum_{j ∋ k} exp(-alpha_q d_hat_j) grad d_hat_j / (n_j + 1)
+    / sum_j exp(-alpha_q d_hat_j).
 
 So the vertex gradients sum to the gradient of a rigid translation of the whole query mesh.
 Their torque ``sum_k (x_k - o) x grad_k`` applies each primitive's force at its centroid, which
@@ -21,8 +22,8 @@ torque the exact rotational derivative (:mod:`smoothdist.mesh_moment`), and
 
 Conventions: distances are unsigned, in scene units (the data mesh's frame). ``R``, ``t`` map query
 vertices ``x -> R x + t`` into that frame; gradients are with respect to the transformed vertex
-positions. Bounds: ``d_hat <= min_j d_hat_j <= exact minimum pairwise distance``, and Barnes-Hut only
-lowers it (``d_hat_beta <= d_hat_0``).
+positions. Bounds: ``d_hat <= min_j d_hat_j <= exact minimum pairwise distance``, and Barnes-Hut
+only lowers it (``d_hat_beta <= d_hat_0``).
 """
 
 import math

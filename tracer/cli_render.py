@@ -147,7 +147,8 @@ _NUMBERS = (("--alpha", "alpha", 0.0, False), ("--alpha-u", "alpha_u", 0.0, Fals
 def check_options(args):
     """The command line's numbers, checked before any file is read or any output looked at
     (so ``--size 0 0`` is reported as such, not as an existing output). One-line
-    :class:`~tracer.errors.CLIError` naming the flag; the scene and mesh loaders check them again."""
+    :class:`~tracer.errors.CLIError` naming the flag; the scene and mesh loaders check them
+    again."""
     import math
 
     if args.size:

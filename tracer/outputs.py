@@ -1,7 +1,7 @@
 """What every ``tracer`` command shares: its error class, option checks and output files.
 
-* :class:`~tracer.errors.CLIError`: bad input, reported by :func:`tracer.cli.main` as one ``error: ...`` line
-  with exit status 2;
+* :class:`~tracer.errors.CLIError`: bad input, reported by :func:`tracer.cli.main` as one
+  ``error: ...`` line with exit status 2;
 * option checks with one-line errors naming the option: :func:`positive`,
   :func:`non_negative`, :func:`at_least`, :func:`float_list` and :func:`check_size` (one pixel
   limit, :data:`MAX_SIDE`, for every command that takes an image size in this form);
@@ -47,14 +47,16 @@ MAX_SIDE = 8192
 
 
 def positive(value, name):
-    """``value`` if it is a finite number > 0; else a :class:`~tracer.errors.CLIError` naming ``name``."""
+    """``value`` if it is a finite number > 0; else a :class:`~tracer.errors.CLIError` naming
+    ``name``."""
     if not (math.isfinite(value) and value > 0):
         raise CLIError(f"{name} must be a finite number > 0, got {value:g}")
     return value
 
 
 def non_negative(value, name):
-    """``value`` if it is a finite number >= 0; else a :class:`~tracer.errors.CLIError` naming ``name``."""
+    """``value`` if it is a finite number >= 0; else a :class:`~tracer.errors.CLIError` naming
+    ``name``."""
     if not (math.isfinite(value) and value >= 0):
         raise CLIError(f"{name} must be >= 0, got {value:g}")
     return value

@@ -98,7 +98,8 @@ def check_arguments(args):
 
 def check_reachable(address, timeout=CONNECT_TIMEOUT):
     """Fail fast, before a study creates any output, when no Dask scheduler answers at
-    ``address``: one-line :class:`~tracer.errors.CLIError` after at most about ``timeout`` seconds."""
+    ``address``: one-line :class:`~tracer.errors.CLIError` after at most about ``timeout``
+    seconds."""
     import asyncio
 
     scheme, host, port = _split_address(address)
@@ -209,8 +210,8 @@ class StudyProgress:
 
     Each task has an a-priori weight (its expected cost). ``item(w)`` returns a callback that an
     in-process task reports its own progress to (``done, total, elapsed`` like
-    :class:`tracer.rendering.frame.ProgressBar`); ``finish(w, line)`` marks a task done and logs a line,
-    ``fail(w, line)`` marks it failed. On a terminal the bar redraws in place; in a log it
+    :class:`tracer.rendering.frame.ProgressBar`); ``finish(w, line)`` marks a task done and logs a
+    line, ``fail(w, line)`` marks it failed. On a terminal the bar redraws in place; in a log it
     prints one line per finished task.
     """
 
@@ -435,7 +436,8 @@ def run_tasks(fn, tasks, *, on_result, on_failure=None, scheduler="local", worke
 
 def connect(mode, workers=None, timeout=CONNECT_TIMEOUT):
     """``(client, cluster)``: a LocalCluster (``mode == "local"``) or a client of the scheduler
-    at the address ``mode`` (cluster None). One-line :class:`~tracer.errors.CLIError` when it cannot be had."""
+    at the address ``mode`` (cluster None). One-line :class:`~tracer.errors.CLIError` when it cannot
+    be had."""
     try:
         from distributed import Client, LocalCluster
     except ImportError:

@@ -104,9 +104,9 @@ def resolve_path(base, p, path, where):
 
 
 def read_json(path, what="scene"):
-    """Parse a JSON file into Python values, with one-line :class:`~tracer.errors.SceneError` messages for a
-    file that cannot be read or parsed; ``what`` names the kind of file in them (``"scene
-    file not found: ..."``)."""
+    """Parse a JSON file into Python values, with one-line :class:`~tracer.errors.SceneError`
+    messages for a file that cannot be read or parsed; ``what`` names the kind of file in them
+    (``"scene file not found: ..."``)."""
     path = os.fspath(path)
     name = os.path.basename(path)
     if not os.path.exists(path):

@@ -207,11 +207,11 @@ def scene_field(scene, points, chunk=_CHUNK):
     Notes
     -----
     Same formula as :func:`tracer.rendering.march.scene_distance`, evaluated with the library's
-    parallel batch queries per object: smooth mode ``d_k = field_k.smooth_distance(alpha_k,
-    beta_k, alpha_u_k, scene.gradient) - c_k`` (``c_k`` the object's smooth offset), combined for several objects by
-    ``m - log(sum exp(-a (d_k - m))) / a`` with ``a`` the largest alpha and ``m = min d_k``
-    (gradient: the ``exp``-weighted mean); exact mode ``min_k (exact_k - offset_k)`` with the
-    gradient of the minimiser.
+    parallel batch queries per object: smooth mode
+    ``d_k = field_k.smooth_distance(alpha_k, beta_k, alpha_u_k, scene.gradient) - c_k`` (``c_k`` the
+    object's smooth offset), combined for several objects by ``m - log(sum exp(-a (d_k - m))) / a``
+    with ``a`` the largest alpha and ``m = min d_k`` (gradient: the ``exp``-weighted mean); exact
+    mode ``min_k (exact_k - offset_k)`` with the gradient of the minimiser.
     """
     P = np.ascontiguousarray(np.asarray(points, dtype=np.float64).reshape(-1, 3))
     n = P.shape[0]

@@ -2,8 +2,8 @@
 
 A render first traces one ray per pixel, through the pixel's own position (the tile kernels of
 :mod:`tracer.rendering.march`); those *centre samples* give the depth, normals and hit mask of a
-:class:`~tracer.rendering.frame.RenderResult`. With ``samples = N > 1`` every pixel gets ``N - 1`` more
-rays (:func:`tracer.rendering.march.trace_samples`) at the offsets of :func:`sample_offsets`: a
+:class:`~tracer.rendering.frame.RenderResult`. With ``samples = N > 1`` every pixel gets ``N - 1``
+more rays (:func:`tracer.rendering.march.trace_samples`) at the offsets of :func:`sample_offsets`: a
 low-discrepancy (R2) sequence warped so that the offsets are distributed like a tent filter of
 radius one pixel. Every sample then carries the same weight and the pixel is their mean, which
 is the tent-filtered image (filter importance sampling); sample 0 is the centre.
@@ -20,9 +20,9 @@ from beyond the box, which bound where any of them can meet the surface
 (:data:`SAMPLE_OMEGA`), Newton steps down to a grazing cosine of :data:`SAMPLE_NEWTON_COS`
 and the scene's hit threshold (:data:`EPS_PX`).
 
-Every sample is shaded (:mod:`tracer.rendering.shading`, or :mod:`tracer.rendering.lighting` for ``"lit"``) and
-averaged with its coverage: lit colours in linear light (encoded to sRGB at the end), the
-other shadings in display values, as they were defined. The alpha of a pixel is the fraction of
+Every sample is shaded (:mod:`tracer.rendering.shading`, or :mod:`tracer.rendering.lighting` for
+``"lit"``) and averaged with its coverage: lit colours in linear light (encoded to sRGB at the end),
+the other shadings in display values, as they were defined. The alpha of a pixel is the fraction of
 its samples that hit the surface (or, transparent with a ground, the ground's shadow: a shadow
 catcher). The centre samples' shadow and occlusion are computed at every
 :data:`LIGHT_STRIDE`-th pixel of every :data:`LIGHT_STRIDE`-th row and filled in where the
@@ -73,19 +73,19 @@ SAMPLE_SPREAD = 0.02
 #: pixel saves 10 % of the time (0.25: 22 %) but fattens silhouettes (coverage +0.036 on
 #: edge pixels at 0.1), so it is off
 EPS_PX = 0.0
-#: cap of the extra samples' over-relaxed sphere-tracing steps (:func:`tracer.rendering.march.march_ray`:
-#: steps lengthened by the slope of the distance along the ray, each one checked). Silhouette
-#: samples graze the surface and then leave it, where plain steps grow slowly. Measured on
-#: the 512^2 lit bunny, adaptive 16: the samples' distance queries (with the cone passes)
-#: 1.07 M with the fixed factor 1.6 of before (which fell back to 1 for good after its first
-#: failed step); with the slope rule at ``OMEGA_SAFETY`` 0.9, 809 k capped at 2 or at 3 (at
-#: 0.8: 842 k capped at 1.6, 828 k at 3). Camera rays take the same rule
+#: cap of the extra samples' over-relaxed sphere-tracing steps
+#: (:func:`tracer.rendering.march.march_ray`: steps lengthened by the slope of the distance along
+#: the ray, each one checked). Silhouette samples graze the surface and then leave it, where plain
+#: steps grow slowly. Measured on the 512^2 lit bunny, adaptive 16: the samples' distance queries
+#: (with the cone passes) 1.07 M with the fixed factor 1.6 of before (which fell back to 1 for good
+#: after its first failed step); with the slope rule at ``OMEGA_SAFETY`` 0.9, 809 k capped at 2 or
+#: at 3 (at 0.8: 842 k capped at 1.6, 828 k at 3). Camera rays take the same rule
 #: (:data:`tracer.rendering.march.OMEGA`, also 2)
 SAMPLE_OMEGA = 2.0
 
 #: the extra samples take Newton steps (:func:`tracer.rendering.march.march_ray`) unless
-#: ``-(g . dir) < SAMPLE_NEWTON_COS |g|`` (camera rays: :data:`tracer.rendering.march.NEWTON_COS`, 0.2).
-#: Silhouette samples graze the surface, where sphere steps converge slowly. Measured on the
+#: ``-(g . dir) < SAMPLE_NEWTON_COS |g|`` (camera rays: :data:`tracer.rendering.march.NEWTON_COS`,
+#: 0.2). Silhouette samples graze the surface, where sphere steps converge slowly. Measured on the
 #: 512^2 lit bunny, adaptive 16 (before the middle stage): 0.2 -> 27.3 queries per extra ray
 #: (30 on hits, 22 on misses), 0.05 -> 22.0, 0.02 -> 19.8 (12 on hits), 0.005 -> 19.4; 18.0 ->
 #: 14.6 s; 285 of 262,144 pixels changed, mean alpha change 1e-6. The price: a Newton step
@@ -121,7 +121,7 @@ class _Shader:
         self.scene = scene
         self.camera = camera
         self.arrays = arrays
-        self.kargs = kargs                  # tracer.rendering.frame.RayArgs: the render's own queries
+        self.kargs = kargs  # tracer.rendering.frame.RayArgs: the render's own queries
         self.lit = scene.shading == "lit"
         self.transparent = bool(getattr(scene, "transparent", False))
         self.nobj = len(scene.objects)
@@ -665,8 +665,9 @@ def form_image(scene, camera, arrays, kargs, options, centre, samples=1, adaptiv
     adaptive selection), and average.
 
     ``kargs``: :class:`tracer.rendering.frame.RayArgs`, the march kernels' leading arguments;
-    ``options``: :class:`tracer.rendering.frame.TraceOptions`; ``centre = (hit (H, W), t (H, W), grad
-    (H, W, 3), objs (H, W))`` (``objs``: the object each hit shows, as the march found it). Returns
+    ``options``: :class:`tracer.rendering.frame.TraceOptions`;
+    ``centre = (hit (H, W), t (H, W), grad (H, W, 3), objs (H, W))`` (``objs``: the object each hit
+    shows, as the march found it). Returns
     ``(rgb (H, W, 3) uint8, alpha (H, W) float32, spp (H, W) int32, info dict)``; ``info``
     holds the centre samples' ``shadow``, ``ao``, ``object`` and ``ground`` maps (lit only)
     and the ``rays``, ``light_queries`` and ``shading_queries`` counts.

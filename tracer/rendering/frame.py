@@ -1,9 +1,9 @@
 """What one frame is made of: the scene as the march kernels take it, the camera, the result.
 
 The pieces that :func:`tracer.render`, the film (:mod:`tracer.rendering.film`), the light
-(:mod:`tracer.rendering.lighting`) and the GPU path (:mod:`tracer.rendering.gpu_render`) share, kept below all of
-them so that none imports another sideways: :class:`RenderResult`, :class:`SceneArrays` and
-:func:`scene_arrays`, the march kernels' named arguments (:class:`RayArgs`,
+(:mod:`tracer.rendering.lighting`) and the GPU path (:mod:`tracer.rendering.gpu_render`) share, kept
+below all of them so that none imports another sideways: :class:`RenderResult`, :class:`SceneArrays`
+and :func:`scene_arrays`, the march kernels' named arguments (:class:`RayArgs`,
 :class:`TraceOptions`), the camera checks, the plain shadings (:func:`shade`) and the
 progress bar. :mod:`tracer.rendering.renderer` re-exports every name.
 """
@@ -160,7 +160,7 @@ class SceneArrays(NamedTuple):
         The objects' trees, concatenated into one forest when there are several.
     roots : (k,) int64
         Root node of each object.
-    params : (k, tracer.rendering.march.P_COLUMNS) or (k, tracer.rendering.march.P_COLUMNS_POSED) float64
+    params : (k, march.P_COLUMNS) or (k, march.P_COLUMNS_POSED) float64
         The per-object parameter table, columns ``tracer.rendering.march.P_*``.
     mode : int
         ``tracer.rendering.march.MODE_SMOOTH`` or ``MODE_EXACT``.
@@ -255,8 +255,8 @@ def _posed(scene, transforms, params, grow):
 def kernel_roots(roots, params, mode, tol):
     """The ``roots`` argument for :mod:`tracer.rendering.march`: one unposed object in smooth mode
     without tolerance pruning (``tol`` 0) is passed as its root node (an int), which selects
-    the kernels' lean path (:func:`tracer.rendering.march.scene_distance`; same values, far less code
-    to compile); anything else as the ``(k,)`` array."""
+    the kernels' lean path (:func:`tracer.rendering.march.scene_distance`; same values, far less
+    code to compile); anything else as the ``(k,)`` array."""
     if (mode == march.MODE_SMOOTH and roots.size == 1 and params.shape[1] == march.P_COLUMNS
             and not tol > 0.0):
         return int(roots[0])

@@ -57,7 +57,8 @@ _KERNELS = {}
 
 @numba.njit(**NJIT)
 def _channel(v):
-    """``127 v + 128`` clipped to 0..255 and truncated, as :func:`tracer.rendering.shading.shade_normals`."""
+    """``127 v + 128`` clipped to 0..255 and truncated, as
+    :func:`tracer.rendering.shading.shade_normals`."""
     x = 127.0 * v + 128.0
     if x < 0.0:
         x = 0.0
@@ -70,8 +71,8 @@ def _channel(v):
 def normal_colour(gx, gy, gz, cam):
     """The ``"normals"`` colour ``(r, g, b)`` of a hit with distance gradient ``g``: the unit
     gradient in the camera frame ``(g . horizontal, g . vertical, -g . forward)``
-    (:func:`tracer.rendering.shading.view_normals`), ``127 n + 128`` per channel, truncated; a zero or
-    non-finite gradient gives the zero normal."""
+    (:func:`tracer.rendering.shading.view_normals`), ``127 n + 128`` per channel, truncated; a zero
+    or non-finite gradient gives the zero normal."""
     n = math.sqrt(gx * gx + gy * gy + gz * gz)
     ux = 0.0
     uy = 0.0
@@ -202,8 +203,9 @@ def prepare(scene, transforms=None, relax=None, omega=None, newton=None):
                           "camera.origin outside or lower alpha's blur")
     on = (lambda a: a) if sdcuda.simulated() else cu.to_device
     bg = tuple(int(v) for v in scene.background)
-    # roots as the (k,) array: the general path of tracer.rendering.march.scene_distance (the same values
-    # as the lean one that tracer.rendering.renderer.kernel_roots picks for the CPU with an int root)
+    # roots as the (k,) array: the general path of tracer.rendering.march.scene_distance (the same
+    # values as the lean one that tracer.rendering.renderer.kernel_roots picks for the CPU with an
+    # int root)
     data = (sdcuda.device_tree(tree), on(np.ascontiguousarray(roots, np.int64)), on(params),
             on(camera.as_array()), on(np.asarray(lo, np.float64)),
             on(np.asarray(hi, np.float64)), bg)
@@ -253,8 +255,9 @@ def launch(args, shape, cone=True, block=BLOCK, out=None):
 
 def render_cuda(scene, *, progress=None, transforms=None, relax=None, omega=None, newton=None,
                 samples=None, adaptive=None, cone=None):
-    """:func:`tracer.render` on the GPU (its arguments; ``band_rows`` does not apply). Returns a :class:`tracer.rendering.frame.RenderResult`; ``seconds`` is the time of
-    the launch and the copies back."""
+    """:func:`tracer.render` on the GPU (its arguments; ``band_rows`` does not apply). Returns a
+    :class:`tracer.rendering.frame.RenderResult`; ``seconds`` is the time of the launch and the
+    copies back."""
     from tracer.rendering.frame import RenderResult, _progress_callback, _samples, shade
 
     samples = _samples(scene.samples if samples is None else samples)

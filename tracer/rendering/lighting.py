@@ -1,8 +1,8 @@
 """Light for publication images: key and fill lights, soft shadows, ambient occlusion, a ground.
 
 The ``"lit"`` shading. Everything is computed from the same distance the tracer marches, with
-the same kernels (:func:`tracer.rendering.march.scene_distance`), so Barnes-Hut, ``tol``, posed objects
-and exact-offset mode apply to every shadow and occlusion query as they do to camera rays.
+the same kernels (:func:`tracer.rendering.march.scene_distance`), so Barnes-Hut, ``tol``, posed
+objects and exact-offset mode apply to every shadow and occlusion query as they do to camera rays.
 
 * **Soft shadows** (:func:`soft_shadow`): a ray from the surface towards the key light is
   sphere-traced through the distance; the smallest ``d / (penumbra t)`` seen along it is the
@@ -335,8 +335,8 @@ def ground_height(arrays, data_vertices, up, eps, max_steps=400):
     """Height (along ``up``) of the surface's lowest point: upward rays from below the lowest
     data vertices (the ten lowest) to the surface; the smallest height where they land.
 
-    ``arrays``: :class:`tracer.rendering.frame.SceneArrays`. Falls back to the bottom of the scene box
-    (which bounds the surface) if no ray lands."""
+    ``arrays``: :class:`tracer.rendering.frame.SceneArrays`. Falls back to the bottom of the scene
+    box (which bounds the surface) if no ray lands."""
     from tracer.rendering.frame import kernel_roots
 
     tree, roots, params, mode, lo, hi, depth_max, tol = arrays

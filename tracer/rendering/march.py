@@ -6,8 +6,8 @@ a ``(k, P_COLUMNS)`` float64 parameter table ``params``, one row per object, the
 ``mode`` (``MODE_SMOOTH`` or ``MODE_EXACT``) and its ``tol``: one scalar for the whole
 scene, the tolerance-controlled pruning of every object (0 = off, the default
 ``smoothdist.kernels.DEFAULT_TOL``; see ``smoothdist.kernels.smooth_distance_point_tol``).
-The columns of ``params`` (built by ``tracer.rendering.frame.scene_arrays``; the kernels read them by
-these names only):
+The columns of ``params`` (built by ``tracer.rendering.frame.scene_arrays``; the kernels read them
+by these names only):
 
 =================== ======= =============================================================
 column              index   meaning
@@ -29,9 +29,10 @@ combined as the paper combines them: by a second LogSumExp with the largest alph
 mode), or by the minimum (exact-offset mode, where each object's distance is
 ``exact - offset``). In smooth mode each object's ``d_hat - c`` is combined (``c`` its
 ``P_OFFSET``, 0 by default): the surface ``d_hat = c``. ``d_hat - c`` is as Lipschitz as
-``d_hat`` and lies below ``d - c``, so every bound below holds for it with ``c`` subtracted. The object with the nearest root box is evaluated first; an object whose
-root box alone shows that it cannot change the result (:func:`object_lower_bound`: not below
-the minimum, or a LogSumExp term below one unit in the last place of the sum) is skipped.
+``d_hat`` and lies below ``d - c``, so every bound below holds for it with ``c`` subtracted. The
+object with the nearest root box is evaluated first; an object whose root box alone shows that it
+cannot change the result (:func:`object_lower_bound`: not below the minimum, or a LogSumExp term
+below one unit in the last place of the sum) is skipped.
 
 Safety (docs/design-notes.md §4): each ray starts where it enters the scene box grown by
 ``margin`` (the isosurface can lie at most ``log(A^S N) / alpha`` outside the data, Barnes-Hut
@@ -144,8 +145,8 @@ def scene_distance(tree, roots, params, mode, tol, x, y, z, stack, dstack, slack
     ``_scene_distance_objects``), so that a ray's hit knows what it shows.
 
     ``roots`` may also be one root node, an int: one unposed object in smooth mode without
-    tolerance pruning (``tracer.rendering.renderer.kernel_roots``), the same value as the general path
-    with ``roots = [root]``. Numba then compiles only that branch (``isinstance`` is resolved
+    tolerance pruning (``tracer.rendering.renderer.kernel_roots``), the same value as the general
+    path with ``roots = [root]``. Numba then compiles only that branch (``isinstance`` is resolved
     at compile time), which is what keeps the first render of such a scene short.
     """
     if isinstance(roots, int):
@@ -344,7 +345,8 @@ def newton_distance(eps, lo, hi, newton=NEWTON):
 
 @numba.njit(**NJIT)
 def ray_box(ox, oy, oz, dx, dy, dz, lo, hi):
-    """Slab test: ``(t_enter, t_exit)`` of the ray with box ``lo..hi``; ``t_enter > t_exit`` misses."""
+    """Slab test: ``(t_enter, t_exit)`` of the ray with box ``lo..hi``; ``t_enter > t_exit``
+    misses."""
     t0 = 0.0
     t1 = np.inf
     o = (ox, oy, oz)

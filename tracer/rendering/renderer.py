@@ -1,9 +1,10 @@
 """Render a :class:`~tracer.scenes.scene.Scene`: trace, shade, and collect per-pixel buffers.
 
 :func:`render` and the tile scheduler (:func:`trace_tiles`); the pieces a frame is made of
-(:class:`~tracer.rendering.frame.RenderResult`, :func:`~tracer.rendering.frame.scene_arrays`, ...) live in :mod:`tracer.rendering.frame` and the thread
-helpers in :mod:`tracer.rendering.threads`, below the film, the light and the GPU path that use them;
-their names are importable from here as before.
+(:class:`~tracer.rendering.frame.RenderResult`, :func:`~tracer.rendering.frame.scene_arrays`, ...)
+live in :mod:`tracer.rendering.frame` and the thread helpers in :mod:`tracer.rendering.threads`,
+below the film, the light and the GPU path that use them; their names are importable from here as
+before.
 """
 
 import math
@@ -26,6 +27,16 @@ __all__ = ["render", "RenderResult", "RenderError", "camera_of", "distance_at_ca
            "ProgressBar"]
 
 
+def _check_steps(newton, relax):
+    """``newton`` and ``relax`` of :func:`render`: None or a finite number >= 0, else a
+    ``ValueError`` naming the argument."""
+    for name, value in (("newton", newton), ("relax", relax)):
+        if value is not None and not (isinstance(value, (int, float, np.number))
+                                      and not isinstance(value, bool)
+                                      and math.isfinite(value) and value >= 0):
+            raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
+
+
 def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None, omega=None,
            cone=None, newton=None, samples=None, adaptive=None, device="cpu"):
     """Trace and shade ``scene``.
@@ -34,11 +45,12 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
     ----------
     scene : tracer.scenes.scene.Scene
     transforms : list of (R (3, 3), t (3,)), optional
-        A rigid pose per object (see :func:`~tracer.rendering.frame.scene_arrays`); the trees are not rebuilt.
+        A rigid pose per object (see :func:`~tracer.rendering.frame.scene_arrays`); the trees are
+        not rebuilt.
     progress : bool, callable(done_pixels, total_pixels, elapsed_s) or None
         A callable is called a few times a second while tracing, and at the end; ``True``
-        shows a text progress bar on stderr (:class:`~tracer.rendering.frame.ProgressBar`); ``None`` or ``False``:
-        none.
+        shows a text progress bar on stderr (:class:`~tracer.rendering.frame.ProgressBar`); ``None``
+        or ``False``: none.
     band_rows : int, optional
         Trace the image in bands of this many rows, one after the other (default: one band;
         the image does not depend on it when it is a multiple of ``tracer.rendering.march.TILE``).
@@ -64,8 +76,8 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
         Give the extra samples only to pixels that disagree with a neighbour (default: the
         scene's ``adaptive``).
     device : {"cpu", "cuda"}
-        ``"cuda"``: trace on the GPU (:mod:`tracer.rendering.gpu_render`; the ``gpu`` extra; one sample
-        per pixel, not the ``"lit"`` shading; ``band_rows`` does not apply).
+        ``"cuda"``: trace on the GPU (:mod:`tracer.rendering.gpu_render`; the ``gpu`` extra; one
+        sample per pixel, not the ``"lit"`` shading; ``band_rows`` does not apply).
 
     Raises
     ------
@@ -80,11 +92,7 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
         return render_cuda(scene, progress=progress, transforms=transforms, relax=relax,
                            omega=omega, newton=newton, samples=samples, adaptive=adaptive,
                            cone=cone)
-    for name, value in (("newton", newton), ("relax", relax)):
-        if value is not None and not (isinstance(value, (int, float, np.number))
-                                      and not isinstance(value, bool)
-                                      and math.isfinite(value) and value >= 0):
-            raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
+    _check_steps(newton, relax)
     progress = _progress_callback(progress, scene)
     camera = camera_of(scene)
     arrays = scene_arrays(scene, transforms)
@@ -150,8 +158,8 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
 
 #: a render's tiles are taken by the threads in chunks of ``1 / CHUNKS_PER_THREAD`` of a
 #: thread's share (at least one tile). The chunks follow the scattered tile order of
-#: ``tracer.rendering.march.render_rows``, so each is a sample of the whole image and costs about the
-#: same; a thread that drew expensive tiles takes fewer chunks. Each chunk is one kernel call
+#: ``tracer.rendering.march.render_rows``, so each is a sample of the whole image and costs about
+#: the same; a thread that drew expensive tiles takes fewer chunks. Each chunk is one kernel call
 #: (8 us of dispatch under the GIL, serial): chunks of 4 tiles gave a 1080p frame 32,400 calls
 #: (0.25 s serial); 64 chunks per thread leave at most 1/64 of a share idle at the end
 CHUNKS_PER_THREAD = 64
@@ -162,9 +170,11 @@ REPORT_SECONDS = 0.25
 def trace_tiles(args, row0, row1, depth_max, outputs, options, report=None, threads=None):
     """Trace image rows ``row0 <= r < row1`` into ``outputs``.
 
-    ``args`` (:class:`~tracer.rendering.frame.RayArgs`) and ``outputs = (hit, tbuf, grad, steps, leaves, bisect,
-    objs)`` as for :func:`tracer.rendering.march.render_rows`, ``options`` (:class:`~tracer.rendering.frame.TraceOptions`).
-    ``threads`` Python threads (default :func:`~tracer.rendering.threads.render_threads`) take chunks of tiles
+    ``args`` (:class:`~tracer.rendering.frame.RayArgs`) and
+    ``outputs = (hit, tbuf, grad, steps, leaves, bisect, objs)`` as for
+    :func:`tracer.rendering.march.render_rows`, ``options``
+    (:class:`~tracer.rendering.frame.TraceOptions`). ``threads`` Python threads (default
+    :func:`~tracer.rendering.threads.render_threads`) take chunks of tiles
     (:data:`CHUNKS_PER_THREAD`) from a shared counter and trace them with
     the serial, GIL-free kernel :func:`tracer.rendering.march.render_tiles`, so that a thread that
     drew cheap tiles takes more; every tile is traced by one thread start to finish, so the

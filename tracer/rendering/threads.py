@@ -1,5 +1,6 @@
 """Python threads for a render's per-pixel work: the serial, GIL-free task kernels and numpy
-loops that release the GIL (:func:`~tracer.rendering.threads.run_tasks`, :func:`~tracer.rendering.threads.in_bands`), with numba's thread count."""
+loops that release the GIL (:func:`~tracer.rendering.threads.run_tasks`,
+:func:`~tracer.rendering.threads.in_bands`), with numba's thread count."""
 
 from smoothdist.kernels import PARALLEL
 from smoothdist.schedule import run_tasks as _run_tasks

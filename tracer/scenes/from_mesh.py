@@ -1,11 +1,13 @@
-"""From a user's mesh to an image in one call: :func:`~tracer.render_mesh` and :func:`~tracer.mesh_scene`.
+"""From a user's mesh to an image in one call: :func:`~tracer.render_mesh` and
+:func:`~tracer.mesh_scene`.
 
 ``tracer.render_mesh(mesh)`` takes a mesh file path, numpy ``(V, F)`` arrays, a
 ``trimesh.Trimesh`` / ``PointCloud`` / ``path.Path3D``, a ``pyvista.PolyData`` or a
 :class:`smoothdist.DataMesh`, picks ``alpha="auto"`` and ``alpha_u="auto"`` (see
 :meth:`smoothdist.SmoothDistanceField.auto_alpha`), frames the whole surface with
-:func:`tracer.rendering.camera.frame_points` and returns a :class:`tracer.rendering.frame.RenderResult` of numpy
-arrays (``rgb``, ``depth``, ``normals``, ``hit``, ``steps``, ...; ``.save(path)``).
+:func:`tracer.rendering.camera.frame_points` and returns a
+:class:`tracer.rendering.frame.RenderResult` of numpy arrays (``rgb``, ``depth``, ``normals``,
+``hit``, ``steps``, ...; ``.save(path)``).
 """
 
 import os
@@ -58,7 +60,8 @@ def guess_up(mesh):
 
 
 def resolve_up(mesh, up):
-    """``up`` checked (``"x"``, ``"y"``, ``"z"``), or :func:`~tracer.scenes.from_mesh.guess_up` for ``"auto"`` / None."""
+    """``up`` checked (``"x"``, ``"y"``, ``"z"``), or :func:`~tracer.scenes.from_mesh.guess_up` for
+    ``"auto"`` / None."""
     from tracer.rendering.camera import UP_AXES
 
     if up is None or up == "auto":
@@ -104,8 +107,8 @@ def mesh_scene(mesh, F=None, *, kind=None, alpha=_MESH["alpha"], alpha_u=_MESH["
         region the surface can occupy (the data's vertices grown by the largest possible
         inflation; :func:`tracer.rendering.camera.frame_points`).
     up : {"auto", "x", "y", "z"}
-        The data's up axis for ``view``. ``"auto"`` (:func:`~tracer.scenes.from_mesh.guess_up`): z for STL and PLY
-        files and for trimesh / pyvista objects, y otherwise (OBJ, OFF, arrays).
+        The data's up axis for ``view``. ``"auto"`` (:func:`~tracer.scenes.from_mesh.guess_up`): z
+        for STL and PLY files and for trimesh / pyvista objects, y otherwise (OBJ, OFF, arrays).
     camera : (origin, dest, up), optional
         An explicit camera instead of ``view``.
     shading : {"lit", "normals", "matcap", "headlight"}
@@ -258,7 +261,8 @@ def scene_dict(scene, scene_path, source_paths):
         if scene.mode == "exact" or o.level(scene.mode) > 0:
             od["offset"] = float(f"{o.level(scene.mode):.6g}")
         objs.append(od)
-    out = {"description": f"written by tracer render --save-scene from {os.path.basename(source_paths[0])}",
+    out = {"description": ("written by tracer render --save-scene from "
+                           f"{os.path.basename(source_paths[0])}"),
            "camera": {k: [float(f"{v:.9g}") for v in np.asarray(vec, dtype=float)]
                       for k, vec in (("origin", scene.camera_origin), ("dest", scene.camera_dest),
                                      ("up", scene.camera_up))},

@@ -28,14 +28,14 @@ set ``d_hat = C`` about 0.75 mean edge lengths out, without dimples; issue 35).
 Several objects are combined by LogSumExp with the largest alpha (paper Sec. 3.6).
 
 The complete reference (every key: type, default, example) is the JSON Schema
-``tracer/scenes/scene.schema.json``, rendered as ``docs/scene-format.md``; a test keeps both equal to
-what this loader accepts.
+``tracer/scenes/scene.schema.json``, rendered as ``docs/scene-format.md``; a test keeps both equal
+to what this loader accepts.
 
 Relative paths resolve against the scene file's folder.
 
 Validation: :func:`load_scene` checks every key, value, camera and referenced file before it
-reads any mesh, and raises :class:`~tracer.errors.SceneError` (a ``ValueError``) with a one-line message
-``<scene file>: <key> <problem>``. Limits: images up to 64 megapixels, ``max_steps`` up to
+reads any mesh, and raises :class:`~tracer.errors.SceneError` (a ``ValueError``) with a one-line
+message ``<scene file>: <key> <problem>``. Limits: images up to 64 megapixels, ``max_steps`` up to
 1e6, scene files up to 16 MiB, coordinates up to 1e50 in absolute value. When the data has
 no extent (a single point) the default ``eps`` is ``1e-4 x`` the surface's size
 (``max(1/alpha, offset)``) instead of the bbox diagonal.
@@ -239,10 +239,12 @@ def load_scene(path, overrides=None):
     if max_steps > MAX_STEPS:
         raise file_error(path, "max_steps", f"must be at most {MAX_STEPS}, got {max_steps}")
     mode = choice(overrides.get("mode") or data.get("mode", _FILE["mode"]), MODES, path, "mode")
-    gradient = choice(data.get("gradient", _FILE["gradient"]), ("metric", "exact"), path, "gradient")
+    gradient = choice(data.get("gradient", _FILE["gradient"]), ("metric", "exact"), path,
+                      "gradient")
     bg = data.get("background", list(_FILE["background"]))
     if (not isinstance(bg, list) or len(bg) != 3
-            or not all(isinstance(v, int) and not isinstance(v, bool) and 0 <= v <= 255 for v in bg)):
+            or not all(isinstance(v, int) and not isinstance(v, bool) and 0 <= v <= 255
+                       for v in bg)):
         raise file_error(path, "background", f"must be [r, g, b] integers 0-255, got {show(bg)}")
     samples = top("samples", _FILE["samples"], "--samples", positive=True, integer=True)
     if samples > MAX_SAMPLES:
@@ -321,8 +323,8 @@ def color(value, path, where):
 
 
 def _lighting(ld, override, path):
-    """The ``lighting`` object as :class:`~tracer.rendering.lighting.Lighting` (``override``: a dict of
-    already-checked values from the command line, applied on top)."""
+    """The ``lighting`` object as :class:`~tracer.rendering.lighting.Lighting` (``override``: a dict
+    of already-checked values from the command line, applied on top)."""
     check_keys(ld, _LIGHTING_KEYS, path, "lighting")
     kw = {}
     for key in ("shadows", "ao", "ground"):
@@ -482,7 +484,8 @@ def _part_mesh(ps, path):
 
 
 def merge_meshes(meshes, name="mixed"):
-    """Concatenate several :class:`~smoothdist.DataMesh` into one mixed mesh over a shared vertex array."""
+    """Concatenate several :class:`~smoothdist.DataMesh` into one mixed mesh over a shared vertex
+    array."""
     V, P, E, T = [], [], [], []
     off = 0
     for m in meshes:
@@ -514,8 +517,8 @@ def scene_from_field(field, *, alpha, alpha_u=_API["alpha_u"], beta=_API["beta"]
         As in the scene file; ``"auto"`` is ``field.auto_alpha()``.
     alpha_u : float, "auto", "off" or None
         As ``max_alpha`` in the scene file; ``"auto"`` is ``field.auto_alpha_u(alpha)`` (no
-        ribbing); ``"off"`` (the default here, unlike scene files: see :mod:`tracer.scenes.settings`)
-        or None is ``alpha``, i.e. no attenuation.
+        ribbing); ``"off"`` (the default here, unlike scene files: see
+        :mod:`tracer.scenes.settings`) or None is ``alpha``, i.e. no attenuation.
     beta : float
         Barnes-Hut parameter.
     camera : (origin, dest, up), or a view name, optional
@@ -534,11 +537,14 @@ def scene_from_field(field, *, alpha, alpha_u=_API["alpha_u"], beta=_API["beta"]
         Tolerance-controlled pruning (>= 0; 0 = off), as the scene key ``tol``.
     newton : float, optional
         Smooth mode: Newton steps once the distance is below ``newton x eps`` (>= 0; 0 =
-        plain sphere tracing; default ``tracer.rendering.march.NEWTON``), as the scene key ``newton``.
+        plain sphere tracing; default ``tracer.rendering.march.NEWTON``), as the scene key
+        ``newton``.
     up : {"x", "y", "z"}
-        The data's up axis, for a view name ``camera`` (:func:`tracer.rendering.camera.view_vectors`).
+        The data's up axis, for a view name ``camera``
+        (:func:`tracer.rendering.camera.view_vectors`).
     samples : int
-        Anti-aliasing samples per pixel (1 to ``tracer.rendering.film.MAX_SAMPLES``), as the scene key.
+        Anti-aliasing samples per pixel (1 to ``tracer.rendering.film.MAX_SAMPLES``), as the scene
+        key.
     adaptive : bool
         Extra samples only where neighbouring pixels disagree (:mod:`tracer.rendering.film`).
     transparent : bool

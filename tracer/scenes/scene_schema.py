@@ -159,7 +159,8 @@ def markdown(schema=None):
     """The Markdown reference of the scene format (``docs/scene-format.md``)."""
     schema = schema or load_schema()
     out = ["# Scene file format", "",
-           "<!-- Generated from tracer/scenes/scene.schema.json by `python -m tracer.scenes.scene_schema > "
+           "<!-- Generated from tracer/scenes/scene.schema.json by "
+           "`python -m tracer.scenes.scene_schema > "
            "docs/scene-format.md`; do not edit by hand (tests/test_scene_schema.py checks it). "
            "-->", "",
            schema["description"], "",

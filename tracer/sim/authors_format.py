@@ -1,8 +1,8 @@
 """The authors' simulation files (``sims/*.json`` of abhimadan/smoothdists), read unchanged.
 
 :func:`tracer.sim.simfile.load_simulation` hands a file with a top-level ``objects`` list here;
-:func:`build_simulation` turns it into the same :class:`~tracer.sim.simulation.Simulation` as our own
-format. Format (keys not listed are refused; lengths in scene units, times in seconds)::
+:func:`build_simulation` turns it into the same :class:`~tracer.sim.simulation.Simulation` as our
+own format. Format (keys not listed are refused; lengths in scene units, times in seconds)::
 
     {
       "name": "point_v_long",           label (default: the file name)

@@ -81,7 +81,8 @@ def _moments(mesh, density):
 
 
 def mass_properties(mesh, density=1.0):
-    """Mass, centre of mass and inertia tensor of a :class:`~smoothdist.DataMesh` (see module notes).
+    """Mass, centre of mass and inertia tensor of a :class:`~smoothdist.DataMesh` (see module
+    notes).
 
     Returns ``(mass float, com (3,), inertia (3, 3))``; the inertia is about the centre of mass,
     symmetric positive definite (degenerate directions floored, see :data:`INERTIA_FLOOR`).

@@ -108,8 +108,8 @@ class ContactConstraint:
     factory : callable, optional
         ``factory(data_field, query_mesh, *, alpha, alpha_q, beta, alpha_u, gradient)`` returning
         an object
-        with ``__call__(R, t)`` and ``exact(R, t)`` -> ``(d, G)`` (the :class:`~smoothdist.MeshDistance`
-        contract). Default: :func:`mesh_distance_factory`.
+        with ``__call__(R, t)`` and ``exact(R, t)`` -> ``(d, G)`` (the
+        :class:`~smoothdist.MeshDistance` contract). Default: :func:`mesh_distance_factory`.
     """
 
     def __init__(self, bodies, beta=0.5, mode="smooth", factory=None, torques=DEFAULT_TORQUES):
@@ -170,7 +170,8 @@ class ContactConstraint:
         return -gsum, gw_d, gsum, gw_q
 
     def evaluate(self, X, Rs, gradient=True):
-        """``(c, gx (nb, 3), gw (nb, 3))`` at centres ``X (nb, 3)`` and rotations ``Rs (nb, 3, 3)``."""
+        """``(c, gx (nb, 3), gw (nb, 3))`` at centres ``X (nb, 3)`` and rotations
+        ``Rs (nb, 3, 3)``."""
         nb = len(self.bodies)
         gx = np.zeros((nb, 3))
         gw = np.zeros((nb, 3))

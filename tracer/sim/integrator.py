@@ -4,7 +4,8 @@ the scene's single smooth-distance constraint (paper Sec. 5.5, after Ferguson et
 Unknowns per moving body: the new centre of mass ``x`` and a rotation vector ``theta`` with the
 new rotation ``R = exp([theta]x) R_t`` (a world-frame increment). The incremental potential is::
 
-    E(x, theta) = sum_b  1/2 m_b |x_b - x^_b|^2 + 1/2 (theta_b - theta^_b)^T I_b (theta_b - theta^_b)
+    E(x, theta) = sum_b  1/2 m_b |x_b - x^_b|^2
+                       + 1/2 (theta_b - theta^_b)^T I_b (theta_b - theta^_b)
     x^ = x_t + h v_t + h^2 g,   theta^ = h w_t,   I_b = R_t I_body R_t^T   (world inertia at t)
 
 Its unconstrained minimiser is ``x = x^`` (implicit Euler in position under gravity:

@@ -36,7 +36,8 @@ slack variable, so that **every iterate is feasible**, ``c(x_k) > 0``):
 4. The solve also ends at ``mu_min`` when an accepted step lowers the merit by less than
    ``1e-12`` of its value. A subproblem is solved when the accepted step is shorter than
    ``max(tol, 0.3 sqrt(mu))`` in the ``H`` norm; then ``mu <- max(sigma mu, mu_min)``. The solve
-   ends when ``mu = mu_min`` and the step is below ``tol``. At the end ``c ~ mu_min / z`` when the contact is active.
+   ends when ``mu = mu_min`` and the step is below ``tol``. At the end ``c ~ mu_min / z`` when the
+   contact is active.
 
 Lengths: with ``H`` scaled to unit mass (the integrator divides by the mean mass), ``sqrt(dx^T H
 dx)`` is a length, ``mu`` a squared length and ``z`` a length, so the tolerances are geometric.

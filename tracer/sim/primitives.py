@@ -69,7 +69,8 @@ def _sphere_points(radius=1.0, count=200):
     z = 1 - 2 * i / n
     phi = np.pi * (1 + 5 ** 0.5) * i
     r = np.sqrt(1 - z * z)
-    return DataMesh(float(radius) * np.c_[r * np.cos(phi), r * np.sin(phi), z], name="sphere_points")
+    return DataMesh(float(radius) * np.c_[r * np.cos(phi), r * np.sin(phi), z],
+                    name="sphere_points")
 
 
 def _box(size=(1.0, 1.0, 1.0)):
@@ -83,10 +84,12 @@ def _plane(size=(4.0, 4.0), resolution=10, bumps=0.0, bump_count=3):
     n = int(resolution)
     sx, sy = (float(v) for v in size)
     u, v = np.meshgrid(np.linspace(-0.5, 0.5, n + 1), np.linspace(-0.5, 0.5, n + 1), indexing="ij")
-    z = float(bumps) * np.sin(np.pi * bump_count * (u + 0.5)) * np.sin(np.pi * bump_count * (v + 0.5))
+    z = (float(bumps) * np.sin(np.pi * bump_count * (u + 0.5))
+         * np.sin(np.pi * bump_count * (v + 0.5)))
     V = np.c_[sx * u.ravel(), sy * v.ravel(), z.ravel()]
     idx = np.arange((n + 1) ** 2).reshape(n + 1, n + 1)
-    a, b, c, d = idx[:-1, :-1].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel(), idx[:-1, 1:].ravel()
+    a, b, c, d = (idx[:-1, :-1].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel(),
+                  idx[:-1, 1:].ravel())
     F = np.r_[np.c_[a, b, c], np.c_[a, c, d]]
     return DataMesh(V, F, name="plane")
 

@@ -145,9 +145,10 @@ def simulate(sim, out_path, *, steps=None, resume=False, overwrite=False, progre
 
     ``steps`` overrides the file's step count. With ``resume`` an existing trajectory is
     continued from its last frame up to ``steps`` in total. ``progress(done, total, elapsed)``
-    is called after each step. ``built``: the ``(constraint, integrator)`` of :func:`~tracer.sim.run.build`
-    when the caller has them already. ``torques`` (``"exact"`` / ``"split"``) overrides the
-    file's rotation gradient (:mod:`tracer.sim.constraint`); not with ``built``.
+    is called after each step. ``built``: the ``(constraint, integrator)`` of
+    :func:`~tracer.sim.run.build` when the caller has them already. ``torques`` (``"exact"`` /
+    ``"split"``) overrides the file's rotation gradient (:mod:`tracer.sim.constraint`); not with
+    ``built``.
     """
     steps = sim.steps if steps is None else int(steps)
     if built is not None and torques is not None and built[0].torques != torques:

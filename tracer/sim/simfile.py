@@ -55,11 +55,12 @@ The authors' simulator (``sims/*.json``) names these ``timestep``, ``num_steps``
 ``is_dynamic``, ``max_alpha``, ``bvh_type`` and ``init_state``; we use one flat object per body.
 :func:`load_simulation` reads their files too, unchanged (a top-level ``objects`` list instead
 of ``bodies``): :mod:`tracer.sim.authors_format`. They have no camera; theirs get
-:func:`~tracer.sim.simulation.auto_camera` (``Camera.auto``), which frames the whole trajectory when frames are rendered.
+:func:`~tracer.sim.simulation.auto_camera` (``Camera.auto``), which frames the whole trajectory when
+frames are rendered.
 
 :func:`load_simulation` validates every key and value (and that every referenced file exists)
-before it reads any mesh, and raises :class:`~tracer.errors.SimFileError` (a ``ValueError``) with a one-line
-message ``<file>: <key> <problem>``. Bodies that already overlap are refused later, by
+before it reads any mesh, and raises :class:`~tracer.errors.SimFileError` (a ``ValueError``) with a
+one-line message ``<file>: <key> <problem>``. Bodies that already overlap are refused later, by
 :func:`tracer.sim.run.check_initial_state`.
 """
 
@@ -99,7 +100,8 @@ def _err(path, where, msg):
 
 
 def read_simulation_json(path):
-    """Parse the file into a dict (one-line :class:`~tracer.errors.SimFileError` on unreadable/malformed JSON)."""
+    """Parse the file into a dict (one-line :class:`~tracer.errors.SimFileError` on
+    unreadable/malformed JSON)."""
     try:
         return read_json(path, "simulation")
     except SceneError as exc:
@@ -193,7 +195,8 @@ def _body_spec(bd, i, base, path):
     if "crop" in bd:
         c = bd["crop"]
         if not isinstance(c, list) or len(c) != 2:
-            raise _err(path, f"{where}.crop", f"must be [[x0, y0, z0], [x1, y1, z1]], got {show(c)}")
+            raise _err(path, f"{where}.crop",
+                       f"must be [[x0, y0, z0], [x1, y1, z1]], got {show(c)}")
         lo, hi = vec3(c[0], path, f"{where}.crop[0]"), vec3(c[1], path, f"{where}.crop[1]")
         if not (lo < hi).all():
             raise _err(path, f"{where}.crop", "must have its first corner below the second")

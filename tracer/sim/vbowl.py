@@ -69,7 +69,8 @@ def summary(r):
             "final_kinetic_energy": round(float(r["ke"][-1]), 5),
             "max_kinetic_energy": round(float(r["ke"].max()), 5),
             "max_x": round(float(r["x"].max()), 4),
-            "first_crossing_time": None if crossed.size == 0 else round(float(r["t"][crossed[0]]), 3),
+            "first_crossing_time": (None if crossed.size == 0
+                                    else round(float(r["t"][crossed[0]]), 3)),
             "left_the_bowl_at": (round(float(r["t"][-1]), 3)
                                  if abs(r["x"][-1]) > r["V"][:, 0].max() else None),
             "ipm_iterations": int(r["iterations"])}
@@ -110,7 +111,8 @@ def plot(results, path):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(prog="python -m tracer.sim.vbowl", description=__doc__.split("\n")[0])
+    ap = argparse.ArgumentParser(prog="python -m tracer.sim.vbowl",
+                                 description=__doc__.split("\n")[0])
     ap.add_argument("-o", "--out", default="renders/sim", help="output folder")
     ap.add_argument("--steps", type=int, default=STEPS)
     args = ap.parse_args(argv)

@@ -4,10 +4,11 @@ Render the mesh's vertices, edges and triangles with the authors' camera at ever
 record the wall time and the isosurface error along each ray against the exact (beta = 0)
 render, relative to the bounding-box diagonal. ``--view`` / ``--up`` frame a mesh as ``tracer
 render`` does instead of the authors' camera; the report shows the authors' errors and times
-only for their data and protocol (the paper's bunny, alpha 200, alpha_U 1200, their camera). Protocol of the authors' ``app/beta_error_test``:
-alpha = 200, alpha_U = 1200, beta in {0, 0.1, ..., 1}, camera at the bbox centre + 2 x the
-largest extent along +z looking at the centre (up +y); the error over the pixels that both
-renders hit is ``mean |t_beta - t_0|`` with its population standard deviation.
+only for their data and protocol (the paper's bunny, alpha 200, alpha_U 1200, their camera).
+Protocol of the authors' ``app/beta_error_test``: alpha = 200, alpha_U = 1200, beta in
+{0, 0.1, ..., 1}, camera at the bbox centre + 2 x the largest extent along +z looking at the centre
+(up +y); the error over the pixels that both renders hit is ``mean |t_beta - t_0|`` with its
+population standard deviation.
 
 The study as independent tasks:
 
