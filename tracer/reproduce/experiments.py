@@ -11,11 +11,13 @@ folder (the study's CSV, JSON and plots go there), ``settings`` the experiment's
 
 import datetime
 import importlib
+import json
 import math
 import os
 import platform
 import shutil
 import subprocess
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -54,6 +56,7 @@ SETTINGS = {
         "table3": {"scenes": ["ico_bowl", "trefoil_ringtoss", "sphere_slide"], "steps": 100,
                    "threads": [1, None], "authors_timeout": 600.0},
         "box_test": {"cases": ["bowl-ico", "slide-sphere"], "repeat": 5},
+        "gpu": {"size": [640, 360], "grid": 50, "repeat": 3},
     },
     "smoke": {  # the test suite's: every experiment at its smallest (seconds, once compiled)
         "beta": {"size": 12, "betas": [0.0, 0.2, 0.5]},
@@ -63,6 +66,7 @@ SETTINGS = {
         "grid": {"grid": 8, "generated": [100], "thingi10k": False},
         "table3": {"scenes": ["trefoil_ringtoss"], "steps": 10, "threads": [1, None]},
         "box_test": {"cases": ["bowl-ico"], "repeat": 2},
+        "gpu": {"size": [320, 180], "grid": 20, "repeat": 1},
     },
     "full": {
         "beta": {"size": 512, "betas": [0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0]},
@@ -75,6 +79,7 @@ SETTINGS = {
                    "step_caps": {"octopus_lidar": 263}, "authors_timeout": 3600.0},
         "box_test": {"cases": ["bunny-bunny", "ring-toss", "bowl-ico", "slide-sphere"],
                      "repeat": 9},
+        "gpu": {"size": [1920, 1080], "grid": 100, "repeat": 3},
     },
 }
 
@@ -607,7 +612,66 @@ def underestimate(out, s, where):
     return res
 
 
+# ============================================================================ GPU (App. E)
+#: the last measurement on a CUDA card committed to the repository (``benchmarks/run_on_card.sh``)
+GPU_CARD_RESULT = REPO / "benchmarks" / "data" / "gpu_h100.json"
+
+
+def _card_available():
+    from smoothdist.cuda import CudaUnavailable, cuda_module, simulated
+
+    try:
+        return not simulated() and cuda_module() is not None
+    except CudaUnavailable:
+        return False
+
+
+def _gpu_summary(bench, source, measured):
+    """The claim's figures from a ``benchmarks/bench_gpu.py`` JSON: per type the grid's
+    CPU, GPU (with copies) and GPU kernel times (ms) and the render's."""
+    rows = {r["what"]: r for r in bench["rows"]}
+    res = {"source": source, "measured": measured, "card": bench.get("card"),
+           "cpu": bench.get("cpu"), "cpu_threads": bench.get("threads"), "grid": {},
+           "render": {}}
+    for kind in TYPES:
+        g, r = rows[f"grid {kind}"], rows[f"bunny {kind}"]
+        res["grid"][kind] = {
+            "queries": g["size"], "primitives": g["primitives"], "cpu_ms": 1e3 * g["cpu_s"],
+            "gpu_ms": 1e3 * g["gpu_s"], "gpu_kernel_ms": 1e3 * g["gpu_kernel_s"],
+            "speedup": g["cpu_s"] / g["gpu_s"], "kernel_speedup": g["cpu_s"] / g["gpu_kernel_s"],
+            "max_abs_diff": g.get("distance_max_diff")}
+        res["render"][kind] = {"size": r["size"], "cpu_ms": 1e3 * r["cpu_s"],
+                               "gpu_ms": 1e3 * r["gpu_s"], "speedup": r["cpu_s"] / r["gpu_s"],
+                               "hit_differs": r.get("hit_differs")}
+    return res
+
+
+def gpu(out, s, where):
+    """App. E: the smooth distance of the paper's benchmark grid (and the bunny's render) on a
+    CUDA GPU against all the CPU's threads, on the same machine. With a card here,
+    ``benchmarks/bench_gpu.py`` runs at the mode's sizes; without one, the last card
+    measurement committed to the repository (:data:`GPU_CARD_RESULT`) is read, with the date
+    and commit git gives it (``source`` says which)."""
+    bench_py = REPO / "benchmarks" / "bench_gpu.py"
+    if _card_available() and bench_py.is_file():
+        path = Path(out) / "gpu" / "bench_gpu.json"
+        path.parent.mkdir(parents=True, exist_ok=True)
+        argv = [sys.executable, str(bench_py), "--size", *map(str, s["size"]),
+                "--grid", str(s["grid"]), "--repeat", str(s["repeat"]), "--json", str(path)]
+        subprocess.run(argv, cwd=REPO, check=True)
+        bench = json.loads(path.read_text(encoding="utf-8"))
+        return _gpu_summary(bench, "measured here", {"date": provenance()["date"],
+                                                     "commit": provenance()["commit"]})
+    if not GPU_CARD_RESULT.is_file():
+        return {"source": None, "why": "no CUDA GPU here and no committed card measurement"}
+    bench = json.loads(GPU_CARD_RESULT.read_text(encoding="utf-8"))
+    rel = str(GPU_CARD_RESULT.relative_to(REPO))
+    when = _git("log", "-1", "--format=%cI %H", "--", rel).split()
+    measured = {"date": when[0] if when else None, "commit": when[1] if when else None}
+    return _gpu_summary(bench, rel, measured)
+
+
 #: name -> experiment, in the order they run (quick first where they are quick)
 EXPERIMENTS = {"underestimate": underestimate, "table3": table3, "grid": grid,
-               "bh_switch": bh_switch, "box_test": box_test, "beta": beta,
+               "bh_switch": bh_switch, "box_test": box_test, "gpu": gpu, "beta": beta,
                "alpha": alpha}
