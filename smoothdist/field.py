@@ -45,13 +45,22 @@ AUTO_SURFACE_MAX = 0.08
 #: ... and, when there are edges, at least this fraction of it (a tube of a finely sampled
 #: curve stays as thick as ``alpha="auto"``'s zero set made it) ...
 AUTO_SURFACE_MIN_TUBE = 0.01
-#: ... at ``alpha = AUTO_SURFACE_SHARPNESS / C``, without attenuation; a net of edges (the
-#: wireframe of a surface: vertices of more than ``AUTO_WIRE_DEGREE`` edges on average) is
-#: drawn as wires of radius ``AUTO_WIRE_RADIUS`` mean edge lengths instead, so that it stays
-#: a net (0.75 closed it into a ribbed surface)
+#: ... at ``alpha = AUTO_SURFACE_SHARPNESS / C``, without attenuation ...
 AUTO_SURFACE_SHARPNESS = 6.0
+#: ... or ``AUTO_FLAT_SHARPNESS / C`` where ``alpha`` would exceed ``AUTO_ISOLATED_EDGES``
+#: over the mean edge length (``C`` capped: a few large facets, a box of 12 triangles). The
+#: terms of neighbouring facets then no longer overlap into a smooth sum: each edge between
+#: coplanar facets raises a ridge whose slope falls like ``1 / sqrt(alpha C)``
+AUTO_ISOLATED_EDGES = 16.0
+AUTO_FLAT_SHARPNESS = 14.0
+#: a net of edges (the wireframe of a surface: vertices of more than ``AUTO_WIRE_DEGREE``
+#: edges on average) is drawn as wires of radius ``AUTO_WIRE_RADIUS`` mean edge lengths, so
+#: that it stays a net (0.75 closed it into a ribbed surface), at ``alpha =
+#: AUTO_WIRE_SHARPNESS / C``: the joints of straight wires bulge by about ``log(degree) /
+#: alpha``, 5 % of the radius at this sharpness (``renders/ripple/sharpness_wire.csv``)
 AUTO_WIRE_DEGREE = 2.5
 AUTO_WIRE_RADIUS = 0.1
+AUTO_WIRE_SHARPNESS = 30.0
 #: how many data sets' ``auto_alpha`` values are remembered by content (a key and a float each;
 #: the search costs seconds on a 100k-point cloud, a key a hash of the arrays, ~1 ms per MB)
 AUTO_CACHE_SIZE = 64
@@ -349,7 +358,9 @@ class SmoothDistanceField:
         (0.75 edge lengths, at most 8 % of the diagonal; with edges at least
         ``AUTO_SURFACE_MIN_TUBE x diagonal``, 1 %: the tube's radius; the wireframe of a
         surface, :meth:`is_wire_net`, ``AUTO_WIRE_RADIUS`` = 0.1 edge lengths: wires),
-        ``alpha = AUTO_SURFACE_SHARPNESS / C`` and no attenuation (``alpha_u = alpha``). The
+        ``alpha = AUTO_SURFACE_SHARPNESS / C`` (6; 14 where that would exceed 16 over the
+        mean edge length, a few large facets; 30 for wires) and no attenuation
+        (``alpha_u = alpha``). The
         zero set of ``d_hat`` runs in a groove along every mesh edge (dimples on a coarse
         sphere, rings on a tube); the level set about one edge length out is as smooth as the
         exact offset surface there (``renders/ripple/auto.csv``: 95th percentile of the
@@ -369,12 +380,15 @@ class SmoothDistanceField:
             value = (alpha, self.auto_alpha_u(alpha), 0.0)
         elif self.is_wire_net():
             C = AUTO_WIRE_RADIUS * h
+            alpha = AUTO_WIRE_SHARPNESS / C
         else:
             C = min(AUTO_SURFACE_SPACINGS * h, AUTO_SURFACE_MAX * L)
             if self.mesh.edges.size:
                 C = max(C, AUTO_SURFACE_MIN_TUBE * L)
-        if value is None:
             alpha = AUTO_SURFACE_SHARPNESS / C
+            if alpha * h > AUTO_ISOLATED_EDGES:
+                alpha = AUTO_FLAT_SHARPNESS / C
+        if value is None:
             value = (float(alpha), float(alpha), float(C))
         self._auto_surface_value = value
         return value

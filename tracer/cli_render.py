@@ -32,7 +32,8 @@ def add_arguments(p):
                    f"{_def('beta', 'mesh')} for a mesh)")
     p.add_argument("--alpha", type=_auto_or_number("--alpha"), metavar="auto|A",
                    help="alpha of the (first) object, or 'auto' (default for a mesh): for "
-                   "edges and triangles with --alpha-u and --offset left out too, 6/C at the "
+                   "edges and triangles with --alpha-u and --offset left out too, 6/C (14/C for "
+                   "a few large facets, 30/C for wireframes) at the "
                    "level set d_hat = C, C = 0.75 mean edge lengths (no dimples along the "
                    "edges); otherwise mean surface offset <= 2%% of the bbox diagonal")
     p.add_argument("--alpha-u", type=_auto_or_number("--alpha-u", "off"),

@@ -92,8 +92,9 @@ def mesh_scene(mesh, F=None, *, kind=None, alpha=_MESH["alpha"], alpha_u=_MESH["
         diagonal (:meth:`~smoothdist.SmoothDistanceField.auto_alpha`); with ``alpha_u`` and
         ``offset`` left out too, edges and triangles get ``alpha``, ``alpha_u`` and the
         offset chosen together (:meth:`~smoothdist.SmoothDistanceField.auto_surface`: the
-        level set ``d_hat = C`` about 0.75 mean edge lengths out, ``alpha = 6 / C``, no
-        attenuation; no dimples along the mesh edges).
+        level set ``d_hat = C`` about 0.75 mean edge lengths out, ``alpha = 6 / C`` (14 / C
+        for a few large facets, 30 / C for a wireframe's wires), no attenuation; no dimples
+        along the mesh edges).
     alpha_u : float, "auto" or None
         Attenuation threshold; ``"auto"`` is 20 x alpha (no ribbing); ``"off"`` or None: no
         attenuation.
