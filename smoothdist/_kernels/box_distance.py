@@ -31,7 +31,7 @@ import math
 import numba
 
 from smoothdist._config import NJIT
-from smoothdist.closest_pair import closest_pair, point_segment, point_triangle
+from smoothdist._kernels.closest_pair import closest_pair, point_segment, point_triangle
 
 
 @numba.njit(**NJIT)
@@ -216,7 +216,7 @@ def box_distance_exact(kq, Q, lo, hi, node, E):
 
     0 when a query vertex lies in the box (the primitive meets it); otherwise the primitive
     meets the box, if at all, on its surface, so the distance is the smallest to the box's 12
-    face triangles (:func:`smoothdist.closest_pair.closest_pair`). ``E`` (9,) scratch.
+    face triangles (:func:`smoothdist._kernels.closest_pair.closest_pair`). ``E`` (9,) scratch.
     Returns ``(delta, ux, uy, uz)`` as :func:`box_lower_bound`, with ``delta`` >= its value.
     """
     for v in range(kq + 1):

@@ -1,12 +1,12 @@
-"""The Barnes-Hut far-field distances of :mod:`smoothdist.box_distance` with their *rotational*
-derivative: what a small rigid rotation of the query primitive does to them.
+"""The Barnes-Hut far-field distances of :mod:`smoothdist._kernels.box_distance` with their
+*rotational* derivative: what a small rigid rotation of the query primitive does to them.
 
 A far-field term uses a lower bound ``delta`` of the query primitive's distance to a node box
 and its translation gradient ``u``. For a rotation ``omega`` of the query about a point ``c``
 (each query point moving by ``omega x (x - c)``) the derivative is ``omega . M`` with ``M`` the
 *moment* returned here, about ``c``:
 
-* box-box gap (:func:`~smoothdist.box_distance.box_box_offset`; also the one-axis gap): the
+* box-box gap (:func:`~smoothdist._kernels.box_distance.box_box_offset`; also the one-axis gap): the
   gap along axis ``a`` is set by the query vertex extreme along ``a``, so
   ``M = sum_a (Q_{k_a} - c) x (u_a e_a)``: each axis's share of ``u`` acts at its own vertex;
 * three separated axes (distance to a box corner ``K``): the closest query point ``p`` is
@@ -20,7 +20,7 @@ and its translation gradient ``u``. For a rotation ``omega`` of the query about 
 These are exact derivatives of the *same* piecewise-smooth bounds (away from the switches
 between cases and ties between extreme vertices), so the value and the gradient of the far field
 stay consistent. ``delta`` and ``u`` are computed by the same operations as in
-:mod:`smoothdist.box_distance`, bit for bit.
+:mod:`smoothdist._kernels.box_distance`, bit for bit.
 """
 
 import math
@@ -28,8 +28,8 @@ import math
 import numba
 
 from smoothdist._config import NJIT
-from smoothdist.box_distance import box_lower_bound
-from smoothdist.closest_pair import point_segment, point_triangle
+from smoothdist._kernels.box_distance import box_lower_bound
+from smoothdist._kernels.closest_pair import point_segment, point_triangle
 
 
 @numba.njit(**NJIT)
@@ -90,7 +90,7 @@ def _cross(ax, ay, az, bx, by, bz):
 
 @numba.njit(**NJIT)
 def box_lower_bound_moment(kq, Q, qlo, qhi, lo, hi, node, E, cx, cy, cz, L):
-    """:func:`~smoothdist.box_distance.box_lower_bound` and its moment about ``c``.
+    """:func:`~smoothdist._kernels.box_distance.box_lower_bound` and its moment about ``c``.
 
     Arguments as there, plus the moment's reference point ``(cx, cy, cz)`` and the query's
     :func:`extreme_levers` ``L`` about it; ``kq`` 1 or 2. Returns

@@ -11,7 +11,7 @@ Every kernel works on float64 scalars and returns
 * ``d2``: squared distance;
 * ``r = (point on the first primitive) - (point on the second)``: the first is the *query*;
 * ``(qs, qt, qf)`` and ``(ds, dt, df)``: parameters and feature code of the closest point on the
-  query and on the data primitive, in the conventions of :mod:`smoothdist.closest_point`:
+  query and on the data primitive, in the conventions of :mod:`smoothdist._kernels.closest_point`:
   a point has ``(0, 0, 0)``; a segment ``a + s (b - a)`` has ``(s, 0, SEG_*)``; a triangle
   ``a + s (b - a) + t (c - a)`` has ``(s, t, TRI_*)``.
 
@@ -38,9 +38,9 @@ import numba
 import numpy as np
 
 from smoothdist._config import NJIT, NJIT_INLINE
-from smoothdist.closest_point import (SEG_A, SEG_B, SEG_INTERIOR, TRI_A, TRI_AB, TRI_AC, TRI_B,
-                                      TRI_BC, TRI_C, TRI_INTERIOR, closest_point_segment,
-                                      closest_point_triangle)
+from smoothdist._kernels.closest_point import (SEG_A, SEG_B, SEG_INTERIOR, TRI_A, TRI_AB, TRI_AC,
+                                               TRI_B, TRI_BC, TRI_C, TRI_INTERIOR,
+                                               closest_point_segment, closest_point_triangle)
 
 KIND_POINT, KIND_SEGMENT, KIND_TRIANGLE = 0, 1, 2
 
@@ -583,7 +583,7 @@ def closest_pair(kq, Q, kd, P):
 # lets rounding choose an end of S: the data barycentrics, hence the weight and d_hat, jump as
 # the query moves (issue 37). Where several candidates tie, the pair reported is instead the
 # point of S nearest the query's centroid (a projection onto a convex set, so it moves
-# continuously with S). Each case of that rule moves the way :func:`smoothdist.mesh_query.
+# continuously with S). Each case of that rule moves the way :func:`smoothdist._kernels.mesh_query.
 # weight_gradient` assumes for the reported features: the centroid itself is fixed on the query;
 # a projection onto an edge of S that lies on a data edge slides along that edge; one onto a
 # crossing of a query and a data edge moves as that crossing does.

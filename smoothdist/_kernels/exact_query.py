@@ -2,10 +2,10 @@
 stored with their parent, and a batch kernel that traces groups of neighbouring queries
 together, each group seeded by the previous one's closest primitive.
 
-The smooth-distance kernels need the leaf-size-1 tree of :mod:`smoothdist.bvh` (its node
+The smooth-distance kernels need the leaf-size-1 tree of :mod:`smoothdist._kernels.bvh` (its node
 diameters and weight bounds drive Barnes-Hut); exact branch and bound only needs
 tight boxes and few nodes. :class:`ExactTree` is that second tree. It is built from a
-:class:`~smoothdist.bvh.TreeData`'s primitive table by :func:`build_exact_tree`, and
+:class:`~smoothdist._kernels.bvh.TreeData`'s primitive table by :func:`build_exact_tree`, and
 :class:`~smoothdist.field.SmoothDistanceField` builds it lazily, once its exact-distance calls
 have asked for about one query per primitive (:data:`smoothdist.field.EXACT_TREE_AFTER`).
 
@@ -28,7 +28,7 @@ about 131 bytes per triangle, 108 per edge, 52 per point (a 1e7-point cloud: 0.5
 
 The hot loop computes squared distances only (:func:`primitive_d2`); the closest point, the
 distance and the gradient are computed once per query, for the winner, by the routines of
-:mod:`smoothdist.closest_point` that the plain kernel uses, so whenever both pick the same
+:mod:`smoothdist._kernels.closest_point` that the plain kernel uses, so whenever both pick the same
 primitive they return the same bits.
 """
 
@@ -40,7 +40,7 @@ import numpy as np
 from numba import prange
 
 from smoothdist._config import NJIT, NJIT_INLINE, NJIT_PARALLEL
-from smoothdist.closest_point import closest_point_segment, closest_point_triangle
+from smoothdist._kernels.closest_point import closest_point_segment, closest_point_triangle
 from smoothdist.mesh import KIND_TRIANGLE
 
 #: queries handled by one parallel task (one stack and one seed chain each)
@@ -403,7 +403,7 @@ def _box_d2(px, py, pz, box, k, o):
 def _triangle_d2(px, py, pz, P, G, i):
     """Squared distance from ``p`` to triangle ``i`` (rows of ``P`` and ``G`` as in
     :class:`ExactTree`): the Voronoi-region method of
-    :func:`smoothdist.closest_point.closest_point_triangle`, with the six dot products it
+    :func:`smoothdist._kernels.closest_point.closest_point_triangle`, with the six dot products it
     needs reduced to two per query (``d1 = ab.ap``, ``d2 = ac.ap``; ``ab.bp = d1 - |ab|^2``
     and so on from the Gram matrix)."""
     ax = P[i, 0]
@@ -538,7 +538,7 @@ def exact_tree_point(et, px, py, pz, stack, dstack, seed=-1):
 
     ``seed`` (a primitive index in tree order, or -1) is evaluated first, so that its
     distance is the initial upper bound. Returns ``(d, gx, gy, gz, prim, nodes, leaves,
-    winner)``: as :func:`smoothdist.query.exact_distance_point`, plus the winner's index in
+    winner)``: as :func:`smoothdist._kernels.query.exact_distance_point`, plus the winner's index in
     tree order (the next query's seed). ``nodes`` counts the nodes whose box test did not
     prune them (inner nodes and leaves), ``leaves`` the primitive evaluations.
     """

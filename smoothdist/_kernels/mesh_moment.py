@@ -1,8 +1,8 @@
 """Kernels: a query primitive's smooth distance with its exact *rotational* gradient (moment).
 
-:mod:`smoothdist.mesh_query` gives each query primitive ``g``'s smooth distance ``d_hat(g)`` and
-its gradient for a translation of ``g``. For a rigid rotation ``omega`` of ``g`` about a point
-``c`` the derivative is ``omega . M`` with the moment
+:mod:`smoothdist._kernels.mesh_query` gives each query primitive ``g``'s smooth distance
+``d_hat(g)`` and its gradient for a translation of ``g``. For a rigid rotation ``omega`` of ``g``
+about a point ``c`` the derivative is ``omega . M`` with the moment
 
     M = sum_i softmax_i [ (p_i - c) x v_i + wgs y_i (q_i x r_i) ]
 
@@ -14,8 +14,8 @@ motion of its own closest point ``p_i`` (not the centroid of ``g``). The weight 
 the data-side closest point, which moves with the query's feature when that is an edge
 (direction ``q_i``): the stationarity conditions of the active features add the term
 ``y_i (q_i x r_i)``, with ``y_i`` the query-edge component of ``(M^T M)^-1 (w1, w2, 0)`` in
-:func:`smoothdist.mesh_query.weight_gradient`'s notation (0 in its fallbacks). Far-field nodes
-use the moments of :mod:`smoothdist.box_moment`.
+:func:`smoothdist._kernels.mesh_query.weight_gradient`'s notation (0 in its fallbacks).
+Far-field nodes use the moments of :mod:`smoothdist._kernels.box_moment`.
 
 The same traversal gives the derivative for a motion of one query vertex ``x_k`` alone (a
 deformation, :func:`smooth_vertex_primitive`): by the same envelope argument a pair distance
@@ -32,8 +32,8 @@ among the vertices, so the result is the exact derivative at ``beta = 0`` and ``
 The paper's equal split (Eq. 7-8) applies every primitive's translation gradient at its centroid
 ``c``; ``M`` about the centroid is what it leaves out. Point queries have ``M = 0`` (their
 closest point is the point). Here ``c`` is the primitive's centroid, and ``d_hat`` and the
-translation gradient are computed by the same operations as in :mod:`smoothdist.mesh_query`, so
-they agree with it bit for bit.
+translation gradient are computed by the same operations as in
+:mod:`smoothdist._kernels.mesh_query`, so they agree with it bit for bit.
 """
 
 import math
@@ -43,9 +43,10 @@ import numpy as np
 from numba import prange
 
 from smoothdist._config import NJIT, NJIT_PARALLEL
-from smoothdist.mesh_query import (TASKS, VERTEX_1, VERTEX_2, _accumulate, centroid,  # noqa: F401
-                                   pair_terms, query_coefficient, smooth_traverse)
-from smoothdist.query import DEFAULT_TOL, smooth_distance_point
+from smoothdist._kernels.mesh_query import (TASKS, VERTEX_1, VERTEX_2,  # noqa: F401
+                                            _accumulate, centroid, pair_terms,
+                                            query_coefficient, smooth_traverse)
+from smoothdist._kernels.query import DEFAULT_TOL, smooth_distance_point
 
 
 #: the query-edge coefficient of the weight's motion (``mesh_query.query_coefficient``)
@@ -54,7 +55,7 @@ _query_coefficient = query_coefficient
 
 @numba.njit(**NJIT)
 def pair_term_moment(tree, i, kq, Q, S, wgs, cx, cy, cz):
-    """:func:`smoothdist.mesh_query.pair_term` and the term's moment about ``c``.
+    """:func:`smoothdist._kernels.mesh_query.pair_term` and the term's moment about ``c``.
 
     Returns ``(d, W, vx, vy, vz, mx, my, mz)``: ``v`` as there, and
     ``M = (p - c) x v + wgs y (q x r)`` (module notes).
@@ -66,11 +67,11 @@ def pair_term_moment(tree, i, kq, Q, S, wgs, cx, cy, cz):
 @numba.njit(**NJIT)
 def smooth_moment_primitive(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch,
                             tol=DEFAULT_TOL):
-    """:func:`smoothdist.mesh_query.smooth_distance_primitive` with the moment about the
+    """:func:`smoothdist._kernels.mesh_query.smooth_distance_primitive` with the moment about the
     query's centroid.
 
-    Same traversal (:func:`smoothdist.mesh_query.smooth_traverse`) and arguments (``kq`` 1 or
-    2), but ``scratch (33,)``. Returns
+    Same traversal (:func:`smoothdist._kernels.mesh_query.smooth_traverse`) and arguments
+    (``kq`` 1 or 2), but ``scratch (33,)``. Returns
     ``(d_hat, gx, gy, gz, mx, my, mz, nodes_visited, leaves_visited)``.
     """
     return smooth_traverse(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, tol, True)
@@ -130,7 +131,8 @@ def smooth_moment_primitives(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_
                              out_nodes, out_leaves, tol=DEFAULT_TOL, ntasks=TASKS):
     """``d_hat``, translation gradient and moment (about the centroid) of every query primitive.
 
-    As :func:`smoothdist.mesh_query.smooth_distance_primitives`, plus ``out_m (m, 3)`` float64.
+    As :func:`smoothdist._kernels.mesh_query.smooth_distance_primitives`, plus
+    ``out_m (m, 3)`` float64.
     """
     ntasks = max(1, min(qkind.size, ntasks))
     for task in prange(ntasks):

@@ -5,9 +5,10 @@ query primitive ``g`` to the data mesh is
 
     d_hat(g) = -(1/alpha) log sum_i W_i exp(-alpha d(f_i, g)),
 
-with ``d(f_i, g)`` the exact primitive-primitive distance (:mod:`smoothdist.closest_pair`) and
-``W_i`` the data primitive's weight at the data-side barycentrics of the closest pair. Its gradient
-is with respect to a rigid translation ``tau`` of ``g``:
+with ``d(f_i, g)`` the exact primitive-primitive distance
+(:mod:`smoothdist._kernels.closest_pair`) and ``W_i`` the data primitive's weight at the data-side
+barycentrics of the closest pair. Its gradient is with respect to a rigid translation ``tau`` of
+``g``:
 
     grad d(f_i, g) = unit(r),  r = (closest point on g) - (closest point on f_i),
 
@@ -15,19 +16,19 @@ and the weight's gradient goes through the closest pair's data barycentrics ``ph
 active features (the faces of both simplices the closest points lie in), the stationarity
 conditions ``D^T r = 0`` and ``Q^T r = 0`` (``D``, ``Q`` the features' edge directions) give
 ``d[phi, lambda] / d tau = (M^T M)^-1 M^T`` with ``M = [D, -Q]``. For a point query this is the
-point kernel's projection Jacobian (:func:`smoothdist.query.primitive_term`).
+point kernel's projection Jacobian (:func:`smoothdist._kernels.query.primitive_term`).
 
-Traversal as for points (:func:`smoothdist.query.smooth_distance_point`): an explicit stack,
-nearest child first by the cheap box-box distance. Barnes-Hut replaces a node by
+Traversal as for points (:func:`smoothdist._kernels.query.smooth_distance_point`): an explicit
+stack, nearest child first by the cheap box-box distance. Barnes-Hut replaces a node by
 ``count * whi**S * exp(-alpha delta)`` with ``delta`` a lower bound of the query-box distance: the
 box-box distance when that already satisfies ``diag < beta delta``, else
-:func:`smoothdist.box_distance.box_lower_bound` (the paper's halfspace test, done
+:func:`smoothdist._kernels.box_distance.box_lower_bound` (the paper's halfspace test, done
 conservatively). So the far field overestimates the subtree's sum and ``d_hat_beta <= d_hat_0``.
 Point queries use the point kernels themselves.
 
 One traversal (:func:`smooth_traverse`) serves the translation gradient and, with ``moment``,
-:mod:`smoothdist.mesh_moment`'s rotational one; ``moment`` is a compile-time constant of each
-caller, so the distance kernel carries none of the moment's work. For speed (the same nodes,
+:mod:`smoothdist._kernels.mesh_moment`'s rotational one; ``moment`` is a compile-time constant
+of each caller, so the distance kernel carries none of the moment's work. For speed (the same nodes,
 terms and values as a plain version; issue 17): the tree's arrays are taken out of the tree
 once (a NamedTuple field read in the loop updates a reference count), the data primitive's
 coordinates go to the closest-pair kernels as scalars, small helpers are inlined
@@ -42,23 +43,25 @@ import numpy as np
 from numba import prange
 
 from smoothdist._config import NJIT, NJIT_INLINE, NJIT_PARALLEL
-from smoothdist.box_distance import (box_box_distance, box_box_offset, box_distance_exact,
-                                     box_lower_bound)
-from smoothdist.box_moment import box_lower_bound_moment, extreme_levers, gap_moment
-from smoothdist.closest_pair import (closest_pair, segment_point, segment_segment, segment_triangle,
-                                     triangle_point, triangle_segment, triangle_triangle)
-from smoothdist.closest_point import (SEG_INTERIOR, TRI_AB, TRI_AC, TRI_BC, TRI_INTERIOR)
-from smoothdist.query import (DEFAULT_TOL, _attenuate, exact_distance_point, logsumexp_accumulate,
-                              negligible_reach, smooth_distance_point)
+from smoothdist._kernels.box_distance import (box_box_distance, box_box_offset, box_distance_exact,
+                                              box_lower_bound)
+from smoothdist._kernels.box_moment import box_lower_bound_moment, extreme_levers, gap_moment
+from smoothdist._kernels.closest_pair import (closest_pair, segment_point, segment_segment,
+                                              segment_triangle, triangle_point, triangle_segment,
+                                              triangle_triangle)
+from smoothdist._kernels.closest_point import (SEG_INTERIOR, TRI_AB, TRI_AC, TRI_BC, TRI_INTERIOR)
+from smoothdist._kernels.query import (DEFAULT_TOL, _attenuate, exact_distance_point,
+                                       logsumexp_accumulate, negligible_reach,
+                                       smooth_distance_point)
 from smoothdist.schedule import TASKS
-from smoothdist.weights import eval_triangle_weight
+from smoothdist._kernels.weights import eval_triangle_weight
 
-#: :func:`smoothdist.query._attenuate`, inlined (it calls no other kernel)
+#: :func:`smoothdist._kernels.query._attenuate`, inlined (it calls no other kernel)
 _attenuate_inline = numba.njit(**NJIT_INLINE)(_attenuate.py_func)
 #: ``moment`` values of :func:`smooth_traverse` (and its pair terms) beyond True (the moment):
 #: the derivative for a motion of query vertex 1 or 2 alone
 VERTEX_1, VERTEX_2 = 2, 3
-#: :func:`smoothdist.closest_pair.segment_segment`, inlined (the edge-edge leaves)
+#: :func:`smoothdist._kernels.closest_pair.segment_segment`, inlined (the edge-edge leaves)
 _segment_segment_inline = numba.njit(**NJIT_INLINE)(segment_segment.py_func)
 
 
@@ -123,7 +126,7 @@ def weight_gradient(nd, d1x, d1y, d1z, d2x, d2y, d2z, w1, w2, nq, q1x, q1y, q1z)
 
 @numba.njit(**NJIT_INLINE)
 def _edge_weight(wc, i, t):
-    """:func:`smoothdist.weights.eval_edge_weight` of row ``i`` of ``wc`` (no row view)."""
+    """:func:`smoothdist._kernels.weights.eval_edge_weight` of row ``i`` of ``wc`` (no row view)."""
     c0 = wc[i, 0]
     c1 = wc[i, 1]
     c2 = wc[i, 2]
@@ -136,9 +139,9 @@ def _edge_weight(wc, i, t):
 
 @numba.njit(**NJIT_INLINE)
 def _closest(kind, P, i, kq, Q, k):
-    """:func:`smoothdist.closest_pair.closest_pair` of query ``(kq, Q)`` and data primitive ``i``
-    of ``kind``, ``P`` (the tree's arrays), called with the data's coordinates as scalars for
-    edge and triangle queries (no row view, no dispatch through every kind pair)."""
+    """:func:`smoothdist._kernels.closest_pair.closest_pair` of query ``(kq, Q)`` and data
+    primitive ``i`` of ``kind``, ``P`` (the tree's arrays), called with the data's coordinates as
+    scalars for edge and triangle queries (no row view, no dispatch through every kind pair)."""
     if kq == 0:
         # a point query (the brute-force references only: the traversal takes edges and
         # triangles)
@@ -166,7 +169,7 @@ def _closest(kind, P, i, kq, Q, k):
 def query_coefficient(nd, d1x, d1y, d1z, w1, nq, q1x, q1y, q1z):
     """The query-edge component ``y`` of :func:`weight_gradient`'s solve (one data and one query
     direction, same singularity test; 0 otherwise): the rotational part of the weight's motion
-    (:mod:`smoothdist.mesh_moment`)."""
+    (:mod:`smoothdist._kernels.mesh_moment`)."""
     if nq == 1 and nd == 1:
         a = _dot(d1x, d1y, d1z, d1x, d1y, d1z)
         b = -_dot(d1x, d1y, d1z, q1x, q1y, q1z)
@@ -183,9 +186,10 @@ def _pair(kind, pts, wc, pwhi, i, kq, Q, S, wgs, moment, cx, cy, cz, k):
 
     Returns ``(d, W, vx, vy, vz, mx, my, mz)``: distance, attenuated weight, the gradient
     numerator ``v = W unit(r) - wgs grad W`` (for a translation of the query) and, with
-    ``moment`` True (or 1), the term's moment about ``c`` (:mod:`smoothdist.mesh_moment`), with
-    ``moment`` ``VERTEX_1`` or ``VERTEX_2`` the numerator for a motion of that query vertex
-    alone (:func:`smoothdist.mesh_moment.smooth_vertex_primitive`); else 0.
+    ``moment`` True (or 1), the term's moment about ``c``
+    (:mod:`smoothdist._kernels.mesh_moment`), with ``moment`` ``VERTEX_1`` or ``VERTEX_2`` the
+    numerator for a motion of that query vertex alone
+    (:func:`smoothdist._kernels.mesh_moment.smooth_vertex_primitive`); else 0.
     """
     c = _closest(kind, pts, i, kq, Q, k)
     d = math.sqrt(c[0])
@@ -305,7 +309,7 @@ pair_terms = numba.njit(**NJIT)(_pair.py_func)
 def pair_term(tree, i, kq, Q, S, wgs):
     """Term of data primitive ``i`` (tree order) for query primitive ``(kq, Q)``.
 
-    Returns ``(d, W, vx, vy, vz)`` as :func:`smoothdist.query.primitive_term`: distance,
+    Returns ``(d, W, vx, vy, vz)`` as :func:`smoothdist._kernels.query.primitive_term`: distance,
     attenuated weight and the gradient numerator ``W unit(r) - wgs grad W`` (gradients with
     respect to a translation of the query).
     """
@@ -346,7 +350,7 @@ def centroid(kq, Q):
 
 @numba.njit(**NJIT_INLINE)
 def _box_gap2(l0, l1, l2, h0, h1, h2, lo, hi, node):
-    """Squared :func:`smoothdist.box_distance.box_box_distance` of the query box ``l..h``
+    """Squared :func:`smoothdist._kernels.box_distance.box_box_distance` of the query box ``l..h``
     (scalars) and a node's box (the same sum of the same squared gaps)."""
     d2 = 0.0
     g = lo[node, 0] - h0
@@ -375,8 +379,8 @@ def _box_gap2(l0, l1, l2, h0, h1, h2, lo, hi, node):
 
 @numba.njit(**NJIT_INLINE)
 def _signed_gap(ql, qh, nl, nh):
-    """One axis of :func:`smoothdist.box_distance.box_box_offset`: the gap (negative when the
-    query is below the node, 0 when the intervals overlap)."""
+    """One axis of :func:`smoothdist._kernels.box_distance.box_box_offset`: the gap (negative
+    when the query is below the node, 0 when the intervals overlap)."""
     g = nl - qh
     if g > 0.0:
         return -g
@@ -388,8 +392,8 @@ def _signed_gap(ql, qh, nl, nh):
 
 @numba.njit(**NJIT_INLINE)
 def _accumulate(m, s, gx, gy, gz, mx, my, mz, d, W, vx, vy, vz, ux, uy, uz, alpha, moment):
-    """:func:`smoothdist.query.logsumexp_accumulate` (the same operations on ``m, s, g``), with
-    the moment ``u`` summed like ``v`` when ``moment``."""
+    """:func:`smoothdist._kernels.query.logsumexp_accumulate` (the same operations on
+    ``m, s, g``), with the moment ``u`` summed like ``v`` when ``moment``."""
     if d < m:
         f = math.exp(-alpha * (m - d))
         s *= f
@@ -420,22 +424,22 @@ def _far_weight(whi, node, cnt, S):
 def smooth_traverse(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, tol, moment,
                     exact_box=False):
     """The traversal of :func:`smooth_distance_primitive` and, with ``moment``,
-    :func:`smoothdist.mesh_moment.smooth_moment_primitive` (one code for both, so that their
-    ``d_hat`` and gradients agree bit for bit; inlined, so that a constant ``moment`` folds).
+    :func:`smoothdist._kernels.mesh_moment.smooth_moment_primitive` (one code for both, so that
+    their ``d_hat`` and gradients agree bit for bit; inlined, so that a constant ``moment`` folds).
 
     ``scratch`` holds 15 float64 (33 with ``moment``). Returns
     ``(d_hat, gx, gy, gz, mx, my, mz, nodes_visited, leaves_visited)``; the moment about the
     query's centroid is 0 without ``moment``.
 
-    The stack holds squared box-box distances; Barnes-Hut tests ``diag**2 < beta**2 d**2``, as
-    the point kernel does. The finer bound (:func:`smoothdist.box_distance.box_lower_bound`)
-    is tried only if the smallest query-vertex distance to the box could qualify the node, and
-    that only if the box-box distance plus the query box's diagonal (an upper bound of it)
-    could: a cheap test that rejects most nodes before the per-vertex one.
+    The stack holds squared box-box distances; Barnes-Hut tests ``diag**2 < beta**2 d**2``, as the
+    point kernel does. The finer bound (:func:`smoothdist._kernels.box_distance.box_lower_bound`) is
+    tried only if the smallest query-vertex distance to the box could qualify the node, and that
+    only if the box-box distance plus the query box's diagonal (an upper bound of it) could: a cheap
+    test that rejects most nodes before the per-vertex one.
 
     ``exact_box`` (``moment`` False only): the box test off, i.e. every Barnes-Hut candidate's
     distance is the exact primitive-box distance
-    (:func:`smoothdist.box_distance.box_distance_exact`, the quadratic program the paper's
+    (:func:`smoothdist._kernels.box_distance.box_distance_exact`, the quadratic program the paper's
     halfspace test avoids) instead of the box-box distance or the halfspace bound; the same
     traversal otherwise.
     """
@@ -486,8 +490,8 @@ def smooth_traverse(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, to
     pts = tree.pts
     wc = tree.wc
     pwhi = tree.pwhi
-    # negligible-term pruning, as in the point kernel (smoothdist.query.negligible_reach): a
-    # node at box-box distance >= m + reach adds less than 2**-53 x n_B / N of the sum
+    # negligible-term pruning, as in the point kernel (query.negligible_reach): a node at box-box
+    # distance >= m + reach adds less than 2**-53 x n_B / N of the sum
     reach = negligible_reach(tree, 0, S, alpha)
     cut2 = np.inf
     stack[0] = 0
@@ -601,7 +605,7 @@ def smooth_distance_primitive(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, s
     """Smooth distance ``d_hat(g)`` and its translation gradient for an edge or triangle query.
 
     ``Q (9,)`` the query's vertices, ``kq`` 1 or 2; ``scratch (15,)`` float64 work space; other
-    arguments as :func:`smoothdist.query.smooth_distance_point`. Returns
+    arguments as :func:`smoothdist._kernels.query.smooth_distance_point`. Returns
     ``(d_hat, gx, gy, gz, nodes_visited, leaves_visited)``.
 
     ``tol > 0`` adds a second far-field rule (docs/design-notes.md §3, not in the paper): a

@@ -22,10 +22,10 @@ import numpy as np
 from numba import prange
 
 from smoothdist._config import NJIT, NJIT_INLINE, NJIT_PARALLEL
-from smoothdist.closest_point import (SEG_INTERIOR, TRI_AB, TRI_AC, TRI_BC, TRI_INTERIOR,
-                                      box_distance2, closest_point_segment,
-                                      closest_point_triangle)
-from smoothdist.weights import eval_edge_weight, eval_triangle_weight
+from smoothdist._kernels.closest_point import (SEG_INTERIOR, TRI_AB, TRI_AC, TRI_BC, TRI_INTERIOR,
+                                               box_distance2, closest_point_segment,
+                                               closest_point_triangle)
+from smoothdist._kernels.weights import eval_edge_weight, eval_triangle_weight
 
 #: queries handled by one parallel task (one traversal stack each)
 CHUNK = 64

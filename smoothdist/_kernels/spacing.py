@@ -7,7 +7,7 @@ those gaps open (holes). :func:`gap_probes` finds, around sampled points, the po
 sampled surface farthest from the samples (centres of the local gaps); the surface is closed
 where ``d_hat <= 0`` at every gap centre.
 
-Kernels take the flat :class:`smoothdist.bvh.TreeData` arrays; the Python function builds
+Kernels take the flat :class:`smoothdist._kernels.bvh.TreeData` arrays; the Python function builds
 the probes in numpy.
 """
 
@@ -15,7 +15,7 @@ import numba
 import numpy as np
 
 from smoothdist._config import NJIT
-from smoothdist.closest_point import box_distance2
+from smoothdist._kernels.closest_point import box_distance2
 from smoothdist.schedule import parallel_tasks, run_tasks
 
 __all__ = ["points_within", "gap_probes", "local_smooth_distance"]
