@@ -19,7 +19,7 @@ _guard_kernel_cache()
 from smoothdist.field import (ExactDistanceResult, QueryStats, SmoothDistanceField,
                               SmoothDistanceResult)
 from smoothdist.mesh import DataMesh, MeshRepairWarning, as_data_mesh
-from smoothdist.query import DEFAULT_TOL as _DEFAULT_TOL
+from smoothdist._kernels.query import DEFAULT_TOL as _DEFAULT_TOL
 from smoothdist.whole_mesh import MeshDistance, combine_distances, mesh_distance
 
 __all__ = ["DataMesh", "MeshRepairWarning", "SmoothDistanceField", "SmoothDistanceResult",

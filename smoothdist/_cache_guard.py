@@ -1,14 +1,14 @@
 """Guard against stale numba kernel caches after a source edit in another module.
 
-numba's ``cache=True`` checks a cached kernel only against the file that defines it, but our
-kernels compile in the njit functions they call from other modules (the tracer's march kernels
-contain ``smoothdist.query``'s), so an edit to ``smoothdist/query.py`` alone could leave a new
-process running the old render kernels. :func:`guard_once`, called when ``smoothdist`` is
-imported (before any kernel is defined; every ``tracer`` module with kernels imports
-``smoothdist`` first), hashes all ``.py`` files of ``smoothdist`` and ``tracer`` together with the
-numba version, compares the digest with the one stored in each cache directory, and on a
-difference (or none stored) deletes that directory's ``*.nbi`` / ``*.nbc`` files and stores the
-new digest. Unchanged sources keep the cache. ``SMOOTHDIST_CACHE_GUARD=0`` switches it off.
+numba's ``cache=True`` checks a cached kernel only against the file that defines it, but our kernels
+compile in the njit functions they call from other modules (the tracer's march kernels contain
+``smoothdist._kernels.query``'s), so an edit to ``smoothdist/_kernels/query.py`` alone could leave a
+new process running the old render kernels. :func:`guard_once`, called when ``smoothdist`` is
+imported (before any kernel is defined; every ``tracer`` module with kernels imports ``smoothdist``
+first), hashes all ``.py`` files of ``smoothdist`` and ``tracer`` together with the numba version,
+compares the digest with the one stored in each cache directory, and on a difference (or none
+stored) deletes that directory's ``*.nbi`` / ``*.nbc`` files and stores the new digest. Unchanged
+sources keep the cache. ``SMOOTHDIST_CACHE_GUARD=0`` switches it off.
 
 Where numba caches the kernels of ``pkg/mod.py`` (``numba.core.caching``, numba >= 0.58): the
 first of ``$NUMBA_CACHE_DIR/<subpath>`` (if the variable is set), ``pkg/__pycache__`` and

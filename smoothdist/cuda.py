@@ -1,14 +1,15 @@
 """The CUDA path: smooth and exact distances of query points on an NVIDIA GPU (numba-cuda).
 
-The kernels here are thin launch wrappers around the CPU kernels of :mod:`smoothdist.query`:
-numba-cuda compiles a ``numba.njit`` function called from a ``cuda.jit`` kernel as a CUDA
-device function from the same Python source (``numba.cuda.target``'s dispatcher handling), so
-``smooth_distance_point_tol``, ``exact_distance_point`` and everything they call run
-unchanged on the device and the two paths cannot drift apart. Each GPU thread evaluates one
-query point with its own fixed-size local traversal stack (:data:`STACK` entries, enough for
-any tree of depth ``<= STACK - 4``); the tree is the same flat :class:`~smoothdist.bvh.TreeData`
-structure of arrays, copied to the device once per field. All arithmetic is float64 as on the
-CPU (the exponential sums need it; data-centre GPUs run float64 at half the float32 rate).
+The kernels here are thin launch wrappers around the CPU kernels of
+:mod:`smoothdist._kernels.query`: numba-cuda compiles a ``numba.njit`` function called from a
+``cuda.jit`` kernel as a CUDA device function from the same Python source (``numba.cuda.target``'s
+dispatcher handling), so ``smooth_distance_point_tol``, ``exact_distance_point`` and everything they
+call run unchanged on the device and the two paths cannot drift apart. Each GPU thread evaluates one
+query point with its own fixed-size local traversal stack (:data:`STACK` entries, enough for any
+tree of depth ``<= STACK - 4``); the tree is the same flat
+:class:`~smoothdist._kernels.bvh.TreeData` structure of arrays, copied to the device once per field.
+All arithmetic is float64 as on the CPU (the exponential sums need it; data-centre GPUs run float64
+at half the float32 rate).
 
 Install: ``pip install -e ".[gpu]"`` in the clone (numba-cuda). Without a GPU, numba's CUDA
 simulator (``NUMBA_ENABLE_CUDASIM=1`` set before ``numba.cuda`` is first imported) runs the
@@ -24,7 +25,7 @@ import os
 import numba
 import numpy as np
 
-from smoothdist.query import exact_distance_point, smooth_distance_point_tol
+from smoothdist._kernels.query import exact_distance_point, smooth_distance_point_tol
 
 __all__ = ["CudaUnavailable", "DEVICES", "check_device", "cuda_module", "device_tree",
            "simulated", "smooth_distance", "exact_distance", "STACK", "THREADS"]
@@ -143,7 +144,8 @@ def check_depth(depth):
 
 
 def device_tree(tree):
-    """``tree`` (:class:`~smoothdist.bvh.TreeData`) with every array copied to the device."""
+    """``tree`` (:class:`~smoothdist._kernels.bvh.TreeData`) with every array copied to the
+    device."""
     cuda = cuda_module()
     check_depth(int(tree.depth))
     if simulated():
@@ -161,7 +163,7 @@ def _blocks(n):
 
 def smooth_distance(tree, Q, alpha, beta, S, wgs, tol, dtree=None):
     """Smooth distance of the rows of ``Q (q, 3)`` on the device, arguments as for
-    :func:`smoothdist.query.smooth_distance_batch` (validated by the caller; ``dtree`` a
+    :func:`smoothdist._kernels.query.smooth_distance_batch` (validated by the caller; ``dtree`` a
     :func:`device_tree` of ``tree`` to reuse). Returns host arrays ``(d, g, nodes, leaves)``."""
     cuda = cuda_module()
     dtree = device_tree(tree) if dtree is None else dtree
@@ -179,8 +181,8 @@ def smooth_distance(tree, Q, alpha, beta, S, wgs, tol, dtree=None):
 
 def exact_distance(tree, Q, dtree=None):
     """Exact distance of the rows of ``Q (q, 3)`` on the device (as
-    :func:`smoothdist.query.exact_distance_batch`). Returns host arrays ``(d, g, prim, nodes,
-    leaves)``; ``prim`` is in the mesh numbering."""
+    :func:`smoothdist._kernels.query.exact_distance_batch`). Returns host arrays
+    ``(d, g, prim, nodes, leaves)``; ``prim`` is in the mesh numbering."""
     cuda = cuda_module()
     dtree = device_tree(tree) if dtree is None else dtree
     n = Q.shape[0]

@@ -5,10 +5,10 @@ from typing import NamedTuple
 
 import numpy as np
 
-from smoothdist import query as _q
+from smoothdist._kernels import query as _q
 from smoothdist._cast import as_points, non_negative, positive
-from smoothdist.bvh import build_tree
-from smoothdist.exact_query import build_exact_tree, exact_tree_batch
+from smoothdist._kernels.bvh import build_tree
+from smoothdist._kernels.exact_query import build_exact_tree, exact_tree_batch
 from smoothdist.mesh import as_data_mesh
 from smoothdist.schedule import parallel_tasks, run_tasks
 
@@ -84,9 +84,10 @@ def _data_key(field):
 #: one or two exact queries per primitive save)
 EXACT_TREE_AFTER = 1.0
 #: batches of at most this many queries (``smooth_distance`` without ``tol``, ``exact_distance``
-#: on the BVH) run as serial task kernels from Python threads (``smoothdist.query.*_tasks``:
-#: about half the compile time of a ``prange`` kernel, which a fresh install's first call
-#: pays); larger batches use the ``prange`` kernels (``*_batch``). The same values either way.
+#: on the BVH) run as serial task kernels from Python threads
+#: (``smoothdist._kernels.query.*_tasks``: about half the compile time of a ``prange`` kernel, which
+#: a fresh install's first call pays); larger batches use the ``prange`` kernels (``*_batch``). The
+#: same values either way.
 TASK_BATCH = 1 << 14
 
 
@@ -129,7 +130,7 @@ class SmoothDistanceField:
     leaf_size : int
         Primitives per BVH leaf.
     progress : callable(done, total, elapsed_s), optional
-        Reports the BVH build (see :func:`smoothdist.bvh.build_tree`), for very large data.
+        Reports the BVH build (see :func:`smoothdist._kernels.bvh.build_tree`), for very large data.
 
     Notes
     -----
@@ -166,14 +167,16 @@ class SmoothDistanceField:
 
     @property
     def exact_tree(self):
-        """The :class:`~smoothdist.exact_query.ExactTree` that answers exact distance queries.
+        """The :class:`~smoothdist._kernels.exact_query.ExactTree` that answers exact distance
+        queries.
 
         Built on first access and kept (binned SAH, leaves of up to 4 primitives; about
-        1.5 us and 170 bytes per triangle, 70 per point, see :mod:`smoothdist.exact_query`).
-        :meth:`exact_distance` builds it once its calls have asked for
-        ``EXACT_TREE_AFTER`` queries per primitive (the build then pays for itself) and
-        searches the smooth-distance tree with :func:`smoothdist.query.exact_distance_point`
-        until then. The smooth kernels never use it.
+        1.5 us and 170 bytes per triangle, 70 per point, see
+        :mod:`smoothdist._kernels.exact_query`). :meth:`exact_distance` builds it once its calls
+        have asked for ``EXACT_TREE_AFTER`` queries per primitive (the build then pays for
+        itself) and searches the smooth-distance tree with
+        :func:`smoothdist._kernels.query.exact_distance_point` until then. The smooth kernels never
+        use it.
         """
         et = self.__dict__.get("_exact_tree")
         if et is None:
@@ -285,14 +288,14 @@ class SmoothDistanceField:
         Probes are the centres of the gaps (local maxima of the distance to the cloud, the
         circumcentres of empty non-obtuse triangles) between up to ``samples`` sampled points
         and their neighbours within ``AUTO_GAP_RADIUS`` median spacings
-        (:func:`smoothdist.spacing.gap_probes`); the cloud is closed at an alpha where
+        (:func:`smoothdist._kernels.spacing.gap_probes`); the cloud is closed at an alpha where
         ``d_hat <= 0`` (beta 0.5, ``alpha_u="auto"``) at every probe. ``alpha`` itself when
         it closes them, else a bisection in ``log alpha`` (``d_hat`` falls with alpha, so
         the closed alphas are an interval). A random sample of a surface needs about 0.6-0.8
         of ``1 / median spacing``: its widest gaps are 2-3 median spacings across, where an
         even sample's are 1.5-2. Meshes without points: ``alpha``.
         """
-        from smoothdist.spacing import gap_probes, local_smooth_distance
+        from smoothdist._kernels.spacing import gap_probes, local_smooth_distance
 
         pts = self.mesh.V[self.mesh.points]
         if pts.shape[0] < 3:
@@ -503,7 +506,7 @@ class SmoothDistanceField:
             replace a subtree by its conservative far field only while the far fields accepted
             so far stay below ``tol`` times the exact part of the sum. With ``beta=0``,
             ``d_hat_0 - log(1 + tol) / alpha <= d_hat <= d_hat_0`` (error at most
-            ``tol / alpha``; proof in :func:`smoothdist.query.smooth_distance_point_tol`).
+            ``tol / alpha``; proof in :func:`smoothdist._kernels.query.smooth_distance_point_tol`).
         device : {"cpu", "cuda"}
             ``"cuda"``: evaluate on the GPU (:mod:`smoothdist.cuda`; needs the ``gpu`` extra
             and a GPU, or numba's simulator), the same kernel code; ``method="bvh"`` only.
@@ -558,8 +561,8 @@ class SmoothDistanceField:
         vertex or an edge shared by several triangles), ``closest`` is one of them; which one
         may depend on the tree searched and on the neighbouring rows of ``Q``, as each query
         starts its search from the previous row's closest primitive
-        (:func:`smoothdist.exact_query.exact_tree_batch`). ``device="cuda"`` evaluates on the
-        GPU (:mod:`smoothdist.cuda`), searching the field's ``tree``.
+        (:func:`smoothdist._kernels.exact_query.exact_tree_batch`). ``device="cuda"`` evaluates
+        on the GPU (:mod:`smoothdist.cuda`), searching the field's ``tree``.
         """
         Q = as_points(Q, "Q")
         if _check_device(device) == "cuda":
@@ -598,7 +601,7 @@ class SmoothDistanceField:
         return self.__dict__["_cuda_tree"]
 
     def kernel_args(self, alpha, beta=0.5, alpha_u=None, gradient="metric"):
-        """Validated scalars for :func:`smoothdist.query.smooth_distance_point`.
+        """Validated scalars for :func:`smoothdist._kernels.query.smooth_distance_point`.
 
         Returns ``(alpha, beta, S, wgs)``.
         """
@@ -626,7 +629,7 @@ def _check_device(device, method="bvh"):
 def _tasks(kernel, n, *args):
     """Run the serial task kernel ``kernel(*args, ntasks, task0, task1)`` over ``n`` queries
     from the persistent worker threads (:func:`smoothdist.schedule.run_tasks` with ``pool``;
-    one strided task per thread, :func:`smoothdist.query.chunk_tasks`)."""
+    one strided task per thread, :func:`smoothdist._kernels.query.chunk_tasks`)."""
     ntasks = _q.chunk_tasks(n)
     run_tasks(lambda a, b: kernel(*args, ntasks, a, b), ntasks, pool=True)
 

@@ -20,9 +20,9 @@ Your own kernels take the package's compilation policy from here, so that they a
 import numpy as np
 
 from smoothdist._config import NJIT, NJIT_PARALLEL, PARALLEL
-from smoothdist.bvh import TreeData, concatenate_trees
-from smoothdist.query import (DEFAULT_TOL, exact_distance_point, logsumexp_accumulate,
-                              smooth_distance_point, smooth_distance_point_tol, stack_size)
+from smoothdist._kernels.bvh import TreeData, concatenate_trees
+from smoothdist._kernels.query import (DEFAULT_TOL, exact_distance_point, logsumexp_accumulate,
+                                       smooth_distance_point, smooth_distance_point_tol, stack_size)
 
 __all__ = ["TreeData", "concatenate_trees", "exact_distance_point", "logsumexp_accumulate",
            "smooth_distance_point", "smooth_distance_point_tol", "new_stack", "stack_size",

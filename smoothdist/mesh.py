@@ -16,7 +16,7 @@ import warnings
 
 import numpy as np
 
-from smoothdist import weights as _weights
+from smoothdist._kernels import weights as _weights
 from smoothdist._cast import COORD_LIMIT, as_indices, as_points, non_finite_rows
 from smoothdist.convert import foreign_arrays, is_foreign_geometry, trimesh_arrays
 

@@ -6,9 +6,9 @@ the same kinds, which may move rigidly between calls:
     d_hat(M_d, M_q) = -(1/alpha_q) log sum_j exp(-alpha_q d_hat(M_d, g_j))          (Eq. 6)
 
 over the query primitives ``g_j``, each ``d_hat(M_d, g_j)`` the smooth distance of one query
-primitive (:mod:`smoothdist.mesh_query`). The gradient with respect to query vertex ``k`` is the
-paper's equal split (Eq. 7-8): primitive ``j``'s softmax weight times its translation gradient,
-divided among its ``n_j + 1`` vertices,
+primitive (:mod:`smoothdist._kernels.mesh_query`). The gradient with respect to query vertex
+``k`` is the paper's equal split (Eq. 7-8): primitive ``j``'s softmax weight times its translation
+gradient, divided among its ``n_j + 1`` vertices,
 
     grad_k = sum_{j ∋ k} exp(-alpha_q d_hat_j) grad d_hat_j / (n_j + 1)
     / sum_j exp(-alpha_q d_hat_j).
@@ -17,7 +17,7 @@ So the vertex gradients sum to the gradient of a rigid translation of the whole 
 Their torque ``sum_k (x_k - o) x grad_k`` applies each primitive's force at its centroid, which
 is exact for point queries only: a pair distance changes under a rotation through the motion of
 its closest point on ``g_j``. :meth:`MeshDistance.with_couple` adds the couple that makes the
-torque the exact rotational derivative (:mod:`smoothdist.mesh_moment`), and
+torque the exact rotational derivative (:mod:`smoothdist._kernels.mesh_moment`), and
 :meth:`MeshDistance.rigid_gradient` returns force and torque either way.
 
 Conventions: distances are unsigned, in scene units (the data mesh's frame). ``R``, ``t`` map query
@@ -32,14 +32,14 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
-from smoothdist import mesh_moment as _mm
-from smoothdist import mesh_query as _mq
+from smoothdist._kernels import mesh_moment as _mm
+from smoothdist._kernels import mesh_query as _mq
 from smoothdist._cast import COORD_LIMIT, as_indices, as_points, non_negative, positive
 from smoothdist._config import NJIT
 from smoothdist.convert import is_foreign_geometry
 from smoothdist.field import SmoothDistanceField
 from smoothdist.mesh import DataMesh, as_data_mesh
-from smoothdist.query import DEFAULT_TOL
+from smoothdist._kernels.query import DEFAULT_TOL
 from smoothdist.schedule import parallel_tasks
 
 
@@ -287,7 +287,7 @@ class MeshDistance:
 
     @property
     def tree(self):
-        """The data mesh's :class:`~smoothdist.bvh.TreeData`."""
+        """The data mesh's :class:`~smoothdist._kernels.bvh.TreeData`."""
         return self.field.tree
 
     @property
@@ -364,9 +364,9 @@ class MeshDistance:
         Calling the object returns the paper's equal split instead (Eq. 7-8), which is right
         for rigid translations only. Here each pair term moves with its own closest point on the
         query primitive (its barycentrics) and its weight follows the data-side closest point
-        (:mod:`smoothdist.mesh_moment`). With ``gradient="exact"``, ``beta=0`` and ``tol=0`` this
-        is the derivative of ``d_hat`` (checked against finite differences); Barnes-Hut and
-        tol far fields are split equally among a primitive's vertices, and
+        (:mod:`smoothdist._kernels.mesh_moment`). With ``gradient="exact"``, ``beta=0`` and
+        ``tol=0`` this is the derivative of ``d_hat`` (checked against finite differences);
+        Barnes-Hut and tol far fields are split equally among a primitive's vertices, and
         ``gradient="metric"`` divides the weights' part by alpha as everywhere. Its rows sum
         to the translation gradient ``G.sum(axis=0)`` of the call. Costs one traversal per
         vertex beyond the first of each primitive (about 2x a call for edges, 3x for
@@ -398,7 +398,7 @@ class MeshDistance:
 
         ``d_hat`` and the gradient equal :meth:`primitive_distances`' bit for bit; the moment
         is the gradient of ``d_hat_j`` for a rotation of the primitive about its centroid
-        (:mod:`smoothdist.mesh_moment`; 0 for points). Scene units, data frame.
+        (:mod:`smoothdist._kernels.mesh_moment`; 0 for points). Scene units, data frame.
         """
         if method not in ("bvh", "brute"):
             raise ValueError(f"method must be 'bvh' or 'brute', got {method!r}")

@@ -1,8 +1,8 @@
 """Slow, readable, pure-numpy reference implementations for the smoothdist tests.
 
-Nothing here uses the library's numba kernels (``smoothdist.query``,
-``smoothdist.closest_point``, ``smoothdist.bvh``). The only things taken from the library are
-the weight-polynomial *coefficients*, ``A`` and the clamp bounds ``whi``
+Nothing here uses the library's numba kernels (``smoothdist._kernels.query``,
+``smoothdist._kernels.closest_point``, ``smoothdist._kernels.bvh``). The only things taken from
+the library are the weight-polynomial *coefficients*, ``A`` and the clamp bounds ``whi``
 (``DataMesh.weight_data()``; ``test_mesh.py`` checks those against an independent valence count
 here, :func:`valences`); the polynomials themselves, their derivatives, the projection
 Jacobians, the clamp into ``[1, whi]``, the attenuation power ``S`` and the LogSumExp are

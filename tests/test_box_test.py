@@ -1,8 +1,8 @@
 """The paper's box test on and off (Sec. 3.5; ``MeshDistance(box_test=...)``).
 
 Off, a Barnes-Hut candidate's distance is the exact primitive-box distance
-(:func:`smoothdist.box_distance.box_distance_exact`), checked here against a dense sampling of
-the primitive (the point-box distance is a clamp, independent of the kernel). On and off
+(:func:`smoothdist._kernels.box_distance.box_distance_exact`), checked here against a dense
+sampling of the primitive (the point-box distance is a clamp, independent of the kernel). On and off
 accept different far fields (the exact distance is at least the halfspace bound, so more nodes
 qualify), so their values agree only within the Barnes-Hut error: the tolerance of these tests
 and of ``tracer reproduce``'s ``box_test`` experiment is, per query primitive,
@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from smoothdist import MeshDistance
-from smoothdist.box_distance import box_distance_exact, box_lower_bound
+from smoothdist._kernels.box_distance import box_distance_exact, box_lower_bound
 
 
 def _sampled(kq, Q, lo, hi, n=120):

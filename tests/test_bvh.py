@@ -9,7 +9,7 @@ import pytest
 
 import naive
 from smoothdist import DataMesh, SmoothDistanceField
-from smoothdist.bvh import SAH_MIN, build_tree
+from smoothdist._kernels.bvh import SAH_MIN, build_tree
 
 MESHES = ("point_cloud", "circle", "segment_star", "icosphere", "cube", "mixed_mesh",
           "nonmanifold_mesh", "octopus", "trefoil")
@@ -194,7 +194,7 @@ def test_stats_beta_zero_visit_everything(request, zoo, name, rng):
         f = SmoothDistanceField(mesh, leaf_size=leaf_size)
         Q = naive.near_queries(mesh, 100, rng)
         _, _, st = f.smooth_distance(Q, alpha=10.0, beta=0.0, return_stats=True)
-        # every primitive, except those skipped as negligible (smoothdist.query.
+        # every primitive, except those skipped as negligible (smoothdist._kernels.query.
         # negligible_reach): all within ``reach`` of the nearest one are visited
         D = naive.distances_to_primitives(Q, mesh)
         reach = _reach(f, 10.0)

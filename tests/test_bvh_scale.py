@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from smoothdist import DataMesh, SmoothDistanceField
-from smoothdist.bvh import build_tree
+from smoothdist._kernels.bvh import build_tree
 
 
 @pytest.mark.parametrize("leaf_size", [1, 2, 3, 8, 33])

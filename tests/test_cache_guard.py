@@ -190,8 +190,8 @@ def test_the_default_covers_smoothdist_and_tracer():
     dirs = cache_guard.default_package_dirs()
     assert dirs == [str(ROOT / "smoothdist"), str(ROOT / "tracer")]
     files = set(cache_guard.source_files(dirs))
-    for rel in ("smoothdist/query.py", "smoothdist/weights.py", "tracer/rendering/march.py",
-                "tracer/rendering/camera.py", "tracer/sim/ipm.py"):
+    for rel in ("smoothdist/_kernels/query.py", "smoothdist/_kernels/weights.py",
+                "tracer/rendering/march.py", "tracer/rendering/camera.py", "tracer/sim/ipm.py"):
         assert str(ROOT / rel) in files
 
 
@@ -259,7 +259,7 @@ def test_serial_runs_do_not_load_the_parallel_kernels(tmp_path):
     code = (
         "import numpy as np\n"
         "from smoothdist import DataMesh, SmoothDistanceField\n"
-        "import smoothdist.query as q\n"
+        "import smoothdist._kernels.query as q\n"
         "f = SmoothDistanceField(DataMesh(np.random.default_rng(0).random((50, 3))))\n"
         "from smoothdist.field import TASK_BATCH\n"
         "f.smooth_distance(np.zeros((TASK_BATCH + 1, 3)), alpha=20.0, beta=0.5)  # prange\n"

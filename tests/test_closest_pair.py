@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 import naive_pairs
-from smoothdist.box_distance import box_box_distance, box_lower_bound
-from smoothdist.closest_pair import closest_pair
+from smoothdist._kernels.box_distance import box_box_distance, box_lower_bound
+from smoothdist._kernels.closest_pair import closest_pair
 
 KINDS = (0, 1, 2)
 

@@ -1,7 +1,7 @@
-"""The exact-distance tree (``smoothdist.exact_query``): its build covers every primitive with
-conservative boxes, and its seeded branch and bound equals numpy brute force and the plain
-kernel on the smooth-distance tree (``smoothdist.query.exact_distance_batch``), on real meshes,
-fuzzed mixed meshes, ties and queries on the geometry."""
+"""The exact-distance tree (``smoothdist._kernels.exact_query``): its build covers every primitive
+with conservative boxes, and its seeded branch and bound equals numpy brute force and the plain
+kernel on the smooth-distance tree (``smoothdist._kernels.query.exact_distance_batch``), on real
+meshes, fuzzed mixed meshes, ties and queries on the geometry."""
 
 from pathlib import Path
 
@@ -12,9 +12,9 @@ import pytest
 import naive
 from smoothdist import DataMesh, SmoothDistanceField
 from smoothdist import field as field_mod
-from smoothdist import query
-from smoothdist.exact_query import (MAX_LEAF, build_exact_tree, exact_stack_size, exact_tree_batch,
-                                     exact_tree_point, primitive_d2)
+from smoothdist._kernels import query
+from smoothdist._kernels.exact_query import (MAX_LEAF, build_exact_tree, exact_stack_size,
+                                             exact_tree_batch, exact_tree_point, primitive_d2)
 
 ROOT = Path(__file__).resolve().parents[1]
 ZOO = ("point_cloud", "circle", "segment_star", "icosphere", "cube", "mixed_mesh",
@@ -373,7 +373,7 @@ def test_squared_distance_routines_match_brute_force():
 def test_depth_stays_bounded_on_uneven_data(rng):
     """Points at x = 2^-k make every binned split cut off one point: past SAH_DEPTH the build
     splits at the median, so the depth stays small and the queries exact."""
-    from smoothdist.exact_query import SAH_DEPTH
+    from smoothdist._kernels.exact_query import SAH_DEPTH
     k = np.arange(300)
     V = np.stack([2.0 ** -k, 0.5 * 2.0 ** -k, np.zeros(k.size)], axis=1)
     V = np.concatenate([V, rng.random((30, 3))])

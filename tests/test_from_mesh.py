@@ -590,7 +590,7 @@ def test_gap_probes_and_local_bound_against_numpy():
     """``spacing.points_within`` against brute force; ``local_smooth_distance`` bounds the
     exact sum from above and equals it when the radius covers the cloud; gap probes are
     circumcentres (equidistant from three samples, none closer)."""
-    from smoothdist.spacing import gap_probes, local_smooth_distance, points_within
+    from smoothdist._kernels.spacing import gap_probes, local_smooth_distance, points_within
 
     rng = np.random.default_rng(5)
     X = rng.normal(size=(400, 3))

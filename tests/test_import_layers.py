@@ -67,7 +67,7 @@ def test_no_arrow_from_a_lower_room_up():
     assert not up, "imports that run back up: " + ", ".join(sorted(up))
 
 
-@pytest.mark.parametrize("edge", ["smoothdist.query -> tracer.rendering.renderer",
+@pytest.mark.parametrize("edge", ["smoothdist._kernels.query -> tracer.rendering.renderer",
                                   "tracer.rendering.camera -> tracer.scenes.scene",
                                   "tracer.runner -> tracer.rendering",
                                   "tracer.scenes.from_mesh -> tracer.checks.imagediff"])

@@ -13,7 +13,7 @@ import trimesh
 import naive
 import smoothdist
 from smoothdist import DataMesh, MeshRepairWarning, SmoothDistanceField
-from smoothdist import weights as W
+from smoothdist._kernels import weights as W
 
 DATA = Path(__file__).resolve().parent / "data"
 TRI = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0.2]])

@@ -54,7 +54,7 @@ def segment_pairs(P0, P1, V0, V1):
     boundary, i.e. one endpoint projected onto the other segment. All five candidates are
     computed and the nearest kept. Where several tie (parallel segments: the closest pairs
     form an interval of ``u``), the pair is the one nearest the query's midpoint ``u = 1/2``
-    (issue 37's rule, :func:`smoothdist.closest_pair.tied_pair`): ``u`` clamped to the tied
+    (issue 37's rule, :func:`smoothdist._kernels.closest_pair.tied_pair`): ``u`` clamped to the tied
     candidates' range, ``t`` interpolated (the map from ``u`` to ``t`` is affine there).
     """
     dp, dv, w = P1 - P0, V1 - V0, P0 - V0
@@ -192,7 +192,7 @@ def test_segment_pairs_against_dense_sampling(rng):
 def test_edge_weight_closed_form():
     """The solved quartic equals the closed form ``[a, 0, 16 - 11a - 5b, 18a + 14b - 32,
     16 - 8a - 8b]`` (``a = 1/n0``, ``b = 1/n1``) the library stores."""
-    from smoothdist.weights import edge_weight_coefficients
+    from smoothdist._kernels.weights import edge_weight_coefficients
 
     for n0, n1 in [(1, 1), (2, 2), (2, 46), (46, 4), (3, 5)]:
         np.testing.assert_allclose(edge_weight(n0, n1), edge_weight_coefficients(n0, n1),

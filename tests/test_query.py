@@ -347,7 +347,7 @@ def test_beta0_bvh_equals_brute_and_naive(request, zoo, name, rng):
 @pytest.mark.parametrize("name", ZOO + REAL_LOCAL)
 @pytest.mark.parametrize("sharp", [1.0, 20.0, 200.0])
 def test_negligible_pruning_equals_brute_to_rounding(request, zoo, name, sharp, rng):
-    """Negligible-term pruning (``smoothdist.query.negligible_reach``) at ``beta = 0``: the
+    """Negligible-term pruning (``smoothdist._kernels.query.negligible_reach``) at ``beta = 0``: the
     value equals brute force (every term) to rounding, at alphas where it prunes nearly
     everything (``sharp`` x the paper's alpha), and the pruned leaves are really skipped."""
     mesh = zoo[name] if name in zoo else request.getfixturevalue(name)

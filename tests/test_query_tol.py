@@ -1,6 +1,7 @@
 """Tolerance-controlled evaluation (``tol``): the fast path against the plain ``beta = 0`` one.
 
-The claim (``smoothdist.query.smooth_distance_point_tol``): with ``beta = 0`` and ``tol > 0``
+The claim (``smoothdist._kernels.query.smooth_distance_point_tol``): with ``beta = 0`` and
+``tol > 0``
 
     d_hat_0 - log(1 + tol) / alpha  <=  d_hat_tol  <=  d_hat_0
 
@@ -30,9 +31,9 @@ from hypothesis import strategies as st
 
 import smoothdist
 from smoothdist import DataMesh, SmoothDistanceField
-from smoothdist.bvh import concatenate_trees
+from smoothdist._kernels.bvh import concatenate_trees
 from smoothdist.kernels import new_stack
-from smoothdist.query import smooth_distance_point_tol
+from smoothdist._kernels.query import smooth_distance_point_tol
 from test_query_fuzz import build, meshes, queries
 
 ROOT = Path(__file__).resolve().parents[1]

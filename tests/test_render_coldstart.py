@@ -188,8 +188,9 @@ def test_a_plain_render_is_lean(tmp_path):
         assert sigs[name][0][1] == "int64", sigs[name]
     # nothing of the general path was compiled or loaded
     for name in ("tracer.rendering.march.render_rows", "tracer.rendering.march._scene_distance_posed",
-                 "tracer.rendering.march.trace_pixels", "smoothdist.query.smooth_distance_point_tol",
-                 "smoothdist.query.exact_distance_point"):
+                 "tracer.rendering.march.trace_pixels",
+                 "smoothdist._kernels.query.smooth_distance_point_tol",
+                 "smoothdist._kernels.query.exact_distance_point"):
         assert name not in sigs, sigs.get(name)
 
 
@@ -227,8 +228,9 @@ def test_a_lit_adaptive_render_is_lean(tmp_path):
     # no prange kernel (a parallel loop costs numba about as much again as its body), and
     # nothing of the general path
     for name in ("tracer.rendering.march.trace_samples", "tracer.rendering.lighting.light_points",
-                 "tracer.rendering.march.render_rows", "smoothdist.query.smooth_distance_point_tol",
-                 "smoothdist.query.exact_distance_point"):
+                 "tracer.rendering.march.render_rows",
+                 "smoothdist._kernels.query.smooth_distance_point_tol",
+                 "smoothdist._kernels.query.exact_distance_point"):
         assert name not in sigs, sigs.get(name)
     # compiled specialisations (all kernels, callees included, each counted once; each one
     # compiled, optimised and written to the cache): no more than the measured first render
@@ -330,7 +332,7 @@ def _sah_split(plo, phi):
     """Where the build splits primitives with boxes ``plo, phi (n, 3)`` (in their sorted
     order): the ``k`` of smallest ``A(:k) k + A(k:) (n - k)`` with ``A`` the half box area and
     both sides at least ``SAH_MIN n`` (at least 1); the largest such ``k`` on a tie."""
-    from smoothdist.bvh import SAH_MIN
+    from smoothdist._kernels.bvh import SAH_MIN
 
     n = len(plo)
 
@@ -382,7 +384,7 @@ def reference_build(cent, plo, phi, leaf_size):
 @pytest.mark.parametrize("case", ["grid_points", "bunny_triangles", "bunny_edges"])
 @pytest.mark.parametrize("leaf_size", [1, 3])
 def test_build_matches_its_specification(bunny, case, leaf_size):
-    from smoothdist.bvh import build_tree
+    from smoothdist._kernels.bvh import build_tree
 
     if case == "grid_points":  # many equal coordinates: the sort's stability matters
         g = np.arange(7.0)
@@ -402,7 +404,7 @@ def test_build_matches_its_specification(bunny, case, leaf_size):
 
 
 def test_stable_sort_of_the_build():
-    from smoothdist.bvh import _sort_by_key
+    from smoothdist._kernels.bvh import _sort_by_key
 
     rng = np.random.default_rng(3)
     for n in (0, 1, 15, 16, 17, 33, 100, 1000):

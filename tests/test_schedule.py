@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from smoothdist import DataMesh, SmoothDistanceField
-from smoothdist import query as q
+from smoothdist._kernels import query as q
 from smoothdist.schedule import TASKS, parallel_tasks
 
 BUNNY = Path(__file__).resolve().parents[1] / "scenes" / "data" / "bunny.off"

@@ -11,9 +11,9 @@ from conftest import make_circle, make_icosphere, make_mixed
 
 import naive_pairs
 from smoothdist import DataMesh, MeshDistance
-from smoothdist.box_distance import box_box_offset, box_lower_bound
-from smoothdist.box_moment import box_lower_bound_moment, extreme_levers, gap_moment
-from smoothdist.mesh_query import query_box
+from smoothdist._kernels.box_distance import box_box_offset, box_lower_bound
+from smoothdist._kernels.box_moment import box_lower_bound_moment, extreme_levers, gap_moment
+from smoothdist._kernels.mesh_query import query_box
 from tracer.sim import primitives
 from tracer.sim.bodies import Body, rotation_matrix
 from tracer.sim.constraint import ContactConstraint

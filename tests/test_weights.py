@@ -1,10 +1,10 @@
-"""Tests for smoothdist.weights (Madan & Levin 2022, Appendix C weight functions)."""
+"""Tests for smoothdist._kernels.weights (Madan & Levin 2022, Appendix C weight functions)."""
 
 import numpy as np
 import pytest
 
-from smoothdist import weights as W
-from smoothdist.weights import (
+from smoothdist._kernels import weights as W
+from smoothdist._kernels.weights import (
     edge_weight_coefficients,
     edge_weight_max,
     edge_weight_range,

@@ -1,15 +1,14 @@
 """Whole-mesh distance under fine lines of motion through parallel configurations (issue 37).
 
-Where a query edge or face is parallel to a data edge or face, the closest pair of two primitives
-is not unique; the weight depends on where it lies, so a choice left to rounding made ``d_hat``
-jump (9.2e-4 between shifts 5e-7 apart in the issue's smallest case) while the query moved by
-less than a micron. ``smoothdist.closest_pair.tied_pair`` makes the choice continuous. Each scan
-below translates a query mesh in steps of 1e-7 and 1e-4 along the axes and a diagonal and fails
-on any step of ``d_hat`` larger than ``LIPSCHITZ`` times the step length; before the tie rule
-the icosphere scans stepped by 2-3e3 times it. The gradients are checked there against
-one-sided differences (aligned placements sit on kinks of the weight, where the two one-sided
-derivatives differ and the gradient must lie between them) and, off the aligned placements,
-against central differences.
+Where a query edge or face is parallel to a data edge or face, the closest pair of two primitives is
+not unique; the weight depends on where it lies, so a choice left to rounding made ``d_hat`` jump
+(9.2e-4 between shifts 5e-7 apart in the issue's smallest case) while the query moved by less than a
+micron. ``smoothdist._kernels.closest_pair.tied_pair`` makes the choice continuous. Each scan below
+translates a query mesh in steps of 1e-7 and 1e-4 along the axes and a diagonal and fails on any
+step of ``d_hat`` larger than ``LIPSCHITZ`` times the step length; before the tie rule the icosphere
+scans stepped by 2-3e3 times it. The gradients are checked there against one-sided differences
+(aligned placements sit on kinks of the weight, where the two one-sided derivatives differ and the
+gradient must lie between them) and, off the aligned placements, against central differences.
 """
 
 import numpy as np
@@ -17,7 +16,7 @@ import pytest
 import trimesh
 
 from smoothdist import MeshDistance
-from smoothdist.closest_pair import distinct_ties, tied_pair, triangle_triangle
+from smoothdist._kernels.closest_pair import distinct_ties, tied_pair, triangle_triangle
 
 #: ``|d_hat(x + h e) - d_hat(x)| <= LIPSCHITZ h``: d_hat's translation gradient has norm about 1
 #: (unit distance gradients, averaged, plus a weight term of order 1 / alpha); a jump from a
@@ -167,7 +166,7 @@ def test_tied_pairs_are_closest_pairs(qkind, dkind):
     """Every pair the tie rule reports lies on both primitives at the minimum distance, which
     :mod:`naive_pairs` (a face-by-face pseudo-inverse enumeration) finds independently."""
     import naive_pairs
-    from smoothdist.closest_pair import closest_pair
+    from smoothdist._kernels.closest_pair import closest_pair
 
     V, F = QUERIES["box"]
     GV, GF = GRID
@@ -273,7 +272,7 @@ def test_random_parallel_pairs(qkind, dkind):
     edge parallel to a data edge; some with duplicate vertices): the tie rule reports a real
     pair at the minimum distance that :mod:`naive_pairs` finds, and never a NaN."""
     import naive_pairs
-    from smoothdist.closest_pair import closest_pair
+    from smoothdist._kernels.closest_pair import closest_pair
 
     rng = np.random.default_rng(370 + 10 * qkind + dkind)
     n_tied = 0

@@ -19,7 +19,7 @@ import numba
 import numpy as np
 
 from smoothdist import DataMesh, MeshDistance
-from smoothdist.closest_pair import distinct_ties
+from smoothdist._kernels.closest_pair import distinct_ties
 
 HERE = Path(__file__).resolve().parent
 FILE = HERE / "whole_mesh_before_issue17.npz"

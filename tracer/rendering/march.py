@@ -1,7 +1,7 @@
 """Sphere-tracing kernels: march camera rays against a scene's smooth (or exact-offset) distance.
 
-A scene is one :class:`smoothdist.bvh.TreeData` *forest* (the objects' trees concatenated by
-``smoothdist.kernels.concatenate_trees``), the root node of each object ``roots (k,) int64``,
+A scene is one :class:`smoothdist._kernels.bvh.TreeData` *forest* (the objects' trees concatenated
+by ``smoothdist.kernels.concatenate_trees``), the root node of each object ``roots (k,) int64``,
 a ``(k, P_COLUMNS)`` float64 parameter table ``params``, one row per object, the scene's
 ``mode`` (``MODE_SMOOTH`` or ``MODE_EXACT``) and its ``tol``: one scalar for the whole
 scene, the tolerance-controlled pruning of every object (0 = off, the default
@@ -49,7 +49,7 @@ from numba import prange
 from numba.core import types as nbtypes
 from numba.extending import intrinsic, overload
 
-from smoothdist.closest_point import box_distance2
+from smoothdist._kernels.closest_point import box_distance2
 from smoothdist.kernels import (NJIT, NJIT_PARALLEL, exact_distance_point, logsumexp_accumulate,
                                 smooth_distance_point, smooth_distance_point_tol)
 from tracer.rendering.camera import ray_direction

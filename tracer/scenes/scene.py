@@ -12,7 +12,7 @@ units; default ``1e-4 x`` the data's bbox diagonal), ``mode`` (``"smooth"`` or `
 object; smooth mode ``d_hat = offset``, default 0), ``shading`` (``"normals"``,
 ``"matcap"``, ``"headlight"``), ``matcap``, ``background`` ([r, g, b] 0-255), ``max_steps``,
 ``gradient`` (``"metric"`` or ``"exact"``), ``description``, ``tol`` (tolerance-controlled
-pruning, a number >= 0, default 0 = off; see ``smoothdist.query.smooth_distance_point_tol``),
+pruning, a number >= 0, default 0 = off; see ``smoothdist.kernels.smooth_distance_point_tol``),
 ``newton`` (smooth mode: Newton steps along the ray once the distance is below ``newton x eps``,
 a number >= 0, default ``tracer.rendering.march.NEWTON``; 0 = plain sphere tracing; see
 ``tracer.rendering.march.march_ray``).

@@ -162,9 +162,9 @@ def unweighted_field(field):
     """A shallow copy of ``field`` whose every primitive has weight 1 ("weights off").
 
     The raw weight polynomial ``A w~`` of edges and triangles becomes the constant 1
-    (``wc[:, 0] = 1``, all other coefficients 0; see ``smoothdist.bvh.TreeData`` and
-    ``smoothdist.query.primitive_term``), the per-primitive clamp ``pwhi`` and the node bounds
-    ``whi`` become 1 (so that the Barnes-Hut far field ``count * whi**S`` and the tracer's
+    (``wc[:, 0] = 1``, all other coefficients 0; see ``smoothdist.kernels.TreeData`` and
+    ``smoothdist._kernels.query.primitive_term``), the per-primitive clamp ``pwhi`` and the node
+    bounds ``whi`` become 1 (so that the Barnes-Hut far field ``count * whi**S`` and the tracer's
     inflation margin ``log(A**S N) / alpha`` use the unweighted bound), and ``A`` becomes 1.
     Point clouds are unchanged (their weight is already 1).
     """

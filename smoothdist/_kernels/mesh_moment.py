@@ -1,0 +1,240 @@
+"""Kernels: a query primitive's smooth distance with its exact *rotational* gradient (moment).
+
+:mod:`smoothdist._kernels.mesh_query` gives each query primitive ``g``'s smooth distance
+``d_hat(g)`` and its gradient for a translation of ``g``. For a rigid rotation ``omega`` of ``g``
+about a point ``c`` the derivative is ``omega . M`` with the moment
+
+    M = sum_i softmax_i [ (p_i - c) x v_i + wgs y_i (q_i x r_i) ]
+
+over the data primitives (and far-field nodes) ``i`` that ``d_hat(g)`` sums, with ``v_i`` the
+term's translation-gradient numerator (``W unit(r) - wgs grad W``), ``p_i`` the closest point of
+the pair *on g* and ``r_i`` the pair's offset (query minus data point). Why: each pair distance
+is a minimum over point pairs, so by the envelope theorem a rigid motion changes it through the
+motion of its own closest point ``p_i`` (not the centroid of ``g``). The weight ``W`` follows
+the data-side closest point, which moves with the query's feature when that is an edge
+(direction ``q_i``): the stationarity conditions of the active features add the term
+``y_i (q_i x r_i)``, with ``y_i`` the query-edge component of ``(M^T M)^-1 (w1, w2, 0)`` in
+:func:`smoothdist._kernels.mesh_query.weight_gradient`'s notation (0 in its fallbacks).
+Far-field nodes use the moments of :mod:`smoothdist._kernels.box_moment`.
+
+The same traversal gives the derivative for a motion of one query vertex ``x_k`` alone (a
+deformation, :func:`smooth_vertex_primitive`): by the same envelope argument a pair distance
+changes through its closest point ``p_i = sum_k b_k x_k`` (``b_k`` the query barycentrics of
+the pair), and the weight through the stationarity conditions, whose query-edge row now also
+sees the edge direction ``q = sum_k (d b_k / d lambda) x_k`` change:
+
+    grad_k d_hat(g) = sum_i softmax_i [ b_k v_i + wgs y_i (d b_k / d lambda) r_i ].
+
+Summed over ``k`` this is the translation gradient, and ``sum_k (x_k - c) x grad_k`` the moment.
+A far-field node (Barnes-Hut, tol) has no closest point on ``g``: its term is split equally
+among the vertices, so the result is the exact derivative at ``beta = 0`` and ``tol = 0``.
+
+The paper's equal split (Eq. 7-8) applies every primitive's translation gradient at its centroid
+``c``; ``M`` about the centroid is what it leaves out. Point queries have ``M = 0`` (their
+closest point is the point). Here ``c`` is the primitive's centroid, and ``d_hat`` and the
+translation gradient are computed by the same operations as in
+:mod:`smoothdist._kernels.mesh_query`, so they agree with it bit for bit.
+"""
+
+import math
+
+import numba
+import numpy as np
+from numba import prange
+
+from smoothdist._config import NJIT, NJIT_PARALLEL
+from smoothdist._kernels.mesh_query import (TASKS, VERTEX_1, VERTEX_2,  # noqa: F401
+                                            _accumulate, centroid, pair_terms,
+                                            query_coefficient, smooth_traverse)
+from smoothdist._kernels.query import DEFAULT_TOL, smooth_distance_point
+
+
+#: the query-edge coefficient of the weight's motion (``mesh_query.query_coefficient``)
+_query_coefficient = query_coefficient
+
+
+@numba.njit(**NJIT)
+def pair_term_moment(tree, i, kq, Q, S, wgs, cx, cy, cz):
+    """:func:`smoothdist._kernels.mesh_query.pair_term` and the term's moment about ``c``.
+
+    Returns ``(d, W, vx, vy, vz, mx, my, mz)``: ``v`` as there, and
+    ``M = (p - c) x v + wgs y (q x r)`` (module notes).
+    """
+    return pair_terms(tree.kind, tree.pts, tree.wc, tree.pwhi, i, kq, Q, S, wgs, kq >= 0, cx,
+                      cy, cz, tree.kind[i])
+
+
+@numba.njit(**NJIT)
+def smooth_moment_primitive(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch,
+                            tol=DEFAULT_TOL):
+    """:func:`smoothdist._kernels.mesh_query.smooth_distance_primitive` with the moment about the
+    query's centroid.
+
+    Same traversal (:func:`smoothdist._kernels.mesh_query.smooth_traverse`) and arguments
+    (``kq`` 1 or 2), but ``scratch (33,)``. Returns
+    ``(d_hat, gx, gy, gz, mx, my, mz, nodes_visited, leaves_visited)``.
+    """
+    return smooth_traverse(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, tol, True)
+
+
+@numba.njit(**NJIT)
+def smooth_moment_brute_primitive(tree, kq, Q, alpha, S, wgs):
+    """``(d_hat, gx, gy, gz, mx, my, mz)`` summing every data primitive (reference; no tree)."""
+    cx, cy, cz = centroid(kq, Q)
+    m = np.inf
+    s = 0.0
+    gx = gy = gz = 0.0
+    mx = my = mz = 0.0
+    for i in range(tree.kind.size):
+        d, W, vx, vy, vz, tx, ty, tz = pair_term_moment(tree, i, kq, Q, S, wgs, cx, cy, cz)
+        m, s, gx, gy, gz, mx, my, mz = _accumulate(m, s, gx, gy, gz, mx, my, mz, d, W, vx, vy,
+                                                   vz, tx, ty, tz, alpha, True)
+    return m - math.log(s) / alpha, gx / s, gy / s, gz / s, mx / s, my / s, mz / s
+
+
+@numba.njit(**NJIT)
+def _moment_task(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g, out_m, out_nodes,
+                 out_leaves, tol, task, ntasks):
+    """Query primitives ``task, task + ntasks, ...`` of :func:`smooth_moment_primitives`."""
+    k = tree.depth + 4
+    stack = np.empty(k, dtype=np.int64)
+    dstack = np.empty(k)
+    scratch = np.empty(33)
+    for j in range(task, qkind.size, ntasks):
+        kq = qkind[j]
+        Q = qpts[j]
+        nodes = 0
+        leaves = tree.kind.size
+        mx = my = mz = 0.0
+        if brute:
+            d, gx, gy, gz, mx, my, mz = smooth_moment_brute_primitive(tree, kq, Q, alpha, S, wgs)
+        elif kq == 0:
+            # a point: its closest point is itself, no moment about it
+            d, gx, gy, gz, nodes, leaves = smooth_distance_point(
+                tree, Q[0], Q[1], Q[2], alpha, beta, S, wgs, stack, dstack)
+        else:
+            d, gx, gy, gz, mx, my, mz, nodes, leaves = smooth_moment_primitive(
+                tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, tol)
+        out_d[j] = d
+        out_g[j, 0] = gx
+        out_g[j, 1] = gy
+        out_g[j, 2] = gz
+        out_m[j, 0] = mx
+        out_m[j, 1] = my
+        out_m[j, 2] = mz
+        out_nodes[j] = nodes
+        out_leaves[j] = leaves
+
+
+@numba.njit(**NJIT_PARALLEL)
+def smooth_moment_primitives(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g, out_m,
+                             out_nodes, out_leaves, tol=DEFAULT_TOL, ntasks=TASKS):
+    """``d_hat``, translation gradient and moment (about the centroid) of every query primitive.
+
+    As :func:`smoothdist._kernels.mesh_query.smooth_distance_primitives`, plus
+    ``out_m (m, 3)`` float64.
+    """
+    ntasks = max(1, min(qkind.size, ntasks))
+    for task in prange(ntasks):
+        _moment_task(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g, out_m,
+                     out_nodes, out_leaves, tol, np.int64(task), ntasks)
+
+
+@numba.njit(**NJIT)
+def smooth_moment_primitives_serial(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g,
+                                    out_m, out_nodes, out_leaves, tol=DEFAULT_TOL):
+    """:func:`smooth_moment_primitives` on the calling thread (small query meshes)."""
+    _moment_task(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g, out_m, out_nodes,
+                 out_leaves, tol, np.int64(0), np.int64(1))
+
+
+@numba.njit(**NJIT)
+def smooth_vertex_primitive(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch,
+                            tol=DEFAULT_TOL):
+    """``(d_hat, g (3,), G (kq + 1, 3))`` of an edge or triangle query: the smooth distance, its
+    translation gradient and its derivative for a motion of each vertex alone (module notes).
+
+    One traversal per vertex beyond the first (vertex 0's is ``g`` less the others').
+    """
+    G = np.zeros((kq + 1, 3))
+    d, gx, gy, gz, ax, ay, az, nodes, leaves = smooth_traverse(
+        tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, tol, VERTEX_1)
+    G[1, 0] = ax
+    G[1, 1] = ay
+    G[1, 2] = az
+    if kq == 2:
+        _, _, _, _, ax, ay, az, _, _ = smooth_traverse(
+            tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, tol, VERTEX_2)
+        G[2, 0] = ax
+        G[2, 1] = ay
+        G[2, 2] = az
+    G[0, 0] = gx - G[1:, 0].sum()
+    G[0, 1] = gy - G[1:, 1].sum()
+    G[0, 2] = gz - G[1:, 2].sum()
+    return d, gx, gy, gz, G
+
+
+@numba.njit(**NJIT)
+def smooth_vertex_brute_primitive(tree, kq, Q, alpha, S, wgs):
+    """:func:`smooth_vertex_primitive` summing every data primitive (reference; no tree)."""
+    G = np.zeros((kq + 1, 3))
+    for v in range(1, kq + 1):
+        m = np.inf
+        s = 0.0
+        gx = gy = gz = 0.0
+        mx = my = mz = 0.0
+        for i in range(tree.kind.size):
+            d, W, vx, vy, vz, tx, ty, tz = pair_terms(tree.kind, tree.pts, tree.wc, tree.pwhi, i,
+                                                      kq, Q, S, wgs, VERTEX_1 + v - 1, 0.0, 0.0,
+                                                      0.0, tree.kind[i])
+            m, s, gx, gy, gz, mx, my, mz = _accumulate(m, s, gx, gy, gz, mx, my, mz, d, W, vx,
+                                                       vy, vz, tx, ty, tz, alpha, True)
+        G[v, 0] = mx / s
+        G[v, 1] = my / s
+        G[v, 2] = mz / s
+    G[0, 0] = gx / s - G[1:, 0].sum()
+    G[0, 1] = gy / s - G[1:, 1].sum()
+    G[0, 2] = gz / s - G[1:, 2].sum()
+    return m - math.log(s) / alpha, gx / s, gy / s, gz / s, G
+
+
+@numba.njit(**NJIT)
+def _vertex_task(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g, out_G, tol, task,
+                 ntasks):
+    """Query primitives ``task, task + ntasks, ...`` of :func:`smooth_vertex_primitives`."""
+    k = tree.depth + 4
+    stack = np.empty(k, dtype=np.int64)
+    dstack = np.empty(k)
+    scratch = np.empty(33)
+    for j in range(task, qkind.size, ntasks):
+        kq = qkind[j]
+        Q = qpts[j]
+        out_G[j] = 0.0
+        if kq == 0:
+            d, gx, gy, gz, _, _ = smooth_distance_point(tree, Q[0], Q[1], Q[2], alpha, beta, S,
+                                                        wgs, stack, dstack)
+            out_G[j, 0, 0] = gx
+            out_G[j, 0, 1] = gy
+            out_G[j, 0, 2] = gz
+        else:
+            if brute:
+                d, gx, gy, gz, G = smooth_vertex_brute_primitive(tree, kq, Q, alpha, S, wgs)
+            else:
+                d, gx, gy, gz, G = smooth_vertex_primitive(tree, kq, Q, alpha, beta, S, wgs,
+                                                           stack, dstack, scratch, tol)
+            out_G[j, :kq + 1] = G
+        out_d[j] = d
+        out_g[j, 0] = gx
+        out_g[j, 1] = gy
+        out_g[j, 2] = gz
+
+
+@numba.njit(**NJIT_PARALLEL)
+def smooth_vertex_primitives(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g, out_G,
+                             tol=DEFAULT_TOL, ntasks=TASKS):
+    """``d_hat``, translation gradient and per-vertex derivatives ``out_G (m, 3, 3)`` (slot ``k``
+    for the primitive's vertex ``k``; unused slots 0) of every query primitive."""
+    ntasks = max(1, min(qkind.size, ntasks))
+    for task in prange(ntasks):
+        _vertex_task(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g, out_G, tol,
+                     task, ntasks)

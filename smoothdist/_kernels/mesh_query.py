@@ -1,0 +1,838 @@
+"""Kernels: smooth and exact distance from one query primitive (point, edge, triangle) to a tree.
+
+The paper's generalized query primitives (Madan & Levin 2022, Sec. 3.4): the smooth distance from a
+query primitive ``g`` to the data mesh is
+
+    d_hat(g) = -(1/alpha) log sum_i W_i exp(-alpha d(f_i, g)),
+
+with ``d(f_i, g)`` the exact primitive-primitive distance
+(:mod:`smoothdist._kernels.closest_pair`) and ``W_i`` the data primitive's weight at the data-side
+barycentrics of the closest pair. Its gradient is with respect to a rigid translation ``tau`` of
+``g``:
+
+    grad d(f_i, g) = unit(r),  r = (closest point on g) - (closest point on f_i),
+
+and the weight's gradient goes through the closest pair's data barycentrics ``phi``: on the pair of
+active features (the faces of both simplices the closest points lie in), the stationarity
+conditions ``D^T r = 0`` and ``Q^T r = 0`` (``D``, ``Q`` the features' edge directions) give
+``d[phi, lambda] / d tau = (M^T M)^-1 M^T`` with ``M = [D, -Q]``. For a point query this is the
+point kernel's projection Jacobian (:func:`smoothdist._kernels.query.primitive_term`).
+
+Traversal as for points (:func:`smoothdist._kernels.query.smooth_distance_point`): an explicit
+stack, nearest child first by the cheap box-box distance. Barnes-Hut replaces a node by
+``count * whi**S * exp(-alpha delta)`` with ``delta`` a lower bound of the query-box distance: the
+box-box distance when that already satisfies ``diag < beta delta``, else
+:func:`smoothdist._kernels.box_distance.box_lower_bound` (the paper's halfspace test, done
+conservatively). So the far field overestimates the subtree's sum and ``d_hat_beta <= d_hat_0``.
+Point queries use the point kernels themselves.
+
+One traversal (:func:`smooth_traverse`) serves the translation gradient and, with ``moment``,
+:mod:`smoothdist._kernels.mesh_moment`'s rotational one; ``moment`` is a compile-time constant
+of each caller, so the distance kernel carries none of the moment's work. For speed (the same nodes,
+terms and values as a plain version; issue 17): the tree's arrays are taken out of the tree
+once (a NamedTuple field read in the loop updates a reference count), the data primitive's
+coordinates go to the closest-pair kernels as scalars, small helpers are inlined
+(``NJIT_INLINE``), the stack holds squared box distances, and the finer Barnes-Hut bound is
+only tried where a cheap upper bound says it could qualify the node.
+"""
+
+import math
+
+import numba
+import numpy as np
+from numba import prange
+
+from smoothdist._config import NJIT, NJIT_INLINE, NJIT_PARALLEL
+from smoothdist._kernels.box_distance import (box_box_distance, box_box_offset, box_distance_exact,
+                                              box_lower_bound)
+from smoothdist._kernels.box_moment import box_lower_bound_moment, extreme_levers, gap_moment
+from smoothdist._kernels.closest_pair import (closest_pair, segment_point, segment_segment,
+                                              segment_triangle, triangle_point, triangle_segment,
+                                              triangle_triangle)
+from smoothdist._kernels.closest_point import (SEG_INTERIOR, TRI_AB, TRI_AC, TRI_BC, TRI_INTERIOR)
+from smoothdist._kernels.query import (DEFAULT_TOL, _attenuate, exact_distance_point,
+                                       logsumexp_accumulate, negligible_reach,
+                                       smooth_distance_point)
+from smoothdist.schedule import TASKS
+from smoothdist._kernels.weights import eval_triangle_weight
+
+#: :func:`smoothdist._kernels.query._attenuate`, inlined (it calls no other kernel)
+_attenuate_inline = numba.njit(**NJIT_INLINE)(_attenuate.py_func)
+#: ``moment`` values of :func:`smooth_traverse` (and its pair terms) beyond True (the moment):
+#: the derivative for a motion of query vertex 1 or 2 alone
+VERTEX_1, VERTEX_2 = 2, 3
+#: :func:`smoothdist._kernels.closest_pair.segment_segment`, inlined (the edge-edge leaves)
+_segment_segment_inline = numba.njit(**NJIT_INLINE)(segment_segment.py_func)
+
+
+@numba.njit(**NJIT)
+def feature_directions(kind, feat, X):
+    """Edge directions spanning the feature a closest point lies in.
+
+    Returns ``(n, d1x, d1y, d1z, d2x, d2y, d2z)`` with ``n`` in 0..2 free directions. For a
+    triangle edge ``bc`` the direction is ``c - b`` (parameter ``u`` with ``s = 1 - u, t = u``).
+    """
+    if kind == 1:
+        if feat == SEG_INTERIOR:
+            return 1, X[3] - X[0], X[4] - X[1], X[5] - X[2], 0.0, 0.0, 0.0
+        return 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    if kind == 2:
+        if feat == TRI_INTERIOR:
+            return (2, X[3] - X[0], X[4] - X[1], X[5] - X[2], X[6] - X[0], X[7] - X[1],
+                    X[8] - X[2])
+        if feat == TRI_AB:
+            return 1, X[3] - X[0], X[4] - X[1], X[5] - X[2], 0.0, 0.0, 0.0
+        if feat == TRI_AC:
+            return 1, X[6] - X[0], X[7] - X[1], X[8] - X[2], 0.0, 0.0, 0.0
+        if feat == TRI_BC:
+            return 1, X[6] - X[3], X[7] - X[4], X[8] - X[5], 0.0, 0.0, 0.0
+    return 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+
+
+@numba.njit(**NJIT_INLINE)
+def _dot(ax, ay, az, bx, by, bz):
+    return ax * bx + ay * by + az * bz
+
+
+@numba.njit(**NJIT)
+def weight_gradient(nd, d1x, d1y, d1z, d2x, d2y, d2z, w1, w2, nq, q1x, q1y, q1z):
+    """Gradient of the weight with respect to a translation of the query.
+
+    ``nd`` data directions ``d1, d2`` with weight partials ``w1, w2`` along their parameters, and
+    ``nq`` (0 or 1 used) query directions. Solves ``(M^T M) y = (w1, w2, 0)`` for ``M = [D, -Q]``
+    and returns ``M y``. Falls back to the data directions alone when the system is singular
+    (parallel features) or has three unknowns (only at intersections, where ``r = 0``).
+    """
+    if nq == 1 and nd == 1:
+        a = _dot(d1x, d1y, d1z, d1x, d1y, d1z)
+        b = -_dot(d1x, d1y, d1z, q1x, q1y, q1z)
+        c = _dot(q1x, q1y, q1z, q1x, q1y, q1z)
+        det = a * c - b * b
+        if det > 1e-12 * a * c:
+            y1 = c * w1 / det
+            y2 = -b * w1 / det
+            return y1 * d1x - y2 * q1x, y1 * d1y - y2 * q1y, y1 * d1z - y2 * q1z
+    if nd == 1:
+        f = w1 / _dot(d1x, d1y, d1z, d1x, d1y, d1z)
+        return f * d1x, f * d1y, f * d1z
+    a = _dot(d1x, d1y, d1z, d1x, d1y, d1z)
+    b = _dot(d1x, d1y, d1z, d2x, d2y, d2z)
+    c = _dot(d2x, d2y, d2z, d2x, d2y, d2z)
+    det = a * c - b * b
+    y1 = (c * w1 - b * w2) / det
+    y2 = (a * w2 - b * w1) / det
+    return y1 * d1x + y2 * d2x, y1 * d1y + y2 * d2y, y1 * d1z + y2 * d2z
+
+
+@numba.njit(**NJIT_INLINE)
+def _edge_weight(wc, i, t):
+    """:func:`smoothdist._kernels.weights.eval_edge_weight` of row ``i`` of ``wc`` (no row view)."""
+    c0 = wc[i, 0]
+    c1 = wc[i, 1]
+    c2 = wc[i, 2]
+    c3 = wc[i, 3]
+    c4 = wc[i, 4]
+    w = c0 + t * (c1 + t * (c2 + t * (c3 + t * c4)))
+    dw = c1 + t * (2.0 * c2 + t * (3.0 * c3 + t * (4.0 * c4)))
+    return w, dw
+
+
+@numba.njit(**NJIT_INLINE)
+def _closest(kind, P, i, kq, Q, k):
+    """:func:`smoothdist._kernels.closest_pair.closest_pair` of query ``(kq, Q)`` and data
+    primitive ``i`` of ``kind``, ``P`` (the tree's arrays), called with the data's coordinates as
+    scalars for edge and triangle queries (no row view, no dispatch through every kind pair)."""
+    if kq == 0:
+        # a point query (the brute-force references only: the traversal takes edges and
+        # triangles)
+        return closest_pair(kq, Q, k, P[i])
+    if k == 0:
+        if kq == 1:
+            return segment_point(Q[0], Q[1], Q[2], Q[3], Q[4], Q[5], P[i, 0], P[i, 1], P[i, 2])
+        return triangle_point(Q[0], Q[1], Q[2], Q[3], Q[4], Q[5], Q[6], Q[7], Q[8], P[i, 0],
+                              P[i, 1], P[i, 2])
+    if k == 1:
+        if kq == 1:
+            return _segment_segment_inline(Q[0], Q[1], Q[2], Q[3], Q[4], Q[5], P[i, 0], P[i, 1],
+                                           P[i, 2], P[i, 3], P[i, 4], P[i, 5])
+        return triangle_segment(Q[0], Q[1], Q[2], Q[3], Q[4], Q[5], Q[6], Q[7], Q[8], P[i, 0],
+                                P[i, 1], P[i, 2], P[i, 3], P[i, 4], P[i, 5])
+    if kq == 1:
+        return segment_triangle(Q[0], Q[1], Q[2], Q[3], Q[4], Q[5], P[i, 0], P[i, 1], P[i, 2],
+                                P[i, 3], P[i, 4], P[i, 5], P[i, 6], P[i, 7], P[i, 8])
+    return triangle_triangle(Q[0], Q[1], Q[2], Q[3], Q[4], Q[5], Q[6], Q[7], Q[8], P[i, 0],
+                             P[i, 1], P[i, 2], P[i, 3], P[i, 4], P[i, 5], P[i, 6], P[i, 7],
+                             P[i, 8])
+
+
+@numba.njit(**NJIT)
+def query_coefficient(nd, d1x, d1y, d1z, w1, nq, q1x, q1y, q1z):
+    """The query-edge component ``y`` of :func:`weight_gradient`'s solve (one data and one query
+    direction, same singularity test; 0 otherwise): the rotational part of the weight's motion
+    (:mod:`smoothdist._kernels.mesh_moment`)."""
+    if nq == 1 and nd == 1:
+        a = _dot(d1x, d1y, d1z, d1x, d1y, d1z)
+        b = -_dot(d1x, d1y, d1z, q1x, q1y, q1z)
+        c = _dot(q1x, q1y, q1z, q1x, q1y, q1z)
+        det = a * c - b * b
+        if det > 1e-12 * a * c:
+            return -b * w1 / det
+    return 0.0
+
+
+@numba.njit(**NJIT_INLINE)
+def _pair(kind, pts, wc, pwhi, i, kq, Q, S, wgs, moment, cx, cy, cz, k):
+    """Term of data primitive ``i`` (tree order) for query primitive ``(kq, Q)``.
+
+    Returns ``(d, W, vx, vy, vz, mx, my, mz)``: distance, attenuated weight, the gradient
+    numerator ``v = W unit(r) - wgs grad W`` (for a translation of the query) and, with
+    ``moment`` True (or 1), the term's moment about ``c``
+    (:mod:`smoothdist._kernels.mesh_moment`), with ``moment`` ``VERTEX_1`` or ``VERTEX_2`` the
+    numerator for a motion of that query vertex alone
+    (:func:`smoothdist._kernels.mesh_moment.smooth_vertex_primitive`); else 0.
+    """
+    c = _closest(kind, pts, i, kq, Q, k)
+    d = math.sqrt(c[0])
+    rx = c[1]
+    ry = c[2]
+    rz = c[3]
+    W = 1.0
+    gwx = 0.0
+    gwy = 0.0
+    gwz = 0.0
+    y = 0.0
+    q1x = q1y = q1z = 0.0
+    if k != 0:
+        df = c[9]
+        if k == 1:
+            w, dw = _edge_weight(wc, i, c[7])
+            W, fac = _attenuate_inline(w, dw, pwhi[i], S)
+            if fac != 0.0 and df == SEG_INTERIOR:
+                # feature_directions and weight_gradient with the data edge's one direction
+                d1x = pts[i, 3] - pts[i, 0]
+                d1y = pts[i, 4] - pts[i, 1]
+                d1z = pts[i, 5] - pts[i, 2]
+                if kq == 1:
+                    nq = 1 if c[6] == SEG_INTERIOR else 0
+                    q1x = Q[3] - Q[0]
+                    q1y = Q[4] - Q[1]
+                    q1z = Q[5] - Q[2]
+                else:
+                    nq, q1x, q1y, q1z, _, _, _ = feature_directions(kq, c[6], Q)
+                gwx, gwy, gwz = weight_gradient(1, d1x, d1y, d1z, 0.0, 0.0, 0.0, fac, 0.0, nq,
+                                                q1x, q1y, q1z)
+                if moment:
+                    y = query_coefficient(1, d1x, d1y, d1z, fac, nq, q1x, q1y, q1z)
+        else:
+            w, dws, dwt = eval_triangle_weight(wc[i], c[7], c[8])
+            W, fac = _attenuate_inline(w, 1.0, pwhi[i], S)
+            if df == TRI_INTERIOR:
+                w1 = fac * dws
+                w2 = fac * dwt
+            elif df == TRI_AB:
+                w1 = fac * dws
+                w2 = 0.0
+            elif df == TRI_AC:
+                w1 = fac * dwt
+                w2 = 0.0
+            else:
+                w1 = fac * (dwt - dws)
+                w2 = 0.0
+            if fac != 0.0:
+                nd, d1x, d1y, d1z, d2x, d2y, d2z = feature_directions(k, df, pts[i])
+                if nd > 0:
+                    nq, q1x, q1y, q1z, _, _, _ = feature_directions(kq, c[6], Q)
+                    gwx, gwy, gwz = weight_gradient(nd, d1x, d1y, d1z, d2x, d2y, d2z, w1, w2, nq,
+                                                    q1x, q1y, q1z)
+                    if moment:
+                        y = query_coefficient(nd, d1x, d1y, d1z, w1, nq, q1x, q1y, q1z)
+    if d > 0.0:
+        inv = W / d
+        vx = rx * inv - wgs * gwx
+        vy = ry * inv - wgs * gwy
+        vz = rz * inv - wgs * gwz
+    else:
+        vx = -wgs * gwx
+        vy = -wgs * gwy
+        vz = -wgs * gwz
+    mx = my = mz = 0.0
+    if moment >= VERTEX_1:
+        # vertex mode: the term's derivative for a motion of query vertex 1 or 2 alone, b v +
+        # wgs y (d b / d lambda) r (module notes; b the vertex's barycentric at the pair)
+        b = c[4] if moment == VERTEX_1 else c[5]
+        db = 0.0
+        if y != 0.0:
+            qf = c[6]
+            if kq == 1:
+                db = 1.0 if moment == VERTEX_1 else 0.0
+            elif qf == TRI_AB:
+                db = 1.0 if moment == VERTEX_1 else 0.0
+            elif qf == TRI_AC:
+                db = 0.0 if moment == VERTEX_1 else 1.0
+            elif qf == TRI_BC:
+                db = -1.0 if moment == VERTEX_1 else 1.0
+        f = wgs * y * db
+        mx = b * vx + f * rx
+        my = b * vy + f * ry
+        mz = b * vz + f * rz
+    elif moment:
+        # the closest point on the query, relative to c
+        s = c[4]
+        t = c[5]
+        px = Q[0] - cx
+        py = Q[1] - cy
+        pz = Q[2] - cz
+        if kq >= 1:
+            px += s * (Q[3] - Q[0])
+            py += s * (Q[4] - Q[1])
+            pz += s * (Q[5] - Q[2])
+        if kq == 2:
+            px += t * (Q[6] - Q[0])
+            py += t * (Q[7] - Q[1])
+            pz += t * (Q[8] - Q[2])
+        mx = py * vz - pz * vy
+        my = pz * vx - px * vz
+        mz = px * vy - py * vx
+        if y != 0.0:
+            f = wgs * y
+            mx += f * (q1y * rz - q1z * ry)
+            my += f * (q1z * rx - q1x * rz)
+            mz += f * (q1x * ry - q1y * rx)
+    return d, W, vx, vy, vz, mx, my, mz
+
+
+#: ``_pair`` as an ordinary kernel (for the brute-force references: one compiled copy)
+pair_terms = numba.njit(**NJIT)(_pair.py_func)
+
+
+@numba.njit(**NJIT)
+def pair_term(tree, i, kq, Q, S, wgs):
+    """Term of data primitive ``i`` (tree order) for query primitive ``(kq, Q)``.
+
+    Returns ``(d, W, vx, vy, vz)`` as :func:`smoothdist._kernels.query.primitive_term`: distance,
+    attenuated weight and the gradient numerator ``W unit(r) - wgs grad W`` (gradients with
+    respect to a translation of the query).
+    """
+    # ``kq < 0`` is a run-time False: the moment reference (``moment=kq >= 0``) shares the
+    # compiled pair_terms
+    d, W, vx, vy, vz, _, _, _ = pair_terms(tree.kind, tree.pts, tree.wc, tree.pwhi, i, kq, Q, S,
+                                           wgs, kq < 0, 0.0, 0.0, 0.0, tree.kind[i])
+    return d, W, vx, vy, vz
+
+
+@numba.njit(**NJIT)
+def query_box(kq, Q, qlo, qhi):
+    """Fill ``qlo``, ``qhi`` (3,) with the bounding box of the query's ``kq + 1`` vertices."""
+    for a in range(3):
+        lo = Q[a]
+        hi = Q[a]
+        for j in range(1, kq + 1):
+            v = Q[3 * j + a]
+            lo = min(lo, v)
+            hi = max(hi, v)
+        qlo[a] = lo
+        qhi[a] = hi
+
+
+@numba.njit(**NJIT)
+def centroid(kq, Q):
+    """Centroid ``(cx, cy, cz)`` of the query's ``kq + 1`` vertices."""
+    cx = Q[0]
+    cy = Q[1]
+    cz = Q[2]
+    for j in range(1, kq + 1):
+        cx += Q[3 * j]
+        cy += Q[3 * j + 1]
+        cz += Q[3 * j + 2]
+    n = kq + 1.0
+    return cx / n, cy / n, cz / n
+
+
+@numba.njit(**NJIT_INLINE)
+def _box_gap2(l0, l1, l2, h0, h1, h2, lo, hi, node):
+    """Squared :func:`smoothdist._kernels.box_distance.box_box_distance` of the query box ``l..h``
+    (scalars) and a node's box (the same sum of the same squared gaps)."""
+    d2 = 0.0
+    g = lo[node, 0] - h0
+    if g > 0.0:
+        d2 += g * g
+    else:
+        g = l0 - hi[node, 0]
+        if g > 0.0:
+            d2 += g * g
+    g = lo[node, 1] - h1
+    if g > 0.0:
+        d2 += g * g
+    else:
+        g = l1 - hi[node, 1]
+        if g > 0.0:
+            d2 += g * g
+    g = lo[node, 2] - h2
+    if g > 0.0:
+        d2 += g * g
+    else:
+        g = l2 - hi[node, 2]
+        if g > 0.0:
+            d2 += g * g
+    return d2
+
+
+@numba.njit(**NJIT_INLINE)
+def _signed_gap(ql, qh, nl, nh):
+    """One axis of :func:`smoothdist._kernels.box_distance.box_box_offset`: the gap (negative
+    when the query is below the node, 0 when the intervals overlap)."""
+    g = nl - qh
+    if g > 0.0:
+        return -g
+    g = ql - nh
+    if g < 0.0:
+        return 0.0
+    return g
+
+
+@numba.njit(**NJIT_INLINE)
+def _accumulate(m, s, gx, gy, gz, mx, my, mz, d, W, vx, vy, vz, ux, uy, uz, alpha, moment):
+    """:func:`smoothdist._kernels.query.logsumexp_accumulate` (the same operations on
+    ``m, s, g``), with the moment ``u`` summed like ``v`` when ``moment``."""
+    if d < m:
+        f = math.exp(-alpha * (m - d))
+        s *= f
+        gx *= f
+        gy *= f
+        gz *= f
+        if moment:
+            mx *= f
+            my *= f
+            mz *= f
+        m = d
+    e = math.exp(-alpha * (d - m))
+    if moment:
+        mx += e * ux
+        my += e * uy
+        mz += e * uz
+    return m, s + W * e, gx + e * vx, gy + e * vy, gz + e * vz, mx, my, mz
+
+
+@numba.njit(**NJIT_INLINE)
+def _far_weight(whi, node, cnt, S):
+    """``count * whi**S``: the far-field weight of a node (bounds every replaced term)."""
+    wh = whi[node]
+    return cnt * (wh if (S == 1.0 or wh == 1.0) else math.exp(S * math.log(wh)))
+
+
+@numba.njit(**NJIT)
+def smooth_traverse(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, tol, moment,
+                    exact_box=False):
+    """The traversal of :func:`smooth_distance_primitive` and, with ``moment``,
+    :func:`smoothdist._kernels.mesh_moment.smooth_moment_primitive` (one code for both, so that
+    their ``d_hat`` and gradients agree bit for bit; inlined, so that a constant ``moment`` folds).
+
+    ``scratch`` holds 15 float64 (33 with ``moment``). Returns
+    ``(d_hat, gx, gy, gz, mx, my, mz, nodes_visited, leaves_visited)``; the moment about the
+    query's centroid is 0 without ``moment``.
+
+    The stack holds squared box-box distances; Barnes-Hut tests ``diag**2 < beta**2 d**2``, as the
+    point kernel does. The finer bound (:func:`smoothdist._kernels.box_distance.box_lower_bound`) is
+    tried only if the smallest query-vertex distance to the box could qualify the node, and that
+    only if the box-box distance plus the query box's diagonal (an upper bound of it) could: a cheap
+    test that rejects most nodes before the per-vertex one.
+
+    ``exact_box`` (``moment`` False only): the box test off, i.e. every Barnes-Hut candidate's
+    distance is the exact primitive-box distance
+    (:func:`smoothdist._kernels.box_distance.box_distance_exact`, the quadratic program the paper's
+    halfspace test avoids) instead of the box-box distance or the halfspace bound; the same
+    traversal otherwise.
+    """
+    qlo = scratch[0:3]
+    qhi = scratch[3:6]
+    E = scratch[6:15]
+    query_box(kq, Q, qlo, qhi)
+    l0 = qlo[0]
+    l1 = qlo[1]
+    l2 = qlo[2]
+    h0 = qhi[0]
+    h1 = qhi[1]
+    h2 = qhi[2]
+    # any query vertex is within the query box's diagonal of the box-box closest point
+    qd = math.sqrt((h0 - l0) ** 2 + (h1 - l1) ** 2 + (h2 - l2) ** 2)
+    b2 = beta * beta
+    ib = (1.0 - 1e-9) / beta if beta > 0.0 else 0.0
+    # vertex modes: a far field's gradient is split equally among the query's vertices
+    split = 1.0 / (kq + 1)
+    cx = cy = cz = 0.0
+    if moment == 1:
+        L = scratch[15:33]
+        cx, cy, cz = centroid(kq, Q)
+        extreme_levers(kq, Q, cx, cy, cz, L)
+    else:
+        L = E
+    m = np.inf
+    s = 0.0
+    gx = 0.0
+    gy = 0.0
+    gz = 0.0
+    mx = 0.0
+    my = 0.0
+    mz = 0.0
+    nodes = 0
+    leaves = 0
+    lo = tree.lo
+    hi = tree.hi
+    count = tree.count
+    diag = tree.diag
+    left = tree.left
+    right = tree.right
+    start = tree.start
+    whi = tree.whi
+    # (arrays taken out of the tree once: a NamedTuple field read in the loop costs a reference
+    # count update each time)
+    kind = tree.kind
+    pts = tree.pts
+    wc = tree.wc
+    pwhi = tree.pwhi
+    # negligible-term pruning, as in the point kernel (query.negligible_reach): a node at box-box
+    # distance >= m + reach adds less than 2**-53 x n_B / N of the sum
+    reach = negligible_reach(tree, 0, S, alpha)
+    cut2 = np.inf
+    stack[0] = 0
+    dstack[0] = _box_gap2(l0, l1, l2, h0, h1, h2, lo, hi, 0)
+    sp = 1
+    while sp > 0:
+        sp -= 1
+        node = stack[sp]
+        bd2 = dstack[sp]
+        if bd2 >= cut2:
+            continue
+        nodes += 1
+        cnt = count[node]
+        far = False
+        delta = ux = uy = uz = 0.0
+        ax = ay = az = 0.0
+        if cnt > 1 and beta > 0.0:
+            dg = diag[node]
+            if exact_box and dg * dg < b2 * bd2:
+                delta, ux, uy, uz = box_distance_exact(kq, Q, lo, hi, node, E)
+                far = True
+            elif dg * dg < b2 * bd2:
+                # the box-box distance (a lower bound) already qualifies the node
+                g0 = _signed_gap(l0, h0, lo[node, 0], hi[node, 0])
+                g1 = _signed_gap(l1, h1, lo[node, 1], hi[node, 1])
+                g2 = _signed_gap(l2, h2, lo[node, 2], hi[node, 2])
+                delta = math.sqrt(g0 * g0 + g1 * g1 + g2 * g2)
+                if delta > 0.0:
+                    ux = g0 / delta
+                    uy = g1 / delta
+                    uz = g2 / delta
+                if moment >= VERTEX_1:
+                    ax, ay, az = ux * split, uy * split, uz * split
+                elif moment:
+                    ax, ay, az = gap_moment(L, ux, uy, uz)
+                far = True
+            else:
+                x = dg * ib - qd
+                if (x <= 0.0 or x * x < bd2) and dg < beta * _point_box(kq, Q, lo, hi, node):
+                    # the box distance is at most any vertex's: only then can the finer bound
+                    # help
+                    if moment == 1:
+                        delta, ux, uy, uz, ax, ay, az = box_lower_bound_moment(
+                            kq, Q, qlo, qhi, lo, hi, node, E, cx, cy, cz, L)
+                    elif exact_box:
+                        delta, ux, uy, uz = box_distance_exact(kq, Q, lo, hi, node, E)
+                    else:
+                        delta, ux, uy, uz = box_lower_bound(kq, Q, qlo, qhi, lo, hi, node, E)
+                        if moment >= VERTEX_1:
+                            ax, ay, az = ux * split, uy * split, uz * split
+                    far = dg < beta * delta
+        if not far and tol > 0.0 and s > 0.0:
+            W = _far_weight(whi, node, cnt, S)
+            if W * math.exp(-alpha * (math.sqrt(bd2) - m)) <= tol * s:
+                delta, ux, uy, uz = box_box_offset(qlo, qhi, lo, hi, node)
+                if moment >= VERTEX_1:
+                    ax, ay, az = ux * split, uy * split, uz * split
+                elif moment:
+                    ax, ay, az = gap_moment(L, ux, uy, uz)
+                far = True
+        if far:
+            W = _far_weight(whi, node, cnt, S)
+            m, s, gx, gy, gz, mx, my, mz = _accumulate(
+                m, s, gx, gy, gz, mx, my, mz, delta, W, W * ux, W * uy, W * uz, W * ax, W * ay,
+                W * az, alpha, moment)
+            leaves += 1
+            cut = max(m + reach, 0.0)
+            cut2 = cut * cut
+            continue
+        l = left[node]
+        if l < 0:
+            st = start[node]
+            for i in range(st, st + cnt):
+                k = kind[i]
+                if kq == 1 and k == 1:
+                    # edges against edges: a copy of the inlined term in which the compiler
+                    # knows both kinds (and keeps only that case)
+                    d, W, vx, vy, vz, tx, ty, tz = _pair(kind, pts, wc, pwhi, i, kq, Q, S, wgs,
+                                                         moment, cx, cy, cz, k)
+                else:
+                    d, W, vx, vy, vz, tx, ty, tz = _pair(kind, pts, wc, pwhi, i, kq, Q, S, wgs,
+                                                         moment, cx, cy, cz, k)
+                m, s, gx, gy, gz, mx, my, mz = _accumulate(
+                    m, s, gx, gy, gz, mx, my, mz, d, W, vx, vy, vz, tx, ty, tz, alpha, moment)
+            leaves += cnt
+            cut = max(m + reach, 0.0)
+            cut2 = cut * cut
+            continue
+        r = right[node]
+        dl = _box_gap2(l0, l1, l2, h0, h1, h2, lo, hi, l)
+        dr = _box_gap2(l0, l1, l2, h0, h1, h2, lo, hi, r)
+        if dl <= dr:
+            stack[sp] = r
+            dstack[sp] = dr
+            stack[sp + 1] = l
+            dstack[sp + 1] = dl
+        else:
+            stack[sp] = l
+            dstack[sp] = dl
+            stack[sp + 1] = r
+            dstack[sp + 1] = dr
+        sp += 2
+    inv = 1.0 / s
+    return (m - math.log(s) / alpha, gx * inv, gy * inv, gz * inv, mx * inv, my * inv, mz * inv,
+            nodes, leaves)
+
+
+@numba.njit(**NJIT)
+def smooth_distance_primitive(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch,
+                              tol=DEFAULT_TOL, exact_box=False):
+    """Smooth distance ``d_hat(g)`` and its translation gradient for an edge or triangle query.
+
+    ``Q (9,)`` the query's vertices, ``kq`` 1 or 2; ``scratch (15,)`` float64 work space; other
+    arguments as :func:`smoothdist._kernels.query.smooth_distance_point`. Returns
+    ``(d_hat, gx, gy, gz, nodes_visited, leaves_visited)``.
+
+    ``tol > 0`` adds a second far-field rule (docs/design-notes.md §3, not in the paper): a
+    node whose far-field term ``count * whi**S * exp(-alpha delta)`` (``delta`` its box-box
+    distance) is at most ``tol`` times the sum so far is replaced by that term. It is the same
+    overestimate of the subtree's sum as Barnes-Hut's, so ``d_hat`` only decreases, by at most
+    ``-log(1 - k tol) / alpha`` for ``k`` such nodes (``k tol < 1``).
+
+    ``exact_box``: the paper's box test off (see :func:`smooth_traverse`).
+    """
+    d, gx, gy, gz, _, _, _, nodes, leaves = smooth_traverse(
+        tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, tol, False, exact_box)
+    return d, gx, gy, gz, nodes, leaves
+
+
+@numba.njit(**NJIT)
+def _point_box(kq, Q, lo, hi, node):
+    """Smallest distance from a query vertex to a node box (an upper bound of the query's)."""
+    best = np.inf
+    for j in range(kq + 1):
+        d2 = 0.0
+        for a in range(3):
+            v = Q[3 * j + a]
+            if v < lo[node, a]:
+                d2 += (lo[node, a] - v) ** 2
+            elif v > hi[node, a]:
+                d2 += (v - hi[node, a]) ** 2
+        best = min(best, d2)
+    return math.sqrt(best)
+
+
+@numba.njit(**NJIT)
+def smooth_distance_brute_primitive(tree, kq, Q, alpha, S, wgs):
+    """``d_hat(g)`` and gradient summing every data primitive (reference; no tree)."""
+    m = np.inf
+    s = 0.0
+    gx = 0.0
+    gy = 0.0
+    gz = 0.0
+    for i in range(tree.kind.size):
+        d, W, vx, vy, vz = pair_term(tree, i, kq, Q, S, wgs)
+        m, s, gx, gy, gz = logsumexp_accumulate(m, s, gx, gy, gz, d, W, vx, vy, vz, alpha)
+    return m - math.log(s) / alpha, gx / s, gy / s, gz / s
+
+
+@numba.njit(**NJIT)
+def exact_distance_primitive(tree, kq, Q, stack, dstack, scratch, bound2=np.inf):
+    """Exact distance from an edge or triangle query to the data by branch and bound.
+
+    Prunes with the distance between the query's and the node's boxes (a lower bound for the whole
+    query, unlike the authors' first-vertex distance). Returns
+    ``(d, ux, uy, uz, prim, nodes_visited, leaves_visited)``: the distance, the unit translation
+    gradient ``r / d`` (0 on contact) and the closest primitive (mesh numbering). Only pairs at
+    squared distance ``< bound2`` are considered; with none, ``d = inf`` and ``prim = -1``.
+    """
+    qlo = scratch[0:3]
+    qhi = scratch[3:6]
+    query_box(kq, Q, qlo, qhi)
+    best = bound2
+    bi = -1
+    brx = 0.0
+    bry = 0.0
+    brz = 0.0
+    nodes = 0
+    leaves = 0
+    lo = tree.lo
+    hi = tree.hi
+    stack[0] = 0
+    dstack[0] = box_box_distance(qlo, qhi, lo, hi, 0)
+    sp = 1
+    while sp > 0:
+        sp -= 1
+        node = stack[sp]
+        if dstack[sp] * dstack[sp] >= best:
+            continue
+        nodes += 1
+        l = tree.left[node]
+        if l < 0:
+            st = tree.start[node]
+            for i in range(st, st + tree.count[node]):
+                c = closest_pair(kq, Q, tree.kind[i], tree.pts[i])
+                leaves += 1
+                if c[0] < best:
+                    best = c[0]
+                    bi = i
+                    brx = c[1]
+                    bry = c[2]
+                    brz = c[3]
+            continue
+        r = tree.right[node]
+        dl = box_box_distance(qlo, qhi, lo, hi, l)
+        dr = box_box_distance(qlo, qhi, lo, hi, r)
+        if dl <= dr:
+            if dr * dr < best:
+                stack[sp] = r
+                dstack[sp] = dr
+                sp += 1
+            if dl * dl < best:
+                stack[sp] = l
+                dstack[sp] = dl
+                sp += 1
+        else:
+            if dl * dl < best:
+                stack[sp] = l
+                dstack[sp] = dl
+                sp += 1
+            if dr * dr < best:
+                stack[sp] = r
+                dstack[sp] = dr
+                sp += 1
+    if bi < 0:
+        return np.inf, 0.0, 0.0, 0.0, -1, nodes, leaves
+    d = math.sqrt(best)
+    if d > 0.0:
+        return d, brx / d, bry / d, brz / d, tree.orig[bi], nodes, leaves
+    return 0.0, 0.0, 0.0, 0.0, tree.orig[bi], nodes, leaves
+
+
+@numba.njit(**NJIT)
+def _smooth_task(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g, out_nodes,
+                 out_leaves, tol, task, ntasks, exact_box=False):
+    """Query primitives ``task, task + ntasks, ...`` of :func:`smooth_distance_primitives`."""
+    k = tree.depth + 4
+    stack = np.empty(k, dtype=np.int64)
+    dstack = np.empty(k)
+    scratch = np.empty(15)
+    for j in range(task, qkind.size, ntasks):
+        kq = qkind[j]
+        Q = qpts[j]
+        nodes = 0
+        leaves = tree.kind.size
+        if brute:
+            d, gx, gy, gz = smooth_distance_brute_primitive(tree, kq, Q, alpha, S, wgs)
+        elif kq == 0:
+            d, gx, gy, gz, nodes, leaves = smooth_distance_point(
+                tree, Q[0], Q[1], Q[2], alpha, beta, S, wgs, stack, dstack)
+        else:
+            d, gx, gy, gz, nodes, leaves = smooth_distance_primitive(
+                tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, tol, exact_box)
+        out_d[j] = d
+        out_g[j, 0] = gx
+        out_g[j, 1] = gy
+        out_g[j, 2] = gz
+        out_nodes[j] = nodes
+        out_leaves[j] = leaves
+
+
+@numba.njit(**NJIT_PARALLEL)
+def smooth_distance_primitives(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g,
+                               out_nodes, out_leaves, tol=DEFAULT_TOL, ntasks=TASKS,
+                               exact_box=False):
+    """``d_hat`` and translation gradient of every query primitive, in parallel.
+
+    ``qkind (m,)`` int64, ``qpts (m, 9)`` float64; fills ``out_d (m,)``, ``out_g (m, 3)``,
+    ``out_nodes``, ``out_leaves (m,)``. ``brute`` sums every data primitive (reference).
+    ``tol``: see :func:`smooth_distance_primitive` (edge and triangle queries only).
+    ``ntasks``: the number of strided tasks (:func:`smoothdist.schedule.parallel_tasks`).
+    ``exact_box``: the paper's box test off (:func:`smooth_traverse`).
+    """
+    ntasks = max(1, min(qkind.size, ntasks))
+    for task in prange(ntasks):
+        # the task index as int64 (prange's is uint64): one specialisation of the task for
+        # the parallel kernel, the serial one and the thread runner
+        _smooth_task(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g, out_nodes,
+                     out_leaves, tol, np.int64(task), ntasks, exact_box)
+
+
+@numba.njit(**NJIT)
+def smooth_distance_primitives_serial(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d,
+                                      out_g, out_nodes, out_leaves, tol=DEFAULT_TOL,
+                                      exact_box=False):
+    """:func:`smooth_distance_primitives` on the calling thread (small query meshes)."""
+    _smooth_task(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g, out_nodes,
+                 out_leaves, tol, np.int64(0), np.int64(1), exact_box)
+
+
+@numba.njit(**NJIT)
+def _exact_task(tree, qkind, qpts, bound2, out_d, out_g, out_prim, task, ntasks):
+    """Query primitives ``task, task + ntasks, ...`` of :func:`exact_distance_primitives`."""
+    k = tree.depth + 4
+    stack = np.empty(k, dtype=np.int64)
+    dstack = np.empty(k)
+    scratch = np.empty(15)
+    for j in range(task, qkind.size, ntasks):
+        kq = qkind[j]
+        Q = qpts[j]
+        if kq == 0:
+            d, gx, gy, gz, p, nodes, leaves = exact_distance_point(tree, Q[0], Q[1], Q[2],
+                                                                   stack, dstack)
+        else:
+            d, gx, gy, gz, p, nodes, leaves = exact_distance_primitive(tree, kq, Q, stack,
+                                                                       dstack, scratch, bound2)
+        out_d[j] = d
+        out_g[j, 0] = gx
+        out_g[j, 1] = gy
+        out_g[j, 2] = gz
+        out_prim[j] = p
+
+
+@numba.njit(**NJIT_PARALLEL)
+def exact_distance_primitives(tree, qkind, qpts, bound2, out_d, out_g, out_prim, ntasks=TASKS):
+    """Exact distance, unit translation gradient and closest data primitive per query primitive.
+
+    Edge and triangle queries only look for pairs closer than ``sqrt(bound2)`` (an upper bound of
+    the minimum over all query primitives, e.g. from the query vertices); the others get
+    ``inf`` and ``-1``. Point queries are always exact. ``ntasks`` as in
+    :func:`smooth_distance_primitives`.
+    """
+    ntasks = max(1, min(qkind.size, ntasks))
+    for task in prange(ntasks):
+        _exact_task(tree, qkind, qpts, bound2, out_d, out_g, out_prim, np.int64(task), ntasks)
+
+
+@numba.njit(**NJIT)
+def exact_distance_primitives_serial(tree, qkind, qpts, bound2, out_d, out_g, out_prim):
+    """:func:`exact_distance_primitives` on the calling thread (small query meshes)."""
+    _exact_task(tree, qkind, qpts, bound2, out_d, out_g, out_prim, np.int64(0), np.int64(1))
+
+
+@numba.njit(**NJIT)
+def nearest_vertex_distance(tree, X):
+    """Smallest exact distance from the rows of ``X (n, 3)`` to the data (serial)."""
+    k = tree.depth + 4
+    stack = np.empty(k, dtype=np.int64)
+    dstack = np.empty(k)
+    best = np.inf
+    for i in range(X.shape[0]):
+        d = exact_distance_point(tree, X[i, 0], X[i, 1], X[i, 2], stack, dstack)[0]
+        best = min(best, d)
+    return best
