@@ -10,9 +10,7 @@ LIMIT = 120
 #: their speed when split into force-inlined helpers, so they wait for a split that keeps it
 ALLOWED = {"smoothdist._kernels.query:smooth_distance_point_tol": 167,
            # + the box test switch (issue 36)
-           "smoothdist._kernels.mesh_query:smooth_traverse": 176,
-           "smoothdist._kernels.box_distance:box_lower_bound": 122,
-           "tracer.rendering.march:march_ray": 153}
+           "smoothdist._kernels.mesh_query:smooth_traverse": 176}
 
 
 def long_functions():

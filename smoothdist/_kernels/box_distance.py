@@ -83,6 +83,38 @@ def box_box_offset(qlo, qhi, lo, hi, node):
 
 
 @numba.njit(**NJIT)
+def _normal_gap(Q, lo, hi, node):
+    """Gap between triangle ``Q`` (9,) and a node's box along the triangle's unit normal:
+    ``(gap, ux, uy, uz)``, ``u`` the normal pointing from the box to the triangle (a
+    negative gap where the box straddles the triangle's plane; ``-inf`` for a degenerate
+    triangle)."""
+    abx = Q[3] - Q[0]
+    aby = Q[4] - Q[1]
+    abz = Q[5] - Q[2]
+    acx = Q[6] - Q[0]
+    acy = Q[7] - Q[1]
+    acz = Q[8] - Q[2]
+    nx = aby * acz - abz * acy
+    ny = abz * acx - abx * acz
+    nz = abx * acy - aby * acx
+    nn = math.sqrt(nx * nx + ny * ny + nz * nz)
+    if not nn > 0.0:
+        return -math.inf, 0.0, 0.0, 0.0
+    nx /= nn
+    ny /= nn
+    nz /= nn
+    h = nx * Q[0] + ny * Q[1] + nz * Q[2]
+    cx = 0.5 * (lo[node, 0] + hi[node, 0])
+    cy = 0.5 * (lo[node, 1] + hi[node, 1])
+    cz = 0.5 * (lo[node, 2] + hi[node, 2])
+    rad = 0.5 * (abs(nx) * (hi[node, 0] - lo[node, 0]) + abs(ny) * (hi[node, 1] - lo[node, 1])
+                 + abs(nz) * (hi[node, 2] - lo[node, 2]))
+    off = h - (nx * cx + ny * cy + nz * cz)
+    sgn = 1.0 if off > 0.0 else -1.0
+    return abs(off) - rad, sgn * nx, sgn * ny, sgn * nz
+
+
+@numba.njit(**NJIT)
 def box_lower_bound(kq, Q, qlo, qhi, lo, hi, node, E):
     """Lower bound ``delta`` on the distance from query primitive ``(kq, Q)`` to a node's box.
 
@@ -176,34 +208,9 @@ def box_lower_bound(kq, Q, qlo, qhi, lo, hi, node, E):
     uz = 1.0 if g2 > 0.0 else (-1.0 if g2 < 0.0 else 0.0)
     if kq == 2:
         # ... or along the triangle's normal, whichever separates more
-        abx = Q[3] - Q[0]
-        aby = Q[4] - Q[1]
-        abz = Q[5] - Q[2]
-        acx = Q[6] - Q[0]
-        acy = Q[7] - Q[1]
-        acz = Q[8] - Q[2]
-        nx = aby * acz - abz * acy
-        ny = abz * acx - abx * acz
-        nz = abx * acy - aby * acx
-        nn = math.sqrt(nx * nx + ny * ny + nz * nz)
-        if nn > 0.0:
-            nx /= nn
-            ny /= nn
-            nz /= nn
-            h = nx * Q[0] + ny * Q[1] + nz * Q[2]
-            cx = 0.5 * (lo[node, 0] + hi[node, 0])
-            cy = 0.5 * (lo[node, 1] + hi[node, 1])
-            cz = 0.5 * (lo[node, 2] + hi[node, 2])
-            rad = 0.5 * (abs(nx) * (hi[node, 0] - lo[node, 0]) + abs(ny)
-                         * (hi[node, 1] - lo[node, 1]) + abs(nz) * (hi[node, 2] - lo[node, 2]))
-            off = h - (nx * cx + ny * cy + nz * cz)
-            g = abs(off) - rad
-            if g > best:
-                best = g
-                sgn = 1.0 if off > 0.0 else -1.0
-                ux = sgn * nx
-                uy = sgn * ny
-                uz = sgn * nz
+        g, nx, ny, nz = _normal_gap(Q, lo, hi, node)
+        if g > best:
+            return g, nx, ny, nz
     return best, ux, uy, uz
 
 

@@ -411,58 +411,79 @@ def _false_position(tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, a, f
 
 
 @numba.njit(**NJIT)
+def next_step(d, gx, gy, gz, slope, mode, omega, near, newton_on, newton_cos):
+    """The step from a point outside the band (``d > eps``) with distance gradient ``g``,
+    along which the distance changes at the rate ``slope = g . dir``:
+    ``(step, relaxed, newton)``.
+
+    *Over-relaxed* (``omega > 1``, smooth mode; Keinert et al. 2014): where ``d`` changes at
+    the rate ``s``, the unbounding spheres at ``t`` and ``t + h`` still overlap for
+    ``h <= 2 d / (1 - s)``; the step is :data:`OMEGA_SAFETY` of that, between ``d`` and
+    ``omega d``. A ray heading into the surface takes plain steps, one that grazes it or moves
+    away lengthens them. ``relaxed``: the step is longer than ``d`` (checked by the caller).
+
+    *Newton* (``newton_on`` and ``d <= near``): ``h = d / -(g . dir)`` capped at
+    ``NEWTON_CAP x d``. Sphere tracing converges linearly near a surface it meets at an angle
+    (the distance shrinks by about ``1 - cos`` per step); Newton converges quadratically and
+    usually lands within ``eps`` in one or two steps. Grazing rays (``-(g . dir) <
+    newton_cos |g|``) keep sphere steps. ``newton``: the step is longer than ``d`` (checked by
+    :func:`stepped_over`). Smooth mode only, both: the exact-offset field of a point cloud is
+    a union of spheres, kinked everywhere; its gradient says little about the next step.
+    """
+    step = d
+    if omega > 1.0 and mode == MODE_SMOOTH:
+        step = d * min(omega, max(1.0, 2.0 * OMEGA_SAFETY / (1.0 - min(slope, 0.999))))
+    relaxed = step > d
+    newton = False
+    if d <= near and newton_on and -slope > newton_cos * math.sqrt(gx * gx + gy * gy + gz * gz):
+        step = min(d / -slope, NEWTON_CAP * d)
+        relaxed = False
+        newton = step > d
+    return step, relaxed, newton
+
+
+@numba.njit(**NJIT)
+def stepped_over(step, d_prev, d, eps, slope):
+    """Whether a Newton step of length ``step``, from a point at distance ``d_prev`` to one at
+    ``d`` where the distance changes along the ray at the rate ``slope``, may have stepped
+    over a thin shell: it left the part of the ray the sphere at its start certifies
+    (``step > d_prev + |d|``) and landed outside (``d >= -eps``) where ``d`` grows along the
+    ray (``slope > 0``), so ``d`` had a minimum in the uncertified gap (the zero set around a
+    triangle sheet at high alpha is such a shell). The caller undoes it and goes on with plain
+    steps: a surface is then only crossed, or landed on from its front side. Not detected: a
+    step that crosses a whole shell *and* lands where ``d`` falls again (a second surface
+    within ``NEWTON_CAP x newton``)."""
+    return step > d_prev + abs(d) and d >= -eps and slope > 0.0
+
+
+@numba.njit(**NJIT)
 def march_ray(tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, lo, hi, eps, max_steps,
               stack, dstack, relax=RELAX, omega=OMEGA, t_min=0.0, newton=0.0, t_max=np.inf,
               newton_cos=NEWTON_COS, t_pred=0.0, d_lb=0.0):
     """March one ray; returns ``(hit, t, gx, gy, gz, steps, leaves, bisections, nearest)``.
 
-    ``omega >= 1``: over-relaxed steps (Keinert et al. 2014) whose length follows the slope of
-    ``d`` along the ray: where ``d`` changes at the rate ``s = g . dir``, the unbounding
-    spheres at ``t`` and ``t + h`` still overlap for ``h <= 2 d / (1 - s)``; the step is
-    :data:`OMEGA_SAFETY` of that, between ``d`` and ``omega d``. So a ray heading into the
-    surface takes plain steps and one that grazes it or moves away lengthens them. Every such
-    step is checked: when the spheres of its two ends do not overlap (``h > d_prev + d``, with
-    ``d`` the new distance, taken as 0 inside) the segment between them is not certified
-    empty, and the ray takes the plain step ``t_prev + d_prev`` instead (then goes on).
-    Smooth mode only (as the Newton steps below): the exact-offset field of a point cloud is
-    kinked everywhere, its gradient says little about the next step.
+    Each step comes from :func:`next_step`: over-relaxed by up to ``omega >= 1`` (1: plain
+    sphere tracing), or a Newton step once ``d <= newton`` (scene units, see
+    :func:`newton_distance`; 0: never). An over-relaxed step whose end sphere does not
+    overlap its start sphere (``h > d_prev + d``, ``d`` taken as 0 inside) is redone as the
+    plain step ``d_prev``; a Newton step that may have stepped over a shell
+    (:func:`stepped_over`) is undone, and Newton steps stay off for the rest of the ray.
 
-    ``relax``: for scenes with ``tol > 0``, a step may under-estimate the distance by up to
-    ``relax`` x the previous step (cheaper evaluations far from the surface; 0: never).
+    ``relax`` (scenes with ``tol > 0``): far from the surface a step may under-estimate the
+    distance by up to ``relax`` x the previous step (cheaper evaluations; 0: never).
+    ``t_min`` / ``t_max``: depths before / beyond which the ray is known not to meet the
+    surface (the tile's cone pass, :func:`cone_end`): the march runs from ``max(box entry,
+    t_min)`` to ``min(box exit, t_max)``. ``t_pred > t_min`` and ``d_lb > 0`` (smooth mode,
+    Newton on): the distance at ``t_min`` is at least ``d_lb`` and the first step goes to
+    ``t_pred`` (:func:`cone_newton_step`), checked as a Newton step. (With ``d_lb <= eps`` the
+    ray at ``t_min`` may already lie in the band; it then stops at ``t_pred``, deeper in the
+    same band, or, if that overshoots, at a band point false position finds between them.)
 
-    ``t_min``: a depth before which the ray is known not to meet the surface (the cone pass
-    of ``_render_tile``); the march starts at ``max(box entry, t_min)``. ``t_max``: a depth
-    beyond which the ray is known not to meet the surface (:func:`cone_end`); the march ends
-    at ``min(box exit, t_max)``.
-
-    ``newton >= 0`` (scene units, see :func:`newton_distance`): once ``d <= newton``, the ray
-    takes Newton steps on ``d(t)`` along the ray, ``h = d / -(g . dir)`` capped at
-    ``NEWTON_CAP x d``, instead of sphere-tracing steps ``h = d`` (0: never). Sphere tracing
-    converges linearly near a surface it meets at an angle (the distance to the surface
-    shrinks by about ``1 - cos`` per step, so a tight ``eps`` costs many steps); Newton
-    converges quadratically and usually lands within ``eps`` in one or two steps. Smooth mode
-    only: the exact-offset field of a point cloud is a union of spheres, kinked everywhere. A
-    Newton step that ends inside (``d < -eps``) is resolved by false position in the bracket.
-    Grazing rays (``-(g . dir) < newton_cos |g|``, default :data:`NEWTON_COS`) keep sphere
-    steps. A Newton step longer than ``d`` is not certified surface-free beyond ``d``: when
-    the spheres at its two ends do not overlap and it lands outside (``d >= -eps``) where
-    ``d`` grows along the ray, it may have stepped over a thin shell (the zero set around a
-    triangle sheet at high alpha is one), so it is undone, and the ray goes on with plain
-    sphere steps. What is left: a step that crosses a whole shell *and* lands where ``d``
-    falls again (approaching a second surface within ``NEWTON_CAP x newton``) is not
-    detected.
-
-    ``t_pred > t_min`` and ``d_lb > 0`` (smooth mode, Newton steps on): the ray's distance at
-    ``t_min`` is known to be at least ``d_lb`` and its first step goes to ``t_pred``
-    (:func:`cone_newton_step`), checked as a Newton step; the ray's evaluation at ``t_min`` is
-    saved. (With ``d_lb <= eps`` the ray at ``t_min`` may already
-    lie in the band ``d <= eps``; it then stops at ``t_pred``, deeper in the same band, or, if
-    that overshoots, at a band point that false position finds between the two.)
-
-    ``hit`` is 1 when ``|d| <= eps`` was reached inside the box (``d < -eps`` only after
-    ``BISECT_ITERS`` bracketing steps); then ``t`` is the ray parameter and ``g`` the
-    (unnormalised) distance gradient there, and ``nearest`` the object whose own distance is
-    the smallest there (:func:`scene_distance`). Misses return ``t = nan``, ``nearest = -1``.
+    ``hit`` is 1 when ``|d| <= eps`` was reached inside the box; a step into ``d < -eps`` is
+    resolved by false position back to the last positive point (:func:`_false_position`).
+    Then ``t`` is the ray parameter, ``g`` the (unnormalised) distance gradient there and
+    ``nearest`` the object whose own distance is the smallest (:func:`scene_distance`).
+    Misses return ``t = nan``, ``nearest = -1``.
     """
     t, t_exit = ray_box(ox, oy, oz, dx, dy, dz, lo, hi)
     t = max(t, t_min)
@@ -482,15 +503,13 @@ def march_ray(tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, lo, hi, ep
     near = max(eps, newton)
     d_prev = 0.0
     step = 0.0
-    # Newton steps stay on until one is undone (see the check below), then plain steps
     newton_on = newton > 0.0 and mode == MODE_SMOOTH
     newton_step = False
     relaxed = False         # the last step was an over-relaxed one (to be checked)
     ob = -1
     if newton_on and d_lb > 0.0 and t < t_pred <= t_exit:
-        # a first step predicted from the tile's cone pass, taken and checked as a Newton step
-        # from a point whose distance is at least d_lb; it lands near the surface, so it is
-        # evaluated at the scene's own tol at once
+        # the cone pass's predicted first step, from a point at distance >= d_lb; it lands
+        # near the surface, so it is evaluated at the scene's own tol at once
         d_prev = d_lb
         step = t_pred - t
         newton_step = step > d_lb
@@ -508,24 +527,17 @@ def march_ray(tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, lo, hi, ep
                                                        stack, dstack, 0.0)
             steps += 1
             leaves += ll
-        if relaxed and step > d_prev + max(d, 0.0):
-            # the over-relaxed step may have jumped over a surface: redo it plainly
+        slope = gx * dx + gy * dy + gz * dz
+        if (relaxed and step > d_prev + max(d, 0.0)) or (
+                newton_step and stepped_over(step, d_prev, d, eps, slope)):
+            # the long step may have jumped over a surface: take the plain one instead
+            newton_on = newton_on and not newton_step
             relaxed = False
+            newton_step = False
             t = t_prev + d_prev
             step = d_prev
             continue
-        if newton_step:
-            newton_step = False
-            if (step > d_prev + abs(d) and d >= -eps
-                    and gx * dx + gy * dy + gz * dz > 0.0):
-                # the Newton step left the part of the ray the sphere at t_prev certifies and
-                # landed where d grows along the ray: d had a minimum in the uncertified gap,
-                # and a thin shell there may have been stepped over. Undo it; plain steps
-                # from here on (a surface is only crossed, or landed on from its front side)
-                newton_on = False
-                t = t_prev + d_prev
-                step = d_prev
-                continue
+        newton_step = False
         if d <= eps:
             if d < -eps and t > t_prev:
                 # overshoot into the negative band: find the root in [t_prev (d > eps), t]
@@ -539,17 +551,8 @@ def march_ray(tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, lo, hi, ep
             return 1, t, gx, gy, gz, steps, leaves, bis, ob
         t_prev = t
         d_prev = d
-        step = d
-        if omega > 1.0 and mode == MODE_SMOOTH:
-            slope = min(gx * dx + gy * dy + gz * dz, 0.999)
-            step = d * min(omega, max(1.0, 2.0 * OMEGA_SAFETY / (1.0 - slope)))
-        relaxed = step > d
-        if d <= near and newton_on:
-            sd = -(gx * dx + gy * dy + gz * dz)
-            if sd > newton_cos * math.sqrt(gx * gx + gy * gy + gz * gz):
-                step = min(d / sd, NEWTON_CAP * d)
-                relaxed = False
-                newton_step = step > d
+        step, relaxed, newton_step = next_step(d, gx, gy, gz, slope, mode, omega, near,
+                                               newton_on, newton_cos)
         t += step
         # near the surface the next point is evaluated at full accuracy at once (a loosened
         # value there would mostly fall below eps and be evaluated again)
@@ -564,7 +567,6 @@ def march_ray(tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, lo, hi, ep
             t = t_prev + d_prev
             step = d_prev
     return 0, np.nan, 0.0, 0.0, 0.0, steps, leaves, bis, -1
-
 
 @numba.njit(**NJIT)
 def _cone_axis(cam, r_lo, r_hi, c_lo, c_hi):
