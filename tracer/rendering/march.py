@@ -480,7 +480,7 @@ def march_ray(tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, lo, hi, ep
     same band, or, if that overshoots, at a band point false position finds between them.)
 
     ``hit`` is 1 when ``|d| <= eps`` was reached inside the box; a step into ``d < -eps`` is
-    resolved by false position back to the last positive point (:func:`_false_position`).
+    resolved by false position back to the last positive point (``_false_position``).
     Then ``t`` is the ray parameter, ``g`` the (unnormalised) distance gradient there and
     ``nearest`` the object whose own distance is the smallest (:func:`scene_distance`).
     Misses return ``t = nan``, ``nearest = -1``.
