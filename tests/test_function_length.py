@@ -8,8 +8,7 @@ from import_graph import modules
 LIMIT = 120
 #: "module:function" -> its length when listed; the hot kernels among them lost 15-50 % of
 #: their speed when split into force-inlined helpers, so they wait for a split that keeps it
-ALLOWED = {"smoothdist._kernels.query:smooth_distance_point_tol": 167,
-           # + the box test switch (issue 36)
+ALLOWED = {# + the box test switch (issue 36)
            "smoothdist._kernels.mesh_query:smooth_traverse": 176}
 
 

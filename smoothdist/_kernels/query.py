@@ -322,57 +322,16 @@ def smooth_distance_point_tol(tree, px, py, pz, alpha, beta, tol, S, wgs, stack,
 
     Arguments and result as in :func:`smooth_distance_point`, plus ``tol >= 0``: the relative
     error budget of the LogSumExp sum (0: this is :func:`smooth_distance_point`). With
-    ``beta = 0`` and ``tol > 0``, for every query and every data mesh:
+    ``beta = 0`` and ``tol > 0``, for every query and every data mesh,
+    ``d_hat_0 - log(1 + tol) / alpha <= d_hat_tol <= d_hat_0`` (scene units).
 
-        d_hat_0 - log(1 + tol) / alpha  <=  d_hat_tol  <=  d_hat_0,
-
-    so the error is at most ``log(1 + tol) / alpha <= tol / alpha`` (scene units).
-
-    Rule (docs/design-notes.md §3, with one shared budget instead of one per node, so that the
-    bound does not grow with the number of accepted nodes). Nodes are visited
-    nearest-child-first (a depth-first stack whose nearer child is popped first), so the first
-    leaves evaluated are those closest to ``p`` and the exact part of the sum grows early. Let
-    ``N`` be the number of primitives below the root, ``s_ex`` the sum of the exact terms
-    evaluated so far, ``E`` the sum of the far fields accepted so far and ``n_C`` the number of
-    primitives dealt with so far: evaluated, or below an accepted (or Barnes-Hut) node (sums
-    relative to the same running shift). A popped node ``B`` with
-    ``n_B`` primitives and box distance ``delta_B`` has the far-field bound
-    ``U_B = n_B A^S exp(-alpha delta_B)`` (the Barnes-Hut over-estimate, with ``A`` the
-    largest raw weight of the tree); it is added *instead of* being opened if
-
-        E + U_B  <=  tol * s_ex * (n_C + n_B) / N.
-
-    Each node may spend the budget in proportion to the primitives it covers, plus what
-    earlier nodes left unused (an evaluated primitive uses none of its share), so near nodes
-    cannot exhaust the budget of the far part of the data (a greedy ``E + U_B <= tol * s_ex``
-    does: it then opens almost every node). Invariant: ``E <= tol * s_ex * n_C / N`` (true at
-    the start, kept by every acceptance and every evaluation, and kept as ``s_ex`` grows).
-    (Counting the accepted nodes' primitives only left the evaluated primitives' share unused:
-    more leaves at the surface.)
-
-    Proof. (1) Conservative: every primitive ``i`` below ``B`` has ``d_i >= delta_B`` (the
-    box holds the primitive) and ``1 <= W_i <= A^S`` (the weight clamp), so its term
-    ``W_i exp(-alpha d_i) <= A^S exp(-alpha delta_B)`` and the true contribution of the node
-    is ``c_B <= U_B``. The accepted nodes and the evaluated leaves partition the
-    primitives, so the computed sum ``s_tol = s_ex + E >= s_0`` (the exact sum) and
-    ``d_hat_tol <= d_hat_0``. (2) Accurate: the counted primitives are disjoint, so ``n_C <= N``
-    and by the invariant ``E <= tol * s_ex``; ``s_ex`` is a partial sum of ``s_0`` (terms
-    of evaluated leaves, all >= 0), so ``s_tol = s_ex + E <= (1 + tol) s_0`` and
-    ``d_hat_0 - d_hat_tol = log(s_tol / s_0) / alpha <= log(1 + tol) / alpha``. Both steps
-    hold for any visiting order; the order only decides how early ``s_ex`` is large enough
-    to accept far nodes (hence the speed; deferring nodes that fail and re-testing them at
-    the end, when the far nodes have left budget unused, visited about 10 % fewer leaves on
-    the bunny but took 3-13 % more time, and was removed). Both
-    sides of the test are relative to the same shift, so they rescale together when it
-    moves. No node is accepted before the first exact term (``s_ex = 0``).
-
-    With ``beta > 0`` as well, nodes passing the Barnes-Hut test are added to the sum but not
-    to ``E`` or ``s_ex``: then ``d_hat <= d_hat_0`` still holds, the error bound only for the
-    ``tol`` part. The gradient of a far-field term points from the box's closest point, as
-    Barnes-Hut's does. (A best-first priority queue, largest ``U_B`` first, with the stop
-    test on the whole queue's ``sum U_B``, visited 25-40 % fewer nodes and about 20 % fewer
-    leaves on the bunny, but its heap operations and per-entry exponentials made it about
-    20 % slower in our one, noisy, measurement; depth-first it is.)
+    Rule (docs/design-notes.md §3, with the proof): nodes are visited nearest-child-first. A
+    popped node ``B`` with ``n_B`` primitives at box distance ``delta_B`` has the far-field
+    bound ``U_B = n_B A^S exp(-alpha delta_B)`` (``A`` the tree's largest raw weight); it is
+    added *instead of* being opened if ``E + U_B <= tol * s_ex * (n_C + n_B) / N`` (``s_ex``
+    the exact terms so far, ``E`` the accepted far fields, ``n_C`` the primitives dealt with
+    so far, ``N`` all). Barnes-Hut nodes (``beta > 0``) add to the sum, not to ``E`` or
+    ``s_ex``. Orders tried: docs/guide/performance.md, "Tuning constants".
     """
     if not tol > 0.0:
         return smooth_distance_point(tree, px, py, pz, alpha, beta, S, wgs, stack, dstack,
@@ -389,15 +348,8 @@ def smooth_distance_point_tol(tree, px, py, pz, alpha, beta, tol, S, wgs, stack,
     wa = wa if (S == 1.0 or wa == 1.0) else math.exp(S * math.log(wa))
     # tol * s_ex * (n_C + n_B) / N, with the constants folded in
     budget = tol / tree.count[root]
-    # nodes closer than ``near`` cannot pass the test whatever their size: it needs
-    # n_B wa exp(-alpha (bd - m)) <= budget s_ex (n_C + n_B), and (n_C + n_B) / n_B <= n_C + 1,
-    # so bd >= m + log(wa / (budget s_ex (n_C + 1))) / alpha: a cheap pre-check, no exp for
-    # those nodes. Kept lazily: recomputed when s_ex or n_C + 1 has doubled since (s_ref and
-    # n_ref are their values then; s_ref is rescaled with the shift like s_ex). Both only
-    # grow, so a stale ``near`` is too far, never too near: it can only open a node that
-    # would have passed (more work, same bound), and is at most 2 log(2)/alpha too far.
-    # (With tol * s_ex instead of budget s_ex (n_C + 1), the old pre-check: 40 % more
-    # exponentials for far tests that fail, same leaves.)
+    # nodes closer than ``near`` cannot pass the test whatever their size (no exp for them;
+    # docs/design-notes.md §3); recomputed when s_ex or n_C + 1 has doubled since s_ref, n_ref
     near = np.inf
     s_ref = 0.0
     n_ref = 0
