@@ -167,8 +167,8 @@ NOT_RUN = {
         "and its refusal without a GPU",
     "python -m tracer reproduce --only beta":
         "it is the full reproduction's beta study at the paper's 512² (minutes); "
-        "tests/test_reproduce.py::test_smoke_run_end_to_end runs the same experiment at its "
-        "smallest, and python -m tracer ablate-beta, which it runs, is run from this page",
+        "tests/test_reproduce.py::test_quick_run_end_to_end runs the same experiment at "
+        "--quick's size, and python -m tracer ablate-beta, which it runs, is run from this page",
     "python -m tracer reproduce --report-only --docs":
         "it rewrites the result blocks of the repository's own guides; "
         "tests/test_reproduce.py checks the guides against the committed results with the "
