@@ -330,3 +330,40 @@ def test_beta_speedup_says_which_leaves_beta_prunes():
     del b["leaves_per_eval"]
     assert claims._beta_speedup({"beta": b})[3] == \
         "time(beta 0) / time(beta 0.2) is below 10 for some type"
+
+
+def test_gpu_experiment_runs_the_benchmark_where_a_card_is(tmp_path, monkeypatch):
+    """With a card, the gpu experiment runs benchmarks/bench_gpu.py at the mode's sizes and
+    reads its JSON (the card here is a stand-in: the committed H100 results play the
+    benchmark's output); without one it reads the committed measurement. Both give the same
+    figures from the same file."""
+    import subprocess
+
+    from tracer.reproduce import experiments
+
+    card = json.loads(experiments.GPU_CARD_RESULT.read_text(encoding="utf-8"))
+    seen = []
+
+    real_run = subprocess.run
+
+    def fake_run(argv, **kw):
+        if not any(str(a).endswith("bench_gpu.py") for a in argv):
+            return real_run(argv, **kw)  # git and lscpu, for the provenance
+        seen.append(argv)
+        Path(argv[argv.index("--json") + 1]).write_text(json.dumps(card), encoding="utf-8")
+
+    monkeypatch.setattr(experiments, "_card_available", lambda: True)
+    monkeypatch.setattr(subprocess, "run", fake_run)
+    s = SETTINGS["quick"]["gpu"]
+    here = experiments.gpu(tmp_path / "gpu", s, {})
+    argv = seen[0]
+    assert argv[1].endswith("bench_gpu.py") and argv[argv.index("--grid") + 1] == str(s["grid"])
+    assert argv[argv.index("--size") + 1:argv.index("--size") + 3] == [str(v) for v in s["size"]]
+    assert here["source"] == "measured here" and (tmp_path / "gpu" / "bench_gpu.json").is_file()
+    monkeypatch.setattr(experiments, "_card_available", lambda: False)
+    stored = experiments.gpu(tmp_path / "gpu2", s, {})
+    assert stored["source"] == "benchmarks/data/gpu_h100.json"
+    assert here["grid"] == stored["grid"] and here["render"] == stored["render"]
+    rows = {r["what"]: r for r in card["rows"]}
+    assert stored["grid"]["points"]["kernel_speedup"] == pytest.approx(
+        rows["grid points"]["cpu_s"] / rows["grid points"]["gpu_kernel_s"], rel=1e-12)

@@ -654,14 +654,15 @@ def gpu(out, s, where):
     and commit git gives it (``source`` says which)."""
     bench_py = REPO / "benchmarks" / "bench_gpu.py"
     if _card_available() and bench_py.is_file():
-        path = Path(out) / "gpu" / "bench_gpu.json"
+        path = Path(out) / "bench_gpu.json"
         path.parent.mkdir(parents=True, exist_ok=True)
         argv = [sys.executable, str(bench_py), "--size", *map(str, s["size"]),
                 "--grid", str(s["grid"]), "--repeat", str(s["repeat"]), "--json", str(path)]
         subprocess.run(argv, cwd=REPO, check=True)
         bench = json.loads(path.read_text(encoding="utf-8"))
-        return _gpu_summary(bench, "measured here", {"date": provenance()["date"],
-                                                     "commit": provenance()["commit"]})
+        prov = provenance()
+        return _gpu_summary(bench, "measured here", {"date": prov["date"],
+                                                     "commit": prov["commit"]})
     if not GPU_CARD_RESULT.is_file():
         return {"source": None, "why": "no CUDA GPU here and no committed card measurement"}
     bench = json.loads(GPU_CARD_RESULT.read_text(encoding="utf-8"))
