@@ -30,7 +30,7 @@ import math
 
 import numba
 
-from smoothdist._config import NJIT
+from smoothdist._config import NJIT, NJIT_INLINE
 from smoothdist._kernels.closest_pair import closest_pair, point_segment, point_triangle
 
 
@@ -41,16 +41,31 @@ def box_box_distance(qlo, qhi, lo, hi, node):
     A lower bound on the distance from anything inside the query box to the node box (cheap:
     used to order and prune the traversal).
     """
-    d2 = 0.0
-    for a in range(3):
-        g = lo[node, a] - qhi[a]
-        if g > 0.0:
-            d2 += g * g
-        else:
-            g = qlo[a] - hi[node, a]
-            if g > 0.0:
-                d2 += g * g
-    return math.sqrt(d2)
+    g0, g1, g2 = axis_gaps(qlo, qhi, lo, hi, node)
+    return math.sqrt(g0 * g0 + g1 * g1 + g2 * g2)
+
+
+@numba.njit(**NJIT_INLINE)
+def signed_gap(ql, qh, nl, nh):
+    """The gap between the query's interval ``[ql, qh]`` and the node's ``[nl, nh]`` on one axis:
+    ``-(nl - qh)`` when the node lies above the query, ``ql - nh`` when below, 0 when they
+    overlap (always ``+0.0`` then). The sign is that of the query's offset from the node."""
+    g = nl - qh
+    if g > 0.0:
+        return -g
+    g = ql - nh
+    if g <= 0.0:
+        return 0.0
+    return g
+
+
+@numba.njit(**NJIT_INLINE)
+def axis_gaps(qlo, qhi, lo, hi, node):
+    """:func:`signed_gap` on the three axes between the query box ``qlo, qhi (3,)`` and node
+    ``node``'s box: ``(g0, g1, g2)``, the offset of the query box from the node box."""
+    return (signed_gap(qlo[0], qhi[0], lo[node, 0], hi[node, 0]),
+            signed_gap(qlo[1], qhi[1], lo[node, 1], hi[node, 1]),
+            signed_gap(qlo[2], qhi[2], lo[node, 2], hi[node, 2]))
 
 
 @numba.njit(**NJIT)
@@ -59,23 +74,7 @@ def box_box_offset(qlo, qhi, lo, hi, node):
 
     Returns ``(d, ux, uy, uz)`` (a unit vector, or 0 when the boxes overlap).
     """
-    g0 = 0.0
-    g1 = 0.0
-    g2 = 0.0
-    for a in range(3):
-        g = lo[node, a] - qhi[a]
-        if g > 0.0:
-            g = -g
-        else:
-            g = qlo[a] - hi[node, a]
-            if g < 0.0:
-                g = 0.0
-        if a == 0:
-            g0 = g
-        elif a == 1:
-            g1 = g
-        else:
-            g2 = g
+    g0, g1, g2 = axis_gaps(qlo, qhi, lo, hi, node)
     d = math.sqrt(g0 * g0 + g1 * g1 + g2 * g2)
     if d > 0.0:
         return d, g0 / d, g1 / d, g2 / d
@@ -137,28 +136,9 @@ def box_lower_bound(kq, Q, qlo, qhi, lo, hi, node, E):
         ``0 <= delta <= dist(query, box)``, and the derivative of ``delta`` with respect to a
         translation of the query (a unit vector, or 0 when ``delta = 0``).
     """
-    nsep = 0
-    gap2 = 0.0
-    g0 = 0.0
-    g1 = 0.0
-    g2 = 0.0
-    for a in range(3):
-        g = lo[node, a] - qhi[a]
-        if g > 0.0:
-            g = -g
-        else:
-            g = qlo[a] - hi[node, a]
-            if g <= 0.0:
-                g = 0.0
-        if g != 0.0:
-            nsep += 1
-            gap2 += g * g
-        if a == 0:
-            g0 = g
-        elif a == 1:
-            g1 = g
-        else:
-            g2 = g
+    g0, g1, g2 = axis_gaps(qlo, qhi, lo, hi, node)
+    nsep = (g0 != 0.0) + (g1 != 0.0) + (g2 != 0.0)
+    gap2 = g0 * g0 + g1 * g1 + g2 * g2
     if nsep == 0:
         return 0.0, 0.0, 0.0, 0.0
     if kq == 0:

@@ -28,7 +28,7 @@ import math
 import numba
 
 from smoothdist._config import NJIT
-from smoothdist._kernels.box_distance import box_lower_bound
+from smoothdist._kernels.box_distance import axis_gaps, box_lower_bound
 from smoothdist._kernels.closest_pair import point_segment, point_triangle
 
 
@@ -100,26 +100,8 @@ def box_lower_bound_moment(kq, Q, qlo, qhi, lo, hi, node, E, cx, cy, cz, L):
     if delta == 0.0 or (ux == 0.0 and uy == 0.0 and uz == 0.0):
         return delta, ux, uy, uz, 0.0, 0.0, 0.0
     # which case gave delta: the same per-axis gaps as box_lower_bound
-    nsep = 0
-    g0 = 0.0
-    g1 = 0.0
-    g2 = 0.0
-    for a in range(3):
-        g = lo[node, a] - qhi[a]
-        if g > 0.0:
-            g = -g
-        else:
-            g = qlo[a] - hi[node, a]
-            if g <= 0.0:
-                g = 0.0
-        if g != 0.0:
-            nsep += 1
-        if a == 0:
-            g0 = g
-        elif a == 1:
-            g1 = g
-        else:
-            g2 = g
+    g0, g1, g2 = axis_gaps(qlo, qhi, lo, hi, node)
+    nsep = (g0 != 0.0) + (g1 != 0.0) + (g2 != 0.0)
     if nsep == 3:
         Kx = lo[node, 0] if g0 < 0.0 else hi[node, 0]
         Ky = lo[node, 1] if g1 < 0.0 else hi[node, 1]

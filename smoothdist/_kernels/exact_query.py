@@ -41,6 +41,7 @@ from numba import prange
 
 from smoothdist._config import NJIT, NJIT_INLINE, NJIT_PARALLEL
 from smoothdist._kernels.closest_point import closest_point_segment, closest_point_triangle
+from smoothdist._kernels.traversal import beyond_best, nearest_first, no_far_field, within_best
 from smoothdist.mesh import KIND_TRIANGLE
 
 #: queries handled by one parallel task (one stack and one seed chain each)
@@ -532,6 +533,40 @@ def winner_result(kind, pts, bi, px, py, pz):
     return 0.0, 0.0, 0.0, 0.0
 
 
+@numba.njit(**NJIT_INLINE)
+def _coded_children(et, q, code):
+    """``children`` of an ExactTree inner node: its two child codes, keyed by the squared
+    distance to the child boxes stored in the node's row."""
+    px, py, pz = q
+    return (et.child[code, 0], _box_d2(px, py, pz, et.box, code, 0),
+            et.child[code, 1], _box_d2(px, py, pz, et.box, code, 6))
+
+
+@numba.njit(**NJIT_INLINE)
+def _code_leaf(et, q, code, st):
+    """A leaf code's primitives (``-1 - (start << 4 | count)``); ``st = (best d2, prim,
+    leaves)``."""
+    if code >= 0:
+        return False, st
+    px, py, pz = q
+    best, bi, leaves = st
+    c = -1 - code
+    first = c >> 4
+    for i in range(first, first + (c & 15)):
+        k = et.kind[i]
+        if k == 2:
+            d2 = _triangle_d2(px, py, pz, et.pts, et.gram, i)
+        elif k == 1:
+            d2 = _segment_d2(px, py, pz, et.pts, et.gram, i)
+        else:
+            d2 = (px - et.pts[i, 0]) ** 2 + (py - et.pts[i, 1]) ** 2 + (pz - et.pts[i, 2]) ** 2
+        leaves += 1
+        if d2 < best:
+            best = d2
+            bi = i
+    return True, (best, bi, leaves)
+
+
 @numba.njit(**NJIT)
 def exact_tree_point(et, px, py, pz, stack, dstack, seed=-1):
     """Exact unsigned distance at ``p`` by nearest-first branch and bound over an ExactTree.
@@ -544,15 +579,11 @@ def exact_tree_point(et, px, py, pz, stack, dstack, seed=-1):
     """
     kind = et.kind
     pts = et.pts
-    gram = et.gram
-    box = et.box
-    child = et.child
     best = np.inf
     bi = -1
     leaves = 0
-    nodes = 0
     if seed >= 0:
-        d2 = primitive_d2(kind, pts, gram, seed, px, py, pz)
+        d2 = primitive_d2(kind, pts, et.gram, seed, px, py, pz)
         leaves += 1
         if d2 < best:
             best = d2
@@ -561,53 +592,9 @@ def exact_tree_point(et, px, py, pz, stack, dstack, seed=-1):
     dx = max(rb[0] - px, 0.0, px - rb[3])
     dy = max(rb[1] - py, 0.0, py - rb[4])
     dz = max(rb[2] - pz, 0.0, pz - rb[5])
-    stack[0] = et.root
-    dstack[0] = dx * dx + dy * dy + dz * dz
-    sp = 1
-    while sp > 0:
-        sp -= 1
-        if dstack[sp] >= best:
-            continue
-        code = stack[sp]
-        nodes += 1
-        if code < 0:
-            c = -1 - code
-            st = c >> 4
-            for i in range(st, st + (c & 15)):
-                k = kind[i]
-                if k == 2:
-                    d2 = _triangle_d2(px, py, pz, pts, gram, i)
-                elif k == 1:
-                    d2 = _segment_d2(px, py, pz, pts, gram, i)
-                else:
-                    d2 = (px - pts[i, 0]) ** 2 + (py - pts[i, 1]) ** 2 + (pz - pts[i, 2]) ** 2
-                leaves += 1
-                if d2 < best:
-                    best = d2
-                    bi = i
-            continue
-        d0 = _box_d2(px, py, pz, box, code, 0)
-        d1 = _box_d2(px, py, pz, box, code, 6)
-        c0 = child[code, 0]
-        c1 = child[code, 1]
-        if d0 <= d1:
-            if d1 < best:
-                stack[sp] = c1
-                dstack[sp] = d1
-                sp += 1
-            if d0 < best:
-                stack[sp] = c0
-                dstack[sp] = d0
-                sp += 1
-        else:
-            if d0 < best:
-                stack[sp] = c0
-                dstack[sp] = d0
-                sp += 1
-            if d1 < best:
-                stack[sp] = c1
-                dstack[sp] = d1
-                sp += 1
+    (best, bi, leaves), nodes = nearest_first(
+        et, (px, py, pz), (best, bi, leaves), stack, dstack, et.root, dx * dx + dy * dy + dz * dz,
+        beyond_best, no_far_field, _code_leaf, _coded_children, within_best)
     d, gx, gy, gz = winner_result(kind, pts, bi, px, py, pz)
     return d, gx, gy, gz, et.orig[bi], nodes, leaves, bi
 

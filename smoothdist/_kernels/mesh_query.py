@@ -18,10 +18,11 @@ conditions ``D^T r = 0`` and ``Q^T r = 0`` (``D``, ``Q`` the features' edge dire
 ``d[phi, lambda] / d tau = (M^T M)^-1 M^T`` with ``M = [D, -Q]``. For a point query this is the
 point kernel's projection Jacobian (:func:`smoothdist._kernels.query.primitive_term`).
 
-Traversal as for points (:func:`smoothdist._kernels.query.smooth_distance_point`): an explicit
-stack, nearest child first by the cheap box-box distance. Barnes-Hut replaces a node by
-``count * whi**S * exp(-alpha delta)`` with ``delta`` a lower bound of the query-box distance: the
-box-box distance when that already satisfies ``diag < beta delta``, else
+Traversal as for points: :func:`smoothdist._kernels.traversal.nearest_first`, nearest child first
+by the cheap box-box distance, with this module's skip, far-field, leaf and children functions.
+Barnes-Hut replaces a node by ``count * whi**S * exp(-alpha delta)`` with ``delta`` a lower bound
+of the query-box distance: the box-box distance when that already satisfies ``diag < beta delta``,
+else
 :func:`smoothdist._kernels.box_distance.box_lower_bound` (the paper's halfspace test, done
 conservatively). So the far field overestimates the subtree's sum and ``d_hat_beta <= d_hat_0``.
 Point queries use the point kernels themselves.
@@ -29,14 +30,15 @@ Point queries use the point kernels themselves.
 One traversal (:func:`smooth_traverse`) serves the translation gradient and, with ``moment``,
 :mod:`smoothdist._kernels.mesh_moment`'s rotational one; ``moment`` is a compile-time constant
 of each caller, so the distance kernel carries none of the moment's work. For speed (the same nodes,
-terms and values as a plain version; issue 17): the tree's arrays are taken out of the tree
-once (a NamedTuple field read in the loop updates a reference count), the data primitive's
+terms and values as a plain version; issue 17): the traversal reads the tree's arrays without
+reference counts (``smoothdist._kernels.traversal.borrowed``), the data primitive's
 coordinates go to the closest-pair kernels as scalars, small helpers are inlined
 (``NJIT_INLINE``), the stack holds squared box distances, and the finer Barnes-Hut bound is
 only tried where a cheap upper bound says it could qualify the node.
 """
 
 import math
+from typing import NamedTuple
 
 import numba
 import numpy as np
@@ -44,6 +46,7 @@ from numba import prange
 
 from smoothdist._config import NJIT, NJIT_INLINE, NJIT_PARALLEL
 from smoothdist._kernels.box_distance import (box_box_distance, box_box_offset, box_distance_exact,
+                                              signed_gap,
                                               box_lower_bound)
 from smoothdist._kernels.box_moment import box_lower_bound_moment, extreme_levers, gap_moment
 from smoothdist._kernels.closest_pair import (closest_pair, segment_point, segment_segment,
@@ -54,6 +57,7 @@ from smoothdist._kernels.query import (DEFAULT_TOL, _attenuate, exact_distance_p
                                        logsumexp_accumulate, negligible_reach,
                                        smooth_distance_point)
 from smoothdist.schedule import TASKS
+from smoothdist._kernels.traversal import always, nearest_first, no_far_field
 from smoothdist._kernels.weights import eval_triangle_weight
 
 #: :func:`smoothdist._kernels.query._attenuate`, inlined (it calls no other kernel)
@@ -352,42 +356,10 @@ def centroid(kq, Q):
 def _box_gap2(l0, l1, l2, h0, h1, h2, lo, hi, node):
     """Squared :func:`smoothdist._kernels.box_distance.box_box_distance` of the query box ``l..h``
     (scalars) and a node's box (the same sum of the same squared gaps)."""
-    d2 = 0.0
-    g = lo[node, 0] - h0
-    if g > 0.0:
-        d2 += g * g
-    else:
-        g = l0 - hi[node, 0]
-        if g > 0.0:
-            d2 += g * g
-    g = lo[node, 1] - h1
-    if g > 0.0:
-        d2 += g * g
-    else:
-        g = l1 - hi[node, 1]
-        if g > 0.0:
-            d2 += g * g
-    g = lo[node, 2] - h2
-    if g > 0.0:
-        d2 += g * g
-    else:
-        g = l2 - hi[node, 2]
-        if g > 0.0:
-            d2 += g * g
-    return d2
-
-
-@numba.njit(**NJIT_INLINE)
-def _signed_gap(ql, qh, nl, nh):
-    """One axis of :func:`smoothdist._kernels.box_distance.box_box_offset`: the gap (negative
-    when the query is below the node, 0 when the intervals overlap)."""
-    g = nl - qh
-    if g > 0.0:
-        return -g
-    g = ql - nh
-    if g < 0.0:
-        return 0.0
-    return g
+    g0 = signed_gap(l0, h0, lo[node, 0], hi[node, 0])
+    g1 = signed_gap(l1, h1, lo[node, 1], hi[node, 1])
+    g2 = signed_gap(l2, h2, lo[node, 2], hi[node, 2])
+    return g0 * g0 + g1 * g1 + g2 * g2
 
 
 @numba.njit(**NJIT_INLINE)
@@ -420,22 +392,174 @@ def _far_weight(whi, node, cnt, S):
     return cnt * (wh if (S == 1.0 or wh == 1.0) else math.exp(S * math.log(wh)))
 
 
+class _PrimitiveQuery(NamedTuple):
+    """What :func:`smooth_traverse`'s traversal functions read about the query primitive."""
+    kq: int               # 1 edge, 2 triangle
+    Q: np.ndarray         # (9,) its vertices
+    qlo: np.ndarray       # (3,) its box
+    qhi: np.ndarray
+    E: np.ndarray         # (9,) scratch of the box bounds
+    L: np.ndarray         # (18,) lever arms (moment 1), else E
+    l0: float             # the box as scalars
+    l1: float
+    l2: float
+    h0: float
+    h1: float
+    h2: float
+    qd: float             # the box's diagonal
+    beta: float
+    b2: float             # beta**2
+    ib: float             # (1 - 1e-9) / beta (0 without beta)
+    split: float          # 1 / (number of vertices)
+    cx: float             # centroid (moment 1)
+    cy: float
+    cz: float
+    alpha: float
+    S: float
+    wgs: float
+    tol: float
+    moment: int
+    exact_box: bool
+    reach: float          # negligible-term pruning (query.negligible_reach)
+
+
+@numba.njit(**NJIT_INLINE)
+def _gap_children(tree, q, node):
+    """``children``: both children, keyed by squared box-box distance."""
+    l = tree.left[node]
+    r = tree.right[node]
+    return (l, _box_gap2(q.l0, q.l1, q.l2, q.h0, q.h1, q.h2, tree.lo, tree.hi, l),
+            r, _box_gap2(q.l0, q.l1, q.l2, q.h0, q.h1, q.h2, tree.lo, tree.hi, r))
+
+
+@numba.njit(**NJIT_INLINE)
+def _prim_skip(tree, q, node, bd2, st):
+    """Negligible-term pruning, as in the point kernel."""
+    return bd2 >= st[8]
+
+
+@numba.njit(**NJIT_INLINE)
+def _barnes_hut(tree, q, node, bd2):
+    """Barnes-Hut for a query primitive: ``(far, delta, ux, uy, uz, ax, ay, az)``, the node's
+    lower-bound distance ``delta``, its direction ``u`` and the moment lever ``a``.
+
+    The box-box distance (a lower bound) qualifies the node first; the finer bound
+    (:func:`smoothdist._kernels.box_distance.box_lower_bound`) is tried only if the smallest
+    query-vertex distance could qualify it, and that only if the box-box distance plus the query
+    box's diagonal (an upper bound of it) could. ``exact_box``: the exact primitive-box distance
+    instead.
+    """
+    lo = tree.lo
+    hi = tree.hi
+    kq = q.kq
+    Q = q.Q
+    moment = q.moment
+    dg = tree.diag[node]
+    delta = ux = uy = uz = 0.0
+    ax = ay = az = 0.0
+    far = False
+    if q.exact_box and dg * dg < q.b2 * bd2:
+        delta, ux, uy, uz = box_distance_exact(kq, Q, lo, hi, node, q.E)
+        far = True
+    elif dg * dg < q.b2 * bd2:
+        g0 = signed_gap(q.l0, q.h0, lo[node, 0], hi[node, 0])
+        g1 = signed_gap(q.l1, q.h1, lo[node, 1], hi[node, 1])
+        g2 = signed_gap(q.l2, q.h2, lo[node, 2], hi[node, 2])
+        delta = math.sqrt(g0 * g0 + g1 * g1 + g2 * g2)
+        if delta > 0.0:
+            ux = g0 / delta
+            uy = g1 / delta
+            uz = g2 / delta
+        if moment >= VERTEX_1:
+            ax, ay, az = ux * q.split, uy * q.split, uz * q.split
+        elif moment:
+            ax, ay, az = gap_moment(q.L, ux, uy, uz)
+        far = True
+    else:
+        x = dg * q.ib - q.qd
+        if (x <= 0.0 or x * x < bd2) and dg < q.beta * _point_box(kq, Q, lo, hi, node):
+            if moment == 1:
+                delta, ux, uy, uz, ax, ay, az = box_lower_bound_moment(
+                    kq, Q, q.qlo, q.qhi, lo, hi, node, q.E, q.cx, q.cy, q.cz, q.L)
+            elif q.exact_box:
+                delta, ux, uy, uz = box_distance_exact(kq, Q, lo, hi, node, q.E)
+            else:
+                delta, ux, uy, uz = box_lower_bound(kq, Q, q.qlo, q.qhi, lo, hi, node, q.E)
+                if moment >= VERTEX_1:
+                    ax, ay, az = ux * q.split, uy * q.split, uz * q.split
+            far = dg < q.beta * delta
+    return far, delta, ux, uy, uz, ax, ay, az
+
+
+@numba.njit(**NJIT_INLINE)
+def _prim_far(tree, q, node, bd2, st):
+    """Far fields: Barnes-Hut, then the ``tol`` rule; ``st = (m, s, gx, gy, gz, mx, my, mz,
+    cut2, leaves)``."""
+    m, s, gx, gy, gz, mx, my, mz, cut2, leaves = st
+    cnt = tree.count[node]
+    far = False
+    delta = ux = uy = uz = 0.0
+    ax = ay = az = 0.0
+    if cnt > 1 and q.beta > 0.0:
+        far, delta, ux, uy, uz, ax, ay, az = _barnes_hut(tree, q, node, bd2)
+    if not far and q.tol > 0.0 and s > 0.0:
+        W = _far_weight(tree.whi, node, cnt, q.S)
+        if W * math.exp(-q.alpha * (math.sqrt(bd2) - m)) <= q.tol * s:
+            delta, ux, uy, uz = box_box_offset(q.qlo, q.qhi, tree.lo, tree.hi, node)
+            if q.moment >= VERTEX_1:
+                ax, ay, az = ux * q.split, uy * q.split, uz * q.split
+            elif q.moment:
+                ax, ay, az = gap_moment(q.L, ux, uy, uz)
+            far = True
+    if not far:
+        return False, st
+    W = _far_weight(tree.whi, node, cnt, q.S)
+    m, s, gx, gy, gz, mx, my, mz = _accumulate(
+        m, s, gx, gy, gz, mx, my, mz, delta, W, W * ux, W * uy, W * uz, W * ax, W * ay, W * az,
+        q.alpha, q.moment)
+    cut = max(m + q.reach, 0.0)
+    return True, (m, s, gx, gy, gz, mx, my, mz, cut * cut, leaves + 1)
+
+
+@numba.njit(**NJIT_INLINE)
+def _prim_leaf(tree, q, node, st):
+    """A leaf's data primitives against the query primitive, exactly."""
+    if tree.left[node] >= 0:
+        return False, st
+    m, s, gx, gy, gz, mx, my, mz, cut2, leaves = st
+    kq = q.kq
+    kind = tree.kind
+    st_ = tree.start[node]
+    cnt = tree.count[node]
+    for i in range(st_, st_ + cnt):
+        k = kind[i]
+        if kq == 1 and k == 1:
+            # edges against edges: a copy of the inlined term in which the compiler knows both
+            # kinds (and keeps only that case)
+            d, W, vx, vy, vz, tx, ty, tz = _pair(kind, tree.pts, tree.wc, tree.pwhi, i, kq, q.Q,
+                                                 q.S, q.wgs, q.moment, q.cx, q.cy, q.cz, k)
+        else:
+            d, W, vx, vy, vz, tx, ty, tz = _pair(kind, tree.pts, tree.wc, tree.pwhi, i, kq, q.Q,
+                                                 q.S, q.wgs, q.moment, q.cx, q.cy, q.cz, k)
+        m, s, gx, gy, gz, mx, my, mz = _accumulate(
+            m, s, gx, gy, gz, mx, my, mz, d, W, vx, vy, vz, tx, ty, tz, q.alpha, q.moment)
+    cut = max(m + q.reach, 0.0)
+    return True, (m, s, gx, gy, gz, mx, my, mz, cut * cut, leaves + cnt)
+
+
 @numba.njit(**NJIT)
 def smooth_traverse(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, tol, moment,
                     exact_box=False):
     """The traversal of :func:`smooth_distance_primitive` and, with ``moment``,
     :func:`smoothdist._kernels.mesh_moment.smooth_moment_primitive` (one code for both, so that
-    their ``d_hat`` and gradients agree bit for bit; inlined, so that a constant ``moment`` folds).
+    their ``d_hat`` and gradients agree bit for bit).
 
     ``scratch`` holds 15 float64 (33 with ``moment``). Returns
     ``(d_hat, gx, gy, gz, mx, my, mz, nodes_visited, leaves_visited)``; the moment about the
     query's centroid is 0 without ``moment``.
 
-    The stack holds squared box-box distances; Barnes-Hut tests ``diag**2 < beta**2 d**2``, as the
-    point kernel does. The finer bound (:func:`smoothdist._kernels.box_distance.box_lower_bound`) is
-    tried only if the smallest query-vertex distance to the box could qualify the node, and that
-    only if the box-box distance plus the query box's diagonal (an upper bound of it) could: a cheap
-    test that rejects most nodes before the per-vertex one.
+    The keys are squared box-box distances; Barnes-Hut tests ``diag**2 < beta**2 d**2``, as the
+    point kernel does, and tries finer bounds only where they could help (``_barnes_hut``).
 
     ``exact_box`` (``moment`` False only): the box test off, i.e. every Barnes-Hut candidate's
     distance is the exact primitive-box distance
@@ -447,18 +571,8 @@ def smooth_traverse(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, to
     qhi = scratch[3:6]
     E = scratch[6:15]
     query_box(kq, Q, qlo, qhi)
-    l0 = qlo[0]
-    l1 = qlo[1]
-    l2 = qlo[2]
-    h0 = qhi[0]
-    h1 = qhi[1]
-    h2 = qhi[2]
-    # any query vertex is within the query box's diagonal of the box-box closest point
-    qd = math.sqrt((h0 - l0) ** 2 + (h1 - l1) ** 2 + (h2 - l2) ** 2)
-    b2 = beta * beta
-    ib = (1.0 - 1e-9) / beta if beta > 0.0 else 0.0
-    # vertex modes: a far field's gradient is split equally among the query's vertices
-    split = 1.0 / (kq + 1)
+    l0, l1, l2 = qlo[0], qlo[1], qlo[2]
+    h0, h1, h2 = qhi[0], qhi[1], qhi[2]
     cx = cy = cz = 0.0
     if moment == 1:
         L = scratch[15:33]
@@ -466,134 +580,20 @@ def smooth_traverse(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, to
         extreme_levers(kq, Q, cx, cy, cz, L)
     else:
         L = E
-    m = np.inf
-    s = 0.0
-    gx = 0.0
-    gy = 0.0
-    gz = 0.0
-    mx = 0.0
-    my = 0.0
-    mz = 0.0
-    nodes = 0
-    leaves = 0
-    lo = tree.lo
-    hi = tree.hi
-    count = tree.count
-    diag = tree.diag
-    left = tree.left
-    right = tree.right
-    start = tree.start
-    whi = tree.whi
-    # (arrays taken out of the tree once: a NamedTuple field read in the loop costs a reference
-    # count update each time)
-    kind = tree.kind
-    pts = tree.pts
-    wc = tree.wc
-    pwhi = tree.pwhi
-    # negligible-term pruning, as in the point kernel (query.negligible_reach): a node at box-box
-    # distance >= m + reach adds less than 2**-53 x n_B / N of the sum
-    reach = negligible_reach(tree, 0, S, alpha)
-    cut2 = np.inf
-    stack[0] = 0
-    dstack[0] = _box_gap2(l0, l1, l2, h0, h1, h2, lo, hi, 0)
-    sp = 1
-    while sp > 0:
-        sp -= 1
-        node = stack[sp]
-        bd2 = dstack[sp]
-        if bd2 >= cut2:
-            continue
-        nodes += 1
-        cnt = count[node]
-        far = False
-        delta = ux = uy = uz = 0.0
-        ax = ay = az = 0.0
-        if cnt > 1 and beta > 0.0:
-            dg = diag[node]
-            if exact_box and dg * dg < b2 * bd2:
-                delta, ux, uy, uz = box_distance_exact(kq, Q, lo, hi, node, E)
-                far = True
-            elif dg * dg < b2 * bd2:
-                # the box-box distance (a lower bound) already qualifies the node
-                g0 = _signed_gap(l0, h0, lo[node, 0], hi[node, 0])
-                g1 = _signed_gap(l1, h1, lo[node, 1], hi[node, 1])
-                g2 = _signed_gap(l2, h2, lo[node, 2], hi[node, 2])
-                delta = math.sqrt(g0 * g0 + g1 * g1 + g2 * g2)
-                if delta > 0.0:
-                    ux = g0 / delta
-                    uy = g1 / delta
-                    uz = g2 / delta
-                if moment >= VERTEX_1:
-                    ax, ay, az = ux * split, uy * split, uz * split
-                elif moment:
-                    ax, ay, az = gap_moment(L, ux, uy, uz)
-                far = True
-            else:
-                x = dg * ib - qd
-                if (x <= 0.0 or x * x < bd2) and dg < beta * _point_box(kq, Q, lo, hi, node):
-                    # the box distance is at most any vertex's: only then can the finer bound
-                    # help
-                    if moment == 1:
-                        delta, ux, uy, uz, ax, ay, az = box_lower_bound_moment(
-                            kq, Q, qlo, qhi, lo, hi, node, E, cx, cy, cz, L)
-                    elif exact_box:
-                        delta, ux, uy, uz = box_distance_exact(kq, Q, lo, hi, node, E)
-                    else:
-                        delta, ux, uy, uz = box_lower_bound(kq, Q, qlo, qhi, lo, hi, node, E)
-                        if moment >= VERTEX_1:
-                            ax, ay, az = ux * split, uy * split, uz * split
-                    far = dg < beta * delta
-        if not far and tol > 0.0 and s > 0.0:
-            W = _far_weight(whi, node, cnt, S)
-            if W * math.exp(-alpha * (math.sqrt(bd2) - m)) <= tol * s:
-                delta, ux, uy, uz = box_box_offset(qlo, qhi, lo, hi, node)
-                if moment >= VERTEX_1:
-                    ax, ay, az = ux * split, uy * split, uz * split
-                elif moment:
-                    ax, ay, az = gap_moment(L, ux, uy, uz)
-                far = True
-        if far:
-            W = _far_weight(whi, node, cnt, S)
-            m, s, gx, gy, gz, mx, my, mz = _accumulate(
-                m, s, gx, gy, gz, mx, my, mz, delta, W, W * ux, W * uy, W * uz, W * ax, W * ay,
-                W * az, alpha, moment)
-            leaves += 1
-            cut = max(m + reach, 0.0)
-            cut2 = cut * cut
-            continue
-        l = left[node]
-        if l < 0:
-            st = start[node]
-            for i in range(st, st + cnt):
-                k = kind[i]
-                if kq == 1 and k == 1:
-                    # edges against edges: a copy of the inlined term in which the compiler
-                    # knows both kinds (and keeps only that case)
-                    d, W, vx, vy, vz, tx, ty, tz = _pair(kind, pts, wc, pwhi, i, kq, Q, S, wgs,
-                                                         moment, cx, cy, cz, k)
-                else:
-                    d, W, vx, vy, vz, tx, ty, tz = _pair(kind, pts, wc, pwhi, i, kq, Q, S, wgs,
-                                                         moment, cx, cy, cz, k)
-                m, s, gx, gy, gz, mx, my, mz = _accumulate(
-                    m, s, gx, gy, gz, mx, my, mz, d, W, vx, vy, vz, tx, ty, tz, alpha, moment)
-            leaves += cnt
-            cut = max(m + reach, 0.0)
-            cut2 = cut * cut
-            continue
-        r = right[node]
-        dl = _box_gap2(l0, l1, l2, h0, h1, h2, lo, hi, l)
-        dr = _box_gap2(l0, l1, l2, h0, h1, h2, lo, hi, r)
-        if dl <= dr:
-            stack[sp] = r
-            dstack[sp] = dr
-            stack[sp + 1] = l
-            dstack[sp + 1] = dl
-        else:
-            stack[sp] = l
-            dstack[sp] = dl
-            stack[sp + 1] = r
-            dstack[sp + 1] = dr
-        sp += 2
+    q = _PrimitiveQuery(
+        kq, Q, qlo, qhi, E, L, l0, l1, l2, h0, h1, h2,
+        # any query vertex is within the query box's diagonal of the box-box closest point
+        math.sqrt((h0 - l0) ** 2 + (h1 - l1) ** 2 + (h2 - l2) ** 2),
+        beta, beta * beta, (1.0 - 1e-9) / beta if beta > 0.0 else 0.0,
+        # vertex modes: a far field's gradient is split equally among the query's vertices
+        1.0 / (kq + 1), cx, cy, cz, alpha, S, wgs, tol, moment, exact_box,
+        # negligible-term pruning, as in the point kernel: a node at box-box distance
+        # >= m + reach adds less than 2**-53 x n_B / N of the sum
+        negligible_reach(tree, 0, S, alpha))
+    (m, s, gx, gy, gz, mx, my, mz, _, leaves), nodes = nearest_first(
+        tree, q, (np.inf, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, np.inf, 0), stack, dstack, 0,
+        _box_gap2(l0, l1, l2, h0, h1, h2, tree.lo, tree.hi, 0), _prim_skip, _prim_far,
+        _prim_leaf, _gap_children, always)
     inv = 1.0 / s
     return (m - math.log(s) / alpha, gx * inv, gy * inv, gz * inv, mx * inv, my * inv, mz * inv,
             nodes, leaves)
@@ -651,6 +651,54 @@ def smooth_distance_brute_primitive(tree, kq, Q, alpha, S, wgs):
     return m - math.log(s) / alpha, gx / s, gy / s, gz / s
 
 
+class _PairQuery(NamedTuple):
+    """An edge or triangle query of the exact kernel: its kind, vertices (9,) and box (3,)."""
+    kq: int
+    Q: np.ndarray
+    qlo: np.ndarray
+    qhi: np.ndarray
+
+
+@numba.njit(**NJIT_INLINE)
+def _box_box_children(tree, q, node):
+    """``children`` of the exact primitive query: keyed by box-box distance."""
+    l = tree.left[node]
+    r = tree.right[node]
+    return (l, box_box_distance(q.qlo, q.qhi, tree.lo, tree.hi, l),
+            r, box_box_distance(q.qlo, q.qhi, tree.lo, tree.hi, r))
+
+
+@numba.njit(**NJIT_INLINE)
+def _gap_beyond_best(tree, q, node, key, st):
+    """Branch and bound on the box-box distance against the best squared distance."""
+    return key * key >= st[0]
+
+
+@numba.njit(**NJIT_INLINE)
+def _gap_within_best(key, st):
+    """Push a child only if its box-box distance is below the best so far."""
+    return key * key < st[0]
+
+
+@numba.njit(**NJIT_INLINE)
+def _pair_leaf(tree, q, node, st):
+    """A leaf's closest pairs; ``st = (best d2, prim, r, leaves)``."""
+    if tree.left[node] >= 0:
+        return False, st
+    best, bi, brx, bry, brz, leaves = st
+    st_ = tree.start[node]
+    cnt = tree.count[node]
+    for i in range(st_, st_ + cnt):
+        c = closest_pair(q.kq, q.Q, tree.kind[i], tree.pts[i])
+        if c[0] < best:
+            best = c[0]
+            bi = i
+            brx = c[1]
+            bry = c[2]
+            brz = c[3]
+    return True, (best, bi, brx, bry, brz, leaves + cnt)
+
+
 @numba.njit(**NJIT)
 def exact_distance_primitive(tree, kq, Q, stack, dstack, scratch, bound2=np.inf):
     """Exact distance from an edge or triangle query to the data by branch and bound.
@@ -664,58 +712,10 @@ def exact_distance_primitive(tree, kq, Q, stack, dstack, scratch, bound2=np.inf)
     qlo = scratch[0:3]
     qhi = scratch[3:6]
     query_box(kq, Q, qlo, qhi)
-    best = bound2
-    bi = -1
-    brx = 0.0
-    bry = 0.0
-    brz = 0.0
-    nodes = 0
-    leaves = 0
-    lo = tree.lo
-    hi = tree.hi
-    stack[0] = 0
-    dstack[0] = box_box_distance(qlo, qhi, lo, hi, 0)
-    sp = 1
-    while sp > 0:
-        sp -= 1
-        node = stack[sp]
-        if dstack[sp] * dstack[sp] >= best:
-            continue
-        nodes += 1
-        l = tree.left[node]
-        if l < 0:
-            st = tree.start[node]
-            for i in range(st, st + tree.count[node]):
-                c = closest_pair(kq, Q, tree.kind[i], tree.pts[i])
-                leaves += 1
-                if c[0] < best:
-                    best = c[0]
-                    bi = i
-                    brx = c[1]
-                    bry = c[2]
-                    brz = c[3]
-            continue
-        r = tree.right[node]
-        dl = box_box_distance(qlo, qhi, lo, hi, l)
-        dr = box_box_distance(qlo, qhi, lo, hi, r)
-        if dl <= dr:
-            if dr * dr < best:
-                stack[sp] = r
-                dstack[sp] = dr
-                sp += 1
-            if dl * dl < best:
-                stack[sp] = l
-                dstack[sp] = dl
-                sp += 1
-        else:
-            if dl * dl < best:
-                stack[sp] = l
-                dstack[sp] = dl
-                sp += 1
-            if dr * dr < best:
-                stack[sp] = r
-                dstack[sp] = dr
-                sp += 1
+    (best, bi, brx, bry, brz, leaves), nodes = nearest_first(
+        tree, _PairQuery(kq, Q, qlo, qhi), (bound2, -1, 0.0, 0.0, 0.0, 0), stack, dstack, 0,
+        box_box_distance(qlo, qhi, tree.lo, tree.hi, 0), _gap_beyond_best, no_far_field,
+        _pair_leaf, _box_box_children, _gap_within_best)
     if bi < 0:
         return np.inf, 0.0, 0.0, 0.0, -1, nodes, leaves
     d = math.sqrt(best)

@@ -3,8 +3,9 @@
 Three layers, as in the rest of the package:
 
 * ``primitive_term``: one primitive's distance, attenuated weight and gradient numerator;
-* ``smooth_distance_point`` / ``exact_distance_point``: one query point, an explicit stack,
-  nearest-child-first traversal (public: other njit code, e.g. the tracer, calls these);
+* ``smooth_distance_point`` / ``exact_distance_point``: one query point, the nearest-child-first
+  traversal of :mod:`smoothdist._kernels.traversal` with this module's far-field and leaf
+  functions (public: other njit code, e.g. the tracer, calls these);
 * ``*_batch``: ``prange`` over chunks of query points, one stack per chunk;
   ``*_tasks``: the same loops as serial task kernels, run from Python threads
   (:func:`smoothdist.schedule.run_tasks`; they compile in about half the time).
@@ -16,6 +17,7 @@ distance seen so far), so ``d_hat = m - log(s) / alpha`` is finite for every fin
 """
 
 import math
+from typing import NamedTuple
 
 import numba
 import numpy as np
@@ -25,6 +27,8 @@ from smoothdist._config import NJIT, NJIT_INLINE, NJIT_PARALLEL
 from smoothdist._kernels.closest_point import (SEG_INTERIOR, TRI_AB, TRI_AC, TRI_BC, TRI_INTERIOR,
                                                box_distance2, closest_point_segment,
                                                closest_point_triangle)
+from smoothdist._kernels.traversal import (always, beyond_best, nearest_first, never, no_far_field,
+                                          within_best)
 from smoothdist._kernels.weights import eval_edge_weight, eval_triangle_weight
 
 #: queries handled by one parallel task (one traversal stack each)
@@ -134,23 +138,6 @@ def primitive_term(tree, i, px, py, pz, S, wgs):
 
 
 @numba.njit(**NJIT_INLINE)
-def push_nearest_first(stack, dstack, sp, l, dl, r, dr):
-    """Push child nodes ``l`` and ``r`` (box distances ``dl``, ``dr``) onto the traversal
-    stack so that the nearer one is popped first; returns the new stack size."""
-    if dl <= dr:
-        stack[sp] = r
-        dstack[sp] = dr
-        stack[sp + 1] = l
-        dstack[sp + 1] = dl
-    else:
-        stack[sp] = l
-        dstack[sp] = dl
-        stack[sp + 1] = r
-        dstack[sp + 1] = dr
-    return sp + 2
-
-
-@numba.njit(**NJIT_INLINE)
 def logsumexp_accumulate(m, s, gx, gy, gz, d, W, vx, vy, vz, alpha):
     """Add one term to a streaming LogSumExp kept relative to a running shift ``m``.
 
@@ -169,6 +156,93 @@ def logsumexp_accumulate(m, s, gx, gy, gz, d, W, vx, vy, vz, alpha):
         m = d
     e = math.exp(-alpha * (d - m))
     return m, s + W * e, gx + e * vx, gy + e * vy, gz + e * vz
+
+
+class _PointQuery(NamedTuple):
+    """A query point and the smooth kernel's constants, as its traversal functions read them."""
+    px: float
+    py: float
+    pz: float
+    alpha: float
+    b2: float       # beta**2 (Barnes-Hut tests diag**2 < beta**2 d**2)
+    S: float
+    wgs: float
+    sa: float       # S / alpha
+    reach: float    # negligible-term pruning (negligible_reach)
+
+
+class _TolQuery(NamedTuple):
+    """A query point and the tol kernel's constants."""
+    px: float
+    py: float
+    pz: float
+    alpha: float
+    beta: float
+    S: float
+    wgs: float
+    wa: float       # the largest raw weight to the power S
+    budget: float   # tol / N
+
+
+class _ExactQuery(NamedTuple):
+    """A query point of the exact kernel; primitives at squared distance ``<= floor`` are
+    ignored."""
+    px: float
+    py: float
+    pz: float
+    floor: float
+
+
+@numba.njit(**NJIT_INLINE)
+def _box_children(tree, q, node):
+    """``children`` of the point kernels: both children, keyed by squared box distance."""
+    l = tree.left[node]
+    r = tree.right[node]
+    return (l, box_distance2(q.px, q.py, q.pz, tree.lo, tree.hi, l)[0],
+            r, box_distance2(q.px, q.py, q.pz, tree.lo, tree.hi, r)[0])
+
+
+@numba.njit(**NJIT_INLINE)
+def _smooth_skip(tree, q, node, bd2, st):
+    """Negligible-term pruning: the node is at least ``cut = m + reach`` away."""
+    return bd2 >= st[5]
+
+
+@numba.njit(**NJIT_INLINE)
+def _smooth_far(tree, q, node, bd2, st):
+    """Barnes-Hut: a node with ``diag < beta d`` (and more than one primitive) becomes
+    ``count * whi**S * exp(-alpha d)``, written ``count * exp(-alpha (d - S log(whi) / alpha))``.
+    ``st = (m, s, gx, gy, gz, cut2, leaves)``."""
+    cnt = tree.count[node]
+    dg = tree.diag[node]
+    if not (cnt > 1 and dg * dg < q.b2 * bd2):
+        return False, st
+    px, py, pz, alpha, _, _, _, sa, reach = q
+    m, s, gx, gy, gz, _, leaves = st
+    d2, cx, cy, cz = box_distance2(px, py, pz, tree.lo, tree.hi, node)
+    bd = math.sqrt(bd2)
+    f = cnt / bd
+    m, s, gx, gy, gz = logsumexp_accumulate(m, s, gx, gy, gz, bd - sa * tree.lwhi[node],
+                                            float(cnt), f * (px - cx), f * (py - cy),
+                                            f * (pz - cz), alpha)
+    cut = m + reach
+    return True, (m, s, gx, gy, gz, cut * cut, leaves + 1)
+
+
+@numba.njit(**NJIT_INLINE)
+def _smooth_leaf(tree, q, node, st):
+    """Every primitive of a leaf, exactly."""
+    if tree.left[node] >= 0:
+        return False, st
+    px, py, pz, alpha, _, S, wgs, _, reach = q
+    m, s, gx, gy, gz, _, leaves = st
+    st_ = tree.start[node]
+    cnt = tree.count[node]
+    for i in range(st_, st_ + cnt):
+        d, W, vx, vy, vz = primitive_term(tree, i, px, py, pz, S, wgs)
+        m, s, gx, gy, gz = logsumexp_accumulate(m, s, gx, gy, gz, d, W, vx, vy, vz, alpha)
+    cut = m + reach
+    return True, (m, s, gx, gy, gz, cut * cut, leaves + cnt)
 
 
 def stack_size(tree):
@@ -205,63 +279,16 @@ def smooth_distance_point(tree, px, py, pz, alpha, beta, S, wgs, stack, dstack, 
         ``leaves_visited`` counts exact primitive evaluations plus far-field nodes (the
         authors' ``num_visited``).
     """
-    m = np.inf
-    s = 0.0
-    gx = 0.0
-    gy = 0.0
-    gz = 0.0
-    nodes = 0
-    leaves = 0
-    lo = tree.lo
-    hi = tree.hi
-    sa = S / alpha
-    # the stack holds squared box distances; the square root is taken for far fields only
-    # (the test diag < beta d as diag**2 < beta**2 d**2): 3-18 % less CPU time in renders
-    b2 = beta * beta
-    # negligible-term pruning: a node whose terms are all below NEGLIGIBLE x the sum is skipped
+    # the keys are squared box distances; the square root is taken for far fields only
+    # (the test diag < beta d as diag**2 < beta**2 d**2): 3-18 % less CPU time in renders.
+    # Negligible-term pruning: a node whose terms are all below NEGLIGIBLE x the sum is skipped
     # once ``dist(p, box) >= cut = m + reach`` (see negligible_reach)
-    reach = negligible_reach(tree, root, S, alpha)
-    cut2 = np.inf
-    d2, cx, cy, cz = box_distance2(px, py, pz, lo, hi, root)
-    stack[0] = root
-    dstack[0] = d2
-    sp = 1
-    while sp > 0:
-        sp -= 1
-        node = stack[sp]
-        bd2 = dstack[sp]
-        if bd2 >= cut2:
-            continue
-        nodes += 1
-        cnt = tree.count[node]
-        dg = tree.diag[node]
-        if cnt > 1 and dg * dg < b2 * bd2:
-            d2, cx, cy, cz = box_distance2(px, py, pz, lo, hi, node)
-            bd = math.sqrt(bd2)
-            # count * whi**S * exp(-alpha bd) as count * exp(-alpha (bd - S log(whi) / alpha))
-            f = cnt / bd
-            m, s, gx, gy, gz = logsumexp_accumulate(m, s, gx, gy, gz, bd - sa * tree.lwhi[node],
-                                                    float(cnt), f * (px - cx), f * (py - cy),
-                                                    f * (pz - cz), alpha)
-            leaves += 1
-            cut = m + reach
-            cut2 = cut * cut
-            continue
-        l = tree.left[node]
-        if l < 0:
-            st = tree.start[node]
-            for i in range(st, st + cnt):
-                d, W, vx, vy, vz = primitive_term(tree, i, px, py, pz, S, wgs)
-                m, s, gx, gy, gz = logsumexp_accumulate(m, s, gx, gy, gz, d, W, vx, vy, vz,
-                                                        alpha)
-            leaves += cnt
-            cut = m + reach
-            cut2 = cut * cut
-            continue
-        r = tree.right[node]
-        dl = box_distance2(px, py, pz, lo, hi, l)[0]
-        dr = box_distance2(px, py, pz, lo, hi, r)[0]
-        sp = push_nearest_first(stack, dstack, sp, l, dl, r, dr)
+    q = _PointQuery(px, py, pz, alpha, beta * beta, S, wgs, S / alpha,
+                    negligible_reach(tree, root, S, alpha))
+    (m, s, gx, gy, gz, _, leaves), nodes = nearest_first(
+        tree, q, (np.inf, 0.0, 0.0, 0.0, 0.0, np.inf, 0), stack, dstack, root,
+        box_distance2(px, py, pz, tree.lo, tree.hi, root)[0], _smooth_skip, _smooth_far,
+        _smooth_leaf, _box_children, always)
     inv = 1.0 / s
     return m - math.log(s) / alpha, gx * inv, gy * inv, gz * inv, nodes, leaves
 
@@ -315,6 +342,99 @@ def _shift_sums(m, d, alpha, s, gx, gy, gz, s_ex, e_far, s_ref):
     return m, s * f, gx * f, gy * f, gz * f, s_ex * f, e_far * f, s_ref * f
 
 
+@numba.njit(**NJIT_INLINE)
+def _box_children_sqrt(tree, q, node):
+    """``children`` of the tol kernel: both children, keyed by box distance."""
+    l = tree.left[node]
+    r = tree.right[node]
+    return (l, math.sqrt(box_distance2(q.px, q.py, q.pz, tree.lo, tree.hi, l)[0]),
+            r, math.sqrt(box_distance2(q.px, q.py, q.pz, tree.lo, tree.hi, r)[0]))
+
+
+@numba.njit(**NJIT_INLINE)
+def _near(m, alpha, wa, budget, s_ex, n_ref):
+    """The distance below which no node can pass the tol test (docs/design-notes.md §3)."""
+    return m + math.log(wa / (budget * s_ex * (n_ref + 1))) / alpha
+
+
+@numba.njit(**NJIT_INLINE)
+def _tol_far(tree, q, node, bd, st):
+    """The tol kernel's far fields: the budget test, then Barnes-Hut (outside the budget).
+    ``st = (m, s, gx, gy, gz, s_ex, e_far, s_ref, n_cov, n_ref, near, leaves)``."""
+    px, py, pz, alpha, beta, S, wgs, wa, budget = q
+    m, s, gx, gy, gz, s_ex, e_far, s_ref, n_cov, n_ref, near, leaves = st
+    cnt = tree.count[node]
+    if s_ex > 0.0 and bd >= near:
+        W = cnt * wa
+        allow = budget * s_ex * (n_cov + cnt)
+        if bd >= m:
+            far = e_far + W * math.exp(-alpha * (bd - m)) <= allow
+        else:
+            f = math.exp(-alpha * (m - bd))
+            far = e_far * f + W <= allow * f
+        if far:
+            n_cov += cnt
+            if n_cov + 1 >= 2 * (n_ref + 1):
+                n_ref = n_cov
+                near = _near(m, alpha, wa, budget, s_ex, n_ref)
+            d2, cx, cy, cz = box_distance2(px, py, pz, tree.lo, tree.hi, node)
+            m, s, gx, gy, gz, s_ex, e_far, s_ref = _shift_sums(m, bd, alpha, s, gx, gy, gz,
+                                                               s_ex, e_far, s_ref)
+            e = math.exp(-alpha * (bd - m))
+            s += W * e
+            e_far += W * e
+            if bd > 0.0:
+                fw = W / bd
+                gx += e * (fw * (px - cx))
+                gy += e * (fw * (py - cy))
+                gz += e * (fw * (pz - cz))
+            return True, (m, s, gx, gy, gz, s_ex, e_far, s_ref, n_cov, n_ref, near, leaves + 1)
+    if tree.left[node] >= 0 and cnt > 1 and beta > 0.0 and tree.diag[node] < beta * bd:
+        # Barnes-Hut far field, count * whi**S * exp(-alpha bd)
+        d2, cx, cy, cz = box_distance2(px, py, pz, tree.lo, tree.hi, node)
+        W = float(cnt)
+        db = bd - S * tree.lwhi[node] / alpha
+        m, s, gx, gy, gz, s_ex, e_far, s_ref = _shift_sums(m, db, alpha, s, gx, gy, gz,
+                                                           s_ex, e_far, s_ref)
+        e = math.exp(-alpha * (db - m))
+        fw = W / bd
+        s += W * e
+        gx += e * (fw * (px - cx))
+        gy += e * (fw * (py - cy))
+        gz += e * (fw * (pz - cz))
+        return True, (m, s, gx, gy, gz, s_ex, e_far, s_ref, n_cov + cnt, n_ref, near,
+                      leaves + 1)
+    return False, st
+
+
+@numba.njit(**NJIT_INLINE)
+def _tol_leaf(tree, q, node, st):
+    """The tol kernel's exact terms: a leaf, or a node of at most :data:`TOL_LEAF`
+    primitives (contiguous in tree order), primitive by primitive."""
+    cnt = tree.count[node]
+    if tree.left[node] >= 0 and cnt > TOL_LEAF:
+        return False, st
+    px, py, pz, alpha, beta, S, wgs, wa, budget = q
+    m, s, gx, gy, gz, s_ex, e_far, s_ref, n_cov, n_ref, near, leaves = st
+    st_ = tree.start[node]
+    for i in range(st_, st_ + cnt):
+        d, W, vx, vy, vz = primitive_term(tree, i, px, py, pz, S, wgs)
+        m, s, gx, gy, gz, s_ex, e_far, s_ref = _shift_sums(m, d, alpha, s, gx, gy, gz, s_ex,
+                                                           e_far, s_ref)
+        e = math.exp(-alpha * (d - m))
+        s += W * e
+        s_ex += W * e
+        gx += e * vx
+        gy += e * vy
+        gz += e * vz
+    n_cov += cnt
+    if s_ex >= 2.0 * s_ref or n_cov + 1 >= 2 * (n_ref + 1):
+        s_ref = s_ex
+        n_ref = n_cov
+        near = _near(m, alpha, wa, budget, s_ex, n_ref)
+    return True, (m, s, gx, gy, gz, s_ex, e_far, s_ref, n_cov, n_ref, near, leaves + cnt)
+
+
 @numba.njit(**NJIT)
 def smooth_distance_point_tol(tree, px, py, pz, alpha, beta, tol, S, wgs, stack, dstack,
                               root=0):
@@ -336,105 +456,54 @@ def smooth_distance_point_tol(tree, px, py, pz, alpha, beta, tol, S, wgs, stack,
     if not tol > 0.0:
         return smooth_distance_point(tree, px, py, pz, alpha, beta, S, wgs, stack, dstack,
                                      root)
-    m = np.inf
-    s = 0.0
-    gx = 0.0
-    gy = 0.0
-    gz = 0.0
-    s_ex = 0.0
-    e_far = 0.0
-    n_cov = 0
     wa = tree.whi[root]
     wa = wa if (S == 1.0 or wa == 1.0) else math.exp(S * math.log(wa))
     # tol * s_ex * (n_C + n_B) / N, with the constants folded in
     budget = tol / tree.count[root]
-    # nodes closer than ``near`` cannot pass the test whatever their size (no exp for them;
-    # docs/design-notes.md §3); recomputed when s_ex or n_C + 1 has doubled since s_ref, n_ref
-    near = np.inf
-    s_ref = 0.0
-    n_ref = 0
-    nodes = 0
-    leaves = 0
-    lo = tree.lo
-    hi = tree.hi
-    d2, cx, cy, cz = box_distance2(px, py, pz, lo, hi, root)
-    stack[0] = root
-    dstack[0] = math.sqrt(d2)
-    sp = 1
-    while sp > 0:
-        sp -= 1
-        node = stack[sp]
-        bd = dstack[sp]
-        nodes += 1
-        cnt = tree.count[node]
-        if s_ex > 0.0 and bd >= near:
-            W = cnt * wa
-            allow = budget * s_ex * (n_cov + cnt)
-            if bd >= m:
-                far = e_far + W * math.exp(-alpha * (bd - m)) <= allow
-            else:
-                f = math.exp(-alpha * (m - bd))
-                far = e_far * f + W <= allow * f
-            if far:
-                n_cov += cnt
-                if n_cov + 1 >= 2 * (n_ref + 1):
-                    n_ref = n_cov
-                    near = m + math.log(wa / (budget * s_ex * (n_ref + 1))) / alpha
-                d2, cx, cy, cz = box_distance2(px, py, pz, lo, hi, node)
-                m, s, gx, gy, gz, s_ex, e_far, s_ref = _shift_sums(m, bd, alpha, s, gx, gy, gz,
-                                                                   s_ex, e_far, s_ref)
-                e = math.exp(-alpha * (bd - m))
-                s += W * e
-                e_far += W * e
-                if bd > 0.0:
-                    fw = W / bd
-                    gx += e * (fw * (px - cx))
-                    gy += e * (fw * (py - cy))
-                    gz += e * (fw * (pz - cz))
-                leaves += 1
-                continue
-        l = tree.left[node]
-        if l >= 0 and cnt > 1 and beta > 0.0 and tree.diag[node] < beta * bd:
-            # Barnes-Hut far field (outside the tol budget), count * whi**S * exp(-alpha bd)
-            d2, cx, cy, cz = box_distance2(px, py, pz, lo, hi, node)
-            W = float(cnt)
-            db = bd - S * tree.lwhi[node] / alpha
-            m, s, gx, gy, gz, s_ex, e_far, s_ref = _shift_sums(m, db, alpha, s, gx, gy, gz,
-                                                               s_ex, e_far, s_ref)
-            e = math.exp(-alpha * (db - m))
-            fw = W / bd
-            n_cov += cnt
-            s += W * e
-            gx += e * (fw * (px - cx))
-            gy += e * (fw * (py - cy))
-            gz += e * (fw * (pz - cz))
-            leaves += 1
-            continue
-        if l < 0 or cnt <= TOL_LEAF:
-            st = tree.start[node]
-            for i in range(st, st + cnt):
-                d, W, vx, vy, vz = primitive_term(tree, i, px, py, pz, S, wgs)
-                m, s, gx, gy, gz, s_ex, e_far, s_ref = _shift_sums(m, d, alpha, s, gx, gy, gz,
-                                                                   s_ex, e_far, s_ref)
-                e = math.exp(-alpha * (d - m))
-                s += W * e
-                s_ex += W * e
-                gx += e * vx
-                gy += e * vy
-                gz += e * vz
-            leaves += cnt
-            n_cov += cnt
-            if s_ex >= 2.0 * s_ref or n_cov + 1 >= 2 * (n_ref + 1):
-                s_ref = s_ex
-                n_ref = n_cov
-                near = m + math.log(wa / (budget * s_ex * (n_ref + 1))) / alpha
-            continue
-        r = tree.right[node]
-        dl = math.sqrt(box_distance2(px, py, pz, lo, hi, l)[0])
-        dr = math.sqrt(box_distance2(px, py, pz, lo, hi, r)[0])
-        sp = push_nearest_first(stack, dstack, sp, l, dl, r, dr)
+    # state: the sums (m, s, g, s_ex, e_far), the primitives dealt with (n_C), the reference
+    # sum and count of ``near`` (nodes closer than ``near`` cannot pass the test whatever their
+    # size: no exp for them, docs/design-notes.md §3; recomputed when s_ex or n_C + 1 has
+    # doubled since), ``near`` and the leaves count
+    (m, s, gx, gy, gz, _, _, _, _, _, _, leaves), nodes = nearest_first(
+        tree, _TolQuery(px, py, pz, alpha, beta, S, wgs, wa, budget),
+        (np.inf, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0, 0, np.inf, 0), stack, dstack, root,
+        math.sqrt(box_distance2(px, py, pz, tree.lo, tree.hi, root)[0]), never, _tol_far,
+        _tol_leaf, _box_children_sqrt, always)
     inv = 1.0 / s
     return m - math.log(s) / alpha, gx * inv, gy * inv, gz * inv, nodes, leaves
+
+
+@numba.njit(**NJIT_INLINE)
+def _exact_leaf(tree, q, node, st):
+    """A leaf's primitives, exactly; ``st = (best d2, prim, closest point, leaves)``;
+    primitives at squared distance ``<= q.floor`` are ignored."""
+    if tree.left[node] >= 0:
+        return False, st
+    px, py, pz, floor = q
+    best, bi, bx, by, bz, leaves = st
+    st_ = tree.start[node]
+    cnt = tree.count[node]
+    for i in range(st_, st_ + cnt):
+        k = tree.kind[i]
+        P = tree.pts[i]
+        if k == 0:
+            cx = P[0]
+            cy = P[1]
+            cz = P[2]
+        elif k == 1:
+            cx, cy, cz, t, f = closest_point_segment(px, py, pz, P[0], P[1], P[2], P[3], P[4],
+                                                     P[5])
+        else:
+            cx, cy, cz, s, t, f = closest_point_triangle(px, py, pz, P[0], P[1], P[2], P[3],
+                                                         P[4], P[5], P[6], P[7], P[8])
+        d2 = (px - cx) ** 2 + (py - cy) ** 2 + (pz - cz) ** 2
+        if floor < d2 < best:
+            best = d2
+            bi = i
+            bx = cx
+            by = cy
+            bz = cz
+    return True, (best, bi, bx, by, bz, leaves + cnt)
 
 
 @numba.njit(**NJIT)
@@ -447,71 +516,10 @@ def exact_distance_point(tree, px, py, pz, stack, dstack, root=0, floor=-1.0):
     :func:`smooth_distance_point`. Primitives at squared distance ``<= floor`` are ignored
     (``floor = 0`` finds the nearest *other* point of a point cloud queried at its own points).
     """
-    best = np.inf
-    bi = -1
-    bx = px
-    by = py
-    bz = pz
-    nodes = 0
-    leaves = 0
-    lo = tree.lo
-    hi = tree.hi
-    stack[0] = root
-    dstack[0] = box_distance2(px, py, pz, lo, hi, root)[0]
-    sp = 1
-    while sp > 0:
-        sp -= 1
-        node = stack[sp]
-        if dstack[sp] >= best:
-            continue
-        nodes += 1
-        l = tree.left[node]
-        if l < 0:
-            st = tree.start[node]
-            for i in range(st, st + tree.count[node]):
-                k = tree.kind[i]
-                P = tree.pts[i]
-                if k == 0:
-                    cx = P[0]
-                    cy = P[1]
-                    cz = P[2]
-                elif k == 1:
-                    cx, cy, cz, t, f = closest_point_segment(px, py, pz, P[0], P[1], P[2], P[3],
-                                                             P[4], P[5])
-                else:
-                    cx, cy, cz, s, t, f = closest_point_triangle(px, py, pz, P[0], P[1], P[2],
-                                                                 P[3], P[4], P[5], P[6], P[7],
-                                                                 P[8])
-                d2 = (px - cx) ** 2 + (py - cy) ** 2 + (pz - cz) ** 2
-                leaves += 1
-                if floor < d2 < best:
-                    best = d2
-                    bi = i
-                    bx = cx
-                    by = cy
-                    bz = cz
-            continue
-        r = tree.right[node]
-        dl = box_distance2(px, py, pz, lo, hi, l)[0]
-        dr = box_distance2(px, py, pz, lo, hi, r)[0]
-        if dl <= dr:
-            if dr < best:
-                stack[sp] = r
-                dstack[sp] = dr
-                sp += 1
-            if dl < best:
-                stack[sp] = l
-                dstack[sp] = dl
-                sp += 1
-        else:
-            if dl < best:
-                stack[sp] = l
-                dstack[sp] = dl
-                sp += 1
-            if dr < best:
-                stack[sp] = r
-                dstack[sp] = dr
-                sp += 1
+    (best, bi, bx, by, bz, leaves), nodes = nearest_first(
+        tree, _ExactQuery(px, py, pz, floor), (np.inf, -1, px, py, pz, 0), stack, dstack, root,
+        box_distance2(px, py, pz, tree.lo, tree.hi, root)[0], beyond_best, no_far_field,
+        _exact_leaf, _box_children, within_best)
     d = math.sqrt(best)
     if d > 0.0:
         return d, (px - bx) / d, (py - by) / d, (pz - bz) / d, tree.orig[bi], nodes, leaves

@@ -11,43 +11,66 @@ Kernels take the flat :class:`smoothdist._kernels.bvh.TreeData` arrays; the Pyth
 the probes in numpy.
 """
 
+from typing import NamedTuple
+
 import numba
 import numpy as np
 
-from smoothdist._config import NJIT
+from smoothdist._config import NJIT, NJIT_INLINE
 from smoothdist._kernels.closest_point import box_distance2
+from smoothdist._kernels.traversal import always, nearest_first, no_far_field
 from smoothdist.schedule import parallel_tasks, run_tasks
 
 __all__ = ["points_within", "gap_probes", "local_smooth_distance"]
 
 
+class _RadiusQuery(NamedTuple):
+    """A radius search: the centre, the squared radius, the output indices."""
+    px: float
+    py: float
+    pz: float
+    r2: float
+    out: np.ndarray
+
+
+@numba.njit(**NJIT_INLINE)
+def _outside_radius(tree, q, node, key, st):
+    """``skip``: the node's box is farther than the radius (the march's box kernel)."""
+    return box_distance2(q.px, q.py, q.pz, tree.lo, tree.hi, node)[0] > q.r2
+
+
+@numba.njit(**NJIT_INLINE)
+def _right_first(tree, q, node):
+    """``children`` without keys: the right child is popped first (the order in which the
+    stored neighbours of a crowded query have always been taken)."""
+    return tree.right[node], 0.0, tree.left[node], 0.0
+
+
+@numba.njit(**NJIT_INLINE)
+def _collect_points(tree, q, node, n):
+    """A leaf's point primitives at squared distance ``0 < d2 <= r2``, stored into ``q.out``;
+    the state is how many were found."""
+    if tree.left[node] >= 0:
+        return False, n
+    px, py, pz, r2, out = q
+    for i in range(tree.start[node], tree.start[node] + tree.count[node]):
+        if tree.kind[i] != 0:
+            continue
+        dd = (tree.pts[i, 0] - px) ** 2 + (tree.pts[i, 1] - py) ** 2 + (tree.pts[i, 2] - pz) ** 2
+        if 0.0 < dd <= r2:
+            if n < out.size:
+                out[n] = i
+            n += 1
+    return True, n
+
+
 @numba.njit(**NJIT)
-def _points_within_one(tree, px, py, pz, r2, out, stack):
+def _points_within_one(tree, px, py, pz, r2, out, stack, dstack):
     """Tree-order indices of point primitives at squared distance ``0 < d2 <= r2`` from
     ``(px, py, pz)`` into ``out`` (at most ``out.size``, nearest not guaranteed first);
     returns how many were found (may exceed ``out.size``: the rest are not stored)."""
-    n = 0
-    sp = 1
-    stack[0] = 0
-    while sp > 0:
-        sp -= 1
-        node = stack[sp]
-        if box_distance2(px, py, pz, tree.lo, tree.hi, node)[0] > r2:   # the march's kernel
-            continue
-        if tree.left[node] < 0:
-            for i in range(tree.start[node], tree.start[node] + tree.count[node]):
-                if tree.kind[i] != 0:
-                    continue
-                dd = ((tree.pts[i, 0] - px) ** 2 + (tree.pts[i, 1] - py) ** 2
-                      + (tree.pts[i, 2] - pz) ** 2)
-                if 0.0 < dd <= r2:
-                    if n < out.size:
-                        out[n] = i
-                    n += 1
-        else:
-            stack[sp] = tree.left[node]
-            stack[sp + 1] = tree.right[node]
-            sp += 2
+    n, _ = nearest_first(tree, _RadiusQuery(px, py, pz, r2, out), 0, stack, dstack, 0, 0.0,
+                         _outside_radius, no_far_field, _collect_points, _right_first, always)
     return n
 
 
@@ -56,9 +79,11 @@ def _points_within_tasks(tree, P, r2, out, counts, stack_len, ntasks, task0, tas
     """:func:`_points_within_one` for rows ``q = t, t + ntasks, ...`` of ``P`` for the tasks
     ``task0 <= t < task1`` (a serial task kernel, :func:`smoothdist.schedule.run_tasks`)."""
     stack = np.empty(stack_len, dtype=np.int64)
+    dstack = np.empty(stack_len)
     for task in range(task0, task1):
         for q in range(task, P.shape[0], ntasks):
-            counts[q] = _points_within_one(tree, P[q, 0], P[q, 1], P[q, 2], r2, out[q], stack)
+            counts[q] = _points_within_one(tree, P[q, 0], P[q, 1], P[q, 2], r2, out[q], stack,
+                                           dstack)
 
 
 def points_within(tree, P, radius, max_count):

@@ -31,10 +31,10 @@ import numba
 import numpy as np
 from numba import prange
 
-from smoothdist.kernels import NJIT, NJIT_PARALLEL
+from smoothdist.kernels import NJIT, NJIT_PARALLEL, borrowed
 from tracer.rendering.camera import box_corners
-from tracer.rendering.march import (NEWTON_COS, OMEGA, RELAX, _borrowed, march_ray, nearest_object,
-                          object_lower_bound, ray_box, scene_distance, visiting_order)
+from tracer.rendering.march import (NEWTON_COS, OMEGA, RELAX, march_ray, nearest_object,
+                                    object_lower_bound, ray_box, scene_distance, visiting_order)
 
 __all__ = ["Lighting", "DEFAULT_COLOR", "PALETTE", "soft_shadow", "ambient_occlusion",
            "light_points", "object_ids", "ground_height", "light_directions", "shade_lit",
@@ -228,8 +228,8 @@ def light_tasks(tree, roots, params, mode, tol, P, N, L, lo, hi, eps, depth_max,
     """Tasks ``task0 <= task < task1`` of :func:`light_points` (``ntasks`` of them), serial and
     ``nogil``, for Python threads (``tracer.rendering.threads.run_tasks``): the same values, and no
     ``prange`` to compile (a parallel loop costs numba as much again as its body)."""
-    tree = _borrowed(tree)
-    params = _borrowed(params)
+    tree = borrowed(tree)
+    params = borrowed(params)
     for task in range(task0, task1):
         _light_task(tree, roots, params, mode, tol, P, N, L, lo, hi, eps, depth_max, k, delta,
                     do_shadow, do_ao, slack, t_min, t_judge, shadow, ao, work, task, ntasks)

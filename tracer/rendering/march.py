@@ -47,11 +47,12 @@ import numba
 import numpy as np
 from numba import prange
 from numba.core import types as nbtypes
-from numba.extending import intrinsic, overload
+from numba.extending import overload
 
 from smoothdist._kernels.closest_point import box_distance2
-from smoothdist.kernels import (NJIT, NJIT_PARALLEL, exact_distance_point, logsumexp_accumulate,
-                                smooth_distance_point, smooth_distance_point_tol)
+from smoothdist.kernels import (NJIT, NJIT_PARALLEL, borrowed, exact_distance_point,
+                                logsumexp_accumulate, smooth_distance_point,
+                                smooth_distance_point_tol)
 from tracer.rendering.camera import ray_direction
 
 MODE_SMOOTH, MODE_EXACT = 0, 1
@@ -915,11 +916,11 @@ def sample_tasks(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, ro
     """Tasks ``task0 <= task < task1`` of :func:`trace_samples` (``ntasks`` of them; every
     argument is required here), serial and ``nogil``, for Python threads
     (``tracer.rendering.threads.run_tasks``): the same values, and no ``prange`` to compile."""
-    tree = _borrowed(tree)
-    params = _borrowed(params)
-    cam = _borrowed(cam)
-    lo = _borrowed(lo)
-    hi = _borrowed(hi)
+    tree = borrowed(tree)
+    params = borrowed(params)
+    cam = borrowed(cam)
+    lo = borrowed(lo)
+    hi = borrowed(hi)
     for task in range(task0, task1):
         _samples_task(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, rows, cols,
                       offsets, depth_max, hit, tbuf, grad, steps, objs, t_lo, t_hi, relax, omega,
@@ -968,34 +969,6 @@ def _samples_task(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, r
             objs[i, k] = ob
 
 
-@intrinsic
-def _borrowed(typingctx, value):
-    """``value`` (an array, or a tuple such as a ``TreeData`` holding arrays) with every array
-    replaced by a view that carries no reference count (as a ``prange`` body sees its arrays).
-
-    Only valid while the caller holds the original arrays (e.g. for the duration of a kernel
-    call). It saves the atomic reference-count updates at every call that passes an array
-    down (the tree, once per distance evaluation), about 4 % of a render's time.
-    """
-    def borrow(context, builder, ty, val):
-        if isinstance(ty, nbtypes.Array):
-            src = context.make_array(ty)(context, builder, value=val)
-            dst = context.make_array(ty)(context, builder)
-            context.populate_array(dst, data=src.data, shape=src.shape, strides=src.strides,
-                                   itemsize=src.itemsize, meminfo=None)
-            return dst._getvalue()
-        if isinstance(ty, nbtypes.BaseTuple):
-            for i, member in enumerate(ty):
-                val = builder.insert_value(
-                    val, borrow(context, builder, member, builder.extract_value(val, i)), i)
-        return val
-
-    def codegen(context, builder, signature, args):
-        return borrow(context, builder, value, args[0])
-
-    return value(value), codegen
-
-
 @numba.njit(**NJIT)
 def render_tiles(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, row0, row1,
                  depth_max, hit, tbuf, grad, steps, leaves, bisect, objs, relax, omega, cone,
@@ -1007,15 +980,15 @@ def render_tiles(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, ro
     Serial and ``nogil``: ``tracer.rendering.renderer`` runs it from a few Python threads that take
     chunks of tiles as they finish (the tiles, hence the pixels, are exactly those of
     ``render_rows``). Without ``prange`` numba compiles the render in seconds less. The tree
-    and parameters are passed down as borrowed views (``_borrowed``), as ``prange``
+    and parameters are passed down as borrowed views (``borrowed``), as ``prange``
     would.
     """
     W, ntx, n, stride = _tile_grid(cam, row0, row1)
-    tree = _borrowed(tree)
-    params = _borrowed(params)
-    cam = _borrowed(cam)
-    lo = _borrowed(lo)
-    hi = _borrowed(hi)
+    tree = borrowed(tree)
+    params = borrowed(params)
+    cam = borrowed(cam)
+    lo = borrowed(lo)
+    hi = borrowed(hi)
     for j in range(j0, min(j1, n)):
         r_lo, r_hi, c_lo, c_hi = _tile_rect(j, n, stride, ntx, row0, row1, W)
         _render_tile(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, r_lo, r_hi,
