@@ -39,6 +39,7 @@ import numba  # noqa: E402
 import smoothdist  # noqa: E402
 from smoothdist import SmoothDistanceField  # noqa: E402
 from tracer.rendering import march  # noqa: E402
+from tracer.rendering.frame import MarchArgs  # noqa: E402
 from tracer.rendering.renderer import camera_of, render, scene_arrays  # noqa: E402
 from tracer.scenes.scene import scene_from_field  # noqa: E402
 
@@ -57,9 +58,10 @@ def reference_depths(scene, stride):
     t = np.full(rows.size, np.nan)
     steps = np.zeros(rows.size, dtype=np.int64)
     leaves = np.zeros(rows.size, dtype=np.int64)
-    march.trace_pixels(tree, roots, params, mode, tol, camera_of(scene).as_array(), lo, hi,
-                       float(scene.eps), int(scene.max_steps), rows, cols, depth_max, hit, t,
-                       steps, leaves, 0.0, march.OMEGA, march.newton_distance(scene.eps, lo, hi))
+    ray = MarchArgs(roots, params, mode, tol, camera_of(scene).as_array(), lo, hi,
+                    float(scene.eps), int(scene.max_steps))
+    march.trace_pixels(tree, ray, rows, cols, depth_max, hit, t, steps, leaves, 0.0, march.OMEGA,
+                       march.newton_distance(scene.eps, lo, hi))
     return rows, cols, hit, t
 
 

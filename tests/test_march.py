@@ -24,6 +24,7 @@ import pytest
 from smoothdist import DataMesh, SmoothDistanceField
 from tracer.rendering import march
 from tracer.rendering.camera import primary_rays
+from tracer.rendering.frame import MarchArgs, SampleBuffers, TraceOptions
 from tracer.cli import main
 from tracer.image import load_png
 from tracer.rendering.renderer import camera_of, render, scene_arrays
@@ -134,10 +135,10 @@ def test_trace_pixels_equals_render(bunny_points):
     t = np.full(5, np.nan)
     steps = np.zeros(5, dtype=np.int64)
     leaves = np.zeros(5, dtype=np.int64)
-    march.trace_pixels(tree, roots, params, mode, tol, camera_of(scene).as_array(), lo, hi,
-                       float(scene.eps), int(scene.max_steps), rows, cols, depth_max, hit, t,
-                       steps, leaves, march.RELAX, march.OMEGA,
-                       march.newton_distance(scene.eps, lo, hi))
+    ray = MarchArgs(roots, params, mode, tol, camera_of(scene).as_array(), lo, hi,
+                    float(scene.eps), int(scene.max_steps))
+    march.trace_pixels(tree, ray, rows, cols, depth_max, hit, t, steps, leaves, march.RELAX,
+                       march.OMEGA, march.newton_distance(scene.eps, lo, hi))
     np.testing.assert_array_equal(hit, full.hit[rows, cols])
     np.testing.assert_array_equal(t.astype(np.float32), full.depth[rows, cols])
     np.testing.assert_array_equal(steps, full.steps[rows, cols])
@@ -457,10 +458,11 @@ def test_samples_equal_a_plain_march(bunny_points, newton):
         grad = np.zeros((m, k, 3))
         steps = np.zeros((m, k), dtype=np.int64)
         objs = np.full((m, k), -1, dtype=np.int32)
-        march.trace_samples(tree, roots, params, mode, tol, cam, lo, hi, float(scene.eps), 4000,
-                            rows, cols, np.ascontiguousarray(part), depth_max, hit, t, grad,
-                            steps, objs, t_lo, t_hi, march.RELAX, SAMPLE_OMEGA, True, nd, 0.0,
-                            SAMPLE_NEWTON_COS)
+        march.trace_samples(
+            tree, MarchArgs(roots, params, mode, tol, cam, lo, hi, float(scene.eps), 4000), rows,
+            cols, np.ascontiguousarray(part), depth_max,
+            SampleBuffers(hit, t, grad, steps, objs, t_lo, t_hi),
+            TraceOptions(march.RELAX, SAMPLE_OMEGA, True, nd), 0.0, SAMPLE_NEWTON_COS)
         assert ((objs == 0) == hit).all()           # one object: 0 at every hit, -1 elsewhere
         assert np.isfinite(t_lo).all() and np.isfinite(t_hi).all()
         ref = np.array([[_plain_first_hit(arrays, cam, rows[i] + o[0], cols[i] + o[1],

@@ -24,6 +24,8 @@ import pytest
 
 from smoothdist import DataMesh, SmoothDistanceField
 from tracer.rendering import march, renderer as render_mod
+from tracer.rendering.frame import (LightArgs, LightBuffers, MarchArgs, PixelBuffers,
+                                    SampleBuffers)
 from tracer.rendering.renderer import (RayArgs, TraceOptions, camera_of, kernel_roots, render, scene_arrays,
                            trace_tiles)
 from tracer.scenes.scene import load_scene, scene_from_field
@@ -50,7 +52,8 @@ def trace(scene, roots=None, threads=None, band=None, kernel="tiles"):
     for r0 in range(0, H, band):
         r1 = min(H, r0 + band)
         if kernel == "rows":
-            march.render_rows(*args, r0, r1, depth_max, *out, *options)
+            march.render_rows(args.tree, args.march, r0, r1, depth_max, PixelBuffers(*out),
+                              options)
         else:
             trace_tiles(args, r0, r1, depth_max, out, options, threads=threads)
     return [np.ascontiguousarray(a).tobytes() for a in out]
@@ -183,9 +186,10 @@ def test_a_plain_render_is_lean(tmp_path):
     assert not heavy & {m.split(".")[0] for m in report["modules"]}
     sigs = report["signatures"]
     # the march kernels ran with an int root (the lean path), one specialisation each
-    for name in ("tracer.rendering.march.render_tiles", "tracer.rendering.march.distance_at"):
-        assert len(sigs[name]) == 1, sigs[name]
-        assert sigs[name][0][1] == "int64", sigs[name]
+    tiles = sigs["tracer.rendering.march.render_tiles"]     # (tree, MarchArgs(roots, ...), ...)
+    assert len(tiles) == 1 and tiles[0][1].startswith("MarchArgs(int64,"), tiles
+    dist = sigs["tracer.rendering.march.distance_at"]       # (tree, roots, ...)
+    assert len(dist) == 1 and dist[0][1] == "int64", dist
     # nothing of the general path was compiled or loaded
     for name in ("tracer.rendering.march.render_rows", "tracer.rendering.march._scene_distance_posed",
                  "tracer.rendering.march.trace_pixels",
@@ -221,10 +225,13 @@ def test_a_lit_adaptive_render_is_lean(tmp_path):
     # kernels show their signatures whether compiled or loaded; callees (the query functions)
     # show only where compiled, i.e. where the cache was cold for them
     sigs = report["signatures"]
-    # samples, light and the ground probe on the lean path (an int root), one each
+    # samples, light and the ground probe on the lean path (an int root), one each; the march
+    # kernels take the roots first in their MarchArgs
     for name in ("tracer.rendering.march.render_tiles", "tracer.rendering.march.sample_tasks",
                  "tracer.rendering.lighting.light_tasks", "tracer.rendering.lighting._lowest_hit"):
-        assert len(sigs[name]) == 1 and sigs[name][0][1] == "int64", sigs.get(name)
+        assert len(sigs[name]) == 1, sigs.get(name)
+        roots = sigs[name][0][1]
+        assert roots == "int64" or roots.startswith("MarchArgs(int64,"), sigs.get(name)
     # no prange kernel (a parallel loop costs numba about as much again as its body), and
     # nothing of the general path
     for name in ("tracer.rendering.march.trace_samples", "tracer.rendering.lighting.light_points",
@@ -262,15 +269,15 @@ def test_task_kernels_equal_the_prange_kernels(name):
     rows = rng.integers(0, scene.height, m).astype(np.int64)
     cols = rng.integers(0, scene.width, m).astype(np.int64)
     off = sample_offsets(5)
-    head = (tree, roots, params, mode, tol, cam, lo, hi, float(scene.eps), 400, rows, cols, off,
-            depth_max)
-    tail = (march.RELAX, 2.0, True, march.newton_distance(scene.eps, lo, hi), 0.0, 0.02)
-    ref = _sample_outputs(m, len(off))
-    march.trace_samples(*head, *ref, *tail, 3)
+    head = (tree, MarchArgs(roots, params, mode, tol, cam, lo, hi, float(scene.eps), 400), rows,
+            cols, off, depth_max)
+    opts = TraceOptions(march.RELAX, 2.0, True, march.newton_distance(scene.eps, lo, hi))
+    ref = SampleBuffers(*_sample_outputs(m, len(off)))
+    march.trace_samples(*head, ref, opts, 0.0, 0.02, 3)
     for ntasks, threads in ((3, 1), (3, 2), (5, 3), (1, 1)):
-        got = _sample_outputs(m, len(off))
-        run_tasks(lambda a, b: march.sample_tasks(*head, *got, *tail, ntasks, a, b), ntasks,
-                  threads)
+        got = SampleBuffers(*_sample_outputs(m, len(off)))
+        run_tasks(lambda a, b: march.sample_tasks(*head, got, opts, 0.0, 0.02, ntasks, a, b),
+                  ntasks, threads)
         assert [x.tobytes() for x in got] == [x.tobytes() for x in ref], (ntasks, threads)
     # light at the hits
     hit = ref[0].ravel()
@@ -282,18 +289,18 @@ def test_task_kernels_equal_the_prange_kernels(name):
     assert n > 5
     key = np.array([0.3, 0.8, 0.52])
     key /= np.linalg.norm(key)
-    args = (tree, roots, params, mode, tol, P, N, key, lo, hi, float(scene.eps), depth_max,
-            8.0, 0.01 * scene.diagonal, True, True, 0.0, 2 * float(scene.eps),
-            20 * float(scene.eps))
+    args = (tree, roots, params, mode, tol, P, N, depth_max,
+            LightArgs(key, lo, hi, float(scene.eps), 8.0, 0.01 * scene.diagonal, True, True, 0.0,
+                      2 * float(scene.eps), 20 * float(scene.eps)))
 
     def light_out():
-        return np.ones(n), np.ones(n), np.zeros((n, 2), dtype=np.int64)
+        return LightBuffers(np.ones(n), np.ones(n), np.zeros((n, 2), dtype=np.int64))
 
     ref_l = light_out()
-    lighting.light_points(*args, *ref_l, 2)
+    lighting.light_points(*args, ref_l, 2)
     for ntasks, threads in ((2, 1), (2, 2), (4, 3)):
         got = light_out()
-        run_tasks(lambda a, b: lighting.light_tasks(*args, *got, ntasks, a, b), ntasks, threads)
+        run_tasks(lambda a, b: lighting.light_tasks(*args, got, ntasks, a, b), ntasks, threads)
         assert [x.tobytes() for x in got] == [x.tobytes() for x in ref_l], (ntasks, threads)
 
 

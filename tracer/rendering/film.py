@@ -47,6 +47,8 @@ from tracer.rendering import lighting as _lighting
 from tracer.rendering import march
 from tracer.rendering.camera import box_corners, primary_rays
 from tracer.rendering.frame import MAX_SAMPLES  # noqa: F401  (the film's limit; defined in frame)
+from tracer.rendering.frame import (LightArgs, LightBuffers, MarchArgs, SampleBuffers,
+                                    TraceOptions)
 from tracer.rendering.shading import (load_matcap, shade_headlight, shade_matcap, shade_normals,
                             view_normals)
 from tracer.rendering.threads import in_bands, run_tasks
@@ -197,10 +199,11 @@ class _Shader:
         t_min = max(2.0 * eps, _lighting.SHADOW_START * self.diag)
         t_judge = t_min if ground else _lighting.SHADOW_JUDGE * t_min
         ntasks = parallel_tasks(n)
+        light = LightArgs(self.key, lo, hi, eps, k, delta, do_shadow, do_ao, self.slack, t_min,
+                          t_judge)
+        out = LightBuffers(shadow, ao, work)
         run_tasks(lambda a, b: _lighting.light_tasks(
-            tree, roots, params, mode, tol, P, N, self.key, lo, hi, eps, depth_max, k, delta,
-            do_shadow, do_ao, self.slack, t_min, t_judge, shadow, ao, work, ntasks, a, b),
-            ntasks)
+            tree, roots, params, mode, tol, P, N, depth_max, light, out, ntasks, a, b), ntasks)
         self.queries += int(work[:, 0].sum())
         self.leaves += int(work[:, 1].sum())
         return shadow, ao
@@ -510,10 +513,12 @@ def _trace(kargs, depth_max, options, pixels, W, offsets, bounds=None, eps_px=EP
         rows, cols = np.divmod(pixels.astype(np.int64), W)
         offsets = np.ascontiguousarray(offsets, dtype=np.float64)
         ntasks = parallel_tasks(m)
+        ray = MarchArgs(roots, params, mode, tol, cam, lo, hi, eps, max_steps)
+        out = SampleBuffers(hit, t, grad, steps, objs, bounds[0], bounds[1])
+        opts = TraceOptions(relax, omega, cone, newton)
         run_tasks(lambda a, b: march.sample_tasks(
-            tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, rows, cols, offsets,
-            depth_max, hit, t, grad, steps, objs, bounds[0], bounds[1], relax, omega, cone,
-            newton, eps_px, SAMPLE_NEWTON_COS, ntasks, a, b), ntasks)
+            tree, ray, rows, cols, offsets, depth_max, out, opts, eps_px, SAMPLE_NEWTON_COS,
+            ntasks, a, b), ntasks)
     return hit.ravel(), t.ravel(), grad.reshape(-1, 3), steps.ravel(), objs.ravel()
 
 

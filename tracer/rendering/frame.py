@@ -21,7 +21,8 @@ from tracer.rendering.camera import box_corners, look_at
 from tracer.rendering.shading import (load_matcap, shade_headlight, shade_matcap, shade_normals,
                             view_normals)
 
-__all__ = ["RenderResult", "RayArgs", "TraceOptions", "SceneArrays", "scene_arrays",
+__all__ = ["RenderResult", "RayArgs", "MarchArgs", "PixelBuffers", "SampleBuffers", "LightArgs",
+           "LightBuffers",           "TraceOptions", "SceneArrays", "scene_arrays",
            "object_level", "kernel_roots", "camera_of", "distance_at_camera", "shade",
            "ProgressBar", "MAX_SAMPLES"]
 
@@ -122,9 +123,10 @@ class RenderResult(NamedTuple):
 
 
 class RayArgs(NamedTuple):
-    """The leading arguments of the march kernels (:func:`tracer.rendering.march.render_tiles`,
-    :func:`tracer.rendering.march.sample_tasks`, ...), in their order: a render passes them on with
-    ``*args``."""
+    """What the march kernels read about the scene and the camera: the tree, then
+    :class:`MarchArgs` (:attr:`march`), the kernels' first two arguments
+    (:func:`tracer.rendering.march.render_tiles`, :func:`tracer.rendering.march.sample_tasks`,
+    ...)."""
 
     tree: object
     #: the kernel form of the roots (:func:`kernel_roots`: an int on the lean path)
@@ -138,6 +140,80 @@ class RayArgs(NamedTuple):
     hi: np.ndarray
     eps: float
     max_steps: int
+
+    @property
+    def march(self):
+        """:class:`MarchArgs`: these arguments without the tree."""
+        return MarchArgs(self.roots, self.params, self.mode, self.tol, self.cam, self.lo, self.hi,
+                         self.eps, self.max_steps)
+
+
+class MarchArgs(NamedTuple):
+    """The march kernels' second argument: the scene's arrays other than the tree, the camera
+    and the march's limits (:class:`RayArgs` without the tree). Flat, with the tree passed on its
+    own: numba's parallel loops cannot take a NamedTuple that holds another."""
+
+    roots: object
+    params: np.ndarray
+    mode: int
+    tol: float
+    cam: np.ndarray
+    lo: np.ndarray
+    hi: np.ndarray
+    eps: float
+    max_steps: int
+
+
+class LightArgs(NamedTuple):
+    """The light kernels' settings (:func:`tracer.rendering.lighting.light_points`)."""
+
+    L: np.ndarray        # (3,) unit direction towards the key light
+    lo: np.ndarray       # (3,) the box the shadow rays march in (the ground included)
+    hi: np.ndarray
+    eps: float
+    k: float             # 1 / penumbra
+    delta: float         # the occlusion step, scene units
+    do_shadow: bool
+    do_ao: bool
+    slack: float         # each query may be this much below the render's own distance
+    t_min: float         # where shadow rays start ...
+    t_judge: float       # ... and judge the light (lighting.soft_shadow)
+
+
+class LightBuffers(NamedTuple):
+    """The light kernels' outputs: ``shadow (n,)``, ``ao (n,)`` and ``work (n, 2) int64``
+    (distance queries and leaves visited)."""
+
+    shadow: np.ndarray
+    ao: np.ndarray
+    work: np.ndarray
+
+
+class PixelBuffers(NamedTuple):
+    """The per-pixel outputs of the render kernels (:func:`tracer.rendering.march.render_rows`,
+    :func:`tracer.rendering.march.render_tiles`), full-image arrays."""
+
+    hit: np.ndarray      # (H, W) bool
+    tbuf: np.ndarray     # (H, W) float64, the depth along the ray
+    grad: np.ndarray     # (H, W, 3) float64, the distance's gradient at the hit
+    steps: np.ndarray    # (H, W) int64, distance evaluations
+    leaves: np.ndarray   # (H, W) int64, leaves visited
+    bisect: np.ndarray   # (H, W) int64, bisection steps
+    objs: np.ndarray     # (H, W) int32, the object each hit shows (-1: a miss)
+
+
+class SampleBuffers(NamedTuple):
+    """The outputs of the anti-aliasing sample kernels
+    (:func:`tracer.rendering.march.trace_samples`, ``sample_tasks``): ``(m, K)`` per pixel and
+    sample, and the pixels' cone bounds ``t_lo, t_hi (m,)`` (read when finite)."""
+
+    hit: np.ndarray
+    tbuf: np.ndarray
+    grad: np.ndarray     # (m, K, 3)
+    steps: np.ndarray
+    objs: np.ndarray
+    t_lo: np.ndarray
+    t_hi: np.ndarray
 
 
 class TraceOptions(NamedTuple):
@@ -278,11 +354,11 @@ def distance_at_camera(scene, arrays=None):
 
 
 def _pixel_buffers(H, W):
-    """The tracing outputs ``(hit, tbuf, grad, steps, leaves, bisect, objs)`` of an ``H x W``
-    image, cleared (see :func:`trace_tiles`)."""
-    return (np.zeros((H, W), dtype=np.bool_), np.full((H, W), np.nan), np.zeros((H, W, 3)),
-            np.zeros((H, W), dtype=np.int64), np.zeros((H, W), dtype=np.int64),
-            np.zeros((H, W), dtype=np.int64), np.full((H, W), -1, dtype=np.int32))
+    """The tracing outputs (:class:`PixelBuffers`) of an ``H x W`` image, cleared."""
+    return PixelBuffers(np.zeros((H, W), dtype=np.bool_), np.full((H, W), np.nan),
+                        np.zeros((H, W, 3)), np.zeros((H, W), dtype=np.int64),
+                        np.zeros((H, W), dtype=np.int64), np.zeros((H, W), dtype=np.int64),
+                        np.full((H, W), -1, dtype=np.int32))
 
 
 def _samples(value):

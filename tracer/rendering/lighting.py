@@ -202,43 +202,43 @@ def _ao_total(delta):
 
 
 @numba.njit(**NJIT_PARALLEL)
-def light_points(tree, roots, params, mode, tol, P, N, L, lo, hi, eps, depth_max, k, delta,
-                 do_shadow, do_ao, slack, t_min, t_judge, shadow, ao, work, ntasks=1):
+def light_points(tree, roots, params, mode, tol, P, N, depth_max, light, out, ntasks=1):
     """Shadow and occlusion at points ``P (n, 3)`` with unit normals ``N (n, 3)``.
 
-    ``L (3,)``: unit direction towards the key light; ``k = 1 / penumbra``; ``delta``: the
-    occlusion step (scene units); ``slack`` (scene units): each query may be that much below
-    the render's own distance (tolerance pruning loosened as in
-    :func:`tracer.rendering.march.scene_distance`; ``roots`` must then be an array and
-    ``tol > 0``). ``t_min``, ``t_judge``: where shadow rays start and judge the light
-    (:func:`soft_shadow`).
-    Writes ``shadow (n,)``, ``ao (n,)`` (1 where not asked for)
-    and ``work (n, 2) int64``: distance queries and leaves visited. Every point is
+    ``light`` (:class:`tracer.rendering.frame.LightArgs`): ``L (3,)`` the unit direction towards
+    the key light, ``lo, hi`` the box the shadow rays march in, ``eps``, ``k = 1 / penumbra``,
+    ``delta`` the occlusion step (scene units), ``do_shadow``, ``do_ao``, ``slack`` (scene
+    units: each query may be that much below the render's own distance, tolerance pruning
+    loosened as in :func:`tracer.rendering.march.scene_distance`; ``roots`` must then be an
+    array and ``tol > 0``), ``t_min``, ``t_judge`` (where shadow rays start and judge the
+    light, :func:`soft_shadow`). Writes ``out`` (:class:`tracer.rendering.frame.LightBuffers`):
+    ``shadow (n,)``, ``ao (n,)`` (1 where not asked for) and ``work (n, 2) int64``: distance
+    queries and leaves visited. Every point is
     independent (no dependence on threads); ``ntasks`` strided tasks share them out
     (:mod:`smoothdist.schedule`)."""
     ntasks = max(1, min(P.shape[0], ntasks))
     for task in prange(ntasks):
-        _light_task(tree, roots, params, mode, tol, P, N, L, lo, hi, eps, depth_max, k, delta,
-                    do_shadow, do_ao, slack, t_min, t_judge, shadow, ao, work, task, ntasks)
+        _light_task(tree, roots, params, mode, tol, P, N, depth_max, light, out, task, ntasks)
 
 
 @numba.njit(**NJIT)
-def light_tasks(tree, roots, params, mode, tol, P, N, L, lo, hi, eps, depth_max, k, delta,
-                do_shadow, do_ao, slack, t_min, t_judge, shadow, ao, work, ntasks, task0, task1):
+def light_tasks(tree, roots, params, mode, tol, P, N, depth_max, light, out, ntasks, task0,
+                task1):
     """Tasks ``task0 <= task < task1`` of :func:`light_points` (``ntasks`` of them), serial and
     ``nogil``, for Python threads (``tracer.rendering.threads.run_tasks``): the same values, and no
     ``prange`` to compile (a parallel loop costs numba as much again as its body)."""
     tree = borrowed(tree)
     params = borrowed(params)
+    light = borrowed(light)
     for task in range(task0, task1):
-        _light_task(tree, roots, params, mode, tol, P, N, L, lo, hi, eps, depth_max, k, delta,
-                    do_shadow, do_ao, slack, t_min, t_judge, shadow, ao, work, task, ntasks)
+        _light_task(tree, roots, params, mode, tol, P, N, depth_max, light, out, task, ntasks)
 
 
 @numba.njit(**NJIT)
-def _light_task(tree, roots, params, mode, tol, P, N, L, lo, hi, eps, depth_max, k, delta,
-                do_shadow, do_ao, slack, t_min, t_judge, shadow, ao, work, task, ntasks):
+def _light_task(tree, roots, params, mode, tol, P, N, depth_max, light, out, task, ntasks):
     """Points ``task, task + ntasks, ...`` of :func:`light_points`."""
+    L, lo, hi, eps, k, delta, do_shadow, do_ao, slack, t_min, t_judge = light
+    shadow, ao, work = out
     bias = 2.0 * eps
     n = P.shape[0]
     stack = np.empty(depth_max + 4, dtype=np.int64)

@@ -751,9 +751,12 @@ def cone_first_step(cam, r_lo, r_hi, c_lo, c_hi, t_min, D, gx, gy, gz, dx, dy, d
 
 
 @numba.njit(**NJIT)
-def _render_tile(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, r_lo, r_hi, c_lo,
-                 c_hi, depth_max, hit, tbuf, grad, steps, leaves, bisect, objs, relax, omega,
-                 cone, newton):
+def _render_tile(tree, ray, r_lo, r_hi, c_lo, c_hi, depth_max, out, opts):
+    """Trace the pixels ``r_lo <= r < r_hi, c_lo <= c < c_hi`` of one tile (see
+    :func:`render_rows`; ``tree``, ``ray``, ``out``, ``opts`` as there)."""
+    roots, params, mode, tol, cam, lo, hi, eps, max_steps = ray
+    hit, tbuf, grad, steps, leaves, bisect, objs = out
+    relax, omega, cone, newton = opts
     stack = np.empty(depth_max + 4, dtype=np.int64)
     dstack = np.empty(depth_max + 4)
     ox = cam[0]
@@ -825,29 +828,31 @@ def _tile_rect(j, n, stride, ntx, row0, row1, W):
 
 
 @numba.njit(**NJIT_PARALLEL)
-def render_rows(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, row0, row1,
-                depth_max, hit, tbuf, grad, steps, leaves, bisect, objs, relax=RELAX,
-                omega=OMEGA, cone=CONE, newton=0.0):
+def render_rows(tree, ray, row0, row1, depth_max, out, opts):
     """Trace rows ``row0 <= r < row1`` of the image into the per-pixel output arrays.
 
-    Outputs are full-image arrays: ``hit (H, W) bool``, ``tbuf (H, W) float64``,
-    ``grad (H, W, 3) float64``, ``steps``, ``leaves``, ``bisect (H, W) int64`` and ``objs (H,
-    W) int32``, the object each hit shows (its own distance the smallest at the hit; -1 where
-    the ray misses; see :func:`march_ray`). Work is split
-    into ``TILE x TILE`` tiles so that neighbouring rays share cache lines of the tree; a tile
-    is traced by one thread, so the result does not depend on the number of threads. With
-    ``cone``, a tile's rays start at its :func:`cone_start` depth and, once one of them has
-    missed after more than :data:`END_AFTER` evaluations, the later ones end at its
+    ``tree``: the scene's (forest of) trees; ``ray``:
+    :class:`tracer.rendering.frame.MarchArgs` (the rest of the scene's arrays, the camera,
+    ``eps``, ``max_steps``); ``opts``:
+    :class:`tracer.rendering.frame.TraceOptions` (``relax, omega, cone, newton``);
+    ``depth_max``: the tree's depth (stack size). ``out``
+    (:class:`tracer.rendering.frame.PixelBuffers`) holds full-image arrays: ``hit (H, W)
+    bool``, ``tbuf (H, W) float64``, ``grad (H, W, 3) float64``, ``steps``, ``leaves``,
+    ``bisect (H, W) int64`` and ``objs (H, W) int32``, the object each hit shows (its own
+    distance the smallest at the hit; -1 where the ray misses; see :func:`march_ray`).
+
+    Work is split into ``TILE x TILE`` tiles so that neighbouring rays share cache lines of the
+    tree; a tile is traced by one thread, so the result does not depend on the number of
+    threads. With ``cone``, a tile's rays start at its :func:`cone_start` depth and, once one of
+    them has missed after more than :data:`END_AFTER` evaluations, the later ones end at its
     :func:`cone_end` depth. Tiles
     are visited in a scattered order (``j * STRIDE mod n``) so that the static split of the
     loop between threads gives each thread a similar mix of empty and busy tiles.
     """
-    W, ntx, n, stride = _tile_grid(cam, row0, row1)
+    W, ntx, n, stride = _tile_grid(ray.cam, row0, row1)
     for j in prange(n):
         r_lo, r_hi, c_lo, c_hi = _tile_rect(j, n, stride, ntx, row0, row1, W)
-        _render_tile(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, r_lo, r_hi,
-                     c_lo, c_hi, depth_max, hit, tbuf, grad, steps, leaves, bisect, objs,
-                     relax, omega, cone, newton)
+        _render_tile(tree, ray, r_lo, r_hi, c_lo, c_hi, depth_max, out, opts)
 
 
 @numba.njit(**NJIT)
@@ -859,10 +864,12 @@ def distance_at(tree, roots, params, mode, tol, x, y, z, depth_max):
 
 
 @numba.njit(**NJIT_PARALLEL)
-def trace_pixels(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, rows, cols,
-                 depth_max, hit, tbuf, steps, leaves, relax=RELAX, omega=OMEGA, newton=0.0):
+def trace_pixels(tree, ray, rows, cols, depth_max, hit, tbuf, steps, leaves, relax=RELAX,
+                 omega=OMEGA, newton=0.0):
     """Trace only the pixels ``(rows[i], cols[i])`` (e.g. a subsample for an expensive
-    reference render); outputs ``hit, tbuf, steps, leaves`` have the shape of ``rows``."""
+    reference render); outputs ``hit, tbuf, steps, leaves`` have the shape of ``rows``;
+    ``tree``, ``ray`` as in :func:`render_rows`."""
+    roots, params, mode, tol, cam, lo, hi, eps, max_steps = ray
     for i in prange(rows.size):
         stack = np.empty(depth_max + 4, dtype=np.int64)
         dstack = np.empty(depth_max + 4)
@@ -878,10 +885,8 @@ def trace_pixels(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, ro
 
 
 @numba.njit(**NJIT_PARALLEL)
-def trace_samples(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, rows, cols,
-                  offsets, depth_max, hit, tbuf, grad, steps, objs, t_lo, t_hi, relax=RELAX,
-                  omega=OMEGA, cone=CONE, newton=0.0, eps_px=0.0, newton_cos=NEWTON_COS,
-                  ntasks=1):
+def trace_samples(tree, ray, rows, cols, offsets, depth_max, out, opts, eps_px=0.0,
+                  newton_cos=NEWTON_COS, ntasks=1):
     """Trace anti-aliasing samples: for pixel ``(rows[i], cols[i])`` the rays through
     ``(rows[i] + offsets[k, 0], cols[i] + offsets[k, 1])`` for every ``k``.
 
@@ -890,9 +895,11 @@ def trace_samples(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, r
     and one from beyond the box (:func:`cone_end`) bound the part of all ``K`` rays that can
     meet the surface: ``[t_lo[i], t_hi[i]]``. ``t_lo, t_hi (m,)`` are read when finite (from
     an earlier call for the same pixels: the cone passes are not repeated) and written
-    otherwise. Outputs are ``(m, K)``: ``hit`` bool, ``tbuf``, ``steps`` int64 (the cone
+    otherwise. ``out`` (:class:`tracer.rendering.frame.SampleBuffers`) holds those bounds and the
+    outputs, ``(m, K)``: ``hit`` bool, ``tbuf``, ``steps`` int64 (the cone
     passes booked on sample 0), ``objs`` int32 (the object each hit shows, -1 for a miss;
-    :func:`march_ray`), and ``grad (m, K, 3)``. Pixels are independent, so the
+    :func:`march_ray`), and ``grad (m, K, 3)``; ``tree``, ``ray`` and ``opts`` as in
+    :func:`render_rows`. Pixels are independent, so the
     result does not depend on the number of threads; ``ntasks`` strided tasks share them out
     (:mod:`smoothdist.schedule`: the flagged pixels come in image order, and their cost
     follows the silhouette).
@@ -904,34 +911,30 @@ def trace_samples(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, r
     """
     ntasks = max(1, min(rows.size, ntasks))
     for task in prange(ntasks):
-        _samples_task(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, rows, cols,
-                      offsets, depth_max, hit, tbuf, grad, steps, objs, t_lo, t_hi, relax, omega,
-                      cone, newton, eps_px, newton_cos, task, ntasks)
+        _samples_task(tree, ray, rows, cols, offsets, depth_max, out, opts, eps_px, newton_cos,
+                      task, ntasks)
 
 
 @numba.njit(**NJIT)
-def sample_tasks(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, rows, cols,
-                 offsets, depth_max, hit, tbuf, grad, steps, objs, t_lo, t_hi, relax, omega,
-                 cone, newton, eps_px, newton_cos, ntasks, task0, task1):
+def sample_tasks(tree, ray, rows, cols, offsets, depth_max, out, opts, eps_px, newton_cos,
+                 ntasks, task0, task1):
     """Tasks ``task0 <= task < task1`` of :func:`trace_samples` (``ntasks`` of them; every
     argument is required here), serial and ``nogil``, for Python threads
     (``tracer.rendering.threads.run_tasks``): the same values, and no ``prange`` to compile."""
     tree = borrowed(tree)
-    params = borrowed(params)
-    cam = borrowed(cam)
-    lo = borrowed(lo)
-    hi = borrowed(hi)
+    ray = borrowed(ray)
     for task in range(task0, task1):
-        _samples_task(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, rows, cols,
-                      offsets, depth_max, hit, tbuf, grad, steps, objs, t_lo, t_hi, relax, omega,
-                      cone, newton, eps_px, newton_cos, task, ntasks)
+        _samples_task(tree, ray, rows, cols, offsets, depth_max, out, opts, eps_px, newton_cos,
+                      task, ntasks)
 
 
 @numba.njit(**NJIT)
-def _samples_task(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, rows, cols,
-                  offsets, depth_max, hit, tbuf, grad, steps, objs, t_lo, t_hi, relax, omega,
-                  cone, newton, eps_px, newton_cos, task, ntasks):
+def _samples_task(tree, ray, rows, cols, offsets, depth_max, out, opts, eps_px, newton_cos, task,
+                  ntasks):
     """Pixels ``task, task + ntasks, ...`` of :func:`trace_samples`."""
+    roots, params, mode, tol, cam, lo, hi, eps, max_steps = ray
+    hit, tbuf, grad, steps, objs, t_lo, t_hi = out
+    relax, omega, cone, newton = opts
     pixel = 1.0 / min(cam[12], cam[13])      # a pixel's size at unit depth
     n = rows.size
     stack = np.empty(depth_max + 4, dtype=np.int64)
@@ -970,27 +973,19 @@ def _samples_task(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, r
 
 
 @numba.njit(**NJIT)
-def render_tiles(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, row0, row1,
-                 depth_max, hit, tbuf, grad, steps, leaves, bisect, objs, relax, omega, cone,
-                 newton, j0, j1):
+def render_tiles(tree, ray, row0, row1, depth_max, out, opts, j0, j1):
     """Trace tiles ``j0 <= j < j1`` of :func:`render_rows`' tile order for rows
     ``row0 <= r < row1``, in the calling thread (same arguments and outputs as
     ``render_rows``; ``relax, omega, cone, newton`` are required here).
 
     Serial and ``nogil``: ``tracer.rendering.renderer`` runs it from a few Python threads that take
     chunks of tiles as they finish (the tiles, hence the pixels, are exactly those of
-    ``render_rows``). Without ``prange`` numba compiles the render in seconds less. The tree
-    and parameters are passed down as borrowed views (``borrowed``), as ``prange``
-    would.
+    ``render_rows``). Without ``prange`` numba compiles the render in seconds less. The scene's
+    arrays are passed down as borrowed views (``borrowed``), as ``prange`` would.
     """
-    W, ntx, n, stride = _tile_grid(cam, row0, row1)
     tree = borrowed(tree)
-    params = borrowed(params)
-    cam = borrowed(cam)
-    lo = borrowed(lo)
-    hi = borrowed(hi)
+    ray = borrowed(ray)
+    W, ntx, n, stride = _tile_grid(ray.cam, row0, row1)
     for j in range(j0, min(j1, n)):
         r_lo, r_hi, c_lo, c_hi = _tile_rect(j, n, stride, ntx, row0, row1, W)
-        _render_tile(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, r_lo, r_hi,
-                     c_lo, c_hi, depth_max, hit, tbuf, grad, steps, leaves, bisect, objs,
-                     relax, omega, cone, newton)
+        _render_tile(tree, ray, r_lo, r_hi, c_lo, c_hi, depth_max, out, opts)

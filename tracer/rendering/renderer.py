@@ -15,7 +15,8 @@ import numpy as np
 
 from tracer.rendering import march
 from tracer.errors import RenderError  # noqa: F401  (defined there; imported from here too)
-from tracer.rendering.frame import (MAX_SAMPLES, ProgressBar, RayArgs, RenderResult,  # noqa: F401
+from tracer.rendering.frame import (MAX_SAMPLES, PixelBuffers, ProgressBar, RayArgs,  # noqa: F401
+                                    RenderResult,
                           SceneArrays, TraceOptions, _pixel_buffers, _posed, _progress_callback,
                           _samples, camera_of, distance_at_camera, kernel_roots, object_level,
                           scene_arrays, shade)
@@ -171,7 +172,8 @@ def trace_tiles(args, row0, row1, depth_max, outputs, options, report=None, thre
     """Trace image rows ``row0 <= r < row1`` into ``outputs``.
 
     ``args`` (:class:`~tracer.rendering.frame.RayArgs`) and
-    ``outputs = (hit, tbuf, grad, steps, leaves, bisect, objs)`` as for
+    ``outputs`` (:class:`~tracer.rendering.frame.PixelBuffers`, or the same arrays in a tuple) as
+    for
     :func:`tracer.rendering.march.render_rows`, ``options``
     (:class:`~tracer.rendering.frame.TraceOptions`). ``threads`` Python threads (default
     :func:`~tracer.rendering.threads.render_threads`) take chunks of tiles
@@ -186,6 +188,7 @@ def trace_tiles(args, row0, row1, depth_max, outputs, options, report=None, thre
     from tracer.rendering.march import TILE, render_tiles
 
     W = int(args.cam[12])
+    outputs = PixelBuffers(*outputs)
     n = -(-W // TILE) * -(-(row1 - row0) // TILE)
     threads = max(1, min(threads or render_threads(), n))
     chunk = max(1, n // (CHUNKS_PER_THREAD * threads))
@@ -201,7 +204,8 @@ def trace_tiles(args, row0, row1, depth_max, outputs, options, report=None, thre
                     if j >= n or state["stop"]:
                         return
                     state["next"] = j + chunk
-                render_tiles(*args, row0, row1, depth_max, *outputs, *options, j, j + chunk)
+                render_tiles(args.tree, args.march, row0, row1, depth_max, outputs, options, j,
+                             j + chunk)
                 with lock:
                     state["done"] += min(chunk, n - j)
         except BaseException as exc:  # handed to the calling thread
