@@ -50,6 +50,9 @@ __all__ = [
 
 #: Number of values in :meth:`Camera.as_array`.
 CAMERA_ARRAY_SIZE = 14
+#: entries of that array: the origin at 0-2 (then forward, horizontal, vertical), and the
+#: image's width and height in pixels
+CAM_WIDTH, CAM_HEIGHT = 12, 13
 
 #: ``|forward x up| / |up|`` (the sine of the angle between them) below which ``up`` counts as
 #: parallel to the view direction.
@@ -123,8 +126,8 @@ class Camera(NamedTuple):
         out[3:6] = self.forward
         out[6:9] = self.horizontal
         out[9:12] = self.vertical
-        out[12] = self.width
-        out[13] = self.height
+        out[CAM_WIDTH] = self.width
+        out[CAM_HEIGHT] = self.height
         return out
 
 
@@ -235,8 +238,8 @@ def ray_direction(cam, row, col):
         Unit world-space direction ``normalize(forward + dx horizontal + dy vertical)`` with
         ``dx = scale_x (col / W - 0.5)``, ``dy = scale_y ((H - 1 - row) / H - 0.5)``.
     """
-    width = cam[12]
-    height = cam[13]
+    width = cam[CAM_WIDTH]
+    height = cam[CAM_HEIGHT]
     sx, sy = _scales(width, height)
     dx = (col / width - 0.5) * sx
     dy = ((height - 1.0 - row) / height - 0.5) * sy

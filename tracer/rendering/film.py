@@ -45,7 +45,7 @@ import numpy as np
 from smoothdist.schedule import parallel_tasks
 from tracer.rendering import lighting as _lighting
 from tracer.rendering import march
-from tracer.rendering.camera import box_corners, primary_rays
+from tracer.rendering.camera import CAM_HEIGHT, CAM_WIDTH, box_corners, primary_rays
 from tracer.rendering.frame import MAX_SAMPLES  # noqa: F401  (the film's limit; defined in frame)
 from tracer.rendering.frame import (LightArgs, LightBuffers, MarchArgs, SampleBuffers,
                                     TraceOptions)
@@ -785,7 +785,7 @@ def _dir(cam, rows, cols):
     :func:`tracer.rendering.camera.ray_direction`)."""
     from tracer.rendering.camera import _scales
 
-    width, height = cam[12], cam[13]
+    width, height = cam[CAM_WIDTH], cam[CAM_HEIGHT]
     sx, sy = _scales(width, height)
     dx = (cols / width - 0.5) * sx
     dy = ((height - 1.0 - rows) / height - 0.5) * sy

@@ -28,7 +28,7 @@ import numpy as np
 from smoothdist import cuda as sdcuda
 from smoothdist.kernels import NJIT
 from tracer.rendering import march
-from tracer.rendering.camera import ray_direction
+from tracer.rendering.camera import CAM_HEIGHT, CAM_WIDTH, ray_direction
 
 __all__ = ["render_cuda", "normal_colour", "BLOCK"]
 
@@ -116,7 +116,8 @@ def _tile_of(cam, ty, tx):
     """Pixel rectangle ``(r_lo, r_hi, c_lo, c_hi)`` of tile ``(ty, tx)`` (``march.TILE``
     square, clipped to the image)."""
     T = march.TILE
-    return (ty * T, min(int(cam[13]), (ty + 1) * T), tx * T, min(int(cam[12]), (tx + 1) * T))
+    return (ty * T, min(int(cam[CAM_HEIGHT]), (ty + 1) * T), tx * T,
+            min(int(cam[CAM_WIDTH]), (tx + 1) * T))
 
 
 def _render_kernel(data, mode, tol, eps, max_steps, relax, omega, newton, cone, cone_n, hit,

@@ -53,7 +53,7 @@ from smoothdist._kernels.closest_point import box_distance2
 from smoothdist.kernels import (NJIT, NJIT_PARALLEL, borrowed, exact_distance_point,
                                 logsumexp_accumulate, smooth_distance_point,
                                 smooth_distance_point_tol)
-from tracer.rendering.camera import ray_direction
+from tracer.rendering.camera import CAM_HEIGHT, CAM_WIDTH, ray_direction
 
 MODE_SMOOTH, MODE_EXACT = 0, 1
 #: columns of the per-object parameter table ``params`` (see the module docstring); numba
@@ -810,7 +810,7 @@ def _render_tile(tree, ray, r_lo, r_hi, c_lo, c_hi, depth_max, out, opts):
 def _tile_grid(cam, row0, row1):
     """Tiles of rows ``row0 <= r < row1``: ``(image width, tiles per row, number of tiles,
     stride of the scattered visiting order)``."""
-    W = int(cam[12])
+    W = int(cam[CAM_WIDTH])
     ntx = (W + TILE - 1) // TILE
     n = ntx * ((row1 - row0 + TILE - 1) // TILE)
     return W, ntx, n, (STRIDE if n % STRIDE != 0 else 1)
@@ -935,7 +935,7 @@ def _samples_task(tree, ray, rows, cols, offsets, depth_max, out, opts, eps_px, 
     roots, params, mode, tol, cam, lo, hi, eps, max_steps = ray
     hit, tbuf, grad, steps, objs, t_lo, t_hi = out
     relax, omega, cone, newton = opts
-    pixel = 1.0 / min(cam[12], cam[13])      # a pixel's size at unit depth
+    pixel = 1.0 / min(cam[CAM_WIDTH], cam[CAM_HEIGHT])      # a pixel's size at unit depth
     n = rows.size
     stack = np.empty(depth_max + 4, dtype=np.int64)
     dstack = np.empty(depth_max + 4)

@@ -14,6 +14,7 @@ import time
 import numpy as np
 
 from tracer.rendering import march
+from tracer.rendering.camera import CAM_WIDTH
 from tracer.errors import RenderError  # noqa: F401  (defined there; imported from here too)
 from tracer.rendering.frame import (MAX_SAMPLES, PixelBuffers, ProgressBar, RayArgs,  # noqa: F401
                                     RenderResult,
@@ -187,7 +188,7 @@ def trace_tiles(args, row0, row1, depth_max, outputs, options, report=None, thre
     """
     from tracer.rendering.march import TILE, render_tiles
 
-    W = int(args.cam[12])
+    W = int(args.cam[CAM_WIDTH])
     outputs = PixelBuffers(*outputs)
     n = -(-W // TILE) * -(-(row1 - row0) // TILE)
     threads = max(1, min(threads or render_threads(), n))
