@@ -106,6 +106,18 @@ def test_the_readme_quotes_the_files():
     assert sum(r["hit_differs"] for r in rows) <= 1      # "with the same image"
 
 
+def test_the_traversal_loop_cold_start_comparison_follows_its_file():
+    """The performance guide's before/after first-render ranges of issue 33 (one traversal
+    loop) are those of ``coldstart_traversal_ab.json``."""
+    text = _flat(_guide())
+    runs = _load("coldstart_traversal_ab.json")["runs"]
+    for case, words in (("mesh", "the mesh file"), ("cloud", "the point cloud"),
+                        ("lit", "the lit render")):
+        before = [r["cases"][case]["cold_wall_s"] for r in runs if r["code"] == "before"]
+        after = [r["cases"][case]["cold_wall_s"] for r in runs if r["code"] == "after"]
+        assert f"{words} {_range(before, '.1f')} -> {_range(after, '.1f')}" in text, case
+
+
 def test_the_cold_start_paragraph_follows_the_files():
     text = _flat(_guide())
     cases = _load("coldstart.json")["cases"]
