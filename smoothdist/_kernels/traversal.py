@@ -93,24 +93,17 @@ def nearest_first(tree, q, state, stack, dstack, root, key0, skip, approximate, 
         if done:
             continue
         a, ka, b, kb = children(tree, q, node)
-        if ka <= kb:
-            if keep(kb, state):
-                stack[sp] = b
-                dstack[sp] = kb
-                sp += 1
-            if keep(ka, state):
-                stack[sp] = a
-                dstack[sp] = ka
-                sp += 1
-        else:
-            if keep(ka, state):
-                stack[sp] = a
-                dstack[sp] = ka
-                sp += 1
-            if keep(kb, state):
-                stack[sp] = b
-                dstack[sp] = kb
-                sp += 1
+        if ka > kb:
+            a, ka, b, kb = b, kb, a, ka
+        # the farther child first, so that the nearer one is popped next
+        if keep(kb, state):
+            stack[sp] = b
+            dstack[sp] = kb
+            sp += 1
+        if keep(ka, state):
+            stack[sp] = a
+            dstack[sp] = ka
+            sp += 1
     return state, nodes
 
 
