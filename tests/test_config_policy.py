@@ -7,7 +7,8 @@
 * Every numba decoration or call (``numba.njit``, ``njit``, ``numba.jit``, ...) takes its
   options from ``**NJIT``, ``**NJIT_PARALLEL`` or ``**NJIT_INLINE`` (``NJIT`` plus
   ``forceinline``) and nothing else, so that every kernel is cached (``cache=True``) and
-  compiled with the same flags.
+  compiled with the same flags; ``**NJIT_GENERIC`` (``NJIT_INLINE`` without the cache) is for
+  the generic traversal functions, which are inlined into cached kernels.
 """
 
 import ast
@@ -25,7 +26,8 @@ CONFIG = ROOT / "smoothdist" / "_config.py"
 FORBIDDEN = ("fastmath", "parallel", "error_model")
 NUMBA_DECORATORS = {"njit", "jit", "generated_jit", "vectorize", "guvectorize", "cfunc",
                     "stencil", "jit_module"}
-ALLOWED_OPTIONS = {"NJIT", "NJIT_PARALLEL", "NJIT_INLINE"}
+#: NJIT_GENERIC: NJIT_INLINE without the cache, for the generic traversal loop (see _config)
+ALLOWED_OPTIONS = {"NJIT", "NJIT_PARALLEL", "NJIT_INLINE", "NJIT_GENERIC"}
 
 
 def sources():

@@ -140,3 +140,70 @@ def test_every_node_is_visited_without_pruning_and_far_fields_count_whole_boxes(
     assert (full[:, 1] == 2 * len(P) - 1).all()     # never skips, opens every inner node
     assert (pruned[:, 1] < full[:, 1]).all()
     assert truth.max() > 50                          # the far field was exercised
+
+
+KIND = '''
+from typing import NamedTuple
+
+import numba, numpy as np
+from smoothdist import SmoothDistanceField
+from smoothdist._kernels.closest_point import box_distance2
+from smoothdist._kernels.traversal import always, nearest_first, never, no_far_field
+
+
+class Query{tag}(NamedTuple):
+    x: float
+    y: float
+    z: float
+
+
+@numba.njit(inline="always")
+def children(tree, q, node):
+    l = tree.left[node]
+    r = tree.right[node]
+    return (l, box_distance2(q.x, q.y, q.z, tree.lo, tree.hi, l)[0],
+            r, box_distance2(q.x, q.y, q.z, tree.lo, tree.hi, r)[0])
+
+
+@numba.njit(inline="always")
+def count_leaf(tree, q, node, n):
+    if tree.left[node] >= 0:
+        return False, n
+    return True, n + tree.count[node]
+
+
+@numba.njit
+def count(tree, stack, dstack):
+    q = Query{tag}(0.0, 0.0, 0.0)
+    return nearest_first(tree, q, 0, stack, dstack, 0, 0.0, never, no_far_field, count_leaf,
+                         children, always)[0]
+
+
+tree = SmoothDistanceField(np.random.default_rng(0).random((50, 3))).tree
+k = tree.depth + 4
+assert count(tree, np.empty(k, np.int64), np.empty(k)) == 50
+'''
+
+
+def test_a_kind_in_another_module_leaves_no_cache_entry_behind(tmp_path):
+    """A query kind written in a module of its own (a script, a notebook, a test) compiles the
+    loop for its types; the loop is not cached, so another process that cannot import that
+    module still compiles its own kinds (a cached loop's index named the first module's
+    types, and reading it failed with ModuleNotFoundError)."""
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = str(Path(__file__).resolve().parents[1])
+    (tmp_path / "mine").mkdir()
+    (tmp_path / "mine" / "user_kind.py").write_text(KIND.format(tag="A"))
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"),
+               PYTHONPATH=os.pathsep.join([str(tmp_path / "mine"), root]))
+    first = subprocess.run([sys.executable, "-c", "import user_kind"], env=env,
+                           capture_output=True, text=True, cwd=root)
+    assert first.returncode == 0, first.stderr[-2000:]
+    env["PYTHONPATH"] = root                       # user_kind is not importable here
+    second = subprocess.run([sys.executable, "-c", KIND.format(tag="B")], env=env,
+                            capture_output=True, text=True, cwd=root)
+    assert second.returncode == 0, second.stderr[-2000:]

@@ -22,7 +22,9 @@ passes five ``njit`` functions (``NJIT_INLINE``, so that they compile into the l
 query (a tuple of scalars and arrays), ``state`` a tuple of scalars (running sums, the best so
 far, counters) that the functions return updated; ``node`` an int64. numba compiles one copy of
 the loop per set of functions (a function passed as an argument is part of the type), inside
-the kernel that calls it, so each kernel's on-disk cache holds its own specialisation.
+the kernel that calls it, so each kernel's on-disk cache holds its own specialisation. The loop
+and the generic functions here are not cached themselves (``NJIT_GENERIC``): their signatures
+name the caller's types, which another process may not be able to import.
 
 Ties (``key_a == key_b``) pop ``a`` first.
 """
@@ -31,7 +33,7 @@ import numba
 from numba.core import types
 from numba.extending import intrinsic
 
-from smoothdist._config import NJIT_INLINE
+from smoothdist._config import NJIT_GENERIC
 
 
 @intrinsic
@@ -62,7 +64,7 @@ def borrowed(typingctx, value):
     return value(value), codegen
 
 
-@numba.njit(**NJIT_INLINE)
+@numba.njit(**NJIT_GENERIC)
 def nearest_first(tree, q, state, stack, dstack, root, key0, skip, approximate, leaf, children,
                   keep):
     """Traverse ``tree`` from ``root`` (key ``key0``) for query ``q``.
@@ -107,32 +109,32 @@ def nearest_first(tree, q, state, stack, dstack, root, key0, skip, approximate, 
     return state, nodes
 
 
-@numba.njit(**NJIT_INLINE)
+@numba.njit(**NJIT_GENERIC)
 def never(tree, q, node, key, state):
     """``skip`` of kinds that prune nothing on pop."""
     return False
 
 
-@numba.njit(**NJIT_INLINE)
+@numba.njit(**NJIT_GENERIC)
 def no_far_field(tree, q, node, key, state):
     """``approximate`` of exact kinds: no node is replaced."""
     return False, state
 
 
-@numba.njit(**NJIT_INLINE)
+@numba.njit(**NJIT_GENERIC)
 def always(key, state):
     """``keep`` of kinds that push both children."""
     return True
 
 
-@numba.njit(**NJIT_INLINE)
+@numba.njit(**NJIT_GENERIC)
 def beyond_best(tree, q, node, key, state):
     """``skip`` of branch and bound: the node is no nearer than the best so far, ``state[0]``
     (in the keys' units)."""
     return key >= state[0]
 
 
-@numba.njit(**NJIT_INLINE)
+@numba.njit(**NJIT_GENERIC)
 def within_best(key, state):
     """``keep`` of branch and bound: a child nearer than the best so far, ``state[0]``."""
     return key < state[0]
