@@ -553,13 +553,7 @@ def _code_leaf(et, q, code, st):
     c = -1 - code
     first = c >> 4
     for i in range(first, first + (c & 15)):
-        k = et.kind[i]
-        if k == 2:
-            d2 = _triangle_d2(px, py, pz, et.pts, et.gram, i)
-        elif k == 1:
-            d2 = _segment_d2(px, py, pz, et.pts, et.gram, i)
-        else:
-            d2 = (px - et.pts[i, 0]) ** 2 + (py - et.pts[i, 1]) ** 2 + (pz - et.pts[i, 2]) ** 2
+        d2 = primitive_d2(et.kind, et.pts, et.gram, i, px, py, pz)
         leaves += 1
         if d2 < best:
             best = d2

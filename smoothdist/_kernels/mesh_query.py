@@ -462,14 +462,8 @@ def _barnes_hut(tree, q, node, bd2):
         delta, ux, uy, uz = box_distance_exact(kq, Q, lo, hi, node, q.E)
         far = True
     elif dg * dg < q.b2 * bd2:
-        g0 = signed_gap(q.l0, q.h0, lo[node, 0], hi[node, 0])
-        g1 = signed_gap(q.l1, q.h1, lo[node, 1], hi[node, 1])
-        g2 = signed_gap(q.l2, q.h2, lo[node, 2], hi[node, 2])
-        delta = math.sqrt(g0 * g0 + g1 * g1 + g2 * g2)
-        if delta > 0.0:
-            ux = g0 / delta
-            uy = g1 / delta
-            uz = g2 / delta
+        # the box-box distance (a lower bound) already qualifies the node
+        delta, ux, uy, uz = box_box_offset(q.qlo, q.qhi, lo, hi, node)
         if moment >= VERTEX_1:
             ax, ay, az = ux * q.split, uy * q.split, uz * q.split
         elif moment:
