@@ -415,6 +415,22 @@ def read_mesh_file(path):
     return V, E, T, ext == ".stl"
 
 
+def needs_trimesh(path):
+    """Whether :func:`read_mesh_file` reads ``path`` with trimesh (STL, PLY, glTF, binary OFF),
+    without reading more than an OFF file's first bytes. False for the formats our own readers
+    handle and for a file it rejects before (missing, a folder, empty, unknown format)."""
+    path = os.fspath(path)
+    ext = os.path.splitext(path)[1].lower()
+    if ext not in MESH_EXTENSIONS or ext in (".obj", ".xyz"):
+        return False
+    try:
+        if not os.path.isfile(path) or os.path.getsize(path) == 0:
+            return False
+        return ext != ".off" or not _is_ascii_off(path)
+    except OSError:  # unreadable: read_mesh_file says so
+        return False
+
+
 class _MeshFileError(Exception):
     """A malformed mesh file detected by our own readers (message ready for the user)."""
 

@@ -1,8 +1,9 @@
 """The command line's layout: one pattern for every sub-command, and packages that depend
 downwards only.
 
-* every module of ``tracer.cli.COMMANDS`` exposes ``HELP``, ``add_arguments`` and ``run``, and
-  its ``HELP`` is read from the source (``tracer --help`` imports no command module);
+* every module of ``tracer.cli.COMMANDS`` exposes ``HELP``, ``add_arguments``, ``needs`` (the
+  optional packages it imports, checked before ``run``) and ``run``, and its ``HELP`` is read
+  from the source (``tracer --help`` imports no command module);
 * the simulator (``tracer/sim``) and the shared modules (``tracer.runner``, ``tracer.outputs``,
   ``tracer.validate``) import nothing of ``tracer.studies``.
 """
@@ -25,7 +26,7 @@ def test_every_command_module_has_help_add_arguments_and_run(name):
     spec = cli._available()[name]
     module = importlib.import_module(spec.name)
     assert isinstance(module.HELP, str) and module.HELP and "\n" not in module.HELP
-    assert callable(module.add_arguments) and callable(module.run)
+    assert callable(module.add_arguments) and callable(module.run) and callable(module.needs)
     assert cli._help(spec) == module.HELP
 
 

@@ -408,6 +408,36 @@ def test_ascii_off_reader_on_the_bunny():
     np.testing.assert_array_equal(T, T2)
 
 
+def test_needs_trimesh_says_which_files_trimesh_reads(tmp_path, monkeypatch):
+    """``needs_trimesh`` (the command line checks for trimesh before any work with it) is True
+    exactly for the files that ``read_mesh_file`` hands to trimesh."""
+    from smoothdist import mesh as mesh_mod
+
+    calls = []
+
+    def trimesh_reader(path, ext):
+        calls.append(path)
+        raise ImportError("not read here")
+
+    monkeypatch.setattr(mesh_mod, "_read_with_trimesh", trimesh_reader)
+    files = {"m.obj": "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "m.xyz": "0 0 0\n1 0 0\n",
+             "m.off": "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
+             "b.off": "OFF BINARY\n3 1 0\n", "m.ply": "ply\n", "m.stl": "solid m\n",
+             "m.glb": "glTF", "m.gltf": "{}", "empty.stl": "", "m.txt": "text"}
+    for name, text in files.items():
+        write(tmp_path / name, text)
+    (tmp_path / "folder.ply").mkdir()
+    for name in [*files, "folder.ply", "missing.ply"]:
+        calls.clear()
+        try:
+            mesh_mod.read_mesh_file(tmp_path / name)
+        except (ImportError, ValueError):
+            pass
+        assert mesh_mod.needs_trimesh(tmp_path / name) == bool(calls), name
+    assert mesh_mod.needs_trimesh(tmp_path / "m.ply") and not mesh_mod.needs_trimesh(
+        tmp_path / "m.off")
+
+
 @pytest.mark.parametrize("text,word", [
     ("OFF\n3 1 0\n0 0 0\n1 0 0\n", "vertices announced"),
     ("OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", "faces announced"),

@@ -20,7 +20,8 @@ mapping is honest:
   (smaller images, grids and repeats) to the commands it recognises, then runs this
   interpreter. Nothing else about the command changes.
 * :data:`SETUP_REWRITES`: the quick start's venv and pip steps are dropped (CI's ``.ci/run``
-  has just done exactly them) and ``.venv/bin/python`` is the shim.
+  has just made the venv and installed the ``test`` extra, which holds the quick start's
+  ``tracer`` extra) and ``.venv/bin/python`` is the shim.
 * :data:`PLACEHOLDERS`: names the pages use for "your file" (``SCENE.json``, ``DIR``, ...)
   become concrete files. A synopsis (a command with ``[optional]`` parts) is run without its
   optional parts, and every option it lists must appear in the command's ``--help``.
@@ -106,7 +107,7 @@ SHIM = textwrap.dedent('''\
 
 SETUP_REWRITES = [
     ('python3 -m venv .venv && ', ''),
-    ('.venv/bin/pip install -q -e ".[test]" && ', ''),
+    ('.venv/bin/pip install -q -e ".[tracer]" && ', ''),
     ('.venv/bin/python ', 'python '),
 ]
 

@@ -12,7 +12,11 @@ exposes
 * ``HELP = "..."``: its one-line help, on one line at the module's top level (``tracer --help``
   reads it from the module's source, without importing the module);
 * ``add_arguments(parser)``: its options;
-* ``run(args) -> int``: the command itself (its exit status).
+* ``run(args) -> int``: the command itself (its exit status);
+* optionally ``needs(args)``: the optional packages (top-level module names, the keys of
+  :data:`EXTRA_OF`) the command will import with these arguments. :func:`main` looks for them
+  right after parsing, before ``run`` does any work, so that a missing extra is reported at once
+  (``error: this command needs pillow, ...``), not after a render of minutes.
 
 A command's module is imported only when that command runs, so that ``tracer render`` does not
 pay for importing pyvista or matplotlib. The error class, option checks and output helpers the
@@ -146,6 +150,26 @@ def _missing_package(exc):
     return f"{_one_line(exc)} (pip install 'smoothdist[all]' installs every optional package)"
 
 
+def installed(name):
+    """Whether the top-level package ``name`` can be imported, without importing it."""
+    try:
+        return importlib.util.find_spec(name) is not None
+    except ValueError:  # imported already, without a spec
+        return True
+    except ImportError:  # a finder refuses it
+        return False
+
+
+def check_needs(module, args):
+    """Raise ``ModuleNotFoundError`` for the first package of the command module's
+    ``needs(args)`` that is not installed; :func:`main` reports it as any failed import
+    (:func:`_missing_package`)."""
+    needs = getattr(module, "needs", None)
+    for name in needs(args) if needs is not None else ():
+        if not installed(name):
+            raise ModuleNotFoundError(f"No module named {name!r}", name=name)
+
+
 def _install(signum, handler):
     try:
         return signal.signal(signum, handler)
@@ -219,7 +243,9 @@ def _run(argv):
             raise CLIError(f"--threads must be between 1 and {numba.config.NUMBA_NUM_THREADS}, "
                            f"got {args.threads}")
         numba.set_num_threads(args.threads)
-    return int(importlib.import_module(args._module).run(args) or 0)
+    module = importlib.import_module(args._module)
+    check_needs(module, args)
+    return int(module.run(args) or 0)
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -200,6 +200,22 @@ def input_kind(path):
                    f"file ({', '.join(MESH_EXTENSIONS)})")
 
 
+def needs(args):
+    """The optional packages this render imports (:mod:`tracer.cli` checks them first):
+    matplotlib for ``--steps-png`` / ``--leaves-png``, Pillow for the PNG, trimesh for a mesh
+    file (given, or named by the scene file) that our own readers do not read."""
+    from smoothdist.mesh import needs_trimesh
+    from tracer.scenes.scene import mesh_paths
+
+    out = ["matplotlib"] if args.steps_png or args.leaves_png else []
+    out.append("PIL")
+    ext = os.path.splitext(args.scene)[1].lower()
+    files = [args.scene] if ext in MESH_EXTENSIONS else mesh_paths(args.scene)
+    if any(needs_trimesh(p) for p in files):
+        out.append("trimesh")
+    return out
+
+
 def run(args):
     """Render; returns the exit status."""
     from tracer.image import false_color, save_npy, save_png

@@ -38,6 +38,7 @@ import sys
 import time
 import uuid
 
+from tracer.compiling import COMPILING, Eta
 from tracer.outputs import CLIError, csv_value, write_csv
 
 #: below this estimated serial cost (seconds) ``--scheduler local`` runs in-process
@@ -94,6 +95,16 @@ def check_arguments(args):
     if sched not in ("local", "serial"):
         check_reachable(sched)
     return sched, workers
+
+
+def needs(args):
+    """``["distributed"]`` when ``--scheduler``/``--workers`` ask for a Dask cluster whatever
+    the run's size (an address, or ``--workers``), else ``[]`` (``local`` alone may run
+    in-process: :func:`choose_mode`). For a command's ``needs`` (:mod:`tracer.cli`)."""
+    sched = getattr(args, "scheduler", "local") or "local"
+    if sched == "serial" or (sched == "local" and getattr(args, "workers", None) is None):
+        return []
+    return ["distributed"]
 
 
 def check_reachable(address, timeout=CONNECT_TIMEOUT):
@@ -212,7 +223,9 @@ class StudyProgress:
     in-process task reports its own progress to (``done, total, elapsed`` like
     :class:`tracer.rendering.frame.ProgressBar`); ``finish(w, line)`` marks a task done and logs a
     line, ``fail(w, line)`` marks it failed. On a terminal the bar redraws in place; in a log it
-    prints one line per finished task.
+    prints one line per finished task. While numba compiles in this process (in-process tasks)
+    the bar says so, and the ETA counts only the progress made after the compilation
+    (:class:`tracer.compiling.Eta`).
     """
 
     def __init__(self, label, total_weight, n_tasks=None, stream=None, quiet=False):
@@ -227,17 +240,19 @@ class StudyProgress:
         self.quiet = quiet
         self.tty = getattr(self.stream, "isatty", lambda: False)()
         self._last = 0.0
+        self.eta = Eta()
 
     def _text(self, frac):
         elapsed = time.perf_counter() - self.t0
-        eta = elapsed * (1 - frac) / frac if frac > 1e-9 else float("nan")
+        eta = self.eta.left(min(frac, 1.0), elapsed)
         bar = "#" * int(30 * min(frac, 1.0))
-        eta_s = "?" if not math.isfinite(eta) else duration(eta)
+        eta_s = "?" if eta is None or not math.isfinite(eta) else duration(eta)
         count = f"{self.n_done}/{self.n_tasks} done" if self.n_tasks else f"{self.n_done} done"
         if self.n_failed:
             count += f", {self.n_failed} failed"
+        left = COMPILING if self.eta.compiling else f"~{eta_s} left"
         return (f"{self.label} [{bar:<30}] {100 * min(frac, 1.0):5.1f}% {count}, "
-                f"{duration(elapsed)} elapsed, ~{eta_s} left")
+                f"{duration(elapsed)} elapsed, {left}")
 
     def _draw(self, frac, force=False):
         if self.quiet or not self.tty:
@@ -252,6 +267,11 @@ class StudyProgress:
     def item(self, weight):
         def cb(done, total, elapsed):
             self._draw((self.done + weight * done / max(total, 1)) / self.total)
+
+        def waiting(elapsed):  # nothing done yet (tracer.render): numba compiling?
+            if self.eta.compiling:
+                self._draw(self.done / self.total)
+        cb.waiting = waiting
         return cb
 
     def finish(self, weight, line="", failed=False):

@@ -702,6 +702,17 @@ def add_arguments(p):
     p.add_argument("-q", "--quiet", action="store_true", help="no summary line")
 
 
+def needs(args):
+    """The optional packages of a comparison (:mod:`tracer.cli` checks them first): pyvista for
+    the isosurface, matplotlib for the figure, Pillow for the PNGs, trimesh for the scene's mesh
+    files that our own readers do not read."""
+    from smoothdist.mesh import needs_trimesh
+    from tracer.scenes.scene import mesh_paths
+
+    out = ["pyvista", "matplotlib", "PIL"]
+    return out + (["trimesh"] if any(map(needs_trimesh, mesh_paths(args.scene))) else [])
+
+
 def run(args):
     """Compare; returns the exit status (0, or 2 with one ``error:`` line)."""
     from tracer.image import save_png

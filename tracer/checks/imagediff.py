@@ -23,7 +23,7 @@ from typing import NamedTuple
 
 from tracer.outputs import CLIError, check_outputs
 
-__all__ = ["DiffVerdict", "check_images", "HELP", "add_arguments", "run"]
+__all__ = ["DiffVerdict", "check_images", "HELP", "add_arguments", "needs", "run"]
 
 HELP = "compare two images; non-zero exit beyond a tolerance"
 
@@ -122,6 +122,12 @@ def add_arguments(p):
                         "(default: not checked)")
     p.add_argument("--overwrite", action="store_true", help="replace an existing DIFF.png")
     p.add_argument("-q", "--quiet", action="store_true", help="print nothing; exit status only")
+
+
+def needs(args):
+    """Pillow reads the images, matplotlib colours the heat map that every comparison makes
+    (:func:`tracer.image.compare_images`); :mod:`tracer.cli` checks them first."""
+    return ["matplotlib", "PIL"]
 
 
 def run(args):

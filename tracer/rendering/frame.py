@@ -16,6 +16,7 @@ from typing import NamedTuple
 import numpy as np
 
 from smoothdist.kernels import DEFAULT_TOL, concatenate_trees
+from tracer.compiling import COMPILING, Eta
 from tracer.rendering import march
 from tracer.rendering.camera import box_corners, look_at
 from tracer.rendering.shading import (load_matcap, shade_headlight, shade_matcap, shade_normals,
@@ -394,31 +395,56 @@ def shade(scene, camera, normals, hit, matcap=None):
 
 
 class ProgressBar:
-    """A dependency-free text progress bar with an ETA, written to ``stream`` (stderr)."""
+    """A dependency-free text progress bar with an ETA, written to ``stream`` (stderr).
 
-    def __init__(self, label, stream=None, min_seconds=0.5):
+    While numba compiles the kernels (the first run on a machine) it says
+    ``compiling kernels (once per machine)`` with the seconds elapsed, and its ETA counts only
+    the progress made after the compilation (:class:`tracer.compiling.Eta`). ``eta``: an
+    :class:`~tracer.compiling.Eta` to use (default: one on the process's compile watch).
+    """
+
+    def __init__(self, label, stream=None, min_seconds=0.5, eta=None):
         self.label = label
         self.stream = stream or sys.stderr
         self.min_seconds = min_seconds
         self.shown = False
+        self.eta = eta or Eta()
+        self._frac = 0.0
+        self._step = None  # logs: (quarter, compiling) of the last line written
 
     def __call__(self, done, total, elapsed):
         """Update with ``done`` of ``total`` units after ``elapsed`` seconds."""
+        self._frac = done / max(total, 1)
+        self._show(elapsed, done >= total)
+
+    def waiting(self, elapsed):
+        """Nothing done yet after ``elapsed`` seconds (:func:`tracer.render` calls it while its
+        tiles wait for their kernel): shown while numba compiles it."""
+        if self.eta.compiling:
+            self._show(elapsed, False)
+
+    def text(self, elapsed):
+        """The bar's line after ``elapsed`` seconds."""
+        left = self.eta.left(self._frac, elapsed)
+        if self.eta.compiling:
+            return f"{self.label} {COMPILING}, {elapsed:6.1f}s elapsed"
+        left = "?" if left is None else f"{left:5.1f}"
+        return (f"{self.label} [{'#' * int(30 * self._frac):<30}] {100 * self._frac:5.1f}% "
+                f"{elapsed:6.1f}s elapsed, ~{left}s left")
+
+    def _show(self, elapsed, last):
+        line = self.text(elapsed)  # also when not shown: the ETA sees every update
         if elapsed < self.min_seconds and not self.shown:
             return
-        frac = done / max(total, 1)
         tty = getattr(self.stream, "isatty", lambda: False)()
         if not tty:
-            # logs: one line per quarter instead of carriage-return animation
-            quarter = int(4 * frac)
-            if self.shown and quarter == getattr(self, "_quarter", -1):
+            # logs: one line per quarter, and when a compilation starts or ends
+            step = (int(4 * self._frac), self.eta.compiling)
+            if self.shown and step == self._step:
                 return
-            self._quarter = quarter
+            self._step = step
         self.shown = True
-        eta = elapsed * (1 - frac) / frac if frac > 0 else float("inf")
-        bar = "#" * int(30 * frac)
-        self.stream.write(f"{chr(13) if tty else ''}{self.label} [{bar:<30}] {100 * frac:5.1f}% "
-                          f"{elapsed:6.1f}s elapsed, ~{eta:5.1f}s left")
-        if done >= total or not tty:
+        self.stream.write(("\r\033[K" if tty else "") + line)
+        if last or not tty:
             self.stream.write("\n")
         self.stream.flush()

@@ -52,7 +52,8 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
     progress : bool, callable(done_pixels, total_pixels, elapsed_s) or None
         A callable is called a few times a second while tracing, and at the end; ``True``
         shows a text progress bar on stderr (:class:`~tracer.rendering.frame.ProgressBar`); ``None``
-        or ``False``: none.
+        or ``False``: none. A callable with a ``waiting(elapsed_s)`` method (a ``ProgressBar``)
+        is told so while nothing is traced yet: the first render compiles the kernels then.
     band_rows : int, optional
         Trace the image in bands of this many rows, one after the other (default: one band;
         the image does not depend on it when it is a multiple of ``tracer.rendering.march.TILE``).
@@ -122,7 +123,7 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
         report = None
         if progress is not None:
             def report(done, r0=r0):
-                progress(r0 * W + done, H * W, time.perf_counter() - t0)
+                _report(progress, done and r0 * W + done, H * W, time.perf_counter() - t0)
         trace_tiles(args, r0, r1, depth_max, (hit, tbuf, grad, steps, leaves, bis, objs),
                     options, report)
     normals = np.empty_like(grad)
@@ -158,6 +159,16 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
                         scene=scene, alpha=alpha, samples=spp, aovs=aovs)
 
 
+def _report(progress, done, total, elapsed):
+    """``progress(done, total, elapsed)`` once something is done (a callable sees ``done > 0``
+    only); before that ``progress.waiting(elapsed)`` where it has one (a ProgressBar: the first
+    render's tiles wait for numba to compile their kernel)."""
+    if done:
+        progress(done, total, elapsed)
+    elif hasattr(progress, "waiting"):
+        progress.waiting(elapsed)
+
+
 #: a render's tiles are taken by the threads in chunks of ``1 / CHUNKS_PER_THREAD`` of a
 #: thread's share (at least one tile). The chunks follow the scattered tile order of
 #: ``tracer.rendering.march.render_rows``, so each is a sample of the whole image and costs about
@@ -183,7 +194,8 @@ def trace_tiles(args, row0, row1, depth_max, outputs, options, report=None, thre
     drew cheap tiles takes more; every tile is traced by one thread start to finish, so the
     result does not depend on the number of threads or the chunking (it equals
     ``render_rows``'). ``report(done_pixels)`` is called from the calling thread a few times
-    a second and at the end. Ctrl-C (KeyboardInterrupt) stops the workers after their
+    a second (with 0 while no chunk is done: the first one waits for its kernel to compile)
+    and at the end. Ctrl-C (KeyboardInterrupt) stops the workers after their
     current chunk and is re-raised.
     """
     from tracer.rendering.march import TILE, render_tiles
@@ -222,7 +234,7 @@ def trace_tiles(args, row0, row1, depth_max, outputs, options, report=None, thre
         for t in workers:
             while t.is_alive():
                 t.join(REPORT_SECONDS)
-                if report is not None and t.is_alive() and state["done"]:
+                if report is not None and t.is_alive():
                     report(pixels * state["done"] // n)
     except BaseException:
         with lock:

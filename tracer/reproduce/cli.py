@@ -92,6 +92,21 @@ def write_report(out, page=None, shown_as=None):
     return text
 
 
+def needs(args):
+    """The optional packages of the experiments to run
+    (:data:`tracer.reproduce.experiments.NEEDS`) and distributed for a cluster; none for
+    ``--report-only``. :mod:`tracer.cli` checks them before anything runs."""
+    if args.report_only:
+        return []
+    from tracer.reproduce.experiments import EXPERIMENTS, NEEDS
+
+    pick = {s.strip() for s in (args.only or "").split(",")}
+    names = [n for n in EXPERIMENTS if not args.only or n in pick]
+    serial = (args.quick or args.smoke) and args.scheduler == "local"  # as run() decides
+    out = [p for n in names for p in NEEDS[n]] + ([] if serial else runner.needs(args))
+    return list(dict.fromkeys(out))
+
+
 def run(args):
     from tracer.reproduce.experiments import EXPERIMENTS, SETTINGS, merge_table3, provenance
 

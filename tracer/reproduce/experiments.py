@@ -676,3 +676,10 @@ def gpu(out, s, where):
 EXPERIMENTS = {"underestimate": underestimate, "table3": table3, "grid": grid,
                "bh_switch": bh_switch, "box_test": box_test, "gpu": gpu, "beta": beta,
                "alpha": alpha}
+#: name -> the optional packages the experiment imports (``tracer reproduce`` checks them
+#: before it runs anything): the studies' plots and images, the simulator's solver, trimesh
+#: for the PLY scans (the lion, the Autzen tile), the generated icospheres and Thingi10K's STLs
+NEEDS = {"underestimate": (), "table3": ("scipy", "trimesh"),
+         "grid": ("matplotlib", "PIL", "trimesh"), "bh_switch": ("matplotlib", "PIL", "trimesh"),
+         "box_test": ("trimesh",), "gpu": (), "beta": ("matplotlib", "PIL"),
+         "alpha": ("matplotlib", "PIL", "trimesh")}

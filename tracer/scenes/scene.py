@@ -176,6 +176,26 @@ def read_scene_json(path):
     return read_json(path, "scene")
 
 
+def mesh_paths(path):
+    """The files a scene file's objects and parts name as ``path``, resolved against its folder
+    as :func:`load_scene` resolves them, without checking anything else; ``[]`` for a file that
+    cannot be read or parsed (:func:`load_scene` says why)."""
+    try:
+        data = read_scene_json(path)
+    except (ValueError, RecursionError):
+        return []
+    base = os.path.dirname(os.path.abspath(path))
+    objects = data.get("objects") if isinstance(data, dict) else None
+    out = []
+    for od in objects if isinstance(objects, list) else []:
+        parts = od.get("parts") if isinstance(od, dict) else None
+        for part in [od] + (parts if isinstance(parts, list) else []):
+            p = part.get("path") if isinstance(part, dict) else None
+            if isinstance(p, str) and p:
+                out.append(os.path.normpath(os.path.join(base, os.path.expanduser(p))))
+    return out
+
+
 def load_scene(path, overrides=None):
     """Read, validate and build a scene.
 

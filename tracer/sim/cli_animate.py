@@ -15,7 +15,7 @@ import os
 import sys
 
 from tracer.outputs import CLIError
-from tracer.sim.frames import add_frame_arguments, check_frame_arguments
+from tracer.sim.frames import add_frame_arguments, check_frame_arguments, frame_needs
 
 HELP = "render a simulated trajectory to PNG frames, MP4 and GIF"
 
@@ -28,6 +28,13 @@ def add_arguments(p):
     p.add_argument("--sim", metavar="SIM.json", help="the simulation file (default: the one "
                    "recorded in the trajectory)")
     add_frame_arguments(p, "frame")
+
+
+def needs(args):
+    """The optional packages (:mod:`tracer.cli` checks them first): scipy (the trajectory
+    module imports the solver) and what the movie needs
+    (:func:`tracer.sim.frames.frame_needs`)."""
+    return ["scipy"] + frame_needs(args)
 
 
 def run(args):

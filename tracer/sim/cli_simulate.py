@@ -15,7 +15,7 @@ import os
 import sys
 
 from tracer.outputs import CLIError, at_least
-from tracer.sim.frames import add_frame_arguments, check_frame_arguments
+from tracer.sim.frames import add_frame_arguments, check_frame_arguments, frame_needs
 
 HELP = "simulate rigid bodies with one smooth-distance constraint"
 
@@ -33,6 +33,14 @@ def add_arguments(p):
                         "of each primitive's force (the authors' simulator); default: the "
                         "file's \"torques\", else exact")
     add_frame_arguments(p, "step")
+
+
+def needs(args):
+    """The optional packages (:mod:`tracer.cli` checks them first): scipy for the solver, and
+    what the movie needs unless ``--no-render`` (:func:`tracer.sim.frames.frame_needs`).
+    Bodies built with trimesh (icospheres, boxes) import it when the file is read, before the
+    first step."""
+    return ["scipy"] + ([] if args.no_render else frame_needs(args))
 
 
 def run(args):

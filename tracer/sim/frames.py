@@ -49,6 +49,13 @@ def check_frame_arguments(args):
     return runner.check_arguments(args)
 
 
+def frame_needs(args):
+    """The optional packages of rendering the frames to a movie (for the commands' ``needs``,
+    checked by :mod:`tracer.cli` before any work): imageio and its ffmpeg for the MP4, Pillow
+    for the PNGs and the GIF, distributed for a cluster (:func:`tracer.runner.needs`)."""
+    return ["imageio", "imageio_ffmpeg"] + runner.needs(args) + ["PIL"]
+
+
 def list_tasks(sim_path, traj_path, frames_dir, indices, size=None):
     """One task per frame index in ``indices``; frame ``n`` of the movie is
     ``frames_dir/frame_NNNNN.png`` (``n`` its position in ``indices``)."""

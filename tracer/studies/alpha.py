@@ -29,7 +29,8 @@ from tracer.outputs import (CLIError, check_size, float_list, non_negative, outp
                             positive, write_bytes, write_json, write_text)
 from tracer.runner import duration
 from tracer.studies.common import (REPO, TYPES, add_common, add_view_arguments, field_of,
-                                   load_mesh, resolve_view, unweighted_field, view_camera)
+                                   load_mesh, resolve_view, study_needs, unweighted_field,
+                                   view_camera)
 from tracer.studies.plots import pyplot
 
 HELP = "the paper's alpha studies as image grids"
@@ -45,6 +46,9 @@ _OCTOPUS = ("scenes/data/meshes/octopus_low.obj",
             ((0.034, 0.049, 2.0), (0.034, 0.049, 0.082), (0.0, 1.0, 0.0)))
 _TORUS = ("scenes/data/meshes/torus.obj",
           ((0.0, -3.6, 2.6), (0.0, 0.0, 0.0), (0.0, 0.0, 1.0)))
+#: the data each study reads without ``--mesh`` (for :func:`needs`)
+_DATA = {"underestimate": (_LION,), "exact-smooth": (_LION,), "weights": (_CAPILLARY, _OCTOPUS),
+         "metric": (_TORUS,), "attenuate": (_OCTOPUS,)}
 
 #: per study: default alphas, and the factors of the mesh's auto alpha used with --mesh
 STUDY_DEFAULTS = {
@@ -118,6 +122,14 @@ def study_task(task):
                 seconds=round(time.perf_counter() - t0, 2), image=f"{_slug(task['study'])}.png")
     return {"png": panel_grid_png(panels, info["title"]), "info": info,
             "panels": f"{len(panels)}x{max(len(r) for r in panels)}"}
+
+
+def needs(args):
+    """The optional packages of the studies (:func:`tracer.studies.common.study_needs`; the
+    lion scan of underestimate and exact-smooth is a PLY file, read by trimesh)."""
+    studies = STUDIES if args.study == "all" else (args.study,)
+    files = [args.mesh] if args.mesh else [REPO / d[0] for s in studies for d in _DATA[s]]
+    return study_needs(args, files)
 
 
 def run(args):

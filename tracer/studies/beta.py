@@ -42,7 +42,7 @@ from tracer.outputs import (CLIError, check_size, float_list, output_folder, pos
 from tracer.runner import duration
 from tracer.studies.common import (TYPES, add_common, add_view_arguments, beta_tag,
                                    cached_field, close, is_paper_bunny, load_mesh, parse_types,
-                                   resolve_view, view_camera)
+                                   resolve_view, study_needs, view_camera)
 
 HELP = "the paper's beta ablation: time and error vs beta"
 
@@ -274,6 +274,11 @@ def reduce(out, cache, log, params, types, grid_betas):
 
 
 # =============================================================================== command
+def needs(args):
+    """The optional packages of the study (:func:`tracer.studies.common.study_needs`)."""
+    return study_needs(args, [args.mesh])
+
+
 def run(args):
     """Run the beta ablation; returns the exit status (1 when a task failed)."""
     sched, workers = runner.check_arguments(args)

@@ -21,7 +21,7 @@ from tracer import runner
 from tracer.outputs import (CLIError, at_least, non_negative, output_folder, positive, write_csv,
                             write_json)
 from tracer.runner import duration, file_stamp
-from tracer.studies.common import REPO, add_common, load_mesh, machine_info
+from tracer.studies.common import REPO, add_common, load_mesh, machine_info, study_needs
 from tracer.studies.plots import PAPER_BH
 
 HELP = "Barnes-Hut near/far switch discontinuity study"
@@ -208,6 +208,12 @@ def reduce(out, records, summary, scale):
     write_json(out / "bh_switch.json", summary)
     bh_plot(out / "bh_switch.png", rows, summary)
     return summary
+
+
+def needs(args):
+    """The optional packages of the study (:func:`tracer.studies.common.study_needs`; the
+    default cloud is a PLY file, read by trimesh)."""
+    return study_needs(args, [args.cloud or str(DEFAULT_CLOUD)])
 
 
 def run(args):

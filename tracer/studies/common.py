@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from tracer.outputs import CLIError
-from tracer.runner import file_stamp
+from tracer.runner import file_stamp, needs as cluster_needs
 
 #: repository root (``tracer/studies/../..``)
 REPO = Path(__file__).resolve().parents[2]
@@ -69,6 +69,17 @@ def add_view_arguments(p, default):
     p.add_argument("--up", choices=("auto",) + UP_AXES,
                    help="the data's up axis for --view, as in tracer render (auto = z for .stl "
                    "and .ply, y otherwise); given alone, it implies --view front")
+
+
+def study_needs(args, meshes=()):
+    """A study's ``needs`` (:mod:`tracer.cli` checks them before any work): matplotlib and
+    Pillow for its plots and images, distributed for a cluster
+    (:func:`tracer.runner.needs`), trimesh when one of the mesh files ``meshes`` is a format
+    our own readers do not read."""
+    from smoothdist.mesh import needs_trimesh
+
+    out = ["matplotlib"] + cluster_needs(args) + ["PIL"]
+    return out + (["trimesh"] if any(needs_trimesh(m) for m in meshes) else [])
 
 
 def resolve_view(args, mesh):

@@ -24,7 +24,7 @@ from tracer import runner
 from tracer.outputs import CLIError, non_negative, output_folder, positive, write_json
 from tracer.runner import duration, file_stamp
 from tracer.studies.common import (REPO, TYPE_LETTER, TYPES, add_common, machine_info,
-                                   parse_types)
+                                   parse_types, study_needs)
 
 HELP = "the paper's Thingi10K grid benchmark over a folder"
 
@@ -167,6 +167,13 @@ def reduce(out, log, params):
     write_json(out / "bench_grid.json", params)
     bench_plots(out, ok, params)
     return ok, skipped, failed
+
+
+def needs(args):
+    """The optional packages of the benchmark (:func:`tracer.studies.common.study_needs`, for
+    the mesh files in the folder)."""
+    folder = Path(args.folder) if args.folder else DEFAULT_FOLDER
+    return study_needs(args, mesh_files(folder) if folder.is_dir() else [])
 
 
 def run(args):
