@@ -12,7 +12,8 @@ Inside a kernel, allocate ``np.empty(tree.depth + 4, np.int64)`` and ``np.empty(
 tolerance-controlled pruning (``tol > 0``; same scratch arrays; ``DEFAULT_TOL`` = 0 is off).
 
 Your own kernels take the package's compilation policy from here, so that they are compiled
-(and cached) like these: decorate them ``@numba.njit(**NJIT)``, or
+(and cached) like these: decorate them ``@numba.njit(**NJIT)``, ``@numba.njit(**NJIT_IR_INLINE)`` for functions
+merged into their callers (no compiled library of their own: a traversal kind, a task body), or
 ``@numba.njit(**NJIT_PARALLEL)`` for batch loops over ``prange``; ``PARALLEL`` is false under
 ``SMOOTHDIST_PARALLEL=0`` (see ``smoothdist/_config.py``). ``borrowed(tree)`` inside a kernel
 gives the tree (or any array, or tuple of arrays) as views without reference counts, for
@@ -21,7 +22,7 @@ loops that pass it down at every step; valid while the kernel's caller holds the
 
 import numpy as np
 
-from smoothdist._config import NJIT, NJIT_PARALLEL, PARALLEL
+from smoothdist._config import NJIT, NJIT_IR_INLINE, NJIT_PARALLEL, PARALLEL
 from smoothdist._kernels.bvh import TreeData, concatenate_trees
 from smoothdist._kernels.query import (DEFAULT_TOL, exact_distance_point, logsumexp_accumulate,
                                        smooth_distance_point, smooth_distance_point_tol, stack_size)
@@ -29,7 +30,8 @@ from smoothdist._kernels.traversal import borrowed
 
 __all__ = ["TreeData", "concatenate_trees", "exact_distance_point", "logsumexp_accumulate",
            "smooth_distance_point", "smooth_distance_point_tol", "new_stack", "stack_size",
-           "DEFAULT_TOL", "NJIT", "NJIT_PARALLEL", "PARALLEL", "borrowed"]
+           "DEFAULT_TOL", "NJIT", "NJIT_IR_INLINE", "NJIT_PARALLEL", "PARALLEL",
+           "borrowed"]
 
 
 def new_stack(tree):

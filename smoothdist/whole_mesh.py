@@ -40,7 +40,7 @@ from smoothdist.convert import is_foreign_geometry
 from smoothdist.field import SmoothDistanceField
 from smoothdist.mesh import DataMesh, as_data_mesh
 from smoothdist._kernels.query import DEFAULT_TOL
-from smoothdist.schedule import parallel_tasks
+from smoothdist.schedule import parallel_tasks, run_tasks
 
 
 #: query meshes with fewer primitives than this run on the calling thread (a parallel launch
@@ -108,6 +108,18 @@ def as_query_mesh(query, name="query"):
     return QueryMesh(np.ascontiguousarray(V, dtype=np.float64),
                      np.ascontiguousarray(np.concatenate(kinds)),
                      np.ascontiguousarray(np.concatenate(idx), dtype=np.int64))
+
+
+def _run_tasks(kernel, m, serial_below, *args):
+    """Run the serial task kernel ``kernel(*args, ntasks, task0, task1)`` over ``m`` query
+    primitives: on the calling thread below ``serial_below`` (one task), else one strided task
+    per thread on the persistent worker threads (:func:`smoothdist.schedule.run_tasks`). The
+    values do not depend on the split."""
+    if m < serial_below:
+        kernel(*args, 1, 0, 1)
+        return
+    ntasks = parallel_tasks(m)
+    run_tasks(lambda a, b: kernel(*args, ntasks, a, b), ntasks, pool=True)
 
 
 def _as_field(data, leaf_size):
@@ -332,15 +344,15 @@ class MeshDistance:
         g = np.empty((m, 3))
         nodes = np.empty(m, dtype=np.int64)
         leaves = np.empty(m, dtype=np.int64)
-        if m < SERIAL_BELOW["smooth"]:
-            _mq.smooth_distance_primitives_serial(
-                self.field.tree, self.query.kind, pts, self.alpha, self.beta, self.S, self.wgs,
-                method == "brute", d, g, nodes, leaves, self.tol, not self.box_test)
+        if method == "brute":
+            _mq.smooth_distance_primitives_brute(self.field.tree, self.query.kind, pts,
+                                                 self.alpha, self.S, self.wgs, d, g)
+            nodes[:] = 0
+            leaves[:] = self.field.tree.kind.size
         else:
-            _mq.smooth_distance_primitives(
-                self.field.tree, self.query.kind, pts, self.alpha, self.beta, self.S, self.wgs,
-                method == "brute", d, g, nodes, leaves, self.tol, parallel_tasks(m),
-                not self.box_test)
+            _run_tasks(_mq.smooth_distance_primitive_tasks, m, SERIAL_BELOW["smooth"],
+                       self.field.tree, self.query.kind, pts, self.alpha, self.beta, self.S,
+                       self.wgs, d, g, nodes, leaves, self.tol, not self.box_test)
         self.last_stats = (nodes, leaves)
         return d, g
 
@@ -381,9 +393,13 @@ class MeshDistance:
         d = np.empty(m)
         g = np.empty((m, 3))
         Gp = np.empty((m, 3, 3))
-        _mm.smooth_vertex_primitives(self.field.tree, q.kind, pts, self.alpha, self.beta, self.S,
-                                     self.wgs, method == "brute", d, g, Gp, self.tol,
-                                     parallel_tasks(m))
+        if method == "brute":
+            _mm.smooth_vertex_primitives_brute(self.field.tree, q.kind, pts, self.alpha,
+                                               self.beta, self.S, self.wgs, d, g, Gp)
+        else:
+            _run_tasks(_mm.smooth_vertex_primitive_tasks, m, SERIAL_BELOW["smooth"],
+                       self.field.tree, q.kind, pts, self.alpha, self.beta, self.S, self.wgs, d,
+                       g, Gp, self.tol)
         dmin = d.min()
         e = np.exp(-self.alpha_q * (d - dmin))
         w = e / e.sum()
@@ -410,14 +426,15 @@ class MeshDistance:
         mo = np.empty((m, 3))
         nodes = np.empty(m, dtype=np.int64)
         leaves = np.empty(m, dtype=np.int64)
-        if m < SERIAL_BELOW["smooth"]:
-            _mm.smooth_moment_primitives_serial(
-                self.field.tree, self.query.kind, pts, self.alpha, self.beta, self.S, self.wgs,
-                method == "brute", d, g, mo, nodes, leaves, self.tol)
+        if method == "brute":
+            _mm.smooth_moment_primitives_brute(self.field.tree, self.query.kind, pts, self.alpha,
+                                               self.S, self.wgs, d, g, mo)
+            nodes[:] = 0
+            leaves[:] = self.field.tree.kind.size
         else:
-            _mm.smooth_moment_primitives(
-                self.field.tree, self.query.kind, pts, self.alpha, self.beta, self.S, self.wgs,
-                method == "brute", d, g, mo, nodes, leaves, self.tol, parallel_tasks(m))
+            _run_tasks(_mm.smooth_moment_primitive_tasks, m, SERIAL_BELOW["smooth"],
+                       self.field.tree, self.query.kind, pts, self.alpha, self.beta, self.S,
+                       self.wgs, d, g, mo, nodes, leaves, self.tol)
         self.last_stats = (nodes, leaves)
         return d, g, mo
 
@@ -473,8 +490,8 @@ class MeshDistance:
                 dv = float(self.field.exact_distance(X)[0].min())
             bound2 = (dv * (1 + 1e-9)) ** 2 + 1e-300
         if m < SERIAL_BELOW["exact"]:
-            _mq.exact_distance_primitives_serial(self.field.tree, self.query.kind, pts, bound2, d,
-                                                 g, prim)
+            _mq.exact_distance_primitive_tasks(self.field.tree, self.query.kind, pts, bound2, d,
+                                               g, prim, 1, 0, 1)
         else:
             _mq.exact_distance_primitives(self.field.tree, self.query.kind, pts, bound2, d, g,
                                           prim, parallel_tasks(m))

@@ -27,7 +27,7 @@ FORBIDDEN = ("fastmath", "parallel", "error_model")
 NUMBA_DECORATORS = {"njit", "jit", "generated_jit", "vectorize", "guvectorize", "cfunc",
                     "stencil", "jit_module"}
 #: NJIT_GENERIC: NJIT_INLINE without the cache, for the generic traversal loop (see _config)
-ALLOWED_OPTIONS = {"NJIT", "NJIT_PARALLEL", "NJIT_INLINE", "NJIT_GENERIC"}
+ALLOWED_OPTIONS = {"NJIT", "NJIT_PARALLEL", "NJIT_INLINE", "NJIT_GENERIC", "NJIT_IR_INLINE"}
 
 
 def sources():

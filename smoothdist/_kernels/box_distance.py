@@ -31,7 +31,9 @@ import math
 import numba
 
 from smoothdist._config import NJIT, NJIT_INLINE
-from smoothdist._kernels.closest_pair import closest_pair, point_segment, point_triangle
+from smoothdist._kernels.closest_pair import (point_segment, point_triangle, segment_point,
+                                              segment_triangle, triangle_point,
+                                              triangle_triangle)
 
 
 @numba.njit(**NJIT)
@@ -150,7 +152,13 @@ def box_lower_bound(kq, Q, qlo, qhi, lo, hi, node, E):
         E[0] = lo[node, 0] if g0 < 0.0 else hi[node, 0]
         E[1] = lo[node, 1] if g1 < 0.0 else hi[node, 1]
         E[2] = lo[node, 2] if g2 < 0.0 else hi[node, 2]
-        c = closest_pair(kq, Q, 0, E)
+        # closest_pair(kq, Q, 0, E) for kq 1 or 2, called directly: a constant kind would
+        # compile closest_pair again for it (a literal argument), with every kind pair
+        if kq == 1:
+            c = segment_point(Q[0], Q[1], Q[2], Q[3], Q[4], Q[5], E[0], E[1], E[2])
+        else:
+            c = triangle_point(Q[0], Q[1], Q[2], Q[3], Q[4], Q[5], Q[6], Q[7], Q[8], E[0],
+                               E[1], E[2])
         d = math.sqrt(c[0])
         if d > 0.0:
             return d, c[1] / d, c[2] / d, c[3] / d
@@ -232,7 +240,14 @@ def box_distance_exact(kq, Q, lo, hi, node, E):
                     E[3 * k + a] = fa
                     E[3 * k + b] = hi[node, b] if ub else lo[node, b]
                     E[3 * k + c] = hi[node, c] if uc else lo[node, c]
-                r = closest_pair(kq, Q, 2, E)
+                # closest_pair(kq, Q, 2, E), called directly (as above)
+                if kq == 1:
+                    r = segment_triangle(Q[0], Q[1], Q[2], Q[3], Q[4], Q[5], E[0], E[1],
+                                         E[2], E[3], E[4], E[5], E[6], E[7], E[8])
+                else:
+                    r = triangle_triangle(Q[0], Q[1], Q[2], Q[3], Q[4], Q[5], Q[6], Q[7],
+                                          Q[8], E[0], E[1], E[2], E[3], E[4], E[5], E[6],
+                                          E[7], E[8])
                 if r[0] < best:
                     best = r[0]
                     bx, by, bz = r[1], r[2], r[3]

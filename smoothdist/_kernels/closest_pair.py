@@ -43,6 +43,13 @@ from smoothdist._kernels.closest_point import (SEG_A, SEG_B, SEG_INTERIOR, TRI_A
                                                closest_point_segment, closest_point_triangle)
 
 KIND_POINT, KIND_SEGMENT, KIND_TRIANGLE = 0, 1, 2
+#: the kinds, and 0 for counters and unset feature codes, as int64: a plain ``1`` or ``0`` is
+#: typed as a literal, and each literal kind, literal counter and tuple type holding a literal
+#: feature compiled the tie kernels again (7 copies of :func:`tie_of_two`, 4 of
+#: :func:`tied_pair`; numba's compile events, issue 51)
+_SEG = np.int64(KIND_SEGMENT)
+_TRI = np.int64(KIND_TRIANGLE)
+_ZERO = np.int64(0)
 
 #: ``|ab x ac|^2 <= DEGENERATE * |ab|^2 |ac|^2`` (sine of the smallest angle below 1e-8):
 #: the triangle is treated as its three edges
@@ -184,7 +191,7 @@ def segment_segment(px, py, pz, qx, qy, qz, ax, ay, az, bx, by, bz):
     brx = bry = brz = 0.0
     bu = bv = 0.0
     M, L = pair_scale(px, py, pz, qx, qy, qz, qx, qy, qz, ax, ay, az, bx, by, bz, bx, by, bz)
-    ntie = 0
+    ntie = _ZERO
     # the other of two tied pairs (the common case of a tie: handled without tied_pair)
     r2x = r2y = r2z = u2 = v2 = 0.0
     if den > 0.0 and den > 1e-30 * A * E:
@@ -235,13 +242,13 @@ def segment_segment(px, py, pz, qx, qy, qz, ax, ay, az, bx, by, bz):
             best = d2
             brx, bry, brz, bu, bv = rx, ry, rz, u, v
     if ntie == 2 and best > 0.0:
-        return tie_of_two(1, _flat(px, py, pz, qx, qy, qz, qx, qy, qz), 1, best,
+        return tie_of_two(_SEG, _flat(px, py, pz, qx, qy, qz, qx, qy, qz), _SEG, best,
                           (best, brx, bry, brz, bu, 0.0, segment_feature(bu), bv, 0.0,
                            segment_feature(bv)),
                           (best, r2x, r2y, r2z, u2, 0.0, segment_feature(u2), v2, 0.0,
                            segment_feature(v2)))
     if ntie > 2 and best > 0.0:
-        return tied_pair(1, _flat(px, py, pz, qx, qy, qz, qx, qy, qz), 1,
+        return tied_pair(_SEG, _flat(px, py, pz, qx, qy, qz, qx, qy, qz), _SEG,
                          _flat(ax, ay, az, bx, by, bz, bx, by, bz))
     return (best, brx, bry, brz, bu, 0.0, segment_feature(bu), bv, 0.0, segment_feature(bv))
 
@@ -352,9 +359,9 @@ def _segment_triangle(px, py, pz, qx, qy, qz, ax, ay, az, bx, by, bz, cx, cy, cz
         if hit:
             return 0.0, 0.0, 0.0, 0.0, u, 0.0, segment_feature(u), s, t, TRI_INTERIOR
     best = math.inf
-    out = (math.inf, 0.0, 0.0, 0.0, 0.0, 0.0, 0, 0.0, 0.0, 0)
+    out = (math.inf, 0.0, 0.0, 0.0, 0.0, 0.0, _ZERO, 0.0, 0.0, _ZERO)
     M, L = pair_scale(px, py, pz, qx, qy, qz, qx, qy, qz, ax, ay, az, bx, by, bz, cx, cy, cz)
-    ntie = 0
+    ntie = _ZERO
     out2 = out
     # the segment's endpoints against the triangle
     for k in range(2):
@@ -412,12 +419,12 @@ def _segment_triangle(px, py, pz, qx, qy, qz, ax, ay, az, bx, by, bz, cx, cy, cz
         T = _flat(ax, ay, az, bx, by, bz, cx, cy, cz)
         if seg_query:
             if ntie == 2:
-                return tie_of_two(1, S, 2, best, out, out2)
-            return tied_pair(1, S, 2, T)
+                return tie_of_two(_SEG, S, _TRI, best, out, out2)
+            return tied_pair(_SEG, S, _TRI, T)
         if ntie == 2:
-            c = tie_of_two(2, T, 1, best, _swap(out), _swap(out2))
+            c = tie_of_two(_TRI, T, _SEG, best, _swap(out), _swap(out2))
         else:
-            c = tied_pair(2, T, 1, S)
+            c = tied_pair(_TRI, T, _SEG, S)
         return _swap(c)
     return out
 
@@ -472,9 +479,9 @@ def triangle_triangle(px, py, pz, qx, qy, qz, rx_, ry_, rz_, ax, ay, az, bx, by,
                 ds, dt, df = triangle_edge_point(e, u)
                 return 0.0, 0.0, 0.0, 0.0, s, t, TRI_INTERIOR, ds, dt, df
     best = math.inf
-    out = (math.inf, 0.0, 0.0, 0.0, 0.0, 0.0, 0, 0.0, 0.0, 0)
+    out = (math.inf, 0.0, 0.0, 0.0, 0.0, 0.0, _ZERO, 0.0, 0.0, _ZERO)
     M, L = pair_scale(px, py, pz, qx, qy, qz, rx_, ry_, rz_, ax, ay, az, bx, by, bz, cx, cy, cz)
-    ntie = 0
+    ntie = _ZERO
     out2 = out
     # vertices of each against the other
     for k in range(3):
@@ -531,9 +538,10 @@ def triangle_triangle(px, py, pz, qx, qy, qz, rx_, ry_, rz_, ax, ay, az, bx, by,
                     ds, dt, df = triangle_edge_point(f, v)
                     out = (d2, rx, ry, rz, qs, qt, qf, ds, dt, df)
     if ntie == 2 and best > 0.0:
-        return tie_of_two(2, _flat(px, py, pz, qx, qy, qz, rx_, ry_, rz_), 2, best, out, out2)
+        return tie_of_two(_TRI, _flat(px, py, pz, qx, qy, qz, rx_, ry_, rz_), _TRI, best, out,
+                          out2)
     if ntie > 2 and best > 0.0:
-        return tied_pair(2, _flat(px, py, pz, qx, qy, qz, rx_, ry_, rz_), 2,
+        return tied_pair(_TRI, _flat(px, py, pz, qx, qy, qz, rx_, ry_, rz_), _TRI,
                          _flat(ax, ay, az, bx, by, bz, cx, cy, cz))
     return out
 
@@ -760,7 +768,7 @@ def _put(C, n, d2, rx, ry, rz, qs, qt, qf, ds, dt, df):
 def _candidates(kq, Q, kd, P, C):
     """Fill ``C`` (MAX_CANDIDATES, >= 10) with every candidate pair of query ``(kq, Q)`` and data
     ``(kd, P)`` (kinds 1 or 2), as rows of the module's 10-tuple; returns their number."""
-    n = 0
+    n = _ZERO
     for i in range(kq + 1):
         d2, rx, ry, rz, s, t, f = _point_to(kd, Q[3 * i], Q[3 * i + 1], Q[3 * i + 2], P)
         qs, qt, qf = _vertex_params(kq, i)
@@ -807,7 +815,7 @@ def tied_pair(kq, Q, kd, P):
     C = np.empty((MAX_CANDIDATES, 14))
     n = _candidates(kq, Q, kd, P, C)
     best = math.inf
-    ib = 0
+    ib = _ZERO
     for i in range(n):
         if C[i, 0] < best:
             best = C[i, 0]

@@ -39,7 +39,7 @@ import numba
 import numpy as np
 from numba import prange
 
-from smoothdist._config import NJIT, NJIT_INLINE, NJIT_PARALLEL
+from smoothdist._config import NJIT, NJIT_INLINE, NJIT_IR_INLINE, NJIT_PARALLEL
 from smoothdist._kernels.closest_point import closest_point_segment, closest_point_triangle
 from smoothdist._kernels.traversal import beyond_best, nearest_first, no_far_field, within_best
 from smoothdist.mesh import KIND_TRIANGLE
@@ -533,7 +533,7 @@ def winner_result(kind, pts, bi, px, py, pz):
     return 0.0, 0.0, 0.0, 0.0
 
 
-@numba.njit(**NJIT_INLINE)
+@numba.njit(**NJIT_IR_INLINE)
 def _coded_children(et, q, code):
     """``children`` of an ExactTree inner node: its two child codes, keyed by the squared
     distance to the child boxes stored in the node's row."""
@@ -542,7 +542,7 @@ def _coded_children(et, q, code):
             et.child[code, 1], _box_d2(px, py, pz, et.box, code, 6))
 
 
-@numba.njit(**NJIT_INLINE)
+@numba.njit(**NJIT_IR_INLINE)
 def _code_leaf(et, q, code, st):
     """A leaf code's primitives (``-1 - (start << 4 | count)``); ``st = (best d2, prim,
     leaves)``."""

@@ -40,10 +40,9 @@ import math
 
 import numba
 import numpy as np
-from numba import prange
 
-from smoothdist._config import NJIT, NJIT_PARALLEL
-from smoothdist._kernels.mesh_query import (TASKS, VERTEX_1, VERTEX_2,  # noqa: F401
+from smoothdist._config import NJIT
+from smoothdist._kernels.mesh_query import (VERTEX_1, VERTEX_2,  # noqa: F401
                                             _accumulate, centroid, pair_terms,
                                             query_coefficient, smooth_traverse)
 from smoothdist._kernels.query import DEFAULT_TOL, smooth_distance_point
@@ -93,28 +92,48 @@ def smooth_moment_brute_primitive(tree, kq, Q, alpha, S, wgs):
 
 
 @numba.njit(**NJIT)
-def _moment_task(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g, out_m, out_nodes,
-                 out_leaves, tol, task, ntasks):
-    """Query primitives ``task, task + ntasks, ...`` of :func:`smooth_moment_primitives`."""
+def smooth_moment_primitive_tasks(tree, qkind, qpts, alpha, beta, S, wgs, out_d, out_g, out_m,
+                                  out_nodes, out_leaves, tol, ntasks, task0, task1):
+    """``d_hat``, translation gradient and moment (about the centroid) of every query primitive.
+
+    As :func:`smoothdist._kernels.mesh_query.smooth_distance_primitive_tasks` (a serial task
+    kernel), plus ``out_m (m, 3)`` float64.
+    """
     k = tree.depth + 4
     stack = np.empty(k, dtype=np.int64)
     dstack = np.empty(k)
     scratch = np.empty(33)
-    for j in range(task, qkind.size, ntasks):
-        kq = qkind[j]
-        Q = qpts[j]
-        nodes = 0
-        leaves = tree.kind.size
-        mx = my = mz = 0.0
-        if brute:
-            d, gx, gy, gz, mx, my, mz = smooth_moment_brute_primitive(tree, kq, Q, alpha, S, wgs)
-        elif kq == 0:
-            # a point: its closest point is itself, no moment about it
-            d, gx, gy, gz, nodes, leaves = smooth_distance_point(
-                tree, Q[0], Q[1], Q[2], alpha, beta, S, wgs, stack, dstack)
-        else:
-            d, gx, gy, gz, mx, my, mz, nodes, leaves = smooth_moment_primitive(
-                tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, tol)
+    root = np.int64(0)
+    for task in range(task0, task1):
+        for j in range(task, qkind.size, ntasks):
+            kq = qkind[j]
+            Q = qpts[j]
+            mx = my = mz = 0.0
+            if kq == 0:
+                # a point: its closest point is itself, no moment about it
+                d, gx, gy, gz, nodes, leaves = smooth_distance_point(
+                    tree, Q[0], Q[1], Q[2], alpha, beta, S, wgs, stack, dstack, root)
+            else:
+                d, gx, gy, gz, mx, my, mz, nodes, leaves = smooth_traverse(
+                    tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, tol, True)
+            out_d[j] = d
+            out_g[j, 0] = gx
+            out_g[j, 1] = gy
+            out_g[j, 2] = gz
+            out_m[j, 0] = mx
+            out_m[j, 1] = my
+            out_m[j, 2] = mz
+            out_nodes[j] = nodes
+            out_leaves[j] = leaves
+
+
+@numba.njit(**NJIT)
+def smooth_moment_primitives_brute(tree, qkind, qpts, alpha, S, wgs, out_d, out_g, out_m):
+    """:func:`smooth_moment_primitive_tasks` summing every data primitive (the reference of
+    ``method="brute"``; serial, no tree). A point's moment is 0."""
+    for j in range(qkind.size):
+        d, gx, gy, gz, mx, my, mz = smooth_moment_brute_primitive(tree, qkind[j], qpts[j], alpha,
+                                                                  S, wgs)
         out_d[j] = d
         out_g[j, 0] = gx
         out_g[j, 1] = gy
@@ -122,30 +141,6 @@ def _moment_task(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g, ou
         out_m[j, 0] = mx
         out_m[j, 1] = my
         out_m[j, 2] = mz
-        out_nodes[j] = nodes
-        out_leaves[j] = leaves
-
-
-@numba.njit(**NJIT_PARALLEL)
-def smooth_moment_primitives(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g, out_m,
-                             out_nodes, out_leaves, tol=DEFAULT_TOL, ntasks=TASKS):
-    """``d_hat``, translation gradient and moment (about the centroid) of every query primitive.
-
-    As :func:`smoothdist._kernels.mesh_query.smooth_distance_primitives`, plus
-    ``out_m (m, 3)`` float64.
-    """
-    ntasks = max(1, min(qkind.size, ntasks))
-    for task in prange(ntasks):
-        _moment_task(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g, out_m,
-                     out_nodes, out_leaves, tol, np.int64(task), ntasks)
-
-
-@numba.njit(**NJIT)
-def smooth_moment_primitives_serial(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g,
-                                    out_m, out_nodes, out_leaves, tol=DEFAULT_TOL):
-    """:func:`smooth_moment_primitives` on the calling thread (small query meshes)."""
-    _moment_task(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g, out_m, out_nodes,
-                 out_leaves, tol, np.int64(0), np.int64(1))
 
 
 @numba.njit(**NJIT)
@@ -199,42 +194,61 @@ def smooth_vertex_brute_primitive(tree, kq, Q, alpha, S, wgs):
 
 
 @numba.njit(**NJIT)
-def _vertex_task(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g, out_G, tol, task,
-                 ntasks):
-    """Query primitives ``task, task + ntasks, ...`` of :func:`smooth_vertex_primitives`."""
+def smooth_vertex_primitive_tasks(tree, qkind, qpts, alpha, beta, S, wgs, out_d, out_g, out_G,
+                                  tol, ntasks, task0, task1):
+    """``d_hat``, translation gradient and per-vertex derivatives ``out_G (m, 3, 3)`` (slot ``k``
+    for the primitive's vertex ``k``; unused slots 0) of every query primitive, as a serial task
+    kernel (tasks ``task0 <= t < task1`` of ``ntasks``, as
+    :func:`smoothdist._kernels.mesh_query.smooth_distance_primitive_tasks`)."""
     k = tree.depth + 4
     stack = np.empty(k, dtype=np.int64)
     dstack = np.empty(k)
     scratch = np.empty(33)
-    for j in range(task, qkind.size, ntasks):
+    root = np.int64(0)
+    for task in range(task0, task1):
+        for j in range(task, qkind.size, ntasks):
+            kq = qkind[j]
+            Q = qpts[j]
+            out_G[j] = 0.0
+            if kq == 0:
+                d, gx, gy, gz, _, _ = smooth_distance_point(tree, Q[0], Q[1], Q[2], alpha, beta,
+                                                            S, wgs, stack, dstack, root)
+                out_G[j, 0, 0] = gx
+                out_G[j, 0, 1] = gy
+                out_G[j, 0, 2] = gz
+            else:
+                d, gx, gy, gz, G = smooth_vertex_primitive(tree, kq, Q, alpha, beta, S, wgs,
+                                                           stack, dstack, scratch, tol)
+                out_G[j, :kq + 1] = G
+            out_d[j] = d
+            out_g[j, 0] = gx
+            out_g[j, 1] = gy
+            out_g[j, 2] = gz
+
+
+@numba.njit(**NJIT)
+def smooth_vertex_primitives_brute(tree, qkind, qpts, alpha, beta, S, wgs, out_d, out_g, out_G):
+    """:func:`smooth_vertex_primitive_tasks` summing every data primitive for edge and triangle
+    queries (the reference of ``method="brute"``; serial; point queries as there, by the
+    tree)."""
+    k = tree.depth + 4
+    stack = np.empty(k, dtype=np.int64)
+    dstack = np.empty(k)
+    root = np.int64(0)
+    for j in range(qkind.size):
         kq = qkind[j]
         Q = qpts[j]
         out_G[j] = 0.0
         if kq == 0:
             d, gx, gy, gz, _, _ = smooth_distance_point(tree, Q[0], Q[1], Q[2], alpha, beta, S,
-                                                        wgs, stack, dstack)
+                                                        wgs, stack, dstack, root)
             out_G[j, 0, 0] = gx
             out_G[j, 0, 1] = gy
             out_G[j, 0, 2] = gz
         else:
-            if brute:
-                d, gx, gy, gz, G = smooth_vertex_brute_primitive(tree, kq, Q, alpha, S, wgs)
-            else:
-                d, gx, gy, gz, G = smooth_vertex_primitive(tree, kq, Q, alpha, beta, S, wgs,
-                                                           stack, dstack, scratch, tol)
+            d, gx, gy, gz, G = smooth_vertex_brute_primitive(tree, kq, Q, alpha, S, wgs)
             out_G[j, :kq + 1] = G
         out_d[j] = d
         out_g[j, 0] = gx
         out_g[j, 1] = gy
         out_g[j, 2] = gz
-
-
-@numba.njit(**NJIT_PARALLEL)
-def smooth_vertex_primitives(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g, out_G,
-                             tol=DEFAULT_TOL, ntasks=TASKS):
-    """``d_hat``, translation gradient and per-vertex derivatives ``out_G (m, 3, 3)`` (slot ``k``
-    for the primitive's vertex ``k``; unused slots 0) of every query primitive."""
-    ntasks = max(1, min(qkind.size, ntasks))
-    for task in prange(ntasks):
-        _vertex_task(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g, out_G, tol,
-                     task, ntasks)

@@ -44,20 +44,20 @@ import numba
 import numpy as np
 from numba import prange
 
-from smoothdist._config import NJIT, NJIT_INLINE, NJIT_PARALLEL
+from smoothdist._config import NJIT, NJIT_INLINE, NJIT_IR_INLINE, NJIT_PARALLEL
 from smoothdist._kernels.box_distance import (box_box_distance, box_box_offset, box_distance_exact,
                                               signed_gap,
                                               box_lower_bound)
 from smoothdist._kernels.box_moment import box_lower_bound_moment, extreme_levers, gap_moment
-from smoothdist._kernels.closest_pair import (closest_pair, segment_point, segment_segment,
+from smoothdist._kernels.closest_pair import (closest_pair, point_segment, point_triangle,
+                                              segment_point, segment_segment,
                                               segment_triangle, triangle_point, triangle_segment,
                                               triangle_triangle)
 from smoothdist._kernels.closest_point import (SEG_INTERIOR, TRI_AB, TRI_AC, TRI_BC, TRI_INTERIOR)
 from smoothdist._kernels.query import (DEFAULT_TOL, _attenuate, exact_distance_point,
                                        logsumexp_accumulate, negligible_reach,
                                        smooth_distance_point)
-from smoothdist.schedule import TASKS
-from smoothdist._kernels.traversal import always, nearest_first, no_far_field
+from smoothdist._kernels.traversal import NONE, ZERO, always, nearest_first, no_far_field
 from smoothdist._kernels.weights import eval_triangle_weight
 
 #: :func:`smoothdist._kernels.query._attenuate`, inlined (it calls no other kernel)
@@ -148,8 +148,17 @@ def _closest(kind, P, i, kq, Q, k):
     scalars for edge and triangle queries (no row view, no dispatch through every kind pair)."""
     if kq == 0:
         # a point query (the brute-force references only: the traversal takes edges and
-        # triangles)
-        return closest_pair(kq, Q, k, P[i])
+        # triangles), as closest_pair does it, without compiling closest_pair's other kinds
+        if k == 0:
+            rx = Q[0] - P[i, 0]
+            ry = Q[1] - P[i, 1]
+            rz = Q[2] - P[i, 2]
+            return rx * rx + ry * ry + rz * rz, rx, ry, rz, 0.0, 0.0, 0, 0.0, 0.0, 0
+        if k == 1:
+            return point_segment(Q[0], Q[1], Q[2], P[i, 0], P[i, 1], P[i, 2], P[i, 3], P[i, 4],
+                                 P[i, 5])
+        return point_triangle(Q[0], Q[1], Q[2], P[i, 0], P[i, 1], P[i, 2], P[i, 3], P[i, 4],
+                              P[i, 5], P[i, 6], P[i, 7], P[i, 8])
     if k == 0:
         if kq == 1:
             return segment_point(Q[0], Q[1], Q[2], Q[3], Q[4], Q[5], P[i, 0], P[i, 1], P[i, 2])
@@ -423,7 +432,7 @@ class _PrimitiveQuery(NamedTuple):
     reach: float          # negligible-term pruning (query.negligible_reach)
 
 
-@numba.njit(**NJIT_INLINE)
+@numba.njit(**NJIT_IR_INLINE)
 def _gap_children(tree, q, node):
     """``children``: both children, keyed by squared box-box distance."""
     l = tree.left[node]
@@ -432,13 +441,13 @@ def _gap_children(tree, q, node):
             r, _box_gap2(q.l0, q.l1, q.l2, q.h0, q.h1, q.h2, tree.lo, tree.hi, r))
 
 
-@numba.njit(**NJIT_INLINE)
+@numba.njit(**NJIT_IR_INLINE)
 def _prim_skip(tree, q, node, bd2, st):
     """Negligible-term pruning, as in the point kernel."""
     return bd2 >= st[8]
 
 
-@numba.njit(**NJIT_INLINE)
+@numba.njit(**NJIT_IR_INLINE)
 def _barnes_hut(tree, q, node, bd2):
     """Barnes-Hut for a query primitive: ``(far, delta, ux, uy, uz, ax, ay, az)``, the node's
     lower-bound distance ``delta``, its direction ``u`` and the moment lever ``a``.
@@ -485,7 +494,7 @@ def _barnes_hut(tree, q, node, bd2):
     return far, delta, ux, uy, uz, ax, ay, az
 
 
-@numba.njit(**NJIT_INLINE)
+@numba.njit(**NJIT_IR_INLINE)
 def _prim_far(tree, q, node, bd2, st):
     """Far fields: Barnes-Hut, then the ``tol`` rule; ``st = (m, s, gx, gy, gz, mx, my, mz,
     cut2, leaves)``."""
@@ -515,7 +524,7 @@ def _prim_far(tree, q, node, bd2, st):
     return True, (m, s, gx, gy, gz, mx, my, mz, cut * cut, leaves + 1)
 
 
-@numba.njit(**NJIT_INLINE)
+@numba.njit(**NJIT_IR_INLINE)
 def _prim_leaf(tree, q, node, st):
     """A leaf's data primitives against the query primitive, exactly."""
     if tree.left[node] >= 0:
@@ -541,7 +550,7 @@ def _prim_leaf(tree, q, node, st):
     return True, (m, s, gx, gy, gz, mx, my, mz, cut * cut, leaves + cnt)
 
 
-@numba.njit(**NJIT)
+@numba.njit(**NJIT_IR_INLINE)
 def smooth_traverse(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, tol, moment,
                     exact_box=False):
     """The traversal of :func:`smooth_distance_primitive` and, with ``moment``,
@@ -583,10 +592,10 @@ def smooth_traverse(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, to
         1.0 / (kq + 1), cx, cy, cz, alpha, S, wgs, tol, moment, exact_box,
         # negligible-term pruning, as in the point kernel: a node at box-box distance
         # >= m + reach adds less than 2**-53 x n_B / N of the sum
-        negligible_reach(tree, 0, S, alpha))
+        negligible_reach(tree, ZERO, S, alpha))
     (m, s, gx, gy, gz, mx, my, mz, _, leaves), nodes = nearest_first(
-        tree, q, (np.inf, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, np.inf, 0), stack, dstack, 0,
-        _box_gap2(l0, l1, l2, h0, h1, h2, tree.lo, tree.hi, 0), _prim_skip, _prim_far,
+        tree, q, (np.inf, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, np.inf, ZERO), stack, dstack, ZERO,
+        _box_gap2(l0, l1, l2, h0, h1, h2, tree.lo, tree.hi, ZERO), _prim_skip, _prim_far,
         _prim_leaf, _gap_children, always)
     inv = 1.0 / s
     return (m - math.log(s) / alpha, gx * inv, gy * inv, gz * inv, mx * inv, my * inv, mz * inv,
@@ -653,7 +662,7 @@ class _PairQuery(NamedTuple):
     qhi: np.ndarray
 
 
-@numba.njit(**NJIT_INLINE)
+@numba.njit(**NJIT_IR_INLINE)
 def _box_box_children(tree, q, node):
     """``children`` of the exact primitive query: keyed by box-box distance."""
     l = tree.left[node]
@@ -662,19 +671,19 @@ def _box_box_children(tree, q, node):
             r, box_box_distance(q.qlo, q.qhi, tree.lo, tree.hi, r))
 
 
-@numba.njit(**NJIT_INLINE)
+@numba.njit(**NJIT_IR_INLINE)
 def _gap_beyond_best(tree, q, node, key, st):
     """Branch and bound on the box-box distance against the best squared distance."""
     return key * key >= st[0]
 
 
-@numba.njit(**NJIT_INLINE)
+@numba.njit(**NJIT_IR_INLINE)
 def _gap_within_best(key, st):
     """Push a child only if its box-box distance is below the best so far."""
     return key * key < st[0]
 
 
-@numba.njit(**NJIT_INLINE)
+@numba.njit(**NJIT_IR_INLINE)
 def _pair_leaf(tree, q, node, st):
     """A leaf's closest pairs; ``st = (best d2, prim, r, leaves)``."""
     if tree.left[node] >= 0:
@@ -707,8 +716,8 @@ def exact_distance_primitive(tree, kq, Q, stack, dstack, scratch, bound2=np.inf)
     qhi = scratch[3:6]
     query_box(kq, Q, qlo, qhi)
     (best, bi, brx, bry, brz, leaves), nodes = nearest_first(
-        tree, _PairQuery(kq, Q, qlo, qhi), (bound2, -1, 0.0, 0.0, 0.0, 0), stack, dstack, 0,
-        box_box_distance(qlo, qhi, tree.lo, tree.hi, 0), _gap_beyond_best, no_far_field,
+        tree, _PairQuery(kq, Q, qlo, qhi), (bound2, NONE, 0.0, 0.0, 0.0, ZERO), stack, dstack, ZERO,
+        box_box_distance(qlo, qhi, tree.lo, tree.hi, ZERO), _gap_beyond_best, no_far_field,
         _pair_leaf, _box_box_children, _gap_within_best)
     if bi < 0:
         return np.inf, 0.0, 0.0, 0.0, -1, nodes, leaves
@@ -719,104 +728,100 @@ def exact_distance_primitive(tree, kq, Q, stack, dstack, scratch, bound2=np.inf)
 
 
 @numba.njit(**NJIT)
-def _smooth_task(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g, out_nodes,
-                 out_leaves, tol, task, ntasks, exact_box=False):
-    """Query primitives ``task, task + ntasks, ...`` of :func:`smooth_distance_primitives`."""
-    k = tree.depth + 4
-    stack = np.empty(k, dtype=np.int64)
-    dstack = np.empty(k)
-    scratch = np.empty(15)
-    for j in range(task, qkind.size, ntasks):
-        kq = qkind[j]
-        Q = qpts[j]
-        nodes = 0
-        leaves = tree.kind.size
-        if brute:
-            d, gx, gy, gz = smooth_distance_brute_primitive(tree, kq, Q, alpha, S, wgs)
-        elif kq == 0:
-            d, gx, gy, gz, nodes, leaves = smooth_distance_point(
-                tree, Q[0], Q[1], Q[2], alpha, beta, S, wgs, stack, dstack)
-        else:
-            d, gx, gy, gz, nodes, leaves = smooth_distance_primitive(
-                tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, tol, exact_box)
-        out_d[j] = d
-        out_g[j, 0] = gx
-        out_g[j, 1] = gy
-        out_g[j, 2] = gz
-        out_nodes[j] = nodes
-        out_leaves[j] = leaves
-
-
-@numba.njit(**NJIT_PARALLEL)
-def smooth_distance_primitives(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g,
-                               out_nodes, out_leaves, tol=DEFAULT_TOL, ntasks=TASKS,
-                               exact_box=False):
-    """``d_hat`` and translation gradient of every query primitive, in parallel.
+def smooth_distance_primitive_tasks(tree, qkind, qpts, alpha, beta, S, wgs, out_d, out_g,
+                                    out_nodes, out_leaves, tol, exact_box, ntasks, task0, task1):
+    """``d_hat`` and translation gradient of every query primitive, as a serial task kernel.
 
     ``qkind (m,)`` int64, ``qpts (m, 9)`` float64; fills ``out_d (m,)``, ``out_g (m, 3)``,
-    ``out_nodes``, ``out_leaves (m,)``. ``brute`` sums every data primitive (reference).
-    ``tol``: see :func:`smooth_distance_primitive` (edge and triangle queries only).
-    ``ntasks``: the number of strided tasks (:func:`smoothdist.schedule.parallel_tasks`).
-    ``exact_box``: the paper's box test off (:func:`smooth_traverse`).
+    ``out_nodes``, ``out_leaves (m,)``. ``tol``: see :func:`smooth_distance_primitive` (edge
+    and triangle queries only); ``exact_box``: the paper's box test off
+    (:func:`smooth_traverse`). Runs tasks ``task0 <= t < task1`` of ``ntasks`` strided tasks
+    (task ``t`` takes primitives ``t, t + ntasks, ...``), GIL-free, from Python threads
+    (:func:`smoothdist.schedule.run_tasks`): no ``prange`` loop, which would compile the whole
+    traversal again (:mod:`smoothdist.schedule`). Values do not depend on the split.
     """
-    ntasks = max(1, min(qkind.size, ntasks))
-    for task in prange(ntasks):
-        # the task index as int64 (prange's is uint64): one specialisation of the task for
-        # the parallel kernel, the serial one and the thread runner
-        _smooth_task(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g, out_nodes,
-                     out_leaves, tol, np.int64(task), ntasks, exact_box)
-
-
-@numba.njit(**NJIT)
-def smooth_distance_primitives_serial(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d,
-                                      out_g, out_nodes, out_leaves, tol=DEFAULT_TOL,
-                                      exact_box=False):
-    """:func:`smooth_distance_primitives` on the calling thread (small query meshes)."""
-    _smooth_task(tree, qkind, qpts, alpha, beta, S, wgs, brute, out_d, out_g, out_nodes,
-                 out_leaves, tol, np.int64(0), np.int64(1), exact_box)
-
-
-@numba.njit(**NJIT)
-def _exact_task(tree, qkind, qpts, bound2, out_d, out_g, out_prim, task, ntasks):
-    """Query primitives ``task, task + ntasks, ...`` of :func:`exact_distance_primitives`."""
     k = tree.depth + 4
     stack = np.empty(k, dtype=np.int64)
     dstack = np.empty(k)
     scratch = np.empty(15)
-    for j in range(task, qkind.size, ntasks):
-        kq = qkind[j]
-        Q = qpts[j]
-        if kq == 0:
-            d, gx, gy, gz, p, nodes, leaves = exact_distance_point(tree, Q[0], Q[1], Q[2],
-                                                                   stack, dstack)
-        else:
-            d, gx, gy, gz, p, nodes, leaves = exact_distance_primitive(tree, kq, Q, stack,
-                                                                       dstack, scratch, bound2)
+    # the whole tree's root as an int64 (a constant would be typed as a literal: another
+    # specialisation of the point kernel than the point queries' and the renderer's)
+    root = np.int64(0)
+    for task in range(task0, task1):
+        for j in range(task, qkind.size, ntasks):
+            kq = qkind[j]
+            Q = qpts[j]
+            if kq == 0:
+                d, gx, gy, gz, nodes, leaves = smooth_distance_point(
+                    tree, Q[0], Q[1], Q[2], alpha, beta, S, wgs, stack, dstack, root)
+            else:
+                d, gx, gy, gz, _, _, _, nodes, leaves = smooth_traverse(
+                    tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, tol, False,
+                    exact_box)
+            out_d[j] = d
+            out_g[j, 0] = gx
+            out_g[j, 1] = gy
+            out_g[j, 2] = gz
+            out_nodes[j] = nodes
+            out_leaves[j] = leaves
+
+
+@numba.njit(**NJIT)
+def smooth_distance_primitives_brute(tree, qkind, qpts, alpha, S, wgs, out_d, out_g):
+    """:func:`smooth_distance_primitive_tasks` summing every data primitive for every query
+    primitive (the reference of ``method="brute"``; serial, no tree, no Barnes-Hut)."""
+    for j in range(qkind.size):
+        d, gx, gy, gz = smooth_distance_brute_primitive(tree, qkind[j], qpts[j], alpha, S, wgs)
         out_d[j] = d
         out_g[j, 0] = gx
         out_g[j, 1] = gy
         out_g[j, 2] = gz
-        out_prim[j] = p
 
 
-@numba.njit(**NJIT_PARALLEL)
-def exact_distance_primitives(tree, qkind, qpts, bound2, out_d, out_g, out_prim, ntasks=TASKS):
-    """Exact distance, unit translation gradient and closest data primitive per query primitive.
+@numba.njit(**NJIT)
+def exact_distance_primitive_tasks(tree, qkind, qpts, bound2, out_d, out_g, out_prim, ntasks,
+                                   task0, task1):
+    """Exact distance, unit translation gradient and closest data primitive per query primitive,
+    as a serial task kernel (tasks ``task0 <= t < task1`` of ``ntasks``, as
+    :func:`smooth_distance_primitive_tasks`).
 
     Edge and triangle queries only look for pairs closer than ``sqrt(bound2)`` (an upper bound of
     the minimum over all query primitives, e.g. from the query vertices); the others get
-    ``inf`` and ``-1``. Point queries are always exact. ``ntasks`` as in
-    :func:`smooth_distance_primitives`.
+    ``inf`` and ``-1``. Point queries are always exact.
     """
-    ntasks = max(1, min(qkind.size, ntasks))
+    k = tree.depth + 4
+    stack = np.empty(k, dtype=np.int64)
+    dstack = np.empty(k)
+    scratch = np.empty(15)
+    root = np.int64(0)
+    for task in range(task0, task1):
+        for j in range(task, qkind.size, ntasks):
+            kq = qkind[j]
+            Q = qpts[j]
+            if kq == 0:
+                d, gx, gy, gz, p, nodes, leaves = exact_distance_point(
+                    tree, Q[0], Q[1], Q[2], stack, dstack, root, -1.0)
+            else:
+                d, gx, gy, gz, p, nodes, leaves = exact_distance_primitive(
+                    tree, kq, Q, stack, dstack, scratch, bound2)
+            out_d[j] = d
+            out_g[j, 0] = gx
+            out_g[j, 1] = gy
+            out_g[j, 2] = gz
+            out_prim[j] = p
+
+
+@numba.njit(**NJIT_PARALLEL)
+def exact_distance_primitives(tree, qkind, qpts, bound2, out_d, out_g, out_prim, ntasks):
+    """:func:`exact_distance_primitive_tasks` over ``ntasks`` tasks in a ``prange`` loop, for
+    large query meshes: numba's own threads start a short call sooner than Python threads do
+    (the bunny against itself, 6,966 triangles, 2 threads: 0.39 ms against 0.67 ms for the
+    primitives' pass; the smooth distance's passes, ten times longer, gain nothing from it).
+    Compiled only when a query mesh of ``SERIAL_BELOW["exact"]`` primitives or more is
+    measured exactly."""
     for task in prange(ntasks):
-        _exact_task(tree, qkind, qpts, bound2, out_d, out_g, out_prim, np.int64(task), ntasks)
-
-
-@numba.njit(**NJIT)
-def exact_distance_primitives_serial(tree, qkind, qpts, bound2, out_d, out_g, out_prim):
-    """:func:`exact_distance_primitives` on the calling thread (small query meshes)."""
-    _exact_task(tree, qkind, qpts, bound2, out_d, out_g, out_prim, np.int64(0), np.int64(1))
+        exact_distance_primitive_tasks(tree, qkind, qpts, bound2, out_d, out_g, out_prim, ntasks,
+                                       np.int64(task), np.int64(task) + 1)
 
 
 @numba.njit(**NJIT)

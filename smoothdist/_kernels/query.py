@@ -23,12 +23,12 @@ import numba
 import numpy as np
 from numba import prange
 
-from smoothdist._config import NJIT, NJIT_INLINE, NJIT_PARALLEL
+from smoothdist._config import NJIT, NJIT_INLINE, NJIT_IR_INLINE, NJIT_PARALLEL
 from smoothdist._kernels.closest_point import (SEG_INTERIOR, TRI_AB, TRI_AC, TRI_BC, TRI_INTERIOR,
                                                box_distance2, closest_point_segment,
                                                closest_point_triangle)
-from smoothdist._kernels.traversal import (always, beyond_best, nearest_first, never, no_far_field,
-                                          within_best)
+from smoothdist._kernels.traversal import (NONE, ZERO, always, beyond_best, nearest_first, never,
+                                          no_far_field, within_best)
 from smoothdist._kernels.weights import eval_edge_weight, eval_triangle_weight
 
 #: queries handled by one parallel task (one traversal stack each)
@@ -193,7 +193,7 @@ class _ExactQuery(NamedTuple):
     floor: float
 
 
-@numba.njit(**NJIT_INLINE)
+@numba.njit(**NJIT_IR_INLINE)
 def _box_children(tree, q, node):
     """``children`` of the point kernels: both children, keyed by squared box distance."""
     l = tree.left[node]
@@ -202,13 +202,13 @@ def _box_children(tree, q, node):
             r, box_distance2(q.px, q.py, q.pz, tree.lo, tree.hi, r)[0])
 
 
-@numba.njit(**NJIT_INLINE)
+@numba.njit(**NJIT_IR_INLINE)
 def _smooth_skip(tree, q, node, bd2, st):
     """Negligible-term pruning: the node is at least ``cut = m + reach`` away."""
     return bd2 >= st[5]
 
 
-@numba.njit(**NJIT_INLINE)
+@numba.njit(**NJIT_IR_INLINE)
 def _smooth_far(tree, q, node, bd2, st):
     """Barnes-Hut: a node with ``diag < beta d`` (and more than one primitive) becomes
     ``count * whi**S * exp(-alpha d)``, written ``count * exp(-alpha (d - S log(whi) / alpha))``.
@@ -229,7 +229,7 @@ def _smooth_far(tree, q, node, bd2, st):
     return True, (m, s, gx, gy, gz, cut * cut, leaves + 1)
 
 
-@numba.njit(**NJIT_INLINE)
+@numba.njit(**NJIT_IR_INLINE)
 def _smooth_leaf(tree, q, node, st):
     """Every primitive of a leaf, exactly."""
     if tree.left[node] >= 0:
@@ -286,7 +286,7 @@ def smooth_distance_point(tree, px, py, pz, alpha, beta, S, wgs, stack, dstack, 
     q = _PointQuery(px, py, pz, alpha, beta * beta, S, wgs, S / alpha,
                     negligible_reach(tree, root, S, alpha))
     (m, s, gx, gy, gz, _, leaves), nodes = nearest_first(
-        tree, q, (np.inf, 0.0, 0.0, 0.0, 0.0, np.inf, 0), stack, dstack, root,
+        tree, q, (np.inf, 0.0, 0.0, 0.0, 0.0, np.inf, ZERO), stack, dstack, root,
         box_distance2(px, py, pz, tree.lo, tree.hi, root)[0], _smooth_skip, _smooth_far,
         _smooth_leaf, _box_children, always)
     inv = 1.0 / s
@@ -342,7 +342,7 @@ def _shift_sums(m, d, alpha, s, gx, gy, gz, s_ex, e_far, s_ref):
     return m, s * f, gx * f, gy * f, gz * f, s_ex * f, e_far * f, s_ref * f
 
 
-@numba.njit(**NJIT_INLINE)
+@numba.njit(**NJIT_IR_INLINE)
 def _box_children_sqrt(tree, q, node):
     """``children`` of the tol kernel: both children, keyed by box distance."""
     l = tree.left[node]
@@ -357,7 +357,7 @@ def _near(m, alpha, wa, budget, s_ex, n_ref):
     return m + math.log(wa / (budget * s_ex * (n_ref + 1))) / alpha
 
 
-@numba.njit(**NJIT_INLINE)
+@numba.njit(**NJIT_IR_INLINE)
 def _tol_far(tree, q, node, bd, st):
     """The tol kernel's far fields: the budget test, then Barnes-Hut (outside the budget).
     ``st = (m, s, gx, gy, gz, s_ex, e_far, s_ref, n_cov, n_ref, near, leaves)``."""
@@ -407,7 +407,7 @@ def _tol_far(tree, q, node, bd, st):
     return False, st
 
 
-@numba.njit(**NJIT_INLINE)
+@numba.njit(**NJIT_IR_INLINE)
 def _tol_leaf(tree, q, node, st):
     """The tol kernel's exact terms: a leaf, or a node of at most :data:`TOL_LEAF`
     primitives (contiguous in tree order), primitive by primitive."""
@@ -466,14 +466,14 @@ def smooth_distance_point_tol(tree, px, py, pz, alpha, beta, tol, S, wgs, stack,
     # doubled since), ``near`` and the leaves count
     (m, s, gx, gy, gz, _, _, _, _, _, _, leaves), nodes = nearest_first(
         tree, _TolQuery(px, py, pz, alpha, beta, S, wgs, wa, budget),
-        (np.inf, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0, 0, np.inf, 0), stack, dstack, root,
+        (np.inf, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, ZERO, ZERO, np.inf, ZERO), stack, dstack, root,
         math.sqrt(box_distance2(px, py, pz, tree.lo, tree.hi, root)[0]), never, _tol_far,
         _tol_leaf, _box_children_sqrt, always)
     inv = 1.0 / s
     return m - math.log(s) / alpha, gx * inv, gy * inv, gz * inv, nodes, leaves
 
 
-@numba.njit(**NJIT_INLINE)
+@numba.njit(**NJIT_IR_INLINE)
 def _exact_leaf(tree, q, node, st):
     """A leaf's primitives, exactly; ``st = (best d2, prim, closest point, leaves)``;
     primitives at squared distance ``<= q.floor`` are ignored."""
@@ -517,7 +517,7 @@ def exact_distance_point(tree, px, py, pz, stack, dstack, root=0, floor=-1.0):
     (``floor = 0`` finds the nearest *other* point of a point cloud queried at its own points).
     """
     (best, bi, bx, by, bz, leaves), nodes = nearest_first(
-        tree, _ExactQuery(px, py, pz, floor), (np.inf, -1, px, py, pz, 0), stack, dstack, root,
+        tree, _ExactQuery(px, py, pz, floor), (np.inf, NONE, px, py, pz, ZERO), stack, dstack, root,
         box_distance2(px, py, pz, tree.lo, tree.hi, root)[0], beyond_best, no_far_field,
         _exact_leaf, _box_children, within_best)
     d = math.sqrt(best)

@@ -16,9 +16,9 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
-from smoothdist._config import NJIT, NJIT_INLINE
+from smoothdist._config import NJIT, NJIT_IR_INLINE
 from smoothdist._kernels.closest_point import box_distance2
-from smoothdist._kernels.traversal import always, nearest_first, no_far_field
+from smoothdist._kernels.traversal import ZERO, always, nearest_first, no_far_field
 from smoothdist.schedule import parallel_tasks, run_tasks
 
 __all__ = ["points_within", "gap_probes", "local_smooth_distance"]
@@ -33,20 +33,20 @@ class _RadiusQuery(NamedTuple):
     out: np.ndarray
 
 
-@numba.njit(**NJIT_INLINE)
+@numba.njit(**NJIT_IR_INLINE)
 def _outside_radius(tree, q, node, key, st):
     """``skip``: the node's box is farther than the radius (the march's box kernel)."""
     return box_distance2(q.px, q.py, q.pz, tree.lo, tree.hi, node)[0] > q.r2
 
 
-@numba.njit(**NJIT_INLINE)
+@numba.njit(**NJIT_IR_INLINE)
 def _right_first(tree, q, node):
     """``children`` without keys: the right child is popped first (the order in which the
     stored neighbours of a crowded query have always been taken)."""
     return tree.right[node], 0.0, tree.left[node], 0.0
 
 
-@numba.njit(**NJIT_INLINE)
+@numba.njit(**NJIT_IR_INLINE)
 def _collect_points(tree, q, node, n):
     """A leaf's point primitives at squared distance ``0 < d2 <= r2``, stored into ``q.out``;
     the state is how many were found."""
@@ -69,7 +69,7 @@ def _points_within_one(tree, px, py, pz, r2, out, stack, dstack):
     """Tree-order indices of point primitives at squared distance ``0 < d2 <= r2`` from
     ``(px, py, pz)`` into ``out`` (at most ``out.size``, nearest not guaranteed first);
     returns how many were found (may exceed ``out.size``: the rest are not stored)."""
-    n, _ = nearest_first(tree, _RadiusQuery(px, py, pz, r2, out), 0, stack, dstack, 0, 0.0,
+    n, _ = nearest_first(tree, _RadiusQuery(px, py, pz, r2, out), ZERO, stack, dstack, ZERO, 0.0,
                          _outside_radius, no_far_field, _collect_points, _right_first, always)
     return n
 

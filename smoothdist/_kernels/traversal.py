@@ -26,14 +26,24 @@ the kernel that calls it, so each kernel's on-disk cache holds its own specialis
 and the generic functions here are not cached themselves (``NJIT_GENERIC``): their signatures
 name the caller's types, which another process may not be able to import.
 
-Ties (``key_a == key_b``) pop ``a`` first.
+Ties (``key_a == key_b``) pop ``a`` first. Initial states hold ``int64`` counters (:data:`ZERO`,
+:data:`NONE`), never literal ints.
 """
 
 import numba
+import numpy as np
 from numba.core import types
 from numba.extending import intrinsic
 
 from smoothdist._config import NJIT_GENERIC
+
+#: 0 and -1 as int64 for a traversal's initial state, root and node arguments. A plain ``0`` is
+#: typed as the literal ``Literal[int](0)``: numba then compiles every function of the kind (and
+#: all they call) once for the literal state and once more for the ``int64`` that the state
+#: becomes after the first update, and a node function once per literal node (numba's compile
+#: events showed the whole-mesh traversal's far field compiled twice, 32 s of a 131 s first call)
+ZERO = np.int64(0)
+NONE = np.int64(-1)
 
 
 @intrinsic
