@@ -19,7 +19,7 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
-from smoothdist._config import NJIT, NJIT_INLINE
+from smoothdist._config import NJIT, NJIT_IR_INLINE
 from smoothdist.mesh import KIND_EDGE, KIND_POINT, KIND_TRIANGLE
 
 
@@ -214,14 +214,14 @@ def _run_build(cent, plo, phi, leaf_size, done):
 _EMPTY_BOX = (np.inf, np.inf, np.inf, -np.inf, -np.inf, -np.inf)
 
 
-@numba.njit(**NJIT_INLINE)
+@numba.njit(**NJIT_IR_INLINE)
 def _grow(box, plo, phi, i):
     """``box`` grown to hold the box ``plo[i], phi[i]``."""
     return (min(box[0], plo[i, 0]), min(box[1], plo[i, 1]), min(box[2], plo[i, 2]),
             max(box[3], phi[i, 0]), max(box[4], phi[i, 1]), max(box[5], phi[i, 2]))
 
 
-@numba.njit(**NJIT_INLINE)
+@numba.njit(**NJIT_IR_INLINE)
 def _half_area(box):
     """Half the surface area of ``box``."""
     a = box[3] - box[0]
@@ -305,7 +305,7 @@ def _build(cent, plo, phi, leaf_size, done, order, lo, hi, left, right, start, c
 SAH_MIN = 0.125
 
 
-@numba.njit(**NJIT)
+@numba.njit(**NJIT_IR_INLINE)
 def _sah_split(plo, phi, order, area, s, e):
     """Split position ``k`` in ``(s, e)`` of ``order[s:e]`` (sorted along the split axis) that
     minimises the surface area heuristic ``A(s:k) (k - s) + A(k:e) (e - k)`` (``A``: the box
@@ -336,7 +336,7 @@ def _sah_split(plo, phi, order, area, s, e):
 SORT_RUN = 16
 
 
-@numba.njit(**NJIT)
+@numba.njit(**NJIT_IR_INLINE)
 def _sort_by_key(keys, items, kbuf, ibuf, s, e):
     """Sort ``keys[s:e]`` ascending and ``items[s:e]`` along, stably (equal keys keep their
     order, as ``np.argsort(kind="stable")``; keys are finite). ``kbuf``, ``ibuf``: scratch

@@ -50,6 +50,10 @@ KIND_POINT, KIND_SEGMENT, KIND_TRIANGLE = 0, 1, 2
 _SEG = np.int64(KIND_SEGMENT)
 _TRI = np.int64(KIND_TRIANGLE)
 _ZERO = np.int64(0)
+#: ``seg_query`` of :func:`_segment_triangle` as a run-time bool (a constant True / False is a
+#: literal: the whole pair kernel compiled twice, once per role, for a branch taken on ties only)
+_SEGMENT_QUERY = np.bool_(True)
+_TRIANGLE_QUERY = np.bool_(False)
 
 #: ``|ab x ac|^2 <= DEGENERATE * |ab|^2 |ac|^2`` (sine of the smallest angle below 1e-8):
 #: the triangle is treated as its three edges
@@ -346,7 +350,8 @@ def segment_triangle(px, py, pz, qx, qy, qz, ax, ay, az, bx, by, bz, cx, cy, cz)
     against the segment; each triangle edge against the segment at an interior stationary pair.
     Tied candidates: :func:`tied_pair`.
     """
-    return _segment_triangle(px, py, pz, qx, qy, qz, ax, ay, az, bx, by, bz, cx, cy, cz, True)
+    return _segment_triangle(px, py, pz, qx, qy, qz, ax, ay, az, bx, by, bz, cx, cy, cz,
+                             _SEGMENT_QUERY)
 
 
 @numba.njit(**NJIT_INLINE)
@@ -432,7 +437,8 @@ def _segment_triangle(px, py, pz, qx, qy, qz, ax, ay, az, bx, by, bz, cx, cy, cz
 @numba.njit(**NJIT)
 def triangle_segment(px, py, pz, qx, qy, qz, rx_, ry_, rz_, ax, ay, az, bx, by, bz):
     """Triangle ``pqr`` (query) against segment ``ab``."""
-    c = _segment_triangle(ax, ay, az, bx, by, bz, px, py, pz, qx, qy, qz, rx_, ry_, rz_, False)
+    c = _segment_triangle(ax, ay, az, bx, by, bz, px, py, pz, qx, qy, qz, rx_, ry_, rz_,
+                          _TRIANGLE_QUERY)
     return c[0], -c[1], -c[2], -c[3], c[7], c[8], c[9], c[4], c[5], c[6]
 
 

@@ -141,7 +141,7 @@ def _edge_weight(wc, i, t):
     return w, dw
 
 
-@numba.njit(**NJIT_INLINE)
+@numba.njit(**NJIT_IR_INLINE)
 def _closest(kind, P, i, kq, Q, k):
     """:func:`smoothdist._kernels.closest_pair.closest_pair` of query ``(kq, Q)`` and data
     primitive ``i`` of ``kind``, ``P`` (the tree's arrays), called with the data's coordinates as

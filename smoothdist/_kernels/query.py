@@ -591,7 +591,7 @@ def exact_distance_batch(tree, Q, out_d, out_g, out_prim, out_nodes, out_leaves,
                       np.int64(0), ntasks, np.int64(task), stack, dstack)
 
 
-@numba.njit(**NJIT)
+@numba.njit(**NJIT_IR_INLINE)
 def _exact_chunks(tree, Q, floor, out_d, out_g, out_prim, out_nodes, out_leaves, root, ntasks,
                   task, stack, dstack):
     """Chunks ``task, task + ntasks, ...`` of :func:`exact_distance_batch` /

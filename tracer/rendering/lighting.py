@@ -31,7 +31,7 @@ import numba
 import numpy as np
 from numba import prange
 
-from smoothdist.kernels import NJIT, NJIT_PARALLEL, borrowed
+from smoothdist.kernels import NJIT, NJIT_IR_INLINE, NJIT_PARALLEL, borrowed
 from tracer.rendering.camera import box_corners
 from tracer.rendering.march import (NEWTON_COS, OMEGA, RELAX, march_ray, nearest_object,
                                     object_lower_bound, ray_box, scene_distance, visiting_order)
@@ -234,7 +234,7 @@ def light_tasks(tree, roots, params, mode, tol, P, N, depth_max, light, out, nta
         _light_task(tree, roots, params, mode, tol, P, N, depth_max, light, out, task, ntasks)
 
 
-@numba.njit(**NJIT)
+@numba.njit(**NJIT_IR_INLINE)
 def _light_task(tree, roots, params, mode, tol, P, N, depth_max, light, out, task, ntasks):
     """Points ``task, task + ntasks, ...`` of :func:`light_points`."""
     L, lo, hi, eps, k, delta, do_shadow, do_ao, slack, t_min, t_judge = light

@@ -50,7 +50,8 @@ from numba.core import types as nbtypes
 from numba.extending import overload
 
 from smoothdist._kernels.closest_point import box_distance2
-from smoothdist.kernels import (NJIT, NJIT_PARALLEL, borrowed, exact_distance_point,
+from smoothdist.kernels import (NJIT, NJIT_IR_INLINE, NJIT_PARALLEL, borrowed,
+                                exact_distance_point,
                                 logsumexp_accumulate, smooth_distance_point,
                                 smooth_distance_point_tol)
 from tracer.rendering.camera import CAM_HEIGHT, CAM_WIDTH, ray_direction
@@ -750,7 +751,7 @@ def cone_first_step(cam, r_lo, r_hi, c_lo, c_hi, t_min, D, gx, gy, gz, dx, dy, d
     return cone_newton_step(t_min, D, gx, gy, gz, ux, uy, uz, delta, dx, dy, dz)
 
 
-@numba.njit(**NJIT)
+@numba.njit(**NJIT_IR_INLINE)
 def _render_tile(tree, ray, r_lo, r_hi, c_lo, c_hi, depth_max, out, opts):
     """Trace the pixels ``r_lo <= r < r_hi, c_lo <= c < c_hi`` of one tile (see
     :func:`render_rows`; ``tree``, ``ray``, ``out``, ``opts`` as there)."""
@@ -928,7 +929,7 @@ def sample_tasks(tree, ray, rows, cols, offsets, depth_max, out, opts, eps_px, n
                       task, ntasks)
 
 
-@numba.njit(**NJIT)
+@numba.njit(**NJIT_IR_INLINE)
 def _samples_task(tree, ray, rows, cols, offsets, depth_max, out, opts, eps_px, newton_cos, task,
                   ntasks):
     """Pixels ``task, task + ntasks, ...`` of :func:`trace_samples`."""
