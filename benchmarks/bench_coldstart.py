@@ -1,27 +1,38 @@
-"""First render with an empty kernel cache: a mesh file, a point cloud, a lit adaptive render.
+"""First calls with an empty kernel cache: library queries, whole-mesh distances, renders, a
+simulation step.
 
-Each case runs ``python -m tracer render ...`` in a fresh process with ``NUMBA_CACHE_DIR``
-pointing at a new empty folder (as after ``pip install``; ``smoothdist._cache_guard`` then
-finds nothing to clear), then once more with that folder filled (warm). Reported per case:
-wall seconds cold and warm, the CPU seconds of the cold run, and how many kernel
-specialisations it compiled (every ``@njit`` function of ``smoothdist`` and ``tracer`` with its
-signatures, each kernel counted once: every one is compiled, optimised and written to the
-cache). The cases:
+Each case runs in a fresh process with ``NUMBA_CACHE_DIR`` pointing at a new empty folder (as
+after ``pip install``; ``smoothdist._cache_guard`` then finds nothing to clear), then once more
+with that folder filled (warm). Reported per case: wall and CPU seconds of the whole process
+(Python, numpy and numba imports included), and the kernel specialisations it compiled: every
+``numba:compile`` event of a ``smoothdist`` or ``tracer`` function (each is compiled, optimised
+and written to the cache; a function merged into its caller, ``NJIT_IR_INLINE``, is not one),
+in total and per function. The cases (geometry made here: the 1,280-triangle icosphere of
+trimesh's ``icosphere(3)``, its 1,920 edges, its 642 vertices, 2,000 points on a sphere):
 
-* ``mesh``: a trimesh-style icosphere (``ball.obj``, 1,280 triangles, written here) rendered
-  as ``tracer render ball.obj --size 256 256`` (lit, auto alpha);
-* ``cloud``: 2,000 points on the unit sphere (``cloud.xyz``), the same command;
-* ``lit``: ``scenes/bunny_triangles.json --size 256 256 --shading lit --samples 16
-  --adaptive``.
+* library: ``exact`` (``smoothdist.exact_distance``, 1,000 points), ``smooth``
+  (``smooth_distance``, alpha 50), ``smooth_alpha_u`` (the same with ``alpha_u="auto"``),
+  ``md_triangles`` / ``md_edges`` / ``md_points`` (``MeshDistance`` of the mesh against a
+  copy scaled by 0.3, alpha 50, and its first call), ``md_exact`` (``MeshDistance.exact``),
+  ``md_vertex`` (``MeshDistance.vertex_gradient``), triangles;
+* renders (``tracer render ... --size 256 256``, lit, auto alpha): ``mesh`` (``ball.obj``),
+  ``edges`` (``ball_edges.obj``, its edges as OBJ lines), ``cloud`` (``cloud.xyz``), ``lit``
+  (``scenes/bunny_triangles.json --shading lit --samples 16 --adaptive``);
+* ``sim``: ``tracer simulate scenes/simulations/ico_bowl.json --steps 1 --no-render``.
 
 Results go to ``benchmarks/data/coldstart.json`` with the load average before and after each
-run (other jobs slow a compile down as much as a render). The README's first-render figure is
-read from that file (``tests/test_render_coldstart.py`` checks it).
+run (other jobs slow a compile down as much as a render), the commit and whether the tree was
+dirty. ``--source DIR`` measures another checkout (e.g. a ``git worktree`` of an older
+commit) with this script, for a before/after table. The README's first-render figures and the
+performance guide's cold-start table are read from these files (``tests/test_docs_tables.py``,
+``tests/test_render_coldstart.py``).
 
 Usage::
 
-    python benchmarks/bench_coldstart.py                  # all three cases
-    python benchmarks/bench_coldstart.py --cases lit --out out/coldstart.json
+    python benchmarks/bench_coldstart.py                       # every case
+    python benchmarks/bench_coldstart.py --cases exact smooth md_triangles --out out/cs.json
+    git worktree add /tmp/before HEAD~5
+    python benchmarks/bench_coldstart.py --source /tmp/before --out benchmarks/data/coldstart_before.json
 """
 
 import argparse
@@ -38,24 +49,61 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-CASES = ("mesh", "cloud", "lit")
 DEFAULT_OUT = ROOT / "benchmarks" / "data" / "coldstart.json"
 
-#: runs in the child: the CLI, then a count of the compiled specialisations
+#: library cases: the code run in the child after the imports (``V``, ``F``, ``E``, ``Q`` given)
+LIBRARY = {
+    "exact": "sd.exact_distance(Q, V, F)",
+    "smooth": "sd.smooth_distance(Q, V, F, alpha=50.0)",
+    "smooth_alpha_u": "sd.smooth_distance(Q, V, F, alpha=50.0, alpha_u='auto')",
+    "md_triangles": "sd.MeshDistance((V, F), (0.3 * V, F), alpha=50, alpha_q=50)(R, t)",
+    "md_edges": "sd.MeshDistance((V, E), (0.3 * V, E), alpha=50, alpha_q=50)(R, t)",
+    "md_points": "sd.MeshDistance(V, 0.3 * V, alpha=50, alpha_q=50)(R, t)",
+    "md_exact": "sd.MeshDistance((V, F), (0.3 * V, F), alpha=50, alpha_q=50).exact(R, t)",
+    "md_vertex": ("sd.MeshDistance((V, F), (0.3 * V, F), alpha=50, alpha_q=50)"
+                  ".vertex_gradient(R, t)"),
+}
+RENDERS = ("mesh", "edges", "cloud", "lit")
+CASES = (*LIBRARY, *RENDERS, "sim")
+
+#: runs in the child: the case, then a count of the compiled specialisations (numba's compile
+#: events of smoothdist and tracer functions)
 CHILD = r"""
 import json, resource, sys, time
 t0 = time.perf_counter()
-from numba.core.dispatcher import Dispatcher
-import tracer.cli
-rc = tracer.cli.main(sys.argv[1:])
+from numba.core import event
+
+compiled = {}
+
+
+class Count(event.Listener):
+    def on_start(self, ev):
+        pass
+
+    def on_end(self, ev):
+        fn = getattr(ev.data.get("dispatcher"), "py_func", None)
+        name = f"{getattr(fn, '__module__', '')}.{getattr(fn, '__qualname__', '?')}"
+        if name.split(".")[0] in ("smoothdist", "tracer"):
+            compiled[name] = compiled.get(name, 0) + 1
+
+
+event.register("numba:compile", Count())
+case, args = sys.argv[1], sys.argv[2:]
+if case == "library":
+    import numpy as np
+    import smoothdist as sd
+    data = np.load(args[0])
+    V, F, E, Q = data["V"], data["F"], data["E"], data["Q"]
+    R, t = np.eye(3), np.array([0.0, 0.0, 2.0])
+    exec(args[1])
+    rc = 0
+else:
+    import tracer.cli
+    rc = tracer.cli.main(args)
 wall = time.perf_counter() - t0
-kernels = {id(obj): (f"{name}.{attr}", len(obj.signatures))
-           for name, mod in list(sys.modules.items()) if name.split(".")[0] in ("smoothdist", "tracer")
-           for attr, obj in vars(mod).items() if isinstance(obj, Dispatcher) and obj.signatures}
 ru = resource.getrusage(resource.RUSAGE_SELF)
 print(json.dumps({"rc": rc, "in_process_s": wall, "cpu_s": ru.ru_utime + ru.ru_stime,
-                  "compiled": sum(n for _, n in kernels.values()),
-                  "kernels": dict(sorted(kernels.values()))}))
+                  "compiled": sum(compiled.values()), "kernels": dict(sorted(compiled.items()))}))
 """
 
 
@@ -88,66 +136,122 @@ def icosphere(subdivisions=3):
 
 
 def write_inputs(folder):
+    """The cases' input files in ``folder``; ``{case: child arguments}``."""
     V, F = icosphere(3)
     ball = folder / "ball.obj"
     with open(ball, "w", encoding="ascii") as f:
         f.writelines(f"v {x:.9f} {y:.9f} {z:.9f}\n" for x, y, z in V)
         f.writelines(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in F)
+    E = np.unique(np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1),
+                  axis=0)
+    wire = folder / "ball_edges.obj"
+    with open(wire, "w", encoding="ascii") as f:
+        f.writelines(f"v {x:.9f} {y:.9f} {z:.9f}\n" for x, y, z in V)
+        f.writelines(f"l {a + 1} {b + 1}\n" for a, b in E)
     rng = np.random.default_rng(0)
     P = rng.normal(size=(2000, 3))
     P /= np.linalg.norm(P, axis=1, keepdims=True)
     cloud = folder / "cloud.xyz"
     np.savetxt(cloud, P)
-    return {"mesh": [str(ball), "--size", "256", "256"],
-            "cloud": [str(cloud), "--size", "256", "256"],
-            "lit": [str(ROOT / "scenes" / "bunny_triangles.json"), "--size", "256", "256",
-                    "--shading", "lit", "--samples", "16", "--adaptive"]}
+    arrays = folder / "arrays.npz"
+    np.savez(arrays, V=V, F=F, E=E, Q=rng.uniform(-1.5, 1.5, (1000, 3)))
+    size = ["--size", "256", "256"]
+    cases = {name: ["library", str(arrays), code] for name, code in LIBRARY.items()}
+    cases.update(
+        mesh=["render", str(ball), *size], edges=["render", str(wire), *size],
+        cloud=["render", str(cloud), *size],
+        lit=["render", str(ROOT / "scenes" / "bunny_triangles.json"), *size, "--shading", "lit",
+             "--samples", "16", "--adaptive"],
+        sim=["simulate", str(ROOT / "scenes" / "simulations" / "ico_bowl.json"), "--steps", "1",
+             "--no-render"])
+    return cases
 
 
-def run(args, cache, out_png, threads):
+def run(args, cache, work, threads, source):
+    """One child process: ``args`` as given by :func:`write_inputs`, with the kernel cache in
+    ``cache`` and ``source`` (a checkout) first on the path."""
     env = dict(os.environ, NUMBA_CACHE_DIR=str(cache), MPLBACKEND="Agg")
-    env["PYTHONPATH"] = str(ROOT) + os.pathsep + env.get("PYTHONPATH", "")
-    cmd = [sys.executable, "-c", CHILD, "render", *args, "-o", str(out_png), "--overwrite", "-q"]
+    env["PYTHONPATH"] = str(source) + os.pathsep + env.get("PYTHONPATH", "")
+    if args[0] == "library":
+        cmd = [sys.executable, "-c", CHILD, *args]
+    else:
+        cmd = [sys.executable, "-c", CHILD, "cli", *args]
+        cmd += (["-o", str(work / "out.png"), "--overwrite", "-q"] if args[0] == "render" else
+                ["-o", str(work / "sim"), "--overwrite"])
+        if threads and args[0] == "render":
+            cmd += ["--threads", str(threads)]
     if threads:
-        cmd += ["--threads", str(threads)]
+        env["NUMBA_NUM_THREADS"] = str(threads)
     load = os.getloadavg()[0]
     t0 = time.perf_counter()
-    p = subprocess.run(cmd, env=env, capture_output=True, text=True)
+    p = subprocess.run(cmd, env=env, capture_output=True, text=True, cwd=work)
     wall = time.perf_counter() - t0
     if p.returncode != 0:
         raise SystemExit(f"error: {' '.join(args)} failed:\n{p.stderr.strip()[-2000:]}")
     r = json.loads(p.stdout.strip().splitlines()[-1])
+    if r["rc"] != 0:
+        raise SystemExit(f"error: {' '.join(args)} exited {r['rc']}:\n{p.stderr[-2000:]}")
     r.update(wall_s=wall, load_before=load, load_after=os.getloadavg()[0])
     return r
+
+
+def describe(case, args, work):
+    """The case's command as a reader would type it (file names without folders)."""
+    if args[0] == "library":
+        return LIBRARY[case]
+    words = [Path(a).name if a.startswith(str(work)) else
+             (str(Path(a).relative_to(ROOT)) if a.startswith(str(ROOT)) else a) for a in args]
+    return "tracer " + " ".join(words)
+
+
+def git_state(source):
+    """``(commit, dirty)`` of the checkout ``source`` (None where git cannot tell)."""
+    try:
+        commit = subprocess.run(["git", "rev-parse", "HEAD"], cwd=source, capture_output=True,
+                                text=True, check=True).stdout.strip()
+        dirty = bool(subprocess.run(["git", "status", "--porcelain", "--", "smoothdist",
+                                     "tracer"], cwd=source, capture_output=True, text=True,
+                                    check=True).stdout.strip())
+        return commit, dirty
+    except (OSError, subprocess.CalledProcessError):
+        return None, None
 
 
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--cases", nargs="+", choices=CASES, default=list(CASES))
-    p.add_argument("--threads", type=int, default=None, help="--threads of the renders")
+    p.add_argument("--threads", type=int, default=None,
+                   help="numba threads of the children (default: numba's)")
+    p.add_argument("--source", default=str(ROOT),
+                   help="the checkout to measure (default: this one)")
     p.add_argument("--out", default=str(DEFAULT_OUT), help="results JSON")
     args = p.parse_args(argv)
     if not args.out.endswith(".json"):
         p.error("--out must name a .json file")
+    source = Path(args.source).resolve()
+    if not (source / "smoothdist" / "__init__.py").is_file():
+        p.error(f"--source {source} holds no smoothdist package")
+    commit, dirty = git_state(source)
     results = {"date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
                "machine": {"cores": os.cpu_count(), "platform": platform.platform(),
                            "python": platform.python_version()},
-               "cases": {}}
+               "commit": commit, "dirty": dirty, "cases": {}}
     work = Path(tempfile.mkdtemp(prefix="coldstart-"))
     try:
         inputs = write_inputs(work)
-        print(f"{'case':6} {'cold s':>7} {'cpu s':>6} {'warm s':>7} {'compiled':>9} {'load':>9}")
+        print(f"{'case':15} {'cold s':>7} {'cpu s':>6} {'warm s':>7} {'compiled':>9} "
+              f"{'load':>9}")
         for case in args.cases:
             cache = work / f"cache-{case}"
             cache.mkdir()
-            cold = run(inputs[case], cache, work / f"{case}.png", args.threads)
-            warm = run(inputs[case], cache, work / f"{case}.png", args.threads)
-            results["cases"][case] = {"command": "tracer render " + " ".join(
-                Path(a).name if a.startswith(str(work)) or a.startswith(str(ROOT)) else a
-                for a in inputs[case]), "cold": cold, "warm": warm}
-            print(f"{case:6} {cold['wall_s']:7.1f} {cold['cpu_s']:6.1f} {warm['wall_s']:7.1f} "
-                  f"{cold['compiled']:9d} {cold['load_before']:4.1f}-{cold['load_after']:.1f}")
+            cold = run(inputs[case], cache, work, args.threads, source)
+            warm = run(inputs[case], cache, work, args.threads, source)
+            results["cases"][case] = {"command": describe(case, inputs[case], work),
+                                      "cold": cold, "warm": warm}
+            print(f"{case:15} {cold['wall_s']:7.1f} {cold['cpu_s']:6.1f} {warm['wall_s']:7.1f} "
+                  f"{cold['compiled']:9d} {cold['load_before']:4.1f}-{cold['load_after']:.1f}",
+                  flush=True)
     finally:
         shutil.rmtree(work, ignore_errors=True)
     os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)

@@ -832,6 +832,6 @@ def nearest_vertex_distance(tree, X):
     dstack = np.empty(k)
     best = np.inf
     for i in range(X.shape[0]):
-        d = exact_distance_point(tree, X[i, 0], X[i, 1], X[i, 2], stack, dstack)[0]
+        d = exact_distance_point(tree, X[i, 0], X[i, 1], X[i, 2], stack, dstack, ZERO, -1.0)[0]
         best = min(best, d)
     return best
