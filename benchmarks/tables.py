@@ -8,6 +8,8 @@ Usage::
 
     python benchmarks/tables.py scaling benchmarks/data/scaling.json
     python benchmarks/tables.py gpu benchmarks/data/gpu_h100.json
+    python benchmarks/tables.py coldstart benchmarks/data/coldstart.json \\
+        benchmarks/data/coldstart_before.json
 """
 
 import argparse
@@ -59,15 +61,64 @@ def gpu_table(path):
     return markdown(d["card"], d["rows"], d["threads"], d["cpu"])
 
 
-TABLES = {"scaling": scaling_table, "gpu": gpu_table}
+#: the cold-start table's targets (issue 51): CPU seconds of a first call, fresh process, empty
+#: kernel cache, our quiet 2-core machine
+COLDSTART_TARGETS = {"exact": 4, "smooth": 5, "smooth_alpha_u": 5, "md_triangles": 15,
+                     "md_edges": 15, "md_points": 15, "md_exact": 15, "md_vertex": 15,
+                     "mesh": 10, "edges": 10, "cloud": 10, "lit": 10}
+
+
+def coldstart_table(path, before_path=None):
+    """The first-call table of a ``bench_coldstart.py`` results file: per case its command, the
+    cold CPU and wall seconds and compiled specialisations (and those of ``before_path``, the
+    same script run on the code before), the warm wall seconds and the target."""
+    d = _load(path)
+    b = _load(before_path)["cases"] if before_path else {}
+    cells = ["first call (empty cache)", "CPU s", "wall s", "compiled"]
+    if b:
+        cells += ["before: CPU s", "wall s", "compiled"]
+    cells += ["warm wall s", "target CPU s"]
+    lines = ["| " + " | ".join(cells) + " |", "|" + "---|" * len(cells)]
+    for case, r in d["cases"].items():
+        c = r["cold"]
+        row = f"| `{r['command']}` | {c['cpu_s']:.1f} | {c['wall_s']:.1f} | {c['compiled']} | "
+        if b:
+            o = b.get(case)
+            row += (f"{o['cold']['cpu_s']:.1f} | {o['cold']['wall_s']:.1f} | "
+                    f"{o['cold']['compiled']} | " if o else "- | - | - | ")
+        target = COLDSTART_TARGETS.get(case)
+        row += f"{r['warm']['wall_s']:.1f} | {target if target else '-'} |"
+        lines.append(row)
+    loads = [x for r in d["cases"].values() for x in (r["cold"]["load_before"],
+                                                       r["cold"]["load_after"])]
+    lines += ["", f"{d['date']}, commit {(d.get('commit') or '?')[:10]}"
+              f"{' (dirty)' if d.get('dirty') else ''}, {d['machine']['cores']} cores, Python "
+              f"{d['machine']['python']}, load average {min(loads):.1f}-{max(loads):.1f}"]
+    return "\n".join(lines)
+
+
+def coldstart_steps_table(path):
+    """The table of ``coldstart_issue51_steps.json``: the first ``MeshDistance`` call after
+    each change of issue 51, in the order made."""
+    d = _load(path)
+    lines = ["| change (cumulative) | CPU s | wall s | compile events |", "|---|---|---|---|"]
+    lines += [f"| {r['step']} | {r['cpu_s']:.1f} | {r['wall_s']:.1f} | {r['compile_events']} |"
+              for r in d["steps"]]
+    return "\n".join(lines)
+
+
+TABLES = {"scaling": scaling_table, "gpu": gpu_table, "coldstart": coldstart_table,
+          "coldstart-steps": coldstart_steps_table}
 
 
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("kind", choices=sorted(TABLES))
     p.add_argument("path")
+    p.add_argument("before", nargs="?", help="coldstart: the results of the code before")
+    # coldstart-steps: benchmarks/data/coldstart_issue51_steps.json
     args = p.parse_args(argv)
-    print(TABLES[args.kind](args.path))
+    print(TABLES[args.kind](args.path, *([args.before] if args.before else [])))
     return 0
 
 

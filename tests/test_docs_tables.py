@@ -17,7 +17,9 @@ GUIDE = ROOT / "docs" / "guide" / "performance.md"
 DATA = ROOT / "benchmarks" / "data"
 sys.path.insert(0, str(ROOT))
 
-from benchmarks.tables import gpu_table, scaling_table  # noqa: E402
+from benchmarks.coldstart_words import warm_sentences  # noqa: E402
+from benchmarks.tables import (coldstart_steps_table, coldstart_table, gpu_table,  # noqa: E402
+                               scaling_table)
 
 
 def _guide():
@@ -44,6 +46,48 @@ def test_the_guide_holds_the_table_of_the_results_file(kind, name):
     want = [ln.strip() for ln in table.splitlines()]
     starts = [i for i, ln in enumerate(lines) if ln == want[0]]
     assert any(lines[i:i + len(want)] == want for i in starts), f"{name}: paste it again"
+
+
+def test_the_guide_holds_the_cold_start_table():
+    """The first-call table of issue 51: this code (``coldstart.json``) and the code before
+    (``coldstart_issue51_before.json``), made by ``benchmarks/tables.py coldstart``."""
+    table = coldstart_table(DATA / "coldstart.json", DATA / "coldstart_issue51_before.json")
+    lines = [ln.strip() for ln in _guide().splitlines()]
+    want = [ln.strip() for ln in table.splitlines()]
+    starts = [i for i, ln in enumerate(lines) if ln == want[0]]
+    assert any(lines[i:i + len(want)] == want for i in starts), "paste it again"
+
+
+def test_the_guide_holds_the_cold_start_steps_and_sentences():
+    """Issue 51's steps table (``coldstart_issue51_steps.json``), its warm side-by-side
+    sentences (``coldstart_issue51_warm.json``) and the first calls it quotes
+    (``coldstart.json``, ``coldstart_issue51_before.json``)."""
+    guide = _guide()
+    lines = [ln.strip() for ln in guide.splitlines()]
+    want = coldstart_steps_table(DATA / "coldstart_issue51_steps.json").splitlines()
+    starts = [i for i, ln in enumerate(lines) if ln == want[0]]
+    assert any(lines[i:i + len(want)] == want for i in starts), "paste the steps table again"
+    text = _flat(guide)
+    for sentence in warm_sentences(DATA / "coldstart_issue51_warm.json"):
+        assert sentence in text, sentence
+    cases = _load("coldstart.json")["cases"]
+    before = _load("coldstart_issue51_before.json")["cases"]
+    md, mdb = cases["md_triangles"]["cold"], before["md_triangles"]["cold"]
+    assert f"the first exact query {cases['exact']['cold']['cpu_s']:.1f} s of CPU" in text
+    assert f"the first smooth one {cases['smooth']['cold']['cpu_s']:.1f} s" in text
+    assert (f"takes {md['cpu_s']:.1f} s against {mdb['cpu_s']:.1f} s before "
+            f"({md['compiled']} specialisations against {mdb['compiled']})") in text
+    renders = [cases[c]["cold"]["cpu_s"] for c in ("mesh", "edges", "cloud", "lit")]
+    assert f"the renders {min(renders):.1f}-{max(renders):.1f} s against 10" in text
+
+
+def test_the_whole_mesh_guide_quotes_the_measured_first_call():
+    """The whole-mesh guide's compile figure is the measured first ``MeshDistance`` call."""
+    text = _flat((ROOT / "docs" / "guide" / "whole-mesh.md").read_text(encoding="utf-8"))
+    cold = _load("coldstart.json")["cases"]["md_triangles"]["cold"]
+    before = _load("coldstart_issue51_before.json")["cases"]["md_triangles"]["cold"]
+    assert (f"the first call compiles for {cold['cpu_s']:.0f} s of CPU "
+            f"({before['cpu_s']:.0f} s before issue 51;") in text
 
 
 def _range(values, fmt):
@@ -119,8 +163,9 @@ def test_the_traversal_loop_cold_start_comparison_follows_its_file():
 
 
 def test_the_cold_start_paragraph_follows_the_files():
+    """The paragraph on the first renders after the one traversal loop (issue 33)."""
     text = _flat(_guide())
-    cases = _load("coldstart.json")["cases"]
+    cases = _load("coldstart_traversal.json")["cases"]
     for case in ("mesh", "cloud", "lit"):
         cold = cases[case]["cold"]
         assert f"{cold['wall_s']:.1f} ({cold['cpu_s']:.1f}, {cold['compiled']})" in text, case

@@ -1,0 +1,42 @@
+"""The performance guide's sentences on issue 51's warm side-by-side runs, made from
+``benchmarks/data/coldstart_issue51_warm.json`` (``tests/test_docs_tables.py`` checks that the
+guide holds them)."""
+
+import json
+from pathlib import Path
+
+DATA = Path(__file__).resolve().parent / "data" / "coldstart_issue51_warm.json"
+
+
+def _range(values, fmt):
+    lo, hi = format(min(values), fmt), format(max(values), fmt)
+    return lo if lo == hi else f"{lo}-{hi}"
+
+
+def _pairs(block, fmt, names=None):
+    b, a = block["before"], block["after"]
+    return ", ".join(f"{names.get(k, k) if names else k} {_range(b[k], fmt)} -> "
+                     f"{_range(a[k], fmt)}" for k in b)
+
+
+def warm_sentences(path=DATA):
+    """``(mesh, exact, render, grid, generic)``: the sentences of the guide."""
+    d = json.loads(Path(path).read_text(encoding="utf-8"))
+    mesh = _pairs(d["mesh_distance_ms_best"], ".2f", {"ring-toss": "ring toss"})
+    exact = _pairs(d["mesh_exact_ms_best"], ".2f")
+    render = _pairs(d["render_s_best"], ".3f")
+    g = d["grid_queries_per_s"]
+    worst = max(abs(sum(g["after"][k]) / sum(g["before"][k]) - 1.0) for k in g["before"])
+    grid = f"within {100 * worst:.0f} % for every kind and mode"
+    c = d["render_s_best_cpu_name"]
+    slow = [sum(c["generic"][k]) / sum(c["host"][k]) - 1.0 for k in c["host"]]
+    generic = (f"{_range([100 * s for s in slow], '.0f')} % slower renders here "
+               "(points / edges / triangles " + " / ".join(_range(c["host"][k], ".3f")
+                                                          for k in c["host"])
+               + " s for this CPU against " + " / ".join(_range(c["generic"][k], ".3f")
+                                                          for k in c["generic"]) + " s generic)")
+    return mesh, exact, render, grid, generic
+
+
+if __name__ == "__main__":
+    print("\n".join(warm_sentences()))
