@@ -44,7 +44,7 @@ root_doc = "index"
 nitpicky = True                      # a reference that resolves nowhere is a warning (an error)
 # types of other packages (no intersphinx: the build runs offline) and numpydoc's shape words
 nitpick_ignore_regex = [
-    (r"py:class", r"(numpy|np|trimesh|pyvista|pv|PIL|dask|distributed|matplotlib|scipy)\..*"),
+    (r"py:class", r"(numpy|np|numba|trimesh|pyvista|pv|PIL|dask|distributed|matplotlib|scipy)\..*"),
     (r"py:class", r"(optional|array_like|array-like|callable|path-like|file-like)"),
     (r"py:class", r"(pathlib\.)?Path|os\.PathLike|typing\..*|collections\..*"),
 ]

@@ -12,9 +12,10 @@ Inside a kernel, allocate ``np.empty(tree.depth + 4, np.int64)`` and ``np.empty(
 tolerance-controlled pruning (``tol > 0``; same scratch arrays; ``DEFAULT_TOL`` = 0 is off).
 
 Your own kernels take the package's compilation policy from here, so that they are compiled
-(and cached) like these: decorate them ``@numba.njit(**NJIT)``, ``@numba.njit(**NJIT_IR_INLINE)`` for functions
-merged into their callers (no compiled library of their own: a traversal kind, a task body), or
-``@numba.njit(**NJIT_PARALLEL)`` for batch loops over ``prange``; ``PARALLEL`` is false under
+(and cached) like these: decorate them ``@numba.njit(**NJIT)``,
+``@numba.njit(**NJIT_IR_INLINE)`` for functions merged into their callers (no compiled library
+of their own: a traversal kind, a task body), or ``@numba.njit(**NJIT_PARALLEL)`` for batch
+loops over ``prange``; ``PARALLEL`` is false under
 ``SMOOTHDIST_PARALLEL=0`` (see ``smoothdist/_config.py``). ``borrowed(tree)`` inside a kernel
 gives the tree (or any array, or tuple of arrays) as views without reference counts, for
 loops that pass it down at every step; valid while the kernel's caller holds the arrays.

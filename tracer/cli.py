@@ -163,7 +163,7 @@ def installed(name):
 def check_needs(module, args):
     """Raise ``ModuleNotFoundError`` for the first package of the command module's
     ``needs(args)`` that is not installed; :func:`main` reports it as any failed import
-    (:func:`_missing_package`)."""
+    (``_missing_package``)."""
     needs = getattr(module, "needs", None)
     for name in needs(args) if needs is not None else ():
         if not installed(name):

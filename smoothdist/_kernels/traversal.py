@@ -26,8 +26,8 @@ the kernel that calls it, so each kernel's on-disk cache holds its own specialis
 and the generic functions here are not cached themselves (``NJIT_GENERIC``): their signatures
 name the caller's types, which another process may not be able to import.
 
-Ties (``key_a == key_b``) pop ``a`` first. Initial states hold ``int64`` counters (:data:`ZERO`,
-:data:`NONE`), never literal ints.
+Ties (``key_a == key_b``) pop ``a`` first. Initial states hold ``int64`` counters (``ZERO``,
+``NONE``), never literal ints.
 """
 
 import numba
