@@ -236,9 +236,18 @@ def test_device_argument_checked():
                        {"width": 8, "height": 8, "shading": "lit"})
     with pytest.raises(ValueError, match="device must be one of"):
         render(scene, device="GPU")
-    # what the GPU does not render is refused before any device is looked for
+    # the missing GPU is said first (issue 49); with a GPU, what it does not render (the lit
+    # look) is refused before any work
+    from smoothdist.cuda import CudaUnavailable
+    from tracer.rendering.gpu_render import check_scene
+    if _no_cuda():
+        with pytest.raises(CudaUnavailable, match="no CUDA GPU found"):
+            render(scene, device="cuda")
+    else:
+        with pytest.raises(ValueError, match="device 'cuda' renders one sample per pixel"):
+            render(scene, device="cuda")
     with pytest.raises(ValueError, match="device 'cuda' renders one sample per pixel"):
-        render(scene, device="cuda")
+        check_scene(scene, 1)
 
 
 def test_no_gpu_is_one_clear_error(tmp_path):

@@ -264,6 +264,9 @@ def render_cuda(scene, *, progress=None, transforms=None, relax=None, omega=None
     from tracer.rendering.frame import RenderResult, _progress_callback, _samples, shade
 
     samples = _samples(scene.samples if samples is None else samples)
+    # no card is the first thing to say (issue 49): an option the card would refuse matters
+    # only where there is a card
+    sdcuda.cuda_module()
     check_scene(scene, samples)
     for name, value in (("newton", newton), ("relax", relax)):
         if value is not None and not (isinstance(value, (int, float, np.number))
