@@ -573,3 +573,29 @@ def test_beta_difference_heat_map_has_a_colour_bar(beta_run):
         plots.pyplot().close(fig)
     assert (beta_run / "beta_diff.png").is_file()
     assert "beta_diff.png" in (beta_run / "report.md").read_text(encoding="utf-8")
+
+
+def test_beta_error_over_a_tiny_hit_set_is_undefined(tmp_path):
+    """An error over fewer than MIN_ERROR_PIXELS pixels hit by both renders is NaN (shown as
+    "undefined"), never 0 %; from that many pixels on it is the mean depth difference."""
+    from tracer.studies import beta
+    from tracer.studies.plots import percent
+
+    def write(kind, b, depth):
+        np.save(tmp_path / f"depth_{beta.file_stem(kind, b, 0.0)}.npy", depth)
+
+    n = beta.MIN_ERROR_PIXELS
+    ref = np.full((32, 32), np.nan)
+    ref.flat[:4] = 1.0                          # 4 hit pixels: a user's mesh at the paper's alpha
+    write("points", 0.0, ref)
+    write("points", 0.5, ref + 0.25)
+    big = np.full((32, 32), np.nan)
+    big.flat[:n] = 2.0
+    write("edges", 0.0, big)
+    write("edges", 0.5, big + 0.5)
+    rows = [{"type": k, "beta": 0.5, "tol": 0.0, "diag": 10.0} for k in ("points", "edges")]
+    tiny, enough = beta.with_errors(rows, tmp_path)
+    assert tiny["n_both"] == 4 and np.isnan(tiny["error_rel_diag"])
+    assert percent(tiny["error_rel_diag"], 2) == "undefined"
+    assert enough["n_both"] == n and enough["error_abs"] == pytest.approx(0.5)
+    assert percent(enough["error_rel_diag"], 2) == "5.00%"

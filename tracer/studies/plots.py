@@ -40,6 +40,12 @@ AUTHORS_TIMES_SETUP = ("authors' C++ (beta_error_test) run side by side with our
                        "machine, 2 threads each, eps 1e-3 absolute, N x N px")
 
 
+def percent(fraction, digits):
+    """``fraction`` (of the diagonal) as a percentage with ``digits`` decimals, or
+    "undefined" where it is not finite (too few pixels to measure it)."""
+    return f"{100 * fraction:.{digits}f}%" if math.isfinite(fraction) else "undefined"
+
+
 def has_reference(params):
     """Whether the study is the authors' own (``params["authors_reference"]``: the paper's
     bunny at alpha 200, alpha_U 1200 with their camera; parameter files written before that
@@ -342,7 +348,7 @@ def beta_grid(out, cache, rows, present, grid_betas):
 
                 ax.imshow(thumb(load_png(img_path), 160), interpolation="lanczos")
                 ax.set_title(f"β={b:g}: {r['seconds']:.3g} s\n"
-                             f"err {100 * r['error_rel_diag']:.2f}%", fontsize=7)
+                             f"err {percent(r['error_rel_diag'], 2)}", fontsize=7)
             else:
                 ax.text(0.5, 0.5, "not available", ha="center", va="center", fontsize=7,
                         transform=ax.transAxes)
@@ -411,7 +417,7 @@ def beta_diff_figure(cache, rows, present, grid_betas, params):
             if (k, b) in maps:
                 err, r = maps[k, b]
                 ax.imshow(err, cmap=cmap, norm=norm, interpolation="nearest")
-                ax.set_title(f"β={b:g}: mean {100 * r['error_rel_diag']:.2f}%", fontsize=7)
+                ax.set_title(f"β={b:g}: mean {percent(r['error_rel_diag'], 2)}", fontsize=7)
             else:
                 ax.text(0.5, 0.5, "not available", ha="center", va="center", fontsize=7,
                         transform=ax.transAxes)
