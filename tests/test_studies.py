@@ -576,20 +576,21 @@ def test_beta_difference_heat_map_has_a_colour_bar(beta_run):
 
 
 def test_beta_error_over_a_tiny_hit_set_is_undefined(tmp_path):
-    """An error over fewer than MIN_ERROR_PIXELS pixels hit by both renders is NaN (shown as
-    "undefined"), never 0 %; from that many pixels on it is the mean depth difference."""
+    """An error over fewer pixels hit by both renders than MIN_ERROR_PIXELS and
+    MIN_ERROR_SHARE of the image is NaN (shown as "undefined"), never 0 %; from that many
+    pixels on it is the mean depth difference."""
     from tracer.studies import beta
     from tracer.studies.plots import percent
 
     def write(kind, b, depth):
         np.save(tmp_path / f"depth_{beta.file_stem(kind, b, 0.0)}.npy", depth)
 
-    n = beta.MIN_ERROR_PIXELS
-    ref = np.full((32, 32), np.nan)
+    n = int(max(beta.MIN_ERROR_PIXELS, np.ceil(beta.MIN_ERROR_SHARE * 128 * 128)))
+    ref = np.full((128, 128), np.nan)
     ref.flat[:4] = 1.0                          # 4 hit pixels: a user's mesh at the paper's alpha
     write("points", 0.0, ref)
     write("points", 0.5, ref + 0.25)
-    big = np.full((32, 32), np.nan)
+    big = np.full((128, 128), np.nan)
     big.flat[:n] = 2.0
     write("edges", 0.0, big)
     write("edges", 0.5, big + 0.5)

@@ -54,10 +54,12 @@ BETA_FIELDS = ["type", "beta", "tol", "seconds", "hits", "mean_steps", "mean_lea
                "diag", "n_primitives", "threads", "key"]
 #: columns that depend on the machine, its load or the scheduler, not on the study's results
 TIMING_FIELDS = ("seconds", "threads", "task_seconds", "worker")
-#: fewest pixels hit by both a render and its beta = 0 reference for an error to be reported:
-#: below it the error is undefined (NaN, "undefined" in the plots and report), not a figure
-#: (a user's mesh at the paper's alpha left 4 of 16,384 pixels hit, shown as "err 0.00 %")
-MIN_ERROR_PIXELS = 100
+#: fewest pixels hit by both a render and its beta = 0 reference for an error to be reported,
+#: in number and as a share of the image: below either the error is undefined (NaN,
+#: "undefined" in the plots), not a figure (a user's mesh at the paper's alpha left 4 of 16,384
+#: pixels hit, shown as "err 0.00 %")
+MIN_ERROR_PIXELS = 10
+MIN_ERROR_SHARE = 0.005
 #: the probe renders at size // PROBE_DIV (at least 8 px) to estimate the study's cost
 PROBE_DIV = 16
 #: a coarse probe spends more time per pixel than the full-size render (more sphere-tracing
@@ -234,7 +236,8 @@ def typed_row(r):
 def with_errors(rows, cache):
     """``rows`` with the error columns computed from the depth buffers in ``cache``: each row
     against the beta = 0, tol = 0 render of its type, over the pixels both hit (NaN, i.e.
-    undefined, over fewer than :data:`MIN_ERROR_PIXELS`)."""
+    undefined, over fewer than :data:`MIN_ERROR_PIXELS` or :data:`MIN_ERROR_SHARE` of the
+    image)."""
     refs = {}
     out = []
     for r in rows:
@@ -252,7 +255,7 @@ def with_errors(rows, cache):
             if depth.shape == ref.shape:
                 both = np.isfinite(depth) & np.isfinite(ref)
                 n_both = int(both.sum())
-                if n_both >= MIN_ERROR_PIXELS:
+                if n_both >= max(MIN_ERROR_PIXELS, MIN_ERROR_SHARE * depth.size):
                     e = np.abs(depth[both] - ref[both])
                     err, std = float(e.mean()), float(e.std())
         diag = r["diag"]
