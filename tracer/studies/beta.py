@@ -59,6 +59,7 @@ TIMING_FIELDS = ("seconds", "threads", "task_seconds", "worker")
 #: "undefined" in the plots), not a figure (a user's mesh at the paper's alpha left 4 of 16,384
 #: pixels hit, shown as "err 0.00 %")
 MIN_ERROR_PIXELS = 10
+#: the share of the image's pixels below which the error is undefined (see above)
 MIN_ERROR_SHARE = 0.005
 #: the probe renders at size // PROBE_DIV (at least 8 px) to estimate the study's cost
 PROBE_DIV = 16
