@@ -44,8 +44,10 @@ import numpy as np
 from smoothdist._config import NJIT
 from smoothdist._kernels.mesh_query import (VERTEX_1, VERTEX_2,  # noqa: F401
                                             _accumulate, centroid, pair_terms,
-                                            query_coefficient, smooth_traverse)
+                                            query_coefficient, smooth_traverse,
+                                            task_scratch)
 from smoothdist._kernels.query import DEFAULT_TOL, smooth_distance_point
+from smoothdist._kernels.traversal import ZERO
 
 
 #: the query-edge coefficient of the weight's motion (``mesh_query.query_coefficient``)
@@ -99,11 +101,8 @@ def smooth_moment_primitive_tasks(tree, qkind, qpts, alpha, beta, S, wgs, out_d,
     As :func:`smoothdist._kernels.mesh_query.smooth_distance_primitive_tasks` (a serial task
     kernel), plus ``out_m (m, 3)`` float64.
     """
-    k = tree.depth + 4
-    stack = np.empty(k, dtype=np.int64)
-    dstack = np.empty(k)
-    scratch = np.empty(33)
-    root = np.int64(0)
+    stack, dstack, scratch = task_scratch(tree, 33)
+    root = ZERO
     for task in range(task0, task1):
         for j in range(task, qkind.size, ntasks):
             kq = qkind[j]
@@ -200,11 +199,8 @@ def smooth_vertex_primitive_tasks(tree, qkind, qpts, alpha, beta, S, wgs, out_d,
     for the primitive's vertex ``k``; unused slots 0) of every query primitive, as a serial task
     kernel (tasks ``task0 <= t < task1`` of ``ntasks``, as
     :func:`smoothdist._kernels.mesh_query.smooth_distance_primitive_tasks`)."""
-    k = tree.depth + 4
-    stack = np.empty(k, dtype=np.int64)
-    dstack = np.empty(k)
-    scratch = np.empty(33)
-    root = np.int64(0)
+    stack, dstack, scratch = task_scratch(tree, 33)
+    root = ZERO
     for task in range(task0, task1):
         for j in range(task, qkind.size, ntasks):
             kq = qkind[j]
@@ -234,7 +230,7 @@ def smooth_vertex_primitives_brute(tree, qkind, qpts, alpha, beta, S, wgs, out_d
     k = tree.depth + 4
     stack = np.empty(k, dtype=np.int64)
     dstack = np.empty(k)
-    root = np.int64(0)
+    root = ZERO
     for j in range(qkind.size):
         kq = qkind[j]
         Q = qpts[j]

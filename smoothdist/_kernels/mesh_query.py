@@ -727,6 +727,14 @@ def exact_distance_primitive(tree, kq, Q, stack, dstack, scratch, bound2=np.inf)
     return 0.0, 0.0, 0.0, 0.0, tree.orig[bi], nodes, leaves
 
 
+@numba.njit(**NJIT_IR_INLINE)
+def task_scratch(tree, n):
+    """Work space of one task of the primitive kernels: the traversal's two stacks
+    (``tree.depth + 4``: int64 nodes, float64 keys) and ``n`` float64 of scratch."""
+    k = tree.depth + 4
+    return np.empty(k, dtype=np.int64), np.empty(k), np.empty(n)
+
+
 @numba.njit(**NJIT)
 def smooth_distance_primitive_tasks(tree, qkind, qpts, alpha, beta, S, wgs, out_d, out_g,
                                     out_nodes, out_leaves, tol, exact_box, ntasks, task0, task1):
@@ -740,13 +748,10 @@ def smooth_distance_primitive_tasks(tree, qkind, qpts, alpha, beta, S, wgs, out_
     (:func:`smoothdist.schedule.run_tasks`): no ``prange`` loop, which would compile the whole
     traversal again (:mod:`smoothdist.schedule`). Values do not depend on the split.
     """
-    k = tree.depth + 4
-    stack = np.empty(k, dtype=np.int64)
-    dstack = np.empty(k)
-    scratch = np.empty(15)
+    stack, dstack, scratch = task_scratch(tree, 15)
     # the whole tree's root as an int64 (a constant would be typed as a literal: another
     # specialisation of the point kernel than the point queries' and the renderer's)
-    root = np.int64(0)
+    root = ZERO
     for task in range(task0, task1):
         for j in range(task, qkind.size, ntasks):
             kq = qkind[j]
@@ -789,11 +794,8 @@ def exact_distance_primitive_tasks(tree, qkind, qpts, bound2, out_d, out_g, out_
     the minimum over all query primitives, e.g. from the query vertices); the others get
     ``inf`` and ``-1``. Point queries are always exact.
     """
-    k = tree.depth + 4
-    stack = np.empty(k, dtype=np.int64)
-    dstack = np.empty(k)
-    scratch = np.empty(15)
-    root = np.int64(0)
+    stack, dstack, scratch = task_scratch(tree, 15)
+    root = ZERO
     for task in range(task0, task1):
         for j in range(task, qkind.size, ntasks):
             kq = qkind[j]
