@@ -33,7 +33,7 @@ def load_mesh(path, kind=None):
     return DataMesh.load(path, kind=kind)
 
 
-def smooth_distance(Q, V, F=None, *, alpha, beta=0.5, alpha_u=None, gradient="metric",
+def smooth_distance(Q, V, F=None, *, alpha, beta=0.5, alpha_u=None, gradient="exact",
                     return_stats=False, tol=_DEFAULT_TOL):
     """Smooth distance from query points to a data mesh (Madan & Levin 2022, Eq. 3-4).
 
@@ -53,8 +53,10 @@ def smooth_distance(Q, V, F=None, *, alpha, beta=0.5, alpha_u=None, gradient="me
         Barnes-Hut parameter (>= 0); 0 is exact.
     alpha_u : float or "auto", optional
         Attenuation threshold alpha_U; None disables attenuation; ``"auto"`` is 20 x alpha.
-    gradient : {"metric", "exact"}
-        The paper's alpha-metric weight gradient, or the exact derivative of ``d_hat``.
+    gradient : {"exact", "metric"}
+        ``"exact"`` (default): the derivative of ``d_hat``. ``"metric"``: the paper's
+        alpha-metric weight gradient (Sec. 3.3), whose weight term is divided by alpha once
+        more; not the derivative for edges and triangles (equal for point clouds).
     return_stats : bool
         Also return per-query :class:`QueryStats`.
     tol : float

@@ -244,9 +244,10 @@ class MeshDistance:
         Barnes-Hut parameter (>= 0); 0 is exact.
     alpha_u : float, optional
         Weight attenuation threshold (None: no attenuation).
-    gradient : {"metric", "exact"}
+    gradient : {"exact", "metric"}
         Weight-gradient convention, as in :meth:`~smoothdist.SmoothDistanceField.smooth_distance`:
-        the paper's alpha-metric, or the exact derivative of the value.
+        ``"exact"`` (default) the derivative of the value, ``"metric"`` the paper's alpha-metric
+        (its ``G.sum(axis=0)`` is a few % off the translation derivative at alpha 20).
     leaf_size : int
         BVH leaf size when the tree is built here.
     tol : float
@@ -266,7 +267,8 @@ class MeshDistance:
     Calling the object, ``d, G = md(R, t)``, returns the smooth distance (float) and the
     paper's vertex gradients ``G (n_query_vertices, 3)`` (Eq. 7-8): each query primitive's
     gradient for a rigid translation of it, weighted by its softmax and split equally among its
-    vertices. So ``G.sum(axis=0)`` is the derivative for translating the whole query, and
+    vertices. So ``G.sum(axis=0)`` is the derivative for translating the whole query (with the
+    default ``gradient="exact"``), and
     :meth:`rigid_gradient` gives force and torque; ``G[k]`` is not the derivative for moving
     vertex ``k`` alone, which :meth:`vertex_gradient` returns (deformable bodies).
     :meth:`exact` returns the exact minimum pairwise distance and its gradient.
@@ -282,7 +284,7 @@ class MeshDistance:
     """
 
     def __init__(self, data, query, *, alpha, alpha_q, beta=0.5, alpha_u=None,
-                 gradient="metric", leaf_size=1, tol=DEFAULT_TOL, box_test=True):
+                 gradient="exact", leaf_size=1, tol=DEFAULT_TOL, box_test=True):
         self.field = _as_field(data, leaf_size)
         self.tol = non_negative(tol, "tol")
         if not isinstance(box_test, (bool, np.bool_)):
@@ -582,7 +584,7 @@ def split_to_vertices(d, g, query, alpha_q):
 
 
 def mesh_distance(V_data, F_data, V_query, F_query, *, alpha, alpha_q, beta=0.5, alpha_u=None,
-                  gradient="metric", tol=DEFAULT_TOL):
+                  gradient="exact", tol=DEFAULT_TOL):
     """Smooth distance between a query mesh and a data mesh (Madan & Levin 2022, Eq. 6-8).
 
     Parameters

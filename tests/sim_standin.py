@@ -27,6 +27,7 @@ class PointQueryDistance:
         self.V = query.V
         self.idx = query.points
         self.alpha, self.alpha_q, self.beta, self.alpha_u = alpha, alpha_q, beta, alpha_u
+        self.gradient = gradient
 
     def _points(self, R, t):
         R = np.eye(3) if R is None else np.asarray(R, float)
@@ -35,7 +36,7 @@ class PointQueryDistance:
 
     def __call__(self, R=None, t=None):
         d, g = self.field.smooth_distance(self._points(R, t), alpha=self.alpha, beta=self.beta,
-                                          alpha_u=self.alpha_u)
+                                          alpha_u=self.alpha_u, gradient=self.gradient)
         m = d.min()
         e = np.exp(-self.alpha_q * (d - m))
         s = e.sum()

@@ -62,7 +62,8 @@ def _reference(scene, poses, Q, mode, own=False):
             d, g = o.field.exact_distance(local)[:2]
             d = d - o.offset
         else:
-            d, g = o.field.smooth_distance(local, alpha=o.alpha, method="brute")
+            d, g = o.field.smooth_distance(local, alpha=o.alpha, method="brute",
+                                           gradient=scene.gradient)
         ds.append(d)
         gs.append(g @ R.T)
     D, G = np.array(ds), np.array(gs)

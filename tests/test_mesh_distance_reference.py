@@ -219,10 +219,11 @@ def test_bowl_ico_beta0_equals_brute_force(bowl_ico):
     assert D == pytest.approx(D_ref, rel=1e-12)
     np.testing.assert_allclose(G, G_ref, rtol=0, atol=1e-7 * np.abs(G_ref).max())
 
-    # the alpha-metric gradient (the default): the weight-derivative part divided by alpha
+    # the paper's alpha-metric gradient: the weight-derivative part divided by alpha
     rdir = brute_pair_direction_part(Vd, Ed, X, Eq, ALPHA)
     g_metric = rdir + (g_ref - rdir) / ALPHA
-    md = MeshDistance((Vd, Ed), (Vq, Eq), alpha=ALPHA, alpha_q=ALPHA, beta=0.0)
+    md = MeshDistance((Vd, Ed), (Vq, Eq), alpha=ALPHA, alpha_q=ALPHA, beta=0.0,
+                      gradient="metric")
     d, g = md.primitive_distances(t=BOWL_ICO_T)
     np.testing.assert_allclose(d, d_ref, rtol=0, atol=1e-13)
     np.testing.assert_allclose(g, g_metric, rtol=0, atol=1e-7)

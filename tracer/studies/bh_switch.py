@@ -149,14 +149,15 @@ def rays_task(task):
     if hits.size:
         Z = z[hits, None] + dz[hits, None] * task["segment"] * frac[None, :]
         Q = np.stack([np.repeat(x[hits], K), np.repeat(y[hits], K), Z.ravel()], axis=1)
-        d, g, st = field.smooth_distance(Q, alpha=alpha, beta=beta, return_stats=True)
+        d, g, st = field.smooth_distance(Q, alpha=alpha, beta=beta, gradient="metric",
+                                         return_stats=True)
         lv = st.leaves_visited.reshape(hits.size, K)
         sw = np.zeros((hits.size, K), bool)
         sw[:, 1:] = lv[:, 1:] != lv[:, :-1]
         flat = np.flatnonzero(sw.ravel())
         if flat.size:
             d2, g2, st2 = field.smooth_distance(Q[flat], alpha=alpha, beta=beta + task["dbeta"],
-                                                return_stats=True)
+                                                gradient="metric", return_stats=True)
             g1 = g[flat]
             n1 = np.linalg.norm(g1, axis=1)
             n2 = np.linalg.norm(g2, axis=1)
