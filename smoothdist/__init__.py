@@ -21,10 +21,12 @@ from smoothdist.field import (ExactDistanceResult, QueryStats, SmoothDistanceFie
 from smoothdist.mesh import DataMesh, MeshRepairWarning, as_data_mesh
 from smoothdist._kernels.query import DEFAULT_TOL as _DEFAULT_TOL
 from smoothdist.whole_mesh import MeshDistance, combine_distances, mesh_distance
+from smoothdist.error_budget import Within, within
 
 __all__ = ["DataMesh", "MeshRepairWarning", "SmoothDistanceField", "SmoothDistanceResult",
            "ExactDistanceResult", "QueryStats", "smooth_distance", "exact_distance",
-           "load_mesh", "as_data_mesh", "MeshDistance", "mesh_distance", "combine_distances"]
+           "load_mesh", "as_data_mesh", "MeshDistance", "mesh_distance", "combine_distances",
+           "within", "Within"]
 __version__ = "0.1.0"
 
 
@@ -46,9 +48,11 @@ def smooth_distance(Q, V, F=None, *, alpha, beta=0.5, alpha_u=None, gradient="ex
         :func:`smoothdist.as_data_mesh`).
     F : None, (m, 2) or (m, 3) array_like of int
         ``None``: the vertices are a point cloud; ``(m, 2)`` edges; ``(m, 3)`` triangles.
-    alpha : float or "auto"
+    alpha : float, "auto" or :func:`within`
         Sharpness, 1 / scene units (> 0); ``"auto"``: mean surface offset <= 2 % of the
-        bbox diagonal (:meth:`SmoothDistanceField.auto_alpha`).
+        bbox diagonal (:meth:`SmoothDistanceField.auto_alpha`); ``within(e)``: the smallest
+        alpha whose proven gap ``d - d_hat`` is at most ``e`` wherever ``d <= e``
+        (:mod:`smoothdist.error_budget`).
     beta : float
         Barnes-Hut parameter (>= 0); 0 is exact.
     alpha_u : float or "auto", optional

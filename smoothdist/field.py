@@ -9,6 +9,7 @@ from smoothdist._kernels import query as _q
 from smoothdist._cast import as_points, non_negative, positive
 from smoothdist._kernels.bvh import build_tree
 from smoothdist._kernels.exact_query import build_exact_tree, exact_tree_batch
+from smoothdist.error_budget import Within, point_alpha, within
 from smoothdist.mesh import as_data_mesh
 from smoothdist.schedule import parallel_tasks, run_tasks
 
@@ -487,8 +488,10 @@ class SmoothDistanceField:
         ----------
         Q : (q, 3) array_like of float
             Query points (a single (3,) point is accepted).
-        alpha : float or "auto"
+        alpha : float, "auto" or :func:`smoothdist.within`
             LogSumExp sharpness in 1 / scene units (> 0). ``"auto"``: :meth:`auto_alpha`.
+            ``within(e)``: :meth:`alpha_within` for this beta and alpha_u (the smooth distance
+            at most ``e`` below the exact one wherever that is ``<= e``; needs ``tol=0``).
         beta : float
             Barnes-Hut parameter (>= 0); 0 evaluates every term exactly.
         alpha_u : float or "auto", optional
@@ -519,11 +522,9 @@ class SmoothDistanceField:
         SmoothDistanceResult ``(distance (q,), gradient (q, 3))``, plus :class:`QueryStats`
         when ``return_stats``.
         """
-        if isinstance(alpha, str) and alpha == "auto":
-            alpha = self.auto_alpha()
-        alpha = self.check_alpha(alpha)
         beta = non_negative(beta, "beta")
         tol = non_negative(tol, "tol")
+        alpha = self.check_alpha(self._resolve_alpha(alpha, beta, alpha_u, tol))
         S = self.attenuation(alpha, alpha_u)
         if gradient not in GRADIENTS:
             raise ValueError(f"gradient must be one of {GRADIENTS}, got {gradient!r}")
@@ -606,14 +607,36 @@ class SmoothDistanceField:
     def kernel_args(self, alpha, beta=0.5, alpha_u=None, gradient="exact"):
         """Validated scalars for :func:`smoothdist._kernels.query.smooth_distance_point`.
 
-        Returns ``(alpha, beta, S, wgs)``.
+        ``alpha`` as in :meth:`smooth_distance`. Returns ``(alpha, beta, S, wgs)``.
         """
-        alpha = self.check_alpha(alpha)
         beta = non_negative(beta, "beta")
+        alpha = self.check_alpha(self._resolve_alpha(alpha, beta, alpha_u))
         if gradient not in GRADIENTS:
             raise ValueError(f"gradient must be one of {GRADIENTS}, got {gradient!r}")
         wgs = 1.0 / alpha if gradient == "exact" else 1.0 / (alpha * alpha)
         return alpha, beta, self.attenuation(alpha, alpha_u), wgs
+
+    def alpha_within(self, max_error, beta=0.5, alpha_u=None):
+        """The smallest alpha (1 / scene units) whose proven gap ``d - d_hat`` is at most
+        ``max_error`` (scene units) wherever the exact distance ``d <= max_error``:
+        ``(1 + beta) (S log A + log N) / max_error`` (:mod:`smoothdist.error_budget`).
+
+        With ``beta = 0`` the gap is at most ``max_error`` everywhere, and the surface
+        ``d_hat = 0`` lies within ``max_error`` of the data at any beta.
+        """
+        return self.check_alpha(point_alpha(self, within(max_error),
+                                            non_negative(beta, "beta"), alpha_u))
+
+    def _resolve_alpha(self, alpha, beta, alpha_u, tol=0.0):
+        """``alpha`` with ``"auto"`` and :func:`~smoothdist.within` replaced by numbers."""
+        if isinstance(alpha, str) and alpha == "auto":
+            return self.auto_alpha()
+        if isinstance(alpha, Within):
+            if tol > 0.0:
+                raise ValueError("alpha=within(...) needs tol=0: the error bound does not "
+                                 "cover tolerance pruning")
+            return point_alpha(self, alpha, beta, alpha_u)
+        return alpha
 
     def __repr__(self):
         return (f"SmoothDistanceField({self.mesh!r}, {self.tree.lo.shape[0]} nodes, "

@@ -37,6 +37,7 @@ from smoothdist._kernels import mesh_query as _mq
 from smoothdist._cast import COORD_LIMIT, as_indices, as_points, non_negative, positive
 from smoothdist._config import NJIT
 from smoothdist.convert import is_foreign_geometry
+from smoothdist.error_budget import Within, mesh_alphas
 from smoothdist.field import SmoothDistanceField
 from smoothdist.mesh import DataMesh, as_data_mesh
 from smoothdist._kernels.query import DEFAULT_TOL
@@ -236,10 +237,16 @@ class MeshDistance:
     query : DataMesh, ``(V, F)`` tuple, ``(n, 3)`` points, or a trimesh / pyvista object
         The query mesh. ``F`` None/(m, 2)/(m, 3); a DataMesh may mix kinds. Not repaired:
         gradients come back for every row of its ``V``.
-    alpha : float
+    alpha : float or :func:`smoothdist.within`
         Inner sharpness (1 / scene units) of each query primitive's smooth distance.
+        ``within(e)`` chooses ``alpha`` and ``alpha_q`` (half of ``e`` each) so that the smooth
+        distance is at most ``e`` below the exact minimum pairwise distance wherever that is
+        ``<= e`` (:mod:`smoothdist.error_budget`; edge and triangle queries need ``beta=0``
+        or ``box_test=False``; kept in :attr:`max_error`, the values in :attr:`alpha`,
+        :attr:`alpha_q`).
     alpha_q : float
-        Outer sharpness over the query primitives (Eq. 6), > 0.
+        Outer sharpness over the query primitives (Eq. 6), > 0; required unless ``alpha`` is
+        ``within(...)``.
     beta : float
         Barnes-Hut parameter (>= 0); 0 is exact.
     alpha_u : float, optional
@@ -283,19 +290,32 @@ class MeshDistance:
     (2.0, [0.0, 0.0, 1.0])
     """
 
-    def __init__(self, data, query, *, alpha, alpha_q, beta=0.5, alpha_u=None,
+    def __init__(self, data, query, *, alpha, alpha_q=None, beta=0.5, alpha_u=None,
                  gradient="exact", leaf_size=1, tol=DEFAULT_TOL, box_test=True):
         self.field = _as_field(data, leaf_size)
         self.tol = non_negative(tol, "tol")
         if not isinstance(box_test, (bool, np.bool_)):
             raise ValueError(f"box_test must be True or False, got {box_test!r}")
         self.box_test = bool(box_test)
+        self.query = as_query_mesh(query)
+        self.max_error = None
+        if isinstance(alpha, Within):
+            if alpha_q is not None:
+                raise ValueError("alpha=within(...) chooses alpha_q too: leave alpha_q out")
+            if self.tol > 0.0:
+                raise ValueError("alpha=within(...) needs tol=0: the error bound does not "
+                                 "cover tolerance pruning")
+            exact_far = not self.box_test or not np.any(self.query.kind)
+            self.max_error = alpha.max_error
+            alpha, alpha_q = mesh_alphas(self.field, alpha, non_negative(beta, "beta"), alpha_u,
+                                         self.query.kind.size, exact_far)
+        elif alpha_q is None:
+            raise ValueError("alpha_q is required (or pass alpha=smoothdist.within(max_error))")
         self.alpha, self.beta, self.S, self.wgs = self.field.kernel_args(alpha, beta, alpha_u,
                                                                          gradient)
         self.alpha_q = positive(alpha_q, "alpha_q")
         self.alpha_u = alpha_u
         self.gradient = gradient
-        self.query = as_query_mesh(query)
         self._used = np.unique(self.query.index)
         self.last_stats = None
 
@@ -583,8 +603,8 @@ def split_to_vertices(d, g, query, alpha_q):
     return float(dist), G
 
 
-def mesh_distance(V_data, F_data, V_query, F_query, *, alpha, alpha_q, beta=0.5, alpha_u=None,
-                  gradient="exact", tol=DEFAULT_TOL):
+def mesh_distance(V_data, F_data, V_query, F_query, *, alpha, alpha_q=None, beta=0.5,
+                  alpha_u=None, gradient="exact", tol=DEFAULT_TOL):
     """Smooth distance between a query mesh and a data mesh (Madan & Levin 2022, Eq. 6-8).
 
     Parameters
