@@ -11,6 +11,7 @@ from smoothdist._kernels.bvh import build_tree
 from smoothdist._kernels.exact_query import build_exact_tree, exact_tree_batch
 from smoothdist.error_budget import Within, point_alpha, within
 from smoothdist.mesh import as_data_mesh
+from smoothdist.query_order import coherent_order, restore
 from smoothdist.schedule import parallel_tasks, run_tasks
 
 GRADIENTS = ("exact", "metric")
@@ -544,12 +545,17 @@ class SmoothDistanceField:
         g = np.empty((n, 3))
         nodes = np.empty(n, dtype=np.int64)
         leaves = np.empty(n, dtype=np.int64)
+        order = coherent_order(Q) if method == "bvh" else None
+        if order is not None:
+            Q = Q[order]
         if 0 < n <= TASK_BATCH and method == "bvh" and tol == 0.0:
             _tasks(_q.smooth_distance_tasks, n, self.tree, Q, alpha, beta, S, wgs, d, g, nodes,
                    leaves, 0)
         elif n:
             _q.smooth_distance_batch(self.tree, Q, alpha, beta, S, wgs, method == "brute", d, g,
                                      nodes, leaves, tol, parallel_tasks(n))
+        if order is not None:     # only what is returned
+            restore(order, d, g, *((nodes, leaves) if return_stats else ()))
         res = SmoothDistanceResult(d, g)
         return (res.distance, res.gradient, QueryStats(nodes, leaves)) if return_stats else res
 
@@ -581,6 +587,9 @@ class SmoothDistanceField:
         prim = np.empty(n, dtype=np.int64)
         nodes = np.empty(n, dtype=np.int64)
         leaves = np.empty(n, dtype=np.int64)
+        order = coherent_order(Q)
+        if order is not None:
+            Q = Q[order]
         if n:
             self._exact_queries = self.__dict__.get("_exact_queries", 0) + n
             if ("_exact_tree" in self.__dict__
@@ -593,6 +602,9 @@ class SmoothDistanceField:
             else:
                 _q.exact_distance_batch(self.tree, Q, d, g, prim, nodes, leaves,
                                         parallel_tasks(n))
+        if order is not None:     # only what is returned
+            restore(order, d, g, *((prim,) if return_closest else ()),
+                    *((nodes, leaves) if return_stats else ()))
         out = ExactDistanceResult(d, g, prim) if return_closest else SmoothDistanceResult(d, g)
         return (*out, QueryStats(nodes, leaves)) if return_stats else out
 

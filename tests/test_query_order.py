@@ -1,0 +1,71 @@
+"""Scattered query batches are answered along a Morton curve and returned in the caller's
+order (smoothdist/query_order.py). The values must not depend on it: compared with the same
+queries in chunks too small to be reordered (bitwise for the smooth distance, whose traversal
+of one query does not depend on its neighbours; to 1 ulp for the exact distance, whose search
+starts from the previous query's closest primitive, and on ties may end on another primitive
+at the same distance) and with numpy brute force.
+"""
+import numpy as np
+import pytest
+
+import smoothdist as sd
+from smoothdist import query_order as qo
+from tests import naive
+
+
+def _mesh():
+    trimesh = pytest.importorskip("trimesh")
+    m = trimesh.creation.icosphere(subdivisions=3)
+    return sd.DataMesh(m.vertices * [1.0, 0.7, 0.4], np.asarray(m.faces))
+
+
+def _chunked(fn, Q, size=qo.COHERENT_FROM - 1):
+    parts = [fn(Q[i:i + size]) for i in range(0, Q.shape[0], size)]
+    return [np.concatenate(p) for p in zip(*parts)]
+
+
+def test_order_is_a_morton_permutation_only_for_scattered_batches():
+    rng = np.random.default_rng(0)
+    Q = rng.uniform(-1, 1, (20000, 3))
+    order = qo.coherent_order(Q)
+    assert order is not None
+    np.testing.assert_array_equal(np.sort(order), np.arange(Q.shape[0]))
+    lo, hi = qo.bounds(Q)
+    np.testing.assert_array_equal(lo, Q.min(axis=0))
+    np.testing.assert_array_equal(hi, Q.max(axis=0))
+    k = np.clip((Q - lo) * (1023.0 / (hi - lo)), 0, 1023).astype(np.uint32)
+    code = qo._spread(k[:, 0]) | (qo._spread(k[:, 1]) << 1) | (qo._spread(k[:, 2]) << 2)
+    assert np.all(np.diff(code[order].astype(np.int64)) >= 0)
+    # a grid in raster order, rows of an image, a polyline: kept as they are
+    c = np.linspace(0, 1, 30)
+    G = np.stack(np.meshgrid(c, c, c, indexing="ij"), -1).reshape(-1, 3)
+    assert qo.coherent_order(G) is None
+    s = np.linspace(0, 20, 50000)
+    assert qo.coherent_order(np.stack([np.cos(s), np.sin(s), s], 1)) is None
+    assert qo.coherent_order(Q[:qo.COHERENT_FROM - 1]) is None     # small batches
+    assert qo.coherent_order(np.zeros((10000, 3))) is None         # one spot
+
+
+def test_reordered_queries_give_the_values_in_the_callers_order():
+    field = sd.SmoothDistanceField(_mesh())
+    rng = np.random.default_rng(1)
+    Q = rng.uniform(-1.3, 1.3, (12000, 3))
+    assert qo.coherent_order(Q) is not None
+    d, g, st = field.smooth_distance(Q, alpha=20.0, return_stats=True)
+    d2, g2, n2, l2 = _chunked(lambda q: (lambda r: (r[0], r[1], r[2].nodes_visited,
+                                                    r[2].leaves_visited))(
+        field.smooth_distance(q, alpha=20.0, return_stats=True)), Q)
+    np.testing.assert_array_equal(d, d2)
+    np.testing.assert_array_equal(g, g2)
+    np.testing.assert_array_equal(st.nodes_visited, n2)
+    np.testing.assert_array_equal(st.leaves_visited, l2)
+    for _ in range(2):      # the smooth-distance tree, then the exact tree (built on use)
+        de, ge, prim = field.exact_distance(Q, return_closest=True)
+        de2, = _chunked(lambda q: (field.exact_distance(q).distance,), Q)
+        np.testing.assert_allclose(de, de2, rtol=4e-16, atol=0)
+        ref, _, _ = naive.exact_distance(Q[::10], field.mesh)
+        np.testing.assert_allclose(de[::10], ref, rtol=1e-12, atol=1e-15)
+        # the closest primitive is in the caller's order: its distance is the query's
+        D = naive.distances_to_primitives(Q[:200], field.mesh)
+        np.testing.assert_allclose(D[np.arange(200), prim[:200]], de[:200], rtol=1e-12)
+        field.exact_tree
