@@ -92,6 +92,10 @@ EXACT_TREE_AFTER = 1.0
 #: same values either way.
 TASK_BATCH = 1 << 14
 
+#: ``order`` argument of :func:`~smoothdist._kernels.exact_query.exact_tree_batch`: the
+#: queries' own order
+_NO_ORDER = np.empty(0, dtype=np.int64)
+
 
 class SmoothDistanceResult(NamedTuple):
     """``distance (q,) float64`` and ``gradient (q, 3) float64``."""
@@ -555,7 +559,9 @@ class SmoothDistanceField:
             _q.smooth_distance_batch(self.tree, Q, alpha, beta, S, wgs, method == "brute", d, g,
                                      nodes, leaves, tol, parallel_tasks(n))
         if order is not None:     # only what is returned
-            restore(order, d, g, *((nodes, leaves) if return_stats else ()))
+            d, g = restore(order, d, g)
+            if return_stats:
+                nodes, leaves = restore(order, nodes, leaves)
         res = SmoothDistanceResult(d, g)
         return (res.distance, res.gradient, QueryStats(nodes, leaves)) if return_stats else res
 
@@ -588,23 +594,28 @@ class SmoothDistanceField:
         nodes = np.empty(n, dtype=np.int64)
         leaves = np.empty(n, dtype=np.int64)
         order = coherent_order(Q)
-        if order is not None:
-            Q = Q[order]
         if n:
             self._exact_queries = self.__dict__.get("_exact_queries", 0) + n
             if ("_exact_tree" in self.__dict__
                     or self._exact_queries >= EXACT_TREE_AFTER * self.num_primitives):
+                # the kernel takes the queries in the coherent order itself (no copies)
                 exact_tree_batch(self.exact_tree, Q, True, d, g, prim, nodes, leaves,
-                                 parallel_tasks(n), bool(return_stats))
-            elif n <= TASK_BATCH:
-                _tasks(_q.exact_distance_tasks, n, self.tree, Q, -1.0, d, g, prim, nodes, leaves,
-                       0)
+                                 parallel_tasks(n), bool(return_stats),
+                                 _NO_ORDER if order is None else order)
             else:
-                _q.exact_distance_batch(self.tree, Q, d, g, prim, nodes, leaves,
-                                        parallel_tasks(n))
-        if order is not None:     # only what is returned
-            restore(order, d, g, *((prim,) if return_closest else ()),
-                    *((nodes, leaves) if return_stats else ()))
+                Qo = Q if order is None else Q[order]
+                if n <= TASK_BATCH:
+                    _tasks(_q.exact_distance_tasks, n, self.tree, Qo, -1.0, d, g, prim, nodes,
+                           leaves, 0)
+                else:
+                    _q.exact_distance_batch(self.tree, Qo, d, g, prim, nodes, leaves,
+                                            parallel_tasks(n))
+                if order is not None:     # only what is returned
+                    d, g = restore(order, d, g)
+                    if return_closest:
+                        prim, = restore(order, prim)
+                    if return_stats:
+                        nodes, leaves = restore(order, nodes, leaves)
         out = ExactDistanceResult(d, g, prim) if return_closest else SmoothDistanceResult(d, g)
         return (*out, QueryStats(nodes, leaves)) if return_stats else out
 

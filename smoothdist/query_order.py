@@ -79,15 +79,23 @@ def coherent_order(Q):
     lo, hi = bounds(Q)
     if not is_scattered(Q, lo, hi):
         return None
-    scale = 1023.0 / np.maximum(hi - lo, 1e-300)
-    k = np.clip((Q - lo) * scale, 0.0, 1023.0).astype(np.uint32)
-    code = _spread(k[:, 0]) | (_spread(k[:, 1]) << 1) | (_spread(k[:, 2]) << 2)
+    t = Q - lo
+    t *= 1023.0 / np.maximum(hi - lo, 1e-300)
+    np.clip(t, 0.0, 1023.0, out=t)
+    k = t.T.astype(np.uint32, order="C")          # (3, n): each axis contiguous
+    code = _spread(k[0])
+    code |= _spread(k[1]) << 1
+    code |= _spread(k[2]) << 2
     first = np.argsort((code & 0xFFFF).astype(np.uint16), kind="stable")
     return first[np.argsort((code[first] >> 16).astype(np.uint16), kind="stable")]
 
 
 def restore(order, *arrays):
-    """Put results computed for ``Q[order]`` back in the order of ``Q``, in place (each array's
-    first axis has ``order.size`` rows)."""
+    """Results computed for ``Q[order]``, in the order of ``Q``: new arrays (each array's
+    first axis has ``order.size`` rows), returned as a tuple."""
+    out = []
     for a in arrays:
-        a[order] = a.copy()
+        b = np.empty_like(a)
+        b[order] = a
+        out.append(b)
+    return tuple(out)

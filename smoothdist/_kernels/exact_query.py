@@ -716,8 +716,14 @@ def exact_tree_group(et, P, k, stack, dstack, best, idx, need, nodes, leaves, co
 
 @numba.njit(**NJIT_PARALLEL)
 def exact_tree_batch(et, Q, seeded, out_d, out_g, out_prim, out_nodes, out_leaves,
-                     ntasks=1, count=True):
+                     ntasks=1, count=True, order=None):
     """Exact distance for every row of ``Q (q, 3)`` into the output arrays.
+
+    ``order`` (optional ``(q,) int64`` permutation; empty or None: ``Q``'s own order): take
+    the queries in the order
+    ``Q[order[0]], Q[order[1]], ...`` (a coherent order, :mod:`smoothdist.query_order`) and
+    write each result to the row of its query, so the outputs stay in ``Q``'s order without a
+    copy of ``Q`` or of the results.
 
     Queries are taken in chunks of :data:`CHUNK` rows and, within a chunk, in groups of
     :data:`GROUP` consecutive rows traced together (:func:`exact_tree_group`). With
@@ -751,6 +757,9 @@ def exact_tree_batch(et, Q, seeded, out_d, out_g, out_prim, out_nodes, out_leave
                 k = min(GROUP, end - i)
                 for q in range(GROUP):
                     j = i + min(q, k - 1)
+                    if order is not None:
+                        if order.size:
+                            j = order[j]
                     P[q, 0] = Q[j, 0]
                     P[q, 1] = Q[j, 1]
                     P[q, 2] = Q[j, 2]
@@ -767,12 +776,16 @@ def exact_tree_batch(et, Q, seeded, out_d, out_g, out_prim, out_nodes, out_leave
                 for q in range(k):
                     bi = idx[q]
                     d, gx, gy, gz = winner_result(kind, pts, bi, P[q, 0], P[q, 1], P[q, 2])
-                    out_d[i + q] = d
-                    out_g[i + q, 0] = gx
-                    out_g[i + q, 1] = gy
-                    out_g[i + q, 2] = gz
-                    out_prim[i + q] = et.orig[bi]
-                    out_nodes[i + q] = nodes[q]
-                    out_leaves[i + q] = leaves[q]
+                    r = i + q
+                    if order is not None:
+                        if order.size:
+                            r = order[r]
+                    out_d[r] = d
+                    out_g[r, 0] = gx
+                    out_g[r, 1] = gy
+                    out_g[r, 2] = gz
+                    out_prim[r] = et.orig[bi]
+                    out_nodes[r] = nodes[q]
+                    out_leaves[r] = leaves[q]
                 if seeded:
                     prev = idx[k - 1]
