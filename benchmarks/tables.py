@@ -10,6 +10,8 @@ Usage::
     python benchmarks/tables.py gpu benchmarks/data/gpu_h100.json
     python benchmarks/tables.py coldstart benchmarks/data/coldstart.json \\
         benchmarks/data/coldstart_before.json
+    python benchmarks/tables.py exact-mix benchmarks/data/exact_mix.json
+    python benchmarks/tables.py smooth-cost benchmarks/data/exact_mix.json
 """
 
 import argparse
@@ -107,8 +109,38 @@ def coldstart_steps_table(path):
     return "\n".join(lines)
 
 
+def exact_mix_table(path):
+    """The exact-query table of a ``bench_exact_mix.py`` results file."""
+    from benchmarks.bench_exact_mix import markdown
+
+    return markdown(_load(path))
+
+
+def smooth_cost_table(path):
+    """The smooth-vs-exact cost table of a ``bench_exact_mix.py --smooth`` results file."""
+    from benchmarks.bench_exact_mix import smooth_markdown
+
+    return smooth_markdown(_load(path))
+
+
+def exact_mix_words(path):
+    """The README's and the guide's sentence: the range of ours / theirs over every mix."""
+    d = _load(path)
+    words = []
+    for name in ("fcpw", "libigl"):
+        r = [row["sides"][name]["ours_over_theirs"] for row in d["rows"]
+             if name in row["sides"] and row["sides"][name]["agrees"]]
+        if r:
+            words.append(f"{min(r):.2f}-{max(r):.2f} of {name}'s")
+    m = d["machine"]
+    return (f"Exact distance takes {' and '.join(words)} wall time on each of "
+            f"{len(d['rows'])} query mixes ({m['date'][:10]}, {m['cores']} cores, "
+            f"{m['threads']} threads each, same process, alternating)")
+
+
 TABLES = {"scaling": scaling_table, "gpu": gpu_table, "coldstart": coldstart_table,
-          "coldstart-steps": coldstart_steps_table}
+          "coldstart-steps": coldstart_steps_table, "exact-mix": exact_mix_table,
+          "smooth-cost": smooth_cost_table}
 
 
 def main(argv=None):

@@ -575,9 +575,10 @@ class SmoothDistanceField:
 
         When several primitives are at the same distance (a query whose closest point is a
         vertex or an edge shared by several triangles), ``closest`` is one of them; which one
-        may depend on the tree searched and on the neighbouring rows of ``Q``, as each query
-        starts its search from the previous row's closest primitive
-        (:func:`smoothdist._kernels.exact_query.exact_tree_batch`). ``device="cuda"`` evaluates
+        may depend on the tree searched and on the other rows of ``Q``, as each query starts
+        its search from the previous query's closest primitive
+        (:func:`smoothdist._kernels.exact_query.exact_tree_batch`); a scattered batch is taken
+        in Morton order (:mod:`smoothdist.query_order`), results in ``Q``'s order. ``device="cuda"`` evaluates
         on the GPU (:mod:`smoothdist.cuda`), searching the field's ``tree``.
         """
         Q = as_points(Q, "Q")

@@ -18,8 +18,8 @@ DATA = ROOT / "benchmarks" / "data"
 sys.path.insert(0, str(ROOT))
 
 from benchmarks.coldstart_words import warm_sentences  # noqa: E402
-from benchmarks.tables import (coldstart_steps_table, coldstart_table, gpu_table,  # noqa: E402
-                               scaling_table)
+from benchmarks.tables import (coldstart_steps_table, coldstart_table, exact_mix_table,  # noqa: E402
+                               exact_mix_words, gpu_table, scaling_table, smooth_cost_table)
 
 
 def _guide():
@@ -180,3 +180,22 @@ def test_the_cold_start_paragraph_follows_the_files():
             f"{runs[1]['wall_s']:.1f} s") in text
     # "not the cost": a lower optimisation level saves no more than a tenth
     assert min(runs[2]["wall_s"], runs[1]["wall_s"]) > 0.9 * r3["wall_s"]
+
+
+def test_the_exact_mix_tables_and_sentences_follow_the_file():
+    """Issue 47: the exact-query table against fcpw and libigl, the smooth distance's cost
+    table, and the sentence that sums them up in the guide and the README."""
+    path = DATA / "exact_mix.json"
+    lines = [ln.strip() for ln in _guide().splitlines()]
+    for table in (exact_mix_table(path), smooth_cost_table(path)):
+        want = [ln.strip() for ln in table.splitlines()]
+        starts = [i for i, ln in enumerate(lines) if ln == want[0]]
+        assert any(lines[i:i + len(want)] == want for i in starts), "paste it again"
+    words = exact_mix_words(path)
+    assert words in _flat(_guide())
+    assert words in _flat((ROOT / "README.md").read_text(encoding="utf-8"))
+    d = _load("exact_mix.json")
+    # the claim the sentence makes: every mix, both sides agreeing on the distances
+    for row in d["rows"]:
+        assert row["sides"]["fcpw"]["agrees"] and row["sides"]["libigl"]["agrees"], row["mix"]
+        assert row["sides"]["fcpw"]["ours_over_theirs"] <= 0.5, row
