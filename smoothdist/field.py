@@ -578,8 +578,9 @@ class SmoothDistanceField:
         may depend on the tree searched and on the other rows of ``Q``, as each query starts
         its search from the previous query's closest primitive
         (:func:`smoothdist._kernels.exact_query.exact_tree_batch`); a scattered batch is taken
-        in Morton order (:mod:`smoothdist.query_order`), results in ``Q``'s order. ``device="cuda"`` evaluates
-        on the GPU (:mod:`smoothdist.cuda`), searching the field's ``tree``.
+        in Morton order (:mod:`smoothdist.query_order`), results in ``Q``'s order.
+        ``device="cuda"`` evaluates on the GPU (:mod:`smoothdist.cuda`), searching the field's
+        ``tree``.
         """
         Q = as_points(Q, "Q")
         if _check_device(device) == "cuda":

@@ -242,8 +242,8 @@ class MeshDistance:
         ``within(e)`` chooses ``alpha`` and ``alpha_q`` (half of ``e`` each) so that the smooth
         distance is at most ``e`` below the exact minimum pairwise distance wherever that is
         ``<= e`` (:mod:`smoothdist.error_budget`; edge and triangle queries need ``beta=0``
-        or ``box_test=False``; kept in :attr:`max_error`, the values in :attr:`alpha`,
-        :attr:`alpha_q`).
+        or ``box_test=False``; kept in ``md.max_error``, the values in ``md.alpha`` and
+        ``md.alpha_q``).
     alpha_q : float
         Outer sharpness over the query primitives (Eq. 6), > 0; required unless ``alpha`` is
         ``within(...)``.
