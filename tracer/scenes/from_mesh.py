@@ -11,15 +11,17 @@
 """
 
 import os
+import warnings
 
 import numpy as np
 
+from tracer.errors import ThinFeatureWarning
 from tracer.scenes.settings import defaults
 
 #: defaults of the mesh entry points (:mod:`tracer.scenes.settings`; ``tracer render MESH`` too)
 _MESH = defaults("mesh")
 
-__all__ = ["render_mesh", "mesh_scene", "load_geometry", "guess_up", "resolve_up",
+__all__ = ["render_mesh", "mesh_scene", "is_mesh_list", "load_geometry", "guess_up", "resolve_up",
            "describe_parameters", "scene_dict"]
 
 KINDS = ("triangles", "edges", "points", "mixed")
@@ -83,8 +85,13 @@ def mesh_scene(mesh, F=None, *, kind=None, alpha=_MESH["alpha"], alpha_u=_MESH["
 
     Parameters
     ----------
-    mesh : path, DataMesh, (n, 3) array_like, or a trimesh / pyvista object
-        The data (see :func:`smoothdist.as_data_mesh`); ``F`` as in ``DataMesh``.
+    mesh : path, DataMesh, (n, 3) array_like, or a trimesh / pyvista object; or a list of them
+        The data (see :func:`smoothdist.as_data_mesh`); ``F`` as in ``DataMesh``. A list
+        (:func:`is_mesh_list`: paths, DataMeshes, trimesh / pyvista objects, ``(V, F)``
+        pairs or ``(n, 3)`` arrays) makes one object per entry, framed together; ``kind``,
+        ``alpha``, ``alpha_u``, ``offset``, ``color`` and ``matcap`` may then be lists too,
+        one value per object (a single value applies to every object; ``color`` None gives
+        the palette). ``F`` must be None then.
     kind : {None, "triangles", "edges", "points", "mixed"}
         Reduce the data to one primitive kind; None or "mixed" keep what it holds.
     alpha : float or "auto"
@@ -110,8 +117,9 @@ def mesh_scene(mesh, F=None, *, kind=None, alpha=_MESH["alpha"], alpha_u=_MESH["
     up : {"auto", "x", "y", "z"}
         The data's up axis for ``view``. ``"auto"`` (:func:`~tracer.scenes.from_mesh.guess_up`): z
         for STL and PLY files and for trimesh / pyvista objects, y otherwise (OBJ, OFF, arrays).
-    camera : (origin, dest, up), optional
-        An explicit camera instead of ``view``.
+    camera : (origin, dest, up) or tracer.rendering.camera.Camera, optional
+        An explicit camera instead of ``view``; the ``camera`` of a
+        :class:`~tracer.rendering.frame.RenderResult` renders the same view again.
     shading : {"lit", "normals", "matcap", "headlight"}
         ``"lit"`` (the default here): key and fill lights, soft shadows, ambient occlusion
         and a ground (:mod:`tracer.rendering.lighting`); ``"normals"``: the paper's normal colours.
@@ -123,6 +131,14 @@ def mesh_scene(mesh, F=None, *, kind=None, alpha=_MESH["alpha"], alpha_u=_MESH["
     from smoothdist import SmoothDistanceField
     from tracer.scenes.scene import scene_from_field
 
+    if is_mesh_list(mesh):
+        if F is not None:
+            raise ValueError("F must be None with a list of meshes: give (V, F) pairs")
+        return _several_objects(
+            mesh, kind=kind, alpha=alpha, alpha_u=alpha_u, beta=beta, size=size, view=view,
+            camera=camera, mode=mode, offset=offset, eps=eps, shading=shading, matcap=matcap,
+            name=name, tol=tol, newton=newton, up=up, samples=samples, adaptive=adaptive,
+            transparent=transparent, lighting=lighting, color=color, background=background)
     up = resolve_up(mesh, up)
     data = load_geometry(mesh, F, kind)
     try:
@@ -137,6 +153,92 @@ def mesh_scene(mesh, F=None, *, kind=None, alpha=_MESH["alpha"], alpha_u=_MESH["
                             newton=newton, up=up, samples=samples, adaptive=adaptive,
                             transparent=transparent, lighting=lighting, color=color,
                             background=background)
+    warn_thin_tubes(scene)
+    return scene
+
+
+def is_mesh_list(mesh):
+    """Whether ``mesh`` is a list (or tuple) of several meshes rather than one: every entry a
+    path, a :class:`smoothdist.DataMesh`, a trimesh / pyvista object, a ``(V, F)`` pair or a
+    2-D array. A list of 3-vectors is one point cloud; a ``(V, F)`` pair is one mesh."""
+    from smoothdist import DataMesh
+    from smoothdist.convert import is_foreign_geometry
+
+    if not isinstance(mesh, (list, tuple)) or not mesh:
+        return False
+    if (isinstance(mesh, tuple) and len(mesh) == 2 and np.ndim(mesh[0]) == 2
+            and (mesh[1] is None or np.ndim(mesh[1]) == 2)):
+        return False                                   # one (V, F) pair
+
+    def one(m):
+        if isinstance(m, (str, os.PathLike, DataMesh)) or is_foreign_geometry(m):
+            return True
+        if isinstance(m, tuple) and len(m) == 2:
+            return np.ndim(m[0]) == 2
+        return isinstance(m, np.ndarray) and m.ndim == 2
+    return all(one(m) for m in mesh)
+
+
+#: per-object arguments of a list of meshes (:func:`mesh_scene`)
+PER_OBJECT = ("kind", "alpha", "alpha_u", "offset", "color", "matcap")
+
+
+def _per_object(name, value, n):
+    """``value`` as ``n`` per-object values: a list of ``n``, or one value for all. A colour
+    (three numbers) is one value."""
+    if isinstance(value, (list, tuple)) and not (
+            name == "color" and len(value) == 3 and all(np.isscalar(v) for v in value)):
+        if len(value) != n:
+            raise ValueError(f"{name} has {len(value)} values for {n} meshes: give one value "
+                             "or one per mesh")
+        return list(value)
+    return [value] * n
+
+
+def _several_objects(meshes, *, kind, alpha, alpha_u, offset, color, matcap, camera, view,
+                     up, size, eps, name, **common):
+    """A scene of one object per entry of ``meshes`` (:func:`mesh_scene` with a list)."""
+    from tracer.rendering.camera import frame_points
+    from tracer.scenes.scene import default_eps
+
+    n = len(meshes)
+    per = {k: _per_object(k, v, n) for k, v in (("kind", kind), ("alpha", alpha),
+                                                ("alpha_u", alpha_u), ("offset", offset),
+                                                ("color", color), ("matcap", matcap))}
+    ups = [resolve_up(m, up) for m in meshes]
+    parts, names = [], set()
+    for i, m in enumerate(meshes):
+        V_F = m if isinstance(m, tuple) else (m, None)
+        try:
+            with warnings.catch_warnings():     # warned once, for the whole scene, below
+                warnings.simplefilter("ignore", ThinFeatureWarning)
+                s = mesh_scene(V_F[0], V_F[1], camera=camera, view=view, up=ups[0], size=size,
+                               eps=eps, **{k: per[k][i] for k in PER_OBJECT}, **common)
+        except ValueError as exc:
+            raise ValueError(f"mesh {i}: {exc}") from None
+        o = s.objects[0]
+        base, k = o.name, 1
+        while o.name in names:                 # unique object names
+            k += 1
+            o.name = f"{base}_{k}"
+        names.add(o.name)
+        parts.append(s)
+    scene = parts[0]
+    scene.objects = [s.objects[0] for s in parts]
+    scene.path = f"{name or '+'.join(o.name for o in scene.objects)}.json"
+    if camera is None:      # frame every object's surface (each grown by its own bound)
+        P, grow = [], 0.0
+        for o in scene.objects:
+            P.append(o.field.mesh.used_vertices())
+            g = (o.level("exact") if scene.mode == "exact" else
+                 o.field.inflation(o.alpha, o.alpha_u) + o.level("smooth"))
+            grow = max(grow, g)
+        scene.eps = default_eps(scene) if eps is None else scene.eps
+        origin, dest, cup = frame_points(np.concatenate(P), grow + 2.0 * scene.eps, view,
+                                         scene.width, scene.height, up=ups[0])
+        scene.camera_origin, scene.camera_dest, scene.camera_up = origin, dest, cup
+    elif eps is None:
+        scene.eps = default_eps(scene)
     warn_thin_tubes(scene)
     return scene
 

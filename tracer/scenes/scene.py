@@ -668,6 +668,10 @@ def _api_camera(field, camera, alpha, alpha_u, offset, eps, mode, width, height,
     """``(origin, dest, up)`` of :func:`scene_from_field`'s ``camera``: three vectors, a view
     name framing the surface, or None (the paper's beta-study camera); validated."""
     lo, hi = field.bounds
+    if hasattr(camera, "forward") and hasattr(camera, "vertical"):
+        # a tracer.rendering.camera.Camera (a render's ``res.camera``): the same view
+        camera = (camera.origin, np.asarray(camera.origin) + np.asarray(camera.forward),
+                  camera.vertical)
     if isinstance(camera, str):
         from tracer.rendering.camera import frame_points
 
