@@ -50,7 +50,8 @@ def add_arguments(p):
                    f"{_def('view', 'mesh')}); with a scene file it replaces the scene's camera")
     p.add_argument("--up", choices=("auto",) + UP_AXES,
                    help="the data's up axis for --view (mesh files: auto = z for .stl and "
-                   ".ply, y otherwise; scene files: y)")
+                   ".ply, y otherwise, and for the front view a flat object seen edge-on or "
+                   "a long one end-on turned to its largest silhouette; scene files: y)")
     p.add_argument("--camera", nargs=9, type=float,
                    metavar=("OX", "OY", "OZ", "DX", "DY", "DZ", "UX", "UY", "UZ"),
                    help="explicit camera: ORIGIN DEST UP, 9 numbers")
@@ -307,8 +308,13 @@ def run(args):
         if source == "mesh" and not args.camera:
             from tracer.scenes.from_mesh import resolve_up
 
-            view = (f", view {args.view or 'front'} with {resolve_up(args.scene, args.up)} up"
-                    + ("" if args.up not in (None, "auto") else " (guessed; --up to change)"))
+            why = scene.extra.get("orientation")
+            if why and not why.endswith("(the file's convention)"):
+                view = f", {why}"
+            else:
+                view = (f", view {args.view or 'front'} with {resolve_up(args.scene, args.up)} "
+                        "up" + ("" if args.up not in (None, "auto") else
+                                " (guessed; --up to change)"))
         print(f"Rendered {name}: {s['width']}x{s['height']} px, {len(s['objects'])} object(s) "
               f"with {prims} primitives ({describe_parameters(scene)}), "
               f"{scene.mode} mode, beta {scene.beta:g}{view}, in "

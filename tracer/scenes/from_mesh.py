@@ -139,6 +139,7 @@ def mesh_scene(mesh, F=None, *, kind=None, alpha=_MESH["alpha"], alpha_u=_MESH["
             camera=camera, mode=mode, offset=offset, eps=eps, shading=shading, matcap=matcap,
             name=name, tol=tol, newton=newton, up=up, samples=samples, adaptive=adaptive,
             transparent=transparent, lighting=lighting, color=color, background=background)
+    guessed = up is None or up == "auto"
     up = resolve_up(mesh, up)
     data = load_geometry(mesh, F, kind)
     try:
@@ -153,6 +154,11 @@ def mesh_scene(mesh, F=None, *, kind=None, alpha=_MESH["alpha"], alpha_u=_MESH["
                             newton=newton, up=up, samples=samples, adaptive=adaptive,
                             transparent=transparent, lighting=lighting, color=color,
                             background=background)
+    if guessed and camera is None and view == "front":
+        up, front, why = auto_orientation(data, up)
+        scene.extra["orientation"] = why
+        if front != "front":
+            frame_scene(scene, front, up)
     warn_thin_tubes(scene)
     return scene
 
@@ -226,21 +232,120 @@ def _several_objects(meshes, *, kind, alpha, alpha_u, offset, color, matcap, cam
     scene = parts[0]
     scene.objects = [s.objects[0] for s in parts]
     scene.path = f"{name or '+'.join(o.name for o in scene.objects)}.json"
-    if camera is None:      # frame every object's surface (each grown by its own bound)
-        P, grow = [], 0.0
-        for o in scene.objects:
-            P.append(o.field.mesh.used_vertices())
-            g = (o.level("exact") if scene.mode == "exact" else
-                 o.field.inflation(o.alpha, o.alpha_u) + o.level("smooth"))
-            grow = max(grow, g)
-        scene.eps = default_eps(scene) if eps is None else scene.eps
-        origin, dest, cup = frame_points(np.concatenate(P), grow + 2.0 * scene.eps, view,
-                                         scene.width, scene.height, up=ups[0])
-        scene.camera_origin, scene.camera_dest, scene.camera_up = origin, dest, cup
-    elif eps is None:
+    if eps is None:
         scene.eps = default_eps(scene)
+    if camera is None:      # frame every object's surface (each grown by its own bound)
+        frame_scene(scene, view, ups[0])
     warn_thin_tubes(scene)
     return scene
+
+
+def frame_scene(scene, view, up="y"):
+    """Point ``scene``'s camera from ``view`` (a name of
+    :data:`tracer.rendering.camera.VIEWS`, or ``(direction to the eye, image up)``) at the
+    region every object's surface can occupy: its data's vertices grown by its inflation
+    bound and offset (exact mode: its offset), plus two hit tolerances
+    (:func:`tracer.rendering.camera.frame_points`)."""
+    from tracer.rendering.camera import frame_points
+
+    P, grow = [], 0.0
+    for o in scene.objects:
+        P.append(o.field.mesh.used_vertices())
+        g = (o.level("exact") if scene.mode == "exact" else
+             o.field.inflation(o.alpha, o.alpha_u) + o.level("smooth"))
+        grow = max(grow, g)
+    origin, dest, cup = frame_points(np.concatenate(P), grow + 2.0 * scene.eps, view,
+                                     scene.width, scene.height, up=up)
+    scene.camera_origin, scene.camera_dest, scene.camera_up = origin, dest, cup
+
+
+#: keep the up axis the file's convention gives while its front view shows at least this
+#: share of the data's largest outline (:func:`auto_orientation`)
+KEEP_CONVENTION = 0.8
+#: the axis a named view's "front" looks along, per up axis (tracer.rendering.camera.VIEWS)
+_FRONT_AXIS = {"x": 2, "y": 2, "z": 1}
+_AXES = "xyz"
+
+
+#: cells across the largest extent of the grid on which :func:`outline_areas` draws
+OUTLINE_CELLS = 64
+#: surface samples drawn by :func:`outline_areas`
+OUTLINE_SAMPLES = 40_000
+
+
+def outline_areas(data, seed=0):
+    """``(3,)`` the area of the data's silhouette seen along x, y and z (scene units squared).
+
+    Samples (:data:`OUTLINE_SAMPLES`, area- or length-weighted; every point primitive) are
+    projected along each axis onto a grid of square cells, :data:`OUTLINE_CELLS` across the
+    largest extent, and the covered cells counted: holes and concave parts count as the
+    silhouette shows them (a text's strokes seen end-on cover one thin strip, not every wall).
+    """
+    rng = np.random.default_rng(seed)
+    V = data.V
+    parts = [V[data.points]] if data.points.size else []
+    T, E = data.triangles, data.edges
+    wt = (0.5 * np.linalg.norm(np.cross(V[T[:, 1]] - V[T[:, 0]], V[T[:, 2]] - V[T[:, 0]]),
+                               axis=1) if T.shape[0] else np.zeros(0))
+    we = np.linalg.norm(V[E[:, 1]] - V[E[:, 0]], axis=1) if E.shape[0] else np.zeros(0)
+    total = wt.sum() + we.sum()
+    if total > 0:
+        n_t = int(round(OUTLINE_SAMPLES * wt.sum() / total))
+        if n_t:
+            i = rng.choice(T.shape[0], n_t, p=wt / wt.sum())
+            u, v = rng.random((2, n_t, 1))
+            flip = (u + v) > 1
+            u, v = np.where(flip, 1 - u, u), np.where(flip, 1 - v, v)
+            A = V[T[i, 0]]
+            parts.append(A + u * (V[T[i, 1]] - A) + v * (V[T[i, 2]] - A))
+        n_e = OUTLINE_SAMPLES - n_t
+        if n_e and we.sum() > 0:
+            i = rng.choice(E.shape[0], n_e, p=we / we.sum())
+            t = rng.random((n_e, 1))
+            parts.append(V[E[i, 0]] + t * (V[E[i, 1]] - V[E[i, 0]]))
+    P = np.concatenate(parts) if parts else data.used_vertices()
+    lo = P.min(axis=0)
+    h = float((P.max(axis=0) - lo).max()) / OUTLINE_CELLS
+    if not h > 0:
+        return np.zeros(3)
+    cells = np.minimum(((P - lo) / h).astype(np.int64), OUTLINE_CELLS)
+    out = np.empty(3)
+    for k in range(3):
+        a, b = [j for j in range(3) if j != k]
+        out[k] = np.unique(cells[:, a] * (OUTLINE_CELLS + 1) + cells[:, b]).size * h * h
+    return out
+
+
+def auto_orientation(data, convention):
+    """``(up, view, why)`` for ``up="auto"`` and the default ``front`` view.
+
+    ``convention`` is the up axis of the file's convention (:func:`guess_up`). When the front
+    view of that convention shows at least :data:`KEEP_CONVENTION` of the data's largest
+    outline (:func:`outline_areas`), it is kept: ``(convention, "front", why)``. Otherwise
+    (a flat object seen edge-on, a long one seen end-on) the camera looks along the axis of
+    the largest outline (ties: not the convention's up), from its + side, with the
+    convention's up axis up when it is across that view, else the shorter of the two others
+    (the longer one runs across the image): ``(up, (direction, image up), why)``.
+    """
+    A = outline_areas(data)
+    front = _FRONT_AXIS[convention]
+    if not A.max() > 0 or A[front] >= KEEP_CONVENTION * A.max():
+        return convention, "front", f"{convention} up (the file's convention)"
+    up_i = _AXES.index(convention)
+    best = max(range(3), key=lambda k: (A[k] >= (1 - 1e-9) * A.max(), k != up_i, -k))
+    if up_i != best:
+        up_k = up_i
+    else:
+        U = data.used_vertices()
+        ext = U.max(axis=0) - U.min(axis=0)
+        others = [k for k in range(3) if k != best]
+        up_k = min(others, key=lambda k: ext[k])
+    direction = np.eye(3)[best]
+    image_up = np.eye(3)[up_k]
+    why = (f"looking along {_AXES[best]} with {_AXES[up_k]} up: the {convention}-up front "
+           f"view would show {100 * A[front] / A.max():.0f} % of the largest outline "
+           "(--up or --view to choose)")
+    return _AXES[up_k], (direction, image_up), why
 
 
 def warn_thin_tubes(scene, probes=128):

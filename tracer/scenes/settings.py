@@ -77,7 +77,9 @@ class Camera:
                      why="scene files carry their camera; the API's None is the paper's "
                          "beta-study camera")
     up: str = _opt("y", "the data's up axis for a view (x, y, z; auto: z for .stl and .ply "
-                   "files and trimesh / pyvista objects, y otherwise)", mesh="auto",
+                   "files and trimesh / pyvista objects, y otherwise; for the front view a "
+                   "flat object seen edge-on or a long one end-on is turned to its largest "
+                   "silhouette)", mesh="auto",
                    file=REQUIRED, key=False,
                    why="a mesh file's extension tells its up axis")
 
