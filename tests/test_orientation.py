@@ -50,9 +50,9 @@ def test_a_long_object_in_a_y_up_file_is_seen_from_its_side(tmp_path):
     path = tmp_path / "cylinder.obj"                      # along z in a y-up format
     trimesh.creation.cylinder(radius=0.3, height=2.0).export(path)
     s = tracer.mesh_scene(path, size=(48, 48))
-    assert s.extra["orientation"].startswith("looking along x with y up")
+    assert s.extra["orientation"].startswith("z up, from the data")
     w, h = _hit_extent(tracer.render(s))
-    assert w > 2 * h                                       # the cylinder lies across the image
+    assert h > 2 * w                                       # the cylinder stands upright
     # the convention, when asked for: end-on, a disc
     w1, h1 = _hit_extent(tracer.render_mesh(path, size=(48, 48), up="y"))
     assert abs(w1 - h1) <= 2
@@ -60,15 +60,15 @@ def test_a_long_object_in_a_y_up_file_is_seen_from_its_side(tmp_path):
 
 def test_a_flat_object_in_a_z_up_file_is_seen_face_on(tmp_path):
     """A 'T' of two plates in the x-y plane, 0.1 thick, wider than tall, saved as STL (z up):
-    its z-up front view looks along y at the edge; the chosen view looks along z with the
-    shorter in-plane axis, y, up: the T upright."""
+    its z-up front view looks along y at the edge; the y-up front view looks along z: the T
+    upright."""
     bar = trimesh.creation.box(extents=[2.0, 0.3, 0.1])
     bar.apply_translation([0, 0.55, 0])
     stem = trimesh.creation.box(extents=[0.3, 1.0, 0.1])
     path = tmp_path / "tee.stl"
     trimesh.util.concatenate([bar, stem]).export(path)
     s = tracer.mesh_scene(path, size=(64, 64), shading="normals")
-    assert s.extra["orientation"].startswith("looking along z with y up")
+    assert s.extra["orientation"].startswith("y up, from the data")
     res = tracer.render(s)
     top = res.hit[: 32].sum(axis=1).max()     # the bar: a wide run of pixels in the upper half
     bottom = res.hit[40:].sum(axis=1).max()   # the stem: a narrow one lower down
@@ -90,12 +90,19 @@ def test_shapes_their_convention_shows_well_keep_it(tmp_path, make, name):
     np.testing.assert_array_equal(s.camera_origin, same.camera_origin)
 
 
-def test_auto_orientation_picks_across_the_conventions_up():
-    # long along y in a z-up world: the front view (along y) sees it end-on; look along x
-    # (the first of the two largest outlines that is not the up axis), z stays up
-    m = trimesh.creation.cylinder(radius=0.3, height=2.0)
-    m.apply_transform(trimesh.transformations.rotation_matrix(np.pi / 2, [1, 0, 0]))
-    up, view, why = auto_orientation(_data(m), "z")
-    assert up == "z"
+def test_side_views_when_neither_front_view_shows_the_data(tmp_path):
+    """A plate in the y-z plane (thin along x) in a y-up OBJ: both conventions' front views
+    (along z, along y) see its edge; the z-up side view (along x) sees its face."""
+    plate = trimesh.creation.box(extents=[0.05, 1.0, 1.5])
+    up, view, why = auto_orientation(_data(plate), "y")
+    assert up == "z" and why.startswith("looking along x with z up, from the data")
     np.testing.assert_array_equal(view[0], [1.0, 0, 0])
     np.testing.assert_array_equal(view[1], [0, 0, 1.0])
+    path = tmp_path / "plate.obj"
+    plate.export(path)
+    face = tracer.render_mesh(path, size=(32, 32), shading="normals")
+    edge = tracer.render_mesh(path, size=(32, 32), shading="normals", up="y")
+    w, h = _hit_extent(face)                 # the 1 x 1.5 face, upright (thickened a little
+    assert 1.1 < h / w < 2.0                 # by the surface's offset)
+    w, h = _hit_extent(edge)                 # the edge: a thin upright strip
+    assert h / w > 2.5

@@ -155,10 +155,10 @@ def mesh_scene(mesh, F=None, *, kind=None, alpha=_MESH["alpha"], alpha_u=_MESH["
                             transparent=transparent, lighting=lighting, color=color,
                             background=background)
     if guessed and camera is None and view == "front":
-        up, front, why = auto_orientation(data, up)
+        new_up, front, why = auto_orientation(data, up)
         scene.extra["orientation"] = why
-        if front != "front":
-            frame_scene(scene, front, up)
+        if front != "front" or new_up != up:
+            frame_scene(scene, front, new_up)
     warn_thin_tubes(scene)
     return scene
 
@@ -319,33 +319,35 @@ def outline_areas(data, seed=0):
 def auto_orientation(data, convention):
     """``(up, view, why)`` for ``up="auto"`` and the default ``front`` view.
 
-    ``convention`` is the up axis of the file's convention (:func:`guess_up`). When the front
-    view of that convention shows at least :data:`KEEP_CONVENTION` of the data's largest
-    outline (:func:`outline_areas`), it is kept: ``(convention, "front", why)``. Otherwise
-    (a flat object seen edge-on, a long one seen end-on) the camera looks along the axis of
-    the largest outline (ties: not the convention's up), from its + side, with the
-    convention's up axis up when it is across that view, else the shorter of the two others
-    (the longer one runs across the image): ``(up, (direction, image up), why)``.
+    ``convention`` is the up axis of the file's convention (:func:`guess_up`). Its front view
+    is kept when it shows at least :data:`KEEP_CONVENTION` of the data's largest silhouette
+    (:func:`outline_areas`): ``(convention, "front", why)``. Otherwise the data does not follow
+    the convention (z-up data in a y-up OBJ, as 3D-printing files often are; a flat text in a
+    z-up STL), and the first of these that passes the same test is taken: the other common
+    convention's front view (z up for y, y up for z and x), its side view (along the third
+    axis), the convention's side view: between them they look along every axis, so one of
+    them shows the largest silhouette. A side view is ``(direction to the eye, image up)``.
     """
     A = outline_areas(data)
-    front = _FRONT_AXIS[convention]
-    if not A.max() > 0 or A[front] >= KEEP_CONVENTION * A.max():
+    top = A.max()
+    if not top > 0 or A[_FRONT_AXIS[convention]] >= KEEP_CONVENTION * top:
         return convention, "front", f"{convention} up (the file's convention)"
-    up_i = _AXES.index(convention)
-    best = max(range(3), key=lambda k: (A[k] >= (1 - 1e-9) * A.max(), k != up_i, -k))
-    if up_i != best:
-        up_k = up_i
-    else:
-        U = data.used_vertices()
-        ext = U.max(axis=0) - U.min(axis=0)
-        others = [k for k in range(3) if k != best]
-        up_k = min(others, key=lambda k: ext[k])
-    direction = np.eye(3)[best]
-    image_up = np.eye(3)[up_k]
-    why = (f"looking along {_AXES[best]} with {_AXES[up_k]} up: the {convention}-up front "
-           f"view would show {100 * A[front] / A.max():.0f} % of the largest outline "
-           "(--up or --view to choose)")
-    return _AXES[up_k], (direction, image_up), why
+    lost = (f"the {convention}-up front view would show "
+            f"{100 * A[_FRONT_AXIS[convention]] / top:.0f} % of the largest silhouette; --up "
+            "or --view to choose")
+    other = "y" if convention == "z" else "z"
+    for up in (other, convention):
+        u = _AXES.index(up)
+        front = _FRONT_AXIS[up]
+        side = 3 - u - front
+        for axis, name in ((front, "front"), (side, None)):
+            if (up, name) == (convention, "front") or A[axis] < KEEP_CONVENTION * top:
+                continue
+            if name == "front":
+                return up, "front", f"{up} up, from the data ({lost})"
+            return (up, (np.eye(3)[axis], np.eye(3)[u]),
+                    f"looking along {_AXES[axis]} with {up} up, from the data ({lost})")
+    return convention, "front", f"{convention} up (the file's convention; {lost})"
 
 
 def warn_thin_tubes(scene, probes=128):
