@@ -79,6 +79,10 @@ def test_beta_bunny_keeps_the_authors_reference(tmp_path):
     assert _column(report, "ref. error (% diag)") == ["0", "2.5"]
     assert set(_column(report, "ref. time (s)")) == {"–"}
     assert "side by side" in report
+    # the paper's own mesh keeps the paper's parameters, and says so (issue 46)
+    params = json.loads((out / "beta_params.json").read_text())
+    assert params["paper_parameters"] and (params["alpha"], params["alpha_u"]) == (200, 1200)
+    assert params["parameters"] == "the paper's parameters: points alpha 200, alpha_U 1200"
     # the same bunny framed from a view is no longer the authors' protocol: no reference
     out2 = tmp_path / "bunny-view"
     assert main(["ablate-beta", str(BUNNY), "-o", str(out2), "--size", "16", "--betas", "0",
@@ -502,7 +506,9 @@ def test_beta_estimate_is_printed_before_the_renders(tmp_path, capsys, monkeypat
                  "--betas", "1", "--types", "points", "--alpha", "40", "--alpha-u", "300",
                  "--scheduler", "serial"]) == 0
     assert len(seen) == 2  # beta 0 and beta 1
-    first = seen[0].strip().splitlines()[0]
+    # the parameters first (issue 46), then the estimate
+    params, first = seen[0].strip().splitlines()[:2]
+    assert params.startswith("parameters: the given parameters: points alpha 40, alpha_U 300")
     assert first.startswith("estimate (from 8x8 probe renders") and "beta = 0 renders" in first
 
 

@@ -1,10 +1,16 @@
 """``tracer ablate-beta``: the beta ablation of Sec. 4.3 (figure "betatest").
 
-Render the mesh's vertices, edges and triangles with the authors' camera at every beta, and
-record the wall time and the isosurface error along each ray against the exact (beta = 0)
-render, relative to the bounding-box diagonal. ``--view`` / ``--up`` frame a mesh as ``tracer
-render`` does instead of the authors' camera; the report shows the authors' errors and times
-only for their data and protocol (the paper's bunny, alpha 200, alpha_U 1200, their camera).
+Render the mesh's vertices, edges and triangles at every beta, and record the wall time and
+the isosurface error along each ray against the exact (beta = 0) render, relative to the
+bounding-box diagonal. The parameters (:func:`surface_parameters`): the paper's bunny, or any
+mesh with ``--paper-parameters``, is rendered with the paper's alpha 200, alpha_U 1200 and the
+authors' camera; any other mesh with its own automatic parameters per type, as ``tracer
+render`` picks them (``SmoothDistanceField.auto_surface``: alpha, alpha_U and the level
+offset), and a camera framing the whole surface from the front (the paper's values would leave
+a few pixels of a small mesh hit). ``--alpha`` / ``--alpha-u`` replace either; ``--view`` /
+``--up`` frame a mesh as ``tracer render`` does. Every output names the parameters and where
+they came from; the report shows the authors' errors and times only for their data and
+protocol (the paper's bunny, alpha 200, alpha_U 1200, their camera).
 Protocol of the authors' ``app/beta_error_test``: alpha = 200, alpha_U = 1200, beta in
 {0, 0.1, ..., 1}, camera at the bbox centre + 2 x the largest extent along +z looking at the centre
 (up +y); the error over the pixels that both renders hit is ``mean |t_beta - t_0|`` with its
@@ -13,7 +19,7 @@ population standard deviation.
 The study as independent tasks:
 
 * :func:`list_tasks`: one task per (type, beta, tol), a small dict of render parameters (mesh
-  path, type, beta, tol, size, alpha, alpha_u, eps);
+  path, type, beta, tol, size, alpha, alpha_u, offset, eps);
 * :func:`render_task`: renders one task (the field is built once per process,
   :func:`tracer.studies.common.cached_field`) and returns its statistics with the depth buffer
   and a PNG of the render;
@@ -33,6 +39,7 @@ import json
 import os
 import time
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 
@@ -50,8 +57,12 @@ BETA_CSV = "beta_ablation.csv"
 BETA_PARAMS = "beta_params.json"
 BETA_FIELDS = ["type", "beta", "tol", "seconds", "hits", "mean_steps", "mean_leaves",
                "error_rel_diag", "error_std_rel_diag", "n_both", "error_abs", "error_std_abs",
-               "leaves_per_eval", "hit_fraction", "alpha", "alpha_u", "width", "height", "eps",
-               "diag", "n_primitives", "threads", "key"]
+               "leaves_per_eval", "hit_fraction", "alpha", "alpha_u", "offset", "parameters",
+               "width", "height", "eps", "diag", "n_primitives", "threads", "key"]
+#: the paper's parameters of the study (Sec. 4.3, the authors' ``beta_error_test``): alpha and
+#: alpha_U in 1 / scene units, chosen for the bunny's scale
+PAPER_ALPHA = 200.0
+PAPER_ALPHA_U = 1200.0
 #: columns that depend on the machine, its load or the scheduler, not on the study's results
 TIMING_FIELDS = ("seconds", "threads", "task_seconds", "worker")
 #: fewest pixels hit by both a render and its beta = 0 reference for an error to be reported,
@@ -83,9 +94,18 @@ def add_arguments(p):
     p.add_argument("-o", "--output", metavar="DIR",
                    help="result folder (created; holds beta_ablation.csv, plots, report.md); "
                    "default renders/ablation/beta-<size>")
-    p.add_argument("--alpha", type=float, default=200.0, help="alpha (default 200, the paper's)")
-    p.add_argument("--alpha-u", type=float, default=1200.0,
-                   help="alpha_U for weight attenuation (default 1200, the paper's)")
+    p.add_argument("--alpha", type=float,
+                   help="alpha of every type (default: the mesh's own automatic alpha per type, "
+                   "as tracer render picks it; the paper's 200 for the paper's bunny or with "
+                   "--paper-parameters)")
+    p.add_argument("--alpha-u", type=float,
+                   help="alpha_U for weight attenuation (default: the mesh's automatic alpha_U "
+                   "per type; the paper's 1200 for the paper's bunny or with "
+                   "--paper-parameters)")
+    p.add_argument("--paper-parameters", action="store_true",
+                   help="render any mesh with the paper's alpha 200, alpha_U 1200 and the "
+                   "authors' camera (the default for the paper's bunny only; on a small mesh "
+                   "few pixels may be hit, and their errors are then undefined)")
     p.add_argument("--betas", default="0,0.1,0.2,0.3,0.4,0.5,0.6,0.7,0.8,0.9,1.0",
                    help="comma-separated betas (default 0,0.1,...,1.0); 0, the reference, "
                    "is always rendered")
@@ -110,8 +130,9 @@ def add_arguments(p):
     p.add_argument("--depth-cache", metavar="DIR",
                    help="where the depth buffers (depth_<type>_beta<b>.npy) and the full-size "
                    "renders are kept (default: DIR/cache)")
-    add_view_arguments(p, "the authors' camera: bbox centre + 2 x the largest extent along +z, "
-                       "looking at the centre, up +y")
+    add_view_arguments(p, "front, framing the whole surface, for a mesh of your own; the "
+                       "authors' camera (bbox centre + 2 x the largest extent along +z, looking "
+                       "at the centre, up +y) for the paper's bunny or with --paper-parameters")
     p.add_argument("--note", help="a line of text for report.md (e.g. the machine's load)")
     g = p.add_mutually_exclusive_group()
     g.add_argument("--overwrite", action="store_true",
@@ -133,21 +154,81 @@ def file_stem(kind, beta, tol):
     return f"{kind}_beta{beta_tag(beta)}" + (f"_tol{beta_tag(tol)}" if tol else "")
 
 
-def list_tasks(mesh, types, betas, tols, *, size, alpha, alpha_u, eps, tol_betas=(0.0,),
-               camera=None):
+def list_tasks(mesh, types, betas, tols, *, size, alpha=None, alpha_u=None, eps,
+               tol_betas=(0.0,), camera=None, surfaces=None):
     """One task per (type, beta, tol): a dict of render parameters and its ``key``. ``tol``
     0 is rendered at every beta, each ``tol > 0`` at the betas ``tol_betas`` (None: every
     beta). The reference (beta 0, tol 0) of every type is always included. ``camera``:
-    ``(origin, dest, up)`` shared by every render, or None for the authors' camera."""
+    ``(origin, dest, up)`` shared by every render, or None for the authors' camera.
+    ``surfaces``: per type, ``alpha``, ``alpha_u`` (1 / scene units), ``offset`` (scene units)
+    and ``parameters`` (where they came from), as :func:`surface_parameters` returns them;
+    without it every type has ``alpha``, ``alpha_u``, offset 0 and "given"."""
     betas = sorted(set(betas) | {0.0})
     tols = sorted(set(tols) | {0.0})
     tol_betas = betas if tol_betas is None else sorted(set(tol_betas))
     mesh = os.path.abspath(mesh)
+    if surfaces is None:
+        surfaces = {k: {"alpha": alpha, "alpha_u": alpha_u, "offset": 0.0,
+                        "parameters": "given"} for k in types}
     return [{"key": task_key(k, b, t), "mesh": mesh, "type": k, "beta": float(b),
-             "tol": float(t), "size": int(size), "alpha": float(alpha),
-             "alpha_u": float(alpha_u), "eps": None if eps is None else float(eps),
-             "camera": camera}
+             "tol": float(t), "size": int(size), "alpha": float(surfaces[k]["alpha"]),
+             "alpha_u": float(surfaces[k]["alpha_u"]),
+             "offset": float(surfaces[k].get("offset", 0.0)),
+             "parameters": surfaces[k].get("parameters", "given"),
+             "eps": None if eps is None else float(eps), "camera": camera}
             for k in types for t in tols for b in (tol_betas if t else betas)]
+
+
+def surface_parameters(mesh, types, alpha=None, alpha_u=None, paper=False):
+    """Per type, the study's ``{"alpha", "alpha_u"}`` (1 / scene units), ``"offset"`` (the
+    level ``d_hat = offset``, scene units) and ``"parameters"``, where they came from:
+
+    * ``paper``: the paper's ``PAPER_ALPHA`` and ``PAPER_ALPHA_U``, offset 0 ("paper");
+    * else the mesh's own automatic ones, as ``tracer render`` picks them ("auto"): with
+      neither ``alpha`` nor ``alpha_u`` given, ``SmoothDistanceField.auto_surface`` (points:
+      ``auto_alpha``, ``auto_alpha_u``, offset 0; edges and triangles: the level about one
+      edge length out); else ``auto_alpha`` / ``auto_alpha_u(alpha)`` for the one not given,
+      offset 0.
+
+    A given ``alpha`` or ``alpha_u`` is used as given ("given"); a mix reads e.g. "alpha
+    given, alpha_U auto"."""
+    out = {}
+    src = "paper" if paper else "auto"
+    for kind in types:
+        if paper:
+            a = PAPER_ALPHA if alpha is None else alpha
+            u = PAPER_ALPHA_U if alpha_u is None else alpha_u
+            off = 0.0
+        else:
+            field = cached_field(os.path.abspath(mesh), kind)
+            if alpha is None and alpha_u is None:
+                a, u, off = field.auto_surface()
+            else:
+                a = field.auto_alpha() if alpha is None else alpha
+                u = field.auto_alpha_u(a) if alpha_u is None else alpha_u
+                off = 0.0
+        a_from = "given" if alpha is not None else src
+        u_from = "given" if alpha_u is not None else src
+        out[kind] = {"alpha": float(a), "alpha_u": float(u), "offset": float(off),
+                     "parameters": a_from if a_from == u_from
+                     else f"alpha {a_from}, alpha_U {u_from}"}
+    return out
+
+
+def describe_parameters(surfaces, paper_bunny=False):
+    """One line naming the parameters of every type and where they came from (1 / scene units;
+    the offset in scene units), e.g. ``the mesh's auto parameters: points alpha 3.86, alpha_U
+    77.3; triangles alpha 26.4, alpha_U 26.4, offset 0.227``."""
+    src = "; ".join(sorted({s["parameters"] for s in surfaces.values()}))
+    head = {"auto": "the mesh's auto parameters (as tracer render picks them)",
+            "paper": "the paper's parameters" + ("" if paper_bunny else
+                                                 " (--paper-parameters: chosen for the "
+                                                 "bunny's scale, not this mesh's)"),
+            "given": "the given parameters"}.get(src, src)
+    parts = [f"{k} alpha {s['alpha']:.4g}, alpha_U {s['alpha_u']:.4g}"
+             + (f", offset {s['offset']:.3g}" if s.get("offset") else "")
+             for k, s in surfaces.items()]
+    return f"{head}: " + "; ".join(parts)
 
 
 _WARM = set()
@@ -159,7 +240,7 @@ def _scene(field, task, size=None):
     size = size or task["size"]
     return scene_from_field(field, alpha=task["alpha"], alpha_u=task["alpha_u"],
                             beta=task["beta"], camera=task.get("camera"), width=size,
-                            height=size, eps=task["eps"],
+                            height=size, eps=task["eps"], offset=task.get("offset") or None,
                             tol=task.get("tol", 0.0), name=f"{task['type']}-beta{task['beta']:g}")
 
 
@@ -190,7 +271,9 @@ def render_task(task, progress=None):
             "mean_leaves": s["mean_leaves"],
             "leaves_per_eval": float(res.leaves.sum() / max(res.steps.sum(), 1)),
             "hit_fraction": s["hit_fraction"], "alpha": task["alpha"],
-            "alpha_u": task["alpha_u"], "width": task["size"], "height": task["size"],
+            "alpha_u": task["alpha_u"], "offset": task.get("offset", 0.0),
+            "parameters": task.get("parameters", "given"), "width": task["size"],
+            "height": task["size"],
             "eps": float(scene.eps), "diag": float(np.linalg.norm(hi - lo)),
             "n_primitives": field.num_primitives, "threads": int(numba.get_num_threads()),
             "depth": res.depth.astype(np.float32), "png": buf.getvalue()}
@@ -219,13 +302,14 @@ def typed_row(r):
     out = dict(r)
     for k in ("beta", "tol", "seconds", "mean_steps", "mean_leaves", "error_rel_diag",
               "error_std_rel_diag", "error_abs", "error_std_abs", "leaves_per_eval",
-              "hit_fraction", "alpha", "alpha_u", "eps", "diag", "task_seconds"):
+              "hit_fraction", "alpha", "alpha_u", "offset", "eps", "diag", "task_seconds"):
         try:
             out[k] = float(r.get(k) or "nan")
         except (TypeError, ValueError):
             out[k] = float("nan")
-    if not out["tol"] == out["tol"]:
-        out["tol"] = 0.0
+    for k in ("tol", "offset"):  # absent from files written before these columns
+        if not out[k] == out[k]:
+            out[k] = 0.0
     for k in ("hits", "n_both", "width", "height", "n_primitives", "threads"):
         try:
             out[k] = int(float(r.get(k) or 0))
@@ -291,8 +375,8 @@ def needs(args):
 def run(args):
     """Run the beta ablation; returns the exit status (1 when a task failed)."""
     sched, workers = runner.check_arguments(args)
-    alpha = positive(args.alpha, "--alpha")
-    alpha_u = positive(args.alpha_u, "--alpha-u")
+    alpha = None if args.alpha is None else positive(args.alpha, "--alpha")
+    alpha_u = None if args.alpha_u is None else positive(args.alpha_u, "--alpha-u")
     betas = float_list(args.betas, "--betas", non_negative=True)
     tols = float_list(args.tols, "--tols", non_negative=True)
     tol_betas = (None if args.tol_betas.strip().lower() == "all"
@@ -312,38 +396,9 @@ def run(args):
     if existing and not (args.overwrite or args.resume):
         raise CLIError(f"{out} already holds beta-ablation results ({existing[0].name}); pass "
                        "--resume to continue them or --overwrite to replace them")
-    mesh_all = load_mesh(args.mesh)
-    for kind in types:  # fail early on a type the mesh cannot provide
-        if kind != "points":
-            load_mesh(args.mesh, kind)
-    diag = float(np.linalg.norm(np.subtract(*mesh_all.bounds[::-1])))
-    eps_abs = args.eps if args.eps is not None else 1e-4 * diag
-    view, up = resolve_view(args, args.mesh)
-    camera = None
-    if view:  # one camera for every type: the largest surface of them all in view
-        fields = [cached_field(os.path.abspath(args.mesh), k) for k in types]
-        grow = max(f.inflation(alpha, alpha_u) for f in fields) + 2.0 * eps_abs
-        camera = view_camera(fields, view, up, grow, size)
-    bunny = is_paper_bunny(args.mesh)
-    # the authors' beta_error_test numbers hold for their bunny, alpha, alpha_U and camera
-    reference = bunny and close(alpha, 200.0) and close(alpha_u, 1200.0) and camera is None
-    params = {"mesh": str(args.mesh), "mesh_name": os.path.basename(args.mesh),
-              "alpha": alpha, "alpha_u": alpha_u, "width": size, "height": size,
-              "eps": eps_abs,
-              "eps_rule": "given" if args.eps is not None else "1e-4 x bbox diagonal",
-              "diag": diag, "camera": "bbox centre + 2 x largest extent along +z, looking at "
-              "the centre, up +y (authors' beta_error_test)" if camera is None else
-              f"--view {view}, up {up}: the whole surface in view, as tracer render frames it "
-              f"(origin {_vec(camera[0])}, looking at {_vec(camera[1])}, up {_vec(camera[2])})",
-              "view": view, "up": up, "camera_vectors": camera,
-              "authors_reference": reference,
-              "reference_rule": "the authors' errors and times are shown for the paper's bunny "
-              "at alpha 200, alpha_U 1200 and their camera only" + (
-                  "" if reference else (" (this mesh is not the bunny)" if not bunny else
-                                        " (this study changes alpha, alpha_U or the camera)")),
-              "depth_cache": str(cache), "note": args.note or ""}
+    params, surfaces, camera = _study_params(args, types, size, alpha, alpha_u, cache)
     log = runner.TaskLog(csv_path, BETA_FIELDS)
-    rows = _resumed_rows(args, log, out, csv_path, params, camera, alpha, alpha_u, size)
+    rows = _resumed_rows(args, log, out, csv_path, params, camera, surfaces, size)
     out.mkdir(parents=True, exist_ok=True)
     cache.mkdir(parents=True, exist_ok=True)
     write_json(out / BETA_PARAMS, params)
@@ -353,11 +408,14 @@ def run(args):
     ).exists()}
     rows = [r for r in rows if r["key"] in done]
     log.start(rows)
-    tasks = list_tasks(args.mesh, types, betas, tols, size=size, alpha=alpha, alpha_u=alpha_u,
-                       eps=args.eps, tol_betas=tol_betas, camera=camera)
+    tasks = list_tasks(args.mesh, types, betas, tols, size=size, eps=args.eps,
+                       tol_betas=tol_betas, camera=camera, surfaces=surfaces)
     todo = [t for t in tasks if t["key"] not in done]
     label = f"ablate-beta {params['mesh_name']}"
     say = (lambda s: None) if args.quiet else (lambda s: print(s, flush=True))
+    say(f"parameters: {params['parameters']}; betas "
+        f"{', '.join(f'{b:g}' for b in sorted(set(betas) | {0.0}))}; camera: "
+        f"{params['camera'].split(' (origin')[0]}")
     if done:
         say(f"resuming: {len(done)} row(s) already in {csv_path}, {len(todo)} render(s) to go")
     estimate = _estimate(todo, size, sched, workers, say)
@@ -383,11 +441,13 @@ def run(args):
                             scheduler=sched, workers=workers, estimate=estimate, label=label,
                             quiet=args.quiet, line=line)
     ok = reduce(out, cache, log, params, types, grid_betas)
-    say(f"Beta ablation of {params['mesh_name']}: {len(ok)} rows in {csv_path} "
-        f"({len(todo)} render(s) {info.describe()}, {duration(info.seconds)}); wrote "
-        f"beta_time.png, beta_error.png, beta_frontier.png, beta_grid.png"
+    say(f"Beta ablation of {params['mesh_name']} at {params['parameters']}: {len(ok)} rows "
+        f"in {csv_path} ({len(todo)} render(s) {info.describe()}, {duration(info.seconds)}); "
+        f"wrote beta_time.png, beta_error.png, beta_frontier.png, beta_grid.png"
         + (", beta_diff.png" if (out / "beta_diff.png").exists() else "")
         + f" and report.md in {out}.")
+    for line_ in few_hits_warnings(ok):
+        print(f"warning: {line_}", flush=True)
     if info.failed:
         print(f"warning: {len(info.failed)} render(s) failed (see the 'error' column of "
               f"{csv_path}); rerun with --resume to retry them", flush=True)
@@ -395,20 +455,75 @@ def run(args):
     return 0
 
 
-def _resumed_rows(args, log, out, csv_path, params, camera, alpha, alpha_u, size):
+def _study_params(args, types, size, alpha, alpha_u, cache):
+    """``(params, surfaces, camera)`` of the study: its description for ``beta_params.json``
+    and the reports, the parameters of every type (:func:`surface_parameters`: the paper's for
+    its bunny or with ``--paper-parameters``, else the mesh's auto ones, ``--alpha`` and
+    ``--alpha-u`` as given) and the shared camera (None: the authors'; a mesh of the user's own
+    is framed from the front unless ``--view`` says otherwise)."""
+    mesh_all = load_mesh(args.mesh)
+    for kind in types:  # fail early on a type the mesh cannot provide
+        if kind != "points":
+            load_mesh(args.mesh, kind)
+    diag = float(np.linalg.norm(np.subtract(*mesh_all.bounds[::-1])))
+    eps_abs = args.eps if args.eps is not None else 1e-4 * diag
+    bunny = is_paper_bunny(args.mesh)
+    # the paper's alpha, alpha_U and camera for its bunny (or when asked); any other mesh
+    # gets its own automatic parameters and a camera framing it
+    paper = bunny or args.paper_parameters
+    surfaces = surface_parameters(args.mesh, types, alpha, alpha_u, paper=paper)
+    view, up = resolve_view(args, args.mesh)
+    framed = "--view" if view else None
+    if not view and not paper:
+        view, up = resolve_view(SimpleNamespace(view="front", up=None), args.mesh)
+        framed = "default for a mesh of your own"
+    camera = None
+    if view:  # one camera for every type: the largest surface of them all in view
+        fields = [cached_field(os.path.abspath(args.mesh), k) for k in types]
+        grow = max(f.inflation(surfaces[k]["alpha"], surfaces[k]["alpha_u"])
+                   + surfaces[k]["offset"] for f, k in zip(fields, types)) + 2.0 * eps_abs
+        camera = view_camera(fields, view, up, grow, size)
+    # the authors' beta_error_test numbers hold for their bunny, alpha, alpha_U and camera
+    reference = bunny and camera is None and all(
+        close(v["alpha"], PAPER_ALPHA) and close(v["alpha_u"], PAPER_ALPHA_U)
+        and not v["offset"] for v in surfaces.values())
+    params = {"mesh": str(args.mesh), "mesh_name": os.path.basename(args.mesh),
+              "alpha": _common(surfaces, "alpha"), "alpha_u": _common(surfaces, "alpha_u"),
+              "surfaces": surfaces, "parameters": describe_parameters(surfaces, bunny),
+              "paper_parameters": bool(paper),
+              "width": size, "height": size, "eps": eps_abs,
+              "eps_rule": "given" if args.eps is not None else "1e-4 x bbox diagonal",
+              "diag": diag, "camera": "bbox centre + 2 x largest extent along +z, looking at "
+              "the centre, up +y (authors' beta_error_test)" if camera is None else
+              f"{view} view, up {up} ({framed}): the whole surface in view, as tracer render "
+              f"frames it (origin {_vec(camera[0])}, looking at {_vec(camera[1])}, up "
+              f"{_vec(camera[2])})",
+              "view": view, "up": up, "camera_vectors": camera,
+              "authors_reference": reference,
+              "reference_rule": "the authors' errors and times are shown for the paper's bunny "
+              "at alpha 200, alpha_U 1200 and their camera only" + (
+                  "" if reference else (" (this mesh is not the bunny)" if not bunny else
+                                        " (this study changes alpha, alpha_U or the camera)")),
+              "depth_cache": str(cache), "note": args.note or ""}
+    return params, surfaces, camera
+
+
+def _resumed_rows(args, log, out, csv_path, params, camera, surfaces, size):
     """The rows of an earlier run to resume (``--resume``), checked against this run's
-    settings: the same alpha, alpha_U, size, camera and mesh (a one-line error otherwise);
-    the earlier note is kept unless a new one is given."""
+    settings: the same alpha, alpha_U and offset per type (``surfaces``), size, camera and
+    mesh (a one-line error otherwise); the earlier note is kept unless a new one is given."""
     if not (args.resume and csv_path.exists()):
         return []
     rows = log.read(["type", "beta", "alpha", "alpha_u", "width"])
     for r in rows:
-        if r["status"] == "ok" and not (close(r["alpha"], alpha)
-                                        and close(r["alpha_u"], alpha_u)
-                                        and int(r["width"]) == size):
+        s = surfaces.get(r["type"])
+        if r["status"] == "ok" and s is not None and not (
+                close(r["alpha"], s["alpha"]) and close(r["alpha_u"], s["alpha_u"])
+                and close(r.get("offset") or 0.0, s["offset"]) and int(r["width"]) == size):
             raise CLIError(f"{csv_path} was measured with alpha {r['alpha']}, alpha_u "
-                           f"{r['alpha_u']}, size {r['width']}; rerun with those values or "
-                           "use --overwrite")
+                           f"{r['alpha_u']}, offset {r.get('offset') or 0}, size {r['width']} "
+                           f"for {r['type']}, not {params['parameters']}; rerun with those "
+                           "values or use --overwrite")
     old = out / BETA_PARAMS
     if old.exists():
         try:
@@ -428,6 +543,27 @@ def _resumed_rows(args, log, out, csv_path, params, camera, alpha, alpha_u, size
 
 def _vec(v):
     return "(" + ", ".join(f"{x:.4g}" for x in v) + ")"
+
+
+def _common(surfaces, key):
+    """``surfaces``' value of ``key`` when every type has the same one, else None."""
+    values = [s[key] for s in surfaces.values()]
+    return values[0] if all(close(v, values[0]) for v in values) else None
+
+
+def few_hits_warnings(rows):
+    """A line per type whose beta = 0 render hit too few pixels to measure an error
+    (:data:`MIN_ERROR_PIXELS`, :data:`MIN_ERROR_SHARE`): its errors are undefined."""
+    out = []
+    for r in rows:
+        if r["beta"] == 0.0 and not r.get("tol", 0.0):
+            n = r["width"] * r["height"]
+            if r["hits"] < max(MIN_ERROR_PIXELS, MIN_ERROR_SHARE * n):
+                out.append(f"{r['type']} at beta 0 hit {r['hits']} of {n} pixels (alpha "
+                           f"{r['alpha']:.4g}, {r.get('parameters') or 'given'}): its errors are "
+                           "undefined; the mesh's auto parameters (no --alpha, no "
+                           "--paper-parameters) or --view frame a surface that fills the image")
+    return out
 
 
 def _estimate(todo, size, sched, workers, say):

@@ -64,6 +64,42 @@ def authors_times(params):
     return AUTHORS_TIMES.get(int(params["width"]), {})
 
 
+def surfaces_of(params):
+    """Per type, the beta study's ``alpha``, ``alpha_u``, ``offset`` and ``parameters`` (where
+    they came from) from its ``params`` (files written before per-type parameters: the one
+    ``alpha`` and ``alpha_u`` of every type)."""
+    if params.get("surfaces"):
+        return params["surfaces"]
+    return {k: {"alpha": params["alpha"], "alpha_u": params["alpha_u"], "offset": 0.0,
+                "parameters": "given"} for k in TYPES}
+
+
+def type_parameters(params, kind):
+    """``α=3.86, α_U=77.3`` (and the offset when it is not 0) of ``kind`` in the beta study."""
+    s = surfaces_of(params).get(kind)
+    if s is None:
+        return ""
+    return (f"α={s['alpha']:.3g}, α_U={s['alpha_u']:.3g}"
+            + (f", offset {s['offset']:.3g}" if s.get("offset") else ""))
+
+
+def parameters_title(params):
+    """The beta study's parameters for a title: ``the paper's α=200, α_U=1200``, ``the mesh's
+    auto α, α_U per type``, ``given α=40, α_U=300`` (or per type when they differ)."""
+    surf = surfaces_of(params)
+    sources = {s.get("parameters", "given") for s in surf.values()}
+    src = sources.pop() if len(sources) == 1 else "mixed"
+    alphas = {(round(s["alpha"], 9), round(s["alpha_u"], 9), s.get("offset") or 0.0)
+              for s in surf.values()}
+    if len(alphas) == 1:
+        a, u, off = alphas.pop()
+        value = f"α={a:.4g}, α_U={u:.4g}" + (f", offset {off:.3g}" if off else "")
+    else:
+        value = "α, α_U per type"
+    who = {"paper": "the paper's", "auto": "the mesh's auto", "given": "given"}.get(src, src)
+    return f"{who} {value}"
+
+
 def authors_errors(params):
     """:data:`PAPER_BETA_ERROR` for the authors' own study (:func:`has_reference`), else
     ``{}``: their errors were measured on their bunny, not on a user's mesh."""
@@ -132,7 +168,7 @@ def beta_outputs(out, cache, rows, params, types, grid_betas):
     present = beta_plots(out, rows, params)
     front = beta_frontier(out, rows, params, present)
     plain = [r for r in rows if not r.get("tol", 0.0)]
-    beta_grid(out, cache, plain, present, grid_betas)
+    beta_grid(out, cache, plain, present, grid_betas, params)
     diff = beta_diff(out, cache, plain, present, grid_betas, params)
     write_text(out / "report.md", beta_report(rows, params, present, diff=diff, front=front))
 
@@ -158,7 +194,8 @@ def beta_plots(out, rows, params):
     for k in present:
         rs = sorted((r for r in rows if r["type"] == k), key=lambda r: r["beta"])
         ax.plot([r["beta"] for r in rs], [max(r["seconds"], 1e-4) for r in rs], "o-",
-                color=TYPE_COLORS[k], label=f"{k} (ours, {params['width']}²)")
+                color=TYPE_COLORS[k],
+                label=f"{k} (ours, {params['width']}², {type_parameters(params, k)})")
         ref = authors_times(params)
         if ref:
             ref_b = sorted(ref)
@@ -169,8 +206,8 @@ def beta_plots(out, rows, params):
     ax.set_yscale("log")
     ax.set_xlabel("β")
     ax.set_ylabel("render time (s)")
-    ax.set_title(f"{params['mesh_name']}: time vs β (α={params['alpha']:g}, "
-                 f"α_U={params['alpha_u']:g})", fontsize=10)
+    ax.set_title(f"{params['mesh_name']}: time vs β ({parameters_title(params)})",
+                 fontsize=10)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7, ncol=2)
     fig.tight_layout()
@@ -183,7 +220,8 @@ def beta_plots(out, rows, params):
         b = np.array([r["beta"] for r in rs])
         m = 100 * np.array([r["error_rel_diag"] for r in rs])
         sd = 100 * np.array([r["error_std_rel_diag"] for r in rs])
-        ax.plot(b, m, "o-", color=TYPE_COLORS[k], label=f"{k} (ours)")
+        ax.plot(b, m, "o-", color=TYPE_COLORS[k],
+                label=f"{k} (ours, {type_parameters(params, k)})")
         ax.fill_between(b, np.maximum(m - sd, 0), m + sd, color=TYPE_COLORS[k], alpha=0.12)
         ref_e = authors_errors(params)
         if ref_e:
@@ -193,7 +231,8 @@ def beta_plots(out, rows, params):
         tol_series(ax, k, "error_rel_diag", 100.0)
     ax.set_xlabel("β")
     ax.set_ylabel("mean |t_β − t_0| (% of bbox diagonal)")
-    ax.set_title(f"{params['mesh_name']}: isosurface error vs β (band: ±1 std)", fontsize=10)
+    ax.set_title(f"{params['mesh_name']}: isosurface error vs β (band: ±1 std)\n"
+                 f"{parameters_title(params)}", fontsize=10)
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=7, ncol=2)
     fig.tight_layout()
@@ -289,7 +328,7 @@ def beta_frontier(out, rows, params, present):
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(fontsize=6, loc="best")
     fig.suptitle(f"{params['mesh_name']}: error against time, β and tol "
-                 f"({params['width']}², α={params['alpha']:g}, α_U={params['alpha_u']:g}; "
+                 f"({params['width']}², {parameters_title(params)}; "
                  "hollow: a tol render is as accurate and as fast)", fontsize=9)
     fig.tight_layout()
     savefig(fig, out / "beta_frontier.png")
@@ -329,8 +368,9 @@ def frontier_lines(rows, present):
     return lines + [""]
 
 
-def beta_grid(out, cache, rows, present, grid_betas):
-    """``beta_grid.png``: the cached renders, types x selected betas (``tol = 0`` rows)."""
+def beta_grid(out, cache, rows, present, grid_betas, params=None):
+    """``beta_grid.png``: the cached renders, types x selected betas (``tol = 0`` rows),
+    each type labelled with its parameters (``params``: the study's, when given)."""
     plt = pyplot()
     measured = sorted({r["beta"] for r in rows})
     cols = [b for b in measured if any(close(b, g) for g in grid_betas)] or measured[:4]
@@ -353,7 +393,10 @@ def beta_grid(out, cache, rows, present, grid_betas):
                 ax.text(0.5, 0.5, "not available", ha="center", va="center", fontsize=7,
                         transform=ax.transAxes)
             if j == 0:
-                ax.set_ylabel(k, fontsize=8)
+                ax.set_ylabel(f"{k}\n{type_parameters(params, k)}" if params else k,
+                              fontsize=8 if params is None else 6)
+    if params:
+        fig.suptitle(f"{params['mesh_name']}: {parameters_title(params)}", fontsize=7)
     fig.tight_layout(pad=0.4)
     savefig(fig, out / "beta_grid.png", dpi=100)
     plt.close(fig)
@@ -422,13 +465,13 @@ def beta_diff_figure(cache, rows, present, grid_betas, params):
                 ax.text(0.5, 0.5, "not available", ha="center", va="center", fontsize=7,
                         transform=ax.transAxes)
             if j == 0:
-                ax.set_ylabel(k, fontsize=8)
+                ax.set_ylabel(f"{k}\n{type_parameters(params, k)}", fontsize=6)
     cb = fig.colorbar(matplotlib.cm.ScalarMappable(norm=norm, cmap=cmap), ax=axes,
                       extend="max" if over else "neither", shrink=0.9)
     cb.set_label(DIFF_LABEL, fontsize=8)
     cb.ax.tick_params(labelsize=7)
-    fig.suptitle(f"{params['mesh_name']}: depth difference to β = 0 (grey: not hit by both)",
-                 fontsize=8)
+    fig.suptitle(f"{params['mesh_name']}: depth difference to β = 0 (grey: not hit by both)"
+                 f"\n{parameters_title(params)}", fontsize=8)
     return fig
 
 
@@ -451,8 +494,8 @@ def beta_report(rows, params, present, diff=False, front=False):
              "`app/beta_error_test`. Generated by `python -m tracer ablate-beta`.", "",
              f"- data: `{params['mesh_name']}` as vertices, edges and triangles; bbox diagonal "
              f"{params['diag']:.6g}",
-             f"- α = {params['alpha']:g}, α_U = {params['alpha_u']:g}; image "
-             f"{params['width']}×{params['height']} px; eps = {params['eps']:.3g} "
+             f"- parameters: {params.get('parameters') or parameters_title(params)}",
+             f"- image {params['width']}×{params['height']} px; eps = {params['eps']:.3g} "
              f"({params['eps_rule']}; the authors' code uses 1e-3)",
              f"- camera: {params['camera']}",
              "- error: mean |t_β − t_0| over the pixels that both the β render and the β = 0 "

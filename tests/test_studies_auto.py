@@ -1,0 +1,114 @@
+"""The studies on a mesh of the user's own (issue 46, item 5): ``ablate-beta`` and
+``ablate-alpha`` render it with its own automatic parameters and a camera framing it, not the
+paper's (alpha 200 left 4 of 16,384 pixels of a noisy icosphere's points hit, shown as
+"err 0.00 %"), and every output names the parameters and where they came from.
+
+A noisy icosphere (162 vertices) written as OBJ, rendered at 24 x 24 px; the auto parameters
+are computed here independently with ``SmoothDistanceField``.
+"""
+
+import csv
+import json
+import math
+
+import numpy as np
+import pytest
+
+from smoothdist import DataMesh, SmoothDistanceField
+from tracer.cli import main
+from tracer.studies import beta as beta_study
+
+SIZE = 24
+#: a panel's hit set counts as non-trivial above this share of the image
+NON_TRIVIAL = 0.05
+
+
+@pytest.fixture(scope="module")
+def noisy_ico(tmp_path_factory):
+    trimesh = pytest.importorskip("trimesh")
+    mesh = trimesh.creation.icosphere(subdivisions=2)
+    rng = np.random.default_rng(0)
+    mesh.vertices = mesh.vertices + 0.02 * rng.standard_normal(mesh.vertices.shape)
+    path = tmp_path_factory.mktemp("ico") / "noisy_ico.obj"
+    mesh.export(path)
+    return path
+
+
+def _auto(path, kind):
+    return SmoothDistanceField(DataMesh.load(path).as_kind(kind))
+
+
+def _rows(path):
+    with open(path, newline="", encoding="utf-8") as fh:
+        return list(csv.DictReader(fh))
+
+
+def test_beta_on_a_users_mesh_uses_its_auto_parameters(noisy_ico, tmp_path, capsys):
+    """No --alpha: each type at the mesh's auto_surface() (alpha, alpha_U, offset), framed
+    from the front; every beta = 0 render hits more than 5 % of the image and every error is
+    defined; the printed lines, the CSV, the JSON and the report name the parameters."""
+    out = tmp_path / "auto"
+    assert main(["ablate-beta", str(noisy_ico), "-o", str(out), "--size", str(SIZE),
+                 "--betas", "0,1", "--grid-betas", "0,1", "--scheduler", "serial"]) == 0
+    printed = capsys.readouterr().out
+    rows = _rows(out / beta_study.BETA_CSV)
+    assert {r["type"] for r in rows} == {"points", "edges", "triangles"}
+    for kind in ("points", "edges", "triangles"):
+        a, u, off = _auto(noisy_ico, kind).auto_surface()
+        mine = [r for r in rows if r["type"] == kind]
+        assert len(mine) == 2
+        for r in mine:
+            assert math.isclose(float(r["alpha"]), a, rel_tol=1e-6), (kind, r["alpha"], a)
+            assert math.isclose(float(r["alpha_u"]), u, rel_tol=1e-6)
+            assert math.isclose(float(r["offset"]), off, rel_tol=1e-6, abs_tol=1e-12)
+            assert r["parameters"] == "auto"
+            assert math.isfinite(float(r["error_rel_diag"])), r   # never "undefined" here
+        ref = next(r for r in mine if float(r["beta"]) == 0.0)
+        assert float(ref["hit_fraction"]) > NON_TRIVIAL, (kind, ref["hit_fraction"])
+        assert f"{kind} alpha {a:.4g}, alpha_U {u:.4g}" in printed
+    assert printed.startswith("parameters: the mesh's auto parameters")
+    summary = next(ln for ln in printed.splitlines() if ln.startswith("Beta ablation of"))
+    assert "at the mesh's auto parameters" in summary and "warning" not in printed
+    params = json.loads((out / beta_study.BETA_PARAMS).read_text())
+    assert params["paper_parameters"] is False and params["view"] == "front"
+    assert params["authors_reference"] is False
+    assert params["parameters"].startswith("the mesh's auto parameters")
+    assert "the mesh's auto parameters" in (out / "report.md").read_text(encoding="utf-8")
+
+
+def test_beta_paper_parameters_on_a_users_mesh_say_so(noisy_ico, tmp_path, capsys):
+    """--paper-parameters: alpha 200, alpha_U 1200 and the authors' camera on any mesh, said
+    in every output; the points of the icosphere are then (almost) not hit, their error is
+    undefined (empty in the CSV, "undefined" in the plots) and a warning says why."""
+    out = tmp_path / "paper"
+    assert main(["ablate-beta", str(noisy_ico), "-o", str(out), "--size", str(SIZE),
+                 "--betas", "0,1", "--grid-betas", "0,1", "--types", "points,triangles",
+                 "--paper-parameters", "--scheduler", "serial"]) == 0
+    printed = capsys.readouterr().out
+    rows = _rows(out / beta_study.BETA_CSV)
+    assert {(float(r["alpha"]), float(r["alpha_u"]), r["parameters"]) for r in rows} == {
+        (beta_study.PAPER_ALPHA, beta_study.PAPER_ALPHA_U, "paper")}
+    points = [r for r in rows if r["type"] == "points"]
+    assert all(float(r["hit_fraction"]) < beta_study.MIN_ERROR_SHARE for r in points)
+    assert all(r["error_rel_diag"] in ("", "nan") for r in points)
+    params = json.loads((out / beta_study.BETA_PARAMS).read_text())
+    assert params["paper_parameters"] is True and params["camera_vectors"] is None
+    assert params["alpha"] == 200.0 and params["alpha_u"] == 1200.0
+    assert "--paper-parameters" in params["parameters"]
+    summary = next(ln for ln in printed.splitlines() if ln.startswith("Beta ablation of"))
+    assert "the paper's parameters (--paper-parameters" in summary
+    warning = [ln for ln in printed.splitlines() if ln.startswith("warning: points")]
+    assert len(warning) == 1 and "undefined" in warning[0], printed
+
+
+def test_beta_given_alpha_is_used_and_named(noisy_ico, tmp_path):
+    """--alpha on a user's mesh: that alpha, the mesh's auto alpha_U for it, offset 0."""
+    out = tmp_path / "given"
+    assert main(["ablate-beta", str(noisy_ico), "-o", str(out), "--size", "16", "--betas", "0",
+                 "--types", "triangles", "--alpha", "20", "-q"]) == 0
+    (row,) = _rows(out / beta_study.BETA_CSV)
+    assert float(row["alpha"]) == 20.0 and float(row["offset"]) == 0.0
+    assert math.isclose(float(row["alpha_u"]), _auto(noisy_ico, "triangles").auto_alpha_u(20.0))
+    assert row["parameters"] == "alpha given, alpha_U auto"
+    report = (out / "report.md").read_text(encoding="utf-8")
+    assert "alpha given, alpha_U auto: triangles alpha 20, alpha_U 400" in report
