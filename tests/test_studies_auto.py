@@ -16,6 +16,7 @@ import pytest
 
 from smoothdist import DataMesh, SmoothDistanceField
 from tracer.cli import main
+from tracer.studies import alpha as alpha_study
 from tracer.studies import beta as beta_study
 
 SIZE = 24
@@ -112,3 +113,49 @@ def test_beta_given_alpha_is_used_and_named(noisy_ico, tmp_path):
     assert row["parameters"] == "alpha given, alpha_U auto"
     report = (out / "report.md").read_text(encoding="utf-8")
     assert "alpha given, alpha_U auto: triangles alpha 20, alpha_U 400" in report
+
+
+def _hit_fractions(info):
+    return [r["hit_fraction"] for r in info["renders"]]
+
+
+def test_alpha_on_a_users_mesh_scales_its_auto_alpha(noisy_ico, tmp_path, capsys):
+    """ablate-alpha --mesh: the study's factors times the mesh's auto alpha, a framed camera,
+    and every panel hit; the paper's alphas (--paper-parameters) leave the icosphere's points
+    all but unhit, and say that they are the paper's."""
+    out = tmp_path / "alpha"
+    assert main(["ablate-alpha", "underestimate", "-o", str(out), "--mesh", str(noisy_ico),
+                 "--kind", "points", "--size", str(SIZE), "--scheduler", "serial"]) == 0
+    printed = capsys.readouterr().out
+    info = json.loads((out / "underestimate.json").read_text())
+    a0 = _auto(noisy_ico, "points").auto_alpha()
+    factors = alpha_study.STUDY_DEFAULTS["underestimate"]["factors"]
+    assert np.allclose(info["alphas"], [f * a0 for f in factors], rtol=1e-3)
+    assert info["parameters"] == "auto" and "the mesh's auto α" in info["parameters_rule"]
+    assert f"auto α {a0:.4g}" in info["title"] and f"auto α {a0:.4g}" in printed
+    fractions = _hit_fractions(info)
+    # one shared camera frames the largest (lowest alpha) surface: the nested ones are smaller
+    assert fractions[0] > NON_TRIVIAL and min(fractions) > 0.01, fractions
+    # the paper's alphas 25-200, said so, and almost no pixel hit
+    out2 = tmp_path / "alpha-paper"
+    assert main(["ablate-alpha", "underestimate", "-o", str(out2), "--mesh", str(noisy_ico),
+                 "--kind", "points", "--size", str(SIZE), "--paper-parameters", "-q"]) == 0
+    paper = json.loads((out2 / "underestimate.json").read_text())
+    assert paper["alphas"] == alpha_study.STUDY_DEFAULTS["underestimate"]["alphas"]
+    assert paper["parameters"] == "paper" and "--paper-parameters" in paper["title"]
+    assert max(_hit_fractions(paper)) < 0.01, _hit_fractions(paper)
+
+
+def test_alpha_metric_on_a_users_mesh(noisy_ico, tmp_path):
+    """The metric figure on the icosphere's triangles: alphas from the triangles' auto alpha,
+    named in the JSON and the report."""
+    out = tmp_path / "metric"
+    assert main(["ablate-alpha", "metric", "-o", str(out), "--mesh", str(noisy_ico),
+                 "--size", "16", "-q"]) == 0
+    info = json.loads((out / "metric.json").read_text())
+    a0 = _auto(noisy_ico, "triangles").auto_alpha()
+    factors = alpha_study.STUDY_DEFAULTS["metric"]["factors"]
+    assert info["kind"] == "triangles"
+    assert np.allclose(info["alphas"], [f * a0 for f in factors], rtol=1e-3)
+    assert all(r["exact"]["hit_fraction"] > NON_TRIVIAL for r in info["renders"])
+    assert "the mesh's auto α" in (out / "report.md").read_text(encoding="utf-8")

@@ -4,6 +4,15 @@
 offset surfaces), ``weights`` (weight functions on/off), ``metric`` (alpha-metric weight
 gradient on/off) and ``attenuate`` (alpha_U attenuation on/off); ``all`` runs them all.
 
+Parameters: the default data is rendered at the alphas of the paper's figures
+(:data:`STUDY_DEFAULTS`) with the scenes' cameras. A mesh of your own (``--mesh``) is rendered
+at alphas scaled from its own automatic alpha (``SmoothDistanceField.auto_alpha``, the
+smallest alpha whose surface lies close to the data; the factors put the default data at
+about the paper's alphas) with a camera framing it from the front, as ``tracer render`` does;
+``--paper-parameters`` renders it at the paper's alphas with the paper's beta-study camera
+instead, and ``--alphas`` at the given ones. Every figure's title, JSON (``parameters``,
+``parameters_rule``) and log line say which.
+
 "Weights off" (figure ``weights``, and the unweighted column of ``attenuate``) is realised by
 :func:`tracer.studies.common.unweighted_field`: a copy of a field whose primitive table has the
 raw weight polynomial ``A w~`` replaced by the constant 1 and whose node weight bounds ``whi``
@@ -50,14 +59,18 @@ _TORUS = ("scenes/data/meshes/torus.obj",
 _DATA = {"underestimate": (_LION,), "exact-smooth": (_LION,), "weights": (_CAPILLARY, _OCTOPUS),
          "metric": (_TORUS,), "attenuate": (_OCTOPUS,)}
 
-#: per study: default alphas, and the factors of the mesh's auto alpha used with --mesh
+#: per study: the paper's alphas (its figures' data), and the factors of a mesh's auto alpha
+#: (``SmoothDistanceField.auto_alpha``) used with --mesh; ``u_factor``: attenuate's alpha_U
+#: over the auto alpha. The factors are the paper's alphas over the default data's auto alpha
+#: (lion points 99.7: 25-200; capillary edges 63.3 and octopus triangles 148: 40 and 120;
+#: torus triangles 54.4: 15 and 30; octopus 148: 20, 40 and alpha_U 300), rounded.
 STUDY_DEFAULTS = {
-    "underestimate": {"alphas": [25.0, 50.0, 100.0, 200.0], "factors": [0.15, 0.3, 0.6, 1.2]},
-    "exact-smooth": {"alphas": [25.0, 50.0, 100.0, 200.0], "factors": [0.15, 0.3, 0.6, 1.2]},
-    "weights": {"alphas": [40.0, 120.0], "factors": [1.0]},
-    "metric": {"alphas": [15.0, 30.0], "factors": [0.5, 1.0]},
+    "underestimate": {"alphas": [25.0, 50.0, 100.0, 200.0], "factors": [0.25, 0.5, 1.0, 2.0]},
+    "exact-smooth": {"alphas": [25.0, 50.0, 100.0, 200.0], "factors": [0.25, 0.5, 1.0, 2.0]},
+    "weights": {"alphas": [40.0, 120.0], "factors": [0.75]},
+    "metric": {"alphas": [15.0, 30.0], "factors": [0.25, 0.5]},
     "attenuate": {"alphas": [20.0, 40.0], "alpha_u": 300.0, "factors": [0.15, 0.3],
-                  "u_factor": 2.4},
+                  "u_factor": 2.0},
 }
 
 
@@ -75,38 +88,44 @@ def add_arguments(p):
                    help="result folder: <study>.png, <study>.json and report.md (default "
                    "renders/ablation/alpha-<size>)")
     p.add_argument("--size", type=int, default=256, help="render size per panel (default 256)")
-    p.add_argument("--mesh", help="use this mesh instead of the study's default data (camera: "
-                   "--view, else the paper's beta-study camera, framed; alphas scaled from the "
-                   "mesh's auto alpha)")
+    p.add_argument("--mesh", help="use this mesh instead of the study's default data (alphas "
+                   "scaled from the mesh's own auto alpha; camera: --view, else framing the "
+                   "surface from the front, as tracer render does)")
+    p.add_argument("--paper-parameters", action="store_true",
+                   help="with --mesh: the paper's alphas (those of the default data) and the "
+                   "paper's beta-study camera instead of the mesh's auto alpha and a framed "
+                   "camera (they suit the paper's data, not necessarily this mesh)")
     p.add_argument("--kind", choices=TYPES,
                    help="with --mesh: primitive type to use (default: points for underestimate "
                    "and exact-smooth, triangles (else edges) for metric and attenuate)")
     p.add_argument("--alphas", help="comma-separated alphas (overrides the study's defaults; "
                    "weights: the alpha of each row)")
     p.add_argument("--alpha-u", type=float, help="attenuate: the alpha_U of the attenuated "
-                   "column (default 300, the octopus scene's max_alpha)")
+                   "column (default 300, the octopus scene's max_alpha; with --mesh 2 x the "
+                   "mesh's auto alpha)")
     p.add_argument("--beta", type=float, default=0.5, help="Barnes-Hut beta (default 0.5)")
     p.add_argument("--shading", choices=("normals", "headlight"), default="normals",
                    help="panel shading (default: normals, i.e. gradient as colour)")
     p.add_argument("--no-frame", action="store_true",
                    help="keep the study's camera as is (default: move it so that the union of "
                    "the panels' silhouettes fills the frame)")
-    add_view_arguments(p, "the default data's scene camera; with --mesh the paper's "
-                       "beta-study camera")
+    add_view_arguments(p, "the default data's scene camera; with --mesh front, framing the "
+                       "surface (with --paper-parameters the paper's beta-study camera)")
     p.add_argument("--overwrite", action="store_true", help="replace earlier results of a study")
     runner.add_arguments(p)
     add_common(p)
 
 
 def list_tasks(studies, *, size, alphas, mesh, kind, beta, shading, alpha_u, no_frame,
-               view=None, up=None):
+               view=None, up=None, paper=False):
     """One task per figure (a dict of its parameters); weights are rough relative costs.
     ``view`` and ``up`` (None, ``"auto"``, ``"x"``, ``"y"`` or ``"z"``): frame the data as
-    ``tracer render --view --up`` does instead of the study's camera."""
+    ``tracer render --view --up`` does instead of the study's camera. ``paper``: a ``mesh``
+    at the paper's alphas and camera instead of its auto alpha and a framed camera."""
     mesh = os.path.abspath(mesh) if mesh else None
     return [{"key": s, "study": s, "size": int(size), "alphas": alphas, "mesh": mesh,
              "kind": kind, "beta": float(beta), "shading": shading, "alpha_u": alpha_u,
-             "no_frame": bool(no_frame), "view": view, "view_up": up,
+             "no_frame": bool(no_frame), "view": view, "view_up": up, "paper": bool(paper),
              "weight": {"underestimate": 3.0, "exact-smooth": 3.0}.get(s, 1.0)}
             for s in studies]
 
@@ -154,26 +173,31 @@ def run(args):
     out.mkdir(parents=True, exist_ok=True)
     tasks = list_tasks(studies, size=size, alphas=alphas, mesh=args.mesh, kind=args.kind,
                        beta=args.beta, shading=args.shading, alpha_u=args.alpha_u,
-                       no_frame=args.no_frame, view=view, up=up)
+                       no_frame=args.no_frame, view=view, up=up,
+                       paper=args.paper_parameters)
     # about a second per 256^2 panel: a cluster pays off for "all" at larger sizes only
     estimate = 8.0 * len(studies) * (size / 256) ** 2
 
+    rules = {}  # study: its parameters in words
+
     def on_result(task, record):
+        rules[task["study"]] = record["info"]["parameters_rule"]
         slug = _slug(task["study"])
         write_bytes(out / f"{slug}.png", record["png"])
         write_json(out / f"{slug}.json", record["info"])
         write_text(out / "report.md", reduce(out))
 
     def line(task, r):
-        return (f"{task['study']}: {r['panels']} panels in {r['info']['seconds']:.1f} s -> "
-                f"{out / (_slug(task['study']) + '.png')}")
+        return (f"{task['study']}: {r['panels']} panels in {r['info']['seconds']:.1f} s, "
+                f"{r['info']['parameters_rule']} -> {out / (_slug(task['study']) + '.png')}")
 
     info = runner.run_tasks(study_task, tasks, on_result=on_result, scheduler=sched,
                             workers=workers, estimate=estimate,
                             label=f"ablate-alpha {args.study}", quiet=args.quiet, line=line)
     if not args.quiet:
         print(f"Wrote {', '.join(_slug(s) + '.png' for s in studies)}, their JSON and "
-              f"report.md in {out} ({info.describe()}, {duration(info.seconds)}).")
+              f"report.md in {out} ({info.describe()}, {duration(info.seconds)}); parameters: "
+              + "; ".join(f"{s} {rules[s]}" for s in studies if s in rules) + ".")
     if info.failed:
         for key, err in info.failed:
             print(f"warning: {key} failed: {err}", flush=True)
@@ -207,23 +231,51 @@ def _study_data(args, default, kind_default):
     return default[0], load_mesh(REPO / default[0], kind_default), default[1], False
 
 
-def _alphas_for(study, alphas, field, override):
+def _alphas_for(study, alphas, field, override, paper=False):
+    """``(alphas, info)``: the figure's alphas (1 / scene units) and ``{"parameters":
+    "given" | "auto" | "paper", "parameters_rule": a sentence}``: ``alphas`` as given, else
+    with ``override`` (``--mesh``, without ``paper``) the study's factors times the mesh's auto
+    alpha, else the paper's (:data:`STUDY_DEFAULTS`)."""
     if alphas:
-        return sorted(alphas)
+        alphas = sorted(alphas)
+        return alphas, _given(alphas)
     d = STUDY_DEFAULTS[study]
-    if override:
-        a0 = field.paper_alpha()
-        return [float(f"{a0 * f:.4g}") for f in d["factors"]]
-    return list(d["alphas"])
+    if override and not paper:
+        a0 = field.auto_alpha()
+        out = [float(f"{a0 * f:.4g}") for f in d["factors"]]
+        return out, _auto(out, d["factors"], a0)
+    return list(d["alphas"]), _paper(d["alphas"], override)
+
+
+def _given(alphas):
+    return {"parameters": "given",
+            "parameters_rule": f"α = {', '.join(f'{a:g}' for a in alphas)} (given, --alphas)"}
+
+
+def _auto(alphas, factors, a0):
+    return {"parameters": "auto",
+            "parameters_rule": f"α = {', '.join(f'{a:g}' for a in alphas)}: "
+            f"{', '.join(f'{f:g}' for f in factors)} × the mesh's auto α {a0:.4g}"}
+
+
+def _paper(alphas, override):
+    return {"parameters": "paper",
+            "parameters_rule": f"α = {', '.join(f'{a:g}' for a in alphas)}: the paper's"
+            + (" (--paper-parameters: chosen for the paper's data, not this mesh)"
+               if override else "")}
 
 
 def _camera(args, src, field, camera, alphas):
-    """The figure's camera: with ``--view``, the data file ``src`` framed as ``tracer render``
-    frames it (its vertices grown by the inflation bound at the smallest alpha; ``--up``
-    auto guessed from the file's format); else ``camera`` (the default data's scene camera)
-    or the paper's beta-study camera."""
-    if getattr(args, "view", None):
-        view, up = resolve_view(SimpleNamespace(view=args.view, up=args.view_up),
+    """The figure's camera: with ``--view``, or for a mesh of your own (``--mesh`` without
+    ``--paper-parameters``: the front view), the data file ``src`` framed as ``tracer render``
+    frames it (its vertices grown by the inflation bound at the smallest alpha; ``--up`` auto
+    guessed from the file's format); else ``camera`` (the default data's scene camera) or the
+    paper's beta-study camera."""
+    view = getattr(args, "view", None)
+    if not view and getattr(args, "mesh", None) and not getattr(args, "paper", False):
+        view = "front"
+    if view:
+        view, up = resolve_view(SimpleNamespace(view=view, up=getattr(args, "view_up", None)),
                                 src if os.path.isabs(src) else REPO / src)
         grow = field.inflation(min(alphas))
         return tuple(np.asarray(v, float) for v in view_camera(field, view, up, grow, args.size))
@@ -300,7 +352,7 @@ def _render_group(specs, camera, size, frame=True):
 def _study_underestimate(args, size, alphas):
     src, mesh, camera, override = _study_data(args, _LION, args.kind or "points")
     field = field_of(mesh)
-    alphas = _alphas_for("underestimate", alphas, field, override)
+    alphas, par = _alphas_for("underestimate", alphas, field, override, args.paper)
     camera = _camera(args, src, field, camera, alphas)
     specs = [(field, dict(alpha=a, beta=args.beta, shading=args.shading)) for a in alphas]
     res, cam = _render_group(specs, camera, size, frame=not args.no_frame)
@@ -310,7 +362,8 @@ def _study_underestimate(args, size, alphas):
                                      n=min(160, max(32, size)))
     row.append(("zero sets on a slice (α ↑ = darker → lighter)", slice_img))
     info = {"title": f"Underestimate / nesting: {os.path.basename(src)} ({field.num_primitives} "
-            f"{mesh.kind}), β={args.beta:g}", "data": src, "kind": mesh.kind, "alphas": alphas,
+            f"{mesh.kind}), β={args.beta:g}; {par['parameters_rule']}", **par, "data": src,
+            "kind": mesh.kind, "alphas": alphas,
             "camera": cam, "shading": args.shading,
             "renders": [{"alpha": a, **r.summary()} for a, r in zip(alphas, res)],
             "nesting": nest, "paper_figure": "underestimate",
@@ -389,7 +442,7 @@ def _nesting_slice(field, alphas, beta, camera, size, n=160, exact_n=32):
 def _study_exact_smooth(args, size, alphas):
     src, mesh, camera, override = _study_data(args, _LION, args.kind or "points")
     field = field_of(mesh)
-    alphas = _alphas_for("exact-smooth", alphas, field, override)
+    alphas, par = _alphas_for("exact-smooth", alphas, field, override, args.paper)
     camera = _camera(args, src, field, camera, alphas)
     specs = []
     for a in alphas:
@@ -404,7 +457,8 @@ def _study_exact_smooth(args, size, alphas):
     stats = [{"alpha": a, "exact": re.summary(), "smooth": rs.summary()}
              for a, re, rs in zip(alphas, res[:n], res[n:])]
     info = {"title": f"Exact offset (top) vs smooth distance (bottom): {os.path.basename(src)}, "
-            f"β={args.beta:g}", "data": src, "kind": mesh.kind, "alphas": alphas,
+            f"β={args.beta:g}; {par['parameters_rule']}", **par, "data": src, "kind": mesh.kind,
+            "alphas": alphas,
             "camera": cam, "shading": args.shading, "renders": stats,
             "paper_figure": "exact_smooth"}
     return [exact_row, smooth_row], info
@@ -425,16 +479,21 @@ def _study_weights(args, size, alphas):
         cases = [("edges", _CAPILLARY[0], load_mesh(REPO / _CAPILLARY[0], "edges"), _CAPILLARY[1]),
                  ("triangles", _OCTOPUS[0], load_mesh(REPO / _OCTOPUS[0], "triangles"),
                   _OCTOPUS[1])]
-    default = STUDY_DEFAULTS["weights"]["alphas"]
-    rows, stats = [], []
+    d = STUDY_DEFAULTS["weights"]
+    rows, stats, rules = [], [], []
     for i, (kind, src, mesh, camera) in enumerate(cases):
         field = field_of(mesh)
         if alphas:
             a = alphas[min(i, len(alphas) - 1)]
-        elif args.mesh:
-            a = float(f"{field.paper_alpha() * STUDY_DEFAULTS['weights']['factors'][0]:.4g}")
+            par = _given([a])
+        elif args.mesh and not args.paper:
+            a0 = field.auto_alpha()
+            a = float(f"{a0 * d['factors'][0]:.4g}")
+            par = _auto([a], d["factors"], a0)
         else:
-            a = default[i]
+            a = d["alphas"][i]
+            par = _paper([a], bool(args.mesh))
+        rules.append(f"{kind} {par['parameters_rule']}")
         camera = _camera(args, src, field, camera, [a])
         kw = dict(alpha=a, beta=args.beta, shading=args.shading)
         (off, on), cam = _render_group([(unweighted_field(field), kw), (field, kw)], camera,
@@ -445,7 +504,8 @@ def _study_weights(args, size, alphas):
                       "A": field.weight_bound, "camera": cam, "off": off.summary(),
                       "on": on.summary()})
     info = {"title": f"Weight functions off (left) / on (right), α_U = α (S = 1), "
-            f"β={args.beta:g}", "cases": stats, "shading": args.shading,
+            f"β={args.beta:g}; {'; '.join(rules)}", "parameters": par["parameters"],
+            "parameters_rule": "; ".join(rules), "cases": stats, "shading": args.shading,
             "paper_figure": "weights",
             "weights_off": "unweighted_field(): raw weight A w~ forced to the constant 1 "
             "(wc[:,0]=1, other coefficients 0, pwhi=1, node whi=1, A=1)"}
@@ -455,7 +515,7 @@ def _study_weights(args, size, alphas):
 def _study_metric(args, size, alphas):
     src, mesh, camera, override = _study_data(args, _TORUS, "triangles")
     field = field_of(mesh)
-    alphas = _alphas_for("metric", alphas, field, override)
+    alphas, par = _alphas_for("metric", alphas, field, override, args.paper)
     camera = _camera(args, src, field, camera, alphas)
     specs = []
     for a in alphas:
@@ -470,7 +530,8 @@ def _study_metric(args, size, alphas):
                      (f"metric on: α-metric gradient (α={a:g})", me.rgb)])
         stats.append({"alpha": a, "exact": ex.summary(), "metric": me.summary()})
     info = {"title": f"α-metric weight gradient off (left) / on (right): "
-            f"{os.path.basename(src)}, α_U = α, β={args.beta:g}", "data": src, "kind": mesh.kind,
+            f"{os.path.basename(src)}, α_U = α, β={args.beta:g}; {par['parameters_rule']}",
+            **par, "data": src, "kind": mesh.kind,
             "alphas": alphas, "camera": cam, "shading": args.shading, "renders": stats,
             "paper_figure": "metric",
             "note": "same isosurface; only the gradient used for shading differs: the weight "
@@ -482,14 +543,17 @@ def _study_metric(args, size, alphas):
 def _study_attenuate(args, size, alphas):
     src, mesh, camera, override = _study_data(args, _OCTOPUS, "triangles")
     field = field_of(mesh)
-    alphas = _alphas_for("attenuate", alphas, field, override)
+    alphas, par = _alphas_for("attenuate", alphas, field, override, args.paper)
     camera = _camera(args, src, field, camera, alphas)
+    d = STUDY_DEFAULTS["attenuate"]
     if args.alpha_u is not None:
-        alpha_u = args.alpha_u
-    elif override:
-        alpha_u = float(f"{field.paper_alpha() * STUDY_DEFAULTS['attenuate']['u_factor']:.4g}")
+        alpha_u, why = args.alpha_u, "given, --alpha-u"
+    elif override and not args.paper:
+        a0 = field.auto_alpha()
+        alpha_u, why = float(f"{a0 * d['u_factor']:.4g}"), f"{d['u_factor']:g} × the mesh's auto α"
     else:
-        alpha_u = STUDY_DEFAULTS["attenuate"]["alpha_u"]
+        alpha_u, why = d["alpha_u"], "the paper's"
+    par["parameters_rule"] += f"; α_U = {alpha_u:g} ({why})"
     unw = unweighted_field(field)
     specs = []
     for a in alphas:
@@ -506,10 +570,10 @@ def _study_attenuate(args, size, alphas):
                      (f"unweighted (α={a:g})", non.rgb)])
         stats.append({"alpha": a, "alpha_u": alpha_u, "S": S, "full": full.summary(),
                       "attenuated": att.summary(), "unweighted": non.summary()})
-    info = {"title": f"Weight attenuation at low α: {os.path.basename(src)}, β={args.beta:g}",
-            "data": src, "kind": mesh.kind, "alphas": alphas, "alpha_u": alpha_u,
-            "A": field.weight_bound, "camera": cam, "shading": args.shading, "renders": stats,
-            "paper_figure": "attenuate"}
+    info = {"title": f"Weight attenuation at low α: {os.path.basename(src)}, β={args.beta:g}; "
+            f"{par['parameters_rule']}", **par, "data": src, "kind": mesh.kind,
+            "alphas": alphas, "alpha_u": alpha_u, "A": field.weight_bound, "camera": cam,
+            "shading": args.shading, "renders": stats, "paper_figure": "attenuate"}
     return rows, info
 
 
