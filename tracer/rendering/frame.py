@@ -369,15 +369,20 @@ def _samples(value):
     return int(value)
 
 
+#: ``progress="auto"``: the bar appears once a render has run this long (seconds)
+AUTO_PROGRESS_AFTER = 3.0
+
+
 def _progress_callback(progress, scene):
     """``render``'s ``progress`` argument as a callable or None (see :func:`tracer.render`)."""
     if progress is None or progress is False:
         return None
-    if progress is True:
-        return ProgressBar(f"render {getattr(scene, 'name', '') or 'scene'}", min_seconds=0.0)
+    if progress is True or (isinstance(progress, str) and progress == "auto"):
+        return ProgressBar(f"render {getattr(scene, 'name', '') or 'scene'}",
+                           min_seconds=0.0 if progress is True else AUTO_PROGRESS_AFTER)
     if callable(progress):
         return progress
-    raise TypeError(f"progress must be True, False, None or a callable(done, total, "
+    raise TypeError(f"progress must be True, False, None, 'auto' or a callable(done, total, "
                     f"elapsed_s), got {progress!r}")
 
 

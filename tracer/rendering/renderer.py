@@ -49,9 +49,10 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
     transforms : list of (R (3, 3), t (3,)), optional
         A rigid pose per object (see :func:`~tracer.rendering.frame.scene_arrays`); the trees are
         not rebuilt.
-    progress : bool, callable(done_pixels, total_pixels, elapsed_s) or None
+    progress : bool, "auto", callable(done_pixels, total_pixels, elapsed_s) or None
         A callable is called a few times a second while tracing, and at the end; ``True``
-        shows a text progress bar on stderr (:class:`~tracer.rendering.frame.ProgressBar`); ``None``
+        shows a text progress bar on stderr (:class:`~tracer.rendering.frame.ProgressBar`);
+        ``"auto"`` the same once the render has run 3 s (``AUTO_PROGRESS_AFTER``); ``None``
         or ``False``: none. A callable with a ``waiting(elapsed_s)`` method (a ``ProgressBar``)
         is told so while nothing is traced yet: the first render compiles the kernels then.
     band_rows : int, optional

@@ -394,7 +394,7 @@ def render_mesh(mesh, F=None, *, kind=None, alpha=_MESH["alpha"], alpha_u=_MESH[
                 beta=_MESH["beta"], size=(_MESH["width"], _MESH["height"]),
                 view=_MESH["view"], camera=None, mode=_MESH["mode"], offset=_MESH["offset"],
                 eps=_MESH["eps"], shading=_MESH["shading"], matcap=_MESH["matcap"],
-                progress=None, up=_MESH["up"], samples=_MESH["samples"],
+                progress="auto", up=_MESH["up"], samples=_MESH["samples"],
                 adaptive=_MESH["adaptive"], transparent=_MESH["transparent"],
                 lighting=_MESH["lighting"], color=_MESH["color"],
                 background=_MESH["background"], tol=_MESH["tol"], newton=_MESH["newton"],
@@ -403,7 +403,8 @@ def render_mesh(mesh, F=None, *, kind=None, alpha=_MESH["alpha"], alpha_u=_MESH[
 
     Parameters are those of :func:`mesh_scene` (the ``"lit"`` shading by default;
     ``shading="normals"`` gives the paper's normal colours); ``progress`` and ``device``
-    (``"cpu"`` or ``"cuda"``) as in :func:`tracer.render`.
+    (``"cpu"`` or ``"cuda"``) as in :func:`tracer.render`: by default (``"auto"``) a progress
+    bar appears on stderr once the render has run 3 s (``progress=None``: never).
 
     Returns
     -------
