@@ -87,8 +87,8 @@ def mesh_scene(mesh, F=None, *, kind=None, alpha=_MESH["alpha"], alpha_u=_MESH["
     ----------
     mesh : path, DataMesh, (n, 3) array_like, or a trimesh / pyvista object; or a list of them
         The data (see :func:`smoothdist.as_data_mesh`); ``F`` as in ``DataMesh``. A list
-        (:func:`is_mesh_list`: paths, DataMeshes, trimesh / pyvista objects, ``(V, F)``
-        pairs or ``(n, 3)`` arrays) makes one object per entry, framed together; ``kind``,
+        (``is_mesh_list``: paths, DataMeshes, trimesh / pyvista objects, ``(V, F)`` pairs or
+        ``(n, 3)`` arrays) makes one object per entry, framed together; ``kind``,
         ``alpha``, ``alpha_u``, ``offset``, ``color`` and ``matcap`` may then be lists too,
         one value per object (a single value applies to every object; ``color`` None gives
         the palette). ``F`` must be None then.
