@@ -199,3 +199,17 @@ def test_the_exact_mix_tables_and_sentences_follow_the_file():
     for row in d["rows"]:
         assert row["sides"]["fcpw"]["agrees"] and row["sides"]["libigl"]["agrees"], row["mix"]
         assert row["sides"]["fcpw"]["ours_over_theirs"] <= 0.5, row
+
+
+def test_the_fidelity_table_follows_its_file():
+    """Issue 46: the troubleshooting guide's fidelity table and its summary sentence are those
+    of ``benchmarks/data/fidelity.json``."""
+    from benchmarks.bench_fidelity import markdown, summary
+
+    d = _load("fidelity.json")
+    page = (ROOT / "docs" / "guide" / "troubleshooting.md").read_text(encoding="utf-8")
+    lines = [ln.strip() for ln in page.splitlines()]
+    want = [ln.strip() for ln in markdown(d).splitlines()]
+    starts = [i for i, ln in enumerate(lines) if ln == want[0]]
+    assert any(lines[i:i + len(want)] == want for i in starts), "paste it again"
+    assert summary(d) in _flat(page)

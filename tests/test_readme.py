@@ -70,6 +70,7 @@ TINY = {
     "tracer bh-switch": ["--trials", "4", "--samples", "11"],
     "benchmarks/bench_render.py": ["--sizes", "8", "--repeat", "1", "--types", "points"],
     "benchmarks/bench_grid.py": ["--grid", "4", "--repeat", "1"],
+    "benchmarks/bench_fidelity.py": ["--size", "16", "--shapes", "icosphere1", "helix_polyline"],
     "benchmarks/bench_exact_mix.py": ["--sizes", "10k", "--mixes", "near", "--kinds-on", "none",
                                       "--grid", "6", "--queries", "5000", "--repeat", "1",
                                       "--smooth-queries", "300"],

@@ -1,0 +1,58 @@
+"""The fidelity measure (tracer/checks/fidelity.py, issue 46 item 1), checked where its
+answer is known without it: an exact render against itself, and a sphere's silhouette against
+the circle its offset gives.
+"""
+import numpy as np
+import pytest
+
+import tracer
+from tracer.checks.fidelity import THIN_OFFSET, fidelity
+
+trimesh = pytest.importorskip("trimesh")
+
+SIZE = (64, 64)
+
+
+def test_the_mesh_itself_scores_perfectly():
+    """An exact render at the reference's own offset: the same silhouette (IoU 1) and, at its
+    own mean offset, the same surface (angles of a few tenths of a degree from the offset
+    differing by the hit tolerance), no streaks."""
+    m = trimesh.creation.icosphere(subdivisions=3)
+    L = float(np.linalg.norm(np.ptp(m.vertices, axis=0)))
+    res = tracer.render_mesh(m, size=SIZE, mode="exact", offset=THIN_OFFSET * L,
+                             progress=None)
+    f = fidelity(res)
+    assert f["iou"] == 1.0
+    assert f["p95_deg"] < 1.0
+    assert f["streak_share"] == 0.0
+    assert f["compared"] > 0.5 * res.hit.sum()
+
+
+def test_a_spheres_iou_is_that_of_its_circles():
+    """A fine sphere of radius 1 drawn at mean offset c: silhouettes are discs of radius
+    about 1 + c and 1 + 0.0025 L seen from the same eye, so IoU ~ ((1 + t) / (1 + c))^2
+    (perspective and pixels: within 0.04)."""
+    m = trimesh.creation.icosphere(subdivisions=4)
+    res = tracer.render_mesh(m, size=SIZE, progress=None, shading="normals")
+    f = fidelity(res)
+    t = f["thin_offset"]
+    assert f["offset"] > 0.02                     # the default draws a little outside
+    assert f["iou"] == pytest.approx(((1 + t) / (1 + f["offset"])) ** 2, abs=0.04)
+    assert f["p95_deg"] < 10.0
+
+
+def test_point_clouds_and_curves_have_their_own_reference():
+    rng = np.random.default_rng(0)
+    P = rng.normal(size=(800, 3))
+    P /= np.linalg.norm(P, axis=1, keepdims=True)
+    res = tracer.render_mesh(P, size=SIZE, progress=None, shading="normals")
+    f = fidelity(res)
+    assert f["thin_offset"] == pytest.approx(res.scene.objects[0].field.point_spacing())
+    assert 0.3 < f["iou"] <= 1.0
+    s = np.linspace(0, 4 * np.pi, 80)
+    V = np.stack([np.cos(s), np.sin(s), 0.2 * s], 1)
+    E = np.stack([np.arange(79), np.arange(1, 80)], 1)
+    res = tracer.render_mesh(V, E, size=SIZE, progress=None, shading="normals")
+    f = fidelity(res)
+    assert f["thin_offset"] == f["offset"]        # a tube of the render's own radius
+    assert f["iou"] > 0.8
