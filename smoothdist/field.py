@@ -556,8 +556,9 @@ class SmoothDistanceField:
             _tasks(_q.smooth_distance_tasks, n, self.tree, Q, alpha, beta, S, wgs, d, g, nodes,
                    leaves, 0)
         elif n:
-            _q.smooth_distance_batch(self.tree, Q, alpha, beta, S, wgs, method == "brute", d, g,
-                                     nodes, leaves, tol, parallel_tasks(n))
+            brute = method == "brute"     # every primitive summed, no tree
+            _q.smooth_distance_batch(self.tree, Q, alpha, beta, S, wgs, brute, d, g, nodes,
+                                     leaves, tol, parallel_tasks(n))
         if order is not None:     # only what is returned
             d, g = restore(order, d, g)
             if return_stats:

@@ -19,17 +19,21 @@ loops over ``prange``; ``PARALLEL`` is false under
 ``SMOOTHDIST_PARALLEL=0`` (see ``smoothdist/_config.py``). ``borrowed(tree)`` inside a kernel
 gives the tree (or any array, or tuple of arrays) as views without reference counts, for
 loops that pass it down at every step; valid while the kernel's caller holds the arrays.
+``box_distance2(x, y, z, lo, hi, node)`` is ``(d2, cx, cy, cz)``: the squared distance from a
+point to a node's box and the box's closest point (the point itself inside), for culling.
 """
 
 import numpy as np
 
 from smoothdist._config import NJIT, NJIT_IR_INLINE, NJIT_PARALLEL, PARALLEL
 from smoothdist._kernels.bvh import TreeData, concatenate_trees
+from smoothdist._kernels.closest_point import box_distance2
 from smoothdist._kernels.query import (DEFAULT_TOL, exact_distance_point, logsumexp_accumulate,
                                        smooth_distance_point, smooth_distance_point_tol, stack_size)
 from smoothdist._kernels.traversal import borrowed
 
-__all__ = ["TreeData", "concatenate_trees", "exact_distance_point", "logsumexp_accumulate",
+__all__ = ["TreeData", "concatenate_trees", "box_distance2", "exact_distance_point",
+           "logsumexp_accumulate",
            "smooth_distance_point", "smooth_distance_point_tol", "new_stack", "stack_size",
            "DEFAULT_TOL", "NJIT", "NJIT_IR_INLINE", "NJIT_PARALLEL", "PARALLEL",
            "borrowed"]

@@ -372,9 +372,11 @@ class MeshDistance:
             nodes[:] = 0
             leaves[:] = self.field.tree.kind.size
         else:
+            # far fields at the exact primitive-box distance instead of the paper's box test
+            exact_box = not self.box_test
             _run_tasks(_mq.smooth_distance_primitive_tasks, m, SERIAL_BELOW["smooth"],
                        self.field.tree, self.query.kind, pts, self.alpha, self.beta, self.S,
-                       self.wgs, d, g, nodes, leaves, self.tol, not self.box_test)
+                       self.wgs, d, g, nodes, leaves, self.tol, exact_box)
         self.last_stats = (nodes, leaves)
         return d, g
 

@@ -37,6 +37,18 @@ def test_smoothdist_never_imports_tracer():
             assert not [t for t in targets if t.split(".")[0] == "tracer"], m
 
 
+def test_tracer_uses_only_public_smoothdist_modules():
+    """tracer reaches smoothdist through its public modules (``smoothdist``,
+    ``smoothdist.kernels``, ``smoothdist.cuda``, ...), never a private one (a name that starts
+    with ``_``, such as ``smoothdist._kernels`` or ``smoothdist._config``): the kernels tracer
+    needs are exported by :mod:`smoothdist.kernels`."""
+    bad = {m: sorted(t for t in targets if t.split(".")[0] == "smoothdist"
+                     and any(part.startswith("_") for part in t.split(".")[1:]))
+           for m, targets in graph().items() if m.split(".")[0] == "tracer"}
+    bad = {m: t for m, t in bad.items() if t}
+    assert not bad, bad
+
+
 def rooms():
     """``[(room, [modules])]`` from the map's table in docs/design-notes.md, lowest first:
     rows ``| n | room | `module`, `module`, ... | ... |``."""

@@ -90,7 +90,7 @@ def png_threads():
     (``tracer.rendering.threads.render_threads``), 1 with ``SMOOTHDIST_PARALLEL=0``."""
     import numba
 
-    from smoothdist._config import PARALLEL
+    from smoothdist.kernels import PARALLEL
 
     return numba.get_num_threads() if PARALLEL else 1
 

@@ -49,8 +49,7 @@ from numba import prange
 from numba.core import types as nbtypes
 from numba.extending import overload
 
-from smoothdist._kernels.closest_point import box_distance2
-from smoothdist.kernels import (NJIT, NJIT_IR_INLINE, NJIT_PARALLEL, borrowed,
+from smoothdist.kernels import (NJIT, NJIT_IR_INLINE, NJIT_PARALLEL, borrowed, box_distance2,
                                 exact_distance_point,
                                 logsumexp_accumulate, smooth_distance_point,
                                 smooth_distance_point_tol)
