@@ -51,6 +51,7 @@ def solve(tilt_deg=0.0, e=0.005, mu=1e-3, rounds=4, steps=40, n=16):
     goal = np.array([0.1, 0.0, -0.5])
     radius = np.linalg.norm(box.vertices, axis=1).max()
     stats = {"steps": 0, "backtracks": 0, "infeasible": 0, "min_d_hat": np.inf, "min_gap": np.inf}
+    history = []                                     # (d_hat, exact gap, tilt) per step
 
     def objective(R, t):
         d = md(R, t)[0]
@@ -83,12 +84,14 @@ def solve(tilt_deg=0.0, e=0.005, mu=1e-3, rounds=4, steps=40, n=16):
                 break
             R, t = R1, t1
             stats["steps"] += 1
+            gap = md.exact(R, t)[0]
             stats["min_d_hat"] = min(stats["min_d_hat"], d1)
-            stats["min_gap"] = min(stats["min_gap"], md.exact(R, t)[0])
+            stats["min_gap"] = min(stats["min_gap"], gap)
+            history.append((d1, gap, np.degrees(np.arccos(np.clip(R[2, 2], -1, 1)))))
         mu /= 4
     tilt = np.degrees(np.arccos(np.clip(R[2, 2], -1, 1)))
     return {**stats, "t": t, "tilt_deg": tilt, "d_hat": md(R, t)[0], "gap": md.exact(R, t)[0],
-            "alpha": md.alpha, "alpha_q": md.alpha_q}
+            "alpha": md.alpha, "alpha_q": md.alpha_q, "history": np.array(history)}
 
 
 results = {tilt: solve(tilt) for tilt in (0.0, 30.0)}
@@ -98,10 +101,15 @@ for tilt, r in results.items():
           f"{r['tilt_deg']:.1f} deg, d_hat {r['d_hat']:.4f}, exact gap {r['gap']:.4f} "
           f"(smallest on the path {r['min_gap']:.4f}); alpha {r['alpha']:.0f}")
 
-fig, ax = plt.subplots(figsize=(6.5, 2.8))
-ax.bar([f"tilt {k:.0f} deg: d_hat" for k in results] + [f"tilt {k:.0f} deg: gap" for k in results],
-       [r["d_hat"] for r in results.values()] + [r["gap"] for r in results.values()])
-ax.axhline(0.005, color="k", lw=1, ls="--", label="error budget e")
-ax.set_ylabel("at rest (scene units)")
-ax.legend(fontsize=8)
+fig, (top, bottom) = plt.subplots(2, 1, figsize=(6.5, 4.6), sharex=True)
+for (tilt, r), colour in zip(results.items(), ("C0", "C1")):
+    h = r["history"]
+    top.semilogy(h[:, 1], colour, label=f"start tilt {tilt:.0f} deg: exact gap")
+    top.semilogy(h[:, 0], colour + ":", label="d_hat")
+    bottom.plot(h[:, 2], colour)
+top.axhline(0.005, color="k", lw=1, ls="--", label="error budget e")
+top.set_ylabel("distance (scene units)")
+top.legend(fontsize=7, ncol=2)
+bottom.set_ylabel("tilt (degrees)")
+bottom.set_xlabel("solver step (mu divided by 4 after each round of at most 40 steps)")
 plt.tight_layout()
