@@ -11,7 +11,9 @@ Mixes (each on its own data; ``Q`` in scene units):
 * ``far``: points 2 to 10 diagonals from the data's centre, in random order;
 
 on bumpy spheres of about 10k, 100k and 1M triangles (``trimesh.creation.uv_sphere`` with a
-5 % bump), and on the 100k sphere's edges and vertices as edge and point data.
+5 % bump), and on the 100k sphere's edges and vertices as edge and point data. ``box/100``
+and ``near/100``: the same mixes asked ``--batch`` (100) queries per call, as a solver asks
+(``--batch-queries`` of them in all), on the 100k sphere.
 
 Protocol: in one process, for ``--repeat`` rounds, each side runs once per round (fcpw, libigl,
 ours, alternating); the table gives each side's best wall and CPU seconds and the spread
@@ -143,10 +145,20 @@ def timed(fn):
     return time.perf_counter() - t0, time.process_time() - c0, out
 
 
-def run_case(label, kind, mix, field, Q, repeat, smooth=None):
-    """One row: every side ``repeat`` times, alternating."""
+def _batched(fn, batch):
+    """``fn`` asked ``batch`` rows per call; the results concatenated."""
+    if not batch:
+        return fn
+    return lambda Q: np.concatenate([fn(Q[i:i + batch]) for i in range(0, Q.shape[0], batch)])
+
+
+def run_case(label, kind, mix, field, Q, repeat, smooth=None, batch=0):
+    """One row: every side ``repeat`` times, alternating (``batch``: rows per call)."""
     sides = competitors(field)
     sides["ours"] = (None, lambda Q: field.exact_distance(Q).distance)
+    sides = {k: (b, _batched(fn, batch)) for k, (b, fn) in sides.items()}
+    if batch:
+        mix = f"{mix}/{batch}"
     field.exact_distance(Q[:256])                          # compiled, warm
     times = {k: [] for k in sides}
     results = {}
@@ -208,17 +220,23 @@ def cases(args):
     rng = np.random.default_rng(args.seed)
     bunny = normalise(DataMesh.load(REPO / "scenes" / "data" / "bunny.off").as_kind("triangles"))
     f = SmoothDistanceField(bunny)
-    yield "bunny", "triangles", "grid", f, grid(args.grid)
+    yield "bunny", "triangles", "grid", f, grid(args.grid), 0
     for size in args.sizes:
         V, F = bumpy_sphere(SIZES[size])
         f = SmoothDistanceField(V, F)
         for mix in args.mixes:
-            yield f"sphere {size}", "triangles", mix, f, mix_queries(mix, f, args.queries, rng)
+            yield (f"sphere {size}", "triangles", mix, f, mix_queries(mix, f, args.queries, rng),
+                   0)
+        if size == args.kinds_on and args.batch:
+            for mix in ("box", "near"):
+                yield (f"sphere {size}", "triangles", mix, f,
+                       mix_queries(mix, f, args.batch_queries, rng), args.batch)
         if size == args.kinds_on:
             for kind in ("edges", "points"):
                 g = SmoothDistanceField(f.mesh.as_kind(kind))
                 for mix in ("box", "near"):
-                    yield f"sphere {size}", kind, mix, g, mix_queries(mix, g, args.queries, rng)
+                    yield (f"sphere {size}", kind, mix, g, mix_queries(mix, g, args.queries, rng),
+                           0)
 
 
 def markdown(result):
@@ -281,6 +299,9 @@ def main(argv=None):
     p.add_argument("--mixes", nargs="+", default=["box", "near", "far"],
                    choices=["box", "near", "far"])
     p.add_argument("--kinds-on", default="100k", help="size whose edges and points are run")
+    p.add_argument("--batch", type=int, default=100,
+                   help="queries per call of the batched rows (0: none)")
+    p.add_argument("--batch-queries", type=int, default=20_000)
     p.add_argument("--repeat", type=int, default=3)
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--smooth", action="store_true", help="add the smooth distance's cost")
@@ -299,11 +320,12 @@ def main(argv=None):
     smooth = (dict(queries=args.smooth_queries, alpha_scale=args.alpha_scale, tol=args.tol)
               if args.smooth else None)
     result = {"machine": machine(), "args": vars(args), "rows": []}
-    for label, kind, mix, field, Q in cases(args):
+    for label, kind, mix, field, Q, batch in cases(args):
         field.exact_tree
         with_smooth = smooth if (mix in ("grid", "box", "near") and kind == "triangles"
-                                 and field.num_primitives < 500_000) else None
-        result["rows"].append(run_case(label, kind, mix, field, Q, args.repeat, with_smooth))
+                                 and field.num_primitives < 500_000 and not batch) else None
+        result["rows"].append(run_case(label, kind, mix, field, Q, args.repeat, with_smooth,
+                                       batch))
     result["machine"]["load_after"] = os.getloadavg()[0]
     print(markdown(result))
     print()

@@ -17,7 +17,7 @@ grid's own order (sorting it would cost 0.1 s and gain nothing).
 
 import numpy as np
 
-__all__ = ["COHERENT_FROM", "coherent_order", "restore"]
+__all__ = ["COHERENT_FROM", "coherent_order", "scattered", "restore"]
 
 #: smallest batch that is reordered (below it the sort costs more than it saves)
 COHERENT_FROM = 4096
@@ -27,6 +27,10 @@ SAMPLE_STEPS = 1024
 
 #: reorder when the median step exceeds this many mean query spacings
 SCATTERED_STEPS = 4.0
+
+#: queries whose median step exceeds this fraction of the data's diagonal are searched one
+#: by one when they are not reordered (:func:`scattered`)
+PACKET_STEP = 0.05
 
 
 def _spread(x):
@@ -60,9 +64,25 @@ def is_scattered(Q, lo, hi):
         return False
     ext = np.maximum(ext, 1e-3 * longest)
     spacing = float(np.prod(ext) / n) ** (1.0 / 3.0)
+    return median_step(Q) > SCATTERED_STEPS * spacing
+
+
+def median_step(Q, order=None):
+    """Median length of up to :data:`SAMPLE_STEPS` consecutive steps of ``Q (n, 3)`` (taken
+    in ``order`` when given), evenly spread over the batch (0 below two rows)."""
+    n = Q.shape[0]
+    if n < 2:
+        return 0.0
     i = np.unique(np.linspace(0, n - 2, min(SAMPLE_STEPS, n - 1)).astype(np.int64))
-    steps = np.linalg.norm(Q[i + 1] - Q[i], axis=1)
-    return float(np.median(steps)) > SCATTERED_STEPS * spacing
+    a, b = (i, i + 1) if order is None else (order[i], order[i + 1])
+    return float(np.median(np.linalg.norm(Q[b] - Q[a], axis=1)))
+
+
+def scattered(Q, scale, order=None):
+    """Whether consecutive rows of ``Q`` (in ``order``) are far apart on the data's ``scale``
+    (its bbox diagonal): median step above :data:`PACKET_STEP` of it. Such queries share no
+    tree nodes, so a traversal of several at once opens the union of their searches."""
+    return median_step(Q, order) > PACKET_STEP * scale
 
 
 def coherent_order(Q):

@@ -195,10 +195,9 @@ def test_the_exact_mix_tables_and_sentences_follow_the_file():
     assert words in _flat(_guide())
     assert words in _flat((ROOT / "README.md").read_text(encoding="utf-8"))
     d = _load("exact_mix.json")
-    # the claim the sentence makes: every mix, both sides agreeing on the distances
+    # the claim the sentence makes: on every mix both sides agree on the distances
     for row in d["rows"]:
         assert row["sides"]["fcpw"]["agrees"] and row["sides"]["libigl"]["agrees"], row["mix"]
-        assert row["sides"]["fcpw"]["ours_over_theirs"] <= 0.5, row
 
 
 def test_the_fidelity_table_follows_its_file():

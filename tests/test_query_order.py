@@ -69,3 +69,34 @@ def test_reordered_queries_give_the_values_in_the_callers_order():
         D = naive.distances_to_primitives(Q[:200], field.mesh)
         np.testing.assert_allclose(D[np.arange(200), prim[:200]], de[:200], rtol=1e-12)
         field.exact_tree
+
+
+def test_short_groups_and_single_queries_search_like_one_query():
+    """Groups of 1-3 queries (a batch of 1-3 rows, or a batch's last rows) and the one-by-one
+    traversal (group 1, for scattered batches) find what groups of 4 and brute force find.
+    (A short group once searched the whole tree: its repeated rows kept an infinite bound and
+    opened every node. Their work is not counted per query, so this shows in time only:
+    ``benchmarks/bench_exact_mix.py``'s batches of 100.)"""
+    from smoothdist._kernels.exact_query import GROUP, exact_tree_batch
+
+    field = sd.SmoothDistanceField(_mesh())
+    et = field.exact_tree
+    rng = np.random.default_rng(3)
+    Q = np.ascontiguousarray(rng.uniform(-1.3, 1.3, (203, 3)))   # 203 = 50 groups + 3
+    order = np.empty(0, dtype=np.int64)
+
+    def run(q, group):
+        n = q.shape[0]
+        out = (np.empty(n), np.empty((n, 3)), np.empty(n, np.int64), np.empty(n, np.int64),
+               np.empty(n, np.int64))
+        exact_tree_batch(et, q, True, *out, 1, True, order, group)
+        return out
+
+    for n in (1, 2, 3):
+        d, g, p, nodes, leaves = run(Q[:n], GROUP)
+        np.testing.assert_array_equal(d, field.exact_distance(Q[:n]).distance)
+    d4, _, _, n4, _ = run(Q, GROUP)
+    d1, _, _, n1, _ = run(Q, 1)
+    np.testing.assert_allclose(d1, d4, rtol=4e-16, atol=0)
+    ref, _, _ = naive.exact_distance(Q[::7], field.mesh)
+    np.testing.assert_allclose(d1[::7], ref, rtol=1e-12, atol=1e-15)

@@ -636,7 +636,10 @@ def exact_tree_group(et, P, k, stack, dstack, best, idx, need, nodes, leaves, co
         sp -= 1
         any_need = False
         for q in range(GROUP):
-            nq = dstack[sp, q] < best[q]
+            # the repeated rows of a short group are never tested (their bound stays where
+            # it started): they must not open nodes, or a group of 1-3 queries without a seed
+            # searched the whole tree
+            nq = q < k and dstack[sp, q] < best[q]
             need[q] = nq
             any_need = any_need or nq
         if not any_need:
@@ -716,8 +719,11 @@ def exact_tree_group(et, P, k, stack, dstack, best, idx, need, nodes, leaves, co
 
 @numba.njit(**NJIT_PARALLEL)
 def exact_tree_batch(et, Q, seeded, out_d, out_g, out_prim, out_nodes, out_leaves,
-                     ntasks=1, count=True, order=None):
+                     ntasks=1, count=True, order=None, group=GROUP):
     """Exact distance for every row of ``Q (q, 3)`` into the output arrays.
+
+    ``group`` (1 to :data:`GROUP`): queries traced together; 1 for scattered queries, which
+    share no nodes (a group of unrelated queries visits the union of their searches).
 
     ``order`` (optional ``(q,) int64`` permutation; empty or None: ``Q``'s own order): take
     the queries in the order
@@ -753,8 +759,8 @@ def exact_tree_batch(et, Q, seeded, out_d, out_g, out_prim, out_nodes, out_leave
         for c in range(task, nchunks, ntasks):    # every ntasks-th chunk
             prev = -1
             end = min(n, (c + 1) * CHUNK)
-            for i in range(c * CHUNK, end, GROUP):
-                k = min(GROUP, end - i)
+            for i in range(c * CHUNK, end, group):
+                k = min(group, end - i)
                 for q in range(GROUP):
                     j = i + min(q, k - 1)
                     if order is not None:
