@@ -124,18 +124,27 @@ def smooth_cost_table(path):
 
 
 def exact_mix_words(path):
-    """The README's and the guide's sentence: the range of ours / theirs over every mix."""
+    """The README's and the guide's sentence: the range of ours / theirs over the mixes asked
+    in one call, and over those asked in small batches (fcpw only: libigl builds its tree at
+    every call)."""
     d = _load(path)
-    words = []
-    for name in ("fcpw", "libigl"):
-        r = [row["sides"][name]["ours_over_theirs"] for row in d["rows"]
+    whole = [r for r in d["rows"] if "/" not in r["mix"]]
+    batched = [r for r in d["rows"] if "/" in r["mix"]]
+
+    def span(rows, name):
+        r = [row["sides"][name]["ours_over_theirs"] for row in rows
              if name in row["sides"] and row["sides"][name]["agrees"]]
-        if r:
-            words.append(f"{min(r):.2f}-{max(r):.2f} of {name}'s")
+        return f"{min(r):.2f}-{max(r):.2f}" if r else None
+
+    words = [f"{span(whole, n)} of {n}'s" for n in ("fcpw", "libigl") if span(whole, n)]
     m = d["machine"]
-    return (f"Exact distance takes {' and '.join(words)} wall time on each of "
-            f"{len(d['rows'])} query mixes ({m['date'][:10]}, {m['cores']} cores, "
-            f"{m['threads']} threads each, same process, alternating)")
+    text = (f"Exact distance takes {' and '.join(words)} wall time on each of {len(whole)} "
+            f"query mixes ({m['date'][:10]}, {m['cores']} cores, {m['threads']} threads each, "
+            "same process, alternating)")
+    if batched and span(batched, "fcpw"):
+        size = batched[0]["mix"].split("/")[1]
+        text += f"; asked {size} queries per call, {span(batched, 'fcpw')} of fcpw's"
+    return text
 
 
 TABLES = {"scaling": scaling_table, "gpu": gpu_table, "coldstart": coldstart_table,
