@@ -6,13 +6,13 @@ cache, and the exact search starts from the previous query's closest primitive
 query was nearby. Grids and image rows come in such an order; points drawn at random in a box
 do not. :func:`coherent_order` detects the scattered case from a sample of consecutive steps and
 returns a permutation along the Morton curve of the queries' bounding box (10 bits per axis);
-the callers query ``Q[order]`` and put every result back in the caller's order
-(:func:`restore`), so values do not depend on it.
+the exact kernel takes the queries in that order itself and writes each result to its own row,
+the others query ``Q[order]`` and put every result back (:func:`restore`), so values do not
+depend on it. Batches too small to reorder whose consecutive queries lie far apart on the
+data's scale (:func:`scattered`) are searched one query at a time instead of in packets.
 
-Measured (2026-11-28, 2 threads, ``benchmarks/bench_exact_mix.py``): 200,000 points uniform in
-a box around a 98,592-triangle sphere, exact distance 2.4 s wall in input order, 0.5 s along
-the curve (the sort itself 20 ms); on the paper's grid, already in order, the test keeps the
-grid's own order (sorting it would cost 0.1 s and gain nothing).
+What this gains is measured by ``benchmarks/bench_exact_mix.py`` (the performance guide,
+"Exact queries on every mix").
 """
 
 import numpy as np
