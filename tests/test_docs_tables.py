@@ -212,3 +212,4 @@ def test_the_fidelity_table_follows_its_file():
     starts = [i for i, ln in enumerate(lines) if ln == want[0]]
     assert any(lines[i:i + len(want)] == want for i in starts), "paste it again"
     assert summary(d) in _flat(page)
+    assert summary(_load("fidelity_before_shell.json")) in _flat(page)
