@@ -27,6 +27,7 @@ objects, which object a lit point shows.
 """
 
 import math
+import sys
 import time
 from typing import NamedTuple
 
@@ -347,7 +348,6 @@ def render_cuda(scene, *, progress=None, transforms=None, relax=None, omega=None
     copies back and (lit, sampled or transparent renders) the film."""
     from tracer.rendering.frame import (RayArgs, RenderResult, TraceOptions, _progress_callback,
                                         _samples, scene_arrays, shade)
-    from tracer.rendering.renderer import kernel_roots
 
     samples = _samples(scene.samples if samples is None else samples)
     adaptive = bool(scene.adaptive if adaptive is None else adaptive)
@@ -372,12 +372,12 @@ def render_cuda(scene, *, progress=None, transforms=None, relax=None, omega=None
 
         arrays = scene_arrays(scene, transforms)
         tree, roots, params, mode, lo, hi, depth_max, tol = arrays
-        kargs = RayArgs(tree, kernel_roots(roots, params, mode, tol), params, mode, tol,
-                        camera.as_array(), lo, hi, float(scene.eps), int(scene.max_steps))
+        kargs = RayArgs(tree, _root_array(roots), params, mode, tol, camera.as_array(), lo, hi,
+                        float(scene.eps), int(scene.max_steps))
         options = TraceOptions(args.relax, args.omega, use_cone, args.newton)
         rgb, alpha, spp, aovs = form_image(scene, camera, arrays, kargs, options,
                                            (hit, tbuf, grad, objs), samples, adaptive,
-                                           device="cuda")
+                                           gpu=sys.modules[__name__])
     seconds = time.perf_counter() - t0
     if progress is not None:
         progress(H * W, H * W, seconds)
