@@ -249,7 +249,8 @@ def test_failed_experiment_leaves_nothing(tmp_path, monkeypatch, capsys):
 
     monkeypatch.setitem(experiments.EXPERIMENTS, "grid", boom)
     out = tmp_path / "res"
-    assert main(["reproduce", "--smoke", "--only", "grid", "--out", str(out)]) == 2
+    assert main(["reproduce", "--smoke", "--only", "grid", "--out", str(out),
+                 "--allow-dirty"]) == 2
     assert "broken on purpose" in capsys.readouterr().err
     assert list(tmp_path.iterdir()) == []
 
@@ -298,7 +299,8 @@ def test_table3_scenes_add_rows_to_the_earlier_ones(tmp_path, monkeypatch, capsy
 
     monkeypatch.setitem(experiments.EXPERIMENTS, "table3", fake)
     out = tmp_path / "res"
-    base = ["reproduce", "--smoke", "--only", "table3", "--out", str(out), "-q"]
+    base = ["reproduce", "--smoke", "--only", "table3", "--out", str(out), "-q",
+            "--allow-dirty"]
     assert main(base + ["--table3-scenes", "ico_bowl,sphere_slide"]) == 0
     assert main(base + ["--table3-scenes", "sphere_slide,bunny_bunny"]) == 0
     res = json.loads((out / "table3.json").read_text())
@@ -367,3 +369,78 @@ def test_gpu_experiment_runs_the_benchmark_where_a_card_is(tmp_path, monkeypatch
     rows = {r["what"]: r for r in card["rows"]}
     assert stored["grid"]["points"]["kernel_speedup"] == pytest.approx(
         rows["grid points"]["cpu_s"] / rows["grid points"]["gpu_kernel_s"], rel=1e-12)
+
+
+# ------------------------------------------------------------------ provenance (issue 48)
+def _fake_gpu(out, s, where):
+    return {"source": None, "why": "no card (a stand-in experiment)"}
+
+
+def test_a_dirty_tree_is_refused_unless_allowed(tmp_path, monkeypatch, capsys):
+    """A run on a tree with uncommitted changes is refused before any experiment runs; with
+    --allow-dirty it runs and the page says which results are so."""
+    from tracer.reproduce import experiments
+
+    ran = []
+    monkeypatch.setattr(experiments, "tree_dirty", lambda: True)
+    monkeypatch.setitem(experiments.EXPERIMENTS, "gpu",
+                        lambda o, s, w: ran.append(1) or _fake_gpu(o, s, w))
+    out = tmp_path / "res"
+    argv = ["reproduce", "--smoke", "--only", "gpu", "--out", str(out), "-q"]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "uncommitted changes" in err and "--allow-dirty" in err
+    assert ran == [] and not out.exists()
+    assert main(argv + ["--allow-dirty"]) == 0
+    page = (out / "reproduction.md").read_text(encoding="utf-8")
+    assert "Written with `--allow-dirty`:** the results of gpu, run" in page
+
+
+def test_report_only_refuses_dirty_results(tmp_path, capsys):
+    """The committed results hold some of a dirty tree: the report is refused without
+    --allow-dirty (and nothing is rewritten), written with it and says so."""
+    folder = tmp_path / "full"
+    shutil.copytree(RESULTS, folder)
+    assert report.dirty_results(folder)  # the committed folder has some (issue 48)
+    before = (folder / "reproduction.md").read_text(encoding="utf-8")
+    assert main(["reproduce", "--report-only", "--out", str(folder), "-q"]) == 2
+    assert "results of a tree with local changes" in capsys.readouterr().err
+    assert (folder / "reproduction.md").read_text(encoding="utf-8") == before
+    assert main(["reproduce", "--report-only", "--out", str(folder), "-q",
+                 "--allow-dirty"]) == 0
+    page = (folder / "reproduction.md").read_text(encoding="utf-8")
+    assert "Written with `--allow-dirty`" in page
+
+
+def test_code_changed_says_unknown_without_git(monkeypatch):
+    from tracer.reproduce import experiments
+
+    head = experiments.head_commit()
+    assert experiments.code_changed(head, head) == "unchanged"
+    assert experiments.code_changed("unknown", head) == "unknown"
+    assert experiments.code_changed("f" * 40, head) == "unknown"  # no such commit
+    monkeypatch.setattr(experiments, "_git_status", lambda *a: None)
+    assert experiments.code_changed(head, head) == "unknown"
+    assert experiments.tree_dirty() is None
+
+
+def test_experiments_table_shows_tree_and_code_state():
+    """Each experiment's row: its commit, clean or dirty, and whether the measured code
+    changed since (as run.json's report state records it)."""
+    run = report.load_run(RESULTS)
+    rows = _table(PAGE.read_text(encoding="utf-8"), "Experiments")
+    assert {r[0] for r in rows} == set(report.load_results(RESULTS))
+    for r in rows:
+        res = json.loads((RESULTS / f"{r[0]}.json").read_text())
+        assert r[3].startswith(res["provenance"]["commit"][:12])
+        assert r[4] == {True: "dirty", False: "clean"}.get(res["provenance"]["dirty"],
+                                                           "unknown")
+        assert r[5].split()[0] == run["report"]["code"][r[0]]
+        assert r[5].split()[0] in ("changed", "unchanged", "unknown")
+
+
+def test_the_page_names_no_absolute_path():
+    for text in (PAGE.read_text(encoding="utf-8"),
+                 *(p.read_text(encoding="utf-8")
+                   for p in RESULTS.parent.glob("*/reproduction.md"))):
+        assert "/work/" not in text and "/home/" not in text

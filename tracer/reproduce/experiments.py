@@ -93,6 +93,50 @@ def _git(*args):
         return ""
 
 
+def _git_status(*args):
+    """The exit status of ``git *args`` in the repository (None when git cannot run)."""
+    try:
+        return subprocess.run(["git", *args], cwd=REPO, capture_output=True,
+                              timeout=30).returncode
+    except (OSError, subprocess.SubprocessError):
+        return None
+
+
+#: the code an experiment measures: a change here between an experiment's commit and the
+#: report's makes its figures stale (table3 also times the simulator)
+MEASURED_CODE = ("smoothdist", "tracer/rendering")
+MEASURED_EXTRA = {"table3": ("tracer/sim",)}
+
+
+def measured_code(name):
+    return MEASURED_CODE + MEASURED_EXTRA.get(name, ())
+
+
+def code_changed(commit, head, paths=MEASURED_CODE):
+    """``"unchanged"`` or ``"changed"`` (the measured code between the two commits, by
+    ``git diff --quiet``), ``"unknown"`` where git, or either commit, is not available."""
+    if not commit or not head or "unknown" in (commit, head):
+        return "unknown"
+    rc = _git_status("diff", "--quiet", commit, head, "--", *paths)
+    return {0: "unchanged", 1: "changed"}.get(rc, "unknown")
+
+
+def tree_dirty():
+    """True when the work tree has changes to tracked files, None where git cannot tell."""
+    if _git_status("rev-parse", "--git-dir") != 0:
+        return None
+    return bool(_git("status", "--porcelain", "--untracked-files=no"))
+
+
+def head_commit():
+    return _git("rev-parse", "HEAD") or "unknown"
+
+
+def load_average():
+    """The 1, 5 and 15 minute load averages (None where the system has none)."""
+    return [round(x, 2) for x in os.getloadavg()] if hasattr(os, "getloadavg") else None
+
+
 def cpu_model():
     """The CPU's model name (lscpu, else /proc/cpuinfo, else platform.processor())."""
     try:
@@ -118,14 +162,12 @@ def provenance():
 
     from tracer.runner import cpu_count
 
-    return {"commit": _git("rev-parse", "HEAD") or "unknown",
-            "dirty": bool(_git("status", "--porcelain", "--untracked-files=no")),
+    return {"commit": head_commit(), "dirty": tree_dirty(),
             "date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
             "machine": {"cpu": cpu_model(), "cores": cpu_count(), "platform": platform.platform(),
                         "python": platform.python_version(), "numba": numba.__version__},
             "numba_threads": int(numba.get_num_threads()),
-            "load_average": [round(x, 2) for x in os.getloadavg()]
-            if hasattr(os, "getloadavg") else None}
+            "load_average": load_average()}
 
 
 # ============================================================================ helpers
@@ -401,8 +443,8 @@ AUTHORS_THREADS = 2
 
 def authors_run(path, steps, binary, timeout):
     """The authors' ``rigid_body_simulator`` on the simulation file ``path`` for ``steps``
-    steps (``/work/shared/tools/authors-bench/README.md``), in a scratch folder: their mean
-    milliseconds per distance evaluation (one ``meshDistance`` call: the lines of their
+    steps (``../shared/tools/authors-bench/README.md``, beside the repository), in a scratch
+    folder: their mean milliseconds per distance evaluation (one ``meshDistance`` call: the lines of their
     ``__times.txt`` files, microseconds each), the count and the wall time; or why not."""
     import subprocess
 
@@ -480,7 +522,7 @@ def table3(out, s, where):
     return {"scenes": s["scenes"], "steps": s["steps"], "step_caps": caps,
             "scheduler": info.describe(), "rows": {n: rows[n] for n in s["scenes"]},
             "authors_simulator": ("their rigid_body_simulator (abhimadan/smoothdists a2706a2, "
-                                  "CPU build of /work/shared/tools/authors-bench), the same "
+                                  "CPU build of ../shared/tools/authors-bench), the same "
                                   f"files and steps, {AUTHORS_THREADS} threads, after ours in "
                                   "the same task" if authors else "not run (no --authors-bin)"),
             "not_run": [n for n in TABLE3_PAPER if n not in s["scenes"]]}
