@@ -130,7 +130,8 @@ def test_committed_results_have_provenance_and_every_claim_a_row():
     page = PAGE.read_text(encoding="utf-8")
     assert len(_table(page, "Claims")) == len(rows) >= 23
     for r in rows:  # every claim is judged, and a verdict other than a match says why
-        assert r["verdict"] in ("match", "differs", "cannot be reproduced", "not run")
+        assert r["verdict"] in ("match", "differs", "not comparable", "cannot be reproduced",
+                                "inconclusive", "not run")
         assert r["verdict"] == "match" or r["reason"]
         if r["experiment"] is not None and r["verdict"] != "not run":
             assert r["last_run"] and r["last_run"][:10] in page
@@ -331,7 +332,7 @@ def test_beta_speedup_says_which_leaves_beta_prunes():
     assert "points 6.97x, edges 10.4x, triangles 5.8x" in why
     del b["leaves_per_eval"]
     assert claims._beta_speedup({"beta": b})[3] == \
-        "time(beta 0) / time(beta 0.2) is below 10 for some type"
+        "time(beta 0) / time(beta 0.2) is below 10 for some type; " + claims.NO_SPREAD
 
 
 def test_gpu_experiment_runs_the_benchmark_where_a_card_is(tmp_path, monkeypatch):
@@ -444,3 +445,101 @@ def test_the_page_names_no_absolute_path():
                  *(p.read_text(encoding="utf-8")
                    for p in RESULTS.parent.glob("*/reproduction.md"))):
         assert "/work/" not in text and "/home/" not in text
+
+
+# ------------------------------------------------------------------ verdicts (issue 48)
+def test_a_spread_that_straddles_the_threshold_is_inconclusive():
+    from tracer.reproduce import claims
+
+    assert claims.judge(5.5, 7.0, 5) == "match"
+    assert claims.judge(3.0, 4.9, 5) == "differs"
+    assert claims.judge(4.86, 7.44, 5) == "inconclusive"  # the issue's bowl-ico runs
+    assert claims.judge(8.0, 9.0, 10, above=False) == "match"
+    assert claims.combine(["match", "inconclusive"]) == "inconclusive"
+    assert claims.combine(["match", "inconclusive", "differs"]) == "differs"
+
+
+def _box(on, off):
+    case = {"data_primitives": 736, "data_kind": "edges", "query_primitives": 120,
+            "query_kind": "edges", "ms_on": sorted(on)[len(on) // 2],
+            "ms_off": sorted(off)[len(off) // 2], "ms_on_all": on, "ms_off_all": off}
+    case["speedup"] = case["ms_off"] / case["ms_on"]
+    return {"box_test": {"beta": 0.5, "repeat": len(on), "threads": 2, "cases": {"c": case},
+                         "load_average_before": [1.5, 1, 1],
+                         "provenance": {"load_average": [2.5, 1, 1]}}}
+
+
+def test_box_test_verdict_follows_the_rounds_spread():
+    from tracer.reproduce import claims
+
+    ours, setting, verdict, why = claims._box_test(_box([10, 10, 10], [60, 70, 80]))
+    assert verdict == "match" and "rounds 6-8x" in ours and "load 1.5 before, 2.5 after" \
+        in setting
+    ours, _, verdict, why = claims._box_test(_box([10, 10, 10], [45, 60, 70]))
+    assert verdict == "inconclusive" and "rounds 4.5-7x" in ours and "straddle" in why
+    assert claims._box_test(_box([10, 10, 10], [30, 40, 45]))[2] == "differs"
+
+
+def test_beta_verdicts_use_the_repeats():
+    from tracer.reproduce import claims
+
+    def beta(t0, t2, t5):
+        return {"beta": {"size": 512, "threads": 2, "repeat": len(t0),
+                         "render_seconds": {k: {"0": t0[0], "0.2": t2[0], "0.5": t5[0]}
+                                            for k in claims.TYPES},
+                         "render_seconds_repeats": {k: {"0": t0, "0.2": t2, "0.5": t5}
+                                                    for k in claims.TYPES}}}
+
+    assert claims._beta_speedup(beta([25, 24], [2, 2.1], [1, 1]))[2] == "match"
+    r = claims._beta_speedup(beta([25, 21], [2, 2.2], [1, 1]))
+    assert r[2] == "inconclusive" and "repeats 9.55-12.5x" in r[0]
+    assert claims._beta_10s(beta([25, 24], [2, 2], [9, 11]))[2] == "inconclusive"
+    assert claims._beta_10s(beta([25, 24], [2, 2], [1, 1.2]))[2] == "match"
+
+
+def test_quick_runs_say_their_timing_verdicts_are_indicative():
+    res = report.load_results(RESULTS)
+    full = {r["id"]: r for r in evaluate(res)}
+    assert not any(r.get("indicative") for r in full.values())
+    for r in res.values():
+        r["mode"] = "quick"
+    quick = {r["id"]: r for r in evaluate(res)}
+    assert quick["box-test"]["indicative"] == "a quick run: indicative only"
+    assert not quick["underestimate"].get("indicative")  # not a timing
+
+
+def test_bh_switch_rows_are_not_a_match_on_another_unit():
+    """Rows 4-5: on the unit-diagonal cloud they are not comparable; measured the authors' way
+    (raw coordinates) with switch points kept they are judged."""
+    from tracer.reproduce import claims
+
+    h = json.loads((RESULTS / "bh_switch.json").read_text())
+    for fn in (claims._bh_disc, claims._bh_cos):
+        assert fn({"bh_switch": h})[2] == "not comparable"
+    raw = {"settings": {"alpha": 100.0, "iso": 0.1, "start": 0.01, "segment": 0.005,
+                        "samples": 101, "max_steps": 20}, "hits": 400, "switch_points": 300,
+           "kept_points": 200, "mean_discrepancy": 5e-5, "max_discrepancy": 1e-3,
+           "mean_cosine": 1.0, "min_cosine": 0.999}
+    ours, _, verdict, why = claims._bh_disc({"bh_switch": dict(h, raw=raw)})
+    assert verdict == "match" and "raw units" in ours and "barnes_hut_smoothness_test" in why
+    raw.update(kept_points=0, switch_points=0, hits=1)
+    ours, _, verdict, why = claims._bh_disc({"bh_switch": dict(h, raw=raw)})
+    assert verdict == "not comparable" and "1 of" in why
+
+
+def test_no_intersection_row_reads_each_runs_minimum_distance():
+    from tracer.reproduce import claims
+
+    def t3(*d):
+        return {"table3": {"rows": {f"s{i}": {"steps": 5, "runs": [{"min_exact_distance": x}]}
+                                    for i, x in enumerate(d)}}}
+
+    assert claims._no_intersection(t3(0.1, 0.02))[2] == "match"
+    assert claims._no_intersection(t3(0.1, 0.0))[2] == "differs"
+    assert claims._no_intersection({"table3": {"rows": {"a": {"runs": [{}]}}}})[2] == "not run"
+
+
+def test_every_claim_of_issue_48_has_a_row():
+    ids = {c[0] for c in CLAIMS}
+    assert {"grid-variance", "gpu-above-one", "gpu-leaves", "no-intersection", "beta-alpha",
+            "attenuation"} <= ids

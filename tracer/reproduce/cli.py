@@ -37,7 +37,8 @@ def add_arguments(p):
                    help="also write the report page here (e.g. docs/reproduction.md)")
     p.add_argument("--only", metavar="LIST",
                    help="comma-separated experiments to run (default all: "
-                   "underestimate, table3, grid, bh_switch, box_test, gpu, beta, alpha); into an "
+                   "underestimate, table3, grid, bh_switch, box_test, gpu, beta, alpha, "
+                   "beta_alpha, attenuation); into an "
                    "existing results folder of the same mode it updates those experiments and "
                    "keeps the others (unless --overwrite)")
     p.add_argument("--authors-bin", metavar="PATH",

@@ -17,7 +17,9 @@ NOT_EXPERIMENTS = {"claims.json", "run.json"}
 
 
 def load_results(folder):
-    """``{experiment: results}`` of every ``<experiment>.json`` in ``folder``."""
+    """``{experiment: results}`` of every ``<experiment>.json`` in ``folder``. A grid result
+    written before the fit held the spread of the share of leaves visited gets it from its
+    own CSVs (the same fit, :func:`tracer.reproduce.experiments.grid_fit`)."""
     folder = Path(folder)
     out = {}
     for p in sorted(folder.glob("*.json")):
@@ -25,6 +27,16 @@ def load_results(folder):
             continue
         with open(p, encoding="utf-8") as fh:
             out[p.stem] = json.load(fh)
+    g = out.get("grid")
+    if g and any("share_sd_pct" not in f for f in g["fit"].values()):
+        from tracer.reproduce.experiments import grid_fit, read_csv
+
+        rows = [r for c in g["csv"] for r in read_csv(folder / c)
+                if r.get("status", "ok") == "ok"]
+        fit = grid_fit(rows, g["grid"])
+        for kind, f in g["fit"].items():
+            for key in ("share_mean_pct", "share_sd_pct"):
+                f.setdefault(key, fit[kind][key])
     return out
 
 
@@ -146,12 +158,21 @@ def render_page(folder, shown_as):
               "steps): it shows that every experiment runs and how each claim is judged; its "
               "sizes are not the paper's, and the verdicts say where that matters. The full run "
               "(`tracer reproduce`, an hour or more on 2 cores) uses the paper's sizes.", ""]
-    L += ["Verdicts: " + ", ".join(f"{v}: {n}" for v, n in sorted(counts.items())) + ".", "",
+    L += ["Verdicts: " + ", ".join(f"{v}: {n}" for v, n in sorted(counts.items())) + ". "
+          "*match* and *differs*: the paper's quantity, measured here; *not comparable*: "
+          "another quantity or unit than the paper's (the reason says which); *cannot be "
+          "reproduced*: the data or the hardware is not available; *inconclusive*: a timing "
+          "whose spread over the repeats (min-max, shown) straddles the paper's threshold; "
+          "*not run*: not part of this run. Timing rows give the load average before and "
+          "after their experiment"
+          + ("; in this run they are indicative only" if run["mode"] != "full" else "")
+          + ".", "",
           "## Claims", "",
           "| # | claim (quoted) | section | paper | ours | setting | verdict | last run |",
           "|---:|---|---|---|---|---|---|---|"]
     for i, r in enumerate(rows, 1):
-        verdict = r["verdict"] + (f": {r['reason'].strip()}" if r["reason"].strip() else "")
+        verdict = r["verdict"] + (f" ({r['indicative']})" if r.get("indicative") else "") \
+            + (f": {r['reason'].strip()}" if r["reason"].strip() else "")
         L.append("| " + " | ".join(_cell(x) for x in (
             i, f"“{r['quote']}”", r["section"], r["paper"], r["ours"], r["setting"], verdict,
             _date(r["last_run"]))) + " |")
