@@ -174,7 +174,7 @@ def test_guides_show_the_committed_results():
     box = json.loads((FULL / "box_test.json").read_text())
     text = _guide("whole-mesh.md")
     for name, c in box["cases"].items():
-        row = next(ln for ln in text.splitlines() if ln.startswith(f"| {name} |"))
+        row = next(ln for ln in text.splitlines() if ln.startswith(f"| {name} ("))
         cells = [x.strip() for x in row.strip("|").split("|")]
         for cell, v in ((cells[5], c["ms_on"]), (cells[6], c["ms_off"])):
             shown = float(cell.split()[0].replace(",", ""))
