@@ -236,7 +236,7 @@ def test_quick_run_end_to_end(tmp_path, capsys):
         assert row["beta_0"]["min_gap"] >= 0 and row["beta_0"]["max_gap"] <= row["bound"]
         assert row["beta_0.5"]["min_gap"] >= 0
     # regenerating from the folder gives the same page
-    assert main(["reproduce", "--report-only", "--out", str(out), "-q"]) == 0
+    assert main(["reproduce", "--report-only", "--out", str(out), "-q", "--allow-dirty"]) == 0
     assert (out / "reproduction.md").read_text(encoding="utf-8") == text
 
 

@@ -131,7 +131,10 @@ def render_page(folder, shown_as):
          + "). Every number below is read from the JSON files "
          "there; the paper's values are quoted from it. Rerun with "
          f"`python -m tracer reproduce{'' if run['mode'] == 'full' else ' --' + run['mode']} "
-         "--out DIR --page docs/reproduction.md`.", ""]
+         + ("--scheduler serial " if run.get("scheduler") == "serial" else "")
+         + "--out DIR --page docs/reproduction.md` on a clean commit (`--scheduler serial`: "
+         "every experiment in this process on all its threads; Table 3 then times 1 and all "
+         "threads).", ""]
     state = run.get("report") or {}
     code = state.get("code", {})
     if state.get("commit"):
