@@ -213,6 +213,20 @@ def test_the_fidelity_table_follows_its_file():
     starts = [i for i, ln in enumerate(lines) if ln == want[0]]
     assert any(lines[i:i + len(want)] == want for i in starts), "paste it again"
     assert summary(d) in _flat(page)
+    assert summary(_load("fidelity_before_shell.json")) in _flat(page)
+
+
+def test_the_shell_time_sentence_follows_its_file():
+    """Issue 46: the troubleshooting guide's render-time ratio of the thin shell against the
+    rule before it is that of ``benchmarks/data/shell_time.json``."""
+    d = _load("shell_time.json")
+    page = (ROOT / "docs" / "guide" / "troubleshooting.md").read_text(encoding="utf-8")
+    words = (f"at {d['size']}² the thin shell renders in {d['ratio_min']:.2f}-"
+             f"{d['ratio_max']:.2f} (median {d['ratio_median']:.2f}) of the time of the rule "
+             f"before it, on the {len(d['rows'])} shapes with triangles")
+    assert words in _flat(page)
+    r = [row["shell_s"] / row["before_s"] for row in d["rows"]]
+    assert min(r) == pytest.approx(d["ratio_min"]) and max(r) == pytest.approx(d["ratio_max"])
 
 
 def test_the_whole_mesh_side_by_side_follows_its_file():
