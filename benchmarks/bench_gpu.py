@@ -116,6 +116,33 @@ def bench_render(kind, size, eps, repeat, blocks=()):
                 mean_steps_cpu=float(cpu.steps.mean()), mean_steps_gpu=float(gpu.steps.mean()))
 
 
+def bench_lit(kind, size, repeat, samples=16):
+    """The gallery's look (lit, ``samples`` adaptive samples per pixel) of the bunny of
+    ``kind``, on the CPU and on the GPU (issue 49: 1080p in 1 s or less on an H100 / H200),
+    each best of ``repeat`` after a warm-up; what differs between the two images."""
+    from tracer.rendering.renderer import render
+    from tracer.scenes.scene import load_scene
+
+    W, H = size
+    scene = load_scene(REPO / "scenes" / f"bunny_{kind}.json",
+                       {"width": W, "height": H, "shading": "lit", "samples": samples,
+                        "adaptive": True})
+    cpu_s, cpu = best(lambda: render(scene), repeat)
+    t0 = time.perf_counter()
+    render(scene, device="cuda")
+    first_s = time.perf_counter() - t0
+    gpu_s, gpu = best(lambda: render(scene, device="cuda"), repeat)
+    both = cpu.hit & gpu.hit
+    return dict(what=f"bunny {kind}, lit, {samples} adaptive", size=f"{W}x{H}", eps=scene.eps,
+                diag=scene.diagonal, primitives=scene.objects[0].field.num_primitives,
+                cpu_s=cpu_s, gpu_s=gpu_s, speedup=cpu_s / gpu_s, gpu_first_s=first_s,
+                hit_differs=int((cpu.hit != gpu.hit).sum()),
+                depth_max_over_diag=(float(np.abs(cpu.depth[both].astype(float)
+                                                  - gpu.depth[both]).max()) / scene.diagonal
+                                     if both.any() else 0.0),
+                rgb_max=int(np.abs(cpu.rgb.astype(int) - gpu.rgb).max(initial=0)))
+
+
 def bench_grid(kind, n, repeat):
     from benchmarks.bench_grid import grid, normalise
     from smoothdist import DataMesh, SmoothDistanceField
@@ -200,6 +227,8 @@ def main(argv=None):
     p.add_argument("--blocks", nargs="*", default=[], metavar="CxR",
                    help="also time the render kernel with these thread blocks (columns x rows, "
                         "e.g. 32x4 8x8), the outputs kept between launches")
+    p.add_argument("--lit", action="store_true",
+                   help="also the lit look with 16 adaptive samples at --size, each kind")
     p.add_argument("--json", default=str(DEFAULT_JSON))
     args = p.parse_args(argv)
     cuda = gpu_or_exit()
@@ -215,6 +244,10 @@ def main(argv=None):
     for kind in KINDS:
         rows.append(bench_grid(kind, args.grid, args.repeat))
         print(rows[-1], flush=True)
+    if args.lit:
+        for kind in KINDS:
+            rows.append(bench_lit(kind, tuple(args.size), max(1, min(args.repeat, 3))))
+            print(rows[-1], flush=True)
     table = markdown(card, rows, numba.get_num_threads(), cpu_name())
     print(table)
     out = Path(args.json)

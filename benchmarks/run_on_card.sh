@@ -9,6 +9,7 @@
 #               (the first-call compile time, and that numba-cuda's disk cache keeps the kernels)
 #   gpu         the GPU benchmark of issue 34: the bunny at 1920x1080 and the 1e6-point grid,
 #               GPU against every CPU core, with the thread blocks of $BLOCKS timed too
+#   gpu-lit     the lit look with 16 adaptive samples at 1920x1080, GPU against every core
 #   scaling     the 1080p thread-scaling table of issue 32 for 1, 2, 4, ... up to every core
 #   stored      the stored-value and golden-image tests on this CPU (pytest-xdist, 8 workers)
 #   all         every step above
@@ -43,7 +44,7 @@ step() {  # step NAME SECONDS COMMAND...: runs it with a limit, its output to NA
 }
 
 steps=("$@")
-[ "${steps[*]}" = all ] && steps=(machine gpu-small gpu scaling stored)
+[ "${steps[*]}" = all ] && steps=(machine gpu-small gpu gpu-lit scaling stored)
 for s in "${steps[@]}"; do
     case $s in
     machine)
@@ -64,6 +65,11 @@ for s in "${steps[@]}"; do
         # shellcheck disable=SC2086
         step gpu_1080p 200 "$py" benchmarks/bench_gpu.py --repeat 3 --blocks ${BLOCKS:-32x4 8x8 32x8} \
             --json "$out/bench_gpu.json"
+        ;;
+    gpu-lit)
+        # issue 49: the lit look with 16 adaptive samples at 1080p, GPU against every core
+        step gpu_lit 300 "$py" benchmarks/bench_gpu.py --repeat 1 --grid 10 --lit \
+            --json "$out/bench_gpu_lit.json"
         ;;
     scaling)
         # shellcheck disable=SC2086

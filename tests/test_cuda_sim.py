@@ -113,7 +113,8 @@ def _worker(out):
     from benchmarks import bench_gpu
 
     rows = [bench_gpu.bench_render("edges", (16, 12), 1e-3, 1),
-            bench_gpu.bench_grid("triangles", 6, 1)]
+            bench_gpu.bench_grid("triangles", 6, 1),
+            bench_gpu.bench_lit("points", (12, 10), 1, samples=4)]
     meta["bench_rows"] = rows
     meta["bench_table"] = bench_gpu.markdown("simulator", rows, 1)
     # the command line, on the simulator's device
@@ -204,7 +205,9 @@ def test_cli_device_cuda_on_the_simulator(sim):
 
 @pytest.mark.slow
 def test_bench_gpu_measures_on_the_simulator(sim):
-    render_row, grid_row = sim["bench_rows"]
+    render_row, grid_row, lit_row = sim["bench_rows"]
+    assert lit_row["size"] == "12x10" and lit_row["hit_differs"] == 0
+    assert lit_row["rgb_max"] <= 1 and lit_row["gpu_s"] > 0
     assert render_row["size"] == "16x12" and render_row["hit_differs"] <= 1
     # at the authors' eps (1e-3 absolute, 4e-3 of the bunny's diagonal) two marches may stop
     # about 2 eps / cos apart

@@ -247,3 +247,14 @@ def test_the_whole_mesh_side_by_side_follows_its_file():
     else:
         assert not [ln for ln in section.splitlines() if ln.startswith("| ")]
         assert "their time" not in readme and "0.38x" not in readme
+
+
+def test_the_cloud_1080_sentence_follows_its_file():
+    """Issue 46 item 7: the troubleshooting guide's 1080p point-cloud times are those of
+    ``benchmarks/data/cloud_1080.json``."""
+    from benchmarks.bench_cloud_1080 import words
+
+    d = _load("cloud_1080.json")
+    page = (ROOT / "docs" / "guide" / "troubleshooting.md").read_text(encoding="utf-8")
+    assert words(d) in _flat(page)
+    assert [r["points"] for r in d["rows"]] == [50_000, 1_000_000]
