@@ -258,3 +258,14 @@ def test_the_cloud_1080_sentence_follows_its_file():
     page = (ROOT / "docs" / "guide" / "troubleshooting.md").read_text(encoding="utf-8")
     assert words(d) in _flat(page)
     assert [r["points"] for r in d["rows"]] == [50_000, 1_000_000]
+
+
+def test_the_self_shadow_sentence_follows_its_files():
+    """Issue 46 item 3: the troubleshooting guide's brute-force shadow figures are those of
+    ``benchmarks/data/self_shadow.json`` (and ``self_shadow_before.json``)."""
+    from benchmarks.bench_self_shadow import words
+
+    d, before = _load("self_shadow.json"), _load("self_shadow_before.json")
+    page = (ROOT / "docs" / "guide" / "troubleshooting.md").read_text(encoding="utf-8")
+    assert words(d, before) in _flat(page)
+    assert d["wrong"] == sum(r["wrong"] for r in d["rows"])

@@ -340,6 +340,10 @@ FILL_COS = 0.9
 #: ... and, for the shadow, when the coarse neighbours' shadows differ by at most this (else:
 #: a shadow edge), for the occlusion when their occlusions do (else: a crease or a contact)
 FILL_SHADOW = 0.1
+#: ... and only from at least this many such neighbours: one alone cannot tell a pixel by a
+#: shadow's edge from one inside it (the brute-force check of ``tracer.checks.self_shadow``
+#: found pixels darkened by a single dark neighbour beside a lit sliver)
+FILL_SHADOW_NEIGHBOURS = 2
 #: the ground fades into the background as ``exp(-(r / R)^2)`` with ``R`` this many times the
 #: diagonal of the box that holds the surface (``r``: distance from below its centre) ...
 FADE = 0.9
@@ -382,6 +386,7 @@ def _fill_light(shape, want, coarse, key, depth, normals, shadow, ao, lit_side=N
         acc_a = np.zeros(i.size)
         acc_w = np.zeros(i.size)
         acc_ws = np.zeros(i.size)
+        n_s = np.zeros(i.size, dtype=np.int64)
         s_lo = np.full(i.size, np.inf)
         s_hi = np.full(i.size, -np.inf)
         a_lo = np.full(i.size, np.inf)
@@ -401,13 +406,14 @@ def _fill_light(shape, want, coarse, key, depth, normals, shadow, ao, lit_side=N
             acc_a += wt * src_a[j]
             acc_w += wt
             acc_ws += wt_s
+            n_s += ok_s
             s_lo = np.where(ok_s, np.minimum(s_lo, src_s[j]), s_lo)
             s_hi = np.where(ok_s, np.maximum(s_hi, src_s[j]), s_hi)
             a_lo = np.where(ok, np.minimum(a_lo, src_a[j]), a_lo)
             a_hi = np.where(ok, np.maximum(a_hi, src_a[j]), a_hi)
         # across a shadow's edge, or where the occlusion changes fast, the neighbours
         # disagree: no interpolation of that factor there
-        good_s = (acc_ws > 0) & (s_hi - s_lo <= FILL_SHADOW)
+        good_s = (acc_ws > 0) & (n_s >= FILL_SHADOW_NEIGHBOURS) & (s_hi - s_lo <= FILL_SHADOW)
         good_a = (acc_w > 0) & (a_hi - a_lo <= FILL_SHADOW)
         shadow[i[good_s]] = acc_s[good_s] / acc_ws[good_s]
         ao[i[good_a]] = acc_a[good_a] / acc_w[good_a]
