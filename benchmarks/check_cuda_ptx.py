@@ -1,8 +1,8 @@
 """Compile every CUDA kernel of the GPU path to PTX, without a GPU.
 
-numba's CUDA simulator (``tests/test_cuda_sim.py``) runs the kernels' launch code but calls the
-shared ``numba.njit`` functions compiled for the CPU, so it cannot show that numba-cuda
-compiles them for a GPU. This script does: it types and lowers ``smoothdist.cuda``'s query
+numba's CUDA simulator (``tests/smoothdist/test_cuda_sim.py``) runs the kernels' launch code
+but calls the shared ``numba.njit`` functions compiled for the CPU, so it cannot show that
+numba-cuda compiles them for a GPU. This script does: it types and lowers ``smoothdist.cuda``'s query
 kernels and ``tracer.rendering.gpu_render``'s cone and render kernels for a compute capability (default 9.0,
 H100 / H200) through NVIDIA's NVVM, as the first launch on a card would, and prints the size
 of the PTX and of each thread's local memory (the traversal stacks).

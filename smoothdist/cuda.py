@@ -13,7 +13,7 @@ at half the float32 rate).
 
 Install: ``pip install -e ".[gpu]"`` in the clone (numba-cuda). Without a GPU, numba's CUDA
 simulator (``NUMBA_ENABLE_CUDASIM=1`` set before ``numba.cuda`` is first imported) runs the
-same kernels on the CPU, slowly; the test suite uses it (``tests/test_cuda_sim.py``).
+same kernels on the CPU, slowly; the test suite uses it (``tests/smoothdist/test_cuda_sim.py``).
 
 Use it through ``SmoothDistanceField.smooth_distance(..., device="cuda")`` and
 ``exact_distance(..., device="cuda")``, or ``tracer.render(scene, device="cuda")``

@@ -20,7 +20,7 @@ import pytest
 
 from smoothdist import _config
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 PACKAGES = ("smoothdist", "tracer")
 CONFIG = ROOT / "smoothdist" / "_config.py"
 FORBIDDEN = ("fastmath", "parallel", "error_model")

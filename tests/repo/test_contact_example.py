@@ -16,7 +16,7 @@ import pytest
 
 matplotlib.use("Agg")
 
-EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "plot_contact_solver.py"
+EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "plot_contact_solver.py"
 
 
 @pytest.fixture(scope="module")

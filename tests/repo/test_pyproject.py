@@ -20,7 +20,7 @@ from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 #: what each extra adds (the top-level module names)
 TRACER = ("PIL", "trimesh")
 SIM = ("scipy", "imageio", "imageio_ffmpeg")

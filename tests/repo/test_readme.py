@@ -50,7 +50,7 @@ from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 README = ROOT / "README.md"
 GUIDE = ROOT / "docs" / "guide"
 #: the pages whose commands run, in this order (README first; the guide pages by name)
@@ -133,10 +133,11 @@ NOT_RUN = {
     "python benchmarks/profile_compile.py":
         "it compiles every kernel three times over with empty caches (a minute); "
         "tests/test_docs_tables.py checks the guide against its results file and "
-        "tests/test_render_coldstart.py the compiled kernels of a first render",
+        "tests/tracer/rendering/test_render_coldstart.py the compiled kernels of a first render",
     "python benchmarks/bench_coldstart.py":
         "it compiles every kernel from an empty cache six times (minutes); "
-        "tests/test_render_coldstart.py runs a first lit render with an empty cache",
+        "tests/tracer/rendering/test_render_coldstart.py runs a first lit render with an empty "
+        "cache",
     "python benchmarks/bench_authors.py --authors-bin PATH":
         "it needs the authors' renderer built outside the repository "
         "(../shared/tools/authors-bench); the same script without --authors-bin is run",
@@ -147,13 +148,13 @@ NOT_RUN = {
         "it needs the authors' renderer built outside the repository "
         "(../shared/tools/authors-bench); the same script without --authors-bin is run",
     "python -m tracer bench-grid MESH_DIR -o OUT_DIR --scheduler tcp://host:8786 # an existing cluster":
-        "it needs an existing Dask cluster; tests/test_runner_cluster.py starts one with the "
-        "dask command line and runs this command against it",
+        "it needs an existing Dask cluster; tests/tracer/test_runner_cluster.py starts one with "
+        "the dask command line and runs this command against it",
     "python benchmarks/bench_authors_sim.py --authors-bin "
     "../authors-build/bench/rigid_body_simulator scenes/simulations/table3/ico_bowl.json "
     "--steps 400 --timeout 1200":
         "it needs the authors' simulator built outside the repository "
-        "(../shared/tools/authors-bench) and takes minutes; tests/test_bench_authors_sim.py "
+        "(../shared/tools/authors-bench) and takes minutes; tests/repo/test_bench_authors_sim.py "
         "runs the script against a stand-in simulator",
     "python benchmarks/bench_mesh_distance.py --authors-bin ../authors-build/bench/mesh_bench "
     "--rounds 5 --repeat 10 --threads 2":
@@ -161,23 +162,25 @@ NOT_RUN = {
         "(../shared/tools/authors-bench); the same script without --authors-bin is run",
     "python -m tracer render scenes/bunny_points.json --size 1920 1080 --shading normals "
     "--device cuda":
-        "it needs an NVIDIA GPU; tests/test_cuda_sim.py runs the same path under numba's CUDA "
-        "simulator, and the error without a GPU",
+        "it needs an NVIDIA GPU; tests/smoothdist/test_cuda_sim.py runs the same path under "
+        "numba's CUDA simulator, and the error without a GPU",
     'pip install -e ".[gpu]" # in the clone: numba-cuda; a CUDA driver on the machine':
         "it installs the optional GPU extra into the environment that runs the tests (whose "
-        "test extra already holds numba-cuda); tests/test_cuda_sim.py runs the CUDA path",
+        "test extra already holds numba-cuda); tests/smoothdist/test_cuda_sim.py runs the CUDA "
+        "path",
     "bash benchmarks/run_on_card.sh OUT machine gpu scaling":
         "it needs an NVIDIA GPU (nvidia-smi, numba-cuda on a card) and takes minutes; "
-        "tests/test_cuda_sim.py runs bench_gpu's measurement functions under the simulator, "
-        "and its refusal without a GPU",
+        "tests/smoothdist/test_cuda_sim.py runs bench_gpu's measurement functions under the "
+        "simulator, and its refusal without a GPU",
     "python -m tracer reproduce --only beta":
         "it is the full reproduction's beta study at the paper's 512² (minutes); "
-        "tests/test_reproduce.py::test_quick_run_end_to_end runs the same experiment at "
-        "--quick's size, and python -m tracer ablate-beta, which it runs, is run from this page",
+        "tests/tracer/reproduce/test_reproduce.py::test_quick_run_end_to_end runs the same "
+        "experiment at --quick's size, and python -m tracer ablate-beta, which it runs, is run "
+        "from this page",
     "python -m tracer reproduce --report-only --docs":
         "it rewrites the result blocks of the repository's own guides; "
-        "tests/test_reproduce.py checks the guides against the committed results with the "
-        "same code",
+        "tests/tracer/reproduce/test_reproduce.py checks the guides against the committed results "
+        "with the same code",
     "for s in scenes/*.json; do python -m tracer render $s -o renders/gallery/$(basename "
     "${s%.json}).png --size 512 512 --shading lit --samples 16 --adaptive --overwrite; done":
         "it starts one interpreter per scene (14); tests/test_render_golden.py runs the same "
@@ -187,15 +190,16 @@ NOT_RUN = {
         "with the test's tiny options appended (--grid 4) it is the command above, which runs",
     "python scenes/simulations/table3/make_meshes.py --check "
     "# the committed meshes, regenerated and compared":
-        "tests/test_sim_table3.py::test_make_meshes_is_reproducible runs this very command",
+        "tests/tracer/sim/test_sim_table3.py::test_make_meshes_is_reproducible runs this very "
+        "command",
     "bash .ci/run": "it runs this test suite (CI runs it)",
     'bash .ci/run -m "not slow"': "it runs the quick part of this test suite",
     "python -m pytest tests/test_render_golden.py --regen-baselines":
-        "it rewrites the repository's baselines; tests/test_pytest_plugin.py tests "
+        "it rewrites the repository's baselines; tests/tracer/test_pytest_plugin.py tests "
         "--regen-baselines in a throwaway project",
     ".venv/bin/python -m sphinx -W --keep-going docs docs/_build/html":
         "it builds the whole documentation site, gallery and notebook included (minutes); "
-        "tests/test_docs.py builds it in the suite",
+        "tests/repo/test_docs.py builds it in the suite",
 }
 
 MENTIONS = {"python -m tracer", "python -m tracer render"}
@@ -309,7 +313,7 @@ def concrete(cmd):
             tokens[i] = PLACEHOLDERS[tok]
         elif re.fullmatch(r"[A-Z][A-Z_]+(\.[a-z]+)?", tok):
             raise AssertionError(f"command {cmd!r} has a placeholder {tok!r}: add it to "
-                                 "PLACEHOLDERS in tests/test_readme.py")
+                                 "PLACEHOLDERS in tests/repo/test_readme.py")
     return " ".join(tokens)
 
 
@@ -421,7 +425,8 @@ def test_pages_have_commands():
     assert sum(k == "python" for _, k, _ in COMMANDS) >= 2
     for table in (NOT_RUN, FRESH, PENDING):
         for cmd in table:
-            assert cmd in cmds, f"{cmd!r} is listed in tests/test_readme.py, but no page shows it"
+            assert cmd in cmds, (f"{cmd!r} is listed in tests/repo/test_readme.py, but no page "
+                                 "shows it")
 
 
 def test_fragments_are_code_with_placeholders():

@@ -19,7 +19,7 @@ import re
 import tokenize
 from pathlib import Path
 
-TESTS = Path(__file__).resolve().parent
+TESTS = Path(__file__).resolve().parents[1]
 ROOT = TESTS.parent
 PAGE = ROOT / "docs" / "guide" / "test-tolerances.md"
 #: significant digits from which a typed number counts as a stored value
@@ -57,7 +57,7 @@ def stored_value_uses(source, results=()):
 def reviewed_files():
     """The test files in the page's review table (rows starting with a test file's path)."""
     text = PAGE.read_text(encoding="utf-8")
-    return set(re.findall(r"^\| `(tests/test_\w+\.py)` \|", text, flags=re.M))
+    return set(re.findall(r"^\| `(tests/(?:\w+/)*test_\w+\.py)` \|", text, flags=re.M))
 
 
 def test_the_detector_finds_each_kind_of_stored_value():
@@ -78,12 +78,13 @@ def test_every_test_with_stored_values_is_reviewed():
     results = stored_results()
     reviewed = reviewed_files()
     missing = {}
-    for path in sorted(TESTS.glob("test_*.py")):
+    for path in sorted(TESTS.rglob("test_*.py")):
         if path.name == Path(__file__).name:    # its examples above are examples
             continue
         reasons = stored_value_uses(path.read_text(encoding="utf-8"), results)
-        if reasons and f"tests/{path.name}" not in reviewed:
-            missing[path.name] = reasons[:3]
+        name = path.relative_to(ROOT).as_posix()
+        if reasons and name not in reviewed:
+            missing[name] = reasons[:3]
     assert not missing, (
         f"tests comparing with stored values without a row in {PAGE.relative_to(ROOT)}: "
         f"{missing}; review their tolerances against the policy and add the rows")

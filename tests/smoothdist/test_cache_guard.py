@@ -21,7 +21,7 @@ import pytest
 
 from smoothdist import _cache_guard as cache_guard
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 GUARD = ROOT / "smoothdist" / "_cache_guard.py"
 
 A_PY = "from numba import njit\n\n\n@njit(cache=True)\ndef constant():\n    return {value}\n"

@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 KINDS = ("points", "edges", "triangles")
 #: 24 x 24 renders of these scenes (the three bunnies, two objects by a second LogSumExp; and
 #: the two objects at rigid poses, ``two_objects_posed``)

@@ -15,7 +15,7 @@ import smoothdist
 from smoothdist import DataMesh, MeshRepairWarning, SmoothDistanceField
 from smoothdist._kernels import weights as W
 
-DATA = Path(__file__).resolve().parent / "data"
+DATA = Path(__file__).resolve().parents[1] / "data"
 TRI = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0.2]])
 TRI_F = np.array([[0, 1, 2], [1, 3, 2]])
 
@@ -401,7 +401,7 @@ def test_ascii_off_reader_matches_trimesh(tmp_path, text):
 
 def test_ascii_off_reader_on_the_bunny():
     from smoothdist import mesh as mesh_mod
-    path = os.fspath(Path(__file__).resolve().parents[1] / "scenes" / "data" / "bunny.off")
+    path = os.fspath(Path(__file__).resolve().parents[2] / "scenes" / "data" / "bunny.off")
     V, E, T, _ = mesh_mod.read_mesh_file(path)
     V2, E2, T2 = mesh_mod._read_with_trimesh(path, ".off")
     np.testing.assert_array_equal(V, V2)

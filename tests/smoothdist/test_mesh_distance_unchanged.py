@@ -32,7 +32,7 @@ import pytest
 
 from smoothdist import DataMesh, MeshDistance
 
-DATA = Path(__file__).resolve().parent / "data" / "whole_mesh_before_issue17.npz"
+DATA = Path(__file__).resolve().parents[1] / "data" / "whole_mesh_before_issue17.npz"
 #: distances (``d_hat``, per primitive, exact, brute force): of ``max(|ref|, L)``, ``L`` the
 #: largest data coordinate: a distance's error comes from its coordinates' last bits (and it
 #: is 0 at contact); worst seen on other (emulated) CPUs 2.2e-14, L 3
@@ -95,7 +95,7 @@ def _check(md, R, t, ref, key, primitives=True, approximate=False):
     shape; since the tree splits by the surface area heuristic (2026-11-25) they differ from
     the reference (by up to 8 % for one query primitive's gradient), so only the exact
     distance is compared then (the approximations are checked against beta 0 and brute force
-    in ``tests/test_whole_mesh.py``: bounds with and without Barnes-Hut, tol)."""
+    in ``tests/smoothdist/test_whole_mesh.py``: bounds with and without Barnes-Hut, tol)."""
     d, G = md(R, t)
     dc, Gc, C = md.with_couple(R, t)
     assert dc == d and np.array_equal(Gc, G)

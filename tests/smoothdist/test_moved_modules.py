@@ -23,7 +23,7 @@ import smoothdist
 from import_graph import graph
 from smoothdist._moved import MOVED
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def _fresh_import(old):

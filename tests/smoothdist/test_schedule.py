@@ -10,7 +10,7 @@ from smoothdist import DataMesh, SmoothDistanceField
 from smoothdist._kernels import query as q
 from smoothdist.schedule import TASKS, parallel_tasks
 
-BUNNY = Path(__file__).resolve().parents[1] / "scenes" / "data" / "bunny.off"
+BUNNY = Path(__file__).resolve().parents[2] / "scenes" / "data" / "bunny.off"
 
 
 def test_one_task_per_thread():

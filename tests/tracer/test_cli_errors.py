@@ -38,7 +38,7 @@ from tracer.outputs import atomic_write
 from tracer.rendering.renderer import RenderResult, render
 from tracer.scenes.scene import load_scene, scene_from_field
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 LIDAR = REPO / "scenes" / "lidar_autzen.json"
 IS_ROOT = hasattr(os, "geteuid") and os.geteuid() == 0
 

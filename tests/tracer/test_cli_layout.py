@@ -18,7 +18,7 @@ import pytest
 
 from tracer import cli
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 @pytest.mark.parametrize("name", sorted(cli.COMMANDS))

@@ -22,7 +22,7 @@ from tracer.rendering.renderer import render
 from tracer.runner import StudyProgress
 from tracer.scenes.scene import load_scene
 
-SCENES = Path(__file__).resolve().parents[1] / "scenes"
+SCENES = Path(__file__).resolve().parents[2] / "scenes"
 
 
 class Stream(io.StringIO):

@@ -20,7 +20,7 @@ from tracer.cli import main
 from tracer.outputs import CLIError
 from tracer.studies import beta, grid
 
-TESTS = Path(__file__).resolve().parent
+TESTS = Path(__file__).resolve().parents[1]
 OCTOPUS = TESTS / "data" / "octopus_low.obj"
 TREFOIL = TESTS / "data" / "trefoil.obj"
 BETA_ARGS = ["--size", "24", "--betas", "0.5,1", "--alpha", "40", "--alpha-u", "300", "-q"]
@@ -172,7 +172,8 @@ def test_dask_needs_no_default_client_and_keeps_the_users(cluster, monkeypatch):
     """``python -m tracer ... --scheduler ADDRESS`` runs in a process with no Dask client: the
     runner's own client is not made the default (a user's stays the default), so it must be
     used explicitly. Here the process's default clients are hidden, as in that process
-    (``No clients found`` before the fix; tests/test_runner_cluster.py runs the real thing)."""
+    (``No clients found`` before the fix; tests/tracer/test_runner_cluster.py runs the real
+    thing)."""
     import weakref
 
     import distributed

@@ -4,7 +4,7 @@ A ``dask scheduler`` and two ``dask worker`` processes are started as separate p
 loopback interface (their own process groups, torn down by the fixture's finalizers also when
 the test fails), and the study runs as ``python -m tracer ...`` in another process: that
 process has no Dask client of its own except the one the study makes (the in-process tests of
-``tests/test_runner.py`` run with a client already in the process, which hid a
+``tests/tracer/test_runner.py`` run with a client already in the process, which hid a
 ``No clients found`` error here).
 """
 
@@ -20,7 +20,7 @@ from pathlib import Path
 
 import pytest
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 MESHES = REPO / "scenes" / "data" / "meshes"
 #: bounded waits (seconds)
 START_TIMEOUT = 60.0

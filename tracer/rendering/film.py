@@ -93,7 +93,7 @@ SAMPLE_OMEGA = 2.0
 #: 14.6 s; 285 of 262,144 pixels changed, mean alpha change 1e-6. The price: a Newton step
 #: along a grazing ray may cross a thin part and land in the surface behind it (the sample
 #: then shows that surface; hit or miss is unchanged), 1 of 112 hits in
-#: ``tests/test_march.py::test_samples_equal_a_plain_march``
+#: ``tests/tracer/rendering/test_march.py::test_samples_equal_a_plain_march``
 SAMPLE_NEWTON_COS = 0.02
 
 _R2 = 1.32471795724474602596     # the plastic number: R2 sequence (Roberts 2018)

@@ -12,10 +12,10 @@ The cone pass runs first, one thread per ``TILE x TILE`` tile (``_cone_kernel``,
 depth with the same predicted first step as on the CPU. What differs from the CPU path: no
 common end depth (the CPU's ``cone_end``, marched once a ray of the tile has missed; it
 only shortens misses); the same hit test, steps, Newton steps and bisection otherwise. Under
-numba's CUDA simulator the images equal the CPU's bit for bit (``tests/test_cuda_sim.py``); on a
-card, fused multiply-add may move a grazing pixel (one of the 1080p bunnies' 6.2 million pixels
-in ``benchmarks/data/gpu_h100.json``). One sample per pixel; the ``"lit"`` shading,
-anti-aliasing and transparent backgrounds are CPU only.
+numba's CUDA simulator the images equal the CPU's bit for bit
+(``tests/smoothdist/test_cuda_sim.py``); on a card, fused multiply-add may move a grazing pixel
+(one of the 1080p bunnies' 6.2 million pixels in ``benchmarks/data/gpu_h100.json``). One sample
+per pixel; the ``"lit"`` shading, anti-aliasing and transparent backgrounds are CPU only.
 """
 
 import math

@@ -16,7 +16,7 @@ from smoothdist._kernels import query
 from smoothdist._kernels.exact_query import (MAX_LEAF, build_exact_tree, exact_stack_size,
                                              exact_tree_batch, exact_tree_point, primitive_d2)
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[3]
 ZOO = ("point_cloud", "circle", "segment_star", "icosphere", "cube", "mixed_mesh",
        "nonmanifold_mesh")
 

@@ -36,7 +36,7 @@ from smoothdist.kernels import new_stack
 from smoothdist._kernels.query import smooth_distance_point_tol
 from test_query_fuzz import build, meshes, queries
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[3]
 BUNNY = ROOT / "scenes" / "data" / "bunny.off"
 #: float64 round-off allowance on d_hat (relative to the scene's size)
 ROUND = 1e-12

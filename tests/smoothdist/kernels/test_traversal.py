@@ -195,7 +195,7 @@ def test_a_kind_in_another_module_leaves_no_cache_entry_behind(tmp_path):
     import sys
     from pathlib import Path
 
-    root = str(Path(__file__).resolve().parents[1])
+    root = str(Path(__file__).resolve().parents[3])
     (tmp_path / "mine").mkdir()
     (tmp_path / "mine" / "user_kind.py").write_text(KIND.format(tag="A"))
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"),

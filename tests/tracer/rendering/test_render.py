@@ -22,7 +22,7 @@ from tracer.rendering.camera import look_at, primary_rays, project
 from tracer.rendering.renderer import RenderError, render
 from tracer.scenes.scene import Scene, SceneObject, load_scene, scene_from_field
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[3]
 SCENES = ROOT / "scenes"
 
 

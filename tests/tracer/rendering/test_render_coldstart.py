@@ -30,7 +30,7 @@ from tracer.rendering.renderer import (RayArgs, TraceOptions, camera_of, kernel_
                            trace_tiles)
 from tracer.scenes.scene import load_scene, scene_from_field
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[3]
 SCENES = ROOT / "scenes"
 BUNNY = SCENES / "data" / "bunny.off"
 SIZE = {"width": 24, "height": 20}

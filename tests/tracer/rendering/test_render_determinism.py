@@ -16,7 +16,7 @@ from smoothdist import SmoothDistanceField
 from tracer.rendering.renderer import render
 from tracer.scenes.scene import load_scene, scene_from_field
 
-SCENES = Path(__file__).resolve().parents[1] / "scenes"
+SCENES = Path(__file__).resolve().parents[3] / "scenes"
 SIZE = {"width": 40, "height": 32}
 #: shipped scenes covering points, edges, triangles, mixed, several objects and exact mode
 SCENE_NAMES = ["bunny_points", "trefoil", "torus", "mixed", "two_objects", "capillary_exact"]

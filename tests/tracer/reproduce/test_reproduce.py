@@ -15,7 +15,7 @@ from tracer.reproduce import report
 from tracer.reproduce.claims import CLAIMS, evaluate
 from tracer.reproduce.experiments import SETTINGS, TABLE3_PAPER
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[3]
 RESULTS = REPO / "renders" / "reproduction" / "full"
 PAGE = REPO / "docs" / "reproduction.md"
 SHOWN = "renders/reproduction/full"

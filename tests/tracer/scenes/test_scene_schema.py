@@ -25,7 +25,7 @@ from tracer.scenes import scene as scene_mod
 from tracer.scenes.scene_schema import (SCHEMA_PATH, _resolve, load_schema, markdown, sections,
                                         validate)
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[3]
 
 #: keys in the schema that another change adds to the loader (issue 10: ``tol``,
 #: tolerance-controlled pruning). Remove an entry once the loader accepts the key; until then

@@ -18,7 +18,7 @@ from tracer.sim import run
 from tracer.sim.authors_format import EDGE_MASS_SCALE
 from tracer.sim.simfile import SimFileError, auto_camera, load_simulation
 
-DATA = os.path.join(os.path.dirname(__file__), "data", "authors_sims")
+DATA = os.path.join(os.path.dirname(__file__), "..", "..", "data", "authors_sims")
 ROT_Z = [[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]       # +90 degrees about z
 CUBE_V = [[x, y, z] for x in (-0.5, 0.5) for y in (-0.5, 0.5) for z in (-0.5, 0.5)]
 CUBE_F = [[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1], [2, 3, 7],

@@ -262,7 +262,7 @@ def test_shipped_ball_on_plane_draws_a_closed_ball():
 
     from smoothdist import SmoothDistanceField
 
-    root = Path(__file__).resolve().parents[1]
+    root = Path(__file__).resolve().parents[3]
     sim = load_simulation(str(root / "scenes" / "simulations" / "ball_on_plane.json"))
     ball = next(b for b in sim.bodies if b.name == "ball")
     field = SmoothDistanceField(ball.mesh)

@@ -262,7 +262,7 @@ def test_bunny_on_plane_never_interpenetrates():
     """The shipped low-poly bunny (triangles, MeshDistance) dropped on a plane: exact > 0."""
     import os
 
-    path = os.path.join(os.path.dirname(__file__), "..", "scenes", "data", "meshes",
+    path = os.path.join(os.path.dirname(__file__), "..", "..", "..", "scenes", "data", "meshes",
                         "bunny_low.obj")
     bunny = DataMesh.load(path, kind="triangles")
     bunny = DataMesh(bunny.V * 4, bunny.triangles)

@@ -17,7 +17,7 @@ import pytest
 from tracer.sim import primitives, run
 from tracer.sim.simfile import load_simulation
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", ".."))
 TABLE3 = os.path.join(ROOT, "scenes", "simulations", "table3")
 
 #: per file: dt, and per body (name, what the distance sees, primitive count, alpha, static);

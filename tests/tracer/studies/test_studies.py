@@ -16,7 +16,7 @@ from tracer import runner
 from tracer.studies import alpha, common, grid
 from tracer.cli import main
 
-TESTS = Path(__file__).resolve().parent
+TESTS = Path(__file__).resolve().parents[2]
 OCTOPUS = TESTS / "data" / "octopus_low.obj"
 BETA_ARGS = ["--size", "32", "--betas", "0,0.5,1", "--alpha", "40", "--alpha-u", "300", "-q"]
 BETA_COLUMNS = ["type", "beta", "seconds", "hits", "mean_steps", "mean_leaves", "error_rel_diag",
