@@ -15,6 +15,8 @@ The parts are rooms (docs/design-notes.md has the map): the base modules at the 
 (:mod:`tracer.cli`), and :mod:`tracer.sim`, :mod:`tracer.studies` and ``tracer.reproduce``.
 """
 
+from tracer import _moved  # noqa: F401  (the old paths' import hook)
+
 _LAZY = {
     "render_mesh": "tracer.scenes.from_mesh",
     "mesh_scene": "tracer.scenes.from_mesh",

@@ -14,11 +14,8 @@ import pytest
 
 import smoothdist
 import tracer
-from smoothdist._moved import MOVED
 
 SKIP = {"tracer.__main__"}   # running it is running the command line
-# the kernels' old paths: importing them warns (tests/smoothdist/test_moved_modules.py checks them)
-SKIP |= {f"smoothdist.{name}" for name in MOVED}
 
 
 def _modules():
