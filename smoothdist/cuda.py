@@ -71,13 +71,14 @@ def cuda_module():
     _numpy_compat()
     if not simulated():
         try:
+            # numba-cuda (gpu extra): loaded on use
             import numba_cuda  # noqa: F401  (the maintained CUDA target, not numba's own)
         except ImportError:
             raise CudaUnavailable("device 'cuda' needs numba-cuda: pip install numba-cuda "
                                   "(or the gpu extra in the clone: pip install -e '.[gpu]')"
                                   ) from None
     try:
-        from numba import cuda
+        from numba import cuda  # numba-cuda (gpu extra): loaded on use
         ok = cuda.is_available()
     except Exception as exc:  # a driver or library problem, in numba's words
         raise CudaUnavailable(f"device 'cuda' is not usable: {str(exc).strip().splitlines()[0]}"

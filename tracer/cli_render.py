@@ -1,15 +1,22 @@
 """``tracer render``: sphere-trace a scene file to a PNG, with optional AOVs."""
 
 import json
+import math
 import os
 import sys
 
 import numpy as np
 
-from smoothdist.mesh import MESH_EXTENSIONS
-from tracer.rendering.camera import UP_AXES, VIEWS
-from tracer.scenes.from_mesh import KINDS
+from smoothdist.cuda import CudaUnavailable, cuda_module
+from smoothdist.mesh import MESH_EXTENSIONS, needs_trimesh
+from tracer.image import false_color, save_npy, save_png
 from tracer.outputs import CLIError, atomic_write, check_outputs, make_parents
+from tracer.rendering.camera import UP_AXES, VIEWS, frame_points, look_at
+from tracer.rendering.film import MAX_SAMPLES
+from tracer.rendering.renderer import ProgressBar, render, scene_arrays
+from tracer.scenes.from_mesh import (KINDS, describe_parameters, mesh_scene, resolve_up,
+                                      scene_dict)
+from tracer.scenes.scene import load_scene, mesh_paths, read_scene_json
 from tracer.scenes.settings import default_text, defaults
 
 HELP = "sphere-trace a scene file to a PNG (and AOVs)"
@@ -151,8 +158,6 @@ def check_options(args):
     (so ``--size 0 0`` is reported as such, not as an existing output). One-line
     :class:`~tracer.errors.CLIError` naming the flag; the scene and mesh loaders check them
     again."""
-    import math
-
     if args.size:
         for what, v in zip(("width", "height"), args.size):
             if v <= 0:
@@ -165,7 +170,6 @@ def check_options(args):
             raise CLIError(f"{flag} must be finite, got {v}")
         if v < low or (v == low and not closed):
             raise CLIError(f"{flag} must be {'>=' if closed else '>'} {low:g}, got {v}")
-    from tracer.rendering.film import MAX_SAMPLES
 
     if args.samples is not None and args.samples > MAX_SAMPLES:
         raise CLIError(f"--samples must be at most {MAX_SAMPLES}, got {args.samples}")
@@ -205,8 +209,6 @@ def needs(args):
     """The optional packages this render imports (:mod:`tracer.cli` checks them first):
     matplotlib for ``--steps-png`` / ``--leaves-png``, Pillow for the PNG, trimesh for a mesh
     file (given, or named by the scene file) that our own readers do not read."""
-    from smoothdist.mesh import needs_trimesh
-    from tracer.scenes.scene import mesh_paths
 
     out = ["matplotlib"] if args.steps_png or args.leaves_png else []
     out.append("PIL")
@@ -219,15 +221,10 @@ def needs(args):
 
 def run(args):
     """Render; returns the exit status."""
-    from tracer.image import false_color, save_npy, save_png
-    from tracer.rendering.renderer import ProgressBar, render
-    from tracer.scenes.scene import load_scene
 
     source = input_kind(args.scene)
     check_options(args)
     if args.device == "cuda":
-        from smoothdist.cuda import CudaUnavailable, cuda_module
-
         try:
             cuda_module()
         except CudaUnavailable as exc:
@@ -300,14 +297,10 @@ def run(args):
                 json.dump(stats, fh, indent=2)
         written.append(args.stats)
     if not args.quiet:
-        from tracer.scenes.from_mesh import describe_parameters
-
         s = stats
         prims = sum(o["primitives"] for o in s["objects"])
         view = ""
         if source == "mesh" and not args.camera:
-            from tracer.scenes.from_mesh import resolve_up
-
             why = scene.extra.get("orientation")
             if why and not why.endswith("(the file's convention)"):
                 view = f", {why}"
@@ -355,8 +348,6 @@ def _mesh_scene(args):
 
 
 def _build_mesh_scene(args):
-    from tracer.scenes.from_mesh import mesh_scene
-
     d = defaults("mesh")  # the options left out: as render_mesh's
 
     def given(key):
@@ -379,8 +370,6 @@ def _build_mesh_scene(args):
 def _replace_camera(scene, args):
     """``--view`` / ``--camera`` for a scene file: a new camera (for ``--view``, framing every
     object's vertices grown by the tracer's conservative margin, which contains the surface)."""
-    from tracer.rendering.camera import frame_points, look_at
-    from tracer.rendering.renderer import scene_arrays
 
     if args.camera:
         origin, dest, up = _camera_arg(args)
@@ -395,8 +384,6 @@ def _replace_camera(scene, args):
 
 def _save_scene(args, scene, source):
     """Write ``--save-scene``: a scene file that renders the same picture."""
-    from tracer.scenes.from_mesh import scene_dict
-    from tracer.scenes.scene import read_scene_json
 
     if source == "mesh":
         data = scene_dict(scene, args.save_scene, [args.scene])

@@ -45,7 +45,7 @@ import numpy as np
 from smoothdist.schedule import parallel_tasks
 from tracer.rendering import lighting as _lighting
 from tracer.rendering import march
-from tracer.rendering.camera import CAM_HEIGHT, CAM_WIDTH, box_corners, primary_rays
+from tracer.rendering.camera import CAM_HEIGHT, CAM_WIDTH, _scales, box_corners, primary_rays
 from tracer.rendering.frame import MAX_SAMPLES  # noqa: F401  (the film's limit; defined in frame)
 from tracer.rendering.frame import (LightArgs, LightBuffers, MarchArgs, SampleBuffers,
                                     TraceOptions)
@@ -783,8 +783,6 @@ def form_image(scene, camera, arrays, kargs, options, centre, samples=1, adaptiv
 def _dir(cam, rows, cols):
     """Unit ray directions through fractional image positions (vectorised
     :func:`tracer.rendering.camera.ray_direction`)."""
-    from tracer.rendering.camera import _scales
-
     width, height = cam[CAM_WIDTH], cam[CAM_HEIGHT]
     sx, sy = _scales(width, height)
     dx = (cols / width - 0.5) * sx

@@ -27,8 +27,11 @@ import numpy as np
 
 from smoothdist import cuda as sdcuda
 from smoothdist.kernels import NJIT
+from tracer.errors import RenderError
 from tracer.rendering import march
 from tracer.rendering.camera import CAM_HEIGHT, CAM_WIDTH, ray_direction
+from tracer.rendering.frame import (RenderResult, _progress_callback, _samples, camera_of,
+                                    distance_at_camera, scene_arrays, shade)
 
 __all__ = ["render_cuda", "normal_colour", "BLOCK"]
 
@@ -190,8 +193,6 @@ def prepare(scene, transforms=None, relax=None, omega=None, newton=None):
     """Everything a launch needs, on the device: ``(camera, args, shape)`` with ``args`` the
     kernel's leading arguments (up to ``newton``) and ``shape = (H, W)``. Checks the camera
     as ``render`` does."""
-    from tracer.errors import RenderError
-    from tracer.rendering.frame import camera_of, distance_at_camera, scene_arrays
 
     cu = sdcuda.cuda_module()
     kernel()
@@ -261,8 +262,6 @@ def render_cuda(scene, *, progress=None, transforms=None, relax=None, omega=None
     """:func:`tracer.render` on the GPU (its arguments; ``band_rows`` does not apply). Returns a
     :class:`tracer.rendering.frame.RenderResult`; ``seconds`` is the time of the launch and the
     copies back."""
-    from tracer.rendering.frame import RenderResult, _progress_callback, _samples, shade
-
     samples = _samples(scene.samples if samples is None else samples)
     # no card is the first thing to say (issue 49): an option the card would refuse matters
     # only where there is a card
