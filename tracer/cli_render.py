@@ -14,8 +14,8 @@ from tracer.outputs import CLIError, atomic_write, check_outputs, make_parents
 from tracer.rendering.camera import UP_AXES, VIEWS, frame_points, look_at
 from tracer.rendering.film import MAX_SAMPLES
 from tracer.rendering.renderer import ProgressBar, render, scene_arrays
-from tracer.scenes.from_mesh import (KINDS, describe_parameters, mesh_scene, resolve_up,
-                                      scene_dict)
+from tracer.scenes import from_mesh
+from tracer.scenes.from_mesh import KINDS, describe_parameters, resolve_up, scene_dict
 from tracer.scenes.scene import load_scene, mesh_paths, read_scene_json
 from tracer.scenes.settings import default_text, defaults
 
@@ -355,16 +355,18 @@ def _build_mesh_scene(args):
         return d[key] if value is None else value
 
     width, height = args.size or (d["width"], d["height"])
-    return mesh_scene(args.scene, kind=args.kind, alpha=given("alpha"), alpha_u=given("alpha_u"),
-                      beta=given("beta"), size=(width, height), view=given("view"),
-                      up=given("up"), camera=_camera_arg(args) if args.camera else None,
-                      mode=given("mode"), offset=given("offset"), eps=given("eps"),
-                      shading=given("shading"), tol=given("tol"), newton=given("newton"),
-                      samples=given("samples"), adaptive=bool(given("adaptive")),
-                      transparent=bool(given("transparent")),
-                      lighting={k: v for k, v in _lighting_args(args).items() if v is not None},
-                      color=given("color"),
-                      background=tuple(given("background")))
+    return from_mesh.mesh_scene(args.scene, kind=args.kind, alpha=given("alpha"),
+                                alpha_u=given("alpha_u"),
+                                beta=given("beta"), size=(width, height), view=given("view"),
+                                up=given("up"), camera=_camera_arg(args) if args.camera else None,
+                                mode=given("mode"), offset=given("offset"), eps=given("eps"),
+                                shading=given("shading"), tol=given("tol"), newton=given("newton"),
+                                samples=given("samples"), adaptive=bool(given("adaptive")),
+                                transparent=bool(given("transparent")),
+                                lighting={k: v for k, v in _lighting_args(args).items()
+                                          if v is not None},
+                                color=given("color"),
+                                background=tuple(given("background")))
 
 
 def _replace_camera(scene, args):

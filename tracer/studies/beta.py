@@ -47,7 +47,7 @@ import numpy as np
 from tracer import runner
 from tracer.outputs import (CLIError, check_size, float_list, output_folder, positive,
                             write_bytes, write_json)
-from tracer.rendering.renderer import render
+from tracer.rendering import renderer
 from tracer.runner import duration
 from tracer.scenes.scene import scene_from_field
 from tracer.studies.common import (TYPES, add_common, add_view_arguments, beta_tag,
@@ -247,7 +247,7 @@ def _scene(field, task, size=None):
 
 
 def _render(scene, task, progress=None):
-    return render(scene, progress=progress)
+    return renderer.render(scene, progress=progress)
 
 
 def render_task(task, progress=None):
