@@ -4,17 +4,18 @@ percentage) has a results file behind it (issue 48).
 A line that shows such a figure passes when it lies
 
 - in a generated block (``<!-- reproduce:NAME ... -->`` ... ``<!-- /reproduce:NAME -->``),
-  which ``tests/test_reproduce.py`` compares with the results files it is written from;
+  which ``tests/tracer/reproduce/test_reproduce.py`` compares with the results files it is
+  written from;
 - in a table that ``benchmarks/tables.py`` makes from a results file (the line as the table
   function prints it; ``tests/test_docs_tables.py`` checks that the page holds the table);
 - in a fenced code block (commands and their printouts, not claims);
-- or on the ledger, ``tests/docs_figures_ledger.tsv`` (``file<TAB>reason<TAB>line``), which
+- or on the ledger, ``tests/repo/docs_figures_ledger.tsv`` (``file<TAB>reason<TAB>line``), which
   says why the line has no results file: a line checked sentence by sentence by a named test,
   or one that predates the rule and is still to be tied.
 
 So a figure typed into a new or an edited line fails here until it is generated from a results
 file, or ledgered with a reason; a ledger line whose text has left its page fails too, so the
-ledger only shrinks. ``python tests/test_docs_figures.py`` prints the lines that are neither
+ledger only shrinks. ``python tests/repo/test_docs_figures.py`` prints the lines that are neither
 (paste them into the ledger only with a true reason).
 """
 
@@ -23,8 +24,8 @@ import re
 import sys
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-LEDGER = ROOT / "tests" / "docs_figures_ledger.tsv"
+ROOT = Path(__file__).resolve().parents[2]
+LEDGER = ROOT / "tests" / "repo" / "docs_figures_ledger.tsv"
 DATA = ROOT / "benchmarks" / "data"
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
@@ -90,7 +91,7 @@ def untied(read=lambda f: (ROOT / f).read_text(encoding="utf-8")):
 def test_every_figure_has_a_results_file_or_a_reason():
     missing = untied()
     assert not missing, ("figures without a results file (generate them from one, or ledger "
-                         "them with a reason in tests/docs_figures_ledger.tsv):\n"
+                         "them with a reason in tests/repo/docs_figures_ledger.tsv):\n"
                          + "\n".join(f"{f}: {ln}" for f, ln in missing))
 
 
