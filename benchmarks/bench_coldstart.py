@@ -25,7 +25,7 @@ run (other jobs slow a compile down as much as a render), the commit and whether
 dirty. ``--source DIR`` measures another checkout (e.g. a ``git worktree`` of an older
 commit) with this script, for a before/after table. The README's first-render figures and the
 performance guide's cold-start table are read from these files (``tests/test_docs_tables.py``,
-``tests/test_render_coldstart.py``).
+``tests/tracer/rendering/test_render_coldstart.py``).
 
 Usage::
 

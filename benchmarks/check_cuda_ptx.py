@@ -1,7 +1,7 @@
 """Compile every CUDA kernel of the GPU path to PTX, without a GPU.
 
-numba's CUDA simulator (``tests/test_cuda_sim.py``) runs the kernels' launch code but calls the
-shared ``numba.njit`` functions compiled for the CPU, so it cannot show that numba-cuda
+numba's CUDA simulator (``tests/smoothdist/test_cuda_sim.py``) runs the kernels' launch code
+but calls the shared ``numba.njit`` functions compiled for the CPU, so it cannot show that numba-cuda
 compiles them for a GPU. This script does: it types and lowers ``smoothdist.cuda``'s query
 kernels and ``tracer.rendering.gpu_render``'s cone, render, samples and light kernels for a
 compute capability (default 9.0,

@@ -6,7 +6,7 @@ Build (from the repository root, with the ``docs`` extra installed)::
 
 ``-W`` turns every warning into an error: a broken cross-reference in a docstring or page
 (``nitpicky``), a docstring numpydoc cannot parse, or a gallery example that raises fails the
-build (``tests/test_docs.py`` runs it in the suite).
+build (``tests/repo/test_docs.py`` runs it in the suite).
 """
 
 import os

@@ -16,6 +16,8 @@ from smoothdist._cache_guard import guard_once as _guard_kernel_cache
 # before any kernel module is imported: drop numba caches compiled from other sources
 _guard_kernel_cache()
 
+from smoothdist import _moved  # noqa: E402,F401  (the old paths' import hook)
+
 from smoothdist.field import (ExactDistanceResult, QueryStats, SmoothDistanceField,
                               SmoothDistanceResult)
 from smoothdist.mesh import DataMesh, MeshRepairWarning, as_data_mesh

@@ -24,6 +24,9 @@ import hashlib
 import os
 import sys
 
+import numba
+from numba.core import config
+
 ENV_VAR = "SMOOTHDIST_CACHE_GUARD"
 #: the digest file written into each cache directory
 STAMP_NAME = "smoothdist-sources.sha1"
@@ -52,8 +55,6 @@ def source_files(package_dirs):
 
 def fingerprint(files):
     """Hex sha1 of the numba version and each file's path (its last two parts) and bytes."""
-    import numba
-
     h = hashlib.sha1(f"numba {numba.__version__}; guard 1\n".encode())
     for path in files:
         with open(path, "rb") as f:
@@ -67,6 +68,7 @@ def fingerprint(files):
 def _cache_subpath(source_dir):
     """numba's per-directory folder name under a cache root: ``<dir name>_<sha1 of the path>``."""
     try:
+        # numba internals, absent in some versions: the fallback below
         from numba.core.caching import _CacheLocator
 
         return _CacheLocator.get_suitable_cache_subpath(os.path.join(source_dir, "x.py"))
@@ -78,14 +80,13 @@ def _cache_subpath(source_dir):
 def cache_dirs(source_dir):
     """numba's candidate cache directories for kernels defined in ``source_dir``, in the order
     numba tries them (it uses the first it can create and write to)."""
-    from numba.core import config
-
     subpath = _cache_subpath(source_dir)
     dirs = []
     if config.CACHE_DIR:
         dirs.append(os.path.join(config.CACHE_DIR, subpath))
     dirs.append(os.path.join(source_dir, "__pycache__"))
     try:
+        # numba internals, absent in some versions: the fallback below
         from numba.misc.appdirs import AppDirs
 
         dirs.append(os.path.join(AppDirs(appname="numba", appauthor=False).user_cache_dir,

@@ -1,7 +1,7 @@
 """Numba compilation policy, in one place.
 
 Every kernel in this package is decorated through these flags; nothing else in the code base
-may hard-code ``fastmath=``, ``parallel=`` or ``error_model=`` (``tests/test_config_policy.py``
+may hard-code ``fastmath=``, ``parallel=`` or ``error_model=`` (``tests/repo/test_config_policy.py``
 greps for it).
 
 * ``FASTMATH`` is off: LogSumExp relies on IEEE ``exp`` underflow and on ``inf`` comparisons,

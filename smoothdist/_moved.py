@@ -1,36 +1,58 @@
-"""The old import paths of the kernel modules that moved into ``smoothdist._kernels``.
+"""The old import paths of the modules that moved, kept for one release (the deprecation
+policy: ``docs/guide/deprecation.md``).
 
-Each old module (``smoothdist/query.py``, ...) is three lines: it calls :func:`forward`, which
-warns once (a module is imported once per process) with a ``DeprecationWarning`` pointing at the
-importing line, and returns the module ``__getattr__`` and ``__dir__`` that hand out the new
-module's names, ``_private`` ones included. The old paths go in the release after 0.1.
+:data:`MOVED` maps each old path to the module now there. An import hook
+(:class:`MovedModules`, installed by ``import smoothdist``) answers an import of an old path
+with the new module itself, after one ``DeprecationWarning`` at the importing line: ``import
+old``, ``from old import name`` (``_private`` names too) and ``from old import *`` work as
+before, and ``old is new``. There are no files at the old paths, so nothing can import them by
+accident, and the table is the whole list. ``tracer/_moved.py`` is the same hook for tracer's
+paths (a copy: tracer uses only smoothdist's public modules; ``tests/repo/test_moved_modules.py``
+checks both alike).
 """
 
 import importlib
+import importlib.abc
+import importlib.util
+import sys
 import warnings
 
-#: the modules that moved, ``smoothdist.<name>`` -> ``smoothdist._kernels.<name>``
-MOVED = ("closest_point", "closest_pair", "box_distance", "box_moment", "weights", "spacing",
-         "bvh", "query", "exact_query", "mesh_query", "mesh_moment")
+#: old path -> new path; an old path goes in the release after the one that moved it
+MOVED = {f"smoothdist.{name}": f"smoothdist._kernels.{name}" for name in (
+    "closest_point", "closest_pair", "box_distance", "box_moment", "weights", "spacing", "bvh",
+    "query", "exact_query", "mesh_query", "mesh_moment")}
+#: where a user of an old path finds the public names
+PUBLIC = "the public names live in smoothdist and smoothdist.kernels"
 
 
-def forward(old, new):
-    """Warn that module ``old`` is now ``new``; return ``(__getattr__, __dir__)`` for ``old``."""
-    warnings.warn(f"{old} is deprecated: the kernels moved to the private {new}; the public names "
-                  "live in smoothdist and smoothdist.kernels (this path goes in the next release)",
-                  DeprecationWarning, stacklevel=3)
-    module = importlib.import_module(new)
+class MovedModules(importlib.abc.MetaPathFinder, importlib.abc.Loader):
+    """Import hook: an old path of :data:`MOVED` imports as its new module, with a warning."""
 
-    def __getattr__(name):
-        if name == "__all__":  # ``from old import *``: the new module's public names
-            return getattr(module, "__all__", [n for n in vars(module) if n[:1] != "_"])
-        try:
-            return getattr(module, name)
-        except AttributeError:
-            msg = f"module {old!r} (now {new!r}) has no attribute {name!r}"
-            raise AttributeError(msg) from None
+    def __init__(self, moved, public):
+        self.moved, self.public = moved, public
 
-    def __dir__():
-        return dir(module)
+    def find_spec(self, fullname, path=None, target=None):
+        if fullname not in self.moved:
+            return None
+        return importlib.util.spec_from_loader(fullname, self)
 
-    return __getattr__, __dir__
+    def create_module(self, spec):
+        return None                     # a placeholder module, replaced in exec_module
+
+    def exec_module(self, module):
+        old = module.__name__
+        # stacklevel 2 is the import statement: the warnings module skips importlib's frames
+        warnings.warn(f"{old} is deprecated: it moved to {self.moved[old]}; {self.public} (the "
+                      "old path goes in the next release)", DeprecationWarning, stacklevel=2)
+        # the import returns what sys.modules holds at the end: the new module itself
+        sys.modules[old] = importlib.import_module(self.moved[old])
+
+
+def install(moved, public):
+    """Put a :class:`MovedModules` hook for ``moved`` first in ``sys.meta_path`` (once): the
+    old paths are its alone, whatever else an installation puts on the path."""
+    if not any(isinstance(f, MovedModules) and f.moved is moved for f in sys.meta_path):
+        sys.meta_path.insert(0, MovedModules(moved, public))
+
+
+install(MOVED, PUBLIC)

@@ -13,7 +13,7 @@ at half the float32 rate).
 
 Install: ``pip install -e ".[gpu]"`` in the clone (numba-cuda). Without a GPU, numba's CUDA
 simulator (``NUMBA_ENABLE_CUDASIM=1`` set before ``numba.cuda`` is first imported) runs the
-same kernels on the CPU, slowly; the test suite uses it (``tests/test_cuda_sim.py``).
+same kernels on the CPU, slowly; the test suite uses it (``tests/smoothdist/test_cuda_sim.py``).
 
 Use it through ``SmoothDistanceField.smooth_distance(..., device="cuda")`` and
 ``exact_distance(..., device="cuda")``, or ``tracer.render(scene, device="cuda")``
@@ -71,13 +71,14 @@ def cuda_module():
     _numpy_compat()
     if not simulated():
         try:
+            # numba-cuda (gpu extra): loaded on use
             import numba_cuda  # noqa: F401  (the maintained CUDA target, not numba's own)
         except ImportError:
             raise CudaUnavailable("device 'cuda' needs numba-cuda: pip install numba-cuda "
                                   "(or the gpu extra in the clone: pip install -e '.[gpu]')"
                                   ) from None
     try:
-        from numba import cuda
+        from numba import cuda  # numba-cuda (gpu extra): loaded on use
         ok = cuda.is_available()
     except Exception as exc:  # a driver or library problem, in numba's words
         raise CudaUnavailable(f"device 'cuda' is not usable: {str(exc).strip().splitlines()[0]}"

@@ -28,8 +28,9 @@ paper's box test accepts a node on a lower bound of that distance (one axis's ga
 such proven relation to ``d``, so :func:`mesh_alphas` refuses ``beta > 0`` with it.
 
 The bound is attained: ``N`` data points at one spot read ``d_hat = d - log N / alpha`` at
-``beta = 0`` (``tests/test_error_budget.py`` checks both sides). Real meshes sit well inside it
-(a query sees a few primitives near, not all ``N``), so the chosen alpha is safe, not tight.
+``beta = 0`` (``tests/smoothdist/test_error_budget.py`` checks both sides). Real meshes sit well
+inside it (a query sees a few primitives near, not all ``N``), so the chosen alpha is safe, not
+tight.
 """
 
 import math

@@ -1,16 +1,19 @@
 """The build-once object: a data mesh, its BVH, and batch queries against it."""
 
+import hashlib
 import math
 from typing import NamedTuple
 
 import numpy as np
 
-from smoothdist._kernels import query as _q
+from smoothdist import cuda
 from smoothdist._cast import as_points, non_negative, positive
+from smoothdist._kernels import query as _q
 from smoothdist._kernels.bvh import build_tree
 from smoothdist._kernels.exact_query import GROUP, build_exact_tree, exact_tree_batch
+from smoothdist._kernels.spacing import gap_probes, local_smooth_distance
 from smoothdist.error_budget import Within, point_alpha, within
-from smoothdist.mesh import as_data_mesh
+from smoothdist.mesh import as_data_mesh, unique_edges
 from smoothdist.query_order import coherent_order, restore, scattered
 from smoothdist.schedule import parallel_tasks, run_tasks
 
@@ -90,8 +93,6 @@ _AUTO_ALPHA_CACHE = {}
 def _data_key(field):
     """A key for what ``auto_alpha`` depends on: the vertex and primitive arrays (a BLAKE2
     digest of their bytes, shapes and dtypes) and the tree's leaf size."""
-    import hashlib
-
     m = field.mesh
     h = hashlib.blake2b(digest_size=20)
     for a in (m.V, m.points, m.edges, m.triangles):
@@ -319,8 +320,6 @@ class SmoothDistanceField:
         of ``1 / median spacing``: its widest gaps are 2-3 median spacings across, where an
         even sample's are 1.5-2. Meshes without points: ``alpha``.
         """
-        from smoothdist._kernels.spacing import gap_probes, local_smooth_distance
-
         pts = self.mesh.V[self.mesh.points]
         if pts.shape[0] < 3:
             return float(alpha)
@@ -356,8 +355,6 @@ class SmoothDistanceField:
     def mean_edge_length(self):
         """Mean length of the distinct edges of the edges and triangles (None for a point
         cloud)."""
-        from smoothdist.mesh import unique_edges
-
         m = self.mesh
         E = np.concatenate([m.edges, unique_edges(m.triangles)])
         if E.shape[0] == 0:
@@ -618,7 +615,6 @@ class SmoothDistanceField:
         Q = as_points(Q, "Q")
         wgs = 1.0 / alpha if gradient == "exact" else 1.0 / (alpha * alpha)
         if _check_device(device, method) == "cuda":
-            from smoothdist import cuda
 
             d, g, nodes, leaves = cuda.smooth_distance(self.tree, Q, alpha, beta, S, wgs, tol,
                                                        self._device_tree())
@@ -665,7 +661,6 @@ class SmoothDistanceField:
         """
         Q = as_points(Q, "Q")
         if _check_device(device) == "cuda":
-            from smoothdist import cuda
 
             d, g, prim, nodes, leaves = cuda.exact_distance(self.tree, Q, self._device_tree())
             out = ExactDistanceResult(d, g, prim) if return_closest else SmoothDistanceResult(d, g)
@@ -708,7 +703,6 @@ class SmoothDistanceField:
     def _device_tree(self):
         """:attr:`tree` on the GPU (:func:`smoothdist.cuda.device_tree`), copied once."""
         if "_cuda_tree" not in self.__dict__:
-            from smoothdist import cuda
 
             self.__dict__["_cuda_tree"] = cuda.device_tree(self.tree)
         return self.__dict__["_cuda_tree"]

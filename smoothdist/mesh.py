@@ -10,14 +10,15 @@ pyvista objects (converted to arrays by :mod:`smoothdist.convert`, which imports
 here).
 """
 
+import logging
 import os
 import re
 import warnings
 
 import numpy as np
 
-from smoothdist._kernels import weights as _weights
 from smoothdist._cast import COORD_LIMIT, as_indices, as_points, non_finite_rows
+from smoothdist._kernels import weights as _weights
 from smoothdist.convert import foreign_arrays, is_foreign_geometry, trimesh_arrays
 
 KIND_POINT, KIND_EDGE, KIND_TRIANGLE = 0, 1, 2
@@ -565,10 +566,8 @@ def _is_number(text):
 
 
 def _read_with_trimesh(path, ext):
-    import logging
-
     try:
-        import trimesh
+        import trimesh  # trimesh (tracer extra): loaded on use
     except ImportError:
         raise ImportError(f"reading {ext} files needs trimesh (pip install trimesh, or "
                           f"'smoothdist[tracer]'); OBJ and ASCII OFF files are read without "

@@ -15,6 +15,10 @@ The parts are rooms (docs/design-notes.md has the map): the base modules at the 
 (:mod:`tracer.cli`), and :mod:`tracer.sim`, :mod:`tracer.studies` and ``tracer.reproduce``.
 """
 
+import importlib
+
+from tracer import _moved  # noqa: F401  (the old paths' import hook)
+
 _LAZY = {
     "render_mesh": "tracer.scenes.from_mesh",
     "mesh_scene": "tracer.scenes.from_mesh",
@@ -34,8 +38,6 @@ __all__ = sorted(_LAZY)
 
 def __getattr__(name):
     if name in _LAZY:
-        import importlib
-
         return getattr(importlib.import_module(_LAZY[name]), name)
     raise AttributeError(f"module 'tracer' has no attribute {name!r}")
 

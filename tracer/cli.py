@@ -29,6 +29,7 @@ import importlib.util
 import os
 import signal
 import sys
+import traceback
 import warnings
 
 from tracer.outputs import CLIError
@@ -193,7 +194,6 @@ def main(argv=None):
         return _run(argv)
     except ImportError as exc:
         if os.environ.get("TRACER_DEBUG"):
-            import traceback
 
             traceback.print_exc()
         print(f"error: {_missing_package(exc)}", file=sys.stderr)
@@ -203,7 +203,6 @@ def main(argv=None):
         return 130
     except (CLIError, ValueError, OSError) as exc:
         if os.environ.get("TRACER_DEBUG") and not isinstance(exc, CLIError):
-            import traceback  # where a ValueError or OSError came from (a library, a bug)
 
             traceback.print_exc()
         print(f"error: {_one_line(exc)}", file=sys.stderr)
@@ -237,7 +236,7 @@ def _run(argv):
         parser.print_help()
         return 2
     if getattr(args, "threads", None) is not None:
-        import numba
+        import numba  # numba: loaded on use, the command line starts without it
 
         if not 1 <= args.threads <= numba.config.NUMBA_NUM_THREADS:
             raise CLIError(f"--threads must be between 1 and {numba.config.NUMBA_NUM_THREADS}, "

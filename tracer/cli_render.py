@@ -1,15 +1,22 @@
 """``tracer render``: sphere-trace a scene file to a PNG, with optional AOVs."""
 
 import json
+import math
 import os
 import sys
 
 import numpy as np
 
-from smoothdist.mesh import MESH_EXTENSIONS
-from tracer.rendering.camera import UP_AXES, VIEWS
-from tracer.scenes.from_mesh import KINDS
+from smoothdist.cuda import CudaUnavailable, cuda_module
+from smoothdist.mesh import MESH_EXTENSIONS, needs_trimesh
+from tracer.image import false_color, save_npy, save_png
 from tracer.outputs import CLIError, atomic_write, check_outputs, make_parents
+from tracer.rendering.camera import UP_AXES, VIEWS, frame_points, look_at
+from tracer.rendering.film import MAX_SAMPLES
+from tracer.rendering.renderer import ProgressBar, render, scene_arrays
+from tracer.scenes import from_mesh
+from tracer.scenes.from_mesh import KINDS, describe_parameters, resolve_up, scene_dict
+from tracer.scenes.scene import load_scene, mesh_paths, read_scene_json
 from tracer.scenes.settings import default_text, defaults
 
 HELP = "sphere-trace a scene file to a PNG (and AOVs)"
@@ -152,8 +159,6 @@ def check_options(args):
     (so ``--size 0 0`` is reported as such, not as an existing output). One-line
     :class:`~tracer.errors.CLIError` naming the flag; the scene and mesh loaders check them
     again."""
-    import math
-
     if args.size:
         for what, v in zip(("width", "height"), args.size):
             if v <= 0:
@@ -166,7 +171,6 @@ def check_options(args):
             raise CLIError(f"{flag} must be finite, got {v}")
         if v < low or (v == low and not closed):
             raise CLIError(f"{flag} must be {'>=' if closed else '>'} {low:g}, got {v}")
-    from tracer.rendering.film import MAX_SAMPLES
 
     if args.samples is not None and args.samples > MAX_SAMPLES:
         raise CLIError(f"--samples must be at most {MAX_SAMPLES}, got {args.samples}")
@@ -206,8 +210,6 @@ def needs(args):
     """The optional packages this render imports (:mod:`tracer.cli` checks them first):
     matplotlib for ``--steps-png`` / ``--leaves-png``, Pillow for the PNG, trimesh for a mesh
     file (given, or named by the scene file) that our own readers do not read."""
-    from smoothdist.mesh import needs_trimesh
-    from tracer.scenes.scene import mesh_paths
 
     out = ["matplotlib"] if args.steps_png or args.leaves_png else []
     out.append("PIL")
@@ -220,15 +222,10 @@ def needs(args):
 
 def run(args):
     """Render; returns the exit status."""
-    from tracer.image import false_color, save_npy, save_png
-    from tracer.rendering.renderer import ProgressBar, render
-    from tracer.scenes.scene import load_scene
 
     source = input_kind(args.scene)
     check_options(args)
     if args.device == "cuda":
-        from smoothdist.cuda import CudaUnavailable, cuda_module
-
         try:
             cuda_module()
         except CudaUnavailable as exc:
@@ -301,14 +298,10 @@ def run(args):
                 json.dump(stats, fh, indent=2)
         written.append(args.stats)
     if not args.quiet:
-        from tracer.scenes.from_mesh import describe_parameters
-
         s = stats
         prims = sum(o["primitives"] for o in s["objects"])
         view = ""
         if source == "mesh" and not args.camera:
-            from tracer.scenes.from_mesh import resolve_up
-
             why = scene.extra.get("orientation")
             if why and not why.endswith("(the file's convention)"):
                 view = f", {why}"
@@ -356,8 +349,6 @@ def _mesh_scene(args):
 
 
 def _build_mesh_scene(args):
-    from tracer.scenes.from_mesh import mesh_scene
-
     d = defaults("mesh")  # the options left out: as render_mesh's
 
     def given(key):
@@ -365,23 +356,23 @@ def _build_mesh_scene(args):
         return d[key] if value is None else value
 
     width, height = args.size or (d["width"], d["height"])
-    return mesh_scene(args.scene, kind=args.kind, alpha=given("alpha"), alpha_u=given("alpha_u"),
-                      beta=given("beta"), size=(width, height), view=given("view"),
-                      up=given("up"), camera=_camera_arg(args) if args.camera else None,
-                      mode=given("mode"), offset=given("offset"), eps=given("eps"),
-                      shading=given("shading"), tol=given("tol"), newton=given("newton"),
-                      samples=given("samples"), adaptive=bool(given("adaptive")),
-                      transparent=bool(given("transparent")),
-                      lighting={k: v for k, v in _lighting_args(args).items() if v is not None},
-                      color=given("color"),
-                      background=tuple(given("background")))
+    return from_mesh.mesh_scene(args.scene, kind=args.kind, alpha=given("alpha"),
+                                alpha_u=given("alpha_u"),
+                                beta=given("beta"), size=(width, height), view=given("view"),
+                                up=given("up"), camera=_camera_arg(args) if args.camera else None,
+                                mode=given("mode"), offset=given("offset"), eps=given("eps"),
+                                shading=given("shading"), tol=given("tol"), newton=given("newton"),
+                                samples=given("samples"), adaptive=bool(given("adaptive")),
+                                transparent=bool(given("transparent")),
+                                lighting={k: v for k, v in _lighting_args(args).items()
+                                          if v is not None},
+                                color=given("color"),
+                                background=tuple(given("background")))
 
 
 def _replace_camera(scene, args):
     """``--view`` / ``--camera`` for a scene file: a new camera (for ``--view``, framing every
     object's vertices grown by the tracer's conservative margin, which contains the surface)."""
-    from tracer.rendering.camera import frame_points, look_at
-    from tracer.rendering.renderer import scene_arrays
 
     if args.camera:
         origin, dest, up = _camera_arg(args)
@@ -396,8 +387,6 @@ def _replace_camera(scene, args):
 
 def _save_scene(args, scene, source):
     """Write ``--save-scene``: a scene file that renders the same picture."""
-    from tracer.scenes.from_mesh import scene_dict
-    from tracer.scenes.scene import read_scene_json
 
     if source == "mesh":
         data = scene_dict(scene, args.save_scene, [args.scene])

@@ -65,7 +65,7 @@ def save_png(path, rgb, overwrite=True):
     :func:`write_png_bands`, one band of rows per thread (:func:`png_threads`); smaller ones by
     Pillow. Either file decodes to the same pixels.
     """
-    from PIL import Image
+    from PIL import Image  # Pillow (tracer extra): loaded on use
 
     arr = np.asarray(rgb)
     if arr.dtype != np.uint8:
@@ -88,8 +88,8 @@ def save_png(path, rgb, overwrite=True):
 def png_threads():
     """Threads that encode a large PNG: numba's thread count, as the render's
     (``tracer.rendering.threads.render_threads``), 1 with ``SMOOTHDIST_PARALLEL=0``."""
+    # numba, smoothdist: loaded on use, PNG files (tracer diff, the pytest plugin) need no kernels
     import numba
-
     from smoothdist.kernels import PARALLEL
 
     return numba.get_num_threads() if PARALLEL else 1
@@ -107,6 +107,7 @@ def write_png_bands(fh, arr, threads=None, level=PNG_LEVEL):
     bands'), make one zlib stream. One IDAT chunk per band. The decoded pixels do not depend
     on ``threads`` (default :func:`png_threads`); the bytes do.
     """
+    # smoothdist: loaded on use, PNG files (tracer diff, the pytest plugin) need no kernels
     from smoothdist.schedule import run_tasks
 
     arr = np.ascontiguousarray(arr)
@@ -172,7 +173,7 @@ def gif_frame(rgb, colors=128):
     The palette is an octree's: it keeps a small, saturated object (a blue body on LiDAR trees)
     that median cut merges into the large background's colours (at 64 or 128 colours median cut
     drew such a body grey), at a slightly larger mean error on smooth gradients."""
-    from PIL import Image
+    from PIL import Image  # Pillow (tracer extra): loaded on use
 
     return Image.fromarray(np.ascontiguousarray(rgb)).quantize(
         colors=int(colors), method=Image.Quantize.FASTOCTREE)
@@ -227,7 +228,7 @@ def load_png(path, alpha=False):
     ValueError
         If the file cannot be decoded as an image.
     """
-    from PIL import Image, UnidentifiedImageError
+    from PIL import Image, UnidentifiedImageError  # Pillow (tracer extra): loaded on use
 
     path = Path(path)
     if not path.is_file():
@@ -262,7 +263,7 @@ def false_color(values, mask=None, cmap="viridis", vmin=None, vmax=None, backgro
     -------
     (H, W, 3) uint8 array
     """
-    import matplotlib
+    import matplotlib  # matplotlib (studies extra): loaded on use
 
     vals = np.asarray(values, dtype=np.float64)
     if vals.ndim != 2:

@@ -15,8 +15,12 @@ Only the standard library is imported here (numpy lazily, for its scalar types),
 ``tracer.cli`` stays light.
 """
 
+import csv
+import io
+import json
 import math
 import os
+import secrets
 from contextlib import contextmanager
 from pathlib import Path
 from tracer.errors import CLIError  # noqa: F401  (defined there; imported from here too)
@@ -168,8 +172,6 @@ def _create_temp(path):
     ``os.replace`` is atomic) and with the same suffix (so format sniffing by extension works).
     The file is created with mode 0o666 minus the umask, like a plain ``open``.
     """
-    import secrets
-
     folder = path.parent
     if not folder.is_dir():
         raise FileNotFoundError(f"cannot write {path}: folder {folder} does not exist")
@@ -285,8 +287,6 @@ def write_bytes(path, data):
 def write_json(path, data):
     """Atomically (re)write a JSON file (indented; numpy scalars and arrays, and paths, are
     converted)."""
-    import json
-
     with atomic_write(path) as tmp:
         with open(tmp, "w", encoding="utf-8") as fh:
             json.dump(data, fh, indent=2, default=_json_default)
@@ -294,7 +294,7 @@ def write_json(path, data):
 
 
 def _json_default(o):
-    import numpy as np
+    import numpy as np  # numpy: loaded on use, tracer.cli imports this module and starts without it
 
     if isinstance(o, np.integer):
         return int(o)
@@ -309,7 +309,7 @@ def _json_default(o):
 
 def csv_value(v):
     """A CSV cell: floats with 8 significant digits, NaN/None as empty."""
-    import numpy as np
+    import numpy as np  # numpy: loaded on use, tracer.cli imports this module and starts without it
 
     if isinstance(v, (float, np.floating)):
         v = float(v)
@@ -322,8 +322,6 @@ def csv_value(v):
 def write_csv(path, fields, rows):
     """Atomically (re)write a whole CSV file: a header of ``fields``, then one line per dict of
     ``rows`` (keys not in ``fields`` are ignored; cells as :func:`csv_value`)."""
-    import csv
-    import io
 
     buf = io.StringIO()
     w = csv.DictWriter(buf, fieldnames=fields, extrasaction="ignore", lineterminator="\n")

@@ -25,7 +25,11 @@ import re
 import shutil
 from pathlib import Path
 
+import numpy as np
 import pytest
+
+from tracer.checks.imagediff import check_images
+from tracer.image import load_png, save_png
 
 __all__ = ["image_regression", "ImageRegression", "write_report"]
 
@@ -47,9 +51,6 @@ def pytest_addoption(parser):
 
 def _as_rgb(image):
     """A uint8 image from a :class:`tracer.rendering.frame.RenderResult`, an array or a PNG path."""
-    import numpy as np
-
-    from tracer.image import load_png
 
     if hasattr(image, "rgb"):
         image = image.rgb
@@ -85,8 +86,6 @@ class ImageRegression:
         ``-1``, ``-2``, ... for further checks in the same test). Returns the
         :class:`tracer.checks.imagediff.DiffVerdict`; fails the test when the images differ beyond
         the criteria, when the baseline is missing, or when the shapes differ."""
-        from tracer.image import save_png
-        from tracer.checks.imagediff import check_images
 
         rgb = _as_rgb(image)
         if name is None:

@@ -29,7 +29,10 @@ it (a field, a scene) under the file's :func:`file_stamp`, so that only the smal
 travels through the scheduler.
 """
 
+import asyncio
+import csv
 import inspect
+import io
 import logging
 import math
 import os
@@ -111,13 +114,11 @@ def check_reachable(address, timeout=CONNECT_TIMEOUT):
     """Fail fast, before a study creates any output, when no Dask scheduler answers at
     ``address``: one-line :class:`~tracer.errors.CLIError` after at most about ``timeout``
     seconds."""
-    import asyncio
-
     scheme, host, port = _split_address(address)
     addr = f"{scheme}://{host}:{port}" if ":" not in host else f"{scheme}://[{host}]:{port}"
 
     async def identity():
-        from distributed.comm import connect
+        from distributed.comm import connect  # dask.distributed (studies extra): loaded on use
 
         comm = await connect(addr, timeout=timeout)
         try:
@@ -175,7 +176,6 @@ class TaskLog:
     def read(self, required=()):
         if not os.path.exists(self.path):
             return []
-        import csv
 
         with open(self.path, "r", encoding="utf-8", newline="") as fh:
             reader = csv.DictReader(fh)
@@ -203,8 +203,6 @@ class TaskLog:
         write_csv(self.path, self.fields, list(rows))
 
     def append(self, row):
-        import csv
-        import io
 
         buf = io.StringIO()
         csv.DictWriter(buf, fieldnames=self.fields, extrasaction="ignore",
@@ -417,7 +415,7 @@ def run_tasks(fn, tasks, *, on_result, on_failure=None, scheduler="local", worke
             prog.log(f"{label}: {len(tasks)} task(s) on {info.describe()} at "
                      f"{client.scheduler.address}{dash}"
                      + ("; waiting for workers to join" if not nworkers else ""))
-        from distributed import as_completed
+        from distributed import as_completed  # dask.distributed (studies extra): loaded on use
 
         # Our client is not the process's default client (a user's own client stays the
         # default), and a separate process has none: whatever looks a client up
@@ -459,6 +457,7 @@ def connect(mode, workers=None, timeout=CONNECT_TIMEOUT):
     at the address ``mode`` (cluster None). One-line :class:`~tracer.errors.CLIError` when it cannot
     be had."""
     try:
+        # dask.distributed (studies extra): loaded on use
         from distributed import Client, LocalCluster
     except ImportError:
         raise CLIError("dask.distributed is not installed (pip install 'smoothdist[studies]'); use "
@@ -495,6 +494,7 @@ def _dashboard(client, local=True):
     scheduler's environment: checked here for a local cluster)."""
     if local:
         try:
+            # bokeh (with dask's dashboard): loaded on use
             import bokeh  # noqa: F401
         except ImportError:
             return None

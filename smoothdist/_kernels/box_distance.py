@@ -139,7 +139,7 @@ def box_lower_bound(kq, Q, qlo, qhi, lo, hi, node, E):
         translation of the query (a unit vector, or 0 when ``delta = 0``).
     """
     g0, g1, g2 = axis_gaps(qlo, qhi, lo, hi, node)
-    nsep = (g0 != 0.0) + (g1 != 0.0) + (g2 != 0.0)
+    nsep = int(g0 != 0.0) + int(g1 != 0.0) + int(g2 != 0.0)   # numpy bools would add as "or"
     gap2 = g0 * g0 + g1 * g1 + g2 * g2
     if nsep == 0:
         return 0.0, 0.0, 0.0, 0.0

@@ -101,7 +101,7 @@ def box_lower_bound_moment(kq, Q, qlo, qhi, lo, hi, node, E, cx, cy, cz, L):
         return delta, ux, uy, uz, 0.0, 0.0, 0.0
     # which case gave delta: the same per-axis gaps as box_lower_bound
     g0, g1, g2 = axis_gaps(qlo, qhi, lo, hi, node)
-    nsep = (g0 != 0.0) + (g1 != 0.0) + (g2 != 0.0)
+    nsep = int(g0 != 0.0) + int(g1 != 0.0) + int(g2 != 0.0)   # numpy bools would add as "or"
     if nsep == 3:
         Kx = lo[node, 0] if g0 < 0.0 else hi[node, 0]
         Ky = lo[node, 1] if g1 < 0.0 else hi[node, 1]
@@ -128,7 +128,7 @@ def box_lower_bound_moment(kq, Q, qlo, qhi, lo, hi, node, E, cx, cy, cz, L):
         mx, my, mz = _cross(px - cx, py - cy, pz - cz, ux, uy, uz)
         return delta, ux, uy, uz, mx, my, mz
     # one separated axis: a unit axis vector is the axis gap, anything else the triangle's normal
-    n_axes = (ux != 0.0) + (uy != 0.0) + (uz != 0.0)
+    n_axes = int(ux != 0.0) + int(uy != 0.0) + int(uz != 0.0)
     if n_axes == 1 and abs(ux) + abs(uy) + abs(uz) == 1.0 and delta == math.sqrt(
             g0 * g0 + g1 * g1 + g2 * g2):
         mx, my, mz = gap_moment(L, ux, uy, uz)

@@ -57,16 +57,17 @@ from smoothdist._kernels.closest_point import (SEG_INTERIOR, TRI_AB, TRI_AC, TRI
 from smoothdist._kernels.query import (DEFAULT_TOL, _attenuate, exact_distance_point,
                                        logsumexp_accumulate, negligible_reach,
                                        smooth_distance_point)
-from smoothdist._kernels.traversal import NONE, ZERO, always, nearest_first, no_far_field
+from smoothdist._kernels.traversal import (NONE, ZERO, always, nearest_first, no_far_field,
+                                           python_function)
 from smoothdist._kernels.weights import eval_triangle_weight
 
 #: :func:`smoothdist._kernels.query._attenuate`, inlined (it calls no other kernel)
-_attenuate_inline = numba.njit(**NJIT_INLINE)(_attenuate.py_func)
+_attenuate_inline = numba.njit(**NJIT_INLINE)(python_function(_attenuate))
 #: ``moment`` values of :func:`smooth_traverse` (and its pair terms) beyond True (the moment):
 #: the derivative for a motion of query vertex 1 or 2 alone
 VERTEX_1, VERTEX_2 = 2, 3
 #: :func:`smoothdist._kernels.closest_pair.segment_segment`, inlined (the edge-edge leaves)
-_segment_segment_inline = numba.njit(**NJIT_INLINE)(segment_segment.py_func)
+_segment_segment_inline = numba.njit(**NJIT_INLINE)(python_function(segment_segment))
 
 
 @numba.njit(**NJIT)
@@ -315,7 +316,7 @@ def _pair(kind, pts, wc, pwhi, i, kq, Q, S, wgs, moment, cx, cy, cz, k):
 
 
 #: ``_pair`` as an ordinary kernel (for the brute-force references: one compiled copy)
-pair_terms = numba.njit(**NJIT)(_pair.py_func)
+pair_terms = numba.njit(**NJIT)(python_function(_pair))
 
 
 @numba.njit(**NJIT)

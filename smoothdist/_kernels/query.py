@@ -30,6 +30,7 @@ from smoothdist._kernels.closest_point import (SEG_INTERIOR, TRI_AB, TRI_AC, TRI
 from smoothdist._kernels.traversal import (NONE, ZERO, always, beyond_best, nearest_first, never,
                                           no_far_field, within_best)
 from smoothdist._kernels.weights import eval_edge_weight, eval_triangle_weight
+from smoothdist.schedule import parallel_tasks
 
 #: queries handled by one parallel task (one traversal stack each)
 CHUNK = 64
@@ -656,6 +657,4 @@ def exact_distance_tasks(tree, Q, floor, out_d, out_g, out_prim, out_nodes, out_
 def chunk_tasks(n):
     """Strided tasks for ``n`` queries in chunks of :data:`CHUNK`: one per thread
     (:func:`smoothdist.schedule.parallel_tasks`), at most one per chunk."""
-    from smoothdist.schedule import parallel_tasks
-
     return max(1, min(parallel_tasks(n), (n + CHUNK - 1) // CHUNK))

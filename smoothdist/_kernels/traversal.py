@@ -74,6 +74,17 @@ def borrowed(typingctx, value):
     return value(value), codegen
 
 
+if numba.config.DISABLE_JIT:       # NUMBA_DISABLE_JIT=1 (tests/README.md): plain Python
+    def borrowed(value):           # noqa: F811
+        return value
+
+
+def python_function(kernel):
+    """The Python function of ``kernel`` (the function itself under ``NUMBA_DISABLE_JIT=1``,
+    where ``numba.njit`` returns it unchanged), to compile it again with other options."""
+    return getattr(kernel, "py_func", kernel)
+
+
 @numba.njit(**NJIT_GENERIC)
 def nearest_first(tree, q, state, stack, dstack, root, key0, skip, approximate, leaf, children,
                   keep):

@@ -95,7 +95,13 @@ from typing import NamedTuple
 
 import numpy as np
 
+from smoothdist.mesh import needs_trimesh
+from tracer.image import compare_images, false_color, save_png
 from tracer.outputs import CLIError, atomic_write, check_outputs
+from tracer.rendering.camera import primary_rays, pyvista_camera_params
+from tracer.rendering.renderer import camera_of, render, scene_arrays
+from tracer.rendering.shading import shade_normals, view_normals
+from tracer.scenes.scene import load_scene, mesh_paths
 
 __all__ = [
     "OUTPUT_FILES",
@@ -181,6 +187,7 @@ def _clean_log_line(line):
 def _quiet_vtk():
     """Keep VTK's log (e.g. the X11 fallback warning before EGL is used) off stderr."""
     try:
+        # VTK (with pyvista, studies extra): loaded on use
         from vtkmodules.vtkCommonCore import vtkLogger
 
         vtkLogger.SetStderrVerbosity(vtkLogger.VERBOSITY_ERROR)
@@ -388,7 +395,7 @@ def isosurface(scene, n, prune=True):
         gradient at each vertex, and field data ``"evaluated_fraction"`` (see
         :func:`sample_grid`). May be empty when the grid sees no sign change.
     """
-    import pyvista as pv
+    import pyvista as pv  # pyvista (studies extra): loaded on use
 
     values, origin, spacing, evaluated = sample_grid(scene, n, prune=prune)
     grid = pv.ImageData(dimensions=(n, n, n), spacing=tuple(spacing), origin=tuple(origin))
@@ -430,8 +437,6 @@ def render_isosurface(surface, camera, background=(255, 255, 255), focal_distanc
     tracer.outputs.CLIError
         ``VTK cannot render off-screen here: ...`` when VTK fails.
     """
-    from tracer.rendering.camera import primary_rays, pyvista_camera_params
-
     W, H = camera.width, camera.height
     params = pyvista_camera_params(camera, focal_distance=focal_distance)
     has_mesh = bool(surface.n_points and surface.n_cells)
@@ -442,7 +447,7 @@ def render_isosurface(surface, camera, background=(255, 255, 255), focal_distanc
         mesh = surface.copy(deep=False)
         mesh.point_data["rgb"] = np.clip((127.0 * nv + 128.0) / 255.0, 0.0, 1.0)
     try:
-        import pyvista as pv
+        import pyvista as pv  # pyvista (studies extra): loaded on use
 
         _quiet_vtk()
         plotter = pv.Plotter(off_screen=True, window_size=list(params["window_size"]))
@@ -496,8 +501,6 @@ def compare_renders(trace, pvr, diagonal):
     ``|t_pyvista - t_tracer|`` over pixels both hit / ``diagonal``),
     ``depth_error_p95_rel_diag``. Metrics over an empty set of pixels are None.
     """
-    from tracer.rendering.shading import view_normals
-
     a = np.asarray(trace.hit, dtype=bool)
     b = np.asarray(pvr.hit, dtype=bool)
     union = int(np.sum(a | b))
@@ -535,8 +538,6 @@ def diff_image(trace, pvr, diagonal, background=(255, 255, 255), vmax=DIFF_VMAX)
     ``vmax`` (pale yellow, clipped above). Only the tracer hit: blue; only pyvista: green;
     neither: ``background``.
     """
-    from tracer.image import false_color
-
     both = trace.hit & pvr.hit
     rel = np.where(both, np.abs(pvr.depth - trace.depth) / diagonal, 0.0)
     img = false_color(rel, mask=both, cmap="inferno", vmin=0.0, vmax=vmax,
@@ -571,9 +572,10 @@ def labelled_side_by_side(tracer_rgb, pyvista_rgb, diff, vmax=DIFF_VMAX, panel_p
     Each panel is shown at least ``panel_px`` pixels wide (nearest-neighbour enlargement of
     small renders) so that the titles stay readable.
     """
-    import matplotlib
+    import matplotlib  # matplotlib (studies extra): loaded on use
 
     matplotlib.use("Agg", force=False)
+    # matplotlib (studies extra): loaded on use
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.colors import Normalize
     from matplotlib.figure import Figure
@@ -638,9 +640,6 @@ def compare_scene(scene, grid=128, trace=None):
     -------
     Comparison
     """
-    from tracer.image import compare_images
-    from tracer.rendering.renderer import camera_of, render
-    from tracer.rendering.shading import shade_normals, view_normals
 
     t_start = time.perf_counter()
     camera = camera_of(scene)
@@ -680,8 +679,6 @@ def compare_scene(scene, grid=128, trace=None):
 
 def scene_box(scene):
     """The grown scene box ``(lo, hi)`` that the grid spans (the tracer's ray box)."""
-    from tracer.rendering.renderer import scene_arrays
-
     return scene_arrays(scene)[4:6]
 
 
@@ -706,8 +703,6 @@ def needs(args):
     """The optional packages of a comparison (:mod:`tracer.cli` checks them first): pyvista for
     the isosurface, matplotlib for the figure, Pillow for the PNGs, trimesh for the scene's mesh
     files that our own readers do not read."""
-    from smoothdist.mesh import needs_trimesh
-    from tracer.scenes.scene import mesh_paths
 
     out = ["pyvista", "matplotlib", "PIL"]
     return out + (["trimesh"] if any(map(needs_trimesh, mesh_paths(args.scene))) else [])
@@ -715,8 +710,6 @@ def needs(args):
 
 def run(args):
     """Compare; returns the exit status (0, or 2 with one ``error:`` line)."""
-    from tracer.image import save_png
-    from tracer.scenes.scene import load_scene
 
     if not 2 <= args.grid <= 512:
         raise CLIError(f"--grid must be between 2 and 512, got {args.grid}")

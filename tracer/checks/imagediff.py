@@ -21,6 +21,7 @@ import math
 import sys
 from typing import NamedTuple
 
+from tracer.image import compare_images, save_png
 from tracer.outputs import CLIError, check_outputs
 
 __all__ = ["DiffVerdict", "check_images", "HELP", "add_arguments", "needs", "run"]
@@ -94,8 +95,6 @@ def check_images(a, b, tol=1.0, threshold=16, max_fraction=None):
     FileNotFoundError
         A path that does not exist.
     """
-    from tracer.image import compare_images
-
     _check_criteria(tol, threshold, max_fraction)
     diff = compare_images(a, b, threshold=threshold)
     failures = []
@@ -132,8 +131,6 @@ def needs(args):
 
 def run(args):
     """Compare; returns 0 (within tolerance) or 1 (beyond); bad input raises (status 2)."""
-    from tracer.image import save_png
-
     if not math.isfinite(args.tol) or args.tol < 0:
         raise CLIError(f"--tol must be a finite number >= 0, got {args.tol}")
     if not 0 <= args.threshold <= 255:

@@ -14,6 +14,9 @@ from pathlib import Path
 
 import numpy as np
 
+from tracer.image import gif_frame, load_png
+from tracer.outputs import write_bytes
+
 __all__ = ["Animation", "show_animation"]
 
 #: largest movie embedded in a notebook, bytes (base64 makes it a third larger)
@@ -54,8 +57,6 @@ class Animation:
 
     def save(self, path):
         """Write the movie to ``path`` (its suffix should match ``mime``); returns it."""
-        from tracer.outputs import write_bytes
-
         write_bytes(path, self.data)
         return Path(path)
 
@@ -65,8 +66,6 @@ class Animation:
 
 def _frames(source):
     """(H, W, 3) uint8 images from a folder of PNGs or a sequence of images / renders."""
-    from tracer.image import load_png
-
     if isinstance(source, (str, os.PathLike)):
         files = sorted(Path(source).glob("*.png"))
         if not files:
@@ -87,8 +86,6 @@ def _frames(source):
 
 
 def _gif_bytes(images, fps):
-    from tracer.image import gif_frame
-
     frames = [gif_frame(im) for im in images]
     buf = io.BytesIO()
     frames[0].save(buf, format="GIF", save_all=True, append_images=frames[1:], loop=0,

@@ -45,7 +45,7 @@ import numpy as np
 from smoothdist.schedule import parallel_tasks
 from tracer.rendering import lighting as _lighting
 from tracer.rendering import march
-from tracer.rendering.camera import CAM_HEIGHT, CAM_WIDTH, box_corners, primary_rays
+from tracer.rendering.camera import CAM_HEIGHT, CAM_WIDTH, _scales, box_corners, primary_rays
 from tracer.rendering.frame import MAX_SAMPLES  # noqa: F401  (the film's limit; defined in frame)
 from tracer.rendering.frame import (LightArgs, LightBuffers, MarchArgs, SampleBuffers,
                                     TraceOptions)
@@ -93,7 +93,7 @@ SAMPLE_OMEGA = 2.0
 #: 14.6 s; 285 of 262,144 pixels changed, mean alpha change 1e-6. The price: a Newton step
 #: along a grazing ray may cross a thin part and land in the surface behind it (the sample
 #: then shows that surface; hit or miss is unchanged), 1 of 112 hits in
-#: ``tests/test_march.py::test_samples_equal_a_plain_march``
+#: ``tests/tracer/rendering/test_march.py::test_samples_equal_a_plain_march``
 SAMPLE_NEWTON_COS = 0.02
 
 _R2 = 1.32471795724474602596     # the plastic number: R2 sequence (Roberts 2018)
@@ -809,8 +809,6 @@ def form_image(scene, camera, arrays, kargs, options, centre, samples=1, adaptiv
 def _dir(cam, rows, cols):
     """Unit ray directions through fractional image positions (vectorised
     :func:`tracer.rendering.camera.ray_direction`)."""
-    from tracer.rendering.camera import _scales
-
     width, height = cam[CAM_WIDTH], cam[CAM_HEIGHT]
     sx, sy = _scales(width, height)
     dx = (cols / width - 0.5) * sx

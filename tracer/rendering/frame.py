@@ -8,6 +8,7 @@ and :func:`scene_arrays`, the march kernels' named arguments (:class:`RayArgs`,
 progress bar. :mod:`tracer.rendering.renderer` re-exports every name.
 """
 
+import io
 import math
 import os
 import sys
@@ -17,6 +18,7 @@ import numpy as np
 
 from smoothdist.kernels import DEFAULT_TOL, concatenate_trees
 from tracer.compiling import COMPILING, Eta
+from tracer.image import save_npy, save_png
 from tracer.rendering import march
 from tracer.rendering.camera import box_corners, look_at
 from tracer.rendering.shading import (load_matcap, shade_headlight, shade_matcap, shade_normals,
@@ -80,8 +82,6 @@ class RenderResult(NamedTuple):
         """Write the image as PNG (``.png``), or the depth ``(H, W)`` float32 (NaN on misses)
         or the normals ``(H, W, 3)`` float32 as ``.npy`` (``*depth*.npy`` / ``*normal*.npy``
         by name), atomically. Returns the path."""
-        from tracer.image import save_npy, save_png
-
         name = str(path).lower()
         if name.endswith(".png"):
             return save_png(path, self.rgba if self.transparent else self.rgb,
@@ -105,9 +105,7 @@ class RenderResult(NamedTuple):
 
     def _repr_png_(self):
         """The image as PNG bytes: a render shows itself in Jupyter."""
-        import io
-
-        from PIL import Image
+        from PIL import Image  # Pillow (tracer extra): loaded on use
 
         buf = io.BytesIO()
         Image.fromarray(np.ascontiguousarray(self.rgba if self.transparent else self.rgb)).save(

@@ -12,9 +12,9 @@ The cone pass runs first, one thread per ``TILE x TILE`` tile (``_cone_kernel``,
 depth with the same predicted first step as on the CPU. What differs from the CPU path: no
 common end depth (the CPU's ``cone_end``, marched once a ray of the tile has missed; it
 only shortens misses); the same hit test, steps, Newton steps and bisection otherwise. Under
-numba's CUDA simulator the images equal the CPU's bit for bit (``tests/test_cuda_sim.py``); on a
-card, fused multiply-add may move a grazing pixel (one of the 1080p bunnies' 6.2 million pixels
-in ``benchmarks/data/gpu_h100.json``).
+numba's CUDA simulator the images equal the CPU's bit for bit
+(``tests/smoothdist/test_cuda_sim.py``); on a card, fused multiply-add may move a grazing pixel
+(one of the 1080p bunnies' 6.2 million pixels in ``benchmarks/data/gpu_h100.json``).
 
 The lit look, anti-aliasing samples (adaptive too) and transparent backgrounds (issue 49) take
 the CPU's film (:func:`tracer.rendering.film.form_image`) over the GPU's centre samples, with
@@ -36,8 +36,12 @@ import numpy as np
 
 from smoothdist import cuda as sdcuda
 from smoothdist.kernels import NJIT
+from tracer.errors import RenderError
 from tracer.rendering import lighting, march
 from tracer.rendering.camera import CAM_HEIGHT, CAM_WIDTH, ray_direction
+from tracer.rendering.film import form_image
+from tracer.rendering.frame import (RayArgs, RenderResult, TraceOptions, _progress_callback,
+                                    _samples, camera_of, distance_at_camera, scene_arrays, shade)
 
 __all__ = ["render_cuda", "normal_colour", "BLOCK", "trace_samples_cuda",
            "light_points_cuda"]
@@ -275,8 +279,6 @@ def prepare(scene, transforms=None, relax=None, omega=None, newton=None):
     """Everything a launch needs, on the device: ``(camera, args, shape)`` with ``args`` the
     kernel's leading arguments (up to ``newton``) and ``shape = (H, W)``. Checks the camera
     as ``render`` does."""
-    from tracer.errors import RenderError
-    from tracer.rendering.frame import camera_of, distance_at_camera, scene_arrays
 
     cu = sdcuda.cuda_module()
     kernel()
@@ -346,9 +348,6 @@ def render_cuda(scene, *, progress=None, transforms=None, relax=None, omega=None
     """:func:`tracer.render` on the GPU (its arguments; ``band_rows`` does not apply). Returns a
     :class:`tracer.rendering.frame.RenderResult`; ``seconds`` is the time of the launch, the
     copies back and (lit, sampled or transparent renders) the film."""
-    from tracer.rendering.frame import (RayArgs, RenderResult, TraceOptions, _progress_callback,
-                                        _samples, scene_arrays, shade)
-
     samples = _samples(scene.samples if samples is None else samples)
     adaptive = bool(scene.adaptive if adaptive is None else adaptive)
     # no card is the first thing to say (issue 49): an option the card would refuse matters
@@ -368,8 +367,6 @@ def render_cuda(scene, *, progress=None, transforms=None, relax=None, omega=None
     film = samples != 1 or scene.shading == "lit" or scene.transparent
     alpha, spp, aovs = hit.astype(np.float32), np.ones((H, W), np.int32), {"rays": H * W}
     if film:
-        from tracer.rendering.film import form_image
-
         arrays = scene_arrays(scene, transforms)
         tree, roots, params, mode, lo, hi, depth_max, tol = arrays
         kargs = RayArgs(tree, _root_array(roots), params, mode, tol, camera.as_array(), lo, hi,

@@ -23,6 +23,8 @@ extra).
 
 import numpy as np
 
+from tracer.rendering.camera import primary_rays
+
 __all__ = ["Sphere", "Capsule", "Torus", "Box", "RoundedCube", "Circle", "Helix", "Segments",
            "hit_points", "normal_angles", "ripple", "mean_offset"]
 
@@ -134,7 +136,7 @@ class RoundedCube:
     tangent plane and a Newton projection onto the surface."""
 
     def __init__(self, radius=1.0, centre=(0.0, 0.0, 0.0), samples=300):
-        from scipy.spatial import cKDTree
+        from scipy.spatial import cKDTree  # scipy (sim extra): loaded on use
 
         self.radius = float(radius)
         self.centre = np.asarray(centre, dtype=np.float64)
@@ -256,8 +258,6 @@ class Segments:
 # ---------------------------------------------------------------------------- the metric
 def hit_points(res):
     """World positions ``(n, 3)`` of a render's hit pixels (row-major order of ``res.hit``)."""
-    from tracer.rendering.camera import primary_rays
-
     rays = primary_rays(res.camera)
     return (res.camera.origin + res.depth.astype(np.float64)[..., None] * rays)[res.hit]
 

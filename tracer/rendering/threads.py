@@ -2,6 +2,8 @@
 loops that release the GIL (:func:`~tracer.rendering.threads.run_tasks`,
 :func:`~tracer.rendering.threads.in_bands`), with numba's thread count."""
 
+import numba
+
 from smoothdist.kernels import PARALLEL
 from smoothdist.schedule import run_tasks as _run_tasks
 
@@ -11,8 +13,6 @@ __all__ = ["render_threads", "in_bands", "run_tasks"]
 def render_threads():
     """Threads that trace a render: numba's thread count (``numba.set_num_threads``,
     ``tracer render --threads``), 1 with ``SMOOTHDIST_PARALLEL=0``."""
-    import numba
-
     return numba.get_num_threads() if PARALLEL else 1
 
 

@@ -49,8 +49,9 @@ import numpy as np
 
 import smoothdist
 from smoothdist import DataMesh, SmoothDistanceField
+from tracer.rendering.camera import frame_points, look_at
 from tracer.rendering.film import MAX_SAMPLES
-from tracer.rendering.lighting import Lighting
+from tracer.rendering.lighting import Lighting, _check_color
 from tracer.scenes.settings import SCENE_KEYS, Film, March, defaults
 from tracer.validate import (SceneError, check_keys, choice, file_error, number, read_json,
                              resolve_path, show, vec3)
@@ -278,7 +279,6 @@ def load_scene(path, overrides=None):
         if key in data and not isinstance(data[key], str):
             raise file_error(path, key, f"must be a string, got {show(data[key])}")
     # the camera, before any mesh is loaded
-    from tracer.rendering.camera import look_at
 
     try:
         look_at(origin, dest, up, width, height)
@@ -591,7 +591,6 @@ def scene_from_field(field, *, alpha, alpha_u=_API["alpha_u"], beta=_API["beta"]
     if max_steps > MAX_STEPS:
         raise ValueError(f"max_steps must be at most {MAX_STEPS}, got {max_steps}")
     width, height, samples = _api_film(width, height, samples)
-    from tracer.rendering.lighting import _check_color
 
     lighting = _api_lighting(lighting)
     if color is not None:
@@ -674,8 +673,6 @@ def _api_camera(field, camera, alpha, alpha_u, offset, eps, mode, width, height,
         camera = (camera.origin, np.asarray(camera.origin) + np.asarray(camera.forward),
                   camera.vertical)
     if isinstance(camera, str):
-        from tracer.rendering.camera import frame_points
-
         # the surface lies within its inflation bound plus its offset (exact mode: the
         # offset) of the data
         grow = (offset if mode == "exact" and offset is not None else
@@ -694,7 +691,6 @@ def _api_camera(field, camera, alpha, alpha_u, offset, eps, mode, width, height,
     except (TypeError, ValueError):
         raise ValueError(f"camera must be (origin, dest, up), three 3-vectors; got {camera!r}") \
             from None
-    from tracer.rendering.camera import look_at
 
     look_at(origin, dest, up, width, height)  # validates the camera
     return origin, dest, up

@@ -12,7 +12,8 @@ module
 * renders it as the Markdown reference ``docs/scene-format.md`` (:func:`markdown`):
   ``python -m tracer.scenes.scene_schema > docs/scene-format.md``.
 
-``tests/test_scene_schema.py`` keeps the schema, the docs and :mod:`tracer.scenes.scene` equal.
+``tests/tracer/scenes/test_scene_schema.py`` keeps the schema, the docs and
+:mod:`tracer.scenes.scene` equal.
 """
 
 import json
@@ -161,7 +162,8 @@ def markdown(schema=None):
     out = ["# Scene file format", "",
            "<!-- Generated from tracer/scenes/scene.schema.json by "
            "`python -m tracer.scenes.scene_schema > "
-           "docs/scene-format.md`; do not edit by hand (tests/test_scene_schema.py checks it). "
+           "docs/scene-format.md`; do not edit by hand "
+           "(tests/tracer/scenes/test_scene_schema.py checks it). "
            "-->", "",
            schema["description"], "",
            "`tracer render MESH` writes a complete example with `--save-scene scene.json`; "

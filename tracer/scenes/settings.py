@@ -11,7 +11,7 @@ one-line meaning the field's ``help``. The entry points read their defaults from
 * :func:`tracer.render_mesh`, :func:`tracer.mesh_scene` and ``tracer render MESH``:
   ``defaults("mesh")``;
 * the JSON Schema ``tracer/scenes/scene.schema.json`` and the command line's help text are checked
-  against this table by ``tests/test_settings.py``.
+  against this table by ``tests/tracer/scenes/test_settings.py``.
 
 Where an entry point deliberately differs, the field says so (``api=`` / ``mesh=``) and
 :func:`table` lists the reason:

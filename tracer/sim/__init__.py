@@ -10,6 +10,8 @@ independent tasks for :mod:`tracer.runner`), :mod:`~tracer.sim.cli_simulate` and
 :mod:`~tracer.sim.vbowl` (the paper's 2D V-bowl study).
 """
 
+import importlib
+
 _LAZY = {
     "load_simulation": "tracer.sim.simfile",
     "Simulation": "tracer.sim.simfile",
@@ -23,8 +25,6 @@ def __getattr__(name):
     """The entry points, imported on first use (scipy loads only when needed). The movie
     writer is ``tracer.sim.animate.animate`` (not exported here: it would shadow its module)."""
     if name in _LAZY:
-        import importlib
-
         return getattr(importlib.import_module(_LAZY[name]), name)
     raise AttributeError(f"module 'tracer.sim' has no attribute {name!r}")
 

@@ -17,10 +17,11 @@ import numpy as np
 
 from smoothdist import SmoothDistanceField
 from tracer.image import gif_frame, save_png
-from tracer.rendering.lighting import Lighting
 from tracer.outputs import atomic_write
+from tracer.rendering.lighting import Lighting
 from tracer.rendering.renderer import ProgressBar, render
 from tracer.scenes.scene import Scene, SceneObject, default_eps
+from tracer.sim.simfile import auto_camera
 
 __all__ = ["animate", "body_scene", "render_frames", "frame_indices", "write_mp4", "write_gif"]
 
@@ -35,8 +36,6 @@ def body_scene(sim, size=None, trajectory=None):
     width, height = (cam.width, cam.height) if size is None else (int(size[0]), int(size[1]))
     origin, dest, up = cam.origin, cam.dest, cam.up
     if cam.auto and trajectory is not None:
-        from tracer.sim.simfile import auto_camera
-
         origin, dest, up = auto_camera(sim.bodies, sim.gravity, trajectory["rotations"],
                                        trajectory["centers"], width, height)
     objs = [SceneObject(name=b.name, field=SmoothDistanceField(b.mesh), alpha=b.alpha,
@@ -91,7 +90,7 @@ def render_frames(sim, traj, frames_dir, *, every=None, progress=None, overwrite
 
 def write_mp4(path, images, fps, overwrite=True):
     """Encode ``images`` ((H, W, 3) uint8 each) as H.264 MP4 at ``fps``."""
-    import imageio.v2 as iio
+    import imageio.v2 as iio  # imageio (sim extra): loaded on use
 
     with atomic_write(path, overwrite=overwrite) as tmp:
         w = iio.get_writer(str(tmp), format="FFMPEG", mode="I", fps=float(fps), codec="libx264",

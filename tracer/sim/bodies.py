@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from smoothdist import DataMesh
+from smoothdist import DataMesh, SmoothDistanceField
 
 #: smallest principal moment relative to the largest (degenerate geometry, see module notes)
 INERTIA_FLOOR = 1e-3
@@ -156,8 +156,6 @@ def auto_alpha(mesh, length, alpha_u="off"):
     alphas open holes between the points). ``alpha_u``: ``"off"`` (no attenuation, the
     simulator's default) or ``"auto"``.
     """
-    from smoothdist import SmoothDistanceField
-
     field = SmoothDistanceField(mesh)
     a = field.auto_alpha()
     if mesh.kind == "points":

@@ -15,7 +15,9 @@ import os
 import sys
 
 from tracer.outputs import CLIError
-from tracer.sim.frames import add_frame_arguments, check_frame_arguments, frame_needs
+from tracer.sim import run as sim_run
+from tracer.sim.frames import add_frame_arguments, check_frame_arguments, frame_needs, render_movie
+from tracer.sim.simfile import load_simulation
 
 HELP = "render a simulated trajectory to PNG frames, MP4 and GIF"
 
@@ -39,10 +41,6 @@ def needs(args):
 
 def run(args):
     """Render the movie; returns the exit status."""
-    from tracer.sim import run
-    from tracer.sim.frames import render_movie
-    from tracer.sim.simfile import load_simulation
-
     scheduler, workers = check_frame_arguments(args)
     if not args.out.endswith(".mp4"):
         raise CLIError(f"output must be a .mp4 file, got {args.out}")
@@ -51,7 +49,7 @@ def run(args):
     for p in (args.out, gif):
         if os.path.exists(p) and not args.overwrite:
             raise CLIError(f"output exists: {p} (pass --overwrite to replace it)")
-    data = run.load_trajectory(args.trajectory)
+    data = sim_run.load_trajectory(args.trajectory)
     sim_path = args.sim or str(data["sim_file"])
     if not os.path.isfile(sim_path):
         raise CLIError(f"the simulation file {sim_path} recorded in the trajectory is missing; "

@@ -15,7 +15,10 @@ import os
 import sys
 
 from tracer.outputs import CLIError, at_least
-from tracer.sim.frames import add_frame_arguments, check_frame_arguments, frame_needs
+from tracer.rendering.renderer import ProgressBar
+from tracer.sim import run as sim_run
+from tracer.sim.frames import add_frame_arguments, check_frame_arguments, frame_needs, render_movie
+from tracer.sim.simfile import load_simulation
 
 HELP = "simulate rigid bodies with one smooth-distance constraint"
 
@@ -45,11 +48,6 @@ def needs(args):
 
 def run(args):
     """Simulate (and render); returns the exit status."""
-    from tracer.rendering.renderer import ProgressBar
-    from tracer.sim import run
-    from tracer.sim.frames import render_movie
-    from tracer.sim.simfile import load_simulation
-
     at_least(args.steps, "--steps")
     scheduler, workers = check_frame_arguments(args)
     out = args.out
@@ -61,15 +59,15 @@ def run(args):
     if args.resume and not os.path.exists(traj):
         raise CLIError(f"--resume: nothing to resume, {traj} does not exist")
     sim = load_simulation(args.sim)
-    built = run.build(sim, torques=args.torques)
+    built = sim_run.build(sim, torques=args.torques)
     con = built[0]
     if not args.resume:
-        run.check_initial_state(sim, con)
+        sim_run.check_initial_state(sim, con)
     created = not os.path.isdir(out)
     os.makedirs(out, exist_ok=True)
     try:
         bar = None if args.quiet else ProgressBar("simulate")
-        frames = run.simulate(sim, traj, steps=args.steps, resume=args.resume,
+        frames = sim_run.simulate(sim, traj, steps=args.steps, resume=args.resume,
                               overwrite=args.overwrite or args.resume, progress=bar,
                               built=built)
     except BaseException:
@@ -78,12 +76,12 @@ def run(args):
         raise
     d = min(frames["min_exact_distance"])
     if not args.quiet:
-        gap = run.closest_gap(sim, con, frames["centers"][-1], frames["rotations"][-1])
+        gap = sim_run.closest_gap(sim, con, frames["centers"][-1], frames["rotations"][-1])
         print(f"wrote {traj}: {len(frames['time'])} frames, minimum exact distance {d:.4g}; "
-              f"{run.describe_gap(gap)}", file=sys.stderr)
+              f"{sim_run.describe_gap(gap)}", file=sys.stderr)
     if args.no_render:
         return 0
-    data = run.load_trajectory(traj)
+    data = sim_run.load_trajectory(traj)
     mp4 = os.path.join(out, f"{sim.name}.mp4")
     gif = os.path.join(out, f"{sim.name}.gif")
     render_movie(args.sim, traj, os.path.join(out, "frames"), mp4, gif,

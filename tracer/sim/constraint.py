@@ -46,6 +46,7 @@ import math
 
 import numpy as np
 
+import smoothdist
 from smoothdist import SmoothDistanceField
 
 #: pairs whose lower bound exceeds the current minimum by this many 1/a are skipped
@@ -57,8 +58,6 @@ DEFAULT_TORQUES = "exact"
 
 def mesh_distance_factory():
     """The whole-mesh distance class (issue 9's :class:`smoothdist.MeshDistance`)."""
-    import smoothdist
-
     cls = getattr(smoothdist, "MeshDistance", None)
     if cls is None:
         raise RuntimeError("smoothdist.MeshDistance is not available in this build")

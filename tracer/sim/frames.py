@@ -25,8 +25,13 @@ import os
 import numpy as np
 
 from tracer import runner
+from tracer.image import save_png
 from tracer.outputs import CLIError, at_least, check_size
+from tracer.rendering.renderer import render
 from tracer.runner import file_stamp
+from tracer.sim.animate import body_scene, frame_indices, write_gif, write_mp4
+from tracer.sim.run import load_trajectory
+from tracer.sim.simfile import load_simulation
 
 
 def add_frame_arguments(p, unit):
@@ -69,8 +74,6 @@ def list_tasks(sim_path, traj_path, frames_dir, indices, size=None):
 
 @functools.lru_cache(maxsize=4)
 def _scene(sim_stamp, size, traj_stamp):
-    from tracer.sim.animate import body_scene
-    from tracer.sim.simfile import load_simulation
 
     sim = load_simulation(sim_stamp[0])
     traj = None
@@ -82,16 +85,12 @@ def _scene(sim_stamp, size, traj_stamp):
 
 @functools.lru_cache(maxsize=4)
 def _poses(traj_stamp):
-    from tracer.sim.run import load_trajectory
-
     data = load_trajectory(traj_stamp[0])
     return np.asarray(data["rotations"]), np.asarray(data["centers"])
 
 
 def frame_task(task):
     """Render ``task["frame"]`` of the trajectory; write ``task["png"]``; return a record."""
-    from tracer.image import save_png
-    from tracer.rendering.renderer import render
 
     size = tuple(task["size"]) if task.get("size") else None
     traj_stamp = file_stamp(task["trajectory"])
@@ -113,9 +112,8 @@ def render_movie(sim_path, traj_path, frames_dir, mp4, gif, *, n_frames, every, 
 
     Raises :class:`tracer.errors.CLIError` when a frame could not be rendered (nothing of the
     movie is written then)."""
-    from PIL import Image
+    from PIL import Image  # Pillow (tracer extra): loaded on use
 
-    from tracer.sim.animate import frame_indices, write_gif, write_mp4
 
     tasks = list_tasks(sim_path, traj_path, frames_dir, frame_indices(n_frames, every), size)
     os.makedirs(frames_dir, exist_ok=True)

@@ -48,6 +48,7 @@ import os
 import numpy as np
 
 from smoothdist import DataMesh
+from smoothdist.mesh import read_mesh_file
 
 #: the repository's ``scenes/data`` folder (the shipped data the defaults below refer to)
 DATA = os.path.join(os.path.dirname(os.path.abspath(__file__)), os.pardir, os.pardir, "scenes",
@@ -57,7 +58,7 @@ AUTZEN_TILE = os.path.normpath(os.path.join(DATA, "pointclouds", "lidar_autzen_t
 
 
 def _icosphere(radius=1.0, subdivisions=2):
-    import trimesh
+    import trimesh  # trimesh (tracer extra): loaded on use
 
     m = trimesh.creation.icosphere(subdivisions=int(subdivisions), radius=float(radius))
     return DataMesh(np.asarray(m.vertices), np.asarray(m.faces), name="icosphere")
@@ -74,7 +75,7 @@ def _sphere_points(radius=1.0, count=200):
 
 
 def _box(size=(1.0, 1.0, 1.0)):
-    import trimesh
+    import trimesh  # trimesh (tracer extra): loaded on use
 
     m = trimesh.creation.box(extents=np.asarray(size, float))
     return DataMesh(np.asarray(m.vertices), np.asarray(m.faces), name="box")
@@ -220,7 +221,7 @@ def bowl_edges(nlon=46, nrings=8, radius=1.0):
 
 def icosphere_edges(radius=0.25):
     """Icosphere (1 subdivision): 42 vertices, 120 unique edges."""
-    import trimesh
+    import trimesh  # trimesh (tracer extra): loaded on use
 
     ico = trimesh.creation.icosphere(subdivisions=1, radius=radius)
     return np.asarray(ico.vertices), np.asarray(ico.edges_unique)
@@ -319,7 +320,6 @@ def lidar_terrain(path=None, copies=60, jitter=1.0, z_jitter=0.1, tiles=(1, 1), 
     copies, nx, ny = int(copies), int(tiles[0]), int(tiles[1])
     if copies < 1 or nx < 1 or ny < 1:
         raise ValueError(f"copies and tiles must be >= 1, got {copies} and {list(tiles)}")
-    from smoothdist.mesh import read_mesh_file
 
     P = np.asarray(read_mesh_file(os.fspath(path))[0], dtype=float)
     lo, hi = P.min(axis=0), P.max(axis=0)

@@ -30,10 +30,12 @@ import time
 
 import numpy as np
 
+from smoothdist import SmoothDistanceField
+from tracer.errors import OverlapError  # noqa: F401  (defined there; imported from here too)
 from tracer.outputs import atomic_write
+from tracer.sim.bodies import thickness
 from tracer.sim.constraint import DEFAULT_TORQUES, ContactConstraint
 from tracer.sim.integrator import Integrator
-from tracer.errors import OverlapError  # noqa: F401  (defined there; imported from here too)
 
 __all__ = ["simulate", "build", "OverlapError", "check_initial_state", "save_trajectory",
            "load_trajectory", "restore", "closest_gap", "describe_gap", "FRAME_KEYS"]
@@ -198,8 +200,6 @@ def closest_gap(sim, con, centers, rotations):
     both offsets: the gap a render shows; negative when the drawn surfaces overlap) and
     ``thickness`` (the smaller body's :func:`tracer.sim.bodies.thickness`). None without pairs.
     """
-    from smoothdist import SmoothDistanceField
-    from tracer.sim.bodies import thickness
 
     X = np.asarray(centers, dtype=float)
     Rs = np.asarray(rotations, dtype=float)

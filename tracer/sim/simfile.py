@@ -69,16 +69,18 @@ import os
 import numpy as np
 
 from smoothdist import DataMesh
+from tracer.errors import SimFileError  # noqa: F401  (defined there; imported from here too)
 from tracer.scenes.scene import SHADINGS
 from tracer.sim import primitives
+from tracer.sim.authors_format import build_simulation
 from tracer.sim.bodies import (AUTO_THICKNESS_OFFSET, Body, auto_alpha, rotation_matrix,
                                thickness)
 from tracer.sim.constraint import DEFAULT_TORQUES, TORQUES
 from tracer.validate import (SceneError, check_keys, choice, number, read_json, resolve_path,
                              show, vec3)
-from tracer.errors import SimFileError  # noqa: F401  (defined there; imported from here too)
-from tracer.sim.authors_format import build_simulation
 # the loaded simulation's types, defined in tracer.sim.simulation and imported from here too
+from smoothdist.field import AUTO_ALPHA_U_FACTOR
+from tracer.rendering.camera import look_at
 from tracer.sim.simulation import (AUTO_CAMERA_ELEVATION, AUTO_CAMERA_FOCUS,  # noqa: F401
                                    AUTO_CAMERA_FOCUS_ELEVATION, AUTO_CAMERA_FOCUS_GROW,
                                    AUTO_CAMERA_MARGIN, DEFAULT_FRAMES, Camera, Simulation,
@@ -149,7 +151,6 @@ def _camera(cd, path):
         if ((bg < 0) | (bg > 255)).any():
             raise _err(path, "camera.background", f"must hold values 0-255, got {cd['background']}")
         cam.background = tuple(int(v) for v in bg)
-    from tracer.rendering.camera import look_at
 
     try:
         look_at(cam.origin, cam.dest, cam.up, cam.width, cam.height)
@@ -252,8 +253,6 @@ def _build_body(spec, i, path, mesh, length):
         if alpha == "auto":
             alpha = auto_alpha(mesh, length, "auto" if alpha_u == "auto" else "off")
         if alpha_u == "auto":  # SmoothDistanceField.auto_alpha_u, without building a tree
-            from smoothdist.field import AUTO_ALPHA_U_FACTOR
-
             alpha_u = AUTO_ALPHA_U_FACTOR * alpha
         elif alpha_u == "off":
             alpha_u = alpha

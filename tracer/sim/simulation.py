@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from tracer.errors import SimFileError
+from tracer.rendering.camera import box_corners, frame_points
 from tracer.sim.constraint import DEFAULT_TORQUES
 
 __all__ = ["Simulation", "Camera", "auto_camera", "DEFAULT_FRAMES", "wrap_scene_error"]
@@ -68,8 +69,6 @@ def auto_camera(bodies, gravity, rotations=None, centers=None, width=640, height
     motion (:data:`AUTO_CAMERA_FOCUS`: terrain) is cut by the frame instead: the view holds the
     moving bodies' swept box with a border and looks down on it from higher.
     """
-    from tracer.rendering.camera import box_corners, frame_points
-
     if rotations is None:
         rotations = np.array([[b.R for b in bodies]])
         centers = np.array([[b.x for b in bodies]])

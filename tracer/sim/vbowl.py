@@ -20,6 +20,7 @@ import os
 
 import numpy as np
 
+from tracer.outputs import atomic_write
 from tracer.sim import primitives
 from tracer.sim.bodies import Body
 from tracer.sim.constraint import ContactConstraint
@@ -78,10 +79,10 @@ def summary(r):
 
 def plot(results, path):
     """Trajectories (left) and kinetic energy (right), one row per bowl."""
-    import matplotlib
+    import matplotlib  # matplotlib (studies extra): loaded on use
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # matplotlib (studies extra): loaded on use
 
     colours = {"exact": "tab:green", "smooth": "tab:orange"}
     fig, axes = plt.subplots(2, 2, figsize=(8.0, 6.0), dpi=90)
@@ -103,7 +104,6 @@ def plot(results, path):
         ax.legend(loc="upper center", fontsize=8)
         ax2.legend(fontsize=8)
     fig.tight_layout()
-    from tracer.outputs import atomic_write
 
     with atomic_write(path) as tmp:
         fig.savefig(tmp, format="png")

@@ -36,11 +36,13 @@ import numpy as np
 from tracer import runner
 from tracer.outputs import (CLIError, check_size, float_list, non_negative, output_folder,
                             positive, write_bytes, write_json, write_text)
+from tracer.rendering.renderer import RenderError, render
 from tracer.runner import duration
+from tracer.scenes.scene import scene_from_field
 from tracer.studies.common import (REPO, TYPES, add_common, add_view_arguments, field_of,
                                    load_mesh, resolve_view, study_needs, unweighted_field,
                                    view_camera)
-from tracer.studies.plots import pyplot
+from tracer.studies.plots import alpha_report, panel_grid_png, pyplot
 
 HELP = "the paper's alpha studies as image grids"
 
@@ -132,8 +134,6 @@ def list_tasks(studies, *, size, alphas, mesh, kind, beta, shading, alpha_u, no_
 
 def study_task(task):
     """Render one figure; returns ``{"png": bytes, "info": dict, "panels": "RxC"}``."""
-    from tracer.studies.plots import panel_grid_png
-
     args = SimpleNamespace(**task)
     t0 = time.perf_counter()
     panels, info = _STUDY_FUNCS[task["study"]](args, task["size"], task["alphas"])
@@ -207,8 +207,6 @@ def run(args):
 
 def reduce(out):
     """``report.md`` of the figures present in ``out``."""
-    from tracer.studies.plots import alpha_report
-
     return alpha_report(out, STUDIES)
 
 
@@ -291,8 +289,6 @@ def _default_camera(field):
 
 def _scene(field, *, camera, size, alpha, alpha_u=None, beta, mode="smooth", shading="normals",
            gradient="metric", offset=None):
-    from tracer.scenes.scene import scene_from_field
-
     return scene_from_field(field, alpha=alpha, alpha_u=alpha_u, beta=beta, camera=camera,
                             width=size, height=size, mode=mode, shading=shading,
                             gradient=gradient, offset=offset)
@@ -302,8 +298,6 @@ def _frame_camera(specs, camera, fill=0.86, probe=48):
     """Move ``camera`` (pan and dolly, same orientation) so that the union of the silhouettes
     of ``specs`` (``(field, scene kwargs)``, probed at ``probe`` px) fills ``fill`` of the
     frame. Never moves it back; returns the original camera when nothing is hit."""
-    from tracer.rendering.renderer import RenderError, render
-
     union = np.zeros((probe, probe), bool)
     for field, kw in specs:
         try:
@@ -335,8 +329,6 @@ def _frame_camera(specs, camera, fill=0.86, probe=48):
 
 def _render_group(specs, camera, size, frame=True):
     """Render ``specs`` (``(field, scene kwargs)``) with one shared, optionally framed camera."""
-    from tracer.rendering.renderer import RenderError, render
-
     cam = _frame_camera(specs, camera, probe=min(48, size)) if frame else camera
     out = []
     for field, kw in specs:
@@ -430,7 +422,7 @@ def _nesting_slice(field, alphas, beta, camera, size, n=160, exact_n=32):
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=100)
     plt.close(fig)
-    from PIL import Image
+    from PIL import Image  # Pillow (tracer extra): loaded on use
 
     buf.seek(0)
     img = np.asarray(Image.open(buf).convert("RGB"))

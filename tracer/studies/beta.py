@@ -41,15 +41,19 @@ import time
 from pathlib import Path
 from types import SimpleNamespace
 
+import numba
 import numpy as np
 
 from tracer import runner
 from tracer.outputs import (CLIError, check_size, float_list, output_folder, positive,
                             write_bytes, write_json)
+from tracer.rendering import renderer
 from tracer.runner import duration
+from tracer.scenes.scene import scene_from_field
 from tracer.studies.common import (TYPES, add_common, add_view_arguments, beta_tag,
                                    cached_field, close, is_paper_bunny, load_mesh, parse_types,
                                    resolve_view, study_needs, view_camera)
+from tracer.studies.plots import beta_outputs
 
 HELP = "the paper's beta ablation: time and error vs beta"
 
@@ -235,8 +239,6 @@ _WARM = set()
 
 
 def _scene(field, task, size=None):
-    from tracer.scenes.scene import scene_from_field
-
     size = size or task["size"]
     return scene_from_field(field, alpha=task["alpha"], alpha_u=task["alpha_u"],
                             beta=task["beta"], camera=task.get("camera"), width=size,
@@ -245,16 +247,13 @@ def _scene(field, task, size=None):
 
 
 def _render(scene, task, progress=None):
-    from tracer.rendering.renderer import render
-
-    return render(scene, progress=progress)
+    return renderer.render(scene, progress=progress)
 
 
 def render_task(task, progress=None):
     """Render one task; returns its record: the render's statistics, ``depth`` (float32
     ``(size, size)``, NaN on misses) and ``png`` (the shaded render, PNG bytes)."""
-    import numba
-    from PIL import Image
+    from PIL import Image  # Pillow (tracer extra): loaded on use
 
     field = cached_field(task["mesh"], task["type"])
     if (task["mesh"], task["type"]) not in _WARM:  # load or compile the kernels, untimed
@@ -353,8 +352,6 @@ def with_errors(rows, cache):
 def reduce(out, cache, log, params, types, grid_betas):
     """Rewrite the CSV (sorted, errors filled in) and write the plots and report; returns the
     finished rows (dicts with numbers)."""
-    from tracer.studies.plots import beta_outputs
-
     rows = log.read()
     ok = [typed_row(r) for r in rows if r["status"] == "ok"]
     ok = with_errors(ok, cache)
@@ -572,7 +569,6 @@ def _estimate(todo, size, sched, workers, say):
     seconds, from which ``--scheduler local`` decides whether to start a cluster."""
     if not todo:
         return 0.0
-    import numba
 
     p = max(8, size // PROBE_DIV)
     t0 = time.perf_counter()

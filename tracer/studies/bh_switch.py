@@ -17,12 +17,13 @@ import os
 
 import numpy as np
 
+from smoothdist import DataMesh, SmoothDistanceField
 from tracer import runner
 from tracer.outputs import (CLIError, at_least, non_negative, output_folder, positive, write_csv,
                             write_json)
 from tracer.runner import duration, file_stamp
 from tracer.studies.common import REPO, add_common, load_mesh, machine_info, study_needs
-from tracer.studies.plots import PAPER_BH
+from tracer.studies.plots import PAPER_BH, bh_plot
 
 HELP = "Barnes-Hut near/far switch discontinuity study"
 
@@ -71,8 +72,6 @@ def add_arguments(p):
 def _normalised(stamp):
     """``(field, scale)``: the cloud's points translated to the bbox min corner and divided by
     the bbox diagonal ``scale`` (built once per process)."""
-    from smoothdist import DataMesh, SmoothDistanceField
-
     mesh = load_mesh(stamp[0], "points")
     V = mesh.V[mesh.points]
     lo0, hi0 = V.min(axis=0), V.max(axis=0)
@@ -191,8 +190,6 @@ def _stats(rs, scale):
 
 def reduce(out, records, summary, scale):
     """CSV (rows sorted by ray and sample), JSON summary and plot; returns the summary."""
-    from tracer.studies.plots import bh_plot
-
     rows = sorted((r for rec in records for r in rec["rows"]),
                   key=lambda r: (r["trial"], r["sample"]))
     steps = [s for rec in records for s in rec["steps"]]

@@ -15,10 +15,15 @@ import platform
 import warnings
 from pathlib import Path
 
+import numba
 import numpy as np
 
+from smoothdist import DataMesh, MeshRepairWarning, SmoothDistanceField
+from smoothdist.mesh import needs_trimesh
 from tracer.outputs import CLIError
+from tracer.rendering.camera import UP_AXES, VIEWS, frame_points
 from tracer.runner import file_stamp, needs as cluster_needs
+from tracer.scenes.from_mesh import resolve_up
 
 #: repository root (``tracer/studies/../..``)
 REPO = Path(__file__).resolve().parents[2]
@@ -61,8 +66,6 @@ def add_view_arguments(p, default):
     :func:`tracer.rendering.camera.frame_points`, and the same up axis guess:
     :func:`tracer.scenes.from_mesh.resolve_up`); ``default`` says which camera the study uses
     without them."""
-    from tracer.rendering.camera import UP_AXES, VIEWS
-
     p.add_argument("--view", choices=tuple(VIEWS),
                    help="camera framing the whole surface from this side, as in tracer render "
                    f"(default: {default})")
@@ -76,8 +79,6 @@ def study_needs(args, meshes=()):
     Pillow for its plots and images, distributed for a cluster
     (:func:`tracer.runner.needs`), trimesh when one of the mesh files ``meshes`` is a format
     our own readers do not read."""
-    from smoothdist.mesh import needs_trimesh
-
     out = ["matplotlib"] + cluster_needs(args) + ["PIL"]
     return out + (["trimesh"] if any(needs_trimesh(m) for m in meshes) else [])
 
@@ -85,8 +86,6 @@ def study_needs(args, meshes=()):
 def resolve_view(args, mesh):
     """``(view, up)`` of the study's ``--view`` / ``--up`` for the mesh file ``mesh``, or
     ``(None, None)`` when neither is given (the study's own camera)."""
-    from tracer.scenes.from_mesh import resolve_up
-
     view, up = getattr(args, "view", None), getattr(args, "up", None)
     if not view and not up:
         return None, None
@@ -98,8 +97,6 @@ def view_camera(fields, view, up, grow, size):
     field or several, framed together) at ``size`` x ``size`` pixels: their vertices grown by
     ``grow`` (scene units: the surface's inflation bound and eps) all in view. Returns
     ``(origin, dest, up)`` as lists."""
-    from tracer.rendering.camera import frame_points
-
     if not isinstance(fields, (list, tuple)):
         fields = [fields]
     P = np.concatenate([f.mesh.used_vertices() for f in fields])
@@ -132,8 +129,6 @@ def is_paper_bunny(mesh):
 def load_mesh(path, kind=None):
     """Load a mesh file as a DataMesh (``kind`` as in ``DataMesh.as_kind``), one-line errors
     (:class:`tracer.errors.CLIError`)."""
-    from smoothdist import DataMesh, MeshRepairWarning
-
     path = os.fspath(path)
     if not os.path.exists(path):
         raise CLIError(f"mesh file not found: {path}")
@@ -151,8 +146,6 @@ def load_mesh(path, kind=None):
 
 @functools.lru_cache(maxsize=8)
 def _cached_field(stamp, kind):
-    from smoothdist import SmoothDistanceField
-
     return SmoothDistanceField(load_mesh(stamp[0], kind))
 
 
@@ -164,8 +157,6 @@ def cached_field(path, kind):
 
 
 def field_of(mesh):
-    from smoothdist import SmoothDistanceField
-
     return SmoothDistanceField(mesh)
 
 
@@ -198,8 +189,6 @@ def fmt(v, digits=4):
 
 
 def machine_info():
-    import numba
-
     return {"platform": platform.platform(), "processor": platform.processor() or "",
             "cpu_count": os.cpu_count(), "numba_threads": int(numba.get_num_threads()),
             "python": platform.python_version(), "numba": numba.__version__,

@@ -18,13 +18,16 @@ import time
 import warnings
 from pathlib import Path
 
+import numba
 import numpy as np
 
+from smoothdist import DataMesh, MeshRepairWarning, SmoothDistanceField
 from tracer import runner
 from tracer.outputs import CLIError, non_negative, output_folder, positive, write_json
 from tracer.runner import duration, file_stamp
 from tracer.studies.common import (REPO, TYPE_LETTER, TYPES, add_common, machine_info,
                                    parse_types, study_needs)
+from tracer.studies.plots import bench_plots
 
 HELP = "the paper's Thingi10K grid benchmark over a folder"
 
@@ -96,8 +99,6 @@ def list_tasks(files, *, grid, alpha, alpha_u, beta, types):
 @functools.lru_cache(maxsize=4)
 def _fields(stamp):
     """``{kind: SmoothDistanceField}`` of the normalised mesh ``stamp[0]`` (per process)."""
-    from smoothdist import DataMesh, MeshRepairWarning, SmoothDistanceField
-
     name = os.path.basename(stamp[0])
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", MeshRepairWarning)
@@ -117,8 +118,6 @@ _WARM = []
 def grid_task(task):
     """One mesh's grid benchmark; returns its CSV row (``status`` ``skipped`` with the error
     when the mesh cannot be loaded)."""
-    import numba
-    from smoothdist import SmoothDistanceField
 
     path = task["path"]
     row = {"name": Path(path).stem, "file": os.path.basename(path),
@@ -154,8 +153,6 @@ def grid_task(task):
 def reduce(out, log, params):
     """Sorted CSV, ``bench_grid.json`` (with the skipped and failed meshes) and the plots;
     returns ``(ok rows, skipped rows, failed rows)``."""
-    from tracer.studies.plots import bench_plots
-
     rows = sorted(log.read(), key=lambda r: r["name"])
     log.start(rows)
     ok = [r for r in rows if r["status"] == "ok"]
@@ -211,7 +208,6 @@ def run(args):
     todo = [t for t in tasks if t["key"] not in done]
     estimate = len(todo) * len(types) * args.grid ** 3 * SECONDS_PER_QUERY
     mode = runner.choose_mode(sched, workers, len(todo), estimate)
-    import numba
 
     params = {"folder": str(folder.resolve()), "grid": args.grid, "alpha": alpha,
               "alpha_u": alpha_u, "beta": args.beta, "types": types,

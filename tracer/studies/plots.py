@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from tracer.image import load_png
 from tracer.outputs import atomic_write, write_text
 from tracer.studies.common import (TYPE_COLORS, TYPE_LETTER, TYPES, beta_tag, close, fmt,
                                    machine_info)
@@ -112,10 +113,10 @@ PAPER_BH = {"kept_points": 259, "mean_discrepancy": 7.6e-5, "max_discrepancy": 6
 
 
 def pyplot():
-    import matplotlib
+    import matplotlib  # matplotlib (studies extra): loaded on use
 
     matplotlib.use("Agg", force=True)
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # matplotlib (studies extra): loaded on use
 
     return plt
 
@@ -130,7 +131,7 @@ def savefig(fig, path, dpi=100, max_bytes=195_000):
 def png_bytes(fig, dpi=100, max_bytes=195_000):
     """A matplotlib figure as PNG bytes; above ``max_bytes`` the image is stored with an
     adaptive 256-colour palette (committed result images stay small)."""
-    from PIL import Image
+    from PIL import Image  # Pillow (tracer extra): loaded on use
 
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=dpi)
@@ -147,7 +148,7 @@ def png_bytes(fig, dpi=100, max_bytes=195_000):
 
 def thumb(rgb, size):
     """Downsample an ``(H, W, 3)`` uint8 image so its longer side is at most ``size``."""
-    from PIL import Image
+    from PIL import Image  # Pillow (tracer extra): loaded on use
 
     H, W = rgb.shape[:2]
     if max(H, W) <= size:
@@ -282,6 +283,7 @@ def beta_frontier(out, rows, params, present):
     if not tol_rows:
         return False
     plt = pyplot()
+    # matplotlib (studies extra): loaded on use
     from matplotlib.ticker import FuncFormatter, NullFormatter
 
     fig, axes = plt.subplots(1, len(present), squeeze=False,
@@ -384,7 +386,6 @@ def beta_grid(out, cache, rows, present, grid_betas, params=None):
             r = next((r for r in rows if r["type"] == k and close(r["beta"], b)), None)
             img_path = cache / f"render_{k}_beta{beta_tag(b)}.png"
             if r is not None and img_path.exists():
-                from tracer.image import load_png
 
                 ax.imshow(thumb(load_png(img_path), 160), interpolation="lanczos")
                 ax.set_title(f"β={b:g}: {r['seconds']:.3g} s\n"
@@ -418,7 +419,7 @@ def beta_diff_figure(cache, rows, present, grid_betas, params):
     largest 99.5th percentile of the panels; larger values take the top colour).
     """
     plt = pyplot()
-    import matplotlib
+    import matplotlib  # matplotlib (studies extra): loaded on use
 
     measured = sorted({r["beta"] for r in rows if r["beta"] > 0})
     cols = [b for b in measured if any(close(b, g) for g in grid_betas)] or measured[:3]
