@@ -5,7 +5,7 @@ For each simulation file in the authors' format (``objects[]``, ``meshes[]``, ``
 other in the same run, 2 threads each:
 
 * theirs: ``rigid_body_simulator FILE 2`` (abhimadan/smoothdists, built CPU-only for this
-  comparison: ``/work/shared/tools/authors-bench/README.md``), in a scratch folder (it writes
+  comparison: ``../shared/tools/authors-bench/README.md``), in a scratch folder (it writes
   ``<name>__<object>__state.txt`` and ``__times.txt`` files there);
 * ours: ``python -m tracer simulate FILE -o DIR --no-render --threads 2 --scheduler serial``
   (a fresh process, like theirs: start-up, loading numba's cached kernels and BVH builds
@@ -28,7 +28,7 @@ at which it passes 2 %.
 
 Usage::
 
-    python benchmarks/bench_authors_sim.py --authors-bin /work/authors-build/bench/rigid_body_simulator \\
+    python benchmarks/bench_authors_sim.py --authors-bin ../authors-build/bench/rigid_body_simulator \\
         tests/data/authors_sims/cube_plane.json --steps 60
     python benchmarks/bench_authors_sim.py --authors-bin BIN FILE... --json out.json
 

@@ -277,9 +277,9 @@ def main(argv=None):
     if args.authors_bin:
         rows = side_by_side(names, specs, args)
         if args.json:
-            _write_json(args.json, {"machine": _machine(load), "repeat": args.repeat,
-                                    "rounds": args.rounds, "overhead_us": overhead,
-                                    "side_by_side": rows})
+            _write_json(args.json, {**_stamp(), "machine": _machine(load),
+                                    "repeat": args.repeat, "rounds": args.rounds,
+                                    "overhead_us": overhead, "side_by_side": rows})
         return 0
     print(f"{'case':14s} {'data':>16s} {'query':>16s} {'alpha':>9s} {'tol':>6s} {'ms best':>8s} "
           f"{'ms med':>8s} {'paper ms':>9s} {'exact ms':>9s} {'d_hat':>9s} {'d exact':>9s} "
@@ -299,7 +299,7 @@ def main(argv=None):
                   f"{r['smooth_distance']:9.4f} {r['exact_distance']:9.4f} {r['mean_leaves']:7.1f}",
                   flush=True)
     if args.json:
-        _write_json(args.json, {"machine": _machine(load), "repeat": args.repeat,
+        _write_json(args.json, {**_stamp(), "machine": _machine(load), "repeat": args.repeat,
                                 "overhead_us": overhead, "results": rows})
     return 0
 
@@ -307,6 +307,23 @@ def main(argv=None):
 def _machine(load):
     return {"processor": platform.processor() or platform.machine(), "cpus": os.cpu_count(),
             "numba_threads": numba.get_num_threads(), "load_average": load}
+
+
+def _stamp():
+    """The date (UTC) and the commit of the code measured (with ``dirty`` when the tree had
+    uncommitted changes), for the results file."""
+    import datetime
+
+    def git(*a):
+        try:
+            return subprocess.run(["git", *a], cwd=Path(__file__).resolve().parents[1],
+                                  capture_output=True, text=True, timeout=10).stdout.strip()
+        except (OSError, subprocess.SubprocessError):
+            return ""
+
+    return {"date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
+            "commit": git("rev-parse", "HEAD") or None,
+            "dirty": bool(git("status", "--porcelain", "--untracked-files=no"))}
 
 
 def _write_json(path, out):

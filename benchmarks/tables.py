@@ -12,6 +12,7 @@ Usage::
         benchmarks/data/coldstart_before.json
     python benchmarks/tables.py exact-mix benchmarks/data/exact_mix.json
     python benchmarks/tables.py smooth-cost benchmarks/data/exact_mix.json
+    python benchmarks/tables.py mesh-distance benchmarks/data/mesh_distance_authors.json
 """
 
 import argparse
@@ -147,9 +148,46 @@ def exact_mix_words(path):
     return text
 
 
+def mesh_distance_table(path):
+    """The whole-mesh side-by-side table of a ``bench_mesh_distance.py --authors-bin ...
+    --json`` results file: per case their ``meshDistance`` and ours, best of each round's
+    ``repeat`` calls (median over the rounds), the ratio of the bests and both values."""
+    from tracer.reproduce.docs import POSES
+
+    d = _load(path)
+    rows = d["side_by_side"]
+    lines = ["| case (pose: exact gap 1/alpha) | theirs, best (median of rounds) | ours, best "
+             "(median) | ours / theirs | their value | ours |",
+             "|---|---:|---:|---:|---:|---:|"]
+    for r in rows:
+        lines.append(f"| {r['case']} ({POSES.get(r['case'], '?')}) | "
+                     f"{r['authors_ms_best']:.2f} ms ({r['authors_ms_median']:.2f}) | "
+                     f"{r['ms_best']:.2f} ms ({r['ms_median']:.2f}) | **{r['ratio']:.2f}** | "
+                     f"{r['authors_distance']:.6f} | {r['smooth_distance']:.6f} |")
+    m = d["machine"]
+    loads = [m["load_average"]] + [r["load_average"] for r in rows]
+    lines += ["", f"{d.get('date', '?')}, commit {(d.get('commit') or '?')[:10]}, "
+              f"{rows[0]['threads']} threads each, beta {rows[0]['beta']:g}, tol 0, "
+              f"{d['rounds']} alternating rounds of theirs and ours, best of {d['repeat']} calls "
+              f"each; load average {min(loads):.1f}-{max(loads):.1f} "
+              f"(`{Path(path).as_posix()}`)"]
+    return "\n".join(lines)
+
+
+def mesh_distance_words(path):
+    """The README's sentence: ours / theirs per case, from the same file."""
+    d = _load(path)
+    names = {"bunny-bunny": "bunny-bunny", "ring-toss": "ring toss",
+             "bowl-ico": "bowl-icosphere", "slide-sphere": "slide-sphere"}
+    return ("Whole-mesh distance (their `meshDistance`, beta 0.5, side by side, "
+            f"{d.get('date', '?')[:10]}, best of each): "
+            + ", ".join(f"{names.get(r['case'], r['case'])} {r['ratio']:.2f}x their time"
+                        for r in d["side_by_side"]))
+
+
 TABLES = {"scaling": scaling_table, "gpu": gpu_table, "coldstart": coldstart_table,
           "coldstart-steps": coldstart_steps_table, "exact-mix": exact_mix_table,
-          "smooth-cost": smooth_cost_table}
+          "smooth-cost": smooth_cost_table, "mesh-distance": mesh_distance_table}
 
 
 def main(argv=None):

@@ -2,8 +2,9 @@
 
 Every shipped scene of ``scenes/`` at 512 x 512 in the lit look with 16 adaptive samples per
 pixel (the scene's camera, data, alpha and beta unchanged), the side-by-side panel of the
-authors' normal colours against ours (``look_side_by_side.png``, the bunny of triangles) and
-the whole-mesh distance demo (``mesh_distance.png``, ``examples/mesh_distance_demo.py``).
+authors' normal colours against ours (``look_side_by_side.png``, the bunny of triangles), shapes
+of trimesh and pyvista with ``tracer.render_mesh``'s defaults (``own_meshes.png``) and the
+whole-mesh distance demo (``mesh_distance.png``, ``examples/mesh_distance_demo.py``).
 
 Usage (from the repository root; about 10 minutes on 2 cores)::
 
@@ -64,6 +65,36 @@ def side_by_side(out_dir):
     os.replace(tmp, out_dir / "look_side_by_side.png")
 
 
+def own_meshes(out_dir, size=384):
+    """``own_meshes.png``: shapes made in a line of trimesh or pyvista, each drawn by
+    ``tracer.render_mesh(shape)`` with every default (the first call of a new user)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import pyvista as pv
+    import trimesh
+
+    import tracer
+
+    shapes = (("trimesh annulus", trimesh.creation.annulus(0.5, 1.0, height=0.3)),
+              ("pyvista arrow", pv.Arrow().triangulate()),
+              ("pyvista Text3D", pv.Text3D("Hi", depth=0.2).triangulate()),
+              ("octopus, 898 triangles", str(ROOT / "scenes" / "data" / "meshes"
+                                              / "octopus_low.obj")))
+    fig, axes = plt.subplots(1, len(shapes), figsize=(3.2 * len(shapes), 3.4), dpi=100)
+    for ax, (title, shape) in zip(axes, shapes):
+        res = tracer.render_mesh(shape, size=(size, size), progress=None)
+        ax.imshow(res.rgb)
+        ax.set_title(title, fontsize=10)
+        ax.axis("off")
+    fig.tight_layout()
+    tmp = out_dir / "own_meshes.tmp.png"
+    fig.savefig(tmp)
+    plt.close(fig)
+    os.replace(tmp, out_dir / "own_meshes.png")
+
+
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("scenes", nargs="*", help="scene names (default: every scenes/*.json)")
@@ -79,6 +110,8 @@ def main(argv=None):
     if not args.scenes:
         side_by_side(out_dir)
         print(f"look_side_by_side -> {out_dir / 'look_side_by_side.png'}", flush=True)
+        own_meshes(out_dir)
+        print(f"own_meshes -> {out_dir / 'own_meshes.png'}", flush=True)
         demo = runpy.run_path(str(ROOT / "examples" / "mesh_distance_demo.py"))
         with tempfile.TemporaryDirectory() as tmp:
             demo["main"](["--out", tmp, "--gallery", str(out_dir / "mesh_distance.png")])

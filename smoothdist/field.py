@@ -58,6 +58,24 @@ AUTO_SURFACE_SHARPNESS = 6.0
 #: coplanar facets raises a ridge whose slope falls like ``1 / sqrt(alpha C)``
 AUTO_ISOLATED_EDGES = 16.0
 AUTO_FLAT_SHARPNESS = 14.0
+#: surfaces (the data has triangles; issue 46): the level ``d_hat = C`` hugs the mesh, with
+#: ``C`` at most this fraction of the bbox diagonal (a silhouette grows by ``2 C``: a sphere's
+#: IoU against the mesh itself stays above 0.95) ...
+AUTO_SHELL_MAX = 0.003
+#: ... and at most this fraction of the data's local feature size (:meth:`feature_sizes`:
+#: half the thickness of a plate, half the width of a gap between parts), taken at this
+#: percentile of the surface (thin parts of a shape keep their thickness within 10 %) ...
+AUTO_SHELL_FEATURE = 0.1
+AUTO_SHELL_PERCENTILE = 25.0
+#: ... but not below this fraction of the diagonal (5 hit tolerances) ...
+AUTO_SHELL_MIN = 0.0005
+#: ... at ``alpha = AUTO_SHELL_SHARPNESS / C`` without attenuation: the smooth surface then
+#: lies within ``log(m) / alpha`` of the exact one (``m`` facets meeting: ridges along the
+#: mesh's edges about 3 % of ``C`` high, the facets' own shading), ``C`` from the data
+AUTO_SHELL_SHARPNESS = 20.0
+#: surface points sampled by :meth:`feature_sizes`, and the steps of its shrinking balls
+AUTO_FEATURE_SAMPLES = 400
+AUTO_FEATURE_STEPS = 16
 #: a net of edges (the wireframe of a surface: vertices of more than ``AUTO_WIRE_DEGREE``
 #: edges on average) is drawn as wires of radius ``AUTO_WIRE_RADIUS`` mean edge lengths, so
 #: that it stays a net (0.75 closed it into a ribbed surface), at ``alpha =
@@ -357,23 +375,31 @@ class SmoothDistanceField:
 
     def auto_surface(self):
         """The renderer's automatic ``(alpha, alpha_u, offset)``: what ``alpha``,
-        ``alpha_u`` and the smooth offset left to ``"auto"`` render (issue 35).
+        ``alpha_u`` and the smooth offset left to ``"auto"`` render (issues 35 and 46).
 
-        Edges and triangles (no points): the level set ``d_hat = C`` with
+        Meshes with triangles (and no points): a thin shell around the mesh itself, the level
+        set ``d_hat = C`` with ``C = min(AUTO_SHELL_MAX x diagonal, AUTO_SHELL_FEATURE x f)``
+        (0.3 % of the diagonal, or a tenth of ``f``, the 25th percentile of the local feature
+        size of :meth:`feature_sizes`: half a thin plate's thickness, half a narrow gap's
+        width), at least ``AUTO_SHELL_MIN x diagonal``, with edges too at least
+        ``AUTO_SURFACE_MIN_TUBE x diagonal``; ``alpha = AUTO_SHELL_SHARPNESS / C`` (20) and
+        no attenuation (``alpha_u = alpha``). Thin parts stay thin, holes open, and the
+        surface follows the exact offset surface of the data closely (no ribs or scallops
+        between facets: a coarse mesh shows its facets, as the mesh itself does);
+        ``benchmarks/bench_fidelity.py`` measures it on a corpus of shapes.
+
+        Edges alone (curves): a tube, the level set ``d_hat = C`` with
         ``C = min(AUTO_SURFACE_SPACINGS x mean edge length, AUTO_SURFACE_MAX x diagonal)``
-        (0.75 edge lengths, at most 8 % of the diagonal; with edges at least
-        ``AUTO_SURFACE_MIN_TUBE x diagonal``, 1 %: the tube's radius; the wireframe of a
-        surface, :meth:`is_wire_net`, ``AUTO_WIRE_RADIUS`` = 0.1 edge lengths: wires),
+        (0.75 edge lengths, at most 8 % of the diagonal) and at least
+        ``AUTO_SURFACE_MIN_TUBE x diagonal`` (1 %: the tube's radius); the wireframe of a
+        surface, :meth:`is_wire_net`, ``AUTO_WIRE_RADIUS`` = 0.1 edge lengths: wires;
         ``alpha = AUTO_SURFACE_SHARPNESS / C`` (6; 14 where that would exceed 16 over the
-        mean edge length, a few large facets; 30 for wires) and no attenuation
-        (``alpha_u = alpha``). The
-        zero set of ``d_hat`` runs in a groove along every mesh edge (dimples on a coarse
-        sphere, rings on a tube); the level set about one edge length out is as smooth as the
-        exact offset surface there (``renders/ripple/auto.csv``: 95th percentile of the
-        normals' angle to the true shape within ``max(6 degrees, 1.5 x`` the exact
-        surface's``)``). The surface then lies about one mean edge length outside the data.
+        mean edge length; 30 for wires), no attenuation. The zero set of ``d_hat`` runs in a
+        groove along every edge (rings on a tube); the level set about one edge length out is
+        as smooth as the exact tube (``renders/ripple/auto.csv``).
+
         Point clouds and meshes with points: :meth:`auto_alpha`, :meth:`auto_alpha_u` and
-        offset 0 (their defaults already meet that target). The result is cached.
+        offset 0 (a cloud's surface is the smooth one that closes it). The result is cached.
         """
         cached = getattr(self, "_auto_surface_value", None)
         if cached is not None:
@@ -387,10 +413,15 @@ class SmoothDistanceField:
         elif self.is_wire_net():
             C = AUTO_WIRE_RADIUS * h
             alpha = AUTO_WIRE_SHARPNESS / C
-        else:
-            C = min(AUTO_SURFACE_SPACINGS * h, AUTO_SURFACE_MAX * L)
+        elif self.mesh.triangles.size:
+            f = np.percentile(self.feature_sizes(), AUTO_SHELL_PERCENTILE)
+            C = max(min(AUTO_SHELL_MAX * L, AUTO_SHELL_FEATURE * f), AUTO_SHELL_MIN * L)
             if self.mesh.edges.size:
                 C = max(C, AUTO_SURFACE_MIN_TUBE * L)
+            alpha = AUTO_SHELL_SHARPNESS / C
+        else:
+            C = max(min(AUTO_SURFACE_SPACINGS * h, AUTO_SURFACE_MAX * L),
+                    AUTO_SURFACE_MIN_TUBE * L)
             alpha = AUTO_SURFACE_SHARPNESS / C
             if alpha * h > AUTO_ISOLATED_EDGES:
                 alpha = AUTO_FLAT_SHARPNESS / C
@@ -398,6 +429,55 @@ class SmoothDistanceField:
             value = (float(alpha), float(alpha), float(C))
         self._auto_surface_value = value
         return value
+
+    def feature_sizes(self, count=AUTO_FEATURE_SAMPLES, seed=0):
+        """Local feature size at ``count`` random points of the triangles (area-weighted):
+        for each, the radius of the largest empty ball touching the surface there, on the
+        smaller of its two sides (scene units, ``(count,)`` float64, at most the diagonal).
+
+        Half the thickness of a plate or a thin part, half the width of a gap or a hole
+        between parts, the radius of curvature of a curved surface; near a sharp edge, the
+        distance to it. Shrinking balls: a ball of radius ``r`` tangent at ``p`` whose
+        nearest surface point ``q`` (exact distance on this field's tree) lies inside is
+        replaced by the ball through ``p`` and ``q``, ``r = |p - q|^2 / (2 (p - q) . n)``,
+        :data:`AUTO_FEATURE_STEPS` times at most. Triangles only (0 data: ``(0,)``).
+        """
+        m = self.mesh
+        T = m.V[m.triangles]
+        if T.shape[0] == 0:
+            return np.empty(0)
+        cr = np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0])
+        area = np.linalg.norm(cr, axis=1)
+        ok = area > 0
+        if not ok.any():
+            return np.empty(0)
+        rng = np.random.default_rng(seed)
+        pick = rng.choice(np.flatnonzero(ok), count, p=area[ok] / area[ok].sum())
+        u, v = rng.random((2, count))
+        flip = u + v > 1.0
+        u[flip], v[flip] = 1.0 - u[flip], 1.0 - v[flip]
+        t = T[pick]
+        P = t[:, 0] + u[:, None] * (t[:, 1] - t[:, 0]) + v[:, None] * (t[:, 2] - t[:, 0])
+        n = cr[pick] / area[pick, None]
+        P, n = np.concatenate([P, P]), np.concatenate([n, -n])    # both sides
+        L = max(self.diagonal, 1e-300)
+        r = np.full(P.shape[0], L)
+        live = np.ones(P.shape[0], dtype=bool)
+        for _ in range(AUTO_FEATURE_STEPS):
+            c = np.ascontiguousarray(P[live] - r[live, None] * n[live])
+            d, g = _exact_bvh(self.tree, c)
+            w = P[live] - (c - d[:, None] * g)                     # p - q
+            wn = np.einsum("ij,ij->i", w, n[live])
+            inside = (d < (1.0 - 1e-6) * r[live]) & (wn > 0.0)
+            new = np.where(inside, np.einsum("ij,ij->i", w, w) / (2.0 * np.where(
+                inside, wn, 1.0)), r[live])
+            idx = np.flatnonzero(live)
+            r[idx] = np.minimum(r[idx], new)
+            live[idx[~inside]] = False
+            if not live.any():
+                break
+        r = np.minimum(r[:count], r[count:])
+        return np.maximum(r, 0.0)
 
     def auto_alpha_u(self, alpha):
         """``alpha_u="auto"``: ``AUTO_ALPHA_U_FACTOR x alpha`` (attenuation ``S = 1/20``).

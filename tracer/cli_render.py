@@ -38,11 +38,12 @@ def add_arguments(p):
     p.add_argument("--beta", type=float, help="Barnes-Hut beta (0 = exact; default: scene's, "
                    f"{_def('beta', 'mesh')} for a mesh)")
     p.add_argument("--alpha", type=_auto_or_number("--alpha"), metavar="auto|A",
-                   help="alpha of the (first) object, or 'auto' (default for a mesh): for "
-                   "edges and triangles with --alpha-u and --offset left out too, 6/C (14/C for "
-                   "a few large facets, 30/C for wireframes) at the "
-                   "level set d_hat = C, C = 0.75 mean edge lengths (no dimples along the "
-                   "edges); otherwise mean surface offset <= 2%% of the bbox diagonal")
+                   help="alpha of the (first) object, or 'auto' (default for a mesh): with "
+                   "--alpha-u and --offset left out too, triangles get a thin shell, the level "
+                   "set d_hat = C at C = 0.3%% of the bbox diagonal or a tenth of the local "
+                   "feature size, alpha 20/C; curves a tube, C = 0.75 mean edge lengths, "
+                   "alpha 6/C (30/C for wireframes); otherwise mean surface offset <= 2%% of "
+                   "the bbox diagonal")
     p.add_argument("--alpha-u", type=_auto_or_number("--alpha-u", "off"),
                    metavar="auto|off|U",
                    help="alpha_U (attenuation) of the (first) object, or 'auto' = 20 x alpha, "

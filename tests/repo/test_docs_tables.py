@@ -19,7 +19,8 @@ sys.path.insert(0, str(ROOT))
 
 from benchmarks.coldstart_words import warm_sentences  # noqa: E402
 from benchmarks.tables import (coldstart_steps_table, coldstart_table, exact_mix_table,  # noqa: E402
-                               exact_mix_words, gpu_table, scaling_table, smooth_cost_table)
+                               exact_mix_words, gpu_table, mesh_distance_table,
+                               mesh_distance_words, scaling_table, smooth_cost_table)
 
 
 def _guide():
@@ -212,3 +213,37 @@ def test_the_fidelity_table_follows_its_file():
     starts = [i for i, ln in enumerate(lines) if ln == want[0]]
     assert any(lines[i:i + len(want)] == want for i in starts), "paste it again"
     assert summary(d) in _flat(page)
+    assert summary(_load("fidelity_before_shell.json")) in _flat(page)
+
+
+def test_the_shell_time_sentence_follows_its_file():
+    """Issue 46: the troubleshooting guide's render-time ratio of the thin shell against the
+    rule before it is that of ``benchmarks/data/shell_time.json``."""
+    d = _load("shell_time.json")
+    page = (ROOT / "docs" / "guide" / "troubleshooting.md").read_text(encoding="utf-8")
+    words = (f"at {d['size']}² the thin shell renders in {d['ratio_min']:.2f}-"
+             f"{d['ratio_max']:.2f} (median {d['ratio_median']:.2f}) of the time of the rule "
+             f"before it, on the {len(d['rows'])} shapes with triangles")
+    assert words in _flat(page)
+    r = [row["shell_s"] / row["before_s"] for row in d["rows"]]
+    assert min(r) == pytest.approx(d["ratio_min"]) and max(r) == pytest.approx(d["ratio_max"])
+
+
+def test_the_whole_mesh_side_by_side_follows_its_file():
+    """Issue 48: the whole-mesh guide's side by side with the authors' ``meshDistance`` is the
+    table of ``mesh_distance_authors.json`` (``benchmarks/tables.py mesh-distance``) and the
+    README's sentence its words; without that file neither quotes a figure of it."""
+    page = (ROOT / "docs" / "guide" / "whole-mesh.md").read_text(encoding="utf-8")
+    section = page.split("### Side by side with the authors' `meshDistance`", 1)[1]
+    section = section.split("\n## ", 1)[0]
+    readme = _flat((ROOT / "README.md").read_text(encoding="utf-8"))
+    path = DATA / "mesh_distance_authors.json"
+    if path.is_file():
+        lines = [ln.strip() for ln in section.splitlines()]
+        want = [ln.strip() for ln in mesh_distance_table(path).splitlines()]
+        starts = [i for i, ln in enumerate(lines) if ln == want[0]]
+        assert any(lines[i:i + len(want)] == want for i in starts), "paste it again"
+        assert mesh_distance_words(path) in readme
+    else:
+        assert not [ln for ln in section.splitlines() if ln.startswith("| ")]
+        assert "their time" not in readme and "0.38x" not in readme

@@ -119,8 +119,9 @@ def sample_offsets(n):
 class _Shader:
     """Shades samples of one render (colours, alphas, objects, light factors)."""
 
-    def __init__(self, scene, camera, arrays, kargs):
+    def __init__(self, scene, camera, arrays, kargs, gpu=None):
         self.scene = scene
+        self.gpu = gpu      # tracer.rendering.gpu_render, or None: the CPU
         self.camera = camera
         self.arrays = arrays
         self.kargs = kargs  # tracer.rendering.frame.RayArgs: the render's own queries
@@ -202,8 +203,12 @@ class _Shader:
         light = LightArgs(self.key, lo, hi, eps, k, delta, do_shadow, do_ao, self.slack, t_min,
                           t_judge)
         out = LightBuffers(shadow, ao, work)
-        run_tasks(lambda a, b: _lighting.light_tasks(
-            tree, roots, params, mode, tol, P, N, depth_max, light, out, ntasks, a, b), ntasks)
+        if self.gpu is not None:
+            self.gpu.light_points_cuda(tree, roots, params, mode, tol, P, N, light, out)
+        else:
+            run_tasks(lambda a, b: _lighting.light_tasks(
+                tree, roots, params, mode, tol, P, N, depth_max, light, out, ntasks, a, b),
+                ntasks)
         self.queries += int(work[:, 0].sum())
         self.leaves += int(work[:, 1].sum())
         return shadow, ao
@@ -493,11 +498,14 @@ def _neighbour_flags(colour, record, shape):
     return flags.ravel(), edges.ravel()
 
 
-def _trace(kargs, depth_max, options, pixels, W, offsets, bounds=None, eps_px=EPS_PX):
+def _trace(kargs, depth_max, options, pixels, W, offsets, bounds=None, eps_px=EPS_PX,
+           gpu=None):
     """The samples ``offsets (K, 2)`` of the pixels ``pixels (m,)`` (flat indices), flattened
     pixel-major: ``hit, t, grad, steps, objs`` of length ``m K``. ``bounds = (t_lo, t_hi)``, each
     ``(m,)``: the pixels' cone bounds, read where finite, written where not (NaN). ``eps_px``:
-    the rays' hit threshold in pixels (:func:`tracer.rendering.march.trace_samples`)."""
+    the rays' hit threshold in pixels (:func:`tracer.rendering.march.trace_samples`).
+    ``gpu``: :mod:`tracer.rendering.gpu_render` to trace on the GPU
+    (:func:`~tracer.rendering.gpu_render.trace_samples_cuda`), None on the CPU."""
     tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps = kargs
     relax, omega, cone, newton = options
     omega = max(omega, SAMPLE_OMEGA)
@@ -516,9 +524,13 @@ def _trace(kargs, depth_max, options, pixels, W, offsets, bounds=None, eps_px=EP
         ray = MarchArgs(roots, params, mode, tol, cam, lo, hi, eps, max_steps)
         out = SampleBuffers(hit, t, grad, steps, objs, bounds[0], bounds[1])
         opts = TraceOptions(relax, omega, cone, newton)
-        run_tasks(lambda a, b: march.sample_tasks(
-            tree, ray, rows, cols, offsets, depth_max, out, opts, eps_px, SAMPLE_NEWTON_COS,
-            ntasks, a, b), ntasks)
+        if gpu is not None:
+            gpu.trace_samples_cuda(tree, ray, rows, cols, offsets, out, opts, eps_px,
+                                   SAMPLE_NEWTON_COS)
+        else:
+            run_tasks(lambda a, b: march.sample_tasks(
+                tree, ray, rows, cols, offsets, depth_max, out, opts, eps_px,
+                SAMPLE_NEWTON_COS, ntasks, a, b), ntasks)
     return hit.ravel(), t.ravel(), grad.reshape(-1, 3), steps.ravel(), objs.ravel()
 
 
@@ -551,7 +563,8 @@ def _shading_args(kargs):
     return kargs._replace(params=low)
 
 
-def _shading_normals(skargs, depth_max, options, pixels, W, offsets, hit, t, grad):
+def _shading_normals(skargs, depth_max, options, pixels, W, offsets, hit, t, grad,
+                     gpu=None):
     """The gradient of the shading field ``skargs`` (:func:`_shading_args`) at every hit
     sample, written over ``grad`` in place; ``hit (n,), t (n,), grad (n, 3)`` are flat,
     pixel-major over ``pixels (m,)`` x ``offsets (K, 2)``, as :func:`_trace` returns them.
@@ -569,7 +582,8 @@ def _shading_normals(skargs, depth_max, options, pixels, W, offsets, hit, t, gra
             continue
         at = t[idx]
         h, _, g, steps, _ = _trace(skargs, depth_max, options, pixels[idx // K], W,
-                                   offsets[k:k + 1], (at.copy(), at.copy()), _ANY_DISTANCE)
+                                   offsets[k:k + 1], (at.copy(), at.copy()), _ANY_DISTANCE,
+                                   gpu)
         evals += int(steps.sum())
         grad[idx[h]] = g[h]
     return evals
@@ -603,7 +617,8 @@ def _blend_normals(corners, normals, key, depth, my_key, my_depth):
     return m, ok
 
 
-def _centre_shading_normals(skargs, depth_max, options, shape, hit, t, grad, objs):
+def _centre_shading_normals(skargs, depth_max, options, shape, hit, t, grad, objs,
+                            gpu=None):
     """:func:`_shading_normals` of the centre samples ``(H W,)`` (``grad (H W, 3)`` written
     in place, as unit normals where interpolated): computed at every :data:`SHADE_STRIDE`-th
     pixel of every :data:`SHADE_STRIDE`-th row, interpolated bilinearly in between where the
@@ -617,7 +632,7 @@ def _centre_shading_normals(skargs, depth_max, options, shape, hit, t, grad, obj
     cpix = np.flatnonzero(coarse)
     g = grad[cpix]
     evals = _shading_normals(skargs, depth_max, options, cpix, W, np.zeros((1, 2)),
-                             np.ones(cpix.size, dtype=bool), t[cpix], g)
+                             np.ones(cpix.size, dtype=bool), t[cpix], g, gpu)
     grad[cpix] = g
     rest = np.flatnonzero(hit & ~coarse)
     if rest.size:
@@ -636,13 +651,13 @@ def _centre_shading_normals(skargs, depth_max, options, shape, hit, t, grad, obj
         todo = rest[~ok]
         g = grad[todo]
         evals += _shading_normals(skargs, depth_max, options, todo, W, np.zeros((1, 2)),
-                                  np.ones(todo.size, dtype=bool), t[todo], g)
+                                  np.ones(todo.size, dtype=bool), t[todo], g, gpu)
         grad[todo] = g
     return evals
 
 
 def _sample_shading_normals(skargs, depth_max, options, pixels, W, offsets, position, centre,
-                            hit, t, grad, objs):
+                            hit, t, grad, objs, gpu=None):
     """:func:`_shading_normals` of extra samples (arguments as there; ``position = (rows,
     cols)`` their fractional image positions, ``centre = (H, W, key, depth, normals)`` of
     the centre samples, normals unit and final): bilinear from the four centre pixels
@@ -662,10 +677,12 @@ def _sample_shading_normals(skargs, depth_max, options, pixels, W, offsets, posi
     n, ok = _blend_normals(corners, normals, key, depth, my_key, np.where(hit, t, 0.0))
     ok &= hit
     grad[ok] = n[ok]
-    return _shading_normals(skargs, depth_max, options, pixels, W, offsets, hit & ~ok, t, grad)
+    return _shading_normals(skargs, depth_max, options, pixels, W, offsets, hit & ~ok, t, grad,
+                            gpu)
 
 
-def form_image(scene, camera, arrays, kargs, options, centre, samples=1, adaptive=False):
+def form_image(scene, camera, arrays, kargs, options, centre, samples=1, adaptive=False,
+               gpu=None):
     """Shade the centre samples, add ``samples - 1`` more per pixel (all pixels, or the
     adaptive selection), and average.
 
@@ -679,7 +696,10 @@ def form_image(scene, camera, arrays, kargs, options, centre, samples=1, adaptiv
 
     Lit renders in smooth mode whose beta exceeds :data:`BETA_SHADE` shade every hit with the
     normal of the field at that beta (``_shading_normals``), and write the centre's into
-    ``centre``'s ``grad`` (in place: the render's normals are those the image is lit with)."""
+    ``centre``'s ``grad`` (in place: the render's normals are those the image is lit with).
+    ``gpu``: :mod:`tracer.rendering.gpu_render` (passed in by it: this module does not import
+    it) to trace the samples' and the light's rays on the GPU (the same per-ray functions);
+    None on the CPU. Everything else runs on the host either way."""
     H, W = scene.height, scene.width
     hit0, t0, grad0, objs0 = (np.asarray(a) for a in centre)
     hit0, t0, objs0 = hit0.ravel(), t0.ravel(), objs0.ravel()
@@ -689,9 +709,9 @@ def form_image(scene, camera, arrays, kargs, options, centre, samples=1, adaptiv
     shade_evals = 0
     if skargs is not None:
         shade_evals += _centre_shading_normals(skargs, arrays.depth_max, options, (H, W), hit0,
-                                               t0, grad0, objs0)
+                                               t0, grad0, objs0, gpu)
         centre_normals = (H, W, np.where(hit0, objs0, -1), t0, _unit(grad0))
-    shader = _Shader(scene, camera, arrays, kargs)
+    shader = _Shader(scene, camera, arrays, kargs, gpu)
     colour0, alpha0, rec0 = shader.shade(hit0, t0, grad0, dirs, grid=(H, W), objs=objs0)
     acc = colour0 * alpha0[:, None]
     acc_a = alpha0.copy()
@@ -715,12 +735,12 @@ def form_image(scene, camera, arrays, kargs, options, centre, samples=1, adaptiv
         d = _dir(kargs.cam, r, c)
         bounds = (cone_lo[pixels], cone_hi[pixels])
         hit, t, grad, st, obj = _trace(kargs, arrays.depth_max, options, pixels, W, offsets[ks],
-                                       bounds)
+                                       bounds, gpu=gpu)
         cone_lo[pixels], cone_hi[pixels] = bounds
         if skargs is not None:
             shade_evals += _sample_shading_normals(skargs, arrays.depth_max, options, pixels,
                                                    W, offsets[ks], (r, c), centre_normals,
-                                                   hit, t, grad, obj)
+                                                   hit, t, grad, obj, gpu)
         rays += pix.size
         work[0] += int(st.sum())
         reuse = None

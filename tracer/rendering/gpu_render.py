@@ -14,11 +14,20 @@ common end depth (the CPU's ``cone_end``, marched once a ray of the tile has mis
 only shortens misses); the same hit test, steps, Newton steps and bisection otherwise. Under
 numba's CUDA simulator the images equal the CPU's bit for bit
 (``tests/smoothdist/test_cuda_sim.py``); on a card, fused multiply-add may move a grazing pixel
-(one of the 1080p bunnies' 6.2 million pixels in ``benchmarks/data/gpu_h100.json``). One sample
-per pixel; the ``"lit"`` shading, anti-aliasing and transparent backgrounds are CPU only.
+(one of the 1080p bunnies' 6.2 million pixels in ``benchmarks/data/gpu_h100.json``).
+
+The lit look, anti-aliasing samples (adaptive too) and transparent backgrounds (issue 49) take
+the CPU's film (:func:`tracer.rendering.film.form_image`) over the GPU's centre samples, with
+its two per-ray kernels on the GPU: the extra samples (:func:`_samples_kernel`, the CPU's
+:func:`tracer.rendering.march.sample_pixel`) and the shadow and occlusion rays
+(:func:`_light_kernel`, :func:`tracer.rendering.lighting.light_point`), one thread per sample
+or point. What stays on the host: the film's bookkeeping (which pixels get samples, the light
+interpolated between centre samples, the colours), the ground's height and, with several
+objects, which object a lit point shows.
 """
 
 import math
+import sys
 import time
 from typing import NamedTuple
 
@@ -28,18 +37,22 @@ import numpy as np
 from smoothdist import cuda as sdcuda
 from smoothdist.kernels import NJIT
 from tracer.errors import RenderError
-from tracer.rendering import march
+from tracer.rendering import lighting, march
 from tracer.rendering.camera import CAM_HEIGHT, CAM_WIDTH, ray_direction
-from tracer.rendering.frame import (RenderResult, _progress_callback, _samples, camera_of,
-                                    distance_at_camera, scene_arrays, shade)
+from tracer.rendering.film import form_image
+from tracer.rendering.frame import (RayArgs, RenderResult, TraceOptions, _progress_callback,
+                                    _samples, camera_of, distance_at_camera, scene_arrays, shade)
 
-__all__ = ["render_cuda", "normal_colour", "BLOCK"]
+__all__ = ["render_cuda", "normal_colour", "BLOCK", "trace_samples_cuda",
+           "light_points_cuda"]
 
 #: entries of each thread's traversal stack (a constant of this module: a local array's size
 #: must be a compile-time constant)
 STACK = sdcuda.STACK
 #: threads per block, (columns, rows): 128 threads, neighbouring rays in one warp
 BLOCK = (16, 8)
+#: threads per block of the one-dimensional kernels (samples, light)
+THREADS = 128
 
 
 class GpuArgs(NamedTuple):
@@ -169,24 +182,97 @@ def _render_kernel(data, mode, tol, eps, max_steps, relax, omega, newton, cone, 
         rgb[r, c, 2] = cb
 
 
+def _samples_kernel(data, n, eps_px, newton_cos):
+    # one thread per pixel of the film's extra samples: ``data = (tree, ray, rows, cols,
+    # offsets, out, opts)`` as :func:`tracer.rendering.march.sample_tasks` takes them, one
+    # tuple (see _render_kernel)
+    tree, ray, rows, cols, offsets, out, opts = data
+    i = cuda.grid(1)
+    if i < n:
+        stack = cuda.local.array(STACK, numba.int64)
+        dstack = cuda.local.array(STACK, numba.float64)
+        march.sample_pixel(tree, ray, rows, cols, offsets, out, opts, eps_px, newton_cos, i,
+                           stack, dstack)
+
+
+def _light_kernel(data, n):
+    # one thread per lit point: ``data = (tree, roots, params, mode, tol, P, N, light, out)``
+    # as :func:`tracer.rendering.lighting.light_tasks` takes them
+    tree, roots, params, mode, tol, P, N, light, out = data
+    i = cuda.grid(1)
+    if i < n:
+        stack = cuda.local.array(STACK, numba.int64)
+        dstack = cuda.local.array(STACK, numba.float64)
+        lighting.light_point(tree, roots, params, mode, tol, P, N, light, out, i, stack, dstack)
+
+
 def kernel(name="render"):
-    """The ``"render"`` (one thread per pixel) or ``"cone"`` (one thread per tile) kernel as
-    a CUDA kernel (compiled at its first launch)."""
+    """The ``"render"`` (one thread per pixel), ``"cone"`` (one thread per tile),
+    ``"samples"`` (one per pixel of extra samples) or ``"light"`` (one per lit point) kernel
+    as a CUDA kernel (compiled at its first launch)."""
     global cuda
     if not _KERNELS:
         cuda = sdcuda.cuda_module()
         _KERNELS["render"] = cuda.jit(_render_kernel, cache=True)
         _KERNELS["cone"] = cuda.jit(_cone_kernel, cache=True)
+        _KERNELS["samples"] = cuda.jit(_samples_kernel, cache=True)
+        _KERNELS["light"] = cuda.jit(_light_kernel, cache=True)
     return _KERNELS[name]
 
 
-def check_scene(scene, samples):
-    """A one-line ``ValueError`` for what the GPU path does not render."""
-    if samples != 1 or scene.shading == "lit" or scene.transparent:
-        raise ValueError("device 'cuda' renders one sample per pixel with the normals, matcap "
-                         f"or headlight shading (this scene: shading {scene.shading!r}, "
-                         f"{samples} sample(s)"
-                         f"{', transparent' if scene.transparent else ''}); use device 'cpu'")
+def _to_device(values):
+    """``values`` (a tuple or NamedTuple) with its arrays on the device (the simulator: as
+    they are), and the host arrays to copy back into: ``(on_device, pairs)``."""
+    if sdcuda.simulated():
+        return values, []
+    moved = [cuda.to_device(np.ascontiguousarray(v)) if isinstance(v, np.ndarray) else v
+             for v in values]
+    pairs = [(v, m) for v, m in zip(values, moved) if isinstance(v, np.ndarray)]
+    return type(values)(*moved) if hasattr(values, "_fields") else tuple(moved), pairs
+
+
+def _root_array(roots):
+    """``roots`` (an int or an array) as a ``(k,) int64`` array."""
+    return np.ascontiguousarray(np.atleast_1d(roots), np.int64)
+
+
+def _copy_back(pairs):
+    for host, dev in pairs:
+        host[...] = dev.copy_to_host()
+
+
+def trace_samples_cuda(tree, ray, rows, cols, offsets, out, opts, eps_px, newton_cos):
+    """:func:`tracer.rendering.march.trace_samples` on the GPU: the samples ``offsets (K, 2)``
+    of the pixels ``rows, cols (m,)``, written into ``out``
+    (:class:`tracer.rendering.frame.SampleBuffers`, host arrays) as the CPU writes them."""
+    kernel()
+    n = int(rows.size)
+    if n == 0:
+        return
+    # roots as the (k,) array: the general path (see prepare); CUDA types no int root
+    dray, _ = _to_device(ray._replace(roots=_root_array(ray.roots)))
+    dout, pairs = _to_device(out)
+    (drows, dcols, doffsets), _ = _to_device((rows, cols, offsets))
+    data = (sdcuda.device_tree(tree), dray, drows, dcols, doffsets, dout, opts)
+    kernel("samples")[(n + THREADS - 1) // THREADS, THREADS](data, n, float(eps_px),
+                                                             float(newton_cos))
+    _copy_back(pairs)
+
+
+def light_points_cuda(tree, roots, params, mode, tol, P, N, light, out):
+    """:func:`tracer.rendering.lighting.light_points` on the GPU: shadow and occlusion at
+    points ``P (n, 3)`` with unit normals ``N``, written into ``out``
+    (:class:`tracer.rendering.frame.LightBuffers`, host arrays) as the CPU writes them."""
+    kernel()
+    n = int(P.shape[0])
+    if n == 0:
+        return
+    dlight, _ = _to_device(light)
+    dout, pairs = _to_device(out)
+    (droots, dparams, dP, dN), _ = _to_device((_root_array(roots), params, P, N))
+    data = (sdcuda.device_tree(tree), droots, dparams, mode, tol, dP, dN, dlight, dout)
+    kernel("light")[(n + THREADS - 1) // THREADS, THREADS](data, n)
+    _copy_back(pairs)
 
 
 def prepare(scene, transforms=None, relax=None, omega=None, newton=None):
@@ -260,13 +346,13 @@ def launch(args, shape, cone=True, block=BLOCK, out=None):
 def render_cuda(scene, *, progress=None, transforms=None, relax=None, omega=None, newton=None,
                 samples=None, adaptive=None, cone=None):
     """:func:`tracer.render` on the GPU (its arguments; ``band_rows`` does not apply). Returns a
-    :class:`tracer.rendering.frame.RenderResult`; ``seconds`` is the time of the launch and the
-    copies back."""
+    :class:`tracer.rendering.frame.RenderResult`; ``seconds`` is the time of the launch, the
+    copies back and (lit, sampled or transparent renders) the film."""
     samples = _samples(scene.samples if samples is None else samples)
+    adaptive = bool(scene.adaptive if adaptive is None else adaptive)
     # no card is the first thing to say (issue 49): an option the card would refuse matters
     # only where there is a card
     sdcuda.cuda_module()
-    check_scene(scene, samples)
     for name, value in (("newton", newton), ("relax", relax)):
         if value is not None and not (isinstance(value, (int, float, np.number))
                                       and not isinstance(value, bool)
@@ -274,17 +360,28 @@ def render_cuda(scene, *, progress=None, transforms=None, relax=None, omega=None
             raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
     progress = _progress_callback(progress, scene)
     camera, args, (H, W) = prepare(scene, transforms, relax, omega, newton)
+    use_cone = bool(march.CONE if cone is None else cone)
     t0 = time.perf_counter()
-    out = launch(args, (H, W), bool(march.CONE if cone is None else cone))
+    out = launch(args, (H, W), use_cone)
     hit, tbuf, grad, steps, leaves, bis, objs, rgb = (a.copy_to_host() for a in out)
+    film = samples != 1 or scene.shading == "lit" or scene.transparent
+    alpha, spp, aovs = hit.astype(np.float32), np.ones((H, W), np.int32), {"rays": H * W}
+    if film:
+        arrays = scene_arrays(scene, transforms)
+        tree, roots, params, mode, lo, hi, depth_max, tol = arrays
+        kargs = RayArgs(tree, _root_array(roots), params, mode, tol, camera.as_array(), lo, hi,
+                        float(scene.eps), int(scene.max_steps))
+        options = TraceOptions(args.relax, args.omega, use_cone, args.newton)
+        rgb, alpha, spp, aovs = form_image(scene, camera, arrays, kargs, options,
+                                           (hit, tbuf, grad, objs), samples, adaptive,
+                                           gpu=sys.modules[__name__])
     seconds = time.perf_counter() - t0
     if progress is not None:
         progress(H * W, H * W, seconds)
     norm = np.linalg.norm(grad, axis=2, keepdims=True)
     normals = np.where(norm > 0, grad / np.where(norm > 0, norm, 1.0), 0.0)
-    if scene.shading != "normals":
+    if not film and scene.shading != "normals":
         rgb = shade(scene, camera, normals, hit)
     return RenderResult(rgb=rgb, hit=hit, depth=tbuf.astype(np.float32), normals=normals,
                         steps=steps, leaves=leaves, bisections=bis, seconds=seconds,
-                        camera=camera, scene=scene, alpha=hit.astype(np.float32),
-                        samples=np.ones((H, W), np.int32), aovs={"rays": H * W})
+                        camera=camera, scene=scene, alpha=alpha, samples=spp, aovs=aovs)

@@ -37,8 +37,8 @@ from tracer.rendering.march import (NEWTON_COS, OMEGA, RELAX, march_ray, nearest
                                     object_lower_bound, ray_box, scene_distance, visiting_order)
 
 __all__ = ["Lighting", "DEFAULT_COLOR", "PALETTE", "soft_shadow", "ambient_occlusion",
-           "light_points", "object_ids", "ground_height", "light_directions", "shade_lit",
-           "shade_ground", "srgb_to_linear", "linear_to_srgb"]
+           "light_points", "light_point", "object_ids", "ground_height", "light_directions",
+           "shade_lit", "shade_ground", "srgb_to_linear", "linear_to_srgb"]
 
 #: at most this many distance queries along a shadow ray
 SHADOW_STEPS = 96
@@ -237,36 +237,43 @@ def light_tasks(tree, roots, params, mode, tol, P, N, depth_max, light, out, nta
 @numba.njit(**NJIT_IR_INLINE)
 def _light_task(tree, roots, params, mode, tol, P, N, depth_max, light, out, task, ntasks):
     """Points ``task, task + ntasks, ...`` of :func:`light_points`."""
-    L, lo, hi, eps, k, delta, do_shadow, do_ao, slack, t_min, t_judge = light
-    shadow, ao, work = out
-    bias = 2.0 * eps
     n = P.shape[0]
     stack = np.empty(depth_max + 4, dtype=np.int64)
     dstack = np.empty(depth_max + 4)
     for i in range(task, n, ntasks):  # every ntasks-th point
-        nx, ny, nz = N[i, 0], N[i, 1], N[i, 2]
-        px = P[i, 0] + bias * nx
-        py = P[i, 1] + bias * ny
-        pz = P[i, 2] + bias * nz
-        s = 1.0
-        q = 0
-        lv = 0
-        if do_shadow and nx * L[0] + ny * L[1] + nz * L[2] > 0.0:
-            s, q, lv = soft_shadow(tree, roots, params, mode, tol, px, py, pz, L[0], L[1],
-                                   L[2], lo, hi, eps, t_min, k, stack, dstack, slack,
-                                   t_judge)
-        elif do_shadow:
-            s = 0.0          # facing away from the light: no direct light anyway
-        a = 1.0
-        if do_ao:
-            a, la = ambient_occlusion(tree, roots, params, mode, tol, px, py, pz, nx, ny, nz,
-                                      delta, stack, dstack, slack)
-            q += AO_SAMPLES
-            lv += la
-        shadow[i] = s
-        ao[i] = a
-        work[i, 0] = q
-        work[i, 1] = lv
+        light_point(tree, roots, params, mode, tol, P, N, light, out, i, stack, dstack)
+
+
+@numba.njit(**NJIT_IR_INLINE)
+def light_point(tree, roots, params, mode, tol, P, N, light, out, i, stack, dstack):
+    """Point ``i`` of :func:`light_points`, with the traversal stacks ``stack``, ``dstack``
+    (the CPU's tasks and the GPU's threads, :mod:`tracer.rendering.gpu_render`, call this)."""
+    L, lo, hi, eps, k, delta, do_shadow, do_ao, slack, t_min, t_judge = light
+    shadow, ao, work = out
+    bias = 2.0 * eps
+    nx, ny, nz = N[i, 0], N[i, 1], N[i, 2]
+    px = P[i, 0] + bias * nx
+    py = P[i, 1] + bias * ny
+    pz = P[i, 2] + bias * nz
+    s = 1.0
+    q = 0
+    lv = 0
+    if do_shadow and nx * L[0] + ny * L[1] + nz * L[2] > 0.0:
+        s, q, lv = soft_shadow(tree, roots, params, mode, tol, px, py, pz, L[0], L[1],
+                               L[2], lo, hi, eps, t_min, k, stack, dstack, slack,
+                               t_judge)
+    elif do_shadow:
+        s = 0.0          # facing away from the light: no direct light anyway
+    a = 1.0
+    if do_ao:
+        a, la = ambient_occlusion(tree, roots, params, mode, tol, px, py, pz, nx, ny, nz,
+                                  delta, stack, dstack, slack)
+        q += AO_SAMPLES
+        lv += la
+    shadow[i] = s
+    ao[i] = a
+    work[i, 0] = q
+    work[i, 1] = lv
 
 
 @numba.njit(**NJIT_PARALLEL)

@@ -932,44 +932,54 @@ def sample_tasks(tree, ray, rows, cols, offsets, depth_max, out, opts, eps_px, n
 def _samples_task(tree, ray, rows, cols, offsets, depth_max, out, opts, eps_px, newton_cos, task,
                   ntasks):
     """Pixels ``task, task + ntasks, ...`` of :func:`trace_samples`."""
-    roots, params, mode, tol, cam, lo, hi, eps, max_steps = ray
-    hit, tbuf, grad, steps, objs, t_lo, t_hi = out
-    relax, omega, cone, newton = opts
-    pixel = 1.0 / min(cam[CAM_WIDTH], cam[CAM_HEIGHT])      # a pixel's size at unit depth
     n = rows.size
     stack = np.empty(depth_max + 4, dtype=np.int64)
     dstack = np.empty(depth_max + 4)
     for i in range(task, n, ntasks):    # every ntasks-th pixel
-        r = rows[i]
-        c = cols[i]
-        c_ev = 0
-        if cone and not (np.isfinite(t_lo[i]) and np.isfinite(t_hi[i])):
-            t_lo[i], ev = cone_start(tree, roots, params, mode, tol, cam, lo, hi, eps,
-                                     r - 1, r + 2, c - 1, c + 2, stack, dstack, relax)[:2]
-            c_ev += ev
-            t_hi[i], ev, lv = cone_end(tree, roots, params, mode, tol, cam, lo, hi, eps, r - 1,
-                                       r + 2, c - 1, c + 2, stack, dstack, relax)
-            c_ev += ev
-        elif not cone:
-            t_lo[i] = 0.0
-            t_hi[i] = np.inf
-        t_min = t_lo[i]
-        e = max(eps, eps_px * pixel * t_min)
-        for k in range(offsets.shape[0]):
-            dx, dy, dz = ray_direction(cam, r + offsets[k, 0], c + offsets[k, 1])
-            # every argument given (t_pred and d_lb at their defaults' values): the camera
-            # rays' specialisation of march_ray, compiled once for both
-            h, t, gx, gy, gz, st, lv, bs, ob = march_ray(
-                tree, roots, params, mode, tol, cam[0], cam[1], cam[2], dx, dy, dz, lo, hi,
-                e, max_steps, stack, dstack, relax, omega, t_min, newton, t_hi[i],
-                newton_cos, 0.0, 0.0)
-            hit[i, k] = h == 1
-            tbuf[i, k] = t
-            grad[i, k, 0] = gx
-            grad[i, k, 1] = gy
-            grad[i, k, 2] = gz
-            steps[i, k] = st + (c_ev if k == 0 else 0)
-            objs[i, k] = ob
+        sample_pixel(tree, ray, rows, cols, offsets, out, opts, eps_px, newton_cos, i, stack,
+                     dstack)
+
+
+@numba.njit(**NJIT_IR_INLINE)
+def sample_pixel(tree, ray, rows, cols, offsets, out, opts, eps_px, newton_cos, i, stack,
+                 dstack):
+    """Pixel ``i`` of :func:`trace_samples`: its cone bounds (where not given) and the rays of
+    its ``offsets``, with the traversal stacks ``stack``, ``dstack`` (the CPU's tasks and the
+    GPU's threads, :mod:`tracer.rendering.gpu_render`, call this)."""
+    roots, params, mode, tol, cam, lo, hi, eps, max_steps = ray
+    hit, tbuf, grad, steps, objs, t_lo, t_hi = out
+    relax, omega, cone, newton = opts
+    pixel = 1.0 / min(cam[CAM_WIDTH], cam[CAM_HEIGHT])      # a pixel's size at unit depth
+    r = rows[i]
+    c = cols[i]
+    c_ev = 0
+    if cone and not (math.isfinite(t_lo[i]) and math.isfinite(t_hi[i])):   # CUDA: no ufunc
+        t_lo[i], ev = cone_start(tree, roots, params, mode, tol, cam, lo, hi, eps,
+                                 r - 1, r + 2, c - 1, c + 2, stack, dstack, relax)[:2]
+        c_ev += ev
+        t_hi[i], ev, lv = cone_end(tree, roots, params, mode, tol, cam, lo, hi, eps, r - 1,
+                                   r + 2, c - 1, c + 2, stack, dstack, relax)
+        c_ev += ev
+    elif not cone:
+        t_lo[i] = 0.0
+        t_hi[i] = np.inf
+    t_min = t_lo[i]
+    e = max(eps, eps_px * pixel * t_min)
+    for k in range(offsets.shape[0]):
+        dx, dy, dz = ray_direction(cam, r + offsets[k, 0], c + offsets[k, 1])
+        # every argument given (t_pred and d_lb at their defaults' values): the camera
+        # rays' specialisation of march_ray, compiled once for both
+        h, t, gx, gy, gz, st, lv, bs, ob = march_ray(
+            tree, roots, params, mode, tol, cam[0], cam[1], cam[2], dx, dy, dz, lo, hi,
+            e, max_steps, stack, dstack, relax, omega, t_min, newton, t_hi[i],
+            newton_cos, 0.0, 0.0)
+        hit[i, k] = h == 1
+        tbuf[i, k] = t
+        grad[i, k, 0] = gx
+        grad[i, k, 1] = gy
+        grad[i, k, 2] = gz
+        steps[i, k] = st + (c_ev if k == 0 else 0)
+        objs[i, k] = ob
 
 
 @numba.njit(**NJIT)

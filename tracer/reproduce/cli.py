@@ -2,8 +2,11 @@
 folder (``<experiment>.json`` each, with commit, date, machine, thread count and settings; the
 studies' own CSVs and plots in ``<experiment>/``), ``claims.json`` and ``reproduction.md``.
 
-``--quick`` runs everything at small sizes (a few minutes on 2 cores); the full run uses the
-paper's sizes (an hour or more on 2 cores: the beta study at 512² alone takes half an hour)
+``--quick`` runs everything at small sizes (at most :data:`QUICK_MINUTES` minutes on 2 cores
+without ``--authors-bin``, which adds up to the quick timeout per Table 3 scene: the committed
+quick run's ``run.json`` holds the measured figure, and ``tests/test_reproduce.py`` checks it
+against the bound); the full run uses the paper's sizes (hours on 2 cores: the Table 3
+simulations dominate)
 and runs the studies' and the simulations' tasks on the Dask runner (:mod:`tracer.runner`,
 ``--scheduler``). The folder is built next to ``--out``
 under a temporary name and renamed when every experiment has finished, so an interrupted or
@@ -21,12 +24,16 @@ from tracer import runner
 from tracer.outputs import CLIError, write_json, write_text
 
 HELP = "run every reproducible experiment of the paper and write the results and the report"
+#: the bound the help states for ``--quick`` on 2 cores (without ``--authors-bin``); the
+#: committed quick run (renders/reproduction/quick/run.json) must keep it
+QUICK_MINUTES = 15
 
 
 def add_arguments(p):
     p.add_argument("--quick", action="store_true",
-                   help="small sizes: a few minutes on 2 cores (default: the paper's sizes, "
-                   "an hour or more)")
+                   help=f"small sizes: at most {QUICK_MINUTES} minutes on 2 cores, measured "
+                   "(renders/reproduction/quick/run.json); --authors-bin adds up to 10 minutes "
+                   "per Table 3 scene (default: the paper's sizes, hours)")
     p.add_argument("--smoke", action="store_true",
                    help="smaller still than --quick (the test suite's run: every experiment "
                    "once, at its smallest)")
@@ -37,12 +44,13 @@ def add_arguments(p):
                    help="also write the report page here (e.g. docs/reproduction.md)")
     p.add_argument("--only", metavar="LIST",
                    help="comma-separated experiments to run (default all: "
-                   "underestimate, table3, grid, bh_switch, box_test, gpu, beta, alpha); into an "
+                   "underestimate, table3, grid, bh_switch, box_test, gpu, beta, alpha, "
+                   "beta_alpha, attenuation); into an "
                    "existing results folder of the same mode it updates those experiments and "
                    "keeps the others (unless --overwrite)")
     p.add_argument("--authors-bin", metavar="PATH",
                    help="the authors' rigid_body_simulator (built as "
-                   "/work/shared/tools/authors-bench/README.md says): Table 3 then also runs "
+                   "../shared/tools/authors-bench/README.md says): Table 3 then also runs "
                    "their simulator on the same files and steps, on this machine, in the same "
                    "run (rows it cannot finish within the timeout say so)")
     p.add_argument("--table3-scenes", metavar="LIST",
@@ -54,6 +62,10 @@ def add_arguments(p):
     p.add_argument("--report-only", action="store_true",
                    help="run nothing: regenerate claims.json and the page from --out")
     p.add_argument("--overwrite", action="store_true", help="replace an existing results folder")
+    p.add_argument("--allow-dirty", action="store_true",
+                   help="run, or write the report from results, on a work tree with "
+                   "uncommitted changes (refused otherwise: such results name a commit that "
+                   "is not the code they measured); the page then says which results are so")
     runner.add_arguments(p)
     p.add_argument("--threads", type=int, help="numba threads of in-process work")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
@@ -80,10 +92,20 @@ def _shown(path):
         return str(path)
 
 
-def write_report(out, page=None, shown_as=None):
-    """``claims.json`` and ``reproduction.md`` in ``out`` (and the page at ``page``)."""
-    from tracer.reproduce.report import claims_rows, render_page
+def write_report(out, page=None, shown_as=None, allow_dirty=False):
+    """``claims.json`` and ``reproduction.md`` in ``out`` (and the page at ``page``); refused
+    (:class:`CLIError`) when a result came from a tree with local changes, unless
+    ``allow_dirty``. The report's own state (its commit, whether each experiment's measured
+    code changed since its run) goes into ``run.json``'s ``report``."""
+    from tracer.reproduce.report import claims_rows, dirty_results, render_page, report_state
 
+    dirty = dirty_results(out)
+    if dirty and not allow_dirty:
+        raise CLIError(f"results of a tree with local changes: {', '.join(dirty)} (rerun them "
+                       "on a clean commit, or pass --allow-dirty and the page says so)")
+    run = json.loads((Path(out) / "run.json").read_text(encoding="utf-8"))
+    run["report"] = report_state(out, allow_dirty)
+    write_json(Path(out) / "run.json", run)
     write_json(Path(out) / "claims.json", claims_rows(out))
     text = render_page(out, shown_as or _shown(out))
     write_text(Path(out) / "reproduction.md", text)
@@ -108,7 +130,8 @@ def needs(args):
 
 
 def run(args):
-    from tracer.reproduce.experiments import EXPERIMENTS, SETTINGS, merge_table3, provenance
+    from tracer.reproduce.experiments import (EXPERIMENTS, SETTINGS, load_average, merge_table3,
+                                              provenance)
 
     if args.quick and args.smoke:
         raise CLIError("--quick and --smoke exclude each other")
@@ -124,7 +147,7 @@ def run(args):
     if args.report_only:
         if not (out / "run.json").is_file():
             raise CLIError(f"{out} holds no results of tracer reproduce (no run.json)")
-        write_report(out, args.page)
+        write_report(out, args.page, allow_dirty=args.allow_dirty)
         if not args.quiet:
             print(f"Wrote {out / 'claims.json'} and {out / 'reproduction.md'}"
                   + (f" and {args.page}" if args.page else ""))
@@ -159,6 +182,17 @@ def run(args):
         # a run of some Table 3 scenes adds its rows to the earlier ones
         keep_rows = [n for n in old["experiments"] if n == "table3"
                      and (out / "table3.json").is_file()]
+    if not args.allow_dirty:  # refuse now, not after an hour of experiments
+        from tracer.reproduce.experiments import tree_dirty
+        from tracer.reproduce.report import dirty_results
+
+        if tree_dirty():
+            raise CLIError("the work tree has uncommitted changes (git status): commit them, "
+                           "or pass --allow-dirty and the page says so")
+        old_dirty = [n for n in dirty_results(out) if n in keep + keep_rows]
+        if old_dirty:
+            raise CLIError(f"{out} keeps results of a tree with local changes: "
+                           f"{', '.join(old_dirty)} (rerun them, or pass --allow-dirty)")
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = out.parent / f".{out.name}.partial-{os.getpid()}"
     shutil.rmtree(tmp, ignore_errors=True)
@@ -171,6 +205,7 @@ def run(args):
             if name == "table3" and scenes:
                 settings = dict(settings, scenes=scenes)
             say(f"reproduce: {name} {settings}")
+            load0 = load_average()
             t0 = time.perf_counter()
             res = EXPERIMENTS[name](tmp / name, settings,
                                     {"scheduler": sched, "workers": workers,
@@ -180,6 +215,7 @@ def run(args):
                 res = merge_table3(json.loads((out / "table3.json").read_text()), res)
             write_json(tmp / f"{name}.json", dict(res, experiment=name, mode=mode,
                                                    settings=settings, seconds=round(sec, 2),
+                                                   load_average_before=load0,
                                                    provenance=provenance()))
             say(f"reproduce: {name} done in {runner.duration(sec)}")
         for n in keep:  # the experiments --only left as they were
@@ -191,9 +227,9 @@ def run(args):
         write_json(tmp / "run.json", dict(prov, mode=mode, experiments=ran,
                                           updated=names if keep else ran,
                                           scheduler=sched if sched in ("serial", "local")
-                                          else "address",
+                                          else "address", authors_bin=bool(authors),
                                           seconds=round(time.perf_counter() - t_all, 1)))
-        write_report(tmp, None, _shown(out))
+        write_report(tmp, None, _shown(out), args.allow_dirty)
         if out.exists():
             old = out.parent / f".{out.name}.old-{os.getpid()}"
             out.rename(old)

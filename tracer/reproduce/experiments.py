@@ -48,38 +48,47 @@ TABLE3_PAPER = {
 #: scenes/simulations/table3/README.md says why not); the terrain scenes build 6.6M points.
 SETTINGS = {
     "quick": {
-        "beta": {"size": 24, "betas": [0.0, 0.2, 0.5, 1.0]},
+        "beta": {"size": 24, "betas": [0.0, 0.2, 0.5, 1.0], "repeat": 3},
         "alpha": {"study": "underestimate", "size": 24},
         "underestimate": {"queries": 2000, "seed": 0, "alpha": 200.0},
         "bh_switch": {"trials": 40},
-        "grid": {"grid": 24, "generated": [100, 1000, 10000], "thingi10k": True},
+        "grid": {"grid": 24, "generated": [100, 1000, 10000], "thingi10k": True, "repeat": 3},
         "table3": {"scenes": ["ico_bowl", "trefoil_ringtoss", "sphere_slide"], "steps": 100,
                    "threads": [1, None], "authors_timeout": 600.0},
         "box_test": {"cases": ["bowl-ico", "slide-sphere"], "repeat": 5},
         "gpu": {"size": [640, 360], "grid": 50, "repeat": 3},
+        "beta_alpha": {"size": 48, "alphas": [50.0, 200.0, 800.0], "betas": [0.0, 0.5, 1.0]},
+        "attenuation": {"R": 4.0, "r": 1.5, "alpha": 2.0, "alpha_us": [4, 8, 16, 64],
+                        "grid": 201},
     },
     "smoke": {  # the test suite's: every experiment at its smallest (seconds, once compiled)
-        "beta": {"size": 12, "betas": [0.0, 0.2, 0.5]},
+        "beta": {"size": 12, "betas": [0.0, 0.2, 0.5], "repeat": 2},
         "alpha": {"study": "underestimate", "size": 12},
         "underestimate": {"queries": 300, "seed": 0, "alpha": 200.0},
         "bh_switch": {"trials": 20},
-        "grid": {"grid": 8, "generated": [100], "thingi10k": False},
+        "grid": {"grid": 8, "generated": [100], "thingi10k": False, "repeat": 2},
         "table3": {"scenes": ["trefoil_ringtoss"], "steps": 10, "threads": [1, None]},
         "box_test": {"cases": ["bowl-ico"], "repeat": 2},
         "gpu": {"size": [320, 180], "grid": 20, "repeat": 1},
+        "beta_alpha": {"size": 12, "alphas": [100.0, 400.0], "betas": [0.0, 1.0]},
+        "attenuation": {"R": 4.0, "r": 1.5, "alpha": 2.0, "alpha_us": [16], "grid": 151},
     },
     "full": {
-        "beta": {"size": 512, "betas": [0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0]},
+        "beta": {"size": 512, "betas": [0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0],
+                 "repeat": 3},
         "alpha": {"study": "all", "size": 512},
         "underestimate": {"queries": 100000, "seed": 0, "alpha": 200.0},
         "bh_switch": {"trials": 500},
         "grid": {"grid": 100, "generated": [100, 1000, 10000, 100000, 1000000],
-                 "thingi10k": True},
+                 "thingi10k": True, "repeat": 3},
         "table3": {"scenes": list(TABLE3_PAPER), "steps": None, "threads": [1, None],
                    "step_caps": {"octopus_lidar": 263}, "authors_timeout": 3600.0},
         "box_test": {"cases": ["bunny-bunny", "ring-toss", "bowl-ico", "slide-sphere"],
                      "repeat": 9},
         "gpu": {"size": [1920, 1080], "grid": 100, "repeat": 3},
+        "beta_alpha": {"size": 128, "alphas": [50.0, 200.0, 800.0], "betas": [0.0, 0.5, 1.0]},
+        "attenuation": {"R": 4.0, "r": 1.5, "alpha": 2.0, "alpha_us": [4, 8, 16, 64],
+                        "grid": 401},
     },
 }
 
@@ -91,6 +100,50 @@ def _git(*args):
                               timeout=10).stdout.strip()
     except (OSError, subprocess.SubprocessError):
         return ""
+
+
+def _git_status(*args):
+    """The exit status of ``git *args`` in the repository (None when git cannot run)."""
+    try:
+        return subprocess.run(["git", *args], cwd=REPO, capture_output=True,
+                              timeout=30).returncode
+    except (OSError, subprocess.SubprocessError):
+        return None
+
+
+#: the code an experiment measures: a change here between an experiment's commit and the
+#: report's makes its figures stale (table3 also times the simulator)
+MEASURED_CODE = ("smoothdist", "tracer/rendering")
+MEASURED_EXTRA = {"table3": ("tracer/sim",)}
+
+
+def measured_code(name):
+    return MEASURED_CODE + MEASURED_EXTRA.get(name, ())
+
+
+def code_changed(commit, head, paths=MEASURED_CODE):
+    """``"unchanged"`` or ``"changed"`` (the measured code between the two commits, by
+    ``git diff --quiet``), ``"unknown"`` where git, or either commit, is not available."""
+    if not commit or not head or "unknown" in (commit, head):
+        return "unknown"
+    rc = _git_status("diff", "--quiet", commit, head, "--", *paths)
+    return {0: "unchanged", 1: "changed"}.get(rc, "unknown")
+
+
+def tree_dirty():
+    """True when the work tree has changes to tracked files, None where git cannot tell."""
+    if _git_status("rev-parse", "--git-dir") != 0:
+        return None
+    return bool(_git("status", "--porcelain", "--untracked-files=no"))
+
+
+def head_commit():
+    return _git("rev-parse", "HEAD") or "unknown"
+
+
+def load_average():
+    """The 1, 5 and 15 minute load averages (None where the system has none)."""
+    return [round(x, 2) for x in os.getloadavg()] if hasattr(os, "getloadavg") else None
 
 
 def cpu_model():
@@ -118,14 +171,12 @@ def provenance():
 
     from tracer.runner import cpu_count
 
-    return {"commit": _git("rev-parse", "HEAD") or "unknown",
-            "dirty": bool(_git("status", "--porcelain", "--untracked-files=no")),
+    return {"commit": head_commit(), "dirty": tree_dirty(),
             "date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
             "machine": {"cpu": cpu_model(), "cores": cpu_count(), "platform": platform.platform(),
                         "python": platform.python_version(), "numba": numba.__version__},
             "numba_threads": int(numba.get_num_threads()),
-            "load_average": [round(x, 2) for x in os.getloadavg()]
-            if hasattr(os, "getloadavg") else None}
+            "load_average": load_average()}
 
 
 # ============================================================================ helpers
@@ -162,6 +213,11 @@ def read_csv(path):
 
 
 # ============================================================================ beta (Sec. 4.3)
+#: the betas whose render times the paper's timing claims quote (0 / 0.2 and 0.5), rendered
+#: ``repeat`` times for their spread
+TIMED_BETAS = (0.0, 0.2, 0.5)
+
+
 def beta(out, s, where):
     """The beta ablation on the bunny (``tracer ablate-beta``): seconds and isosurface error
     (fraction of the bbox diagonal) per type and beta."""
@@ -180,6 +236,23 @@ def beta(out, s, where):
         res.setdefault("leaves_per_eval", {})[kind] = {
             f"{r['beta']:g}": r["leaves_per_eval"] for r in rs if "leaves_per_eval" in r}
     res["threads"] = int(rows[0]["threads"]) if rows else None
+    # the timing claims' betas rendered again (``repeat`` runs in all): their spread
+    timed = [b for b in TIMED_BETAS if b in s["betas"]]
+    reps = {kind: {f"{b:g}": [res["render_seconds"][kind][f"{b:g}"]] for b in timed}
+            for kind in TYPES if res["render_seconds"].get(kind)}
+    for i in range(1, int(s.get("repeat", 1))):
+        sub = out / f"repeat{i}"
+        run_command(["ablate-beta", str(BUNNY), "-o", str(sub), "--size", str(s["size"]),
+                     "--betas", ",".join(f"{b:g}" for b in timed if b),
+                     "--grid-betas", ",".join(f"{b:g}" for b in timed if b), "--overwrite",
+                     "-q", *runner_args(where)])
+        shutil.rmtree(sub / "cache", ignore_errors=True)
+        for r in read_csv(sub / "beta_ablation.csv"):
+            if float(r.get("tol") or 0) == 0 and r["type"] in reps \
+                    and f"{r['beta']:g}" in reps[r["type"]]:
+                reps[r["type"]][f"{r['beta']:g}"].append(r["seconds"])
+    res["render_seconds_repeats"] = reps
+    res["repeat"] = int(s.get("repeat", 1))
     return res
 
 
@@ -203,22 +276,151 @@ def alpha(out, s, where):
             "json": "alpha/underestimate.json"}
 
 
+# ============================================================================ beta vs alpha
+def beta_alpha(out, s, where):
+    """Sec. 4.3, "beta can be increased with low error for higher values of alpha": the beta
+    study (``tracer ablate-beta``) on the bunny at several alphas (alpha_U 1200, the paper's),
+    the isosurface error (fraction of the bbox diagonal) per alpha, type and beta."""
+    res = {"size": s["size"], "alphas": s["alphas"], "betas": s["betas"], "alpha_u": 1200.0,
+           "error_rel_diag": {}, "csv": []}
+    for a in s["alphas"]:
+        sub = out / f"alpha{a:g}"
+        run_command(["ablate-beta", str(BUNNY), "-o", str(sub), "--size", str(s["size"]),
+                     "--alpha", f"{a:g}", "--alpha-u", "1200",
+                     "--betas", ",".join(f"{b:g}" for b in s["betas"]),
+                     "--grid-betas", ",".join(f"{b:g}" for b in s["betas"]), "--overwrite",
+                     "-q", *runner_args(where)])
+        shutil.rmtree(sub / "cache", ignore_errors=True)
+        res["csv"].append(f"beta_alpha/alpha{a:g}/beta_ablation.csv")
+        for r in read_csv(sub / "beta_ablation.csv"):
+            if float(r.get("tol") or 0) == 0 and r.get("status", "ok") == "ok":
+                res["error_rel_diag"].setdefault(r["type"], {}).setdefault(
+                    f"{a:g}", {})[f"{r['beta']:g}"] = r["error_rel_diag"]
+    return res
+
+
+# ============================================================================ alpha_U (Sec. 3.3)
+def hex_torus(R=4.0, r=1.5, n=6):
+    """A hexagonal torus (``n`` segments around the ring and around the tube, ring radius
+    ``R``, tube radius ``r``), triangles: the construction of the paper's Fig. "attenuate"
+    (the authors' scenes/hex_torus.json: alpha 2, max_alpha 16)."""
+    u = 2 * np.pi * np.arange(n) / n
+    U, W = np.meshgrid(u, u, indexing="ij")
+    V = np.stack([(R + r * np.cos(W)) * np.cos(U), (R + r * np.cos(W)) * np.sin(U),
+                  r * np.sin(W)], -1).reshape(-1, 3)
+    i, j = np.meshgrid(np.arange(n), np.arange(n), indexing="ij")
+    a, b = i * n + j, (i + 1) % n * n + j
+    c, d = (i + 1) % n * n + (j + 1) % n, i * n + (j + 1) % n
+    F = np.concatenate([np.stack([a, b, c], -1).reshape(-1, 3),
+                        np.stack([a, c, d], -1).reshape(-1, 3)])
+    return V, F
+
+
+def attenuation(out, s, where):
+    """Sec. 3.3 (Fig. "attenuate"): at a low alpha the weights overcompensate and crease the
+    surface of a blobby hexagonal torus; alpha_U blends between the weighted and the unweighted
+    distance. On the slice y = 0 (both tube sections), beta 0: the smooth distance with full
+    weights (S = 1), with each alpha_U of ``alpha_us`` (S = alpha / alpha_U) and unweighted;
+    per field the largest curvature of the zero level curve (times the tube radius: 1 for a
+    circle of the tube's size) over the samples within 1.5 grid steps of it, and whether every
+    sample's value lies between the weighted and the unweighted one, growing with alpha_U."""
+    from smoothdist import DataMesh, SmoothDistanceField
+    from tracer.studies.common import unweighted_field
+
+    R, r, alpha = s["R"], s["r"], s["alpha"]
+    V, F = hex_torus(R, r)
+    f = SmoothDistanceField(DataMesh(V, triangles=F, name="hex_torus"))
+    m = 1.2 * f.inflation(alpha) + 0.5
+    n = int(s["grid"])
+    x = np.linspace(-(R + r + m), R + r + m, n)
+    z = np.linspace(-(r + m), r + m, max(8, n // 2))
+    X, Z = np.meshgrid(x, z, indexing="ij")
+    Q = np.stack([X.ravel(), np.zeros(X.size), Z.ravel()], 1)
+    hx, hz = x[1] - x[0], z[1] - z[0]
+    fields = [("weighted", f, None)] + [(f"alpha_U {u:g}", f, float(u)) for u in s["alpha_us"]] \
+        + [("unweighted", unweighted_field(f), None)]
+    ds, rows = [], {}
+    for name, field, au in fields:
+        d, g = field.smooth_distance(Q, alpha=alpha, beta=0.0, alpha_u=au, gradient="exact")
+        d = d.reshape(X.shape)
+        g = g[:, [0, 2]].reshape(X.shape + (2,))
+        nrm = g / np.maximum(np.linalg.norm(g, axis=-1, keepdims=True), 1e-300)
+        kappa = np.gradient(nrm[..., 0], hx, axis=0) + np.gradient(nrm[..., 1], hz, axis=1)
+        band = np.abs(d) < 1.5 * max(hx, hz)
+        rows[name] = {"alpha_u": au, "S": 1.0 if name == "weighted" else
+                      0.0 if name == "unweighted" else min(alpha / au, 1.0),
+                      "max_curvature_x_r": float(np.abs(kappa[band]).max() * r)
+                      if band.any() else None,
+                      "p99_curvature_x_r": float(np.percentile(np.abs(kappa[band]), 99) * r)
+                      if band.any() else None,
+                      "band_samples": int(band.sum()), "min_distance": float(d.min())}
+        ds.append(d)
+    tol = 1e-9 * (1.0 + max(float(np.abs(d).max()) for d in ds))
+    ordered = all(bool(np.all(b >= a - tol)) for a, b in zip(ds, ds[1:]))
+    return {"shape": f"hexagonal torus, {len(F)} triangles, R {R:g}, r {r:g}",
+            "alpha": alpha, "alpha_us": s["alpha_us"], "beta": 0.0, "inflation":
+            f.inflation(alpha), "slice": "y = 0", "grid": [int(X.shape[0]), int(X.shape[1])],
+            "fields": rows, "blend_ordered": ordered}
+
+
 # ============================================================================ BH switch
+#: the authors' ``barnes_hut_smoothness_test.cpp`` (abhimadan/smoothdists, app/): raw
+#: coordinates of their scan, alpha 100 and beta 0.5 in those units, rays along z from 0.01
+#: beyond the bbox, marched (at most 20 steps) until d_hat <= 0.1, then 101 samples over 0.005
+AUTHORS_BH = {"alpha": 100.0, "iso": 0.1, "start": 0.01, "segment": 0.005, "samples": 101,
+              "max_steps": 20}
+
+
+def _point_spacing(V):
+    """The median distance of a point to its nearest other point (None without scipy)."""
+    try:
+        from scipy.spatial import cKDTree
+    except ImportError:
+        return None
+    d, _ = cKDTree(V).query(V, k=2)
+    return float(np.median(d[:, 1]))
+
+
 def bh_switch(out, s, where):
-    """The Barnes-Hut switch study (``tracer bh-switch``) on the shipped Autzen cloud."""
+    """The Barnes-Hut switch study (``tracer bh-switch``) on the shipped Autzen cloud: on the
+    cloud normalised to a unit diagonal (the study's default), and the authors' way
+    (:data:`AUTHORS_BH`: their settings in the cloud's raw units, run as the study's
+    normalised settings times the scale, which gives the same field; ``raw``)."""
     import json
+
+    from tracer.studies.bh_switch import DEFAULT_CLOUD, normalised_field
 
     run_command(["bh-switch", "-o", str(out), "--trials", str(s["trials"]), "--overwrite", "-q",
                  *runner_args(where)])
     with open(out / "bh_switch.json", encoding="utf-8") as fh:
         j = json.load(fh)
-    k = j["kept"]
+    field, scale = normalised_field(str(DEFAULT_CLOUD))
+    a = AUTHORS_BH
+    run_command(["bh-switch", "-o", str(out / "raw"), "--trials", str(s["trials"]),
+                 "--alpha", repr(a["alpha"] * scale), "--iso", repr(a["iso"] / scale),
+                 "--start", repr(a["start"] / scale), "--segment", repr(a["segment"] / scale),
+                 "--samples", str(a["samples"]), "--max-steps", str(a["max_steps"]),
+                 "--overwrite", "-q", *runner_args(where)])
+    with open(out / "raw" / "bh_switch.json", encoding="utf-8") as fh:
+        r = json.load(fh)
+    k, rk = j["kept"], r["kept"]
+    spacing = _point_spacing(np.asarray(field.mesh.V) * scale)
     return {"cloud": os.path.relpath(j["cloud"], REPO) if os.path.isabs(j["cloud"])
             else j["cloud"], "points": j["points"], "trials": j["trials"], "hits": j["hits"],
             "alpha": j["alpha"], "beta": j["beta"], "dbeta": j["dbeta"],
             "kept_points": k["count"], "mean_discrepancy": k["mean_discrepancy"],
             "max_discrepancy": k["max_discrepancy"], "mean_cosine": k["mean_cosine"],
-            "min_cosine": k["min_cosine"], "json": "bh_switch/bh_switch.json"}
+            "min_cosine": k["min_cosine"], "scale": scale,
+            "mean_discrepancy_orig_units": k.get("mean_discrepancy_orig_units"),
+            "max_discrepancy_orig_units": k.get("max_discrepancy_orig_units"),
+            "median_spacing_orig_units": spacing,
+            "raw": {"settings": dict(a), "hits": r["hits"], "switch_points": r["switch_points"],
+                    "kept_points": rk["count"],
+                    "mean_discrepancy": rk.get("mean_discrepancy_orig_units"),
+                    "max_discrepancy": rk.get("max_discrepancy_orig_units"),
+                    "mean_cosine": rk["mean_cosine"], "min_cosine": rk["min_cosine"],
+                    "json": "bh_switch/raw/bh_switch.json"},
+            "json": "bh_switch/bh_switch.json"}
 
 
 # ============================================================================ grid (Sec. 4.4)
@@ -270,7 +472,28 @@ def grid_fit(rows, grid):
             "share_largest": float(share[large]), "primitives_largest": int(n[large]),
             "meshes_over_10pct_near_1000": int(np.sum((share > 0.10) & (n >= 500)
                                                       & (n <= 2000))),
+            "share_mean_pct": float(100 * share.mean()),
+            "share_sd_pct": float(100 * share.std(ddof=1)) if len(rs) > 1 else None,
         }
+    return out
+
+
+def fit_spread(fits):
+    """Per type, the min and max over the repeats' fits (:func:`grid_fit`) of the figures the
+    timing claims read: Pearson r, ns per leaf (fit) and the mean microseconds per query; and
+    per repeat whether points were the fastest type."""
+    out = {}
+    for kind in TYPES:
+        fs = [f[kind] for f in fits if kind in f]
+        if not fs:
+            continue
+        out[kind] = {}
+        for key in ("pearson_r", "ns_per_leaf_fit", "us_per_query_mean"):
+            v = [f[key] for f in fs if f.get(key) is not None]
+            out[kind][key] = [min(v), max(v)] if v else None
+    out["points_fastest"] = [all(f["points"]["us_per_query_mean"] < f[k]["us_per_query_mean"]
+                                 for k in ("edges", "triangles") if k in f)
+                             for f in fits if "points" in f]
     return out
 
 
@@ -287,12 +510,19 @@ def grid(out, s, where):
                 for n in s["generated"]}
         sets.append(("generated", gen))
         rows = []
-        for name, folder in sets:
-            run_command(["bench-grid", str(folder), "-o", str(out / name), "--grid",
-                         str(s["grid"]), "--overwrite", "-q", *runner_args(where)])
-            for r in read_csv(out / name / "bench_grid.csv"):
-                if r.get("status", "ok") == "ok":
-                    rows.append(dict(r, set=name))
+        fits = []
+        for i in range(int(s.get("repeat", 1))):  # repeat 0: the figures; the others: spread
+            rep = []
+            for name, folder in sets:
+                dest = out / name if i == 0 else out / f"repeat{i}" / name
+                run_command(["bench-grid", str(folder), "-o", str(dest), "--grid",
+                             str(s["grid"]), "--overwrite", "-q", *runner_args(where)])
+                for r in read_csv(dest / "bench_grid.csv"):
+                    if r.get("status", "ok") == "ok":
+                        rep.append(dict(r, set=name))
+            if i == 0:
+                rows = rep
+            fits.append(grid_fit(rep, s["grid"]))
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
     from tracer.studies.plots import bench_plots
@@ -303,7 +533,7 @@ def grid(out, s, where):
     return {"grid": s["grid"], "alpha": 1.0, "beta": 0.5,
             "sets": [n for n, _ in sets], "generated_triangles": sorted(made.values()),
             "thingi10k_present": THINGI.is_dir(), "meshes": len(rows),
-            "fit": grid_fit(rows, s["grid"]),
+            "fit": fits[0], "repeat": len(fits), "fit_spread": fit_spread(fits),
             "csv": [f"grid/{n}/bench_grid.csv" for n, _ in sets]}
 
 
@@ -369,9 +599,12 @@ def _timed_run(path, steps, cap, threads):
         load0 = os.getloadavg()[0] if hasattr(os, "getloadavg") else None
         t0 = time.perf_counter()
         with tempfile.TemporaryDirectory() as tmp:
-            simrun.simulate(sim, os.path.join(tmp, "trajectory.npz"), steps=steps,
-                            built=(con, integ))
+            frames = simrun.simulate(sim, os.path.join(tmp, "trajectory.npz"), steps=steps,
+                                     built=(con, integ))
         wall = time.perf_counter() - t0
+        # the exact distance between any two bodies at every step (the simulator computes it
+        # for its trajectory anyway): positive throughout means no interpenetration
+        dmin = np.asarray(frames["min_exact_distance"], dtype=float)
     finally:
         numba.set_num_threads(before)
     ev = np.array(log)
@@ -380,7 +613,11 @@ def _timed_run(path, steps, cap, threads):
         "ms_mean": float(1e3 * ev.mean()) if ev.size else None,
         "ms_median": float(1e3 * np.median(ev)) if ev.size else None,
         "simulate_seconds": round(wall, 3), "load_seconds": round(load_s, 3),
-        "load_average_before": None if load0 is None else round(load0, 2)}
+        "load_average_before": None if load0 is None else round(load0, 2),
+        "load_average_after": load_average(),
+        "frames": int(dmin.size), "min_exact_distance": float(dmin.min()) if dmin.size else None,
+        "bodies": [{"name": b.name, "kind": b.kind, "primitives": int(b.mesh.num_primitives),
+                    "static": bool(b.static)} for b in sim.bodies]}
 
 
 def _authors_bench():
@@ -401,9 +638,10 @@ AUTHORS_THREADS = 2
 
 def authors_run(path, steps, binary, timeout):
     """The authors' ``rigid_body_simulator`` on the simulation file ``path`` for ``steps``
-    steps (``/work/shared/tools/authors-bench/README.md``), in a scratch folder: their mean
-    milliseconds per distance evaluation (one ``meshDistance`` call: the lines of their
-    ``__times.txt`` files, microseconds each), the count and the wall time; or why not."""
+    steps (``../shared/tools/authors-bench/README.md``, beside the repository), in a scratch
+    folder: their mean milliseconds per distance evaluation (one ``meshDistance`` call: the
+    lines of their ``__times.txt`` files, microseconds each), the count and the wall time; or
+    why not."""
     import subprocess
 
     bench = _authors_bench()
@@ -480,7 +718,7 @@ def table3(out, s, where):
     return {"scenes": s["scenes"], "steps": s["steps"], "step_caps": caps,
             "scheduler": info.describe(), "rows": {n: rows[n] for n in s["scenes"]},
             "authors_simulator": ("their rigid_body_simulator (abhimadan/smoothdists a2706a2, "
-                                  "CPU build of /work/shared/tools/authors-bench), the same "
+                                  "CPU build of ../shared/tools/authors-bench), the same "
                                   f"files and steps, {AUTHORS_THREADS} threads, after ours in "
                                   "the same task" if authors else "not run (no --authors-bin)"),
             "not_run": [n for n in TABLE3_PAPER if n not in s["scenes"]]}
@@ -575,6 +813,8 @@ def box_test(out, s, where):
             "query_primitives": int(q.kind.size),
             "query_kind": ["points", "edges", "triangles"][int(q.kind.max())],
             "alpha": alpha, "ms_on": ms_on, "ms_off": ms_off, "speedup": ms_off / ms_on,
+            "ms_on_all": [1e3 * x for x in times["on"]],
+            "ms_off_all": [1e3 * x for x in times["off"]],
             "leaves_on": d["on_leaves"], "leaves_off": d["off_leaves"],
             "leaves_beta0": d["beta0_leaves"],
             "max_abs_diff_x_alpha": float(alpha * np.abs(d["on"] - d["off"]).max()),
@@ -675,11 +915,13 @@ def gpu(out, s, where):
 #: name -> experiment, in the order they run (quick first where they are quick)
 EXPERIMENTS = {"underestimate": underestimate, "table3": table3, "grid": grid,
                "bh_switch": bh_switch, "box_test": box_test, "gpu": gpu, "beta": beta,
-               "alpha": alpha}
+               "alpha": alpha, "beta_alpha": beta_alpha, "attenuation": attenuation}
 #: name -> the optional packages the experiment imports (``tracer reproduce`` checks them
 #: before it runs anything): the studies' plots and images, the simulator's solver, trimesh
 #: for the PLY scans (the lion, the Autzen tile), the generated icospheres and Thingi10K's STLs
 NEEDS = {"underestimate": (), "table3": ("scipy", "trimesh"),
-         "grid": ("matplotlib", "PIL", "trimesh"), "bh_switch": ("matplotlib", "PIL", "trimesh"),
+         "grid": ("matplotlib", "PIL", "trimesh"),
+         "bh_switch": ("matplotlib", "PIL", "trimesh", "scipy"),
          "box_test": ("trimesh",), "gpu": (), "beta": ("matplotlib", "PIL"),
-         "alpha": ("matplotlib", "PIL", "trimesh")}
+         "alpha": ("matplotlib", "PIL", "trimesh"), "beta_alpha": ("matplotlib", "PIL"),
+         "attenuation": ()}

@@ -10,14 +10,16 @@ import json
 from pathlib import Path
 
 from tracer.reproduce.claims import evaluate, g3
-from tracer.reproduce.experiments import EXPERIMENTS, TABLE3_PAPER
+from tracer.reproduce.experiments import EXPERIMENTS, MEASURED_CODE, TABLE3_PAPER
 
 #: the files of a results folder that are not an experiment's
 NOT_EXPERIMENTS = {"claims.json", "run.json"}
 
 
 def load_results(folder):
-    """``{experiment: results}`` of every ``<experiment>.json`` in ``folder``."""
+    """``{experiment: results}`` of every ``<experiment>.json`` in ``folder``. A grid result
+    written before the fit held the spread of the share of leaves visited gets it from its
+    own CSVs (the same fit, :func:`tracer.reproduce.experiments.grid_fit`)."""
     folder = Path(folder)
     out = {}
     for p in sorted(folder.glob("*.json")):
@@ -25,6 +27,16 @@ def load_results(folder):
             continue
         with open(p, encoding="utf-8") as fh:
             out[p.stem] = json.load(fh)
+    g = out.get("grid")
+    if g and any("share_sd_pct" not in f for f in g["fit"].values()):
+        from tracer.reproduce.experiments import grid_fit, read_csv
+
+        rows = [r for c in g["csv"] for r in read_csv(folder / c)
+                if r.get("status", "ok") == "ok"]
+        fit = grid_fit(rows, g["grid"])
+        for kind, f in g["fit"].items():
+            for key in ("share_mean_pct", "share_sd_pct"):
+                f.setdefault(key, fit[kind][key])
     return out
 
 
@@ -37,8 +49,61 @@ def claims_rows(folder):
     return evaluate(load_results(folder))
 
 
+def _dirty_word(flag):
+    return {True: "dirty", False: "clean"}.get(flag, "unknown")
+
+
+def dirty_results(folder):
+    """The experiments of ``folder`` (and ``run`` for its run.json) that ran on a tree with
+    local changes; ``[]`` for a folder that is not there."""
+    folder = Path(folder)
+    if not folder.is_dir():
+        return []
+    out = [n for n, r in load_results(folder).items() if r.get("provenance", {}).get("dirty")]
+    if (folder / "run.json").is_file() and load_run(folder).get("dirty"):
+        out.append("run")
+    return out
+
+
+def report_state(folder, allow_dirty):
+    """The report's commit (HEAD now) and, per experiment (and per commit of a Table 3 row),
+    whether its measured code (:func:`tracer.reproduce.experiments.measured_code`) changed
+    between that experiment's commit and the report's: ``run.json``'s ``report``, from which
+    the page is written."""
+    from tracer.reproduce.experiments import code_changed, head_commit, measured_code
+
+    head = head_commit()
+    res = load_results(folder)
+    code = {n: code_changed(r["provenance"].get("commit"), head, measured_code(n))
+            for n, r in res.items()}
+    rows = {}
+    for r in res.get("table3", {}).get("rows", {}).values():
+        c = (r.get("run") or {}).get("commit")
+        if c and c not in rows:
+            rows[c] = code_changed(c, head, measured_code("table3"))
+    return {"commit": head, "allow_dirty": bool(allow_dirty), "code": code,
+            "table3_row_commits": rows}
+
+
 def _cell(text):
     return str(text).replace("|", "\\|").replace("\n", " ")
+
+
+def _relative(text):
+    """Paths of this machine's shared folder (beside the repository) named as
+    ``../shared/...``, as the repository's other files name them (results written before the
+    experiments did so name it absolutely)."""
+    from tracer.studies.common import REPO
+
+    return str(text).replace(str(REPO.parent / "shared") + "/", "../shared/").replace(
+        "/work/shared/", "../shared/")
+
+
+def _loads(before, after):
+    """The 1-minute load average before and after a run (``-`` where not recorded)."""
+    def one(x):
+        return g3(x[0]) if x else "-"
+    return f"{one(before)} → {one(after)}"
 
 
 def _date(d):
@@ -66,7 +131,26 @@ def render_page(folder, shown_as):
          + "). Every number below is read from the JSON files "
          "there; the paper's values are quoted from it. Rerun with "
          f"`python -m tracer reproduce{'' if run['mode'] == 'full' else ' --' + run['mode']} "
-         "--out DIR --page docs/reproduction.md`.", ""]
+         + ("--scheduler serial " if run.get("scheduler") == "serial" else "")
+         + "--out DIR --page docs/reproduction.md` on a clean commit (`--scheduler serial`: "
+         "every experiment in this process on all its threads; Table 3 then times 1 and all "
+         "threads).", ""]
+    state = run.get("report") or {}
+    code = state.get("code", {})
+    if state.get("commit"):
+        L += [f"The report was written at commit `{state['commit'][:12]}`; the Experiments "
+              "table says for each experiment whether the code it measures (`"
+              + "/`, `".join(MEASURED_CODE) + "/`, and `tracer/sim/` for table3) changed "
+              "between its commit and this one.", ""]
+    dirty = dirty_results(folder)
+    if dirty:
+        L += ["**Written with `--allow-dirty`:** the results of " + ", ".join(dirty)
+              + " come from a work tree with uncommitted changes, so their commit is not "
+              "exactly the code they measured.", ""]
+    stale = [n for n, v in code.items() if v == "changed"]
+    if stale:
+        L += ["**Stale:** the measured code changed since the run of " + ", ".join(stale)
+              + "; their rows describe older code.", ""]
     missing = [n for n in EXPERIMENTS if n not in run["experiments"]]
     if missing:
         L += [f"This run did not run {', '.join(missing)} (`--only`): their claims say "
@@ -77,22 +161,42 @@ def render_page(folder, shown_as):
               "steps): it shows that every experiment runs and how each claim is judged; its "
               "sizes are not the paper's, and the verdicts say where that matters. The full run "
               "(`tracer reproduce`, an hour or more on 2 cores) uses the paper's sizes.", ""]
-    L += ["Verdicts: " + ", ".join(f"{v}: {n}" for v, n in sorted(counts.items())) + ".", "",
+    L += ["Verdicts: " + ", ".join(f"{v}: {n}" for v, n in sorted(counts.items())) + ". "
+          "*match* and *differs*: the paper's quantity, measured here; *not comparable*: "
+          "another quantity or unit than the paper's (the reason says which); *cannot be "
+          "reproduced*: the data or the hardware is not available; *inconclusive*: a timing "
+          "whose spread over the repeats (min-max, shown) straddles the paper's threshold; "
+          "*not run*: not part of this run. Timing rows give the load average before and "
+          "after their experiment"
+          + ("; in this run they are indicative only" if run["mode"] != "full" else "")
+          + ".", "",
           "## Claims", "",
           "| # | claim (quoted) | section | paper | ours | setting | verdict | last run |",
           "|---:|---|---|---|---|---|---|---|"]
     for i, r in enumerate(rows, 1):
-        verdict = r["verdict"] + (f": {r['reason'].strip()}" if r["reason"].strip() else "")
+        verdict = r["verdict"] + (f" ({r['indicative']})" if r.get("indicative") else "") \
+            + (f": {r['reason'].strip()}" if r["reason"].strip() else "")
         L.append("| " + " | ".join(_cell(x) for x in (
             i, f"“{r['quote']}”", r["section"], r["paper"], r["ours"], r["setting"], verdict,
             _date(r["last_run"]))) + " |")
     L += ["", "## Experiments", "",
-          "| experiment | last run | seconds | commit | threads | settings |",
-          "|---|---|---:|---|---:|---|"]
+          "| experiment | last run | seconds | commit | tree | measured code since | threads "
+          "| load average before → after | settings |",
+          "|---|---|---:|---|---|---|---:|---|---|"]
     for name, res in results.items():
         p = res["provenance"]
+        commit = p["commit"][:12]
+        since = code.get(name, "not recorded")
+        if name == "table3":  # rows kept from earlier runs carry their own commit
+            rc = state.get("table3_row_commits", {})
+            others = [c for c in rc if c != p["commit"]]
+            if others:
+                commit += " (rows also from " + ", ".join(c[:12] for c in others) + ")"
+                since += " (" + ", ".join(f"{c[:12]}: {rc[c]}" for c in others) + ")"
         L.append("| " + " | ".join(_cell(x) for x in (
-            name, p["date"], f"{res['seconds']:.1f}", p["commit"][:12], p["numba_threads"],
+            name, p["date"], f"{res['seconds']:.1f}", commit, _dirty_word(p.get("dirty")),
+            since, p["numba_threads"], _loads(res.get("load_average_before"),
+                                              p.get("load_average")),
             json.dumps(res["settings"], sort_keys=True))) + " |")
     if "table3" in results:
         t = results["table3"]
@@ -102,7 +206,8 @@ def render_page(folder, shown_as):
               "before the run, so compilation is not timed. The paper's on 28 threads, ours on "
               "this machine at each thread count (a machine shared with other work makes "
               "several threads wait on each other: compare the load averages).", "",
-              f"The last column: {t.get('authors_simulator', 'not run')}. Their evaluations "
+              f"The last column: {_relative(t.get('authors_simulator', 'not run'))}. Their "
+              "evaluations "
               "are their `meshDistance` calls (one per mesh pair and orientation, every "
               "line-search trial of their interior-point solver included), ours the "
               "`MeshDistance` calls of our simulator: the same simulation and steps, not the "

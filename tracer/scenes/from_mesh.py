@@ -98,10 +98,11 @@ def mesh_scene(mesh, F=None, *, kind=None, alpha=_MESH["alpha"], alpha_u=_MESH["
         Sharpness (1 / scene units). ``"auto"``: mean surface offset <= 2 % of the bbox
         diagonal (:meth:`~smoothdist.SmoothDistanceField.auto_alpha`); with ``alpha_u`` and
         ``offset`` left out too, edges and triangles get ``alpha``, ``alpha_u`` and the
-        offset chosen together (:meth:`~smoothdist.SmoothDistanceField.auto_surface`: the
-        level set ``d_hat = C`` about 0.75 mean edge lengths out, ``alpha = 6 / C`` (14 / C
-        for a few large facets, 30 / C for a wireframe's wires), no attenuation; no dimples
-        along the mesh edges).
+        offset chosen together (:meth:`~smoothdist.SmoothDistanceField.auto_surface`:
+        triangles as a thin shell, the level set ``d_hat = C`` at 0.3 % of the diagonal or a
+        tenth of the local feature size, ``alpha = 20 / C``; curves as a tube about 0.75 mean
+        edge lengths thick, ``alpha = 6 / C`` (30 / C for a wireframe's wires); no
+        attenuation).
     alpha_u : float, "auto" or None
         Attenuation threshold; ``"auto"`` is 20 x alpha (no ribbing); ``"off"`` or None: no
         attenuation.

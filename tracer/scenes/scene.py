@@ -23,8 +23,9 @@ an object may list ``parts``: ``[{"path": ..., "bvh_type": ..., "scale": s,
 ``"auto"``; ``max_alpha`` (alpha_U) may be ``"auto"``, its default (20 x alpha, see
 ``SmoothDistanceField.auto_alpha_u``; the authors' files without it meant no attenuation).
 An object whose ``alpha`` is ``"auto"`` with ``max_alpha`` and ``offset`` left out, in smooth
-mode, gets all three from ``SmoothDistanceField.auto_surface`` (edges and triangles: the level
-set ``d_hat = C`` about 0.75 mean edge lengths out, without dimples; issue 35).
+mode, gets all three from ``SmoothDistanceField.auto_surface`` (triangles: a thin shell at
+0.3 % of the diagonal or a tenth of the local feature size, issue 46; curves: a tube about 0.75
+mean edge lengths thick, without rings, issue 35).
 Several objects are combined by LogSumExp with the largest alpha (paper Sec. 3.6).
 
 The complete reference (every key: type, default, example) is the JSON Schema

@@ -130,7 +130,8 @@ def test_committed_results_have_provenance_and_every_claim_a_row():
     page = PAGE.read_text(encoding="utf-8")
     assert len(_table(page, "Claims")) == len(rows) >= 23
     for r in rows:  # every claim is judged, and a verdict other than a match says why
-        assert r["verdict"] in ("match", "differs", "cannot be reproduced", "not run")
+        assert r["verdict"] in ("match", "differs", "not comparable", "cannot be reproduced",
+                                "inconclusive", "not run")
         assert r["verdict"] == "match" or r["reason"]
         if r["experiment"] is not None and r["verdict"] != "not run":
             assert r["last_run"] and r["last_run"][:10] in page
@@ -173,7 +174,7 @@ def test_guides_show_the_committed_results():
     box = json.loads((FULL / "box_test.json").read_text())
     text = _guide("whole-mesh.md")
     for name, c in box["cases"].items():
-        row = next(ln for ln in text.splitlines() if ln.startswith(f"| {name} |"))
+        row = next(ln for ln in text.splitlines() if ln.startswith(f"| {name} ("))
         cells = [x.strip() for x in row.strip("|").split("|")]
         for cell, v in ((cells[5], c["ms_on"]), (cells[6], c["ms_off"])):
             shown = float(cell.split()[0].replace(",", ""))
@@ -235,7 +236,7 @@ def test_quick_run_end_to_end(tmp_path, capsys):
         assert row["beta_0"]["min_gap"] >= 0 and row["beta_0"]["max_gap"] <= row["bound"]
         assert row["beta_0.5"]["min_gap"] >= 0
     # regenerating from the folder gives the same page
-    assert main(["reproduce", "--report-only", "--out", str(out), "-q"]) == 0
+    assert main(["reproduce", "--report-only", "--out", str(out), "-q", "--allow-dirty"]) == 0
     assert (out / "reproduction.md").read_text(encoding="utf-8") == text
 
 
@@ -249,7 +250,8 @@ def test_failed_experiment_leaves_nothing(tmp_path, monkeypatch, capsys):
 
     monkeypatch.setitem(experiments.EXPERIMENTS, "grid", boom)
     out = tmp_path / "res"
-    assert main(["reproduce", "--smoke", "--only", "grid", "--out", str(out)]) == 2
+    assert main(["reproduce", "--smoke", "--only", "grid", "--out", str(out),
+                 "--allow-dirty"]) == 2
     assert "broken on purpose" in capsys.readouterr().err
     assert list(tmp_path.iterdir()) == []
 
@@ -298,7 +300,8 @@ def test_table3_scenes_add_rows_to_the_earlier_ones(tmp_path, monkeypatch, capsy
 
     monkeypatch.setitem(experiments.EXPERIMENTS, "table3", fake)
     out = tmp_path / "res"
-    base = ["reproduce", "--smoke", "--only", "table3", "--out", str(out), "-q"]
+    base = ["reproduce", "--smoke", "--only", "table3", "--out", str(out), "-q",
+            "--allow-dirty"]
     assert main(base + ["--table3-scenes", "ico_bowl,sphere_slide"]) == 0
     assert main(base + ["--table3-scenes", "sphere_slide,bunny_bunny"]) == 0
     res = json.loads((out / "table3.json").read_text())
@@ -329,7 +332,7 @@ def test_beta_speedup_says_which_leaves_beta_prunes():
     assert "points 6.97x, edges 10.4x, triangles 5.8x" in why
     del b["leaves_per_eval"]
     assert claims._beta_speedup({"beta": b})[3] == \
-        "time(beta 0) / time(beta 0.2) is below 10 for some type"
+        "time(beta 0) / time(beta 0.2) is below 10 for some type; " + claims.NO_SPREAD
 
 
 def test_gpu_experiment_runs_the_benchmark_where_a_card_is(tmp_path, monkeypatch):
@@ -367,3 +370,176 @@ def test_gpu_experiment_runs_the_benchmark_where_a_card_is(tmp_path, monkeypatch
     rows = {r["what"]: r for r in card["rows"]}
     assert stored["grid"]["points"]["kernel_speedup"] == pytest.approx(
         rows["grid points"]["cpu_s"] / rows["grid points"]["gpu_kernel_s"], rel=1e-12)
+
+
+# ------------------------------------------------------------------ provenance (issue 48)
+def _fake_gpu(out, s, where):
+    return {"source": None, "why": "no card (a stand-in experiment)"}
+
+
+def test_a_dirty_tree_is_refused_unless_allowed(tmp_path, monkeypatch, capsys):
+    """A run on a tree with uncommitted changes is refused before any experiment runs; with
+    --allow-dirty it runs and the page says which results are so."""
+    from tracer.reproduce import experiments
+
+    ran = []
+    monkeypatch.setattr(experiments, "tree_dirty", lambda: True)
+    monkeypatch.setitem(experiments.EXPERIMENTS, "gpu",
+                        lambda o, s, w: ran.append(1) or _fake_gpu(o, s, w))
+    out = tmp_path / "res"
+    argv = ["reproduce", "--smoke", "--only", "gpu", "--out", str(out), "-q"]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "uncommitted changes" in err and "--allow-dirty" in err
+    assert ran == [] and not out.exists()
+    assert main(argv + ["--allow-dirty"]) == 0
+    page = (out / "reproduction.md").read_text(encoding="utf-8")
+    assert "Written with `--allow-dirty`:** the results of gpu, run" in page
+
+
+def test_report_only_refuses_dirty_results(tmp_path, capsys):
+    """The committed results hold some of a dirty tree: the report is refused without
+    --allow-dirty (and nothing is rewritten), written with it and says so."""
+    folder = tmp_path / "full"
+    shutil.copytree(RESULTS, folder)
+    assert report.dirty_results(folder)  # the committed folder has some (issue 48)
+    before = (folder / "reproduction.md").read_text(encoding="utf-8")
+    assert main(["reproduce", "--report-only", "--out", str(folder), "-q"]) == 2
+    assert "results of a tree with local changes" in capsys.readouterr().err
+    assert (folder / "reproduction.md").read_text(encoding="utf-8") == before
+    assert main(["reproduce", "--report-only", "--out", str(folder), "-q",
+                 "--allow-dirty"]) == 0
+    page = (folder / "reproduction.md").read_text(encoding="utf-8")
+    assert "Written with `--allow-dirty`" in page
+
+
+def test_code_changed_says_unknown_without_git(monkeypatch):
+    from tracer.reproduce import experiments
+
+    head = experiments.head_commit()
+    assert experiments.code_changed(head, head) == "unchanged"
+    assert experiments.code_changed("unknown", head) == "unknown"
+    assert experiments.code_changed("f" * 40, head) == "unknown"  # no such commit
+    monkeypatch.setattr(experiments, "_git_status", lambda *a: None)
+    assert experiments.code_changed(head, head) == "unknown"
+    assert experiments.tree_dirty() is None
+
+
+def test_experiments_table_shows_tree_and_code_state():
+    """Each experiment's row: its commit, clean or dirty, and whether the measured code
+    changed since (as run.json's report state records it)."""
+    run = report.load_run(RESULTS)
+    rows = _table(PAGE.read_text(encoding="utf-8"), "Experiments")
+    assert {r[0] for r in rows} == set(report.load_results(RESULTS))
+    for r in rows:
+        res = json.loads((RESULTS / f"{r[0]}.json").read_text())
+        assert r[3].startswith(res["provenance"]["commit"][:12])
+        assert r[4] == {True: "dirty", False: "clean"}.get(res["provenance"]["dirty"],
+                                                           "unknown")
+        assert r[5].split()[0] == run["report"]["code"][r[0]]
+        assert r[5].split()[0] in ("changed", "unchanged", "unknown")
+
+
+def test_the_page_names_no_absolute_path():
+    for text in (PAGE.read_text(encoding="utf-8"),
+                 *(p.read_text(encoding="utf-8")
+                   for p in RESULTS.parent.glob("*/reproduction.md"))):
+        assert "/work/" not in text and "/home/" not in text
+
+
+# ------------------------------------------------------------------ verdicts (issue 48)
+def test_a_spread_that_straddles_the_threshold_is_inconclusive():
+    from tracer.reproduce import claims
+
+    assert claims.judge(5.5, 7.0, 5) == "match"
+    assert claims.judge(3.0, 4.9, 5) == "differs"
+    assert claims.judge(4.86, 7.44, 5) == "inconclusive"  # the issue's bowl-ico runs
+    assert claims.judge(8.0, 9.0, 10, above=False) == "match"
+    assert claims.combine(["match", "inconclusive"]) == "inconclusive"
+    assert claims.combine(["match", "inconclusive", "differs"]) == "differs"
+
+
+def _box(on, off):
+    case = {"data_primitives": 736, "data_kind": "edges", "query_primitives": 120,
+            "query_kind": "edges", "ms_on": sorted(on)[len(on) // 2],
+            "ms_off": sorted(off)[len(off) // 2], "ms_on_all": on, "ms_off_all": off}
+    case["speedup"] = case["ms_off"] / case["ms_on"]
+    return {"box_test": {"beta": 0.5, "repeat": len(on), "threads": 2, "cases": {"c": case},
+                         "load_average_before": [1.5, 1, 1],
+                         "provenance": {"load_average": [2.5, 1, 1]}}}
+
+
+def test_box_test_verdict_follows_the_rounds_spread():
+    from tracer.reproduce import claims
+
+    ours, setting, verdict, why = claims._box_test(_box([10, 10, 10], [60, 70, 80]))
+    assert verdict == "match" and "rounds 6-8x" in ours and "load 1.5 before, 2.5 after" \
+        in setting
+    ours, _, verdict, why = claims._box_test(_box([10, 10, 10], [45, 60, 70]))
+    assert verdict == "inconclusive" and "rounds 4.5-7x" in ours and "straddle" in why
+    assert claims._box_test(_box([10, 10, 10], [30, 40, 45]))[2] == "differs"
+
+
+def test_beta_verdicts_use_the_repeats():
+    from tracer.reproduce import claims
+
+    def beta(t0, t2, t5):
+        return {"beta": {"size": 512, "threads": 2, "repeat": len(t0),
+                         "render_seconds": {k: {"0": t0[0], "0.2": t2[0], "0.5": t5[0]}
+                                            for k in claims.TYPES},
+                         "render_seconds_repeats": {k: {"0": t0, "0.2": t2, "0.5": t5}
+                                                    for k in claims.TYPES}}}
+
+    assert claims._beta_speedup(beta([25, 24], [2, 2.1], [1, 1]))[2] == "match"
+    r = claims._beta_speedup(beta([25, 21], [2, 2.2], [1, 1]))
+    assert r[2] == "inconclusive" and "repeats 9.55-12.5x" in r[0]
+    assert claims._beta_10s(beta([25, 24], [2, 2], [9, 11]))[2] == "inconclusive"
+    assert claims._beta_10s(beta([25, 24], [2, 2], [1, 1.2]))[2] == "match"
+
+
+def test_quick_runs_say_their_timing_verdicts_are_indicative():
+    res = report.load_results(RESULTS)
+    full = {r["id"]: r for r in evaluate(res)}
+    assert not any(r.get("indicative") for r in full.values())
+    for r in res.values():
+        r["mode"] = "quick"
+    quick = {r["id"]: r for r in evaluate(res)}
+    assert quick["box-test"]["indicative"] == "a quick run: indicative only"
+    assert not quick["underestimate"].get("indicative")  # not a timing
+
+
+def test_bh_switch_rows_are_not_a_match_on_another_unit():
+    """Rows 4-5: on the unit-diagonal cloud they are not comparable; measured the authors' way
+    (raw coordinates) with switch points kept they are judged."""
+    from tracer.reproduce import claims
+
+    h = json.loads((RESULTS / "bh_switch.json").read_text())
+    for fn in (claims._bh_disc, claims._bh_cos):
+        assert fn({"bh_switch": h})[2] == "not comparable"
+    raw = {"settings": {"alpha": 100.0, "iso": 0.1, "start": 0.01, "segment": 0.005,
+                        "samples": 101, "max_steps": 20}, "hits": 400, "switch_points": 300,
+           "kept_points": 200, "mean_discrepancy": 5e-5, "max_discrepancy": 1e-3,
+           "mean_cosine": 1.0, "min_cosine": 0.999}
+    ours, _, verdict, why = claims._bh_disc({"bh_switch": dict(h, raw=raw)})
+    assert verdict == "match" and "raw units" in ours and "barnes_hut_smoothness_test" in why
+    raw.update(kept_points=0, switch_points=0, hits=1)
+    ours, _, verdict, why = claims._bh_disc({"bh_switch": dict(h, raw=raw)})
+    assert verdict == "not comparable" and "1 of" in why
+
+
+def test_no_intersection_row_reads_each_runs_minimum_distance():
+    from tracer.reproduce import claims
+
+    def t3(*d):
+        return {"table3": {"rows": {f"s{i}": {"steps": 5, "runs": [{"min_exact_distance": x}]}
+                                    for i, x in enumerate(d)}}}
+
+    assert claims._no_intersection(t3(0.1, 0.02))[2] == "match"
+    assert claims._no_intersection(t3(0.1, 0.0))[2] == "differs"
+    assert claims._no_intersection({"table3": {"rows": {"a": {"runs": [{}]}}}})[2] == "not run"
+
+
+def test_every_claim_of_issue_48_has_a_row():
+    ids = {c[0] for c in CLAIMS}
+    assert {"grid-variance", "gpu-above-one", "gpu-leaves", "no-intersection", "beta-alpha",
+            "attenuation"} <= ids

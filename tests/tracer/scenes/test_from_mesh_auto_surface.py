@@ -1,17 +1,22 @@
-"""``alpha="auto"`` for edges and triangles picks alpha, alpha_U and the offset together
-(issue 35; :meth:`smoothdist.SmoothDistanceField.auto_surface`).
+"""``alpha="auto"`` picks alpha, alpha_U and the offset together (issues 35 and 46;
+:meth:`smoothdist.SmoothDistanceField.auto_surface`).
 
-* the choice against its definition, computed here from the edges in numpy: ``C = min(0.75 x
-  mean edge length, 0.08 x diagonal)``, ``alpha = 6 / C`` (``14 / C`` where ``6 / C`` is over
-  16 / mean edge length; wireframes ``30 / C`` at ``C`` = 0.1 edge lengths),
-  ``alpha_U = alpha``; point clouds and explicit values keep what they were (``auto_alpha``,
-  20 x alpha, offset 0);
-* the target, on small renders: the 95th percentile of the angle between the rendered normals
-  and the true shape's (:mod:`tracer.rendering.ripple`) is at most ``max(6 degrees, 1.5 x`` the
-  exact distance's offset surface at the same mean offset``)`` for a trimesh icosphere(2) as
-  triangles and a 64-edge circle as edges, where the zero set of the old defaults misses it,
-  and for a box of 12 triangles and a cube's 12 edges, where the first rule (``6 / C``
-  everywhere) missed it too;
+* meshes with triangles (issue 46): a thin shell, ``C = min(0.003 x diagonal, 0.1 x`` the 25th
+  percentile of the local feature size``)``, at least ``0.0005 x diagonal``,
+  ``alpha = alpha_U = 20 / C``; checked on shapes whose feature size is known (a sphere's
+  radius, a thin plate's half thickness, the half width of the gap between two plates) and
+  the feature sizes themselves against trimesh's own closest points (each ball empty and
+  touching the surface);
+* curves (edges alone), computed here from the edges in numpy: ``C = min(0.75 x mean edge
+  length, 0.08 x diagonal)`` and at least 1 % of it, ``alpha = 6 / C`` (``14 / C`` where
+  ``6 / C`` is over 16 / mean edge length; wireframes ``30 / C`` at ``C`` = 0.1 edge
+  lengths), ``alpha_U = alpha``; point clouds and explicit values keep what they were
+  (``auto_alpha``, 20 x alpha, offset 0);
+* the ripple target, on small renders: the 95th percentile of the angle between the rendered
+  normals and the true shape's (:mod:`tracer.rendering.ripple`) is at most ``max(6 degrees,
+  1.5 x`` the exact distance's offset surface at the same mean offset``)`` for a trimesh
+  icosphere(2) as triangles and a 64-edge circle as edges, where the zero set of the old
+  defaults misses it, and for a box of 12 triangles and a cube's 12 edges;
 * scene files: ``"alpha": "auto"`` gets the same choice, a numeric alpha (the authors' files)
   renders as before.
 """
@@ -21,6 +26,7 @@ import json
 import numpy as np
 import pytest
 
+import naive
 import tracer
 from smoothdist import DataMesh, SmoothDistanceField
 from tracer.rendering import ripple as rp
@@ -43,8 +49,8 @@ def circle(n=64):
 
 
 def expected(V, E, tube=False):
-    """``(alpha, alpha_u, offset)`` of the rule, from the unique edges ``E`` (``tube``: the
-    data has edges)."""
+    """``(alpha, alpha_u, offset)`` of the curves' rule, from the unique edges ``E``
+    (``tube``: the data has edges)."""
     h = np.mean(np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1))
     diag = np.linalg.norm(V.max(axis=0) - V.min(axis=0))
     c = min(0.75 * h, 0.08 * diag)
@@ -54,10 +60,45 @@ def expected(V, E, tube=False):
     return a, a, c
 
 
+def shell(c):
+    return 20.0 / c, 20.0 / c, c
+
+
+def diagonal(V):
+    V = np.asarray(V, float)
+    return float(np.linalg.norm(V.max(axis=0) - V.min(axis=0)))
+
+
+def plates(gap=None, thick=0.04):
+    """A 2 x 2 plate ``thick`` thick; with ``gap``, two of them that far apart."""
+    trimesh = pytest.importorskip("trimesh")
+    p = trimesh.creation.box(extents=(2.0, 2.0, thick))
+    if gap is not None:
+        q = p.copy()
+        q.apply_translation((0, 0, gap + thick))
+        p = trimesh.util.concatenate([p, q])
+    return DataMesh(np.asarray(p.vertices, float), np.asarray(p.faces)), p
+
+
 def test_the_choice_follows_its_definition():
+    # a unit sphere: features of about its radius, so 0.3 % of the diagonal
     mesh, m = icosphere2()
-    got = SmoothDistanceField(mesh).auto_surface()
-    np.testing.assert_allclose(got, expected(m.vertices, m.edges_unique), rtol=1e-12)
+    np.testing.assert_allclose(SmoothDistanceField(mesh).auto_surface(),
+                               shell(0.003 * diagonal(m.vertices)), rtol=1e-12)
+    # a plate 0.04 thick: half of it is the feature size almost everywhere (the 25th
+    # percentile), a tenth of that the offset (its edge-on outline grows by 10 %)
+    mesh, p = plates()
+    fld = SmoothDistanceField(mesh)
+    assert np.median(fld.feature_sizes()) == pytest.approx(0.02, rel=1e-9)
+    np.testing.assert_allclose(fld.auto_surface(), shell(0.002), rtol=1e-9)
+    # two of them 0.01 apart: the gap's half width (0.005) is the smaller feature; a tenth of
+    # it would be below 0.05 % of the diagonal, the floor
+    mesh, p = plates(gap=0.01)
+    fld = SmoothDistanceField(mesh)
+    assert np.percentile(fld.feature_sizes(), 25) == pytest.approx(0.005, rel=1e-6)
+    np.testing.assert_allclose(fld.auto_surface(), shell(0.0005 * diagonal(p.vertices)),
+                               rtol=1e-9)
+    # curves keep the tube: a circle of 64 edges
     c = circle()
     np.testing.assert_allclose(SmoothDistanceField(c).auto_surface(),
                                expected(c.V, c.edges, tube=True), rtol=1e-12)
@@ -65,16 +106,58 @@ def test_the_choice_follows_its_definition():
     fine = circle(2000)
     a, au, off = SmoothDistanceField(fine).auto_surface()
     assert off == pytest.approx(0.01 * 2 * np.sqrt(2)) and 0.75 * 2 * np.pi / 2000 < off / 4
-    # a box of 12 triangles: the mean edge (1.7) is capped at 8 % of the diagonal
-    V = np.array([[x, y, z] for x in (-1, 1) for y in (-0.75, 0.75) for z in (-0.5, 0.5)])
+    # triangles with edges: the shell, but a tube of at least 1 % round the edges
+    V = np.r_[m.vertices, [[2.0, 0, 0], [3.0, 0, 0]]]
+    both = DataMesh(V, triangles=np.asarray(m.faces), edges=[[len(V) - 2, len(V) - 1]])
+    np.testing.assert_allclose(SmoothDistanceField(both).auto_surface(),
+                               shell(0.01 * diagonal(V)), rtol=1e-12)
+
+
+def brute_distance(T, Q):
+    """Distance from each row of ``Q (q, 3)`` to the nearest triangle of ``T (m, 3, 3)``,
+    trying all."""
+    X = naive.closest_point_triangle(Q, T[:, 0], T[:, 1], T[:, 2])[0]     # (q, m, 3)
+    return np.sqrt(np.min(np.sum((X - Q[:, None, :]) ** 2, axis=2), axis=1))
+
+
+def test_feature_sizes_are_empty_balls_that_touch():
+    """Each ball the shrinking finds (tangent at its sample, on either side) is empty and
+    touches the surface, by brute-force closest points (tests/naive.py); the smaller side is
+    returned."""
     trimesh = pytest.importorskip("trimesh")
-    box = trimesh.creation.box(extents=(2.0, 1.5, 1.0))
-    a, au, off = SmoothDistanceField(DataMesh(np.asarray(box.vertices), box.faces)).auto_surface()
-    assert off == pytest.approx(0.08 * np.linalg.norm(V.max(0) - V.min(0)))
-    # ... so 6 / C would be 47 / mean edge: its few large facets get 14 / C
-    assert a == pytest.approx(14.0 / off) and au == a
-    np.testing.assert_allclose((a, au, off), expected(box.vertices, box.edges_unique),
-                               rtol=1e-12)
+    m = trimesh.creation.annulus(r_min=0.5, r_max=1.0, height=0.3)
+    fld = SmoothDistanceField(DataMesh(np.asarray(m.vertices, float), np.asarray(m.faces)))
+    r = fld.feature_sizes(count=60, seed=3)
+    assert r.shape == (60,) and np.all(r > 0) and np.all(r < fld.diagonal)
+    # the same samples, drawn again here: their points and normals
+    T = fld.mesh.V[fld.mesh.triangles]
+    cr = np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0])
+    area = np.linalg.norm(cr, axis=1)
+    rng = np.random.default_rng(3)
+    ok = np.flatnonzero(area > 0)
+    pick = rng.choice(ok, 60, p=area[ok] / area[ok].sum())
+    u, v = rng.random((2, 60))
+    flip = u + v > 1.0
+    u[flip], v[flip] = 1.0 - u[flip], 1.0 - v[flip]
+    t = T[pick]
+    P = t[:, 0] + u[:, None] * (t[:, 1] - t[:, 0]) + v[:, None] * (t[:, 2] - t[:, 0])
+    n = cr[pick] / area[pick, None]
+    best = np.full(60, np.inf)
+    for sign in (1.0, -1.0):
+        # the ball of radius r on this side: empty when its centre is >= r from the surface
+        centre = P - sign * r[:, None] * n
+        dist = brute_distance(T, centre)
+        empty = dist >= r * (1 - 1e-6)
+        best = np.where(empty, np.minimum(best, r), best)
+    # on one side at least, the ball of the returned radius is empty ...
+    assert np.all(np.isfinite(best))
+    # ... and maximal: 2 % larger, it holds a surface point on one side at least
+    big = 1.02 * r
+    full = np.zeros(60, dtype=bool)
+    for sign in (1.0, -1.0):
+        centre = P - sign * big[:, None] * n
+        full |= brute_distance(T, centre) < big * (1 - 1e-6)
+    assert np.all(full)
 
 
 def test_points_and_explicit_values_keep_the_old_choice():
@@ -98,6 +181,7 @@ def test_points_and_explicit_values_keep_the_old_choice():
     sc = tracer.mesh_scene(mesh, size=(8, 8))                      # all auto
     o = sc.objects[0]
     assert (o.alpha, o.alpha_u, o.smooth_offset) == pytest.approx(f.auto_surface())
+    assert o.smooth_offset == pytest.approx(0.003 * f.diagonal)
 
 
 def _p95_pair(mesh, shape, kind, **kw):
@@ -154,10 +238,11 @@ def test_large_facets_and_wires_meet_the_ripple_target(case):
     smooth, exact, res = _p95_pair(mesh, shape, kind)
     assert res.hit.sum() > 500
     assert smooth <= max(TARGET_DEG, TARGET_RATIO * exact), (smooth, exact)
-    # the first rule, alpha = 6 / C at the same offset, misses it: the check can fail
-    o = res.scene.objects[0]
-    old, old_exact, _ = _p95_pair(mesh, shape, kind, alpha=6.0 / o.smooth_offset,
-                                  alpha_u="off", offset=o.smooth_offset)
+    # the first rule of issue 35, alpha = 6 / C at C = min(0.75 x mean edge, 8 % of the
+    # diagonal), misses it: the check can fail
+    h = SmoothDistanceField(mesh).mean_edge_length()
+    c = min(0.75 * h, 0.08 * SmoothDistanceField(mesh).diagonal)
+    old, old_exact, _ = _p95_pair(mesh, shape, kind, alpha=6.0 / c, alpha_u="off", offset=c)
     assert old > max(TARGET_DEG, TARGET_RATIO * old_exact), (old, old_exact)
 
 
@@ -174,8 +259,8 @@ def test_scene_files_auto_and_numeric(tmp_path):
         return load_scene(str(path)).objects[0]
 
     o = load("auto")
-    want = expected(np.asarray(m.vertices), np.asarray(m.edges_unique))
-    assert (o.alpha, o.alpha_u, o.smooth_offset) == pytest.approx(want)
+    assert (o.alpha, o.alpha_u, o.smooth_offset) == pytest.approx(
+        SmoothDistanceField(mesh).auto_surface(), rel=1e-9)
     o = load(40.0, max_alpha=80.0)
     assert (o.alpha, o.alpha_u, o.smooth_offset, o.offset) == (40.0, 80.0, 0.0, 1.0 / 40.0)
     o = load(40.0)
