@@ -24,7 +24,7 @@ Results go to ``benchmarks/data/coldstart.json`` with the load average before an
 run (other jobs slow a compile down as much as a render), the commit and whether the tree was
 dirty. ``--source DIR`` measures another checkout (e.g. a ``git worktree`` of an older
 commit) with this script, for a before/after table. The README's first-render figures and the
-performance guide's cold-start table are read from these files (``tests/test_docs_tables.py``,
+performance guide's cold-start table are read from these files (``tests/repo/test_docs_tables.py``,
 ``tests/tracer/rendering/test_render_coldstart.py``).
 
 Usage::

@@ -60,7 +60,7 @@ def _row(name, size, res, off, seconds):
 
 def count_specks(rgb, hit, threshold=THRESHOLD):
     """Pixels inside the silhouette more than ``threshold`` grey levels darker than the
-    median of their 5 x 5 window (the same measure as ``tests/test_lighting.py``)."""
+    median of their 5 x 5 window (the same measure as ``tests/tracer/rendering/test_lighting.py``)."""
     return int(speck_mask(rgb, hit, threshold).sum())
 
 

@@ -1,5 +1,5 @@
 """The performance guide's sentences on issue 51's warm side-by-side runs, made from
-``benchmarks/data/coldstart_issue51_warm.json`` (``tests/test_docs_tables.py`` checks that the
+``benchmarks/data/coldstart_issue51_warm.json`` (``tests/repo/test_docs_tables.py`` checks that the
 guide holds them)."""
 
 import json

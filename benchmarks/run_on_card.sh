@@ -79,7 +79,7 @@ for s in "${steps[@]}"; do
     stored)
         step stored_values 300 "$py" -m pytest -p tracer.pytest_plugin -n 8 -q \
             -p no:cacheprovider tests/smoothdist/test_mesh_distance_unchanged.py \
-            tests/smoothdist/test_mesh_distance_reference.py tests/test_render_golden.py \
+            tests/smoothdist/test_mesh_distance_reference.py tests/tracer/rendering/test_render_golden.py \
             tests/tracer/rendering/test_render_determinism.py \
             tests/smoothdist/kernels/test_weights.py
         ;;

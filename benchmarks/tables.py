@@ -1,6 +1,6 @@
 """The markdown tables that docs/guide/performance.md quotes, made from the results files.
 
-``tests/test_docs_tables.py`` checks that the guide holds each table exactly as this script
+``tests/repo/test_docs_tables.py`` checks that the guide holds each table exactly as this script
 makes it from the committed results files, so a rerun that changes a figure cannot leave the
 page behind.
 

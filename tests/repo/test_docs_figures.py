@@ -7,7 +7,7 @@ A line that shows such a figure passes when it lies
   which ``tests/tracer/reproduce/test_reproduce.py`` compares with the results files it is
   written from;
 - in a table that ``benchmarks/tables.py`` makes from a results file (the line as the table
-  function prints it; ``tests/test_docs_tables.py`` checks that the page holds the table);
+  function prints it; ``tests/repo/test_docs_tables.py`` checks that the page holds the table);
 - in a fenced code block (commands and their printouts, not claims);
 - or on the ledger, ``tests/repo/docs_figures_ledger.tsv`` (``file<TAB>reason<TAB>line``), which
   says why the line has no results file: a line checked sentence by sentence by a named test,

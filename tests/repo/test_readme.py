@@ -132,7 +132,7 @@ PLACEHOLDERS = {
 NOT_RUN = {
     "python benchmarks/profile_compile.py":
         "it compiles every kernel three times over with empty caches (a minute); "
-        "tests/test_docs_tables.py checks the guide against its results file and "
+        "tests/repo/test_docs_tables.py checks the guide against its results file and "
         "tests/tracer/rendering/test_render_coldstart.py the compiled kernels of a first render",
     "python benchmarks/bench_coldstart.py":
         "it compiles every kernel from an empty cache six times (minutes); "
@@ -183,7 +183,7 @@ NOT_RUN = {
         "with the same code",
     "for s in scenes/*.json; do python -m tracer render $s -o renders/gallery/$(basename "
     "${s%.json}).png --size 512 512 --shading lit --samples 16 --adaptive --overwrite; done":
-        "it starts one interpreter per scene (14); tests/test_render_golden.py runs the same "
+        "it starts one interpreter per scene (14); tests/tracer/rendering/test_render_golden.py runs the same "
         "command line for every scene in-process (test_every_scene_renders_lit_from_the_"
         "command_line)",
     "python benchmarks/bench_studies.py --grid 50":
@@ -194,7 +194,7 @@ NOT_RUN = {
         "command",
     "bash .ci/run": "it runs this test suite (CI runs it)",
     'bash .ci/run -m "not slow"': "it runs the quick part of this test suite",
-    "python -m pytest tests/test_render_golden.py --regen-baselines":
+    "python -m pytest tests/tracer/rendering/test_render_golden.py --regen-baselines":
         "it rewrites the repository's baselines; tests/tracer/test_pytest_plugin.py tests "
         "--regen-baselines in a throwaway project",
     ".venv/bin/python -m sphinx -W --keep-going docs docs/_build/html":

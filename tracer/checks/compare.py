@@ -23,11 +23,11 @@ pixel's ray and ``forward``), relative to the data's bounding-box diagonal.
 Residuals and where they come from
 ----------------------------------
 Measured with ``tracer compare SCENE --size 96 96`` (default grid 128) on every shipped scene
-(``scenes/*.json``; ``tests/test_render_golden.py`` re-checks four scenes and a sphere at a
-64^3 grid). "only": pixels hit by the tracer only / by pyvista only; normal angles in degrees;
-depth: mean ``|t_pyvista - t_tracer|`` / data diagonal; cell: the largest grid spacing / data
-diagonal (the grid spans the data box grown by the inflation margin, hence cells of 0.6-0.9 %
-of the diagonal)::
+(``scenes/*.json``; ``tests/tracer/rendering/test_render_golden.py`` re-checks four scenes
+and a sphere at a 64^3 grid). "only": pixels hit by the tracer only / by pyvista only; normal
+angles in degrees; depth: mean ``|t_pyvista - t_tracer|`` / data diagonal; cell: the largest
+grid spacing / data diagonal (the grid spans the data box grown by the inflation margin, hence
+cells of 0.6-0.9 % of the diagonal)::
 
     scene             IoU    only   mean  median  p95   depth    cell
     bunny_edges       0.998  7/0    0.26  0.23    0.5   3.1e-4   0.0080
@@ -341,7 +341,7 @@ def sample_grid(scene, n, prune=True):
         outside the surface -- exact distance above :func:`positive_margin` -- and whose six
         grid neighbours are too; they get a positive placeholder value instead. No grid edge
         touching such a point crosses zero, so the marching-cubes surface is the same as
-        with every point evaluated (``tests/test_render_golden.py`` checks it).
+        with every point evaluated (``tests/tracer/rendering/test_render_golden.py`` checks it).
 
     Returns
     -------

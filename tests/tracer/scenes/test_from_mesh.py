@@ -22,7 +22,7 @@ from tracer.rendering.camera import primary_rays
 from tracer.cli import main
 from tracer.image import load_png
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[3]
 DATA = ROOT / "scenes" / "data"
 SCENES = ROOT / "scenes"
 

@@ -32,7 +32,7 @@ from tracer.rendering.renderer import camera_of, kernel_roots, render, scene_arr
 from tracer.scenes.scene import Scene, SceneObject, default_eps, load_scene, scene_from_field
 
 UP = np.array([0.0, 1.0, 0.0])
-TREFOIL = Path(__file__).resolve().parents[1] / "scenes" / "trefoil.json"
+TREFOIL = Path(__file__).resolve().parents[3] / "scenes" / "trefoil.json"
 
 
 # ----------------------------------------------------------------------------- scenes

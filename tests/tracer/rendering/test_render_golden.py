@@ -17,8 +17,8 @@ comparison.
 Baselines are never written implicitly. To create or update them (after checking that the
 change is intended)::
 
-    python -m pytest tests/test_render_golden.py --regen-baselines                  # all
-    python -m pytest tests/test_render_golden.py --regen-baselines -k torus-smooth  # some
+    python -m pytest tests/tracer/rendering/test_render_golden.py --regen-baselines                  # all
+    python -m pytest tests/tracer/rendering/test_render_golden.py --regen-baselines -k torus-smooth  # some
 
 The pyvista tests are skipped, with the reason, where VTK cannot render off-screen.
 """
@@ -32,7 +32,7 @@ from typing import NamedTuple
 import numpy as np
 import pytest
 
-TESTS = Path(__file__).resolve().parent
+TESTS = Path(__file__).resolve().parents[2]
 ROOT = TESTS.parent
 
 from tracer.image import load_png, save_png
@@ -42,7 +42,7 @@ SCENES = sorted((ROOT / "scenes").glob("*.json"))
 MODES = ("smooth", "exact")
 SIZE = 64
 BASELINE_DIR = TESTS / "baseline"
-REGEN_COMMAND = "python -m pytest tests/test_render_golden.py --regen-baselines"
+REGEN_COMMAND = "python -m pytest tests/tracer/rendering/test_render_golden.py --regen-baselines"
 
 
 class Tolerance(NamedTuple):
