@@ -50,7 +50,7 @@ def run(n, size):
 
 
 def words(result):
-    """The troubleshooting guide's sentence about ``result`` (tests/test_docs_tables.py)."""
+    """The troubleshooting guide's sentence about ``result`` (tests/repo/test_docs_tables.py)."""
     W, H = result["size"]
     parts = []
     for r in result["rows"]:

@@ -39,7 +39,7 @@ def settings(field):
 
 
 def words(result, before):
-    """The troubleshooting guide's sentence (tests/test_docs_tables.py)."""
+    """The troubleshooting guide's sentence (tests/repo/test_docs_tables.py)."""
     shapes = len({r["shape"] for r in result["rows"]})
     surfaces = len({r["surface"] for r in result["rows"]})
     return (f"on {shapes} shapes at {surfaces} surfaces each ({result['size']}²), "

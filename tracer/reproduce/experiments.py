@@ -776,7 +776,7 @@ def box_test(out, s, where):
     primitive-box distance it avoids (``box_test=False``), timed back to back in one process
     (alternating, median of ``repeat``). Both must be conservative (at most the beta = 0 value
     per query primitive) and differ by no more than the Barnes-Hut error of the two (the
-    tolerance ``tests/test_box_test.py`` documents); the run fails otherwise."""
+    tolerance ``tests/smoothdist/test_box_test.py`` documents); the run fails otherwise."""
     from smoothdist import MeshDistance
 
     specs = box_cases()
