@@ -157,7 +157,7 @@ NOT_RUN = {
         "(../shared/tools/authors-bench) and takes minutes; tests/repo/test_bench_authors_sim.py "
         "runs the script against a stand-in simulator",
     "python benchmarks/bench_mesh_distance.py --authors-bin ../authors-build/bench/mesh_bench "
-    "--rounds 5 --repeat 10 --threads 2":
+    "--rounds 5 --repeat 10 --threads 2 --json benchmarks/data/mesh_distance_authors.json":
         "it needs the authors' mesh_bench built outside the repository "
         "(../shared/tools/authors-bench); the same script without --authors-bin is run",
     "python -m tracer render scenes/bunny_points.json --size 1920 1080 --shading normals "

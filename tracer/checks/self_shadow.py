@@ -19,6 +19,9 @@ with no occluder in the way.
 
 import numpy as np
 
+from tracer.rendering.camera import primary_rays
+from tracer.rendering.lighting import light_directions
+
 __all__ = ["wrongly_dark", "STEP", "START", "DARK", "FACING"]
 
 #: sample spacing along the light ray, as a fraction of the bbox diagonal
@@ -38,9 +41,6 @@ def wrongly_dark(res, tol=1e-3, max_pixels=4000, seed=0):
     ``wrong`` (checked pixels wrongly dark) and ``share`` (``wrong / checked``; NaN when none
     were checked). ``res``: a lit render of one object by :func:`tracer.render_mesh` or
     :func:`tracer.render` (smooth mode)."""
-    from tracer.rendering.camera import primary_rays
-    from tracer.rendering.lighting import light_directions
-
     scene = res.scene
     o = scene.objects[0]
     field = o.field

@@ -18,9 +18,9 @@ numba's CUDA simulator the images equal the CPU's bit for bit
 
 The lit look, anti-aliasing samples (adaptive too) and transparent backgrounds (issue 49) take
 the CPU's film (:func:`tracer.rendering.film.form_image`) over the GPU's centre samples, with
-its two per-ray kernels on the GPU: the extra samples (:func:`_samples_kernel`, the CPU's
+its two per-ray kernels on the GPU: the extra samples (``_samples_kernel``, the CPU's
 :func:`tracer.rendering.march.sample_pixel`) and the shadow and occlusion rays
-(:func:`_light_kernel`, :func:`tracer.rendering.lighting.light_point`), one thread per sample
+(``_light_kernel``, :func:`tracer.rendering.lighting.light_point`), one thread per sample
 or point. What stays on the host: the film's bookkeeping (which pixels get samples, the light
 interpolated between centre samples, the colours), the ground's height and, with several
 objects, which object a lit point shows.

@@ -244,10 +244,14 @@ def _light_task(tree, roots, params, mode, tol, P, N, depth_max, light, out, tas
         light_point(tree, roots, params, mode, tol, P, N, light, out, i, stack, dstack)
 
 
-@numba.njit(**NJIT_IR_INLINE)
+@numba.njit(**NJIT)
 def light_point(tree, roots, params, mode, tol, P, N, light, out, i, stack, dstack):
     """Point ``i`` of :func:`light_points`, with the traversal stacks ``stack``, ``dstack``
-    (the CPU's tasks and the GPU's threads, :mod:`tracer.rendering.gpu_render`, call this)."""
+    (the CPU's tasks and the GPU's threads, :mod:`tracer.rendering.gpu_render`, call this).
+    A function of its own, not inlined: inlined twice into the parallel loop of
+    :func:`light_points` (numba 0.68) it lost the shadow of some points (1 where the serial
+    tasks and a direct :func:`soft_shadow` give 0; tests/tracer/rendering/
+    test_render_coldstart.py)."""
     L, lo, hi, eps, k, delta, do_shadow, do_ao, slack, t_min, t_judge = light
     shadow, ao, work = out
     bias = 2.0 * eps

@@ -9,8 +9,8 @@ A guide holds each such figure between two markers::
 :func:`blocks` builds every block's text from the committed results (:data:`BLOCKS`: the guide,
 the block's name and the function that writes it), :func:`update` rewrites the guides
 (``tracer reproduce --report-only --docs``) and :func:`disagreements` lists the blocks whose
-text is not the one generated (``tests/tracer/reproduce/test_reproduce.py``), so that the guides cannot lag the
-results again.
+text is not the one generated (``tests/tracer/reproduce/test_reproduce.py``), so that the
+guides cannot lag the results again.
 """
 
 import csv

@@ -110,6 +110,113 @@ def _date(d):
     return d[:10] if d else "-"
 
 
+def _experiment_lines(results, code, state):
+    """The page's Experiments table."""
+    L = []
+    L += ["", "## Experiments", "",
+          "| experiment | last run | seconds | commit | tree | measured code since | threads "
+          "| load average before → after | settings |",
+          "|---|---|---:|---|---|---|---:|---|---|"]
+    for name, res in results.items():
+        p = res["provenance"]
+        commit = p["commit"][:12]
+        since = code.get(name, "not recorded")
+        if name == "table3":  # rows kept from earlier runs carry their own commit
+            rc = state.get("table3_row_commits", {})
+            others = [c for c in rc if c != p["commit"]]
+            if others:
+                commit += " (rows also from " + ", ".join(c[:12] for c in others) + ")"
+                since += " (" + ", ".join(f"{c[:12]}: {rc[c]}" for c in others) + ")"
+        L.append("| " + " | ".join(_cell(x) for x in (
+            name, p["date"], f"{res['seconds']:.1f}", commit, _dirty_word(p.get("dirty")),
+            since, p["numba_threads"], _loads(res.get("load_average_before"),
+                                              p.get("load_average")),
+            json.dumps(res["settings"], sort_keys=True))) + " |")
+    return L
+
+
+def _table3_lines(t):
+    """The page's Table 3 section from the table3 results ``t``."""
+    L = []
+    L += ["", "## Table 3 as the paper states it", "",
+          "Average time of one smooth distance evaluation (distance and every query "
+          "vertex's gradient) over the whole simulation; every kernel is called once "
+          "before the run, so compilation is not timed. The paper's on 28 threads, ours on "
+          "this machine at each thread count (a machine shared with other work makes "
+          "several threads wait on each other: compare the load averages).", "",
+          f"The last column: {_relative(t.get('authors_simulator', 'not run'))}. Their "
+          "evaluations "
+          "are their `meshDistance` calls (one per mesh pair and orientation, every "
+          "line-search trial of their interior-point solver included), ours the "
+          "`MeshDistance` calls of our simulator: the same simulation and steps, not the "
+          "same number of calls.", "",
+          "| data | query | dt | paper (ms, 28 threads) | ours (ms) | threads | load "
+          "average | steps | evaluations | authors' simulator here (ms) |",
+          "|---|---|---|---:|---:|---:|---:|---:|---:|---|"]
+    for name, (row, data, query, paper_ms, dt) in TABLE3_PAPER.items():
+        r = t["rows"].get(name)
+        if r is None:
+            L.append("| " + " | ".join(_cell(x) for x in (
+                data, query, dt, paper_ms, "not run", "-", "-", "-", "-", "-")) + " |")
+            continue
+        a = r.get("authors")
+        theirs = "-" if not a else (
+            f"{g3(a['ms_mean'])} on {a['threads']} threads ({a['evaluations']} "
+            f"evaluations, load {g3(a['load_average_before'])})"
+            if a["status"] == "ok" else a["status"])
+        for x in r["runs"]:
+            L.append("| " + " | ".join(_cell(v) for v in (
+                data, query, dt, paper_ms, g3(x["ms_mean"]), x["threads"],
+                g3(x["load_average_before"]), r["steps"], x["evaluations"], theirs)) + " |")
+    L.append("| City Street, 6,747,648 points | Motorcycle, 8,800 tris | 1/100 | 581.2362 "
+             "| data not available | - | - | - | - | - |")
+    return L
+
+
+def _box_test_lines(b):
+    """The page's box-test section from the box_test results ``b``."""
+    L = []
+    L += ["", "## The box test on and off", "",
+          "Sec. 3.5: the whole-mesh smooth distance (`MeshDistance`, beta "
+          f"{b['beta']:g}) with the paper's cheap box test (on, the default) and with the "
+          "exact primitive-box distance it avoids (`box_test=False`), timed alternately in "
+          f"one process (median of {b['repeat']}, {b['threads']} threads), the query at an "
+          "exact gap of 1/alpha. Both are conservative; per query primitive they differ by "
+          "no more than the Barnes-Hut error (the largest of each, times alpha, below).", "",
+          "| case | query | data | alpha | on (ms) | off (ms) | speed-up | leaves on / off "
+          "| max \\|on − off\\| × alpha | max BH error × alpha |",
+          "|---|---|---|---:|---:|---:|---:|---|---:|---:|"]
+    for name, c in b["cases"].items():
+        L.append("| " + " | ".join(_cell(x) for x in (
+            name, f"{c['query_primitives']} {c['query_kind']}",
+            f"{c['data_primitives']} {c['data_kind']}", f"{c['alpha']:g}", g3(c["ms_on"]),
+            g3(c["ms_off"]), f"{g3(c['speedup'])}x",
+            f"{g3(c['leaves_on'])} / {g3(c['leaves_off'])}",
+            g3(c["max_abs_diff_x_alpha"]), g3(c["max_bh_error_x_alpha"]))) + " |")
+    return L
+
+
+def _grid_lines(g, shown_as):
+    """The page's benchmark-figure section from the grid results ``g``."""
+    L = []
+    L += ["", "## The benchmark figure", "",
+          f"`tracer bench-grid` over {g['meshes']} meshes ({', '.join(g['sets'])}; "
+          f"generated height fields of {', '.join(str(n) for n in g['generated_triangles'])} "
+          f"triangles), {g['grid']}³ queries. The paper's two plots over every mesh: "
+          f"`{shown_as}/grid/bench_time_vs_leaves.png` and `bench_leaf_fraction.png` (and "
+          "per set in `grid/<set>/`).", "",
+          "| type | meshes | Pearson r (time, leaves) | ns per leaf (fit) | ns per leaf "
+          "(range) | leaves at most | share of leaves, smallest mesh | largest mesh |",
+          "|---|---:|---:|---:|---|---:|---|---|"]
+    for kind, f in g["fit"].items():
+        L.append("| " + " | ".join(_cell(x) for x in (
+            kind, f["meshes"], g3(f["pearson_r"]), g3(f["ns_per_leaf_fit"]),
+            f"{g3(f['ns_per_leaf_min'])}-{g3(f['ns_per_leaf_max'])}", g3(f["leaves_max"]),
+            f"{100 * f['share_smallest']:.3g} % ({f['primitives_smallest']})",
+            f"{100 * f['share_largest']:.3g} % ({f['primitives_largest']})")) + " |")
+    return L
+
+
 def render_page(folder, shown_as):
     """The Markdown page of the results folder ``folder`` (named ``shown_as`` on the page)."""
     results = load_results(folder)
@@ -179,94 +286,12 @@ def render_page(folder, shown_as):
         L.append("| " + " | ".join(_cell(x) for x in (
             i, f"“{r['quote']}”", r["section"], r["paper"], r["ours"], r["setting"], verdict,
             _date(r["last_run"]))) + " |")
-    L += ["", "## Experiments", "",
-          "| experiment | last run | seconds | commit | tree | measured code since | threads "
-          "| load average before → after | settings |",
-          "|---|---|---:|---|---|---|---:|---|---|"]
-    for name, res in results.items():
-        p = res["provenance"]
-        commit = p["commit"][:12]
-        since = code.get(name, "not recorded")
-        if name == "table3":  # rows kept from earlier runs carry their own commit
-            rc = state.get("table3_row_commits", {})
-            others = [c for c in rc if c != p["commit"]]
-            if others:
-                commit += " (rows also from " + ", ".join(c[:12] for c in others) + ")"
-                since += " (" + ", ".join(f"{c[:12]}: {rc[c]}" for c in others) + ")"
-        L.append("| " + " | ".join(_cell(x) for x in (
-            name, p["date"], f"{res['seconds']:.1f}", commit, _dirty_word(p.get("dirty")),
-            since, p["numba_threads"], _loads(res.get("load_average_before"),
-                                              p.get("load_average")),
-            json.dumps(res["settings"], sort_keys=True))) + " |")
+    L += _experiment_lines(results, code, state)
     if "table3" in results:
-        t = results["table3"]
-        L += ["", "## Table 3 as the paper states it", "",
-              "Average time of one smooth distance evaluation (distance and every query "
-              "vertex's gradient) over the whole simulation; every kernel is called once "
-              "before the run, so compilation is not timed. The paper's on 28 threads, ours on "
-              "this machine at each thread count (a machine shared with other work makes "
-              "several threads wait on each other: compare the load averages).", "",
-              f"The last column: {_relative(t.get('authors_simulator', 'not run'))}. Their "
-              "evaluations "
-              "are their `meshDistance` calls (one per mesh pair and orientation, every "
-              "line-search trial of their interior-point solver included), ours the "
-              "`MeshDistance` calls of our simulator: the same simulation and steps, not the "
-              "same number of calls.", "",
-              "| data | query | dt | paper (ms, 28 threads) | ours (ms) | threads | load "
-              "average | steps | evaluations | authors' simulator here (ms) |",
-              "|---|---|---|---:|---:|---:|---:|---:|---:|---|"]
-        for name, (row, data, query, paper_ms, dt) in TABLE3_PAPER.items():
-            r = t["rows"].get(name)
-            if r is None:
-                L.append("| " + " | ".join(_cell(x) for x in (
-                    data, query, dt, paper_ms, "not run", "-", "-", "-", "-", "-")) + " |")
-                continue
-            a = r.get("authors")
-            theirs = "-" if not a else (
-                f"{g3(a['ms_mean'])} on {a['threads']} threads ({a['evaluations']} "
-                f"evaluations, load {g3(a['load_average_before'])})"
-                if a["status"] == "ok" else a["status"])
-            for x in r["runs"]:
-                L.append("| " + " | ".join(_cell(v) for v in (
-                    data, query, dt, paper_ms, g3(x["ms_mean"]), x["threads"],
-                    g3(x["load_average_before"]), r["steps"], x["evaluations"], theirs)) + " |")
-        L.append("| City Street, 6,747,648 points | Motorcycle, 8,800 tris | 1/100 | 581.2362 "
-                 "| data not available | - | - | - | - | - |")
+        L += _table3_lines(results["table3"])
     if "box_test" in results:
-        b = results["box_test"]
-        L += ["", "## The box test on and off", "",
-              "Sec. 3.5: the whole-mesh smooth distance (`MeshDistance`, beta "
-              f"{b['beta']:g}) with the paper's cheap box test (on, the default) and with the "
-              "exact primitive-box distance it avoids (`box_test=False`), timed alternately in "
-              f"one process (median of {b['repeat']}, {b['threads']} threads), the query at an "
-              "exact gap of 1/alpha. Both are conservative; per query primitive they differ by "
-              "no more than the Barnes-Hut error (the largest of each, times alpha, below).", "",
-              "| case | query | data | alpha | on (ms) | off (ms) | speed-up | leaves on / off "
-              "| max \\|on − off\\| × alpha | max BH error × alpha |",
-              "|---|---|---|---:|---:|---:|---:|---|---:|---:|"]
-        for name, c in b["cases"].items():
-            L.append("| " + " | ".join(_cell(x) for x in (
-                name, f"{c['query_primitives']} {c['query_kind']}",
-                f"{c['data_primitives']} {c['data_kind']}", f"{c['alpha']:g}", g3(c["ms_on"]),
-                g3(c["ms_off"]), f"{g3(c['speedup'])}x",
-                f"{g3(c['leaves_on'])} / {g3(c['leaves_off'])}",
-                g3(c["max_abs_diff_x_alpha"]), g3(c["max_bh_error_x_alpha"]))) + " |")
+        L += _box_test_lines(results["box_test"])
     if "grid" in results:
-        g = results["grid"]
-        L += ["", "## The benchmark figure", "",
-              f"`tracer bench-grid` over {g['meshes']} meshes ({', '.join(g['sets'])}; "
-              f"generated height fields of {', '.join(str(n) for n in g['generated_triangles'])} "
-              f"triangles), {g['grid']}³ queries. The paper's two plots over every mesh: "
-              f"`{shown_as}/grid/bench_time_vs_leaves.png` and `bench_leaf_fraction.png` (and "
-              "per set in `grid/<set>/`).", "",
-              "| type | meshes | Pearson r (time, leaves) | ns per leaf (fit) | ns per leaf "
-              "(range) | leaves at most | share of leaves, smallest mesh | largest mesh |",
-              "|---|---:|---:|---:|---|---:|---|---|"]
-        for kind, f in g["fit"].items():
-            L.append("| " + " | ".join(_cell(x) for x in (
-                kind, f["meshes"], g3(f["pearson_r"]), g3(f["ns_per_leaf_fit"]),
-                f"{g3(f['ns_per_leaf_min'])}-{g3(f['ns_per_leaf_max'])}", g3(f["leaves_max"]),
-                f"{100 * f['share_smallest']:.3g} % ({f['primitives_smallest']})",
-                f"{100 * f['share_largest']:.3g} % ({f['primitives_largest']})")) + " |")
+        L += _grid_lines(results["grid"], shown_as)
     L.append("")
     return "\n".join(L)
