@@ -440,7 +440,7 @@ class SmoothDistanceField:
         distance to it. Shrinking balls: a ball of radius ``r`` tangent at ``p`` whose
         nearest surface point ``q`` (exact distance on this field's tree) lies inside is
         replaced by the ball through ``p`` and ``q``, ``r = |p - q|^2 / (2 (p - q) . n)``,
-        :data:`AUTO_FEATURE_STEPS` times at most. Triangles only (0 data: ``(0,)``).
+        ``AUTO_FEATURE_STEPS`` times at most. Triangles only (0 data: ``(0,)``).
         """
         m = self.mesh
         T = m.V[m.triangles]
