@@ -62,7 +62,8 @@ AUTO_FLAT_SHARPNESS = 14.0
 #: ``C`` at most this fraction of the bbox diagonal (a silhouette grows by ``2 C``: a sphere's
 #: IoU against the mesh itself stays above 0.95) ...
 AUTO_SHELL_MAX = 0.003
-#: ... and at most this fraction of the data's local feature size (:meth:`feature_sizes`:
+#: ... and at most this fraction of the data's local feature size
+#: (:meth:`SmoothDistanceField.feature_sizes`:
 #: half the thickness of a plate, half the width of a gap between parts), taken at this
 #: percentile of the surface (thin parts of a shape keep their thickness within 10 %) ...
 AUTO_SHELL_FEATURE = 0.1
@@ -73,7 +74,8 @@ AUTO_SHELL_MIN = 0.0005
 #: lies within ``log(m) / alpha`` of the exact one (``m`` facets meeting: ridges along the
 #: mesh's edges about 3 % of ``C`` high, the facets' own shading), ``C`` from the data
 AUTO_SHELL_SHARPNESS = 20.0
-#: surface points sampled by :meth:`feature_sizes`, and the steps of its shrinking balls
+#: surface points sampled by :meth:`SmoothDistanceField.feature_sizes`, and the steps of its
+#: shrinking balls
 AUTO_FEATURE_SAMPLES = 400
 AUTO_FEATURE_STEPS = 16
 #: a net of edges (the wireframe of a surface: vertices of more than ``AUTO_WIRE_DEGREE``

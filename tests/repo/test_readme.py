@@ -160,6 +160,10 @@ NOT_RUN = {
     "--rounds 5 --repeat 10 --threads 2 --json benchmarks/data/mesh_distance_authors.json":
         "it needs the authors' mesh_bench built outside the repository "
         "(../shared/tools/authors-bench); the same script without --authors-bin is run",
+    "python benchmarks/tables.py mesh-distance benchmarks/data/mesh_distance_authors.json":
+        "it reads the results of the side-by-side run above (the authors' mesh_bench, built "
+        "outside the repository), which no run has written yet; tests/repo/test_docs_tables.py "
+        "ties the table to the file once it exists",
     "python -m tracer render scenes/bunny_points.json --size 1920 1080 --shading normals "
     "--device cuda":
         "it needs an NVIDIA GPU; tests/smoothdist/test_cuda_sim.py runs the same path under "

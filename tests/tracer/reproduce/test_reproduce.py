@@ -214,7 +214,10 @@ def test_quick_run_end_to_end(tmp_path, capsys):
     2 cores once the kernels are compiled)."""
     out = tmp_path / "res"
     page = tmp_path / "page.md"
-    assert main(["reproduce", "--quick", "--out", str(out), "--page", str(page), "-q"]) == 0
+    # --allow-dirty: the tests run on work trees with local changes too (a developer's); the
+    # refusal itself is tested on its own
+    assert main(["reproduce", "--quick", "--out", str(out), "--page", str(page), "-q",
+                 "--allow-dirty"]) == 0
     for name in ("underestimate", "table3", "grid", "bh_switch", "box_test", "gpu", "beta",
                  "alpha"):
         res = json.loads((out / f"{name}.json").read_text())
