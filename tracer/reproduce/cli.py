@@ -5,8 +5,8 @@ studies' own CSVs and plots in ``<experiment>/``), ``claims.json`` and ``reprodu
 ``--quick`` runs everything at small sizes (at most :data:`QUICK_MINUTES` minutes on 2 cores
 without ``--authors-bin``, which adds up to the quick timeout per Table 3 scene: the committed
 quick run's ``run.json`` holds the measured figure, and
-``tests/tracer/reproduce/test_reproduce.py`` checks it against the bound); the full run uses the paper's sizes (hours on 2 cores: the Table 3
-simulations dominate)
+``tests/tracer/reproduce/test_reproduce.py`` checks it against the bound); the full run uses
+the paper's sizes (hours on 2 cores: the Table 3 simulations dominate)
 and runs the studies' and the simulations' tasks on the Dask runner (:mod:`tracer.runner`,
 ``--scheduler``). The folder is built next to ``--out``
 under a temporary name and renamed when every experiment has finished, so an interrupted or
