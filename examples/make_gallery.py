@@ -40,11 +40,6 @@ def render_scene(name, out_dir, overrides=LOOK):
 def side_by_side(out_dir):
     """``look_side_by_side.png``: the bunny of triangles in the paper's normal colours (one
     sample per pixel, as the authors' renderer draws it) beside the gallery look."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     from tracer import render
     from tracer.scenes.scene import load_scene
 
@@ -52,26 +47,14 @@ def side_by_side(out_dir):
     size = {"width": 384, "height": 384}
     authors = render(load_scene(path, dict(size, shading="normals", samples=1, adaptive=False)))
     ours = render(load_scene(path, dict(LOOK, **size)))
-    fig, axes = plt.subplots(1, 2, figsize=(7.68, 4.0), dpi=100)
-    for ax, res, title in zip(axes, (authors, ours),
-                              ("authors' shading (normals)", "ours: lit, 16 adaptive samples")):
-        ax.imshow(res.rgb)
-        ax.set_title(title, fontsize=9)
-        ax.axis("off")
-    fig.tight_layout()
-    tmp = out_dir / "look_side_by_side.tmp.png"
-    fig.savefig(tmp)
-    plt.close(fig)
-    os.replace(tmp, out_dir / "look_side_by_side.png")
+    _panels(out_dir / "look_side_by_side.png",
+            ((authors.rgb, "authors' shading (normals)"),
+             (ours.rgb, "ours: lit, 16 adaptive samples")), (7.68, 4.0), 9)
 
 
 def own_meshes(out_dir, size=384):
     """``own_meshes.png``: shapes made in a line of trimesh or pyvista, each drawn by
     ``tracer.render_mesh(shape)`` with every default (the first call of a new user)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
     import pyvista as pv
     import trimesh
 
@@ -82,17 +65,29 @@ def own_meshes(out_dir, size=384):
               ("pyvista Text3D", pv.Text3D("Hi", depth=0.2).triangulate()),
               ("octopus, 898 triangles", str(ROOT / "scenes" / "data" / "meshes"
                                               / "octopus_low.obj")))
-    fig, axes = plt.subplots(1, len(shapes), figsize=(3.2 * len(shapes), 3.4), dpi=100)
-    for ax, (title, shape) in zip(axes, shapes):
-        res = tracer.render_mesh(shape, size=(size, size), progress=None)
-        ax.imshow(res.rgb)
-        ax.set_title(title, fontsize=10)
+    images = [(tracer.render_mesh(shape, size=(size, size), progress=None).rgb, title)
+              for title, shape in shapes]
+    _panels(out_dir / "own_meshes.png", images, (3.2 * len(shapes), 3.4), 10)
+
+
+def _panels(path, images, figsize, fontsize):
+    """``images`` (``(rgb, title)`` pairs) side by side in one PNG at ``path``, written whole
+    or not at all."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, len(images), figsize=figsize, dpi=100)
+    for ax, (rgb, title) in zip(axes, images):
+        ax.imshow(rgb)
+        ax.set_title(title, fontsize=fontsize)
         ax.axis("off")
     fig.tight_layout()
-    tmp = out_dir / "own_meshes.tmp.png"
+    tmp = path.with_suffix(".tmp.png")
     fig.savefig(tmp)
     plt.close(fig)
-    os.replace(tmp, out_dir / "own_meshes.png")
+    os.replace(tmp, path)
 
 
 def main(argv=None):
