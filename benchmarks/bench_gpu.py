@@ -11,7 +11,8 @@ Measures, on an NVIDIA GPU through numba-cuda (``pip install "smoothdist[gpu]"``
   the unit cube, the bunny normalised to a 0.5 diagonal, alpha = 1 / shortest edge, beta 0.5)
   for the smooth distance of points, edges and triangles; GPU time: kernel plus copies (the
   queries in, distances, gradients and counters out), and the kernel alone with everything
-  already on the device (``gpu_kernel_s``);
+  already on the device (``gpu_kernel_s``), and the public call given queries that live on the
+  device (``gpu_resident_s``: their check, the launch, the outputs left there);
 * image agreement: pixels whose hit differs, the largest depth difference over the common
   hits (as a fraction of the scene diagonal; two marches that stop within eps of the
   surface may differ by about ``2 eps / cos``, 8e-3 of the bunny's diagonal at eps 1e-3) and
@@ -160,9 +161,9 @@ def bench_grid(kind, n, repeat):
     field.smooth_distance(Q[:64], device="cuda", **kw)
     first_s = time.perf_counter() - t0
     cpu_s, cpu = best(lambda: field.smooth_distance(Q, **kw), repeat)
-    alpha, beta, S, wgs = field.kernel_args(alpha, 0.5)
-    dtree = field._device_tree()
-    gpu_s, gpu = best(lambda: sdcuda.smooth_distance(field.tree, Q, alpha, beta, S, wgs, 0.0,
+    alpha, beta, S, wgrad_scale = field.kernel_args(alpha, 0.5)
+    dtree = field.device_tree()
+    gpu_s, gpu = best(lambda: sdcuda.smooth_distance(field.tree, Q, alpha, beta, S, wgrad_scale, 0.0,
                                                      dtree), repeat)
     # the kernel alone, the queries and the outputs already on the device (no copies)
     cu = sdcuda.cuda_module()
@@ -172,13 +173,21 @@ def bench_grid(kind, n, repeat):
 
     def kernel_only():
         sdcuda.kernels()["smooth"][sdcuda._blocks(len(Q)), sdcuda.THREADS](
-            dtree, dQ, float(alpha), float(beta), 0.0, float(S), float(wgs), *outs)
+            dtree, dQ, float(alpha), float(beta), 0.0, float(S), float(wgrad_scale), *outs)
         cu.synchronize()
 
     kernel_s, _ = best(kernel_only, repeat)
+
+    def resident():
+        # the public call with the queries on the device (issue 49): the check of the
+        # queries, the launch and the outputs allocated there; nothing copied
+        field.smooth_distance(dQ, **kw)
+        cu.synchronize()
+
+    resident_s, _ = best(resident, repeat)
     return dict(what=f"grid {kind}", size=f"{n}^3", eps=None, primitives=field.num_primitives,
                 cpu_s=cpu_s, gpu_s=gpu_s, speedup=cpu_s / gpu_s, gpu_first_s=first_s,
-                gpu_kernel_s=kernel_s,
+                gpu_kernel_s=kernel_s, gpu_resident_s=resident_s,
                 hit_differs=None,
                 depth_max_over_diag=None, rgb_max=None,
                 distance_max_diff=float(np.abs(cpu.distance - gpu[0]).max()))
@@ -200,9 +209,9 @@ def markdown(card, rows, threads, cpu=None):
     out = [f"GPU: {card}; CPU: {cpu or cpu_name()}, {threads} threads",
            "",
            "| case | size | primitives | CPU ms | GPU ms | speed-up | GPU ms, no cone pass "
-           "| GPU ms, kernel only | GPU first call s | hits differ | depth / diag | colour "
-           "| distance |",
-           "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+           "| GPU ms, kernel only | GPU ms, queries on the GPU | GPU first call s "
+           "| hits differ | depth / diag | colour | distance |",
+           "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         def f(v, fmt):
             return "" if v is None else format(v, fmt)
@@ -210,6 +219,7 @@ def markdown(card, rows, threads, cpu=None):
                    f"| {1e3 * r['gpu_s']:.2f} | {r['speedup']:.1f}x "
                    f"| {f(r.get('gpu_nocone_s') and 1e3 * r['gpu_nocone_s'], '.2f')} "
                    f"| {f(r.get('gpu_kernel_s') and 1e3 * r['gpu_kernel_s'], '.2f')} "
+                   f"| {f(r.get('gpu_resident_s') and 1e3 * r['gpu_resident_s'], '.2f')} "
                    f"| {r['gpu_first_s']:.1f} "
                    f"| {f(r['hit_differs'], 'd')} "
                    f"| {f(r['depth_max_over_diag'], '.2g')} | {f(r['rgb_max'], 'd')} "

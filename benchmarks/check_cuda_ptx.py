@@ -91,6 +91,7 @@ def main(argv=None):
              (ty(tree), ty(Q), f64, f64, f64, f64, f64, ty(d), ty(g), ty(n), ty(n))),
             ("smoothdist.cuda exact", sdcuda._exact_kernel,
              (ty(tree), ty(Q), ty(d), ty(g), ty(n), ty(n), ty(n))),
+            ("smoothdist.cuda check", sdcuda._check_kernel, (ty(Q), f64, ty(n))),
             ("tracer.rendering.gpu_render cone", gpu_render._cone_kernel,
              (ty(rargs.data), ty(rargs.mode), f64, f64, f64, f64, ty(cone_f), ty(cone_n))),
             ("tracer.rendering.gpu_render render", gpu_render._render_kernel,

@@ -38,7 +38,7 @@ def load_mesh(path, kind=None):
 
 
 def smooth_distance(Q, V, F=None, *, alpha, beta=0.5, alpha_u=None, gradient="exact",
-                    return_stats=False, tol=_DEFAULT_TOL):
+                    return_stats=False, tol=_DEFAULT_TOL, device=None):
     """Smooth distance from query points to a data mesh (Madan & Levin 2022, Eq. 3-4).
 
     Parameters
@@ -68,6 +68,10 @@ def smooth_distance(Q, V, F=None, *, alpha, beta=0.5, alpha_u=None, gradient="ex
     tol : float
         Tolerance-controlled pruning (>= 0; 0 = off); with ``beta=0`` the error is at most
         ``log(1 + tol) / alpha`` and ``d_hat`` stays below the exact sum's.
+    device : {"cpu", "cuda"}, optional
+        Where to evaluate (default: where ``Q`` is). ``Q`` may be a float64 array on the GPU
+        (CuPy, PyTorch, numba: ``__cuda_array_interface__``); the results then stay on the GPU
+        too (:meth:`SmoothDistanceField.smooth_distance`).
 
     Returns
     -------
@@ -84,10 +88,11 @@ def smooth_distance(Q, V, F=None, *, alpha, beta=0.5, alpha_u=None, gradient="ex
     """
     field = SmoothDistanceField(V, F)
     return field.smooth_distance(Q, alpha=alpha, beta=beta, alpha_u=alpha_u, gradient=gradient,
-                                 return_stats=return_stats, tol=tol)
+                                 return_stats=return_stats, tol=tol, device=device)
 
 
-def exact_distance(Q, V, F=None):
+def exact_distance(Q, V, F=None, *, device=None):
     """Exact unsigned distance ``(d (q,), grad (q, 3))`` from query points to a data mesh
-    (``V``, ``F`` as in :func:`smooth_distance`)."""
-    return SmoothDistanceField(V, F).exact_distance(Q)
+    (``V``, ``F`` as in :func:`smooth_distance`; ``device`` too: queries on the GPU give
+    results on the GPU)."""
+    return SmoothDistanceField(V, F).exact_distance(Q, device=device)

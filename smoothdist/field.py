@@ -565,13 +565,15 @@ class SmoothDistanceField:
 
     # ------------------------------------------------------------------ queries
     def smooth_distance(self, Q, *, alpha, beta=0.5, alpha_u=None, gradient="exact",
-                        method="bvh", return_stats=False, tol=_q.DEFAULT_TOL, device="cpu"):
+                        method="bvh", return_stats=False, tol=_q.DEFAULT_TOL, device=None):
         """Smooth distance ``d_hat`` (Eq. 3) and its gradient at query points.
 
         Parameters
         ----------
-        Q : (q, 3) array_like of float
-            Query points (a single (3,) point is accepted).
+        Q : (q, 3) array_like of float, or a (q, 3) float64 array on the GPU
+            Query points (a single (3,) point is accepted). An array on the GPU (any object
+            with ``__cuda_array_interface__``: CuPy, PyTorch, numba) is read there, and the
+            results are numba device arrays (:mod:`smoothdist.cuda`): no host copies.
         alpha : float, "auto" or :func:`smoothdist.within`
             LogSumExp sharpness in 1 / scene units (> 0). ``"auto"``: :meth:`auto_alpha`.
             ``within(e)``: :meth:`alpha_within` for this beta and alpha_u (the smooth distance
@@ -597,9 +599,10 @@ class SmoothDistanceField:
             so far stay below ``tol`` times the exact part of the sum. With ``beta=0``,
             ``d_hat_0 - log(1 + tol) / alpha <= d_hat <= d_hat_0`` (error at most
             ``tol / alpha``; proof in :func:`smoothdist._kernels.query.smooth_distance_point_tol`).
-        device : {"cpu", "cuda"}
+        device : {"cpu", "cuda"}, optional
             ``"cuda"``: evaluate on the GPU (:mod:`smoothdist.cuda`; needs the ``gpu`` extra
             and a GPU, or numba's simulator), the same kernel code; ``method="bvh"`` only.
+            Default: ``"cuda"`` for queries on the GPU, ``"cpu"`` otherwise.
 
         Returns
         -------
@@ -614,12 +617,11 @@ class SmoothDistanceField:
             raise ValueError(f"gradient must be one of {GRADIENTS}, got {gradient!r}")
         if method not in METHODS:
             raise ValueError(f"method must be one of {METHODS}, got {method!r}")
-        Q = as_points(Q, "Q")
-        wgs = 1.0 / alpha if gradient == "exact" else 1.0 / (alpha * alpha)
-        if _check_device(device, method) == "cuda":
-
-            d, g, nodes, leaves = cuda.smooth_distance(self.tree, Q, alpha, beta, S, wgs, tol,
-                                                       self._device_tree())
+        device, Q = _device_and_points(device, Q, method)
+        wgrad_scale = 1.0 / alpha if gradient == "exact" else 1.0 / (alpha * alpha)
+        if device == "cuda":
+            d, g, nodes, leaves = cuda.smooth_distance(self.tree, Q, alpha, beta, S, wgrad_scale,
+                                                       tol, self.device_tree())
             res = SmoothDistanceResult(d, g)
             return (d, g, QueryStats(nodes, leaves)) if return_stats else res
         n = Q.shape[0]
@@ -631,11 +633,11 @@ class SmoothDistanceField:
         if order is not None:
             Q = Q[order]
         if 0 < n <= TASK_BATCH and method == "bvh" and tol == 0.0:
-            _tasks(_q.smooth_distance_tasks, n, self.tree, Q, alpha, beta, S, wgs, d, g, nodes,
-                   leaves, 0)
+            _tasks(_q.smooth_distance_tasks, n, self.tree, Q, alpha, beta, S, wgrad_scale, d, g,
+                   nodes, leaves, 0)
         elif n:
             brute = method == "brute"     # every primitive summed, no tree
-            _q.smooth_distance_batch(self.tree, Q, alpha, beta, S, wgs, brute, d, g, nodes,
+            _q.smooth_distance_batch(self.tree, Q, alpha, beta, S, wgrad_scale, brute, d, g, nodes,
                                      leaves, tol, parallel_tasks(n))
         if order is not None:     # only what is returned
             d, g = restore(order, d, g)
@@ -644,7 +646,7 @@ class SmoothDistanceField:
         res = SmoothDistanceResult(d, g)
         return (res.distance, res.gradient, QueryStats(nodes, leaves)) if return_stats else res
 
-    def exact_distance(self, Q, *, return_closest=False, return_stats=False, device="cpu"):
+    def exact_distance(self, Q, *, return_closest=False, return_stats=False, device=None):
         """Exact unsigned distance, unit gradient, and (optionally) the closest primitive.
 
         Returns ``(distance (q,), gradient (q, 3))``; with ``return_closest`` an
@@ -659,12 +661,12 @@ class SmoothDistanceField:
         (:func:`smoothdist._kernels.exact_query.exact_tree_batch`); a scattered batch is taken
         in Morton order (:mod:`smoothdist.query_order`), results in ``Q``'s order.
         ``device="cuda"`` evaluates on the GPU (:mod:`smoothdist.cuda`), searching the field's
-        ``tree``.
+        ``tree``; queries on the GPU (``device`` None) stay there, and so do the results, as in
+        :meth:`smooth_distance`.
         """
-        Q = as_points(Q, "Q")
-        if _check_device(device) == "cuda":
-
-            d, g, prim, nodes, leaves = cuda.exact_distance(self.tree, Q, self._device_tree())
+        device, Q = _device_and_points(device, Q)
+        if device == "cuda":
+            d, g, prim, nodes, leaves = cuda.exact_distance(self.tree, Q, self.device_tree())
             out = ExactDistanceResult(d, g, prim) if return_closest else SmoothDistanceResult(d, g)
             return (*out, QueryStats(nodes, leaves)) if return_stats else out
         n = Q.shape[0]
@@ -702,24 +704,34 @@ class SmoothDistanceField:
         out = ExactDistanceResult(d, g, prim) if return_closest else SmoothDistanceResult(d, g)
         return (*out, QueryStats(nodes, leaves)) if return_stats else out
 
-    def _device_tree(self):
-        """:attr:`tree` on the GPU (:func:`smoothdist.cuda.device_tree`), copied once."""
+    def device_tree(self):
+        """The field's ``tree`` on the GPU (:func:`smoothdist.cuda.device_tree`: the same
+        :class:`~smoothdist._kernels.bvh.TreeData` of device arrays): copied at the first call
+        and kept with the field, so that every later device query and render reuses it (the
+        handle to pass to your own CUDA kernels). :meth:`free_device_tree` releases it."""
         if "_cuda_tree" not in self.__dict__:
-
             self.__dict__["_cuda_tree"] = cuda.device_tree(self.tree)
         return self.__dict__["_cuda_tree"]
+
+    def free_device_tree(self):
+        """Release the GPU copy of the tree (:meth:`device_tree`); the next device query
+        copies it again."""
+        self.__dict__.pop("_cuda_tree", None)
 
     def kernel_args(self, alpha, beta=0.5, alpha_u=None, gradient="exact"):
         """Validated scalars for :func:`smoothdist._kernels.query.smooth_distance_point`.
 
-        ``alpha`` as in :meth:`smooth_distance`. Returns ``(alpha, beta, S, wgs)``.
+        ``alpha`` as in :meth:`smooth_distance`. Returns ``(alpha, beta, S, wgrad_scale)``:
+        ``S = min(alpha / alpha_U, 1)``, the paper's attenuation exponent of the weights, and
+        ``wgrad_scale``, the scale of the weight gradient's term in the gradient (``1/alpha``
+        for the exact derivative, ``1/alpha**2`` for the paper's alpha-metric one).
         """
         beta = non_negative(beta, "beta")
         alpha = self.check_alpha(self._resolve_alpha(alpha, beta, alpha_u))
         if gradient not in GRADIENTS:
             raise ValueError(f"gradient must be one of {GRADIENTS}, got {gradient!r}")
-        wgs = 1.0 / alpha if gradient == "exact" else 1.0 / (alpha * alpha)
-        return alpha, beta, self.attenuation(alpha, alpha_u), wgs
+        wgrad_scale = 1.0 / alpha if gradient == "exact" else 1.0 / (alpha * alpha)
+        return alpha, beta, self.attenuation(alpha, alpha_u), wgrad_scale
 
     def alpha_within(self, max_error, beta=0.5, alpha_u=None):
         """The smallest alpha (1 / scene units) whose proven gap ``d - d_hat`` is at most
@@ -748,13 +760,28 @@ class SmoothDistanceField:
                 f"depth {self.tree.depth}, A={self.weight_bound:.4g})")
 
 
-def _check_device(device, method="bvh"):
-    """``device`` checked (``"cpu"`` or ``"cuda"``; the GPU has no brute-force method)."""
+def _check_device(device, method="bvh", on_gpu=False):
+    """``device`` checked (``"cpu"`` or ``"cuda"``; None: where the queries are; the GPU has
+    no brute-force method, and queries on the GPU are not copied to the host silently)."""
+    if device is None:
+        device = "cuda" if on_gpu else "cpu"
     if device not in ("cpu", "cuda"):
         raise ValueError(f"device must be one of ('cpu', 'cuda'), got {device!r}")
     if device == "cuda" and method != "bvh":
         raise ValueError(f"method {method!r} runs on the cpu only; device 'cuda' takes 'bvh'")
+    if device == "cpu" and on_gpu:
+        raise ValueError("Q is an array on the GPU: use device='cuda' (or leave device out), "
+                         "or copy it to the host first")
     return device
+
+
+def _device_and_points(device, Q, method="bvh"):
+    """``(device, Q)``: the device checked, and the queries validated where they are
+    (:func:`smoothdist._cast.as_points` on the host, :func:`smoothdist.cuda.device_points` on
+    the GPU)."""
+    on_gpu = cuda.is_device_array(Q)
+    device = _check_device(device, method, on_gpu)
+    return device, (cuda.device_points(Q, "Q") if on_gpu else as_points(Q, "Q"))
 
 
 def _tasks(kernel, n, *args):

@@ -5,10 +5,10 @@ Use them with a :class:`~smoothdist.field.SmoothDistanceField`'s ``tree`` and th
 
     stack, dstack = new_stack(field.tree)
     d, gx, gy, gz, nodes, leaves = smooth_distance_point(field.tree, x, y, z, alpha, beta, S,
-                                                         wgs, stack, dstack)
+                                                         wgrad_scale, stack, dstack)
 
 Inside a kernel, allocate ``np.empty(tree.depth + 4, np.int64)`` and ``np.empty(tree.depth + 4)``.
-``smooth_distance_point_tol(tree, x, y, z, alpha, beta, tol, S, wgs, stack, dstack)`` adds
+``smooth_distance_point_tol(tree, x, y, z, alpha, beta, tol, S, wgrad_scale, stack, dstack)`` adds
 tolerance-controlled pruning (``tol > 0``; same scratch arrays; ``DEFAULT_TOL`` = 0 is off).
 
 Your own kernels take the package's compilation policy from here, so that they are compiled

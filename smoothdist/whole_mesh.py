@@ -311,8 +311,8 @@ class MeshDistance:
                                          self.query.kind.size, exact_far)
         elif alpha_q is None:
             raise ValueError("alpha_q is required (or pass alpha=smoothdist.within(max_error))")
-        self.alpha, self.beta, self.S, self.wgs = self.field.kernel_args(alpha, beta, alpha_u,
-                                                                         gradient)
+        self.alpha, self.beta, self.S, self.wgrad_scale = self.field.kernel_args(
+            alpha, beta, alpha_u, gradient)
         self.alpha_q = positive(alpha_q, "alpha_q")
         self.alpha_u = alpha_u
         self.gradient = gradient
@@ -368,15 +368,14 @@ class MeshDistance:
         leaves = np.empty(m, dtype=np.int64)
         if method == "brute":
             _mq.smooth_distance_primitives_brute(self.field.tree, self.query.kind, pts,
-                                                 self.alpha, self.S, self.wgs, d, g)
+                                                 self.alpha, self.S, self.wgrad_scale, d, g)
             nodes[:] = 0
             leaves[:] = self.field.tree.kind.size
         else:
-            # far fields at the exact primitive-box distance instead of the paper's box test
-            exact_box = not self.box_test
+            # box_test off: far fields at the exact primitive-box distance
             _run_tasks(_mq.smooth_distance_primitive_tasks, m, SERIAL_BELOW["smooth"],
                        self.field.tree, self.query.kind, pts, self.alpha, self.beta, self.S,
-                       self.wgs, d, g, nodes, leaves, self.tol, exact_box)
+                       self.wgrad_scale, d, g, nodes, leaves, self.tol, bool(self.box_test))
         self.last_stats = (nodes, leaves)
         return d, g
 
@@ -419,11 +418,11 @@ class MeshDistance:
         Gp = np.empty((m, 3, 3))
         if method == "brute":
             _mm.smooth_vertex_primitives_brute(self.field.tree, q.kind, pts, self.alpha,
-                                               self.beta, self.S, self.wgs, d, g, Gp)
+                                               self.beta, self.S, self.wgrad_scale, d, g, Gp)
         else:
             _run_tasks(_mm.smooth_vertex_primitive_tasks, m, SERIAL_BELOW["smooth"],
-                       self.field.tree, q.kind, pts, self.alpha, self.beta, self.S, self.wgs, d,
-                       g, Gp, self.tol)
+                       self.field.tree, q.kind, pts, self.alpha, self.beta, self.S,
+                       self.wgrad_scale, d, g, Gp, self.tol)
         dmin = d.min()
         e = np.exp(-self.alpha_q * (d - dmin))
         w = e / e.sum()
@@ -452,13 +451,13 @@ class MeshDistance:
         leaves = np.empty(m, dtype=np.int64)
         if method == "brute":
             _mm.smooth_moment_primitives_brute(self.field.tree, self.query.kind, pts, self.alpha,
-                                               self.S, self.wgs, d, g, mo)
+                                               self.S, self.wgrad_scale, d, g, mo)
             nodes[:] = 0
             leaves[:] = self.field.tree.kind.size
         else:
             _run_tasks(_mm.smooth_moment_primitive_tasks, m, SERIAL_BELOW["smooth"],
                        self.field.tree, self.query.kind, pts, self.alpha, self.beta, self.S,
-                       self.wgs, d, g, mo, nodes, leaves, self.tol)
+                       self.wgrad_scale, d, g, mo, nodes, leaves, self.tol)
         self.last_stats = (nodes, leaves)
         return d, g, mo
 

@@ -4,17 +4,18 @@
 ``d_hat(g)`` and its gradient for a translation of ``g``. For a rigid rotation ``omega`` of ``g``
 about a point ``c`` the derivative is ``omega . M`` with the moment
 
-    M = sum_i softmax_i [ (p_i - c) x v_i + wgs y_i (q_i x r_i) ]
+    M = sum_i softmax_i [ (p_i - c) x v_i + wgrad_scale y_i (q_i x r_i) ]
 
 over the data primitives (and far-field nodes) ``i`` that ``d_hat(g)`` sums, with ``v_i`` the
-term's translation-gradient numerator (``W unit(r) - wgs grad W``), ``p_i`` the closest point of
-the pair *on g* and ``r_i`` the pair's offset (query minus data point). Why: each pair distance
-is a minimum over point pairs, so by the envelope theorem a rigid motion changes it through the
-motion of its own closest point ``p_i`` (not the centroid of ``g``). The weight ``W`` follows
-the data-side closest point, which moves with the query's feature when that is an edge
-(direction ``q_i``): the stationarity conditions of the active features add the term
-``y_i (q_i x r_i)``, with ``y_i`` the query-edge component of ``(M^T M)^-1 (w1, w2, 0)`` in
-:func:`smoothdist._kernels.mesh_query.weight_gradient`'s notation (0 in its fallbacks).
+term's translation-gradient numerator (``W unit(r) - wgrad_scale grad W``), ``p_i`` the
+closest point of the pair *on g* and ``r_i`` the pair's offset (query minus data point). Why:
+each pair distance is a minimum over point pairs, so by the envelope theorem a rigid motion
+changes it through the motion of its own closest point ``p_i`` (not the centroid of ``g``).
+The weight ``W`` follows the data-side closest point, which moves with the query's feature
+when that is an edge (direction ``q_i``): the stationarity conditions of the active features
+add the term ``y_i (q_i x r_i)``, with ``y_i`` the query-edge component of
+``(M^T M)^-1 (w1, w2, 0)`` in :func:`smoothdist._kernels.mesh_query.weight_gradient`'s
+notation (0 in its fallbacks).
 Far-field nodes use the moments of :mod:`smoothdist._kernels.box_moment`.
 
 The same traversal gives the derivative for a motion of one query vertex ``x_k`` alone (a
@@ -23,7 +24,7 @@ changes through its closest point ``p_i = sum_k b_k x_k`` (``b_k`` the query bar
 the pair), and the weight through the stationarity conditions, whose query-edge row now also
 sees the edge direction ``q = sum_k (d b_k / d lambda) x_k`` change:
 
-    grad_k d_hat(g) = sum_i softmax_i [ b_k v_i + wgs y_i (d b_k / d lambda) r_i ].
+    grad_k d_hat(g) = sum_i softmax_i [ b_k v_i + wgrad_scale y_i (d b_k / d lambda) r_i ].
 
 Summed over ``k`` this is the translation gradient, and ``sum_k (x_k - c) x grad_k`` the moment.
 A far-field node (Barnes-Hut, tol) has no closest point on ``g``: its term is split equally
@@ -55,18 +56,18 @@ _query_coefficient = query_coefficient
 
 
 @numba.njit(**NJIT)
-def pair_term_moment(tree, i, kq, Q, S, wgs, cx, cy, cz):
+def pair_term_moment(tree, i, kq, Q, S, wgrad_scale, cx, cy, cz):
     """:func:`smoothdist._kernels.mesh_query.pair_term` and the term's moment about ``c``.
 
     Returns ``(d, W, vx, vy, vz, mx, my, mz)``: ``v`` as there, and
-    ``M = (p - c) x v + wgs y (q x r)`` (module notes).
+    ``M = (p - c) x v + wgrad_scale y (q x r)`` (module notes).
     """
-    return pair_terms(tree.kind, tree.pts, tree.wc, tree.pwhi, i, kq, Q, S, wgs, kq >= 0, cx,
-                      cy, cz, tree.kind[i])
+    return pair_terms(tree.kind, tree.pts, tree.wc, tree.pwhi, i, kq, Q, S, wgrad_scale, kq >= 0,
+                      cx, cy, cz, tree.kind[i])
 
 
 @numba.njit(**NJIT)
-def smooth_moment_primitive(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch,
+def smooth_moment_primitive(tree, kq, Q, alpha, beta, S, wgrad_scale, stack, dstack, scratch,
                             tol=DEFAULT_TOL):
     """:func:`smoothdist._kernels.mesh_query.smooth_distance_primitive` with the moment about the
     query's centroid.
@@ -75,11 +76,12 @@ def smooth_moment_primitive(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scr
     (``kq`` 1 or 2), but ``scratch (33,)``. Returns
     ``(d_hat, gx, gy, gz, mx, my, mz, nodes_visited, leaves_visited)``.
     """
-    return smooth_traverse(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, tol, True)
+    return smooth_traverse(tree, kq, Q, alpha, beta, S, wgrad_scale, stack, dstack, scratch, tol,
+                           True)
 
 
 @numba.njit(**NJIT)
-def smooth_moment_brute_primitive(tree, kq, Q, alpha, S, wgs):
+def smooth_moment_brute_primitive(tree, kq, Q, alpha, S, wgrad_scale):
     """``(d_hat, gx, gy, gz, mx, my, mz)`` summing every data primitive (reference; no tree)."""
     cx, cy, cz = centroid(kq, Q)
     m = np.inf
@@ -87,15 +89,15 @@ def smooth_moment_brute_primitive(tree, kq, Q, alpha, S, wgs):
     gx = gy = gz = 0.0
     mx = my = mz = 0.0
     for i in range(tree.kind.size):
-        d, W, vx, vy, vz, tx, ty, tz = pair_term_moment(tree, i, kq, Q, S, wgs, cx, cy, cz)
+        d, W, vx, vy, vz, tx, ty, tz = pair_term_moment(tree, i, kq, Q, S, wgrad_scale, cx, cy, cz)
         m, s, gx, gy, gz, mx, my, mz = _accumulate(m, s, gx, gy, gz, mx, my, mz, d, W, vx, vy,
                                                    vz, tx, ty, tz, alpha, True)
     return m - math.log(s) / alpha, gx / s, gy / s, gz / s, mx / s, my / s, mz / s
 
 
 @numba.njit(**NJIT)
-def smooth_moment_primitive_tasks(tree, qkind, qpts, alpha, beta, S, wgs, out_d, out_g, out_m,
-                                  out_nodes, out_leaves, tol, ntasks, task0, task1):
+def smooth_moment_primitive_tasks(tree, qkind, qpts, alpha, beta, S, wgrad_scale, out_d, out_g,
+                                  out_m, out_nodes, out_leaves, tol, ntasks, task0, task1):
     """``d_hat``, translation gradient and moment (about the centroid) of every query primitive.
 
     As :func:`smoothdist._kernels.mesh_query.smooth_distance_primitive_tasks` (a serial task
@@ -111,10 +113,10 @@ def smooth_moment_primitive_tasks(tree, qkind, qpts, alpha, beta, S, wgs, out_d,
             if kq == 0:
                 # a point: its closest point is itself, no moment about it
                 d, gx, gy, gz, nodes, leaves = smooth_distance_point(
-                    tree, Q[0], Q[1], Q[2], alpha, beta, S, wgs, stack, dstack, root)
+                    tree, Q[0], Q[1], Q[2], alpha, beta, S, wgrad_scale, stack, dstack, root)
             else:
                 d, gx, gy, gz, mx, my, mz, nodes, leaves = smooth_traverse(
-                    tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, tol, True)
+                    tree, kq, Q, alpha, beta, S, wgrad_scale, stack, dstack, scratch, tol, True)
             out_d[j] = d
             out_g[j, 0] = gx
             out_g[j, 1] = gy
@@ -127,12 +129,12 @@ def smooth_moment_primitive_tasks(tree, qkind, qpts, alpha, beta, S, wgs, out_d,
 
 
 @numba.njit(**NJIT)
-def smooth_moment_primitives_brute(tree, qkind, qpts, alpha, S, wgs, out_d, out_g, out_m):
+def smooth_moment_primitives_brute(tree, qkind, qpts, alpha, S, wgrad_scale, out_d, out_g, out_m):
     """:func:`smooth_moment_primitive_tasks` summing every data primitive (the reference of
     ``method="brute"``; serial, no tree). A point's moment is 0."""
     for j in range(qkind.size):
         d, gx, gy, gz, mx, my, mz = smooth_moment_brute_primitive(tree, qkind[j], qpts[j], alpha,
-                                                                  S, wgs)
+                                                                  S, wgrad_scale)
         out_d[j] = d
         out_g[j, 0] = gx
         out_g[j, 1] = gy
@@ -143,7 +145,7 @@ def smooth_moment_primitives_brute(tree, qkind, qpts, alpha, S, wgs, out_d, out_
 
 
 @numba.njit(**NJIT)
-def smooth_vertex_primitive(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch,
+def smooth_vertex_primitive(tree, kq, Q, alpha, beta, S, wgrad_scale, stack, dstack, scratch,
                             tol=DEFAULT_TOL):
     """``(d_hat, g (3,), G (kq + 1, 3))`` of an edge or triangle query: the smooth distance, its
     translation gradient and its derivative for a motion of each vertex alone (module notes).
@@ -152,13 +154,13 @@ def smooth_vertex_primitive(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scr
     """
     G = np.zeros((kq + 1, 3))
     d, gx, gy, gz, ax, ay, az, nodes, leaves = smooth_traverse(
-        tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, tol, VERTEX_1)
+        tree, kq, Q, alpha, beta, S, wgrad_scale, stack, dstack, scratch, tol, VERTEX_1)
     G[1, 0] = ax
     G[1, 1] = ay
     G[1, 2] = az
     if kq == 2:
         _, _, _, _, ax, ay, az, _, _ = smooth_traverse(
-            tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, tol, VERTEX_2)
+            tree, kq, Q, alpha, beta, S, wgrad_scale, stack, dstack, scratch, tol, VERTEX_2)
         G[2, 0] = ax
         G[2, 1] = ay
         G[2, 2] = az
@@ -169,7 +171,7 @@ def smooth_vertex_primitive(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scr
 
 
 @numba.njit(**NJIT)
-def smooth_vertex_brute_primitive(tree, kq, Q, alpha, S, wgs):
+def smooth_vertex_brute_primitive(tree, kq, Q, alpha, S, wgrad_scale):
     """:func:`smooth_vertex_primitive` summing every data primitive (reference; no tree)."""
     G = np.zeros((kq + 1, 3))
     for v in range(1, kq + 1):
@@ -179,8 +181,8 @@ def smooth_vertex_brute_primitive(tree, kq, Q, alpha, S, wgs):
         mx = my = mz = 0.0
         for i in range(tree.kind.size):
             d, W, vx, vy, vz, tx, ty, tz = pair_terms(tree.kind, tree.pts, tree.wc, tree.pwhi, i,
-                                                      kq, Q, S, wgs, VERTEX_1 + v - 1, 0.0, 0.0,
-                                                      0.0, tree.kind[i])
+                                                      kq, Q, S, wgrad_scale, VERTEX_1 + v - 1,
+                                                      0.0, 0.0, 0.0, tree.kind[i])
             m, s, gx, gy, gz, mx, my, mz = _accumulate(m, s, gx, gy, gz, mx, my, mz, d, W, vx,
                                                        vy, vz, tx, ty, tz, alpha, True)
         G[v, 0] = mx / s
@@ -193,8 +195,8 @@ def smooth_vertex_brute_primitive(tree, kq, Q, alpha, S, wgs):
 
 
 @numba.njit(**NJIT)
-def smooth_vertex_primitive_tasks(tree, qkind, qpts, alpha, beta, S, wgs, out_d, out_g, out_G,
-                                  tol, ntasks, task0, task1):
+def smooth_vertex_primitive_tasks(tree, qkind, qpts, alpha, beta, S, wgrad_scale, out_d, out_g,
+                                  out_G, tol, ntasks, task0, task1):
     """``d_hat``, translation gradient and per-vertex derivatives ``out_G (m, 3, 3)`` (slot ``k``
     for the primitive's vertex ``k``; unused slots 0) of every query primitive, as a serial task
     kernel (tasks ``task0 <= t < task1`` of ``ntasks``, as
@@ -208,12 +210,12 @@ def smooth_vertex_primitive_tasks(tree, qkind, qpts, alpha, beta, S, wgs, out_d,
             out_G[j] = 0.0
             if kq == 0:
                 d, gx, gy, gz, _, _ = smooth_distance_point(tree, Q[0], Q[1], Q[2], alpha, beta,
-                                                            S, wgs, stack, dstack, root)
+                                                            S, wgrad_scale, stack, dstack, root)
                 out_G[j, 0, 0] = gx
                 out_G[j, 0, 1] = gy
                 out_G[j, 0, 2] = gz
             else:
-                d, gx, gy, gz, G = smooth_vertex_primitive(tree, kq, Q, alpha, beta, S, wgs,
+                d, gx, gy, gz, G = smooth_vertex_primitive(tree, kq, Q, alpha, beta, S, wgrad_scale,
                                                            stack, dstack, scratch, tol)
                 out_G[j, :kq + 1] = G
             out_d[j] = d
@@ -223,7 +225,8 @@ def smooth_vertex_primitive_tasks(tree, qkind, qpts, alpha, beta, S, wgs, out_d,
 
 
 @numba.njit(**NJIT)
-def smooth_vertex_primitives_brute(tree, qkind, qpts, alpha, beta, S, wgs, out_d, out_g, out_G):
+def smooth_vertex_primitives_brute(tree, qkind, qpts, alpha, beta, S, wgrad_scale, out_d, out_g,
+                                   out_G):
     """:func:`smooth_vertex_primitive_tasks` summing every data primitive for edge and triangle
     queries (the reference of ``method="brute"``; serial; point queries as there, by the
     tree)."""
@@ -237,12 +240,12 @@ def smooth_vertex_primitives_brute(tree, qkind, qpts, alpha, beta, S, wgs, out_d
         out_G[j] = 0.0
         if kq == 0:
             d, gx, gy, gz, _, _ = smooth_distance_point(tree, Q[0], Q[1], Q[2], alpha, beta, S,
-                                                        wgs, stack, dstack, root)
+                                                        wgrad_scale, stack, dstack, root)
             out_G[j, 0, 0] = gx
             out_G[j, 0, 1] = gy
             out_G[j, 0, 2] = gz
         else:
-            d, gx, gy, gz, G = smooth_vertex_brute_primitive(tree, kq, Q, alpha, S, wgs)
+            d, gx, gy, gz, G = smooth_vertex_brute_primitive(tree, kq, Q, alpha, S, wgrad_scale)
             out_G[j, :kq + 1] = G
         out_d[j] = d
         out_g[j, 0] = gx

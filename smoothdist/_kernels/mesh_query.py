@@ -195,11 +195,11 @@ def query_coefficient(nd, d1x, d1y, d1z, w1, nq, q1x, q1y, q1z):
 
 
 @numba.njit(**NJIT_INLINE)
-def _pair(kind, pts, wc, pwhi, i, kq, Q, S, wgs, moment, cx, cy, cz, k):
+def _pair(kind, pts, wc, pwhi, i, kq, Q, S, wgrad_scale, moment, cx, cy, cz, k):
     """Term of data primitive ``i`` (tree order) for query primitive ``(kq, Q)``.
 
     Returns ``(d, W, vx, vy, vz, mx, my, mz)``: distance, attenuated weight, the gradient
-    numerator ``v = W unit(r) - wgs grad W`` (for a translation of the query) and, with
+    numerator ``v = W unit(r) - wgrad_scale grad W`` (for a translation of the query) and, with
     ``moment`` True (or 1), the term's moment about ``c``
     (:mod:`smoothdist._kernels.mesh_moment`), with ``moment`` ``VERTEX_1`` or ``VERTEX_2`` the
     numerator for a motion of that query vertex alone
@@ -262,17 +262,17 @@ def _pair(kind, pts, wc, pwhi, i, kq, Q, S, wgs, moment, cx, cy, cz, k):
                         y = query_coefficient(nd, d1x, d1y, d1z, w1, nq, q1x, q1y, q1z)
     if d > 0.0:
         inv = W / d
-        vx = rx * inv - wgs * gwx
-        vy = ry * inv - wgs * gwy
-        vz = rz * inv - wgs * gwz
+        vx = rx * inv - wgrad_scale * gwx
+        vy = ry * inv - wgrad_scale * gwy
+        vz = rz * inv - wgrad_scale * gwz
     else:
-        vx = -wgs * gwx
-        vy = -wgs * gwy
-        vz = -wgs * gwz
+        vx = -wgrad_scale * gwx
+        vy = -wgrad_scale * gwy
+        vz = -wgrad_scale * gwz
     mx = my = mz = 0.0
     if moment >= VERTEX_1:
         # vertex mode: the term's derivative for a motion of query vertex 1 or 2 alone, b v +
-        # wgs y (d b / d lambda) r (module notes; b the vertex's barycentric at the pair)
+        # wgrad_scale y (d b / d lambda) r (module notes; b the vertex's barycentric at the pair)
         b = c[4] if moment == VERTEX_1 else c[5]
         db = 0.0
         if y != 0.0:
@@ -285,7 +285,7 @@ def _pair(kind, pts, wc, pwhi, i, kq, Q, S, wgs, moment, cx, cy, cz, k):
                 db = 0.0 if moment == VERTEX_1 else 1.0
             elif qf == TRI_BC:
                 db = -1.0 if moment == VERTEX_1 else 1.0
-        f = wgs * y * db
+        f = wgrad_scale * y * db
         mx = b * vx + f * rx
         my = b * vy + f * ry
         mz = b * vz + f * rz
@@ -308,7 +308,7 @@ def _pair(kind, pts, wc, pwhi, i, kq, Q, S, wgs, moment, cx, cy, cz, k):
         my = pz * vx - px * vz
         mz = px * vy - py * vx
         if y != 0.0:
-            f = wgs * y
+            f = wgrad_scale * y
             mx += f * (q1y * rz - q1z * ry)
             my += f * (q1z * rx - q1x * rz)
             mz += f * (q1x * ry - q1y * rx)
@@ -320,17 +320,17 @@ pair_terms = numba.njit(**NJIT)(python_function(_pair))
 
 
 @numba.njit(**NJIT)
-def pair_term(tree, i, kq, Q, S, wgs):
+def pair_term(tree, i, kq, Q, S, wgrad_scale):
     """Term of data primitive ``i`` (tree order) for query primitive ``(kq, Q)``.
 
     Returns ``(d, W, vx, vy, vz)`` as :func:`smoothdist._kernels.query.primitive_term`: distance,
-    attenuated weight and the gradient numerator ``W unit(r) - wgs grad W`` (gradients with
+    attenuated weight and the gradient numerator ``W unit(r) - wgrad_scale grad W`` (gradients with
     respect to a translation of the query).
     """
     # ``kq < 0`` is a run-time False: the moment reference (``moment=kq >= 0``) shares the
     # compiled pair_terms
     d, W, vx, vy, vz, _, _, _ = pair_terms(tree.kind, tree.pts, tree.wc, tree.pwhi, i, kq, Q, S,
-                                           wgs, kq < 0, 0.0, 0.0, 0.0, tree.kind[i])
+                                           wgrad_scale, kq < 0, 0.0, 0.0, 0.0, tree.kind[i])
     return d, W, vx, vy, vz
 
 
@@ -426,10 +426,10 @@ class _PrimitiveQuery(NamedTuple):
     cz: float
     alpha: float
     S: float
-    wgs: float
+    wgrad_scale: float
     tol: float
     moment: int
-    exact_box: bool
+    box_test: bool        # the paper's box test (off: the exact primitive-box distance)
     reach: float          # negligible-term pruning (query.negligible_reach)
 
 
@@ -456,8 +456,8 @@ def _barnes_hut(tree, q, node, bd2):
     The box-box distance (a lower bound) qualifies the node first; the finer bound
     (:func:`smoothdist._kernels.box_distance.box_lower_bound`) is tried only if the smallest
     query-vertex distance could qualify it, and that only if the box-box distance plus the query
-    box's diagonal (an upper bound of it) could. ``exact_box``: the exact primitive-box distance
-    instead.
+    box's diagonal (an upper bound of it) could. ``box_test`` off: the exact primitive-box
+    distance instead.
     """
     lo = tree.lo
     hi = tree.hi
@@ -468,7 +468,7 @@ def _barnes_hut(tree, q, node, bd2):
     delta = ux = uy = uz = 0.0
     ax = ay = az = 0.0
     far = False
-    if q.exact_box and dg * dg < q.b2 * bd2:
+    if not q.box_test and dg * dg < q.b2 * bd2:
         delta, ux, uy, uz = box_distance_exact(kq, Q, lo, hi, node, q.E)
         far = True
     elif dg * dg < q.b2 * bd2:
@@ -485,7 +485,7 @@ def _barnes_hut(tree, q, node, bd2):
             if moment == 1:
                 delta, ux, uy, uz, ax, ay, az = box_lower_bound_moment(
                     kq, Q, q.qlo, q.qhi, lo, hi, node, q.E, q.cx, q.cy, q.cz, q.L)
-            elif q.exact_box:
+            elif not q.box_test:
                 delta, ux, uy, uz = box_distance_exact(kq, Q, lo, hi, node, q.E)
             else:
                 delta, ux, uy, uz = box_lower_bound(kq, Q, q.qlo, q.qhi, lo, hi, node, q.E)
@@ -541,10 +541,10 @@ def _prim_leaf(tree, q, node, st):
             # edges against edges: a copy of the inlined term in which the compiler knows both
             # kinds (and keeps only that case)
             d, W, vx, vy, vz, tx, ty, tz = _pair(kind, tree.pts, tree.wc, tree.pwhi, i, kq, q.Q,
-                                                 q.S, q.wgs, q.moment, q.cx, q.cy, q.cz, k)
+                                                 q.S, q.wgrad_scale, q.moment, q.cx, q.cy, q.cz, k)
         else:
             d, W, vx, vy, vz, tx, ty, tz = _pair(kind, tree.pts, tree.wc, tree.pwhi, i, kq, q.Q,
-                                                 q.S, q.wgs, q.moment, q.cx, q.cy, q.cz, k)
+                                                 q.S, q.wgrad_scale, q.moment, q.cx, q.cy, q.cz, k)
         m, s, gx, gy, gz, mx, my, mz = _accumulate(
             m, s, gx, gy, gz, mx, my, mz, d, W, vx, vy, vz, tx, ty, tz, q.alpha, q.moment)
     cut = max(m + q.reach, 0.0)
@@ -552,8 +552,8 @@ def _prim_leaf(tree, q, node, st):
 
 
 @numba.njit(**NJIT_IR_INLINE)
-def smooth_traverse(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, tol, moment,
-                    exact_box=False):
+def smooth_traverse(tree, kq, Q, alpha, beta, S, wgrad_scale, stack, dstack, scratch, tol, moment,
+                    box_test=True):
     """The traversal of :func:`smooth_distance_primitive` and, with ``moment``,
     :func:`smoothdist._kernels.mesh_moment.smooth_moment_primitive` (one code for both, so that
     their ``d_hat`` and gradients agree bit for bit).
@@ -565,8 +565,8 @@ def smooth_traverse(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, to
     The keys are squared box-box distances; Barnes-Hut tests ``diag**2 < beta**2 d**2``, as the
     point kernel does, and tries finer bounds only where they could help (``_barnes_hut``).
 
-    ``exact_box`` (``moment`` False only): the box test off, i.e. every Barnes-Hut candidate's
-    distance is the exact primitive-box distance
+    ``box_test`` False (``moment`` False only): the box test off, i.e. every Barnes-Hut
+    candidate's distance is the exact primitive-box distance
     (:func:`smoothdist._kernels.box_distance.box_distance_exact`, the quadratic program the paper's
     halfspace test avoids) instead of the box-box distance or the halfspace bound; the same
     traversal otherwise.
@@ -590,7 +590,7 @@ def smooth_traverse(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, to
         math.sqrt((h0 - l0) ** 2 + (h1 - l1) ** 2 + (h2 - l2) ** 2),
         beta, beta * beta, (1.0 - 1e-9) / beta if beta > 0.0 else 0.0,
         # vertex modes: a far field's gradient is split equally among the query's vertices
-        1.0 / (kq + 1), cx, cy, cz, alpha, S, wgs, tol, moment, exact_box,
+        1.0 / (kq + 1), cx, cy, cz, alpha, S, wgrad_scale, tol, moment, box_test,
         # negligible-term pruning, as in the point kernel: a node at box-box distance
         # >= m + reach adds less than 2**-53 x n_B / N of the sum
         negligible_reach(tree, ZERO, S, alpha))
@@ -604,8 +604,8 @@ def smooth_traverse(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, to
 
 
 @numba.njit(**NJIT)
-def smooth_distance_primitive(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch,
-                              tol=DEFAULT_TOL, exact_box=False):
+def smooth_distance_primitive(tree, kq, Q, alpha, beta, S, wgrad_scale, stack, dstack, scratch,
+                              tol=DEFAULT_TOL, box_test=True):
     """Smooth distance ``d_hat(g)`` and its translation gradient for an edge or triangle query.
 
     ``Q (9,)`` the query's vertices, ``kq`` 1 or 2; ``scratch (15,)`` float64 work space; other
@@ -618,10 +618,10 @@ def smooth_distance_primitive(tree, kq, Q, alpha, beta, S, wgs, stack, dstack, s
     overestimate of the subtree's sum as Barnes-Hut's, so ``d_hat`` only decreases, by at most
     ``-log(1 - k tol) / alpha`` for ``k`` such nodes (``k tol < 1``).
 
-    ``exact_box``: the paper's box test off (see :func:`smooth_traverse`).
+    ``box_test``: the paper's box test, on by default (see :func:`smooth_traverse`).
     """
     d, gx, gy, gz, _, _, _, nodes, leaves = smooth_traverse(
-        tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, tol, False, exact_box)
+        tree, kq, Q, alpha, beta, S, wgrad_scale, stack, dstack, scratch, tol, False, box_test)
     return d, gx, gy, gz, nodes, leaves
 
 
@@ -642,7 +642,7 @@ def _point_box(kq, Q, lo, hi, node):
 
 
 @numba.njit(**NJIT)
-def smooth_distance_brute_primitive(tree, kq, Q, alpha, S, wgs):
+def smooth_distance_brute_primitive(tree, kq, Q, alpha, S, wgrad_scale):
     """``d_hat(g)`` and gradient summing every data primitive (reference; no tree)."""
     m = np.inf
     s = 0.0
@@ -650,7 +650,7 @@ def smooth_distance_brute_primitive(tree, kq, Q, alpha, S, wgs):
     gy = 0.0
     gz = 0.0
     for i in range(tree.kind.size):
-        d, W, vx, vy, vz = pair_term(tree, i, kq, Q, S, wgs)
+        d, W, vx, vy, vz = pair_term(tree, i, kq, Q, S, wgrad_scale)
         m, s, gx, gy, gz = logsumexp_accumulate(m, s, gx, gy, gz, d, W, vx, vy, vz, alpha)
     return m - math.log(s) / alpha, gx / s, gy / s, gz / s
 
@@ -737,14 +737,14 @@ def task_scratch(tree, n):
 
 
 @numba.njit(**NJIT)
-def smooth_distance_primitive_tasks(tree, qkind, qpts, alpha, beta, S, wgs, out_d, out_g,
-                                    out_nodes, out_leaves, tol, exact_box, ntasks, task0, task1):
+def smooth_distance_primitive_tasks(tree, qkind, qpts, alpha, beta, S, wgrad_scale, out_d, out_g,
+                                    out_nodes, out_leaves, tol, box_test, ntasks, task0, task1):
     """``d_hat`` and translation gradient of every query primitive, as a serial task kernel.
 
     ``qkind (m,)`` int64, ``qpts (m, 9)`` float64; fills ``out_d (m,)``, ``out_g (m, 3)``,
     ``out_nodes``, ``out_leaves (m,)``. ``tol``: see :func:`smooth_distance_primitive` (edge
-    and triangle queries only); ``exact_box``: the paper's box test off
-    (:func:`smooth_traverse`). Runs tasks ``task0 <= t < task1`` of ``ntasks`` strided tasks
+    and triangle queries only); ``box_test``: the paper's box test (False: off,
+    :func:`smooth_traverse`). Runs tasks ``task0 <= t < task1`` of ``ntasks`` strided tasks
     (task ``t`` takes primitives ``t, t + ntasks, ...``), GIL-free, from Python threads
     (:func:`smoothdist.schedule.run_tasks`): no ``prange`` loop, which would compile the whole
     traversal again (:mod:`smoothdist.schedule`). Values do not depend on the split.
@@ -759,11 +759,11 @@ def smooth_distance_primitive_tasks(tree, qkind, qpts, alpha, beta, S, wgs, out_
             Q = qpts[j]
             if kq == 0:
                 d, gx, gy, gz, nodes, leaves = smooth_distance_point(
-                    tree, Q[0], Q[1], Q[2], alpha, beta, S, wgs, stack, dstack, root)
+                    tree, Q[0], Q[1], Q[2], alpha, beta, S, wgrad_scale, stack, dstack, root)
             else:
                 d, gx, gy, gz, _, _, _, nodes, leaves = smooth_traverse(
-                    tree, kq, Q, alpha, beta, S, wgs, stack, dstack, scratch, tol, False,
-                    exact_box)
+                    tree, kq, Q, alpha, beta, S, wgrad_scale, stack, dstack, scratch, tol, False,
+                    box_test)
             out_d[j] = d
             out_g[j, 0] = gx
             out_g[j, 1] = gy
@@ -773,11 +773,12 @@ def smooth_distance_primitive_tasks(tree, qkind, qpts, alpha, beta, S, wgs, out_
 
 
 @numba.njit(**NJIT)
-def smooth_distance_primitives_brute(tree, qkind, qpts, alpha, S, wgs, out_d, out_g):
+def smooth_distance_primitives_brute(tree, qkind, qpts, alpha, S, wgrad_scale, out_d, out_g):
     """:func:`smooth_distance_primitive_tasks` summing every data primitive for every query
     primitive (the reference of ``method="brute"``; serial, no tree, no Barnes-Hut)."""
     for j in range(qkind.size):
-        d, gx, gy, gz = smooth_distance_brute_primitive(tree, qkind[j], qpts[j], alpha, S, wgs)
+        d, gx, gy, gz = smooth_distance_brute_primitive(tree, qkind[j], qpts[j], alpha, S,
+                                                        wgrad_scale)
         out_d[j] = d
         out_g[j, 0] = gx
         out_g[j, 1] = gy

@@ -54,12 +54,12 @@ def _attenuate(raw, dwfac_in, whi, S):
 
 
 @numba.njit(**NJIT_INLINE)
-def primitive_term(tree, i, px, py, pz, S, wgs):
+def primitive_term(tree, i, px, py, pz, S, wgrad_scale):
     """Term of primitive ``i`` (tree order) for query ``p``.
 
     Returns ``(d, W, vx, vy, vz)``: distance, attenuated weight ``W``, and the gradient
-    numerator ``W * unit(p - c) - wgs * grad W`` (to be multiplied by ``exp(-alpha d)``).
-    ``wgs`` is ``1/alpha`` for the exact derivative, ``1/alpha**2`` for the paper's metric.
+    numerator ``W * unit(p - c) - wgrad_scale * grad W`` (to be multiplied by ``exp(-alpha d)``).
+    ``wgrad_scale`` is ``1/alpha`` for the exact derivative, ``1/alpha**2`` for the paper's metric.
     """
     k = tree.kind[i]
     P = tree.pts[i]
@@ -128,13 +128,13 @@ def primitive_term(tree, i, px, py, pz, S, wgs):
     d = math.sqrt(rx * rx + ry * ry + rz * rz)
     if d > 0.0:
         inv = W / d
-        vx = rx * inv - wgs * gwx
-        vy = ry * inv - wgs * gwy
-        vz = rz * inv - wgs * gwz
+        vx = rx * inv - wgrad_scale * gwx
+        vy = ry * inv - wgrad_scale * gwy
+        vz = rz * inv - wgrad_scale * gwz
     else:
-        vx = -wgs * gwx
-        vy = -wgs * gwy
-        vz = -wgs * gwz
+        vx = -wgrad_scale * gwx
+        vy = -wgrad_scale * gwy
+        vz = -wgrad_scale * gwz
     return d, W, vx, vy, vz
 
 
@@ -167,7 +167,7 @@ class _PointQuery(NamedTuple):
     alpha: float
     b2: float       # beta**2 (Barnes-Hut tests diag**2 < beta**2 d**2)
     S: float
-    wgs: float
+    wgrad_scale: float
     sa: float       # S / alpha
     reach: float    # negligible-term pruning (negligible_reach)
 
@@ -180,7 +180,7 @@ class _TolQuery(NamedTuple):
     alpha: float
     beta: float
     S: float
-    wgs: float
+    wgrad_scale: float
     wa: float       # the largest raw weight to the power S
     budget: float   # tol / N
 
@@ -235,12 +235,12 @@ def _smooth_leaf(tree, q, node, st):
     """Every primitive of a leaf, exactly."""
     if tree.left[node] >= 0:
         return False, st
-    px, py, pz, alpha, _, S, wgs, _, reach = q
+    px, py, pz, alpha, _, S, wgrad_scale, _, reach = q
     m, s, gx, gy, gz, _, leaves = st
     st_ = tree.start[node]
     cnt = tree.count[node]
     for i in range(st_, st_ + cnt):
-        d, W, vx, vy, vz = primitive_term(tree, i, px, py, pz, S, wgs)
+        d, W, vx, vy, vz = primitive_term(tree, i, px, py, pz, S, wgrad_scale)
         m, s, gx, gy, gz = logsumexp_accumulate(m, s, gx, gy, gz, d, W, vx, vy, vz, alpha)
     cut = m + reach
     return True, (m, s, gx, gy, gz, cut * cut, leaves + cnt)
@@ -252,7 +252,7 @@ def stack_size(tree):
 
 
 @numba.njit(**NJIT)
-def smooth_distance_point(tree, px, py, pz, alpha, beta, S, wgs, stack, dstack, root=0):
+def smooth_distance_point(tree, px, py, pz, alpha, beta, S, wgrad_scale, stack, dstack, root=0):
     """Smooth distance ``d_hat`` and gradient at one point (Madan & Levin 2022, Alg. 1-2).
 
     Parameters
@@ -267,7 +267,7 @@ def smooth_distance_point(tree, px, py, pz, alpha, beta, S, wgs, stack, dstack, 
         primitive) is replaced by ``count * whi**S * exp(-alpha * dist)``. 0 is exact.
     S : float
         Weight attenuation ``min(alpha / alpha_U, 1)``.
-    wgs : float
+    wgrad_scale : float
         Weight-gradient scale: ``1/alpha`` (exact derivative) or ``1/alpha**2`` (paper metric).
     stack : (k,) int64, dstack : (k,) float64
         Scratch space of length ``stack_size(tree)``.
@@ -284,7 +284,7 @@ def smooth_distance_point(tree, px, py, pz, alpha, beta, S, wgs, stack, dstack, 
     # (the test diag < beta d as diag**2 < beta**2 d**2): 3-18 % less CPU time in renders.
     # Negligible-term pruning: a node whose terms are all below NEGLIGIBLE x the sum is skipped
     # once ``dist(p, box) >= cut = m + reach`` (see negligible_reach)
-    q = _PointQuery(px, py, pz, alpha, beta * beta, S, wgs, S / alpha,
+    q = _PointQuery(px, py, pz, alpha, beta * beta, S, wgrad_scale, S / alpha,
                     negligible_reach(tree, root, S, alpha))
     (m, s, gx, gy, gz, _, leaves), nodes = nearest_first(
         tree, q, (np.inf, 0.0, 0.0, 0.0, 0.0, np.inf, ZERO), stack, dstack, root,
@@ -362,7 +362,7 @@ def _near(m, alpha, wa, budget, s_ex, n_ref):
 def _tol_far(tree, q, node, bd, st):
     """The tol kernel's far fields: the budget test, then Barnes-Hut (outside the budget).
     ``st = (m, s, gx, gy, gz, s_ex, e_far, s_ref, n_cov, n_ref, near, leaves)``."""
-    px, py, pz, alpha, beta, S, wgs, wa, budget = q
+    px, py, pz, alpha, beta, S, wgrad_scale, wa, budget = q
     m, s, gx, gy, gz, s_ex, e_far, s_ref, n_cov, n_ref, near, leaves = st
     cnt = tree.count[node]
     if s_ex > 0.0 and bd >= near:
@@ -415,11 +415,11 @@ def _tol_leaf(tree, q, node, st):
     cnt = tree.count[node]
     if tree.left[node] >= 0 and cnt > TOL_LEAF:
         return False, st
-    px, py, pz, alpha, beta, S, wgs, wa, budget = q
+    px, py, pz, alpha, beta, S, wgrad_scale, wa, budget = q
     m, s, gx, gy, gz, s_ex, e_far, s_ref, n_cov, n_ref, near, leaves = st
     st_ = tree.start[node]
     for i in range(st_, st_ + cnt):
-        d, W, vx, vy, vz = primitive_term(tree, i, px, py, pz, S, wgs)
+        d, W, vx, vy, vz = primitive_term(tree, i, px, py, pz, S, wgrad_scale)
         m, s, gx, gy, gz, s_ex, e_far, s_ref = _shift_sums(m, d, alpha, s, gx, gy, gz, s_ex,
                                                            e_far, s_ref)
         e = math.exp(-alpha * (d - m))
@@ -437,7 +437,7 @@ def _tol_leaf(tree, q, node, st):
 
 
 @numba.njit(**NJIT)
-def smooth_distance_point_tol(tree, px, py, pz, alpha, beta, tol, S, wgs, stack, dstack,
+def smooth_distance_point_tol(tree, px, py, pz, alpha, beta, tol, S, wgrad_scale, stack, dstack,
                               root=0):
     """Smooth distance at one point with tolerance-controlled pruning (and optional beta).
 
@@ -455,7 +455,7 @@ def smooth_distance_point_tol(tree, px, py, pz, alpha, beta, tol, S, wgs, stack,
     ``s_ex``. Orders tried: docs/guide/performance.md, "Tuning constants".
     """
     if not tol > 0.0:
-        return smooth_distance_point(tree, px, py, pz, alpha, beta, S, wgs, stack, dstack,
+        return smooth_distance_point(tree, px, py, pz, alpha, beta, S, wgrad_scale, stack, dstack,
                                      root)
     wa = tree.whi[root]
     wa = wa if (S == 1.0 or wa == 1.0) else math.exp(S * math.log(wa))
@@ -466,7 +466,7 @@ def smooth_distance_point_tol(tree, px, py, pz, alpha, beta, tol, S, wgs, stack,
     # size: no exp for them, docs/design-notes.md §3; recomputed when s_ex or n_C + 1 has
     # doubled since), ``near`` and the leaves count
     (m, s, gx, gy, gz, _, _, _, _, _, _, leaves), nodes = nearest_first(
-        tree, _TolQuery(px, py, pz, alpha, beta, S, wgs, wa, budget),
+        tree, _TolQuery(px, py, pz, alpha, beta, S, wgrad_scale, wa, budget),
         (np.inf, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, ZERO, ZERO, np.inf, ZERO), stack, dstack, root,
         math.sqrt(box_distance2(px, py, pz, tree.lo, tree.hi, root)[0]), never, _tol_far,
         _tol_leaf, _box_children_sqrt, always)
@@ -528,7 +528,7 @@ def exact_distance_point(tree, px, py, pz, stack, dstack, root=0, floor=-1.0):
 
 
 @numba.njit(**NJIT)
-def smooth_distance_brute_point(tree, px, py, pz, alpha, S, wgs):
+def smooth_distance_brute_point(tree, px, py, pz, alpha, S, wgrad_scale):
     """Smooth distance at one point summing every primitive (no tree): ``(d_hat, gx, gy, gz)``."""
     m = np.inf
     s = 0.0
@@ -536,13 +536,13 @@ def smooth_distance_brute_point(tree, px, py, pz, alpha, S, wgs):
     gy = 0.0
     gz = 0.0
     for i in range(tree.kind.size):
-        d, W, vx, vy, vz = primitive_term(tree, i, px, py, pz, S, wgs)
+        d, W, vx, vy, vz = primitive_term(tree, i, px, py, pz, S, wgrad_scale)
         m, s, gx, gy, gz = logsumexp_accumulate(m, s, gx, gy, gz, d, W, vx, vy, vz, alpha)
     return m - math.log(s) / alpha, gx / s, gy / s, gz / s
 
 
 @numba.njit(**NJIT_PARALLEL)
-def smooth_distance_batch(tree, Q, alpha, beta, S, wgs, brute, out_d, out_g, out_nodes,
+def smooth_distance_batch(tree, Q, alpha, beta, S, wgrad_scale, brute, out_d, out_g, out_nodes,
                           out_leaves, tol=DEFAULT_TOL, ntasks=1):
     """Fill ``out_d (q,)``, ``out_g (q, 3)``, ``out_nodes``, ``out_leaves (q,)`` for ``Q (q, 3)``.
 
@@ -562,12 +562,13 @@ def smooth_distance_batch(tree, Q, alpha, beta, S, wgs, brute, out_d, out_g, out
             for i in range(c * CHUNK, min(n, (c + 1) * CHUNK)):
                 if brute:
                     d, gx, gy, gz = smooth_distance_brute_point(tree, Q[i, 0], Q[i, 1], Q[i, 2],
-                                                                alpha, S, wgs)
+                                                                alpha, S, wgrad_scale)
                     nodes = 0
                     leaves = tree.kind.size
                 else:
                     d, gx, gy, gz, nodes, leaves = smooth_distance_point_tol(
-                        tree, Q[i, 0], Q[i, 1], Q[i, 2], alpha, beta, tol, S, wgs, stack, dstack)
+                        tree, Q[i, 0], Q[i, 1], Q[i, 2], alpha, beta, tol, S, wgrad_scale, stack,
+                        dstack)
                 out_d[i] = d
                 out_g[i, 0] = gx
                 out_g[i, 1] = gy
@@ -613,7 +614,7 @@ def _exact_chunks(tree, Q, floor, out_d, out_g, out_prim, out_nodes, out_leaves,
 
 
 @numba.njit(**NJIT)
-def smooth_distance_tasks(tree, Q, alpha, beta, S, wgs, out_d, out_g, out_nodes, out_leaves,
+def smooth_distance_tasks(tree, Q, alpha, beta, S, wgrad_scale, out_d, out_g, out_nodes, out_leaves,
                           root, ntasks, task0, task1):
     """:func:`smooth_distance_batch` without ``tol`` (0) nor ``brute``, as a serial task kernel:
     tasks ``task0 <= t < task1`` of ``ntasks`` strided tasks over the chunks (run from Python
@@ -630,7 +631,8 @@ def smooth_distance_tasks(tree, Q, alpha, beta, S, wgs, out_d, out_g, out_nodes,
         for c in range(task, nchunks, ntasks):    # every ntasks-th chunk
             for i in range(c * CHUNK, min(n, (c + 1) * CHUNK)):
                 d, gx, gy, gz, nodes, leaves = smooth_distance_point(
-                    tree, Q[i, 0], Q[i, 1], Q[i, 2], alpha, beta, S, wgs, stack, dstack, root)
+                    tree, Q[i, 0], Q[i, 1], Q[i, 2], alpha, beta, S, wgrad_scale, stack, dstack,
+                    root)
                 out_d[i] = d
                 out_g[i, 0] = gx
                 out_g[i, 1] = gy

@@ -52,6 +52,61 @@ def _queries(field, n, seed=0):
     return lo + (hi - lo) * np.random.default_rng(seed).uniform(-0.25, 1.25, (n, 3))
 
 
+class HostCudaArray:
+    """A stand-in for a CuPy array or a PyTorch CUDA tensor under the simulator: only the
+    ``__cuda_array_interface__``, over host memory (the simulator's device memory)."""
+
+    def __init__(self, a):
+        self.a = a
+
+    @property
+    def __cuda_array_interface__(self):
+        return {"shape": self.a.shape, "typestr": self.a.dtype.str, "strides": None,
+                "data": (self.a.ctypes.data, False), "version": 3}
+
+
+def _device_arrays(sdcuda, arrays, meta):
+    """Issue 49 item 2: queries on the GPU in, results on the GPU out, against the host
+    queries; and the one-line errors of bad device queries."""
+    import smoothdist
+    from tracer.scenes.scene import load_scene
+
+    cuda = sdcuda.cuda_module()
+    o = load_scene(ROOT / "scenes" / "bunny_edges.json", {"width": 8, "height": 8}).objects[0]
+    f = o.field
+    Q = _queries(f, 60, seed=3)
+    kw = dict(alpha=o.alpha, alpha_u=o.alpha_u, beta=0.5)
+    arrays["dev_host_d"], arrays["dev_host_g"] = f.smooth_distance(Q, device="cuda", **kw)
+    arrays["dev_cpu_d"], arrays["dev_cpu_g"] = f.smooth_distance(Q, **kw)
+    arrays["dev_host_exact_d"] = f.exact_distance(Q, device="cuda")[0]
+    meta["dev_tree_kept"] = f.device_tree() is f.device_tree()
+    for label, dQ in (("numba", cuda.to_device(Q)), ("cai", HostCudaArray(Q.copy()))):
+        d, g = f.smooth_distance(dQ, **kw)                 # device=None: where Q is
+        e, eg, prim = f.exact_distance(dQ, return_closest=True)
+        meta[f"dev_{label}_on_gpu"] = [sdcuda.is_device_array(a) for a in (d, g, e, eg, prim)]
+        arrays[f"dev_{label}_d"], arrays[f"dev_{label}_g"] = d.copy_to_host(), g.copy_to_host()
+        arrays[f"dev_{label}_exact_d"] = e.copy_to_host()
+    d, _ = smoothdist.smooth_distance(cuda.to_device(Q), f.mesh, **kw)
+    meta["dev_module_on_gpu"] = sdcuda.is_device_array(d)
+    arrays["dev_module_d"] = d.copy_to_host()
+    meta["dev_point_shape"] = list(f.smooth_distance(cuda.to_device(Q[0]), **kw)[0].shape)
+    bad = Q.copy()
+    bad[7, 1] = np.nan
+    huge = Q.copy()
+    huge[2, 0] = 1e60
+    errors = {"float32": (cuda.to_device(Q.astype(np.float32)), {}),
+              "nan": (cuda.to_device(bad), {}), "huge": (cuda.to_device(huge), {}),
+              "shape": (cuda.to_device(np.ascontiguousarray(Q[:, :2])), {}),
+              "cpu": (cuda.to_device(Q), {"device": "cpu"}),
+              "brute": (cuda.to_device(Q), {"method": "brute"})}
+    for label, (dQ, extra) in errors.items():
+        try:
+            f.smooth_distance(dQ, **kw, **extra)
+            meta[f"dev_error_{label}"] = None
+        except ValueError as exc:
+            meta[f"dev_error_{label}"] = str(exc)
+
+
 def _worker(out):
     """Run in the subprocess: every case on both devices, saved to ``out`` (npz + json)."""
     os.environ["NUMBA_ENABLE_CUDASIM"] = "1"
@@ -117,6 +172,7 @@ def _worker(out):
             bench_gpu.bench_lit("points", (12, 10), 1, samples=4)]
     meta["bench_rows"] = rows
     meta["bench_table"] = bench_gpu.markdown("simulator", rows, 1)
+    _device_arrays(sdcuda, arrays, meta)
     # the command line, on the simulator's device
     png = Path(out).with_suffix(".png")
     meta["cli_rc"] = main(["render", str(ROOT / "scenes" / "bunny_points.json"), "--size", "24",
@@ -317,3 +373,32 @@ def test_film_on_the_gpu_equals_cpu(sim, label):
             assert (cpu[k] == gpu[k]).all(), k
     if label == "transparent":      # the background shows through (the ground fades out)
         assert (gpu["alpha"] < 0.5).mean() > 0.2
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("label", ("numba", "cai"))
+def test_queries_on_the_gpu_stay_there(sim, label):
+    """Issue 49 item 2: a numba device array and any object with ``__cuda_array_interface__``
+    (CuPy, PyTorch) go in without a host copy, and the distances come back as device arrays,
+    equal bit for bit to the same kernel fed from the host (the same launch), and to the CPU
+    within float32 rounding (as above)."""
+    assert sim[f"dev_{label}_on_gpu"] == [True] * 5
+    for k in ("d", "g", "exact_d"):
+        assert (sim[f"dev_{label}_{k}"] == sim[f"dev_host_{k}"]).all(), k
+    scale = np.maximum(np.abs(sim["dev_cpu_d"]), 1.0)
+    assert (np.abs(sim[f"dev_{label}_d"] - sim["dev_cpu_d"]) <= F32 * scale).all()
+
+
+@pytest.mark.slow
+def test_gpu_queries_module_function_tree_handle_and_errors(sim):
+    assert sim["dev_module_on_gpu"]
+    scale = np.maximum(np.abs(sim["dev_cpu_d"]), 1.0)  # a field of its own: float32 rounding
+    assert (np.abs(sim["dev_module_d"] - sim["dev_cpu_d"]) <= F32 * scale).all()
+    assert sim["dev_tree_kept"]                 # the tree is copied once, then reused
+    assert sim["dev_point_shape"] == [1]        # a (3,) point on the GPU is one query
+    expected = {"float32": "must be float64, got float32", "nan": "NaN or infinite",
+                "huge": "beyond", "shape": "shape (n, 3)", "cpu": "device='cuda'",
+                "brute": "runs on the cpu only"}
+    for label, words in expected.items():
+        msg = sim[f"dev_error_{label}"]
+        assert msg is not None and words in msg and "\n" not in msg, (label, msg)

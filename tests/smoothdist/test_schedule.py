@@ -33,12 +33,12 @@ def test_batch_results_do_not_depend_on_the_tasks(bunny, ntasks):
     Q = lo + (hi - lo) * (1.4 * rng.random((3000, 3)) - 0.2)
     Q = Q[np.argsort(Q[:, 0])]                  # spatially sorted, as a grid would be
     n = len(Q)
-    alpha, beta, S, wgs = bunny.kernel_args(200.0, 0.5)
+    alpha, beta, S, wgrad_scale = bunny.kernel_args(200.0, 0.5)
     out = []
     for t in (1, ntasks):
         d, g = np.full(n, np.nan), np.full((n, 3), np.nan)
         nodes, leaves = np.empty(n, np.int64), np.empty(n, np.int64)
-        q.smooth_distance_batch(bunny.tree, Q, alpha, beta, S, wgs, False, d, g, nodes, leaves,
+        q.smooth_distance_batch(bunny.tree, Q, alpha, beta, S, wgrad_scale, False, d, g, nodes, leaves,
                                 0.0, t)
         e, eg, prim = np.full(n, np.nan), np.full((n, 3), np.nan), np.full(n, -1)
         q.exact_distance_batch(bunny.tree, Q, e, eg, prim, nodes.copy(), leaves.copy(), t)
@@ -65,16 +65,16 @@ def test_task_kernels_equal_the_prange_kernels(bunny, ntasks, threads, monkeypat
     lo, hi = bunny.bounds
     Q = lo + (hi - lo) * (1.4 * rng.random((700, 3)) - 0.2)
     n = len(Q)
-    alpha, beta, S, wgs = bunny.kernel_args(200.0, 0.5, alpha_u=2000.0)
+    alpha, beta, S, wgrad_scale = bunny.kernel_args(200.0, 0.5, alpha_u=2000.0)
 
     def outs():
         return (np.full(n, np.nan), np.full((n, 3), np.nan), np.full(n, -1), np.full(n, -1),
                 np.full(n, -1))
 
     ref, got = outs(), outs()
-    q.smooth_distance_batch(bunny.tree, Q, alpha, beta, S, wgs, False, ref[0], ref[1], ref[3],
+    q.smooth_distance_batch(bunny.tree, Q, alpha, beta, S, wgrad_scale, False, ref[0], ref[1], ref[3],
                             ref[4], 0.0, 2)
-    run_tasks(lambda a, b: q.smooth_distance_tasks(bunny.tree, Q, alpha, beta, S, wgs, got[0],
+    run_tasks(lambda a, b: q.smooth_distance_tasks(bunny.tree, Q, alpha, beta, S, wgrad_scale, got[0],
                                                    got[1], got[3], got[4], 0, ntasks, a, b),
               ntasks, threads)
     assert all(np.array_equal(x, y) for x, y in zip(ref, got))
