@@ -87,11 +87,11 @@ def main(argv=None):
     print(f"BVH: {field.tree.lo.shape[0]:,} nodes, depth {field.tree.depth}, built in "
           f"{t_build:.1f} s; peak RSS {peak_rss_gb():.2f} GB", file=sys.stderr, flush=True)
     cam = spec["camera"]
-    scene = scene_from_field(field, alpha=float(obj["alpha"]), alpha_u=float(obj["max_alpha"]),
+    scene = scene_from_field(field, alpha=float(obj["alpha"]), alpha_u=float(obj["alpha_u"]),
                              beta=args.beta, width=args.size, height=args.size,
                              camera=(cam["origin"], cam["dest"], cam["up"]),
                              shading="headlight")
-    render(scene_from_field(field, alpha=float(obj["alpha"]), alpha_u=float(obj["max_alpha"]),
+    render(scene_from_field(field, alpha=float(obj["alpha"]), alpha_u=float(obj["alpha_u"]),
                             beta=args.beta, width=8, height=8,
                             camera=(cam["origin"], cam["dest"], cam["up"])))  # compile
     t0 = time.perf_counter()

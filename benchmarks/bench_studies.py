@@ -6,7 +6,7 @@ numba thread each, started inside the timed region, as a user's run pays for it)
 
 * ``beta``: the beta study's renders of the three data types at the given betas (default
   0.5 and 1: beta = 0 takes minutes) of the bunny at 256 x 256, through
-  :func:`tracer.runner.run_tasks` with :func:`tracer.studies.beta.render_task`;
+  :func:`tracer.runner.run_study` with :func:`tracer.studies.beta.render_task`;
 * ``grid``: the grid study (``tracer bench-grid``) over a folder of meshes, default
   ``../shared/data/thingi10k``, N = 100;
 * ``overhead``: ``--trivial`` no-op tasks; wall time per task once the cluster is up.
@@ -55,7 +55,7 @@ def bench_beta(betas, size, mesh):
     for name, sched, workers in MODES:
         secs = {}
         t0 = time.perf_counter()
-        info = runner.run_tasks(beta.render_task, tasks, scheduler=sched, workers=workers,
+        info = runner.run_study(beta.render_task, tasks, scheduler=sched, workers=workers,
                                 quiet=True, on_result=lambda t, r: secs.__setitem__(
                                     t["key"], (r["seconds"], r["task_seconds"])))
         wall = time.perf_counter() - t0
@@ -87,7 +87,7 @@ def bench_overhead(count):
     for name, sched, workers in MODES:
         if sched == "serial":
             t0 = time.perf_counter()
-            runner.run_tasks(noop, tasks, scheduler="serial", quiet=True,
+            runner.run_study(noop, tasks, scheduler="serial", quiet=True,
                              on_result=lambda t, r: None)
             per = (time.perf_counter() - t0) / count
             out[name] = {"per_task": per, "startup": 0.0}
@@ -97,10 +97,10 @@ def bench_overhead(count):
             startup = time.perf_counter() - t0
             try:
                 address = cluster.scheduler_address
-                runner.run_tasks(noop, tasks[:4], scheduler=address, quiet=True,
+                runner.run_study(noop, tasks[:4], scheduler=address, quiet=True,
                                  on_result=lambda t, r: None)  # workers import the module
                 t0 = time.perf_counter()
-                runner.run_tasks(noop, tasks, scheduler=address, quiet=True,
+                runner.run_study(noop, tasks, scheduler=address, quiet=True,
                                  on_result=lambda t, r: None)
                 per = (time.perf_counter() - t0) / count
             finally:

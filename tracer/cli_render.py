@@ -15,9 +15,9 @@ from tracer.rendering.camera import UP_AXES, VIEWS, frame_points, look_at
 from tracer.rendering.film import MAX_SAMPLES
 from tracer.rendering.renderer import ProgressBar, render, scene_arrays
 from tracer.scenes import from_mesh
-from tracer.scenes.from_mesh import KINDS, describe_parameters, resolve_up, scene_dict
-from tracer.scenes.scene import load_scene, mesh_paths, read_scene_json
-from tracer.scenes.settings import default_text, defaults
+from tracer.scenes.from_mesh import describe_parameters, resolve_up, scene_dict
+from tracer.scenes.scene import AUTHORS_KEYS, BVH_TYPES, load_scene, mesh_paths, read_scene_json
+from tracer.scenes.settings import KINDS, default_text, defaults
 
 HELP = "sphere-trace a scene file to a PNG (and AOVs)"
 
@@ -47,7 +47,7 @@ def add_arguments(p):
     p.add_argument("--alpha-u", type=_auto_or_number("--alpha-u", "off"),
                    metavar="auto|off|U",
                    help="alpha_U (attenuation) of the (first) object, or 'auto' = 20 x alpha, "
-                   "which removes ribbing on tubes (default when the scene has no max_alpha), "
+                   "which removes ribbing on tubes (default when the scene has no alpha_u), "
                    "or 'off' = alpha (no attenuation: the paper's weights even out an uneven "
                    "triangle tessellation that 'auto' shows as pleats)")
     p.add_argument("--kind", choices=KINDS,
@@ -231,7 +231,7 @@ def run(args):
         except CudaUnavailable as exc:
             raise CLIError(str(exc)) from None
     if source == "scene" and args.kind:
-        raise CLIError("--kind applies to mesh files; a scene file sets bvh_type per object")
+        raise CLIError("--kind applies to mesh files; a scene file sets kind per object")
     if source == "scene" and args.up and not args.view:
         raise CLIError("--up applies to a --view; a scene file's camera sets its own up")
     overrides = {"beta": args.beta, "alpha": args.alpha, "alpha_u": args.alpha_u,
@@ -421,6 +421,10 @@ def _edited_scene(data, args, scene):
             for key in ("path", "matcap"):
                 if key in part:
                     part[key] = move(part[key])
+            for old, ours in AUTHORS_KEYS.items():  # written in our spelling
+                if old in part:
+                    value = part.pop(old)
+                    part[ours] = BVH_TYPES.get(value, value) if ours == "kind" else value
     data["camera"] = {k: [float(f"{v:.9g}") for v in np.asarray(vec, dtype=float)]
                       for k, vec in (("origin", scene.camera_origin), ("dest", scene.camera_dest),
                                      ("up", scene.camera_up))}
@@ -428,8 +432,8 @@ def _edited_scene(data, args, scene):
     if args.alpha is not None:
         first["alpha"] = args.alpha
     if args.alpha_u is not None:
-        first["max_alpha"] = (args.alpha_u if args.alpha_u != "off"
-                              else float(f"{scene.objects[0].alpha_u:.6g}"))
+        first["alpha_u"] = (args.alpha_u if args.alpha_u != "off"
+                            else float(f"{scene.objects[0].alpha_u:.6g}"))
     if args.size:
         data["width"], data["height"] = args.size
     for key in ("beta", "mode", "eps", "shading", "offset", "tol", "newton", "samples",

@@ -4,7 +4,7 @@ The studies (:mod:`tracer.studies`) and the frames of ``tracer simulate`` / ``tr
 (:mod:`tracer.sim.frames`) run through this module. A study is a list of tasks (small picklable
 dicts, each with a unique ``"key"`` and an a-priori ``"weight"`` for the ETA) and a
 module-level function ``fn(task) -> record`` (a small dict).
-:func:`run_tasks` runs ``fn`` on every task and hands each record to the study's ``on_result``
+:func:`run_study` runs ``fn`` on every task and hands each record to the study's ``on_result``
 callback in this process as soon as it arrives, in completion order; the study appends it to
 its :class:`TaskLog` (one CSV row per task), so an interrupted study resumes without redoing the
 tasks it finished.
@@ -360,7 +360,7 @@ def _error_line(exc):
     return f"{type(exc).__name__}: {first}" if first else type(exc).__name__
 
 
-def run_tasks(fn, tasks, *, on_result, on_failure=None, scheduler="local", workers=None,
+def run_study(fn, tasks, *, on_result, on_failure=None, scheduler="local", workers=None,
               estimate=None, label="study", quiet=False, line=None, progress=None,
               retries=RETRIES):
     """Run ``fn`` on every task; returns a :class:`RunInfo`.
@@ -472,7 +472,7 @@ def connect(mode, workers=None, timeout=CONNECT_TIMEOUT):
             cluster = LocalCluster(**kw)
         except Exception as exc:
             raise CLIError(f"cannot start a local Dask cluster: {_error_line(exc)}") from None
-        try:  # not the default client either: see run_tasks
+        try:  # not the default client either: see run_study
             return Client(cluster, set_as_default=False), cluster
         except BaseException:
             cluster.close()

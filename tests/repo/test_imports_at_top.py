@@ -16,12 +16,9 @@ from import_graph import ROOT, modules
 #: unexplained imports inside functions, per module, left to the changes editing them
 PENDING = {
     "tracer/reproduce/experiments.py": 25,
-    "tracer/scenes/from_mesh.py": 13,
     "tracer/reproduce/cli.py": 9,
     "tracer/rendering/renderer.py": 4,
     "tracer/checks/fidelity.py": 3,
-    "tracer/reproduce/report.py": 3,
-    "tracer/reproduce/docs.py": 2,
     "tracer/rendering/lighting.py": 1,
     "tracer/rendering/shading.py": 1,
 }

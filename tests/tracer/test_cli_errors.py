@@ -126,8 +126,8 @@ CATALOGUE = [
      "error: alpha must be a finite number > 0"),
     ("param-alpha-tiny", "alpha x bbox diagonal = 1e-15", "api", "error: is too small"),
     ("param-alpha-huge", "alpha x bbox diagonal = 1e7 (distance + render)", "api", "ok"),
-    ("param-alpha-u-zero", "object max_alpha 0", "cli",
-     "error: objects[0].max_alpha must be > 0"),
+    ("param-alpha-u-zero", "object alpha_u 0", "cli",
+     "error: objects[0].alpha_u must be > 0"),
     ("param-alpha-u-negative-api", "smooth_distance(alpha_u=-1)", "api",
      "error: alpha_u must be a finite number > 0"),
     ("param-beta-negative", "--beta -0.5", "cli", "error: --beta must be >= 0"),
@@ -290,7 +290,7 @@ def _(d, mp):
 @setup("file-truncated-ply")
 def _(d, mp):
     ply = (REPO / "scenes" / "data" / "pointclouds" / "lidar_autzen_trim.ply").read_bytes()
-    return [scene(d, mesh_name="cut.ply", mesh=ply[:3000], obj={"bvh_type": "points"})]
+    return [scene(d, mesh_name="cut.ply", mesh=ply[:3000], obj={"kind": "points"})]
 
 
 @setup("file-wrong-ext-mesh")
@@ -410,7 +410,7 @@ def _(d, mp):
 
 @setup("param-alpha-u-zero")
 def _(d, mp):
-    return [scene(d, obj={"max_alpha": 0})]
+    return [scene(d, obj={"alpha_u": 0})]
 
 
 @setup("param-beta-negative")

@@ -53,7 +53,7 @@ def flaky(task):
 
 def _collect(fn, tasks, **kw):
     got, failed = {}, {}
-    info = runner.run_tasks(fn, tasks, on_result=lambda t, r: got.__setitem__(t["key"], r),
+    info = runner.run_study(fn, tasks, on_result=lambda t, r: got.__setitem__(t["key"], r),
                             on_failure=lambda t, e: failed.__setitem__(t["key"], e), quiet=True,
                             **kw)
     return got, failed, info
@@ -255,7 +255,7 @@ def test_tracer_debug_shows_the_traceback_behind_an_error_line(monkeypatch, caps
     def boom(*args, **kwargs):
         raise ValueError("boom")
 
-    monkeypatch.setattr(grid.runner, "run_tasks", boom)
+    monkeypatch.setattr(grid.runner, "run_study", boom)
     argv = ["bench-grid", "-o", str(tmp_path / "out"), "--grid", "2", "-q",
             "--scheduler", "serial"]
     monkeypatch.delenv("TRACER_DEBUG", raising=False)

@@ -42,7 +42,7 @@ render's own.
 
 import numpy as np
 
-from smoothdist.schedule import parallel_tasks
+from smoothdist.schedule import parallel_tasks, run_tasks
 from tracer.rendering import lighting as _lighting
 from tracer.rendering import march
 from tracer.rendering.camera import CAM_HEIGHT, CAM_WIDTH, _scales, box_corners, primary_rays
@@ -51,7 +51,7 @@ from tracer.rendering.frame import (LightArgs, LightBuffers, MarchArgs, SampleBu
                                     TraceOptions)
 from tracer.rendering.shading import (load_matcap, shade_headlight, shade_matcap, shade_normals,
                             view_normals)
-from tracer.rendering.threads import in_bands, run_tasks
+from tracer.rendering.threads import in_bands
 
 __all__ = ["sample_offsets", "form_image", "MAX_SAMPLES", "ADAPTIVE_FIRST", "ADAPTIVE_SECOND"]
 

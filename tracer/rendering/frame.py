@@ -274,9 +274,10 @@ def scene_arrays(scene, transforms=None):
     columns = [march.P_ALPHA, march.P_BETA, march.P_S, march.P_WGS, march.P_OFFSET]
     margin = 0.0
     for k, o in enumerate(scene.objects):
-        alpha, beta, S, wgs = o.field.kernel_args(o.alpha, o.beta, o.alpha_u, scene.gradient)
+        alpha, beta, S, wgrad_scale = o.field.kernel_args(o.alpha, o.beta, o.alpha_u,
+                                                          scene.gradient)
         level = object_level(o, scene.mode)
-        params[k, columns] = (alpha, beta, S, wgs, level)
+        params[k, columns] = (alpha, beta, S, wgrad_scale, level)
         if scene.mode == "exact":
             margin = max(margin, level)
         else:

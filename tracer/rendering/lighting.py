@@ -225,7 +225,7 @@ def light_points(tree, roots, params, mode, tol, P, N, depth_max, light, out, nt
 def light_tasks(tree, roots, params, mode, tol, P, N, depth_max, light, out, ntasks, task0,
                 task1):
     """Tasks ``task0 <= task < task1`` of :func:`light_points` (``ntasks`` of them), serial and
-    ``nogil``, for Python threads (``tracer.rendering.threads.run_tasks``): the same values, and no
+    ``nogil``, for Python threads (``smoothdist.schedule.run_tasks``): the same values, and no
     ``prange`` to compile (a parallel loop costs numba as much again as its body)."""
     tree = borrowed(tree)
     params = borrowed(params)

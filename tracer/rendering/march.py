@@ -920,7 +920,7 @@ def sample_tasks(tree, ray, rows, cols, offsets, depth_max, out, opts, eps_px, n
                  ntasks, task0, task1):
     """Tasks ``task0 <= task < task1`` of :func:`trace_samples` (``ntasks`` of them; every
     argument is required here), serial and ``nogil``, for Python threads
-    (``tracer.rendering.threads.run_tasks``): the same values, and no ``prange`` to compile."""
+    (``smoothdist.schedule.run_tasks``): the same values, and no ``prange`` to compile."""
     tree = borrowed(tree)
     ray = borrowed(ray)
     for task in range(task0, task1):

@@ -22,7 +22,7 @@ from tracer.rendering.frame import (MAX_SAMPLES, PixelBuffers, ProgressBar, RayA
                           _samples, camera_of, distance_at_camera, kernel_roots, object_level,
                           scene_arrays, shade)
 from tracer.rendering.shading import load_matcap
-from tracer.rendering.threads import in_bands, render_threads, run_tasks  # noqa: F401
+from tracer.rendering.threads import in_bands, render_threads
 
 __all__ = ["render", "RenderResult", "RenderError", "camera_of", "distance_at_camera",
            "scene_arrays", "SceneArrays", "RayArgs", "TraceOptions", "render_threads",

@@ -92,7 +92,7 @@ def _shown(path):
         return str(path)
 
 
-def write_report(out, page=None, shown_as=None, allow_dirty=False):
+def write_reproduction(out, page=None, shown_as=None, allow_dirty=False):
     """``claims.json`` and ``reproduction.md`` in ``out`` (and the page at ``page``); refused
     (:class:`CLIError`) when a result came from a tree with local changes, unless
     ``allow_dirty``. The report's own state (its commit, whether each experiment's measured
@@ -147,7 +147,7 @@ def run(args):
     if args.report_only:
         if not (out / "run.json").is_file():
             raise CLIError(f"{out} holds no results of tracer reproduce (no run.json)")
-        write_report(out, args.page, allow_dirty=args.allow_dirty)
+        write_reproduction(out, args.page, allow_dirty=args.allow_dirty)
         if not args.quiet:
             print(f"Wrote {out / 'claims.json'} and {out / 'reproduction.md'}"
                   + (f" and {args.page}" if args.page else ""))
@@ -229,7 +229,7 @@ def run(args):
                                           scheduler=sched if sched in ("serial", "local")
                                           else "address", authors_bin=bool(authors),
                                           seconds=round(time.perf_counter() - t_all, 1)))
-        write_report(tmp, None, _shown(out), args.allow_dirty)
+        write_reproduction(tmp, None, _shown(out), args.allow_dirty)
         if out.exists():
             old = out.parent / f".{out.name}.old-{os.getpid()}"
             out.rename(old)

@@ -698,7 +698,7 @@ def table3(out, s, where):
              for n in s["scenes"]]
     rows = {}
     failed = []
-    info = runner.run_tasks(table3_task, tasks,
+    info = runner.run_study(table3_task, tasks,
                             on_result=lambda t, r: rows.__setitem__(t["key"], r),
                             on_failure=lambda t, e: failed.append((t["key"], e)),
                             scheduler=where["scheduler"], workers=where.get("workers"),

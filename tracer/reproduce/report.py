@@ -10,7 +10,9 @@ import json
 from pathlib import Path
 
 from tracer.reproduce.claims import evaluate, g3
-from tracer.reproduce.experiments import EXPERIMENTS, MEASURED_CODE, TABLE3_PAPER
+from tracer.reproduce.experiments import (EXPERIMENTS, MEASURED_CODE, TABLE3_PAPER, code_changed,
+                                          grid_fit, head_commit, measured_code, read_csv)
+from tracer.studies.common import REPO
 
 #: the files of a results folder that are not an experiment's
 NOT_EXPERIMENTS = {"claims.json", "run.json"}
@@ -29,8 +31,6 @@ def load_results(folder):
             out[p.stem] = json.load(fh)
     g = out.get("grid")
     if g and any("share_sd_pct" not in f for f in g["fit"].values()):
-        from tracer.reproduce.experiments import grid_fit, read_csv
-
         rows = [r for c in g["csv"] for r in read_csv(folder / c)
                 if r.get("status", "ok") == "ok"]
         fit = grid_fit(rows, g["grid"])
@@ -70,8 +70,6 @@ def report_state(folder, allow_dirty):
     whether its measured code (:func:`tracer.reproduce.experiments.measured_code`) changed
     between that experiment's commit and the report's: ``run.json``'s ``report``, from which
     the page is written."""
-    from tracer.reproduce.experiments import code_changed, head_commit, measured_code
-
     head = head_commit()
     res = load_results(folder)
     code = {n: code_changed(r["provenance"].get("commit"), head, measured_code(n))
@@ -93,8 +91,6 @@ def _relative(text):
     """Paths of this machine's shared folder (beside the repository) named as
     ``../shared/...``, as the repository's other files name them (results written before the
     experiments did so name it absolutely)."""
-    from tracer.studies.common import REPO
-
     return str(text).replace(str(REPO.parent / "shared") + "/", "../shared/").replace(
         "/work/shared/", "../shared/")
 

@@ -12,11 +12,18 @@
 
 import os
 import warnings
+from dataclasses import asdict
 
 import numpy as np
 
+import smoothdist
+from smoothdist import DataMesh, SmoothDistanceField
+from smoothdist.convert import is_foreign_geometry
 from tracer.errors import ThinFeatureWarning
-from tracer.scenes.settings import defaults
+from tracer.rendering.camera import UP_AXES, frame_points
+from tracer.rendering.renderer import render
+from tracer.scenes.scene import default_eps, scene_from_field
+from tracer.scenes.settings import KINDS, defaults
 
 #: defaults of the mesh entry points (:mod:`tracer.scenes.settings`; ``tracer render MESH`` too)
 _MESH = defaults("mesh")
@@ -24,15 +31,11 @@ _MESH = defaults("mesh")
 __all__ = ["render_mesh", "mesh_scene", "is_mesh_list", "load_geometry", "guess_up", "resolve_up",
            "describe_parameters", "scene_dict"]
 
-KINDS = ("triangles", "edges", "points", "mixed")
-
 
 def load_geometry(mesh, F=None, kind=None):
     """A :class:`smoothdist.DataMesh` from a path or any object ``as_data_mesh`` accepts,
     reduced to ``kind`` (``"triangles"``, ``"edges"``, ``"points"``; ``"mixed"`` or None keep
     everything it holds)."""
-    import smoothdist
-
     if kind is not None and kind not in KINDS:
         raise ValueError(f"kind must be one of {', '.join(KINDS)}; got {kind!r}")
     if isinstance(mesh, (str, os.PathLike)):
@@ -64,8 +67,6 @@ def guess_up(mesh):
 def resolve_up(mesh, up):
     """``up`` checked (``"x"``, ``"y"``, ``"z"``), or :func:`~tracer.scenes.from_mesh.guess_up` for
     ``"auto"`` / None."""
-    from tracer.rendering.camera import UP_AXES
-
     if up is None or up == "auto":
         return guess_up(mesh)
     if up not in UP_AXES:
@@ -129,9 +130,6 @@ def mesh_scene(mesh, F=None, *, kind=None, alpha=_MESH["alpha"], alpha_u=_MESH["
     name : str, optional
         The scene's name (default: the mesh's).
     """
-    from smoothdist import SmoothDistanceField
-    from tracer.scenes.scene import scene_from_field
-
     if is_mesh_list(mesh):
         if F is not None:
             raise ValueError("F must be None with a list of meshes: give (V, F) pairs")
@@ -149,7 +147,7 @@ def mesh_scene(mesh, F=None, *, kind=None, alpha=_MESH["alpha"], alpha_u=_MESH["
         raise ValueError(f"size must be (width, height), got {size!r}") from None
     field = SmoothDistanceField(data)
     scene = scene_from_field(field, alpha=alpha, alpha_u=alpha_u, beta=beta,
-                            camera=view if camera is None else camera, width=width,
+                            view=view if camera is None else None, camera=camera, width=width,
                             height=height, mode=mode, eps=eps, offset=offset, shading=shading,
                             matcap=matcap, name=name or os.path.splitext(data.name)[0], tol=tol,
                             newton=newton, up=up, samples=samples, adaptive=adaptive,
@@ -168,9 +166,6 @@ def is_mesh_list(mesh):
     """Whether ``mesh`` is a list (or tuple) of several meshes rather than one: every entry a
     path, a :class:`smoothdist.DataMesh`, a trimesh / pyvista object, a ``(V, F)`` pair or a
     2-D array. A list of 3-vectors is one point cloud; a ``(V, F)`` pair is one mesh."""
-    from smoothdist import DataMesh
-    from smoothdist.convert import is_foreign_geometry
-
     if not isinstance(mesh, (list, tuple)) or not mesh:
         return False
     if (isinstance(mesh, tuple) and len(mesh) == 2 and np.ndim(mesh[0]) == 2
@@ -205,9 +200,6 @@ def _per_object(name, value, n):
 def _several_objects(meshes, *, kind, alpha, alpha_u, offset, color, matcap, camera, view,
                      up, size, eps, name, **common):
     """A scene of one object per entry of ``meshes`` (:func:`mesh_scene` with a list)."""
-    from tracer.rendering.camera import frame_points
-    from tracer.scenes.scene import default_eps
-
     n = len(meshes)
     per = {k: _per_object(k, v, n) for k, v in (("kind", kind), ("alpha", alpha),
                                                 ("alpha_u", alpha_u), ("offset", offset),
@@ -247,8 +239,6 @@ def frame_scene(scene, view, up="y"):
     region every object's surface can occupy: its data's vertices grown by its inflation
     bound and offset (exact mode: its offset), plus two hit tolerances
     (:func:`tracer.rendering.camera.frame_points`)."""
-    from tracer.rendering.camera import frame_points
-
     P, grow = [], 0.0
     for o in scene.objects:
         P.append(o.field.mesh.used_vertices())
@@ -357,10 +347,6 @@ def warn_thin_tubes(scene, probes=128):
     the edges (the pixel at the camera's distance to ``dest``: the shorter image axis spans
     that distance) ``d_hat`` is above the surface's level. The message gives the largest
     alpha (alpha_U in the same ratio), found in steps of 0.8, at which they are covered."""
-    import warnings
-
-    from tracer.errors import ThinFeatureWarning
-
     o = scene.objects[0]
     fld = o.field
     m = fld.mesh
@@ -424,8 +410,6 @@ def render_mesh(mesh, F=None, *, kind=None, alpha=_MESH["alpha"], alpha_u=_MESH[
                                  samples=8, adaptive=True)     # anti-aliased, lit
         res.save("renders/ico.png")         # res.rgb, res.depth, res.hit, ... are arrays
     """
-    from tracer.rendering.renderer import render
-
     scene = mesh_scene(mesh, F, kind=kind, alpha=alpha, alpha_u=alpha_u, beta=beta, size=size,
                        view=view, camera=camera, mode=mode, offset=offset, eps=eps,
                        shading=shading, matcap=matcap, up=up, samples=samples,
@@ -469,7 +453,7 @@ def scene_dict(scene, scene_path, source_paths):
     objs = []
     for o, src in zip(scene.objects, source_paths):
         od = {"path": rel(src), "alpha": float(f"{o.alpha:.6g}"),
-              "max_alpha": float(f"{o.alpha_u:.6g}"), "bvh_type": _bvh_type(o.field.mesh.kind)}
+              "alpha_u": float(f"{o.alpha_u:.6g}"), "kind": o.field.mesh.kind}
         if scene.mode == "exact" or o.level(scene.mode) > 0:
             od["offset"] = float(f"{o.level(scene.mode):.6g}")
         objs.append(od)
@@ -493,8 +477,6 @@ def scene_dict(scene, scene_path, source_paths):
     if tuple(scene.background) != tuple(file["background"]):
         out["background"] = [int(v) for v in scene.background]
     if scene.shading == "lit":
-        from dataclasses import asdict
-
         default = asdict(file["lighting"])
         changed = {k: (list(v) if isinstance(v, tuple) else v)
                    for k, v in asdict(scene.lighting).items() if v != default[k]}
@@ -507,6 +489,3 @@ def scene_dict(scene, scene_path, source_paths):
         out["newton"] = float(scene.newton)
     return out
 
-
-def _bvh_type(kind):
-    return {"triangles": "faces"}.get(kind, kind)

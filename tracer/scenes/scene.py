@@ -1,10 +1,15 @@
 """Scene files: the authors' JSON format, read unchanged, plus our extensions.
 
-Authors' keys (abhimadan/smoothdists ``scenes/*.json``)::
+Keys (the authors' scenes, abhimadan/smoothdists ``scenes/*.json``, in our spelling)::
 
     {"camera": {"origin": [x, y, z], "dest": [x, y, z], "up": [x, y, z]},
-     "objects": [{"path": "mesh.obj", "alpha": 100, "max_alpha": 200,
-                  "bvh_type": "faces" | "edges" | "points", "matcap": "jade.png"}]}
+     "objects": [{"path": "mesh.obj", "alpha": 100, "alpha_u": 200,
+                  "kind": "triangles" | "edges" | "points", "matcap": "jade.png"}]}
+
+Two keys are spelled as in the API (``render_mesh(kind=..., alpha_u=...)``) rather than as
+the authors spelled them; their spellings are read too (``AUTHORS_KEYS``):
+``max_alpha`` is ``alpha_u``, and ``bvh_type`` is ``kind``, with ``"faces"`` for
+``"triangles"``. Files and scenes written here use ours.
 
 Extensions (all optional): top level ``width``, ``height``, ``beta``, ``eps`` (absolute, scene
 units; default ``1e-4 x`` the data's bbox diagonal), ``mode`` (``"smooth"`` or ``"exact"``),
@@ -17,12 +22,12 @@ pruning, a number >= 0, default 0 = off; see ``smoothdist.kernels.smooth_distanc
 a number >= 0, default ``tracer.rendering.march.NEWTON``; 0 = plain sphere tracing; see
 ``tracer.rendering.march.march_ray``).
 Per object: ``beta``, ``offset``,
-``bvh_type`` may also be ``"mixed"`` (keep all primitives of the file), and instead of ``path``
-an object may list ``parts``: ``[{"path": ..., "bvh_type": ..., "scale": s,
+``kind`` may also be ``"mixed"`` (keep all primitives of the file), and instead of ``path``
+an object may list ``parts``: ``[{"path": ..., "kind": ..., "scale": s,
 "translate": [x, y, z]}, ...]`` merged into one mixed mesh (one BVH). ``alpha`` may be
-``"auto"``; ``max_alpha`` (alpha_U) may be ``"auto"``, its default (20 x alpha, see
+``"auto"``; ``alpha_u`` (alpha_U) may be ``"auto"``, its default (20 x alpha, see
 ``SmoothDistanceField.auto_alpha_u``; the authors' files without it meant no attenuation).
-An object whose ``alpha`` is ``"auto"`` with ``max_alpha`` and ``offset`` left out, in smooth
+An object whose ``alpha`` is ``"auto"`` with ``alpha_u`` and ``offset`` left out, in smooth
 mode, gets all three from ``SmoothDistanceField.auto_surface`` (triangles: a thin shell at
 0.3 % of the diagonal or a tenth of the local feature size, issue 46; curves: a tube about 0.75
 mean edge lengths thick, without rings, issue 35).
@@ -43,6 +48,7 @@ no extent (a single point) the default ``eps`` is ``1e-4 x`` the surface's size
 """
 
 import os
+import warnings
 from dataclasses import dataclass, field as dc_field, fields
 
 import numpy as np
@@ -52,15 +58,19 @@ from smoothdist import DataMesh, SmoothDistanceField
 from tracer.rendering.camera import frame_points, look_at
 from tracer.rendering.film import MAX_SAMPLES
 from tracer.rendering.lighting import Lighting, _check_color
-from tracer.scenes.settings import SCENE_KEYS, Film, March, defaults
+from tracer.scenes.settings import KINDS, SCENE_KEYS, Film, March, defaults
 from tracer.validate import (SceneError, check_keys, choice, file_error, number, read_json,
                              resolve_path, show, vec3)
 
 __all__ = ["Scene", "SceneObject", "SceneError", "load_scene", "read_scene_json",
-           "scene_from_field", "default_eps", "merge_meshes"]
+           "scene_from_field", "default_eps", "merge_meshes", "AUTHORS_KEYS"]
 
-BVH_TYPES = {"faces": "triangles", "triangles": "triangles", "edges": "edges",
-             "points": "points", "mixed": "mixed"}
+#: the values of ``bvh_type``, the authors' spelling of ``kind`` (their ``"faces"`` is
+#: ``"triangles"``)
+BVH_TYPES = {"faces": "triangles", **{k: k for k in KINDS}}
+#: the authors' spelling of a key -> ours; files in either are read, a file giving both is
+#: refused (the vocabulary: docs/design-notes.md)
+AUTHORS_KEYS = {"max_alpha": "alpha_u", "bvh_type": "kind"}
 SHADINGS = ("normals", "matcap", "headlight", "lit")
 MODES = ("smooth", "exact")
 
@@ -73,9 +83,9 @@ _TOP_KEYS = set(SCENE_KEYS) | {"camera", "objects", "description", "name"}
 _LIGHTING_KEYS = {"shadows", "penumbra", "ao", "ao_distance", "ground", "ground_color", "key",
                   "exposure"}
 _CAMERA_KEYS = {"origin", "dest", "up"}
-_OBJECT_KEYS = {"path", "parts", "alpha", "max_alpha", "bvh_type", "matcap", "beta", "offset",
-                "name", "scale", "translate", "color"}
-_PART_KEYS = {"path", "bvh_type", "scale", "translate"}
+_OBJECT_KEYS = {"path", "parts", "alpha", "alpha_u", "max_alpha", "kind", "bvh_type", "matcap",
+                "beta", "offset", "name", "scale", "translate", "color"}
+_PART_KEYS = {"path", "kind", "bvh_type", "scale", "translate"}
 
 
 @dataclass
@@ -210,7 +220,7 @@ def load_scene(path, overrides=None):
         The scene JSON file.
     overrides : dict, optional
         Values that replace the file's: ``width``, ``height``, ``beta``, ``alpha`` (first
-        object; a number or "auto"), ``alpha_u`` (first object's ``max_alpha``; a number or
+        object; a number or "auto"), ``alpha_u`` (first object's ``alpha_u``; a number or
         "auto"), ``mode``, ``eps``, ``shading``, ``offset``, ``tol``, ``newton``,
         ``samples``, ``adaptive``, ``transparent`` and ``lighting`` (a dict of
         :class:`~tracer.rendering.lighting.Lighting` fields).
@@ -410,7 +420,8 @@ def _object_spec(od, i, base, path, data, overrides, beta):
     if i == 0 and overrides.get("alpha_u") is not None:
         alpha_u, au_where = overrides["alpha_u"], "--alpha-u"
     else:
-        alpha_u, au_where = od.get("max_alpha", _FILE["alpha_u"]), f"{where}.max_alpha"
+        key = _spelling(od, "alpha_u", path, where)
+        alpha_u, au_where = od.get(key, _FILE["alpha_u"]), f"{where}.{key}"
     if alpha_u == "off" and au_where == "--alpha-u":
         pass  # no attenuation: alpha_U = alpha, once alpha is known (the command line only)
     elif alpha_u != "auto":
@@ -441,10 +452,21 @@ def _object_spec(od, i, base, path, data, overrides, beta):
                 offset=offset, matcap=matcap, name=name, color=ocolor)
 
 
+def _spelling(od, key, path, where):
+    """The key of ``od`` that holds the setting ``key``: ``key`` itself, or its authors'
+    spelling (``AUTHORS_KEYS``) when only that is given; a file giving both is refused."""
+    old = next(o for o, k in AUTHORS_KEYS.items() if k == key)
+    if key in od and old in od:
+        raise file_error(path, where, f"has both {key!r} and {old!r} (the authors' spelling of "
+                                      f"{key!r}); give one")
+    return old if old in od else key
+
+
 def _part_spec(pd, base, path, where):
     full = resolve_path(base, pd.get("path"), path, f"{where}.path")
-    kind = BVH_TYPES[choice(pd.get("bvh_type", "mixed"), tuple(BVH_TYPES), path,
-                            f"{where}.bvh_type")]
+    key = _spelling(pd, "kind", path, where)
+    values = BVH_TYPES if key == "bvh_type" else {k: k for k in KINDS}
+    kind = values[choice(pd.get(key, "mixed"), tuple(values), path, f"{where}.{key}")]
     scale = number(pd["scale"], path, f"{where}.scale", positive=True) if "scale" in pd else 1.0
     shift = vec3(pd["translate"], path, f"{where}.translate") if "translate" in pd else np.zeros(3)
     return dict(where=where, full=full, kind=kind, scale=scale, shift=shift)
@@ -520,8 +542,9 @@ def merge_meshes(meshes, name="mixed"):
 
 
 def scene_from_field(field, *, alpha, alpha_u=_API["alpha_u"], beta=_API["beta"],
-                     camera=_API["view"], width=_API["width"], height=_API["height"],
-                     mode=_API["mode"], eps=_API["eps"], offset=_API["offset"],
+                     view=_API["view"], camera=None, width=_API["width"],
+                     height=_API["height"], mode=_API["mode"], eps=_API["eps"],
+                     offset=_API["offset"],
                      shading=_API["shading"], matcap=_API["matcap"],
                      gradient=_API["gradient"], name="scene", max_steps=_API["max_steps"],
                      tol=_API["tol"], newton=_API["newton"], up=_API["up"],
@@ -537,18 +560,21 @@ def scene_from_field(field, *, alpha, alpha_u=_API["alpha_u"], beta=_API["beta"]
     alpha : float or "auto"
         As in the scene file; ``"auto"`` is ``field.auto_alpha()``.
     alpha_u : float, "auto", "off" or None
-        As ``max_alpha`` in the scene file; ``"auto"`` is ``field.auto_alpha_u(alpha)`` (no
+        As ``alpha_u`` in the scene file; ``"auto"`` is ``field.auto_alpha_u(alpha)`` (no
         ribbing); ``"off"`` (the default here, unlike scene files: see
         :mod:`tracer.scenes.settings`) or None is ``alpha``, i.e. no attenuation.
     beta : float
         Barnes-Hut parameter.
-    camera : (origin, dest, up), or a view name, optional
-        Three 3-vectors, or a key of :data:`tracer.rendering.camera.VIEWS` (``"front"``, ``"iso"``,
-        ...) to frame the whole surface (:func:`tracer.rendering.camera.frame_points`: the data's
-        vertices grown by the inflation bound, which contains the surface). Default: the
-        paper's beta-study camera (bbox centre + 2 x the
-        largest extent along +z, looking at the centre, up +y), which may crop a blurry
-        surface.
+    view : str, optional
+        A key of :data:`tracer.rendering.camera.VIEWS` (``"front"``, ``"iso"``, ...): a camera
+        framing the whole surface from that side (:func:`tracer.rendering.camera.frame_points`:
+        the data's vertices grown by the inflation bound, which contains the surface), as
+        ``mesh_scene``'s ``view``. Default (with ``camera`` None too): the paper's beta-study
+        camera (bbox centre + 2 x the largest extent along +z, looking at the centre, up +y),
+        which may crop a blurry surface.
+    camera : (origin, dest, up) or tracer.rendering.camera.Camera, optional
+        The camera itself: three 3-vectors, or a render's ``res.camera``; instead of ``view``.
+        A view name here still works, with a ``DeprecationWarning`` (until 0.2).
     mode : {"smooth", "exact"}
         The smooth distance's isosurface, or the exact distance's offset surface.
     offset : float, optional
@@ -561,7 +587,7 @@ def scene_from_field(field, *, alpha, alpha_u=_API["alpha_u"], beta=_API["beta"]
         plain sphere tracing; default ``tracer.rendering.march.NEWTON``), as the scene key
         ``newton``.
     up : {"x", "y", "z"}
-        The data's up axis, for a view name ``camera``
+        The data's up axis, for ``view``
         (:func:`tracer.rendering.camera.view_vectors`).
     samples : int
         Anti-aliasing samples per pixel (1 to ``tracer.rendering.film.MAX_SAMPLES``), as the scene
@@ -596,8 +622,8 @@ def scene_from_field(field, *, alpha, alpha_u=_API["alpha_u"], beta=_API["beta"]
     if color is not None:
         color = _check_color(color, "color")
     background = tuple(int(round(v)) for v in _check_color(background, "background"))
-    origin, dest, up = _api_camera(field, camera, alpha, alpha_u, offset, eps, mode, width,
-                                   height, up)
+    origin, dest, up = _api_camera(field, _view_or_camera(view, camera), alpha, alpha_u, offset,
+                                   eps, mode, width, height, up)
     obj = SceneObject(name=name, field=field, alpha=alpha, alpha_u=alpha_u, beta=beta,
                       offset=offset if offset is not None else 1.0 / alpha,
                       matcap=matcap, color=color,
@@ -662,6 +688,20 @@ def _api_lighting(lighting):
         raise ValueError(f"lighting must be a tracer.rendering.lighting.Lighting or a dict, got "
                          f"{type(lighting).__name__}")
     return lighting
+
+
+def _view_or_camera(view, camera):
+    """What :func:`_api_camera` frames: ``view`` (a name) or ``camera`` (vectors); a name given
+    as ``camera`` (the old spelling) warns and counts as ``view``."""
+    if isinstance(camera, str):
+        warnings.warn(f"scene_from_field(camera={camera!r}): a view name is view={camera!r} now; "
+                      "camera= takes (origin, dest, up) (the old use goes in the next release)",
+                      DeprecationWarning, stacklevel=3)
+        if view is None:
+            camera, view = None, camera
+    if view is not None and camera is not None:
+        raise ValueError("give view (a name) or camera (origin, dest, up), not both")
+    return camera if view is None else view
 
 
 def _api_camera(field, camera, alpha, alpha_u, offset, eps, mode, width, height, up):

@@ -21,10 +21,10 @@ Where an entry point deliberately differs, the field says so (``api=`` / ``mesh=
   draw the paper's normal colours (the golden images), a user's mesh gets a lit picture;
 * ``alpha``: required by scene files and ``scene_from_field`` (the authors' format names it),
   ``"auto"`` for the mesh entry points;
-* ``alpha_u``: ``"auto"`` in scene files (an object without ``max_alpha``) and for the mesh
+* ``alpha_u``: ``"auto"`` in scene files (an object without ``alpha_u``) and for the mesh
   entry points, ``"off"`` in ``scene_from_field``: the parameter studies and golden images
   vary alpha alone over the paper's unattenuated weights;
-* ``view`` and ``up``: scene files carry their camera; ``scene_from_field``'s ``camera=None``
+* ``view`` and ``up``: scene files carry their camera; ``scene_from_field``'s ``view=None``
   is the paper's beta-study camera, with up ``"y"``; the mesh entry points frame the
   ``"front"`` view with up ``"auto"`` (a mesh file's extension tells its up axis).
 
@@ -38,8 +38,12 @@ from smoothdist.kernels import DEFAULT_TOL
 from tracer.rendering.lighting import Lighting
 from tracer.rendering.march import NEWTON
 
-__all__ = ["Camera", "March", "Film", "Surface", "GROUPS", "ENTRIES", "Row", "table",
+__all__ = ["View", "March", "Film", "Surface", "GROUPS", "ENTRIES", "KINDS", "Row", "table",
            "defaults", "default_text", "REQUIRED", "SCENE_KEYS"]
+
+#: the kinds of data an object draws (``kind=`` of the mesh entry points, ``kind`` of scene
+#: files): its triangles, its edges, its points, or everything its file holds
+KINDS = ("triangles", "edges", "points", "mixed")
 
 #: the entry points: scene files (and ``Scene``), ``scene_from_field``, the mesh entry points
 ENTRIES = ("file", "api", "mesh")
@@ -68,9 +72,10 @@ def _opt(default, help, *, api=_SAME, mesh=_SAME, file=_SAME, why="", text=None,
 
 
 @dataclass(frozen=True)
-class Camera:
+class View:
     """How a camera is chosen when it is not given as three vectors (scene files always give
-    ``camera: {origin, dest, up}``)."""
+    ``camera: {origin, dest, up}``): the side it frames the surface from, and the data's up
+    axis. The camera itself is :class:`tracer.rendering.camera.Camera`."""
 
     view: str = _opt(None, "camera framing the whole surface from this side (front, back, "
                      "left, right, top, iso)", mesh="front", file=REQUIRED, key=False,
@@ -142,7 +147,7 @@ class Surface:
 
 
 #: the settings groups, in the order of the reference table
-GROUPS = (Camera, March, Film, Surface)
+GROUPS = (View, March, Film, Surface)
 
 
 @dataclass(frozen=True)

@@ -73,7 +73,7 @@ from smoothdist import DataMesh
 from smoothdist.mesh import read_mesh_file, unique_edges
 from tracer.errors import SimFileError
 from tracer.sim.bodies import INERTIA_FLOOR, Body
-from tracer.sim.simulation import DEFAULT_FRAMES, Camera, Simulation, auto_camera
+from tracer.sim.simulation import DEFAULT_FRAMES, MovieCamera, Simulation, auto_camera
 from tracer.sim.simulation import wrap_scene_error as _wrap
 from tracer.validate import SceneError, check_keys, choice, number, resolve_path, show, vec3
 
@@ -379,7 +379,7 @@ def build_simulation(data, path):
         bodies = [_object(od, i, path, base) for i, od in enumerate(objects)]
         width, height = 640, 360
         origin, dest, up = auto_camera(bodies, gravity, width=width, height=height)
-        camera = Camera(origin=origin, dest=dest, up=up, width=width, height=height,
+        camera = MovieCamera(origin=origin, dest=dest, up=up, width=width, height=height,
                         every=max(1, steps // DEFAULT_FRAMES), shading="lit", auto=True)
     except SimFileError:
         raise

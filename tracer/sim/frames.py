@@ -10,7 +10,7 @@
   time and size), so only the task dict travels through the scheduler. A simulation without a
   camera (the authors' files) is framed on the whole trajectory
   (:func:`tracer.sim.simulation.auto_camera`);
-* :func:`render_movie`: runs the tasks through :func:`tracer.runner.run_tasks` (in this
+* :func:`render_movie`: runs the tasks through :func:`tracer.runner.run_study` (in this
   process, on a local Dask cluster or on an existing one) and reduces the PNGs, in frame order,
   to an MP4 and a GIF.
 
@@ -119,7 +119,7 @@ def render_movie(sim_path, traj_path, frames_dir, mp4, gif, *, n_frames, every, 
     os.makedirs(frames_dir, exist_ok=True)
     done = {0: frame_task(tasks[0])}
     failed = []
-    info = runner.run_tasks(frame_task, tasks[1:],
+    info = runner.run_study(frame_task, tasks[1:],
                             on_result=lambda t, r: done.__setitem__(t["index"], r),
                             on_failure=lambda t, err: failed.append((t["key"], err)),
                             scheduler=scheduler, workers=workers, label="render frames",

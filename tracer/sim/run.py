@@ -127,7 +127,7 @@ def load_trajectory(path):
     return data
 
 
-def restore(sim, data, frame=-1):
+def restore_frame(sim, data, frame=-1):
     """Put the bodies of ``sim`` in the state of a trajectory frame; returns the frame's time."""
     names = [str(n) for n in data["names"]]
     if names != [b.name for b in sim.bodies]:
@@ -160,7 +160,7 @@ def simulate(sim, out_path, *, steps=None, resume=False, overwrite=False, progre
     frames = {k: [] for k in FRAME_KEYS}
     if resume and os.path.exists(out_path):
         data = load_trajectory(out_path)
-        integ.time = restore(sim, data)
+        integ.time = restore_frame(sim, data)
         for k in FRAME_KEYS:
             frames[k] = list(data[k])
     else:

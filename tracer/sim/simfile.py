@@ -55,8 +55,8 @@ The authors' simulator (``sims/*.json``) names these ``timestep``, ``num_steps``
 ``is_dynamic``, ``max_alpha``, ``bvh_type`` and ``init_state``; we use one flat object per body.
 :func:`load_simulation` reads their files too, unchanged (a top-level ``objects`` list instead
 of ``bodies``): :mod:`tracer.sim.authors_format`. They have no camera; theirs get
-:func:`~tracer.sim.simulation.auto_camera` (``Camera.auto``), which frames the whole trajectory when
-frames are rendered.
+:func:`~tracer.sim.simulation.auto_camera` (``MovieCamera.auto``), which frames the whole
+trajectory when frames are rendered.
 
 :func:`load_simulation` validates every key and value (and that every referenced file exists)
 before it reads any mesh, and raises :class:`~tracer.errors.SimFileError` (a ``ValueError``) with a
@@ -83,11 +83,11 @@ from smoothdist.field import AUTO_ALPHA_U_FACTOR
 from tracer.rendering.camera import look_at
 from tracer.sim.simulation import (AUTO_CAMERA_ELEVATION, AUTO_CAMERA_FOCUS,  # noqa: F401
                                    AUTO_CAMERA_FOCUS_ELEVATION, AUTO_CAMERA_FOCUS_GROW,
-                                   AUTO_CAMERA_MARGIN, DEFAULT_FRAMES, Camera, Simulation,
+                                   AUTO_CAMERA_MARGIN, DEFAULT_FRAMES, MovieCamera, Simulation,
                                    auto_camera)
 from tracer.sim.simulation import wrap_scene_error as _wrap
 
-__all__ = ["Simulation", "Camera", "SimFileError", "load_simulation", "read_simulation_json",
+__all__ = ["Simulation", "MovieCamera", "SimFileError", "load_simulation", "read_simulation_json",
            "auto_camera"]
 
 _TOP = {"name", "description", "dt", "steps", "gravity", "beta", "constraint", "gap_tol",
@@ -128,7 +128,7 @@ def _camera(cd, path):
     for k in ("origin", "dest", "up"):
         if k not in cd:
             raise _err(path, "camera", f"is missing the required key {k!r}")
-    cam = Camera(origin=vec3(cd["origin"], path, "camera.origin"),
+    cam = MovieCamera(origin=vec3(cd["origin"], path, "camera.origin"),
                  dest=vec3(cd["dest"], path, "camera.dest"),
                  up=vec3(cd["up"], path, "camera.up"))
     for k in ("width", "height", "every"):

@@ -1,6 +1,6 @@
 """What a loaded simulation file is: the simulation, its camera, and the automatic camera of
 files that give none (:class:`~tracer.sim.simulation.Simulation`,
-:class:`~tracer.sim.simulation.Camera`, :func:`~tracer.sim.simulation.auto_camera`).
+:class:`~tracer.sim.simulation.MovieCamera`, :func:`~tracer.sim.simulation.auto_camera`).
 
 Both readers build these: :mod:`tracer.sim.simfile` (our format) and
 :mod:`tracer.sim.authors_format` (the authors' ``sims/*.json``); neither imports the other's
@@ -16,17 +16,18 @@ from tracer.errors import SimFileError
 from tracer.rendering.camera import box_corners, frame_points
 from tracer.sim.constraint import DEFAULT_TORQUES
 
-__all__ = ["Simulation", "Camera", "auto_camera", "DEFAULT_FRAMES", "wrap_scene_error"]
+__all__ = ["Simulation", "MovieCamera", "auto_camera", "DEFAULT_FRAMES", "wrap_scene_error"]
 
 #: default number of rendered frames when ``camera.every`` is not given
 DEFAULT_FRAMES = 80
 
 
 @dataclass
-class Camera:
-    """Rendering settings of a simulation. ``auto``: the view was not given (an authors' file);
-    frames are rendered from :func:`auto_camera` of the trajectory instead of ``origin``,
-    ``dest`` and ``up`` (which frame the initial state)."""
+class MovieCamera:
+    """The camera that films a simulation's movie, and the movie's frames (size, rate, every
+    how many steps, shading): the file's ``camera`` object. ``auto``: the view was not given
+    (an authors' file); frames are rendered from :func:`auto_camera` of the trajectory instead
+    of ``origin``, ``dest`` and ``up`` (which frame the initial state)."""
 
     origin: np.ndarray
     dest: np.ndarray
@@ -119,7 +120,7 @@ class Simulation:
     gravity: np.ndarray
     beta: float
     constraint: str
-    camera: Camera
+    camera: MovieCamera
     gap_tol: float = None
     spec: dict = field(default_factory=dict)
     torques: str = DEFAULT_TORQUES

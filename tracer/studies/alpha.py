@@ -40,7 +40,7 @@ from tracer.rendering.renderer import RenderError, render
 from tracer.runner import duration
 from tracer.scenes.scene import scene_from_field
 from tracer.studies.common import (REPO, TYPES, add_common, add_view_arguments, field_of,
-                                   load_mesh, resolve_view, study_needs, unweighted_field,
+                                   load_mesh_checked, resolve_view, study_needs, unweighted_field,
                                    view_camera)
 from tracer.studies.plots import alpha_report, panel_grid_png, pyplot
 
@@ -103,7 +103,7 @@ def add_arguments(p):
     p.add_argument("--alphas", help="comma-separated alphas (overrides the study's defaults; "
                    "weights: the alpha of each row)")
     p.add_argument("--alpha-u", type=float, help="attenuate: the alpha_U of the attenuated "
-                   "column (default 300, the octopus scene's max_alpha; with --mesh 2 x the "
+                   "column (default 300, the octopus scene's alpha_u; with --mesh 2 x the "
                    "mesh's auto alpha)")
     p.add_argument("--beta", type=float, default=0.5, help="Barnes-Hut beta (default 0.5)")
     p.add_argument("--shading", choices=("normals", "headlight"), default="normals",
@@ -167,7 +167,7 @@ def run(args):
             if p.exists() and not args.overwrite:
                 raise CLIError(f"{p} exists (pass --overwrite to replace it)")
     if args.mesh:
-        load_mesh(args.mesh)  # validate early
+        load_mesh_checked(args.mesh)  # validate early
     # the up axis is resolved per figure, from its data file (auto: as tracer render guesses)
     view, up = (args.view or "front", args.up) if (args.view or args.up) else (None, None)
     out.mkdir(parents=True, exist_ok=True)
@@ -191,7 +191,7 @@ def run(args):
         return (f"{task['study']}: {r['panels']} panels in {r['info']['seconds']:.1f} s, "
                 f"{r['info']['parameters_rule']} -> {out / (_slug(task['study']) + '.png')}")
 
-    info = runner.run_tasks(study_task, tasks, on_result=on_result, scheduler=sched,
+    info = runner.run_study(study_task, tasks, on_result=on_result, scheduler=sched,
                             workers=workers, estimate=estimate,
                             label=f"ablate-alpha {args.study}", quiet=args.quiet, line=line)
     if not args.quiet:
@@ -223,10 +223,10 @@ def _study_data(args, default, kind_default):
     if args.mesh:
         kind = args.kind or kind_default
         if kind_default == "triangles" and not args.kind:
-            m = load_mesh(args.mesh)
+            m = load_mesh_checked(args.mesh)
             kind = "triangles" if len(m.triangles) else ("edges" if len(m.edges) else "points")
-        return args.mesh, load_mesh(args.mesh, kind), None, True
-    return default[0], load_mesh(REPO / default[0], kind_default), default[1], False
+        return args.mesh, load_mesh_checked(args.mesh, kind), None, True
+    return default[0], load_mesh_checked(REPO / default[0], kind_default), default[1], False
 
 
 def _alphas_for(study, alphas, field, override, paper=False):
@@ -458,7 +458,7 @@ def _study_exact_smooth(args, size, alphas):
 
 def _study_weights(args, size, alphas):
     if args.mesh:
-        m = load_mesh(args.mesh)
+        m = load_mesh_checked(args.mesh)
         cases = []
         if len(m.edges) or len(m.triangles):
             cases.append(("edges", args.mesh, m.as_kind("edges"), None))
@@ -468,8 +468,9 @@ def _study_weights(args, size, alphas):
             raise CLIError(f"weights: {args.mesh} has no edges or triangles (weights only "
                            "exist for edges and triangles)")
     else:
-        cases = [("edges", _CAPILLARY[0], load_mesh(REPO / _CAPILLARY[0], "edges"), _CAPILLARY[1]),
-                 ("triangles", _OCTOPUS[0], load_mesh(REPO / _OCTOPUS[0], "triangles"),
+        cases = [("edges", _CAPILLARY[0], load_mesh_checked(REPO / _CAPILLARY[0], "edges"),
+                  _CAPILLARY[1]),
+                 ("triangles", _OCTOPUS[0], load_mesh_checked(REPO / _OCTOPUS[0], "triangles"),
                   _OCTOPUS[1])]
     d = STUDY_DEFAULTS["weights"]
     rows, stats, rules = [], [], []

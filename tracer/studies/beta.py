@@ -51,8 +51,8 @@ from tracer.rendering import renderer
 from tracer.runner import duration
 from tracer.scenes.scene import scene_from_field
 from tracer.studies.common import (TYPES, add_common, add_view_arguments, beta_tag,
-                                   cached_field, close, is_paper_bunny, load_mesh, parse_types,
-                                   resolve_view, study_needs, view_camera)
+                                   cached_field, close, is_paper_bunny, load_mesh_checked,
+                                   parse_types, resolve_view, study_needs, view_camera)
 from tracer.studies.plots import beta_outputs
 
 HELP = "the paper's beta ablation: time and error vs beta"
@@ -219,7 +219,7 @@ def surface_parameters(mesh, types, alpha=None, alpha_u=None, paper=False):
     return out
 
 
-def describe_parameters(surfaces, paper_bunny=False):
+def describe_surfaces(surfaces, paper_bunny=False):
     """One line naming the parameters of every type and where they came from (1 / scene units;
     the offset in scene units), e.g. ``the mesh's auto parameters: points alpha 3.86, alpha_U
     77.3; triangles alpha 26.4, alpha_U 26.4, offset 0.227``."""
@@ -434,7 +434,7 @@ def run(args):
                 + f" {r['seconds']:8.2f} s  {r['hits']:7d} hits  {r['mean_leaves']:10.0f} "
                 f"leaves/px")
 
-    info = runner.run_tasks(render_task, todo, on_result=on_result, on_failure=on_failure,
+    info = runner.run_study(render_task, todo, on_result=on_result, on_failure=on_failure,
                             scheduler=sched, workers=workers, estimate=estimate, label=label,
                             quiet=args.quiet, line=line)
     ok = reduce(out, cache, log, params, types, grid_betas)
@@ -458,10 +458,10 @@ def _study_params(args, types, size, alpha, alpha_u, cache):
     its bunny or with ``--paper-parameters``, else the mesh's auto ones, ``--alpha`` and
     ``--alpha-u`` as given) and the shared camera (None: the authors'; a mesh of the user's own
     is framed from the front unless ``--view`` says otherwise)."""
-    mesh_all = load_mesh(args.mesh)
+    mesh_all = load_mesh_checked(args.mesh)
     for kind in types:  # fail early on a type the mesh cannot provide
         if kind != "points":
-            load_mesh(args.mesh, kind)
+            load_mesh_checked(args.mesh, kind)
     diag = float(np.linalg.norm(np.subtract(*mesh_all.bounds[::-1])))
     eps_abs = args.eps if args.eps is not None else 1e-4 * diag
     bunny = is_paper_bunny(args.mesh)
@@ -486,7 +486,7 @@ def _study_params(args, types, size, alpha, alpha_u, cache):
         and not v["offset"] for v in surfaces.values())
     params = {"mesh": str(args.mesh), "mesh_name": os.path.basename(args.mesh),
               "alpha": _common(surfaces, "alpha"), "alpha_u": _common(surfaces, "alpha_u"),
-              "surfaces": surfaces, "parameters": describe_parameters(surfaces, bunny),
+              "surfaces": surfaces, "parameters": describe_surfaces(surfaces, bunny),
               "paper_parameters": bool(paper),
               "width": size, "height": size, "eps": eps_abs,
               "eps_rule": "given" if args.eps is not None else "1e-4 x bbox diagonal",

@@ -22,7 +22,7 @@ from tracer import runner
 from tracer.outputs import (CLIError, at_least, non_negative, output_folder, positive, write_csv,
                             write_json)
 from tracer.runner import duration, file_stamp
-from tracer.studies.common import REPO, add_common, load_mesh, machine_info, study_needs
+from tracer.studies.common import REPO, add_common, load_mesh_checked, machine_info, study_needs
 from tracer.studies.plots import PAPER_BH, bh_plot
 
 HELP = "Barnes-Hut near/far switch discontinuity study"
@@ -72,7 +72,7 @@ def add_arguments(p):
 def _normalised(stamp):
     """``(field, scale)``: the cloud's points translated to the bbox min corner and divided by
     the bbox diagonal ``scale`` (built once per process)."""
-    mesh = load_mesh(stamp[0], "points")
+    mesh = load_mesh_checked(stamp[0], "points")
     V = mesh.V[mesh.points]
     lo0, hi0 = V.min(axis=0), V.max(axis=0)
     scale = float(np.linalg.norm(hi0 - lo0))
@@ -230,7 +230,7 @@ def run(args):
     for p in products:
         if p.exists() and not args.overwrite:
             raise CLIError(f"{p} exists (pass --overwrite to replace it)")
-    load_mesh(src, "points")  # one-line errors for a missing or broken file
+    load_mesh_checked(src, "points")  # one-line errors for a missing or broken file
     field, scale = normalised_field(src)
     n_points = field.num_primitives
     tasks, grow = list_tasks(src, trials=args.trials, seed=args.seed, alpha=alpha, beta=beta,
@@ -238,7 +238,7 @@ def run(args):
                              segment=args.segment, samples=args.samples,
                              max_steps=args.max_steps)
     records = []
-    info = runner.run_tasks(rays_task, tasks, on_result=lambda t, r: records.append(r),
+    info = runner.run_study(rays_task, tasks, on_result=lambda t, r: records.append(r),
                             scheduler=sched, workers=workers, estimate=0.005 * args.trials,
                             label="bh-switch", quiet=args.quiet)
     if info.failed:

@@ -116,7 +116,7 @@ def is_paper_bunny(mesh):
             return True
     except OSError:
         pass
-    a, b = load_mesh(mesh), load_mesh(ref)
+    a, b = load_mesh_checked(mesh), load_mesh_checked(ref)
     if a.V.shape != b.V.shape or a.triangles.shape != b.triangles.shape:
         return False
     # another file format may round the coordinates (e.g. 6 significant digits)
@@ -126,7 +126,7 @@ def is_paper_bunny(mesh):
 
 
 # =============================================================================== meshes
-def load_mesh(path, kind=None):
+def load_mesh_checked(path, kind=None):
     """Load a mesh file as a DataMesh (``kind`` as in ``DataMesh.as_kind``), one-line errors
     (:class:`tracer.errors.CLIError`)."""
     path = os.fspath(path)
@@ -146,7 +146,7 @@ def load_mesh(path, kind=None):
 
 @functools.lru_cache(maxsize=8)
 def _cached_field(stamp, kind):
-    return SmoothDistanceField(load_mesh(stamp[0], kind))
+    return SmoothDistanceField(load_mesh_checked(stamp[0], kind))
 
 
 def cached_field(path, kind):

@@ -234,7 +234,7 @@ def run(args):
                  f"{r['seconds_' + TYPE_LETTER[k]]:.2f} s" for k in TYPES if COUNT[k] in r]
         return f"{r['name']}: " + "; ".join(parts)
 
-    info = runner.run_tasks(grid_task, todo, on_result=on_result, on_failure=on_failure,
+    info = runner.run_study(grid_task, todo, on_result=on_result, on_failure=on_failure,
                             scheduler=mode, workers=workers, label="bench-grid",
                             quiet=args.quiet, line=line)
     ok, skipped, failed = reduce(out, log, params)

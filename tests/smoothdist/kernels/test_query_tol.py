@@ -230,7 +230,7 @@ def test_render_relaxed_steps_against_plain_steps(bunny):
 # ----------------------------------------------------------------------------- scene, CLI
 def _scene_file(tmp_path, **extra):
     data = {"camera": {"origin": [0, 0.11, 0.31], "dest": [0, 0.11, 0], "up": [0, 1, 0]},
-            "objects": [{"path": str(BUNNY), "alpha": 200, "bvh_type": "points"}],
+            "objects": [{"path": str(BUNNY), "alpha": 200, "kind": "points"}],
             "width": 16, "height": 16, **extra}
     p = tmp_path / "s.json"
     p.write_text(json.dumps(data))

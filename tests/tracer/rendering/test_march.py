@@ -160,8 +160,8 @@ def test_cone_pass_with_tol_against_plain(bunny_points, relax):
 def _newton_scene(tmp_path, name="s", **extra):
     """A 24x24 scene file of the bunny's points (``extra``: top-level keys)."""
     data = {"camera": {"origin": [0, 0.11, 0.31], "dest": [0, 0.11, 0], "up": [0, 1, 0]},
-            "objects": [{"path": str(BUNNY), "alpha": 200, "max_alpha": 1200,
-                         "bvh_type": "points"}],
+            "objects": [{"path": str(BUNNY), "alpha": 200, "alpha_u": 1200,
+                         "kind": "points"}],
             "width": 24, "height": 24, **extra}
     p = tmp_path / f"{name}.json"
     p.write_text(json.dumps(data))

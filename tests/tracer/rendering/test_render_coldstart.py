@@ -256,10 +256,10 @@ def _sample_outputs(m, K):
 @pytest.mark.parametrize("name", ["bunny_triangles", "two_objects"])
 def test_task_kernels_equal_the_prange_kernels(name):
     """``march.sample_tasks`` and ``lighting.light_tasks`` run from Python threads
-    (``renderer.run_tasks``, any split) give the prange kernels' values bit for bit."""
+    (``smoothdist.schedule.run_tasks``, any split) give the prange kernels' values bit for bit."""
+    from smoothdist.schedule import run_tasks
     from tracer.rendering import lighting
     from tracer.rendering.film import sample_offsets
-    from tracer.rendering.renderer import run_tasks
 
     scene = load_scene(SCENES / f"{name}.json", SIZE)
     tree, roots, params, mode, lo, hi, depth_max, tol = scene_arrays(scene)
@@ -314,7 +314,8 @@ def _dirs(cam, rows, cols, off, hit):
 
 
 def test_run_tasks_and_bands_cover_everything_once():
-    from tracer.rendering.renderer import in_bands, run_tasks
+    from smoothdist.schedule import run_tasks
+    from tracer.rendering.threads import in_bands
 
     for ntasks in (1, 2, 5, 64):
         for threads in (1, 2, 3, 8):

@@ -133,7 +133,7 @@ def test_exact_sphere_has_no_ripple_and_its_mean_offset_is_its_radius():
     P = RNG.normal(size=(3000, 3))
     P /= np.linalg.norm(P, axis=1, keepdims=True)
     scene = scene_from_field(SmoothDistanceField(P), alpha=1.0, mode="exact", offset=1.0,
-                             width=48, height=48, camera="iso")
+                             width=48, height=48, view="iso")
     res = render(scene)
     out = rp.ripple(res, rp.Sphere(2.0))
     assert out["p50"] < 2.5 and out["p95"] < 5.0

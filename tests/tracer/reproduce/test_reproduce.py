@@ -401,11 +401,16 @@ def test_a_dirty_tree_is_refused_unless_allowed(tmp_path, monkeypatch, capsys):
 
 
 def test_report_only_refuses_dirty_results(tmp_path, capsys):
-    """The committed results hold some of a dirty tree: the report is refused without
-    --allow-dirty (and nothing is rewritten), written with it and says so."""
+    """Results of a dirty tree: the report is refused without --allow-dirty (and nothing is
+    rewritten), written with it and says so. The committed results come from a clean tree
+    (issue 48's rerun); a copy with one of them marked dirty stands for the other case."""
+    assert report.dirty_results(RESULTS) == []
     folder = tmp_path / "full"
     shutil.copytree(RESULTS, folder)
-    assert report.dirty_results(folder)  # the committed folder has some (issue 48)
+    grid = json.loads((folder / "grid.json").read_text(encoding="utf-8"))
+    grid["provenance"]["dirty"] = True
+    (folder / "grid.json").write_text(json.dumps(grid), encoding="utf-8")
+    assert report.dirty_results(folder) == ["grid"]
     before = (folder / "reproduction.md").read_text(encoding="utf-8")
     assert main(["reproduce", "--report-only", "--out", str(folder), "-q"]) == 2
     assert "results of a tree with local changes" in capsys.readouterr().err

@@ -398,16 +398,26 @@ def test_alpha_u_auto_everywhere():
     np.testing.assert_array_equal(a, b)
     from tracer.scenes.scene import scene_from_field
 
-    s = scene_from_field(field, alpha="auto", alpha_u="auto", width=8, height=8, camera="iso",
+    s = scene_from_field(field, alpha="auto", alpha_u="auto", width=8, height=8, view="iso",
                          offset=0.0)
     assert s.objects[0].alpha == field.auto_alpha()
     assert s.objects[0].alpha_u == pytest.approx(20 * field.auto_alpha())
     # all three left to "auto": chosen together (issue 35)
-    s = scene_from_field(field, alpha="auto", alpha_u="auto", width=8, height=8, camera="iso")
+    s = scene_from_field(field, alpha="auto", alpha_u="auto", width=8, height=8, view="iso")
     o = s.objects[0]
     assert (o.alpha, o.alpha_u, o.smooth_offset) == field.auto_surface()
     # scene_from_field keeps None = no attenuation (alpha_u = alpha)
     assert scene_from_field(field, alpha=5.0, width=8, height=8).objects[0].alpha_u == 5.0
+    # the old spelling: a view name as camera= warns, and frames the same camera (issue 50)
+    with pytest.warns(DeprecationWarning, match="view='iso'"):
+        old = scene_from_field(field, alpha="auto", alpha_u="auto", width=8, height=8,
+                               camera="iso")
+    for a, b in ((old.camera_origin, s.camera_origin), (old.camera_dest, s.camera_dest),
+                 (old.camera_up, s.camera_up)):
+        np.testing.assert_array_equal(a, b)
+    with pytest.raises(ValueError, match="not both"):
+        scene_from_field(field, alpha=5.0, view="iso",
+                         camera=(s.camera_origin, s.camera_dest, s.camera_up))
 
 
 # ----------------------------------------------------------------------------- messages
@@ -657,13 +667,13 @@ def test_alpha_u_off_evens_out_a_coarse_tessellation(tmp_path, capsys):
     assert main(["render", str(tmp_path / "t.obj"), "--alpha-u", "off", "--size", "16", "16",
                  "-o", str(out), "--save-scene", str(tmp_path / "t.json")]) == 0
     saved = json.loads((tmp_path / "t.json").read_text())["objects"][0]
-    assert saved["max_alpha"] == pytest.approx(saved["alpha"])
+    assert saved["alpha_u"] == pytest.approx(saved["alpha"]) and "max_alpha" not in saved
     # a scene file too, and --save-scene writes the number, not "off"
     assert main(["render", str(SCENES / "torus.json"), "--alpha-u", "off", "--size", "16",
                  "16", "-o", str(tmp_path / "s.png"), "--save-scene",
                  str(tmp_path / "s.json")]) == 0
     saved = json.loads((tmp_path / "s.json").read_text())["objects"][0]
-    assert saved["max_alpha"] == pytest.approx(saved["alpha"])
+    assert saved["alpha_u"] == pytest.approx(saved["alpha"]) and "max_alpha" not in saved
     assert main(["render", str(SCENES / "torus.json"), "--alpha-u", "of",
                  "-o", str(tmp_path / "x.png")]) == 2
     capsys.readouterr()

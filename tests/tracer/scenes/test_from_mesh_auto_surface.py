@@ -255,13 +255,13 @@ def test_scene_files_auto_and_numeric(tmp_path):
     def load(alpha, **extra):
         path = tmp_path / "s.json"
         path.write_text(json.dumps({"camera": cam, "objects": [
-            {"path": "ico.obj", "alpha": alpha, "bvh_type": "faces", **extra}]}))
+            {"path": "ico.obj", "alpha": alpha, "kind": "triangles", **extra}]}))
         return load_scene(str(path)).objects[0]
 
     o = load("auto")
     assert (o.alpha, o.alpha_u, o.smooth_offset) == pytest.approx(
         SmoothDistanceField(mesh).auto_surface(), rel=1e-9)
-    o = load(40.0, max_alpha=80.0)
+    o = load(40.0, alpha_u=80.0)
     assert (o.alpha, o.alpha_u, o.smooth_offset, o.offset) == (40.0, 80.0, 0.0, 1.0 / 40.0)
     o = load(40.0)
     assert (o.alpha, o.alpha_u, o.smooth_offset) == (40.0, 800.0, 0.0)

@@ -22,6 +22,7 @@ import numpy as np
 import pytest
 
 from tracer.scenes import scene as scene_mod
+from tracer.scenes.settings import KINDS
 from tracer.scenes.scene_schema import (SCHEMA_PATH, _resolve, load_schema, markdown, sections,
                                         validate)
 
@@ -75,6 +76,7 @@ def test_required_keys_and_enums_match_the_loader(schema):
     assert tuple(props["mode"]["enum"]) == scene_mod.MODES
     assert tuple(props["shading"]["enum"]) == scene_mod.SHADINGS
     assert set(schema["$defs"]["bvh_type"]["enum"]) == set(scene_mod.BVH_TYPES)
+    assert tuple(schema["$defs"]["kind"]["enum"]) == KINDS
     assert set(props["gradient"]["enum"]) == {"metric", "exact"}
 
 
@@ -143,7 +145,8 @@ def test_every_schema_default_is_the_loaders(schema, tmp_path):
             assert given == omitted, (level, key, default)
             checked.append((level, key))
     # the defaults the tests above cover, so that a schema without defaults cannot pass
-    assert ("top", "beta") in checked and ("object", "max_alpha") in checked
+    assert ("top", "beta") in checked and ("object", "alpha_u") in checked
+    assert ("object", "kind") in checked and ("part", "kind") in checked
     assert len(checked) >= 15
 
 
@@ -160,10 +163,10 @@ def test_stated_defaults_have_the_stated_values(schema, tmp_path):
     assert list(s.background) == props["background"]["default"]
     assert s.shading == "normals"  # x-default: "normals" without a matcap
     o = s.objects[0]
-    assert o.alpha_u == pytest.approx(20.0 * o.alpha)  # max_alpha "auto" = 20 x alpha
+    assert o.alpha_u == pytest.approx(20.0 * o.alpha)  # alpha_u "auto" = 20 x alpha
     assert s.eps == pytest.approx(1e-4 * s.diagonal)  # x-default of eps
     assert o.offset == pytest.approx(1.0 / o.alpha)  # x-default of offset
-    assert o.field.mesh.kind == "mixed"  # bvh_type "mixed": the file's triangles + its line
+    assert o.field.mesh.kind == "mixed"  # kind "mixed": the file's triangles + its line
 
 
 # ----------------------------------------------------------------------------- validity
@@ -187,6 +190,9 @@ def test_shipped_scenes_are_valid(schema):
     (lambda d: d["objects"][0].update(alpha="10"), "alpha"),
     (lambda d: d["objects"][0].update(max_alpha="sharp"), "max_alpha"),
     (lambda d: d["objects"][0].update(bvh_type="quads"), "bvh_type"),
+    (lambda d: d["objects"][0].update(alpha_u="sharp"), "alpha_u"),
+    (lambda d: d["objects"][0].update(kind="quads"), "kind"),
+    (lambda d: d["objects"][0].update(kind="faces"), "kind"),  # the authors' value: bvh_type only
     (lambda d: d["objects"][0].update(parts=[{"path": "tet.obj"}]), "both"),
     (lambda d: d["objects"][0].pop("alpha"), "alpha"),
     (lambda d: d.update(background=[0, 0, 256]), "background"),
@@ -217,3 +223,60 @@ def test_schema_and_loader_refuse_the_same_bad_values(schema, tmp_path, edit, lo
     p.write_text(json.dumps(data))
     with pytest.raises(scene_mod.SceneError, match=loader_word):
         scene_mod.load_scene(p)
+
+
+# ----------------------------------------------------------------------------- the authors' keys
+@pytest.mark.parametrize("ours,theirs", [
+    ({"alpha_u": 40.0}, {"max_alpha": 40.0}),
+    ({"kind": "triangles"}, {"bvh_type": "faces"}),
+    ({"kind": "triangles"}, {"bvh_type": "triangles"}),
+    ({"kind": "edges", "alpha_u": "auto"}, {"bvh_type": "edges", "max_alpha": "auto"}),
+])
+def test_the_authors_spellings_load_as_ours(schema, tmp_path, ours, theirs):
+    """A file in the authors' spelling (``max_alpha``, ``bvh_type: faces``) loads to the same
+    scene as one in ours (``alpha_u``, ``kind: triangles``), and the schema accepts both."""
+    (tmp_path / "tet.obj").write_text(TET)
+    a, b = _base(), _base()
+    a["objects"][0].update(ours)
+    b["objects"][0].update(theirs)
+    assert validate(a, schema) == [] and validate(b, schema) == []
+    got = _load(tmp_path, a, "ours")
+    assert got == _load(tmp_path, b, "theirs")
+    if "kind" in ours:  # the kind asked for, not the default (mixed: TET's line too)
+        assert got != _load(tmp_path, _base(), "default")
+
+
+@pytest.mark.parametrize("keys", [{"alpha_u": 40.0, "max_alpha": 40.0},
+                                  {"kind": "edges", "bvh_type": "edges"}])
+def test_a_setting_in_both_spellings_is_refused(tmp_path, keys):
+    (tmp_path / "tet.obj").write_text(TET)
+    data = _base()
+    data["objects"][0].update(keys)
+    p = tmp_path / "both.json"
+    p.write_text(json.dumps(data))
+    with pytest.raises(scene_mod.SceneError, match="authors' spelling"):
+        scene_mod.load_scene(p)
+    if "kind" in keys:  # in a part too
+        data = _base(parts=True)
+        data["objects"][0]["parts"][0].update(keys)
+        p.write_text(json.dumps(data))
+        with pytest.raises(scene_mod.SceneError, match="authors' spelling"):
+            scene_mod.load_scene(p)
+
+
+def test_save_scene_writes_our_spelling(tmp_path):
+    """``tracer render A.json --save-scene B.json`` of a file in the authors' spelling writes
+    ours (``alpha_u``, ``kind: triangles``), and B loads to the same scene as A."""
+    from tracer.cli import main
+
+    (tmp_path / "tet.obj").write_text(TET)
+    data = _base()
+    data["objects"][0].update(max_alpha=40.0, bvh_type="faces")
+    (tmp_path / "a.json").write_text(json.dumps(data))
+    assert main(["render", str(tmp_path / "a.json"), "-q", "-o", str(tmp_path / "a.png"),
+                 "--save-scene", str(tmp_path / "b.json")]) == 0
+    saved = json.loads((tmp_path / "b.json").read_text())["objects"][0]
+    assert saved["alpha_u"] == 40.0 and saved["kind"] == "triangles"
+    assert not set(saved) & set(scene_mod.AUTHORS_KEYS)
+    assert (_fingerprint(scene_mod.load_scene(tmp_path / "b.json"))
+            == _fingerprint(scene_mod.load_scene(tmp_path / "a.json")))
