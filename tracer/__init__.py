@@ -5,8 +5,10 @@ The one-call entry point is :func:`render_mesh` (``tracer.render_mesh(mesh)`` ->
 :func:`render` (``tracer.render(scene)``) are the steps it takes, :func:`load_scene` reads a
 scene file, :func:`check_images` compares two images as the image-regression tests do, and
 :func:`show_animation` plays frames inline in Jupyter; :class:`Lighting` holds the settings
-of the ``"lit"`` shading. The error types are in :mod:`tracer.errors`. The names are imported
-on first use, so ``import tracer`` (and the command line) stays light.
+of the ``"lit"`` shading. The error types are in :mod:`tracer.errors`. The names are listed
+once, in ``tracer/__init__.pyi`` (each from the module that defines it, which editors follow),
+and imported on first use (:mod:`tracer.lazy`), so ``import tracer`` (and the command line)
+stays light.
 
 The parts are rooms (docs/design-notes.md has the map): the base modules at the top level
 (errors, checks of values, output files, PNG files, the task runner), :mod:`tracer.rendering`
@@ -15,32 +17,7 @@ The parts are rooms (docs/design-notes.md has the map): the base modules at the 
 (:mod:`tracer.cli`), and :mod:`tracer.sim`, :mod:`tracer.studies` and ``tracer.reproduce``.
 """
 
-import importlib
-
 from tracer import _moved  # noqa: F401  (the old paths' import hook)
+from tracer.lazy import attach_stub
 
-_LAZY = {
-    "render_mesh": "tracer.scenes.from_mesh",
-    "mesh_scene": "tracer.scenes.from_mesh",
-    "scene_from_field": "tracer.scenes.scene",
-    "load_scene": "tracer.scenes.scene",
-    "Scene": "tracer.scenes.scene",
-    "SceneObject": "tracer.scenes.scene",
-    "render": "tracer.rendering.renderer",
-    "RenderResult": "tracer.rendering.renderer",
-    "check_images": "tracer.checks.imagediff",
-    "show_animation": "tracer.checks.notebook",
-    "Lighting": "tracer.rendering.lighting",
-}
-
-__all__ = sorted(_LAZY)
-
-
-def __getattr__(name):
-    if name in _LAZY:
-        return getattr(importlib.import_module(_LAZY[name]), name)
-    raise AttributeError(f"module 'tracer' has no attribute {name!r}")
-
-
-def __dir__():
-    return sorted(set(globals()) | set(__all__))
+__getattr__, __dir__, __all__ = attach_stub(__name__, __file__)

@@ -10,24 +10,9 @@ independent tasks for :mod:`tracer.runner`), :mod:`~tracer.sim.cli_simulate` and
 :mod:`~tracer.sim.vbowl` (the paper's 2D V-bowl study).
 """
 
-import importlib
+from tracer.lazy import attach_stub
 
-_LAZY = {
-    "load_simulation": "tracer.sim.simfile",
-    "Simulation": "tracer.sim.simfile",
-    "simulate": "tracer.sim.run",
-}
-
-__all__ = sorted(_LAZY)
-
-
-def __getattr__(name):
-    """The entry points, imported on first use (scipy loads only when needed). The movie
-    writer is ``tracer.sim.animate.animate`` (not exported here: it would shadow its module)."""
-    if name in _LAZY:
-        return getattr(importlib.import_module(_LAZY[name]), name)
-    raise AttributeError(f"module 'tracer.sim' has no attribute {name!r}")
-
-
-def __dir__():
-    return sorted(set(globals()) | set(__all__))
+# the entry points, imported on first use (scipy loads only when needed), listed in
+# tracer/sim/__init__.pyi; the movie writer is tracer.sim.animate.animate (not exported here:
+# it would shadow its module)
+__getattr__, __dir__, __all__ = attach_stub(__name__, __file__)
