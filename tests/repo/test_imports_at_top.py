@@ -14,14 +14,7 @@ from pathlib import Path
 from import_graph import ROOT, modules
 
 #: unexplained imports inside functions, per module, left to the changes editing them
-PENDING = {
-    "tracer/reproduce/experiments.py": 25,
-    "tracer/reproduce/cli.py": 9,
-    "tracer/rendering/renderer.py": 4,
-    "tracer/checks/fidelity.py": 3,
-    "tracer/rendering/lighting.py": 1,
-    "tracer/rendering/shading.py": 1,
-}
+PENDING = {}
 REASON_WORDS = ("loaded on use", "absent in some versions")
 
 

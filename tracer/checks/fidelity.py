@@ -27,6 +27,9 @@ runs a corpus of shapes made by trimesh and pyvista, real meshes, scans and curv
 
 import numpy as np
 
+from tracer.rendering.ripple import mean_offset
+from tracer.scenes.from_mesh import render_mesh
+
 __all__ = ["fidelity", "THIN_OFFSET", "INSIDE", "AGREE_DEG", "DARKER"]
 
 #: offset of the reference silhouette, as a fraction of the bbox diagonal
@@ -45,7 +48,7 @@ def _luminance(rgb):
 
 
 def _inside(mask, k):
-    from scipy.ndimage import binary_erosion
+    from scipy.ndimage import binary_erosion  # scipy (sim extra): loaded on use
 
     return binary_erosion(mask, iterations=k) if k > 0 else mask
 
@@ -59,9 +62,6 @@ def fidelity(res, **render_options):
     offset ``c``, scene units), ``thin_offset``, ``compared`` (pixels compared), ``hits`` (of
     the render), ``hits_exact_thin``; NaN where nothing can be compared.
     """
-    import tracer
-    from tracer.rendering.ripple import mean_offset
-
     scene = res.scene
     o = scene.objects[0]
     field = o.field
@@ -77,7 +77,7 @@ def fidelity(res, **render_options):
         thin_offset = field.point_spacing()
     else:
         thin_offset = c if np.isfinite(c) and c > 0 else THIN_OFFSET * L
-    thin = tracer.render_mesh(mesh, mode="exact", offset=thin_offset, shading="normals",
+    thin = render_mesh(mesh, mode="exact", offset=thin_offset, shading="normals",
                               **common)
     union = res.hit | thin.hit
     iou = float((res.hit & thin.hit).sum() / union.sum()) if union.any() else float("nan")
@@ -86,7 +86,7 @@ def fidelity(res, **render_options):
            "p50_deg": float("nan"), "streak_share": float("nan"), "compared": 0}
     if not np.isfinite(c) or not c > 0:
         return out
-    ref = tracer.render_mesh(field.mesh, mode="exact", offset=c, shading=scene.shading,
+    ref = render_mesh(field.mesh, mode="exact", offset=c, shading=scene.shading,
                              lighting=scene.lighting, color=o.color, **common)
     both = _inside(res.hit, INSIDE) & _inside(ref.hit, INSIDE)
     n = int(both.sum())

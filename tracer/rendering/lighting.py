@@ -33,6 +33,7 @@ from numba import prange
 
 from smoothdist.kernels import NJIT, NJIT_IR_INLINE, NJIT_PARALLEL, borrowed
 from tracer.rendering.camera import box_corners
+from tracer.rendering.frame import kernel_roots
 from tracer.rendering.march import (NEWTON_COS, OMEGA, RELAX, march_ray, nearest_object,
                                     object_lower_bound, ray_box, scene_distance, visiting_order)
 
@@ -348,8 +349,6 @@ def ground_height(arrays, data_vertices, up, eps, max_steps=400):
 
     ``arrays``: :class:`tracer.rendering.frame.SceneArrays`. Falls back to the bottom of the scene
     box (which bounds the surface) if no ray lands."""
-    from tracer.rendering.frame import kernel_roots
-
     tree, roots, params, mode, lo, hi, depth_max, tol = arrays
     up = np.asarray(up, dtype=np.float64)
     heights = data_vertices @ up

@@ -13,6 +13,7 @@ import time
 
 import numpy as np
 
+from smoothdist.cuda import check_device
 from tracer.rendering import march
 from tracer.rendering.camera import CAM_WIDTH
 from tracer.errors import RenderError  # noqa: F401  (defined there; imported from here too)
@@ -21,6 +22,8 @@ from tracer.rendering.frame import (MAX_SAMPLES, PixelBuffers, ProgressBar, RayA
                           SceneArrays, TraceOptions, _pixel_buffers, _posed, _progress_callback,
                           _samples, camera_of, distance_at_camera, kernel_roots, object_level,
                           scene_arrays, shade)
+from tracer.rendering.film import form_image
+from tracer.rendering.gpu_render import render_cuda
 from tracer.rendering.shading import load_matcap
 from tracer.rendering.threads import in_bands, render_threads
 
@@ -88,11 +91,7 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
     RenderError
         When the camera is inside the surface (distance <= eps at the camera).
     """
-    from smoothdist.cuda import check_device
-
     if check_device(device) == "cuda":
-        from tracer.rendering.gpu_render import render_cuda
-
         return render_cuda(scene, progress=progress, transforms=transforms, relax=relax,
                            omega=omega, newton=newton, samples=samples, adaptive=adaptive,
                            cone=cone)
@@ -148,8 +147,6 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
         in_bands(colour, H)
         alpha, spp, aovs = hit.astype(np.float32), np.ones((H, W), np.int32), {"rays": H * W}
     else:
-        from tracer.rendering.film import form_image
-
         rgb, alpha, spp, aovs = form_image(scene, camera, arrays, args, options,
                                            (hit, tbuf, grad, objs), samples, adaptive)
         in_bands(unit, H)       # after the film: a lit render's normals are its shading's
@@ -199,11 +196,9 @@ def trace_tiles(args, row0, row1, depth_max, outputs, options, report=None, thre
     and at the end. Ctrl-C (KeyboardInterrupt) stops the workers after their
     current chunk and is re-raised.
     """
-    from tracer.rendering.march import TILE, render_tiles
-
     W = int(args.cam[CAM_WIDTH])
     outputs = PixelBuffers(*outputs)
-    n = -(-W // TILE) * -(-(row1 - row0) // TILE)
+    n = -(-W // march.TILE) * -(-(row1 - row0) // march.TILE)
     threads = max(1, min(threads or render_threads(), n))
     chunk = max(1, n // (CHUNKS_PER_THREAD * threads))
     pixels = W * (row1 - row0)
@@ -218,8 +213,8 @@ def trace_tiles(args, row0, row1, depth_max, outputs, options, report=None, thre
                     if j >= n or state["stop"]:
                         return
                     state["next"] = j + chunk
-                render_tiles(args.tree, args.march, row0, row1, depth_max, outputs, options, j,
-                             j + chunk)
+                march.render_tiles(args.tree, args.march, row0, row1, depth_max, outputs,
+                                   options, j, j + chunk)
                 with lock:
                     state["done"] += min(chunk, n - j)
         except BaseException as exc:  # handed to the calling thread

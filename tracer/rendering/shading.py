@@ -9,6 +9,8 @@ All shaders take view-space normals from :func:`view_normals`, whose components 
 
 import numpy as np
 
+from tracer.image import load_png
+
 __all__ = [
     "view_normals",
     "shade_normals",
@@ -197,8 +199,6 @@ def load_matcap(path):
     ValueError
         If the file is missing or cannot be decoded.
     """
-    from tracer.image import load_png
-
     try:
         return load_png(path)
     except FileNotFoundError:

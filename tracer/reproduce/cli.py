@@ -21,7 +21,14 @@ import time
 from pathlib import Path
 
 from tracer import runner
+from tracer.cli import main
 from tracer.outputs import CLIError, write_json, write_text
+from tracer.reproduce import docs, experiments
+from tracer.reproduce.experiments import (EXPERIMENTS, NEEDS, SETTINGS, TABLE3_PAPER,
+                                          load_average, merge_table3, provenance)
+from tracer.reproduce.report import (claims_rows, dirty_results, load_run, render_page,
+                                     report_state)
+from tracer.studies.common import REPO
 
 HELP = "run every reproducible experiment of the paper and write the results and the report"
 #: the bound the help states for ``--quick`` on 2 cores (without ``--authors-bin``); the
@@ -83,8 +90,6 @@ def _only(text, names, flag="--only", what="experiment(s)"):
 
 
 def _shown(path):
-    from tracer.studies.common import REPO
-
     p = Path(path).resolve()
     try:
         return str(p.relative_to(REPO))
@@ -97,8 +102,6 @@ def write_reproduction(out, page=None, shown_as=None, allow_dirty=False):
     (:class:`CLIError`) when a result came from a tree with local changes, unless
     ``allow_dirty``. The report's own state (its commit, whether each experiment's measured
     code changed since its run) goes into ``run.json``'s ``report``."""
-    from tracer.reproduce.report import claims_rows, dirty_results, render_page, report_state
-
     dirty = dirty_results(out)
     if dirty and not allow_dirty:
         raise CLIError(f"results of a tree with local changes: {', '.join(dirty)} (rerun them "
@@ -120,8 +123,6 @@ def needs(args):
     ``--report-only``. :mod:`tracer.cli` checks them before anything runs."""
     if args.report_only:
         return []
-    from tracer.reproduce.experiments import EXPERIMENTS, NEEDS
-
     pick = {s.strip() for s in (args.only or "").split(",")}
     names = [n for n in EXPERIMENTS if not args.only or n in pick]
     serial = (args.quick or args.smoke) and args.scheduler == "local"  # as run() decides
@@ -130,9 +131,6 @@ def needs(args):
 
 
 def run(args):
-    from tracer.reproduce.experiments import (EXPERIMENTS, SETTINGS, load_average, merge_table3,
-                                              provenance)
-
     if args.quick and args.smoke:
         raise CLIError("--quick and --smoke exclude each other")
     mode = "smoke" if args.smoke else "quick" if args.quick else "full"
@@ -156,8 +154,6 @@ def run(args):
     sched, workers = runner.check_arguments(args)
     scenes = None
     if args.table3_scenes:
-        from tracer.reproduce.experiments import TABLE3_PAPER
-
         scenes = _only(args.table3_scenes, list(TABLE3_PAPER), "--table3-scenes", "scene(s)")
     authors = None
     if args.authors_bin:
@@ -171,8 +167,6 @@ def run(args):
     if out.exists() and any(out.iterdir()) and not args.overwrite:
         if not (args.only and (out / "run.json").is_file()):
             raise CLIError(f"{out} exists (pass --overwrite to replace it)")
-        from tracer.reproduce.report import load_run
-
         old = load_run(out)
         if old["mode"] != mode:
             raise CLIError(f"{out} holds a {old['mode']} run, not a {mode} run; use another "
@@ -183,10 +177,7 @@ def run(args):
         keep_rows = [n for n in old["experiments"] if n == "table3"
                      and (out / "table3.json").is_file()]
     if not args.allow_dirty:  # refuse now, not after an hour of experiments
-        from tracer.reproduce.experiments import tree_dirty
-        from tracer.reproduce.report import dirty_results
-
-        if tree_dirty():
+        if experiments.tree_dirty():  # through the module: tests stand in for it
             raise CLIError("the work tree has uncommitted changes (git status): commit them, "
                            "or pass --allow-dirty and the page says so")
         old_dirty = [n for n in dirty_results(out) if n in keep + keep_rows]
@@ -252,8 +243,6 @@ def _docs(args):
     """``--docs``: the guides' generated blocks rewritten from the committed results."""
     if not args.docs:
         return
-    from tracer.reproduce import docs
-
     try:
         changed = docs.update()
     except (OSError, KeyError, ValueError, RuntimeError) as exc:
@@ -263,6 +252,4 @@ def _docs(args):
 
 
 if __name__ == "__main__":  # pragma: no cover
-    from tracer.cli import main
-
     sys.exit(main(["reproduce", *sys.argv[1:]]))

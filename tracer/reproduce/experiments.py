@@ -9,8 +9,10 @@ folder (the study's CSV, JSON and plots go there), ``settings`` the experiment's
 :mod:`tracer.runner`).
 """
 
+import csv
 import datetime
 import importlib
+import importlib.util
 import json
 import math
 import os
@@ -22,9 +24,20 @@ import tempfile
 import time
 from pathlib import Path
 
+import numba
 import numpy as np
 
-from tracer.studies.common import REPO, TYPE_LETTER, TYPES
+from smoothdist import DataMesh, MeshDistance, SmoothDistanceField
+from smoothdist.cuda import CudaUnavailable, cuda_module, simulated
+from tracer import runner
+from tracer.cli import build_parser
+from tracer.outputs import write_json
+from tracer.runner import cpu_count
+from tracer.sim.primitives import (bowl_edges, icosphere_edges, ring_toss_points, slide_edges,
+                                   trefoil_100, uv_sphere)
+from tracer.studies.bh_switch import DEFAULT_CLOUD, normalised_field
+from tracer.studies.common import REPO, TYPE_LETTER, TYPES, unweighted_field
+from tracer.studies.plots import bench_plots
 
 #: the bunny of the paper's beta study
 BUNNY = REPO / "scenes" / "data" / "bunny.off"
@@ -167,10 +180,6 @@ def cpu_model():
 
 def provenance():
     """Commit (and whether the tree had changes), UTC date, machine and thread count."""
-    import numba
-
-    from tracer.runner import cpu_count
-
     return {"commit": head_commit(), "dirty": tree_dirty(),
             "date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
             "machine": {"cpu": cpu_model(), "cores": cpu_count(), "platform": platform.platform(),
@@ -183,8 +192,6 @@ def provenance():
 def run_command(argv):
     """Run a ``tracer`` sub-command in this process; its errors propagate (no ``error:``
     printing here: the caller reports)."""
-    from tracer.cli import build_parser
-
     args = build_parser(only=argv[0]).parse_args(argv)
     status = int(importlib.import_module(args._module).run(args) or 0)
     if status:
@@ -200,8 +207,6 @@ def runner_args(where):
 
 
 def read_csv(path):
-    import csv
-
     def num(v):
         try:
             return float(v)
@@ -260,8 +265,6 @@ def beta(out, s, where):
 def alpha(out, s, where):
     """The alpha studies (``tracer ablate-alpha``); the underestimate study's nesting and
     exact-distance checks are the numbers."""
-    import json
-
     run_command(["ablate-alpha", s["study"], "-o", str(out), "--size", str(s["size"]),
                  "--overwrite", "-q", *runner_args(where)])
     with open(out / "underestimate.json", encoding="utf-8") as fh:
@@ -324,9 +327,6 @@ def attenuation(out, s, where):
     per field the largest curvature of the zero level curve (times the tube radius: 1 for a
     circle of the tube's size) over the samples within 1.5 grid steps of it, and whether every
     sample's value lies between the weighted and the unweighted one, growing with alpha_U."""
-    from smoothdist import DataMesh, SmoothDistanceField
-    from tracer.studies.common import unweighted_field
-
     R, r, alpha = s["R"], s["r"], s["alpha"]
     V, F = hex_torus(R, r)
     f = SmoothDistanceField(DataMesh(V, triangles=F, name="hex_torus"))
@@ -374,7 +374,7 @@ AUTHORS_BH = {"alpha": 100.0, "iso": 0.1, "start": 0.01, "segment": 0.005, "samp
 def _point_spacing(V):
     """The median distance of a point to its nearest other point (None without scipy)."""
     try:
-        from scipy.spatial import cKDTree
+        from scipy.spatial import cKDTree  # scipy (sim extra): loaded on use
     except ImportError:
         return None
     d, _ = cKDTree(V).query(V, k=2)
@@ -386,10 +386,6 @@ def bh_switch(out, s, where):
     cloud normalised to a unit diagonal (the study's default), and the authors' way
     (:data:`AUTHORS_BH`: their settings in the cloud's raw units, run as the study's
     normalised settings times the scale, which gives the same field; ``raw``)."""
-    import json
-
-    from tracer.studies.bh_switch import DEFAULT_CLOUD, normalised_field
-
     run_command(["bh-switch", "-o", str(out), "--trials", str(s["trials"]), "--overwrite", "-q",
                  *runner_args(where)])
     with open(out / "bh_switch.json", encoding="utf-8") as fh:
@@ -525,8 +521,6 @@ def grid(out, s, where):
             fits.append(grid_fit(rep, s["grid"]))
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
-    from tracer.studies.plots import bench_plots
-
     threads = sorted({int(r["threads"]) for r in rows if isinstance(r.get("threads"), float)})
     bench_plots(out, rows, {"grid": s["grid"], "alpha": 1.0, "beta": 0.5,  # every set together
                             "threads": "/".join(map(str, threads)) or "?"})
@@ -563,8 +557,7 @@ class _Timed:
 def _timed_run(path, steps, cap, threads):
     """One simulation at ``threads`` numba threads (at most the process's); the mean and
     median milliseconds of its smooth distance evaluations."""
-    import numba
-
+    # tracer.sim's run and files (scipy, sim extra): loaded on use
     from tracer.sim import run as simrun
     from tracer.sim.constraint import mesh_distance_factory
     from tracer.sim.simfile import load_simulation
@@ -623,8 +616,6 @@ def _timed_run(path, steps, cap, threads):
 def _authors_bench():
     """``benchmarks/bench_authors_sim.py`` as a module (its ``prepared_copy`` and
     ``run_theirs``: the same file, meshes and step count for their simulator as for ours)."""
-    import importlib.util
-
     spec = importlib.util.spec_from_file_location(
         "_bench_authors_sim", REPO / "benchmarks" / "bench_authors_sim.py")
     mod = importlib.util.module_from_spec(spec)
@@ -642,8 +633,6 @@ def authors_run(path, steps, binary, timeout):
     folder: their mean milliseconds per distance evaluation (one ``meshDistance`` call: the
     lines of their ``__times.txt`` files, microseconds each), the count and the wall time; or
     why not."""
-    import subprocess
-
     bench = _authors_bench()
     load0 = round(os.getloadavg()[0], 2) if hasattr(os, "getloadavg") else None
     with tempfile.TemporaryDirectory() as tmp:
@@ -667,8 +656,6 @@ def table3_task(task):
     and median milliseconds of one smooth distance evaluation (distance and every query
     vertex's gradient) over the whole run. Every kernel is called once at the initial state
     before a run, so compilation is not timed."""
-    import numba
-
     most = numba.config.NUMBA_NUM_THREADS  # 1 in a Dask worker
     counts = list(dict.fromkeys(min(int(t or most), most) for t in task["threads"]))
     runs = []
@@ -685,9 +672,6 @@ def table3_task(task):
 
 def table3(out, s, where):
     """The paper's Table 3 simulations, each a task on the runner."""
-    from tracer import runner
-    from tracer.outputs import write_json
-
     caps = s.get("step_caps", {})
     authors = where.get("authors_bin")
     skip = set(s.get("authors_skip", ()))
@@ -749,10 +733,6 @@ def box_cases():
     """The box test's cases: Table 3's whole-mesh pairs with edge and triangle queries, the
     query at an exact gap of 1 / alpha from the data (as ``benchmarks/bench_mesh_distance.py``
     places them). ``{name: (data (V, F), query (V, F), alpha, start, direction)}``."""
-    from smoothdist import DataMesh
-    from tracer.sim.primitives import (bowl_edges, icosphere_edges, ring_toss_points,
-                                       slide_edges, trefoil_100, uv_sphere)
-
     bunny = DataMesh.load(BUNNY)
     sl_V, sl_E = slide_edges()
     tref_V, tref_E = trefoil_100(REPO / "scenes" / "data" / "curves" / "trefoil.obj")
@@ -777,8 +757,6 @@ def box_test(out, s, where):
     (alternating, median of ``repeat``). Both must be conservative (at most the beta = 0 value
     per query primitive) and differ by no more than the Barnes-Hut error of the two (the
     tolerance ``tests/smoothdist/test_box_test.py`` documents); the run fails otherwise."""
-    from smoothdist import MeshDistance
-
     specs = box_cases()
     res = {"beta": 0.5, "repeat": s["repeat"], "cases": {}}
     for name in s["cases"]:
@@ -828,8 +806,6 @@ def box_test(out, s, where):
 def underestimate(out, s, where):
     """Sec. 3 and App. A: ``0 <= d - d_hat <= log(A N) / alpha`` at random queries around the
     bunny, per type, at beta 0 and 0.5 (exact distance from the library's exact query)."""
-    from smoothdist import DataMesh, SmoothDistanceField
-
     mesh = DataMesh.load(BUNNY)
     lo, hi = mesh.V.min(0), mesh.V.max(0)
     diag = float(np.linalg.norm(hi - lo))
@@ -858,8 +834,6 @@ GPU_CARD_RESULT = REPO / "benchmarks" / "data" / "gpu_h100.json"
 
 
 def _card_available():
-    from smoothdist.cuda import CudaUnavailable, cuda_module, simulated
-
     try:
         return not simulated() and cuda_module() is not None
     except CudaUnavailable:
