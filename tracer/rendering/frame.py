@@ -27,7 +27,8 @@ from tracer.rendering.shading import (load_matcap, shade_headlight, shade_matcap
 __all__ = ["RenderResult", "RayArgs", "MarchArgs", "PixelBuffers", "SampleBuffers", "LightArgs",
            "LightBuffers",           "TraceOptions", "SceneArrays", "scene_arrays",
            "object_level", "kernel_roots", "camera_of", "distance_at_camera", "shade",
-           "ProgressBar", "MAX_SAMPLES"]
+           "ProgressBar", "MAX_SAMPLES", "pixel_buffers", "posed_params", "checked_samples",
+           "progress_callback"]
 
 #: the most anti-aliasing samples per pixel (:mod:`tracer.rendering.film`)
 MAX_SAMPLES = 1024
@@ -291,7 +292,7 @@ def scene_arrays(scene, transforms=None):
     mode = march.MODE_EXACT if scene.mode == "exact" else march.MODE_SMOOTH
     tree, roots = concatenate_trees(trees) if len(trees) > 1 else (trees[0], np.zeros(1, np.int64))
     if transforms is not None:
-        params, lo, hi = _posed(scene, transforms, params, grow)
+        params, lo, hi = posed_params(scene, transforms, params, grow)
         return SceneArrays(tree, roots, params, mode, lo, hi, tree.depth, tol)
     return SceneArrays(tree, roots, params, mode, lo - grow, hi + grow, tree.depth, tol)
 
@@ -305,7 +306,7 @@ def object_level(obj, mode):
     return c
 
 
-def _posed(scene, transforms, params, grow):
+def posed_params(scene, transforms, params, grow):
     """``params`` with the pose columns ``P_R``, ``P_T`` filled in, and the world box of the
     posed, grown objects."""
     if len(transforms) != len(scene.objects):
@@ -353,7 +354,7 @@ def distance_at_camera(scene, arrays=None):
                                    tol, float(o[0]), float(o[1]), float(o[2]), depth_max))
 
 
-def _pixel_buffers(H, W):
+def pixel_buffers(H, W):
     """The tracing outputs (:class:`PixelBuffers`) of an ``H x W`` image, cleared."""
     return PixelBuffers(np.zeros((H, W), dtype=np.bool_), np.full((H, W), np.nan),
                         np.zeros((H, W, 3)), np.zeros((H, W), dtype=np.int64),
@@ -361,7 +362,7 @@ def _pixel_buffers(H, W):
                         np.full((H, W), -1, dtype=np.int32))
 
 
-def _samples(value):
+def checked_samples(value):
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) \
             or not 1 <= value <= MAX_SAMPLES:
         raise ValueError(f"samples must be an integer from 1 to {MAX_SAMPLES}, got {value!r}")
@@ -372,7 +373,7 @@ def _samples(value):
 AUTO_PROGRESS_AFTER = 3.0
 
 
-def _progress_callback(progress, scene):
+def progress_callback(progress, scene):
     """``render``'s ``progress`` argument as a callable or None (see :func:`tracer.render`)."""
     if progress is None or progress is False:
         return None

@@ -40,8 +40,9 @@ from tracer.errors import RenderError
 from tracer.rendering import lighting, march
 from tracer.rendering.camera import CAM_HEIGHT, CAM_WIDTH, ray_direction
 from tracer.rendering.film import form_image
-from tracer.rendering.frame import (RayArgs, RenderResult, TraceOptions, _progress_callback,
-                                    _samples, camera_of, distance_at_camera, scene_arrays, shade)
+from tracer.rendering.frame import (RayArgs, RenderResult, TraceOptions, camera_of,
+                                    checked_samples, distance_at_camera, progress_callback,
+                                    scene_arrays, shade)
 
 __all__ = ["render_cuda", "normal_colour", "BLOCK", "trace_samples_cuda",
            "light_points_cuda"]
@@ -348,7 +349,7 @@ def render_cuda(scene, *, progress=None, transforms=None, relax=None, omega=None
     """:func:`tracer.render` on the GPU (its arguments; ``band_rows`` does not apply). Returns a
     :class:`tracer.rendering.frame.RenderResult`; ``seconds`` is the time of the launch, the
     copies back and (lit, sampled or transparent renders) the film."""
-    samples = _samples(scene.samples if samples is None else samples)
+    samples = checked_samples(scene.samples if samples is None else samples)
     adaptive = bool(scene.adaptive if adaptive is None else adaptive)
     # no card is the first thing to say (issue 49): an option the card would refuse matters
     # only where there is a card
@@ -358,7 +359,7 @@ def render_cuda(scene, *, progress=None, transforms=None, relax=None, omega=None
                                       and not isinstance(value, bool)
                                       and math.isfinite(value) and value >= 0):
             raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
-    progress = _progress_callback(progress, scene)
+    progress = progress_callback(progress, scene)
     camera, args, (H, W) = prepare(scene, transforms, relax, omega, newton)
     use_cone = bool(march.CONE if cone is None else cone)
     t0 = time.perf_counter()

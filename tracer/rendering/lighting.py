@@ -107,14 +107,14 @@ class Lighting:
             if isinstance(v, bool) or not isinstance(v, (int, float, np.number)) \
                     or not math.isfinite(v) or v <= 0:
                 raise ValueError(f"lighting.{name} must be a finite number > 0, got {v!r}")
-        _check_color(self.ground_color, "lighting.ground_color")
+        check_color(self.ground_color, "lighting.ground_color")
         key = np.asarray(self.key, dtype=np.float64)
         if key.shape != (3,) or not np.isfinite(key).all() or not np.linalg.norm(key) > 0:
             raise ValueError(f"lighting.key must be a non-zero vector of 3 numbers, "
                              f"got {self.key!r}")
 
 
-def _check_color(color, name):
+def check_color(color, name):
     c = np.asarray(color)
     if c.shape != (3,) or not np.issubdtype(c.dtype, np.number) or not np.isfinite(c).all() \
             or (c < 0).any() or (c > 255).any():

@@ -17,11 +17,10 @@ from smoothdist.cuda import check_device
 from tracer.rendering import march
 from tracer.rendering.camera import CAM_WIDTH
 from tracer.errors import RenderError  # noqa: F401  (defined there; imported from here too)
-from tracer.rendering.frame import (MAX_SAMPLES, PixelBuffers, ProgressBar, RayArgs,  # noqa: F401
-                                    RenderResult,
-                          SceneArrays, TraceOptions, _pixel_buffers, _posed, _progress_callback,
-                          _samples, camera_of, distance_at_camera, kernel_roots, object_level,
-                          scene_arrays, shade)
+from tracer.rendering.frame import (PixelBuffers, ProgressBar, RayArgs, RenderResult,
+                                    SceneArrays, TraceOptions, camera_of, checked_samples,
+                                    distance_at_camera, kernel_roots, pixel_buffers,
+                                    progress_callback, scene_arrays, shade)
 from tracer.rendering.film import form_image
 from tracer.rendering.gpu_render import render_cuda
 from tracer.rendering.shading import load_matcap
@@ -96,7 +95,7 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
                            omega=omega, newton=newton, samples=samples, adaptive=adaptive,
                            cone=cone)
     _check_steps(newton, relax)
-    progress = _progress_callback(progress, scene)
+    progress = progress_callback(progress, scene)
     camera = camera_of(scene)
     arrays = scene_arrays(scene, transforms)
     tree, roots, params, mode, lo, hi, depth_max, tol = arrays
@@ -106,7 +105,7 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
                           f"the surface (distance there {d0:.4g} <= eps {scene.eps:.3g}); move "
                           "camera.origin outside or lower alpha's blur")
     H, W = scene.height, scene.width
-    hit, tbuf, grad, steps, leaves, bis, objs = _pixel_buffers(H, W)
+    hit, tbuf, grad, steps, leaves, bis, objs = pixel_buffers(H, W)
     cam = camera.as_array()
     args = RayArgs(tree, kernel_roots(roots, params, mode, tol), params, mode, tol, cam, lo, hi,
                    float(scene.eps), int(scene.max_steps))
@@ -133,7 +132,7 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
         norm = np.linalg.norm(g, axis=2, keepdims=True)
         normals[r0:r1] = np.where(norm > 0, g / np.where(norm > 0, norm, 1.0), 0.0)
 
-    samples = _samples(scene.samples if samples is None else samples)
+    samples = checked_samples(scene.samples if samples is None else samples)
     adaptive = bool(scene.adaptive if adaptive is None else adaptive)
     if samples == 1 and scene.shading != "lit" and not scene.transparent:
         in_bands(unit, H)

@@ -20,7 +20,7 @@ from pathlib import Path
 
 from tracer.outputs import write_text
 from tracer.reproduce.claims import g3
-from tracer.reproduce.experiments import TABLE3_PAPER, _git
+from tracer.reproduce.experiments import TABLE3_PAPER, git_output
 from tracer.studies.common import REPO
 
 FULL = REPO / "renders" / "reproduction" / "full"
@@ -107,7 +107,7 @@ def _beta_rows():
     else:
         path = BETA512 / "beta_ablation.csv"
         p = _json(BETA512 / "beta_params.json")
-        date = _git("log", "-1", "--format=%cs", "--", _rel(path))
+        date = git_output("log", "-1", "--format=%cs", "--", _rel(path))
         when = (p.get("note") or "the study's own run") + (f"; committed {date}" if date else "")
     with open(path, newline="", encoding="utf-8") as fh:
         rows = [r for r in csv.DictReader(fh) if float(r.get("tol") or 0) == 0

@@ -107,7 +107,7 @@ SETTINGS = {
 
 
 # ============================================================================ provenance
-def _git(*args):
+def git_output(*args):
     try:
         return subprocess.run(["git", *args], cwd=REPO, capture_output=True, text=True,
                               timeout=10).stdout.strip()
@@ -147,11 +147,11 @@ def tree_dirty():
     """True when the work tree has changes to tracked files, None where git cannot tell."""
     if _git_status("rev-parse", "--git-dir") != 0:
         return None
-    return bool(_git("status", "--porcelain", "--untracked-files=no"))
+    return bool(git_output("status", "--porcelain", "--untracked-files=no"))
 
 
 def head_commit():
-    return _git("rev-parse", "HEAD") or "unknown"
+    return git_output("rev-parse", "HEAD") or "unknown"
 
 
 def load_average():
@@ -881,7 +881,7 @@ def gpu(out, s, where):
         return {"source": None, "why": "no CUDA GPU here and no committed card measurement"}
     bench = json.loads(GPU_CARD_RESULT.read_text(encoding="utf-8"))
     rel = str(GPU_CARD_RESULT.relative_to(REPO))
-    when = _git("log", "-1", "--format=%cI %H", "--", rel).split()
+    when = git_output("log", "-1", "--format=%cI %H", "--", rel).split()
     measured = {"date": when[0] if when else None, "commit": when[1] if when else None}
     return _gpu_summary(bench, rel, measured)
 

@@ -57,7 +57,7 @@ import smoothdist
 from smoothdist import DataMesh, SmoothDistanceField
 from tracer.rendering.camera import frame_points, look_at
 from tracer.rendering.film import MAX_SAMPLES
-from tracer.rendering.lighting import Lighting, _check_color
+from tracer.rendering.lighting import Lighting, check_color
 from tracer.scenes.settings import KINDS, SCENE_KEYS, Film, March, defaults
 from tracer.validate import (SceneError, check_keys, choice, file_error, number, read_json,
                              resolve_path, show, vec3)
@@ -620,8 +620,8 @@ def scene_from_field(field, *, alpha, alpha_u=_API["alpha_u"], beta=_API["beta"]
 
     lighting = _api_lighting(lighting)
     if color is not None:
-        color = _check_color(color, "color")
-    background = tuple(int(round(v)) for v in _check_color(background, "background"))
+        color = check_color(color, "color")
+    background = tuple(int(round(v)) for v in check_color(background, "background"))
     origin, dest, up = _api_camera(field, _view_or_camera(view, camera), alpha, alpha_u, offset,
                                    eps, mode, width, height, up)
     obj = SceneObject(name=name, field=field, alpha=alpha, alpha_u=alpha_u, beta=beta,
