@@ -376,8 +376,9 @@ def beta_grid(out, cache, rows, present, grid_betas, params=None):
     plt = pyplot()
     measured = sorted({r["beta"] for r in rows})
     cols = [b for b in measured if any(close(b, g) for g in grid_betas)] or measured[:4]
+    band = 0.25 if params else 0.0     # inches above the panels for the suptitle
     fig, axes = plt.subplots(len(present), len(cols), squeeze=False,
-                             figsize=(1.9 * len(cols), 2.25 * len(present)))
+                             figsize=(1.9 * len(cols), 2.25 * len(present) + band))
     for i, k in enumerate(present):
         for j, b in enumerate(cols):
             ax = axes[i][j]
@@ -398,7 +399,8 @@ def beta_grid(out, cache, rows, present, grid_betas, params=None):
                               fontsize=8 if params is None else 6)
     if params:
         fig.suptitle(f"{params['mesh_name']}: {parameters_title(params)}", fontsize=7)
-    fig.tight_layout(pad=0.4)
+    # tight_layout leaves the suptitle out: keep its band above the panels' titles
+    fig.tight_layout(pad=0.4, rect=(0, 0, 1, 1 - band / fig.get_figheight()))
     savefig(fig, out / "beta_grid.png", dpi=100)
     plt.close(fig)
 
