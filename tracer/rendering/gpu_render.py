@@ -54,6 +54,13 @@ STACK = sdcuda.STACK
 BLOCK = (16, 8)
 #: threads per block of the one-dimensional kernels (samples, light)
 THREADS = 128
+#: the parts of ``_samples_kernel``: a pixel's bounds and rays in one thread, the bounds only,
+#: the rays only (one thread per ray)
+WHOLE, BOUNDS, RAYS = 0, 1, 2
+#: whether the film's samples run one thread per ray (a bounds launch, then a rays launch),
+#: rather than one thread per pixel marching its K rays one after the other: K times the
+#: threads, for the film's small batches of flagged pixels (issue 49 item 3)
+SPLIT_SAMPLES = True
 
 
 class GpuArgs(NamedTuple):
@@ -183,17 +190,39 @@ def _render_kernel(data, mode, tol, eps, max_steps, relax, omega, newton, cone, 
         rgb[r, c, 2] = cb
 
 
-def _samples_kernel(data, n, eps_px, newton_cos):
-    # one thread per pixel of the film's extra samples: ``data = (tree, ray, rows, cols,
-    # offsets, out, opts)`` as :func:`tracer.rendering.march.sample_tasks` takes them, one
-    # tuple (see _render_kernel)
+def _samples_kernel(data, n, eps_px, newton_cos, part):
+    # the film's extra samples: ``data = (tree, ray, rows, cols, offsets, out, opts)`` as
+    # :func:`tracer.rendering.march.sample_tasks` takes them, one tuple (see _render_kernel).
+    # ``part`` WHOLE: one thread per pixel, its bounds and then its K rays (as the CPU's
+    # march.sample_pixel); BOUNDS: one thread per pixel, its bounds (their evaluations parked
+    # in ``steps[i, 0]``); RAYS: one thread per ray (pixel ``j // K``, ray ``j % K``), after a
+    # BOUNDS launch. One call site each of sample_bounds and sample_ray: the device functions
+    # are inlined, and march_ray is the kernel's bulk
     tree, ray, rows, cols, offsets, out, opts = data
-    i = cuda.grid(1)
-    if i < n:
-        stack = cuda.local.array(STACK, numba.int64)
-        dstack = cuda.local.array(STACK, numba.float64)
-        march.sample_pixel(tree, ray, rows, cols, offsets, out, opts, eps_px, newton_cos, i,
-                           stack, dstack)
+    j = cuda.grid(1)
+    K = offsets.shape[0]
+    stack = cuda.local.array(STACK, numba.int64)
+    dstack = cuda.local.array(STACK, numba.float64)
+    if part == RAYS:
+        if j >= n * K:
+            return
+        i = j // K
+        k0 = j - i * K
+        k1 = k0 + 1
+        c_ev = out[3][i, 0] if k0 == 0 else 0
+    else:
+        if j >= n:
+            return
+        i = j
+        c_ev = march.sample_bounds(tree, ray, rows, cols, out, opts, i, stack, dstack)
+        if part == BOUNDS:
+            out[3][i, 0] = c_ev
+            return
+        k0 = 0
+        k1 = K
+    for k in range(k0, k1):
+        march.sample_ray(tree, ray, rows, cols, offsets, out, opts, eps_px, newton_cos, i, k,
+                         c_ev if k == 0 else 0, stack, dstack)
 
 
 def _light_kernel(data, n):
@@ -255,8 +284,14 @@ def trace_samples_cuda(tree, ray, rows, cols, offsets, out, opts, eps_px, newton
     dout, pairs = _to_device(out)
     (drows, dcols, doffsets), _ = _to_device((rows, cols, offsets))
     data = (sdcuda.device_tree(tree), dray, drows, dcols, doffsets, dout, opts)
-    kernel("samples")[(n + THREADS - 1) // THREADS, THREADS](data, n, float(eps_px),
-                                                             float(newton_cos))
+    K = int(offsets.shape[0])
+    if SPLIT_SAMPLES and K > 1:
+        parts = ((BOUNDS, n), (RAYS, n * K))
+    else:
+        parts = ((WHOLE, n),)
+    for part, threads in parts:
+        kernel("samples")[(threads + THREADS - 1) // THREADS, THREADS](
+            data, n, float(eps_px), float(newton_cos), part)
     _copy_back(pairs)
 
 

@@ -943,13 +943,25 @@ def _samples_task(tree, ray, rows, cols, offsets, depth_max, out, opts, eps_px, 
 @numba.njit(**NJIT_IR_INLINE)
 def sample_pixel(tree, ray, rows, cols, offsets, out, opts, eps_px, newton_cos, i, stack,
                  dstack):
-    """Pixel ``i`` of :func:`trace_samples`: its cone bounds (where not given) and the rays of
-    its ``offsets``, with the traversal stacks ``stack``, ``dstack`` (the CPU's tasks and the
-    GPU's threads, :mod:`tracer.rendering.gpu_render`, call this)."""
+    """Pixel ``i`` of :func:`trace_samples`: its cone bounds (:func:`sample_bounds`) and the
+    rays of its ``offsets`` (:func:`sample_ray`), with the traversal stacks ``stack``,
+    ``dstack`` (the CPU's tasks and the GPU's threads, :mod:`tracer.rendering.gpu_render`, call
+    this; the GPU may also run the two parts as separate launches, one thread per ray)."""
+    c_ev = sample_bounds(tree, ray, rows, cols, out, opts, i, stack, dstack)
+    for k in range(offsets.shape[0]):
+        sample_ray(tree, ray, rows, cols, offsets, out, opts, eps_px, newton_cos, i, k,
+                   c_ev if k == 0 else 0, stack, dstack)
+
+
+@numba.njit(**NJIT_IR_INLINE)
+def sample_bounds(tree, ray, rows, cols, out, opts, i, stack, dstack):
+    """The cone bounds ``out.t_lo[i]``, ``out.t_hi[i]`` of pixel ``i`` of
+    :func:`trace_samples` where they are not given (without the cone: ``0`` and ``inf``);
+    returns the distance evaluations they took (int, booked on the pixel's sample 0)."""
     roots, params, mode, tol, cam, lo, hi, eps, max_steps = ray
-    hit, tbuf, grad, steps, objs, t_lo, t_hi = out
+    t_lo = out[5]
+    t_hi = out[6]
     relax, omega, cone, newton = opts
-    pixel = 1.0 / min(cam[CAM_WIDTH], cam[CAM_HEIGHT])      # a pixel's size at unit depth
     r = rows[i]
     c = cols[i]
     c_ev = 0
@@ -963,23 +975,34 @@ def sample_pixel(tree, ray, rows, cols, offsets, out, opts, eps_px, newton_cos, 
     elif not cone:
         t_lo[i] = 0.0
         t_hi[i] = np.inf
+    return c_ev
+
+
+@numba.njit(**NJIT_IR_INLINE)
+def sample_ray(tree, ray, rows, cols, offsets, out, opts, eps_px, newton_cos, i, k, c_ev,
+               stack, dstack):
+    """Ray ``k`` (``offsets[k]``) of pixel ``i`` of :func:`trace_samples`, from the pixel's
+    cone bounds (:func:`sample_bounds`, done); ``c_ev``: evaluations added to its steps."""
+    roots, params, mode, tol, cam, lo, hi, eps, max_steps = ray
+    hit, tbuf, grad, steps, objs, t_lo, t_hi = out
+    relax, omega, cone, newton = opts
+    pixel = 1.0 / min(cam[CAM_WIDTH], cam[CAM_HEIGHT])      # a pixel's size at unit depth
     t_min = t_lo[i]
     e = max(eps, eps_px * pixel * t_min)
-    for k in range(offsets.shape[0]):
-        dx, dy, dz = ray_direction(cam, r + offsets[k, 0], c + offsets[k, 1])
-        # every argument given (t_pred and d_lb at their defaults' values): the camera
-        # rays' specialisation of march_ray, compiled once for both
-        h, t, gx, gy, gz, st, lv, bs, ob = march_ray(
-            tree, roots, params, mode, tol, cam[0], cam[1], cam[2], dx, dy, dz, lo, hi,
-            e, max_steps, stack, dstack, relax, omega, t_min, newton, t_hi[i],
-            newton_cos, 0.0, 0.0)
-        hit[i, k] = h == 1
-        tbuf[i, k] = t
-        grad[i, k, 0] = gx
-        grad[i, k, 1] = gy
-        grad[i, k, 2] = gz
-        steps[i, k] = st + (c_ev if k == 0 else 0)
-        objs[i, k] = ob
+    dx, dy, dz = ray_direction(cam, rows[i] + offsets[k, 0], cols[i] + offsets[k, 1])
+    # every argument given (t_pred and d_lb at their defaults' values): the camera
+    # rays' specialisation of march_ray, compiled once for both
+    h, t, gx, gy, gz, st, lv, bs, ob = march_ray(
+        tree, roots, params, mode, tol, cam[0], cam[1], cam[2], dx, dy, dz, lo, hi,
+        e, max_steps, stack, dstack, relax, omega, t_min, newton, t_hi[i],
+        newton_cos, 0.0, 0.0)
+    hit[i, k] = h == 1
+    tbuf[i, k] = t
+    grad[i, k, 0] = gx
+    grad[i, k, 1] = gy
+    grad[i, k, 2] = gz
+    steps[i, k] = st + c_ev
+    objs[i, k] = ob
 
 
 @numba.njit(**NJIT)
