@@ -45,7 +45,11 @@ REPO = Path(__file__).resolve().parents[1]
 if str(REPO) not in sys.path:
     sys.path.insert(0, str(REPO))
 
+import numba  # noqa: E402
 import numpy as np  # noqa: E402
+
+from smoothdist._kernels.query import smooth_distance_point_tol  # noqa: E402
+from smoothdist.cuda import STACK  # noqa: E402
 
 KINDS = ("points", "edges", "triangles")
 DEFAULT_JSON = REPO / "renders" / "gpu" / "bench_gpu.json"
@@ -117,26 +121,82 @@ def bench_render(kind, size, eps, repeat, blocks=()):
                 mean_steps_cpu=float(cpu.steps.mean()), mean_steps_gpu=float(gpu.steps.mean()))
 
 
-def bench_lit(kind, size, repeat, samples=16):
+def bench_render_box32(kind, size, eps, repeat):
+    """The 1080p frame of :func:`bench_render` with the node boxes stored as float32, rounded
+    outwards (:func:`boxes32`; issue 49 item 3): its time, and what differs from the float64
+    boxes' frame on the card (hit mask, depth over the diagonal, colour)."""
+    from smoothdist import cuda as sdcuda
+    from tracer.rendering import gpu_render
+    from tracer.rendering.frame import scene_arrays
+    from tracer.scenes.scene import load_scene
+
+    W, H = size
+    over = {"width": W, "height": H, "shading": "normals"}
+    if eps is not None:
+        over["eps"] = eps
+    scene = load_scene(REPO / "scenes" / f"bunny_{kind}.json", over)
+    camera, args, shape = gpu_render.prepare(scene)
+    ref = [a.copy_to_host() for a in gpu_render.launch(args, shape)]
+    tree = scene_arrays(scene)[0]
+    args32 = args._replace(data=(sdcuda.device_tree(boxes32(tree)),) + tuple(args.data[1:]))
+
+    t0 = time.perf_counter()
+    out = [a.copy_to_host() for a in gpu_render.launch(args32, shape)]
+    first_s = time.perf_counter() - t0
+    # timed as bench_render's "GPU ms": the launches and the image copied back, each side
+    # best of ``repeat``, one after the other in this process
+    gpu_s, _ = best(lambda: gpu_render.launch(args32, shape)[7].copy_to_host(), repeat)
+    ref_s, _ = best(lambda: gpu_render.launch(args, shape)[7].copy_to_host(), repeat)
+    both = ref[0] & out[0]
+    return dict(gpu_s=gpu_s, gpu_ref_s=ref_s, first_s=first_s,
+                hit_differs=int((ref[0] != out[0]).sum()),
+                depth_max_over_diag=(float(np.abs(ref[1][both] - out[1][both]).max())
+                                     / scene.diagonal if both.any() else 0.0),
+                rgb_max=int(np.abs(ref[7].astype(int) - out[7])[both].max(initial=0)),
+                leaves_ratio=float(out[4].sum() / max(1, ref[4].sum())))
+
+
+def bench_lit(kind, size, repeat, samples=16, images=None):
     """The gallery's look (lit, ``samples`` adaptive samples per pixel) of the bunny of
     ``kind``, on the CPU and on the GPU (issue 49: 1080p in 1 s or less on an H100 / H200),
-    each best of ``repeat`` after a warm-up; what differs between the two images."""
+    each best of ``repeat`` after a warm-up (the CPU's at 64 x 36: its kernels compiled
+    before the timing); what differs between the two images. Also on the GPU: the film's
+    samples one thread per pixel (``gpu_whole_s``, ``gpu_render.SPLIT_SAMPLES`` off) against
+    one thread per ray (``gpu_s``), and where one frame's time goes (``gpu_parts``: the
+    samples and light launches, each with its copies, and the rest: the centre render and
+    the film's host work)."""
+    from tracer.rendering import gpu_render
     from tracer.rendering.renderer import render
     from tracer.scenes.scene import load_scene
 
     W, H = size
-    scene = load_scene(REPO / "scenes" / f"bunny_{kind}.json",
-                       {"width": W, "height": H, "shading": "lit", "samples": samples,
-                        "adaptive": True})
+    over = {"shading": "lit", "samples": samples, "adaptive": True}
+    path = REPO / "scenes" / f"bunny_{kind}.json"
+    scene = load_scene(path, dict(over, width=W, height=H))
+    render(load_scene(path, dict(over, width=64, height=36)))
     cpu_s, cpu = best(lambda: render(scene), repeat)
     t0 = time.perf_counter()
     render(scene, device="cuda")
     first_s = time.perf_counter() - t0
+    split = gpu_render.SPLIT_SAMPLES
+    try:
+        gpu_render.SPLIT_SAMPLES = False
+        whole_s, whole = best(lambda: render(scene, device="cuda"), repeat)
+    finally:
+        gpu_render.SPLIT_SAMPLES = split
     gpu_s, gpu = best(lambda: render(scene, device="cuda"), repeat)
+    parts = _timed_parts(lambda: render(scene, device="cuda"))
+    if images:
+        from PIL import Image  # pillow (a dependency): loaded on use
+
+        Path(images).mkdir(parents=True, exist_ok=True)
+        Image.fromarray(gpu.rgb).save(Path(images) / f"lit_{kind}_gpu.png")
     both = cpu.hit & gpu.hit
     return dict(what=f"bunny {kind}, lit, {samples} adaptive", size=f"{W}x{H}", eps=scene.eps,
                 diag=scene.diagonal, primitives=scene.objects[0].field.num_primitives,
                 cpu_s=cpu_s, gpu_s=gpu_s, speedup=cpu_s / gpu_s, gpu_first_s=first_s,
+                gpu_whole_s=whole_s, whole_equal=bool((whole.rgb == gpu.rgb).all()),
+                gpu_parts=parts,
                 hit_differs=int((cpu.hit != gpu.hit).sum()),
                 depth_max_over_diag=(float(np.abs(cpu.depth[both].astype(float)
                                                   - gpu.depth[both]).max()) / scene.diagonal
@@ -144,7 +204,38 @@ def bench_lit(kind, size, repeat, samples=16):
                 rgb_max=int(np.abs(cpu.rgb.astype(int) - gpu.rgb).max(initial=0)))
 
 
-def bench_grid(kind, n, repeat):
+def _timed_parts(run):
+    """One call of ``run`` with the GPU film's launches timed (each waits for its copies
+    back): ``{"total_s", "samples": [[pixels, K, s], ...], "light": [[points, s], ...],
+    "rest_s"}``."""
+    from tracer.rendering import gpu_render
+
+    log = {"samples": [], "light": []}
+    orig = gpu_render.trace_samples_cuda, gpu_render.light_points_cuda
+
+    def samples(tree, ray, rows, cols, offsets, *rest):
+        t = time.perf_counter()
+        orig[0](tree, ray, rows, cols, offsets, *rest)
+        log["samples"].append([int(rows.size), int(offsets.shape[0]), time.perf_counter() - t])
+
+    def light(tree, roots, params, mode, tol, P, *rest):
+        t = time.perf_counter()
+        orig[1](tree, roots, params, mode, tol, P, *rest)
+        log["light"].append([int(P.shape[0]), time.perf_counter() - t])
+
+    gpu_render.trace_samples_cuda, gpu_render.light_points_cuda = samples, light
+    try:
+        t0 = time.perf_counter()
+        run()
+        total = time.perf_counter() - t0
+    finally:
+        gpu_render.trace_samples_cuda, gpu_render.light_points_cuda = orig
+    log["total_s"] = total
+    log["rest_s"] = total - sum(v[-1] for v in log["samples"] + log["light"])
+    return log
+
+
+def bench_grid(kind, n, repeat, variants=()):
     from benchmarks.bench_grid import grid, normalise
     from smoothdist import DataMesh, SmoothDistanceField
     from smoothdist import cuda as sdcuda
@@ -185,12 +276,81 @@ def bench_grid(kind, n, repeat):
         cu.synchronize()
 
     resident_s, _ = best(resident, repeat)
+    # issue 49 item 3, measured side by side in this run: the kernel alone with a 32-bit
+    # traversal stack, and with the node boxes stored as float32 (rounded outwards)
+    trials = {}
+    for variant in variants:
+        t_first = time.perf_counter()
+        launch_variant = variant_launch(variant, field.tree, dtree)
+        launch_variant(dQ, float(alpha), float(beta), float(S), float(wgrad_scale), outs)
+        t_first = time.perf_counter() - t_first
+        t_var, _ = best(lambda: launch_variant(dQ, float(alpha), float(beta), float(S),
+                                               float(wgrad_scale), outs), repeat)
+        trials[variant] = dict(kernel_s=t_var, first_s=t_first,
+                               distance_max_diff=float(np.abs(outs[0].copy_to_host()
+                                                              - gpu[0]).max()),
+                               leaves_ratio=float(outs[3].copy_to_host().sum()
+                                                  / max(1, gpu[3].sum())))
     return dict(what=f"grid {kind}", size=f"{n}^3", eps=None, primitives=field.num_primitives,
                 cpu_s=cpu_s, gpu_s=gpu_s, speedup=cpu_s / gpu_s, gpu_first_s=first_s,
                 gpu_kernel_s=kernel_s, gpu_resident_s=resident_s,
                 hit_differs=None,
                 depth_max_over_diag=None, rgb_max=None,
-                distance_max_diff=float(np.abs(cpu.distance - gpu[0]).max()))
+                distance_max_diff=float(np.abs(cpu.distance - gpu[0]).max()),
+                mean_leaves_gpu=float(gpu[3].mean()), gpu_variants=trials)
+
+
+#: ``numba.cuda`` once a variant kernel is built (a module global, as in smoothdist.cuda)
+cuda = None
+VARIANTS = ("stack32", "box32")
+
+
+def _smooth_stack32(tree, Q, alpha, beta, tol, S, wgrad_scale, out_d, out_g, out_nodes,
+                    out_leaves):
+    # smoothdist.cuda's smooth kernel with an int32 traversal stack (half its local memory)
+    i = cuda.grid(1)
+    if i < Q.shape[0]:
+        stack = cuda.local.array(STACK, numba.int32)
+        dstack = cuda.local.array(STACK, numba.float64)
+        d, gx, gy, gz, nodes, leaves = smooth_distance_point_tol(
+            tree, Q[i, 0], Q[i, 1], Q[i, 2], alpha, beta, tol, S, wgrad_scale, stack, dstack, 0)
+        out_d[i] = d
+        out_g[i, 0] = gx
+        out_g[i, 1] = gy
+        out_g[i, 2] = gz
+        out_nodes[i] = nodes
+        out_leaves[i] = leaves
+
+
+def boxes32(tree):
+    """``tree`` with its node boxes as float32 rounded outwards (every box contains the
+    float64 one, so each box distance stays a lower bound)."""
+    lo = tree.lo.astype(np.float32)
+    lo = np.where(lo > tree.lo, np.nextafter(lo, np.float32(-np.inf)), lo)
+    hi = tree.hi.astype(np.float32)
+    hi = np.where(hi < tree.hi, np.nextafter(hi, np.float32(np.inf)), hi)
+    assert (lo <= tree.lo).all() and (hi >= tree.hi).all()
+    return tree._replace(lo=np.ascontiguousarray(lo), hi=np.ascontiguousarray(hi))
+
+
+def variant_launch(variant, tree, dtree):
+    """A function ``(dQ, alpha, beta, S, wgrad_scale, outs)`` that launches the smooth
+    kernel's ``variant`` (tol 0) and waits for it."""
+    global cuda
+    from smoothdist import cuda as sdcuda
+    cuda = sdcuda.cuda_module()
+    if variant == "stack32":
+        kern, tr = cuda.jit(_smooth_stack32), dtree
+    elif variant == "box32":
+        kern, tr = sdcuda.kernels()["smooth"], sdcuda.device_tree(boxes32(tree))
+    else:
+        raise ValueError(f"unknown variant {variant!r}; one of {VARIANTS}")
+
+    def go(dQ, alpha, beta, S, wgrad_scale, outs):
+        kern[sdcuda._blocks(dQ.shape[0]), sdcuda.THREADS](tr, dQ, alpha, beta, 0.0, S,
+                                                          wgrad_scale, *outs)
+        cuda.synchronize()
+    return go
 
 
 def cpu_name():
@@ -227,6 +387,21 @@ def markdown(card, rows, threads, cpu=None):
     return "\n".join(out)
 
 
+def write_results(path, card, rows):
+    """The results so far as JSON (written whole after each case, so that a run stopped at
+    its time limit keeps the cases it finished); returns the markdown table."""
+    table = markdown(card, rows, numba.get_num_threads(), cpu_name())
+    out = Path(path)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = out.with_suffix(".tmp")
+    tmp.write_text(json.dumps({"card": card, "threads": numba.get_num_threads(),
+                               "cpu": cpu_name(),
+                               "load": os.getloadavg(), "rows": rows, "table": table},
+                              indent=2))
+    os.replace(tmp, out)
+    return table
+
+
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--size", nargs=2, type=int, default=(1920, 1080), metavar=("W", "H"))
@@ -237,38 +412,51 @@ def main(argv=None):
     p.add_argument("--blocks", nargs="*", default=[], metavar="CxR",
                    help="also time the render kernel with these thread blocks (columns x rows, "
                         "e.g. 32x4 8x8), the outputs kept between launches")
-    p.add_argument("--lit", action="store_true",
-                   help="also the lit look with 16 adaptive samples at --size, each kind")
+    p.add_argument("--cases", nargs="+", default=["render", "grid"],
+                   choices=("render", "grid", "lit"),
+                   help="what to measure: the normals renders, the grid, the lit look with 16 "
+                        "adaptive samples (default: render grid)")
+    p.add_argument("--lit", action="store_true", help="also the lit look (as --cases ... lit)")
+    p.add_argument("--kinds", nargs="+", default=list(KINDS), choices=KINDS,
+                   help="the bunny's kinds, in this order (default: all three)")
+    p.add_argument("--variants", nargs="*", default=[], choices=VARIANTS,
+                   help="also time the grid's kernel alone with a 32-bit traversal stack "
+                        "(stack32) or float32 node boxes rounded outwards (box32), and the "
+                        "renders with box32 (after every other case)")
+    p.add_argument("--images", default=None, metavar="DIR",
+                   help="write the GPU's lit images there (lit_KIND_gpu.png)")
+    p.add_argument("--image-kinds", nargs="*", default=list(KINDS), choices=KINDS,
+                   help="which kinds' lit images --images writes (default: all)")
     p.add_argument("--json", default=str(DEFAULT_JSON))
     args = p.parse_args(argv)
+    cases = set(args.cases) | ({"lit"} if args.lit else set())
     cuda = gpu_or_exit()
-    import numba
 
     card = cuda.get_current_device().name
     card = card.decode() if isinstance(card, bytes) else str(card)
     rows = []
-    for kind in KINDS:
-        blocks = [tuple(int(v) for v in b.lower().split("x")) for b in args.blocks]
-        rows.append(bench_render(kind, tuple(args.size), args.eps or None, args.repeat, blocks))
-        print(rows[-1], flush=True)
-    for kind in KINDS:
-        rows.append(bench_grid(kind, args.grid, args.repeat))
-        print(rows[-1], flush=True)
-    if args.lit:
-        for kind in KINDS:
-            rows.append(bench_lit(kind, tuple(args.size), max(1, min(args.repeat, 3))))
-            print(rows[-1], flush=True)
-    table = markdown(card, rows, numba.get_num_threads(), cpu_name())
-    print(table)
-    out = Path(args.json)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = out.with_suffix(".tmp")
-    tmp.write_text(json.dumps({"card": card, "threads": numba.get_num_threads(),
-                               "cpu": cpu_name(),
-                               "load": os.getloadavg(), "rows": rows, "table": table},
-                              indent=2))
-    os.replace(tmp, out)
-    print(f"wrote {out}")
+
+    def done(row):
+        rows.append(row)
+        print(row, flush=True)
+        write_results(args.json, card, rows)
+
+    blocks = [tuple(int(v) for v in b.lower().split("x")) for b in args.blocks]
+    for kind in args.kinds if "render" in cases else ():
+        done(bench_render(kind, tuple(args.size), args.eps or None, args.repeat, blocks))
+    for kind in args.kinds if "grid" in cases else ():
+        done(bench_grid(kind, args.grid, args.repeat, args.variants))
+    for kind in args.kinds if "lit" in cases else ():
+        done(bench_lit(kind, tuple(args.size), max(1, min(args.repeat, 3)),
+                       images=args.images if kind in args.image_kinds else None))
+    if "box32" in args.variants and "render" in cases:
+        for row, kind in zip(rows, args.kinds):
+            row["gpu_variants"] = {"box32": bench_render_box32(
+                kind, tuple(args.size), args.eps or None, args.repeat)}
+            print(kind, row["gpu_variants"], flush=True)
+            write_results(args.json, card, rows)
+    print(write_results(args.json, card, rows))
+    print(f"wrote {args.json}")
     return 0
 
 

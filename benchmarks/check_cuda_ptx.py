@@ -75,6 +75,9 @@ def main(argv=None):
                                         TraceOptions, scene_arrays)
     from tracer.rendering.renderer import kernel_roots
 
+    from benchmarks import bench_gpu
+    bench_gpu.cuda = cuda
+
     tr, roots, params, mode, lo, hi, depth_max, tol = scene_arrays(scene)
     roots = gpu_render._root_array(kernel_roots(roots, params, mode, tol))
     ray = MarchArgs(roots, params, mode, tol, camera.as_array(), lo, hi, 1e-3, 100)
@@ -98,9 +101,19 @@ def main(argv=None):
              tuple(ty(a) for a in rargs) + (ty(cone_f), ty(cone_n))
              + tuple(ty(o) for o in outs)),
             ("tracer.rendering.gpu_render samples", gpu_render._samples_kernel,
-             (ty(sdata), numba.int64, f64, f64)),
+             (ty(sdata), numba.int64, f64, f64, numba.int64)),
             ("tracer.rendering.gpu_render light", gpu_render._light_kernel,
-             (ty(ldata), numba.int64)))
+             (ty(ldata), numba.int64)),
+            # bench_gpu.py's kernel variants (issue 49 item 3: --variants stack32 box32)
+            ("benchmarks.bench_gpu stack32", bench_gpu._smooth_stack32,
+             (ty(tree), ty(Q), f64, f64, f64, f64, f64, ty(d), ty(g), ty(n), ty(n))),
+            ("benchmarks.bench_gpu box32 render", gpu_render._render_kernel,
+             (ty((bench_gpu.boxes32(rargs.data[0]),) + tuple(rargs.data[1:])),)
+             + tuple(ty(a) for a in rargs[1:]) + (ty(cone_f), ty(cone_n))
+             + tuple(ty(o) for o in outs)),
+            ("benchmarks.bench_gpu box32", sdcuda._smooth_kernel,
+             (ty(bench_gpu.boxes32(tree)), ty(Q), f64, f64, f64, f64, f64, ty(d), ty(g), ty(n),
+              ty(n))))
     status = 0
     for name, fn, sig in jobs:
         t0 = time.perf_counter()

@@ -5,20 +5,24 @@
 #
 # Steps, in the order given:
 #   machine     the card, the CPU, the versions (machine.txt)
+#   gpu         the GPU benchmark of issues 34 and 49: the bunny at 1920x1080 (normals) and the
+#               1e6-point grid, GPU against every CPU core, with the thread blocks of $BLOCKS and
+#               the kernel variants of $VARIANTS (a 32-bit stack, float32 boxes) timed too
+#   gpu-lit     the lit look with 16 adaptive samples at 1920x1080, GPU against every core, and
+#               the GPU's lit images of $IMAGE_KINDS (lit_KIND_gpu.png)
+#   card        machine gpu gpu-lit: issue 49's table, about 8 minutes from a bare machine
+#               (the two steps' limits add up to 600 s; the first launches compile the kernels)
 #   gpu-small   the GPU benchmark at 320x180 twice: an empty kernel cache, then a warm one
 #               (the first-call compile time, and that numba-cuda's disk cache keeps the kernels)
-#   gpu         the GPU benchmark of issue 34: the bunny at 1920x1080 and the 1e6-point grid,
-#               GPU against every CPU core, with the thread blocks of $BLOCKS timed too
-#   gpu-lit     the lit look with 16 adaptive samples at 1920x1080, GPU against every core
 #   scaling     the 1080p thread-scaling table of issue 32 for 1, 2, 4, ... up to every core
 #   stored      the stored-value and golden-image tests on this CPU (pytest-xdist, 8 workers)
 #   all         every step above
 #
-# Each step has its own time limit and writes its log and JSON into OUTDIR as it goes, so that
-# a step that runs out of time leaves the others' results. Kernels are cached in
+# Each step has its own time limit and writes its log and JSON into OUTDIR as it goes (the
+# benchmark rewrites its JSON after each case), so that a step that runs out of time leaves
+# what it finished. Kernels are cached in
 # $NUMBA_CACHE_DIR (default /tmp/smoothdist-numba-cache), shared by the steps. The package is
-# used from the checkout (PYTHONPATH); numpy, numba, numba-cuda, pillow and trimesh must be
-# importable.
+# used from the checkout (PYTHONPATH); numpy, numba, numba-cuda and pillow must be importable.
 set -u
 out=${1:?output folder}
 shift
@@ -44,7 +48,8 @@ step() {  # step NAME SECONDS COMMAND...: runs it with a limit, its output to NA
 }
 
 steps=("$@")
-[ "${steps[*]}" = all ] && steps=(machine gpu-small gpu gpu-lit scaling stored)
+[ "${steps[*]}" = all ] && steps=(machine gpu gpu-lit gpu-small scaling stored)
+[ "${steps[*]}" = card ] && steps=(machine gpu gpu-lit)
 for s in "${steps[@]}"; do
     case $s in
     machine)
@@ -63,12 +68,15 @@ for s in "${steps[@]}"; do
         ;;
     gpu)
         # shellcheck disable=SC2086
-        step gpu_1080p 200 "$py" benchmarks/bench_gpu.py --repeat 3 --blocks ${BLOCKS:-32x4 8x8 32x8} \
-            --json "$out/bench_gpu.json"
+        step gpu_1080p 300 "$py" benchmarks/bench_gpu.py --repeat 3 --blocks ${BLOCKS:-8x8 32x4} \
+            --variants ${VARIANTS:-stack32 box32} --json "$out/bench_gpu.json"
         ;;
     gpu-lit)
         # issue 49: the lit look with 16 adaptive samples at 1080p, GPU against every core
-        step gpu_lit 300 "$py" benchmarks/bench_gpu.py --repeat 1 --grid 10 --lit \
+        # shellcheck disable=SC2086
+        step gpu_lit 300 "$py" benchmarks/bench_gpu.py --repeat 1 --cases lit \
+            --kinds ${LIT_KINDS:-triangles points edges} \
+            --images "$out" --image-kinds ${IMAGE_KINDS:-points triangles} \
             --json "$out/bench_gpu_lit.json"
         ;;
     scaling)

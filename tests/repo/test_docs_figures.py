@@ -52,6 +52,7 @@ def generated_lines():
     made = [T.scaling_table(DATA / "scaling_xeon16.json"),
             T.scaling_table(DATA / "scaling_xeon16_before_png.json"),
             T.scaling_table(DATA / "scaling.json"), T.gpu_table(DATA / "gpu_h100.json"),
+            T.gpu_table(DATA / "gpu_h200.json"), T.gpu_table(DATA / "gpu_h200_lit.json"),
             T.coldstart_table(DATA / "coldstart.json", DATA / "coldstart_issue51_before.json"),
             T.coldstart_steps_table(DATA / "coldstart_issue51_steps.json"),
             T.exact_mix_table(DATA / "exact_mix.json"),

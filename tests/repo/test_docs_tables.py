@@ -38,7 +38,9 @@ def _load(name):
 @pytest.mark.parametrize("kind, name", [("scaling", "scaling_xeon16.json"),
                                         ("scaling", "scaling_xeon16_before_png.json"),
                                         ("scaling", "scaling.json"),
-                                        ("gpu", "gpu_h100.json")])
+                                        ("gpu", "gpu_h100.json"),
+                                        ("gpu", "gpu_h200.json"),
+                                        ("gpu", "gpu_h200_lit.json")])
 def test_the_guide_holds_the_table_of_the_results_file(kind, name):
     table = {"scaling": scaling_table, "gpu": gpu_table}[kind](DATA / name)
     guide = _guide()
@@ -134,6 +136,56 @@ def test_the_gpu_sentences_follow_the_file():
     assert [r["hit_differs"] for r in bunnies] == [0, 1, 0]   # "one grazing pixel of the edges"
     warm = _load("gpu_h100_small_warm.json")["rows"][0]["gpu_first_s"]
     assert f"the first call took {warm:.2f} s" in text
+
+
+def test_the_h200_sentences_follow_the_files():
+    """The H200 paragraphs of issue 49 (``gpu_h200.json``, ``gpu_h200_lit.json``)."""
+    text = _flat(_guide())
+    rows = {r["what"]: r for r in _load("gpu_h200.json")["rows"]}
+    kinds = ("points", "edges", "triangles")
+    bunnies = [rows[f"bunny {k}"] for k in kinds]
+    grids = [rows[f"grid {k}"] for k in kinds]
+    ms = [1e3 * r["gpu_s"] for r in bunnies]
+    assert (f"The 1080p frames take {_range(ms, '.0f')} ms, "
+            f"{_range([r['speedup'] for r in bunnies], '.1f')}x the host's 16 threads") in text
+    assert min(ms) > 25                                      # "25 ms is not met"
+    assert [r["hit_differs"] for r in bunnies] == [0, 1, 0]  # "one grazing pixel of the edges"
+    resident = " / ".join(f"{1e3 * r['gpu_resident_s']:.2f}" for r in grids)
+    assert f"on the card, the launch, the outputs left there): {resident} ms" in text
+    assert f"against {_range([1e3 * r['gpu_s'] for r in grids], '.1f')} ms with the copies" in text
+    assert [r["gpu_resident_s"] <= 0.005 for r in grids] == [True, False, False]
+
+    def change(v):
+        return [100 * (r["gpu_variants"][v]["kernel_s"] / r["gpu_kernel_s"] - 1) for r in grids]
+
+    for v in ("stack32", "box32"):
+        c = change(v)
+        assert f"by {min(c):.1f} to {max(c):+.1f} %" in text, v
+        assert max(abs(x) for x in c) < 5                    # "noise", "neither is kept"
+    assert all(r["gpu_variants"]["stack32"]["distance_max_diff"] == 0 for r in grids)
+    box_render = [100 * (r["gpu_variants"]["box32"]["gpu_s"] / r["gpu_variants"]["box32"]["gpu_ref_s"]
+                         - 1) for r in bunnies]
+    assert f"the 1080p frames were {_range(box_render, '.1f')} % slower with them" in text
+    moved = max(r["gpu_variants"]["box32"]["distance_max_diff"] for r in grids)
+    assert f"moved by up to {moved:.1e} (edges)".replace("e-0", "e-") in text
+    gains = [100 * (1 - r["gpu_by_block"]["8x8"] / r["gpu_reuse_s"]) for r in bunnies]
+    assert f"8 x 8 was again the fastest ({_range(gains, '.1f')} % below 16 x 8)" in text
+    assert all(r["gpu_by_block"]["32x4"] == max(r["gpu_by_block"].values()) for r in bunnies)
+    lit = _load("gpu_h200_lit.json")["rows"]
+    assert (f"{_range([r['gpu_s'] for r in lit], '.2f')} s on the card, "
+            f"{_range([r['speedup'] for r in lit], '.1f')}x the host's 16 threads") in text
+    assert all(r["hit_differs"] == 0 and r["rgb_max"] == 0 and r["whole_equal"] for r in lit)
+    assert min(r["gpu_s"] for r in lit) > 1.0                # "1 s is not met"
+    split = [r["gpu_whole_s"] / r["gpu_s"] for r in lit]
+    assert (f"{_range(split, '.2f')}x faster (`gpu_whole_s`: "
+            f"{_range([r['gpu_whole_s'] for r in lit], '.2f')} s)") in text
+    parts = [r["gpu_parts"] for r in lit]
+    samples = [sum(x[-1] for x in p["samples"]) for p in parts]
+    light = [sum(x[-1] for x in p["light"]) for p in parts]
+    rest = [100 * p["rest_s"] / p["total_s"] for p in parts]
+    assert (f"the samples launches {_range(samples, '.2f')} s, the light launches "
+            f"{_range(light, '.2f')} s, and {_range(rest, '.0f')} % in the rest") in text
+    assert f"compiles the four render kernels: {lit[0]['gpu_first_s']:.0f} s" in text
 
 
 def test_the_readme_quotes_the_files():

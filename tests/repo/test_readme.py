@@ -176,6 +176,10 @@ NOT_RUN = {
         "it needs an NVIDIA GPU (nvidia-smi, numba-cuda on a card) and takes minutes; "
         "tests/smoothdist/test_cuda_sim.py runs bench_gpu's measurement functions under the "
         "simulator, and its refusal without a GPU",
+    "bash benchmarks/run_on_card.sh OUT card":
+        "it needs an NVIDIA GPU (nvidia-smi, numba-cuda on a card) and takes about 8 minutes; "
+        "tests/smoothdist/test_cuda_sim.py runs bench_gpu's measurement functions (the kernel "
+        "variants and the lit look's parts too) under the simulator",
     "python -m tracer reproduce --only beta":
         "it is the full reproduction's beta study at the paper's 512² (minutes); "
         "tests/tracer/reproduce/test_reproduce.py::test_quick_run_end_to_end runs the same "

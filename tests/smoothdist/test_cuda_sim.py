@@ -168,7 +168,7 @@ def _worker(out):
     from benchmarks import bench_gpu
 
     rows = [bench_gpu.bench_render("edges", (16, 12), 1e-3, 1),
-            bench_gpu.bench_grid("triangles", 6, 1),
+            bench_gpu.bench_grid("triangles", 6, 1, variants=bench_gpu.VARIANTS),
             bench_gpu.bench_lit("points", (12, 10), 1, samples=4)]
     meta["bench_rows"] = rows
     meta["bench_table"] = bench_gpu.markdown("simulator", rows, 1)
@@ -264,12 +264,27 @@ def test_bench_gpu_measures_on_the_simulator(sim):
     render_row, grid_row, lit_row = sim["bench_rows"]
     assert lit_row["size"] == "12x10" and lit_row["hit_differs"] == 0
     assert lit_row["rgb_max"] <= 1 and lit_row["gpu_s"] > 0
+    # the film's samples one thread per pixel and one per ray give the same image; the frame's
+    # launches are timed one by one, and the rest is what is left of the frame
+    assert lit_row["whole_equal"] and lit_row["gpu_whole_s"] > 0
+    parts = lit_row["gpu_parts"]
+    assert parts["samples"] and parts["light"] and 0 < parts["rest_s"] < parts["total_s"]
+    assert all(n > 0 and k >= 1 and s > 0 for n, k, s in parts["samples"])
     assert render_row["size"] == "16x12" and render_row["hit_differs"] <= 1
     # at the authors' eps (1e-3 absolute, 4e-3 of the bunny's diagonal) two marches may stop
     # about 2 eps / cos apart
     eps = render_row["eps"] / render_row["diag"]
     assert render_row["depth_max_over_diag"] <= 4 * eps and render_row["rgb_max"] <= 2
     assert grid_row["size"] == "6^3" and grid_row["distance_max_diff"] <= 1e-6
+    # the kernel variants of issue 49 item 3: a 32-bit stack changes nothing; boxes rounded
+    # out to float32 (at most 1 float32 ulp, 6e-8 of a unit coordinate) move the Barnes-Hut
+    # far-field distances by about that much, and may open a node more or less
+    trials = grid_row["gpu_variants"]
+    assert set(trials) == {"stack32", "box32"}
+    assert trials["stack32"]["distance_max_diff"] == 0.0
+    assert trials["stack32"]["leaves_ratio"] == 1.0
+    assert 0.0 <= trials["box32"]["distance_max_diff"] <= 1e-6
+    assert 0.9 <= trials["box32"]["leaves_ratio"] <= 1.1
     assert all(r["cpu_s"] > 0 and r["gpu_s"] > 0 for r in (render_row, grid_row))
     assert "| bunny edges | 16x12 |" in sim["bench_table"]
     assert "| grid triangles | 6^3 |" in sim["bench_table"]
