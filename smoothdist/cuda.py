@@ -28,9 +28,11 @@ a copy). The field's tree is copied to the device once and kept there
 checked on the device (finite, within the coordinate limit) before any traversal.
 """
 
+import contextlib
 import ctypes
 import math
 import os
+import warnings
 
 import numba
 import numpy as np
@@ -40,7 +42,7 @@ from smoothdist._kernels.query import exact_distance_point, smooth_distance_poin
 
 __all__ = ["CudaUnavailable", "DEVICES", "check_device", "cuda_module", "device_tree",
            "simulated", "smooth_distance", "exact_distance", "is_device_array", "device_points",
-           "STACK", "THREADS"]
+           "STACK", "THREADS", "quiet_small_launches"]
 
 #: the values of the ``device`` arguments
 DEVICES = ("cpu", "cuda")
@@ -152,6 +154,19 @@ def _check_kernel(Q, limit, flags):
                 cuda.atomic.max(flags, 1, 1)
 
 
+@contextlib.contextmanager
+def quiet_small_launches():
+    """numba-cuda warns (``NumbaPerformanceWarning``) at every launch of fewer than 128
+    blocks. A caller's few queries, and the film's batches of flagged pixels
+    (:mod:`tracer.rendering.gpu_render`), are such launches by nature, and a render made
+    dozens of them: the warning is silenced for the launches made inside this block, and
+    stays on for everything else."""
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message=r"Grid size \d+ will likely result in GPU "
+                                r"under-utilization")
+        yield
+
+
 def kernels():
     """The query kernels ``{"smooth": ..., "exact": ..., "check": ...}`` as CUDA kernels
     (compiled at their first launch for the argument types given)."""
@@ -213,7 +228,8 @@ def device_points(obj, name="Q"):
         raise ValueError(f"{name} must have shape (n, 3), got {tuple(arr.shape)}")
     if arr.shape[0]:
         flags = cuda.to_device(np.zeros(2, dtype=np.int64))
-        kernels()["check"][_blocks(arr.shape[0]), THREADS](arr, COORD_LIMIT, flags)
+        with quiet_small_launches():
+            kernels()["check"][_blocks(arr.shape[0]), THREADS](arr, COORD_LIMIT, flags)
         bad = flags.copy_to_host()
         if bad[0]:
             raise ValueError(f"{name} contains NaN or infinite coordinates (on the GPU)")
@@ -272,9 +288,10 @@ def smooth_distance(tree, Q, alpha, beta, S, wgrad_scale, tol, dtree=None):
     out = (cuda.device_array(n), cuda.device_array((n, 3)),
            cuda.device_array(n, dtype=np.int64), cuda.device_array(n, dtype=np.int64))
     if n:
-        kernels()["smooth"][_blocks(n), THREADS](
-            dtree, _on_device(cuda, Q), float(alpha), float(beta), float(tol), float(S),
-            float(wgrad_scale), *out)
+        with quiet_small_launches():
+            kernels()["smooth"][_blocks(n), THREADS](
+                dtree, _on_device(cuda, Q), float(alpha), float(beta), float(tol), float(S),
+                float(wgrad_scale), *out)
     return _returned(out, is_device_array(Q))
 
 
@@ -290,5 +307,6 @@ def exact_distance(tree, Q, dtree=None):
            cuda.device_array(n, dtype=np.int64), cuda.device_array(n, dtype=np.int64),
            cuda.device_array(n, dtype=np.int64))
     if n:
-        kernels()["exact"][_blocks(n), THREADS](dtree, _on_device(cuda, Q), *out)
+        with quiet_small_launches():
+            kernels()["exact"][_blocks(n), THREADS](dtree, _on_device(cuda, Q), *out)
     return _returned(out, is_device_array(Q))

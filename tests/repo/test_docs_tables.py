@@ -186,6 +186,8 @@ def test_the_h200_sentences_follow_the_files():
     assert (f"the samples launches {_range(samples, '.2f')} s, the light launches "
             f"{_range(light, '.2f')} s, and {_range(rest, '.0f')} % in the rest") in text
     assert f"compiles the four render kernels: {lit[0]['gpu_first_s']:.0f} s" in text
+    calls = [len(p["samples"]) + len(p["light"]) for p in parts]
+    assert f"a lit frame above made {_range(calls, 'd')} samples and light calls" in text
 
 
 def test_the_readme_quotes_the_files():

@@ -25,6 +25,7 @@ import json
 import os
 import subprocess
 import sys
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -107,6 +108,73 @@ def _device_arrays(sdcuda, arrays, meta):
             meta[f"dev_error_{label}"] = str(exc)
 
 
+class _Warns:
+    """A kernel whose launch configuration warns as numba-cuda's does for a grid of fewer
+    than 128 blocks (the simulator does not), then launches the kernel."""
+
+    def __init__(self, kern):
+        self.kern = kern
+
+    def __getitem__(self, config):
+        from numba.core.errors import NumbaPerformanceWarning
+
+        warnings.warn(NumbaPerformanceWarning("Grid size 3 will likely result in GPU "
+                                              "under-utilization due to low occupancy."))
+        return self.kern[config]
+
+
+def _launch_warnings(sdcuda, meta):
+    """The small-launch warnings that reach a user: none from our launches (a lit render
+    with adaptive samples, queries), one from a launch of their own."""
+    from tracer.rendering import gpu_render
+    from tracer.rendering.renderer import render
+    from tracer.scenes.scene import load_scene
+
+    gpu_render.kernel()
+    sdcuda.kernels()
+    saved = dict(gpu_render._KERNELS), dict(sdcuda._KERNELS)
+    for table in (gpu_render._KERNELS, sdcuda._KERNELS):
+        table.update({k: _Warns(v) for k, v in table.items()})
+    try:
+        with warnings.catch_warnings(record=True) as got:
+            warnings.simplefilter("always")
+            scene = load_scene(ROOT / "scenes" / "bunny_points.json",
+                               {"width": 12, "height": 10, "shading": "lit", "samples": 4,
+                                "adaptive": True})
+            render(scene, device="cuda")
+            f = scene.objects[0].field
+            Q = _queries(f, 5)
+            f.smooth_distance(Q, alpha=50.0, device="cuda")
+            f.exact_distance(Q, device="cuda")
+            ours = sum("Grid size" in str(w.message) for w in got)
+            sdcuda.kernels()["check"][1, 32](sdcuda.cuda_module().to_device(Q), 1e9,
+                                            sdcuda.cuda_module().to_device(np.zeros(2, np.int64)))
+            theirs = sum("Grid size" in str(w.message) for w in got) - ours
+    finally:
+        gpu_render._KERNELS.update(saved[0])
+        sdcuda._KERNELS.update(saved[1])
+    meta["grid_warnings"] = [ours, theirs]
+
+
+def _first_launch_note(meta):
+    """What a progress bar shows at a process's first GPU render, and at the next."""
+    import io
+
+    from tracer.rendering import gpu_render
+    from tracer.rendering.frame import ProgressBar
+    from tracer.rendering.renderer import render
+    from tracer.scenes.scene import load_scene
+
+    scene = load_scene(ROOT / "scenes" / "bunny_points.json", {"width": 8, "height": 6})
+    gpu_render._KERNELS.clear()             # as in a new process: no kernel made yet
+    notes = []
+    for _ in range(2):
+        buf = io.StringIO()
+        render(scene, device="cuda", progress=ProgressBar("render bunny", stream=buf))
+        notes.append(buf.getvalue())
+    meta["first_launch_notes"] = notes
+
+
 def _worker(out):
     """Run in the subprocess: every case on both devices, saved to ``out`` (npz + json)."""
     os.environ["NUMBA_ENABLE_CUDASIM"] = "1"
@@ -173,6 +241,8 @@ def _worker(out):
     meta["bench_rows"] = rows
     meta["bench_table"] = bench_gpu.markdown("simulator", rows, 1)
     _device_arrays(sdcuda, arrays, meta)
+    _launch_warnings(sdcuda, meta)
+    _first_launch_note(meta)
     # the command line, on the simulator's device
     png = Path(out).with_suffix(".png")
     meta["cli_rc"] = main(["render", str(ROOT / "scenes" / "bunny_points.json"), "--size", "24",
@@ -288,6 +358,24 @@ def test_bench_gpu_measures_on_the_simulator(sim):
     assert all(r["cpu_s"] > 0 and r["gpu_s"] > 0 for r in (render_row, grid_row))
     assert "| bunny edges | 16x12 |" in sim["bench_table"]
     assert "| grid triangles | 6^3 |" in sim["bench_table"]
+
+
+@pytest.mark.slow
+def test_small_launch_warnings_stay_inside(sim):
+    """numba-cuda's warning for launches of fewer than 128 blocks is silenced for our own
+    launches (a lit render made dozens), and still reaches a launch of the caller's."""
+    assert sim["grid_warnings"] == [0, 1]
+
+
+@pytest.mark.slow
+def test_first_gpu_render_says_it_may_compile(sim):
+    """The first GPU render of a process may compile the kernels for minutes with nothing
+    to show: its progress bar says so first, once."""
+    from tracer.rendering.gpu_render import FIRST_LAUNCH
+
+    first, second = sim["first_launch_notes"]
+    assert first.startswith(f"render bunny: {FIRST_LAUNCH}\n")
+    assert FIRST_LAUNCH not in second
 
 
 def test_bench_gpu_refuses_without_a_gpu(tmp_path):

@@ -40,9 +40,9 @@ from tracer.errors import RenderError
 from tracer.rendering import lighting, march
 from tracer.rendering.camera import CAM_HEIGHT, CAM_WIDTH, ray_direction
 from tracer.rendering.film import form_image
-from tracer.rendering.frame import (RayArgs, RenderResult, TraceOptions, camera_of,
-                                    checked_samples, distance_at_camera, progress_callback,
-                                    scene_arrays, shade)
+from tracer.rendering.frame import (ProgressBar, RayArgs, RenderResult, TraceOptions,
+                                    camera_of, checked_samples, distance_at_camera,
+                                    progress_callback, scene_arrays, shade)
 
 __all__ = ["render_cuda", "normal_colour", "BLOCK", "trace_samples_cuda",
            "light_points_cuda"]
@@ -75,6 +75,12 @@ class GpuArgs(NamedTuple):
     omega: float
     newton: float
 
+
+#: what the progress bar says before the first GPU render of a process: the kernels load
+#: from numba-cuda's disk cache in a second, but the first run on a machine compiles them
+#: (minutes, with no progress to show: ``benchmarks/data/gpu_h200_lit.json``, gpu_first_s)
+FIRST_LAUNCH = ("CUDA kernels: loading them from numba-cuda's cache, or compiling them (the "
+                "first run on a machine: 1-3 minutes)")
 
 #: ``numba.cuda`` once the kernel exists (a module global: see ``smoothdist.cuda.cuda``)
 cuda = None
@@ -289,9 +295,10 @@ def trace_samples_cuda(tree, ray, rows, cols, offsets, out, opts, eps_px, newton
         parts = ((BOUNDS, n), (RAYS, n * K))
     else:
         parts = ((WHOLE, n),)
-    for part, threads in parts:
-        kernel("samples")[(threads + THREADS - 1) // THREADS, THREADS](
-            data, n, float(eps_px), float(newton_cos), part)
+    with sdcuda.quiet_small_launches():
+        for part, threads in parts:
+            kernel("samples")[(threads + THREADS - 1) // THREADS, THREADS](
+                data, n, float(eps_px), float(newton_cos), part)
     _copy_back(pairs)
 
 
@@ -307,7 +314,8 @@ def light_points_cuda(tree, roots, params, mode, tol, P, N, light, out):
     dout, pairs = _to_device(out)
     (droots, dparams, dP, dN), _ = _to_device((_root_array(roots), params, P, N))
     data = (sdcuda.device_tree(tree), droots, dparams, mode, tol, dP, dN, dlight, dout)
-    kernel("light")[(n + THREADS - 1) // THREADS, THREADS](data, n)
+    with sdcuda.quiet_small_launches():
+        kernel("light")[(n + THREADS - 1) // THREADS, THREADS](data, n)
     _copy_back(pairs)
 
 
@@ -360,8 +368,10 @@ def launch(args, shape, cone=True, block=BLOCK, out=None):
     if cone:
         cone_f = cuda.device_array((nty, ntx, 6))
         cone_n = cuda.device_array((nty, ntx, 2), dtype=np.int64)
-        kernel("cone")[_launch_grid(ntx, nty, BLOCK), BLOCK](
-            args.data, args.mode, args.tol, args.eps, args.relax, args.newton, cone_f, cone_n)
+        with sdcuda.quiet_small_launches():     # small images: a few blocks of tiles
+            kernel("cone")[_launch_grid(ntx, nty, BLOCK), BLOCK](
+                args.data, args.mode, args.tol, args.eps, args.relax, args.newton, cone_f,
+                cone_n)
     else:
         none = np.zeros((nty, ntx, 6))
         none[:, :, 0] = -1.0
@@ -375,7 +385,8 @@ def launch(args, shape, cone=True, block=BLOCK, out=None):
                cuda.device_array((H, W), dtype=np.int64),
                cuda.device_array((H, W), dtype=np.int32),
                cuda.device_array((H, W, 3), dtype=np.uint8))
-    kernel()[_launch_grid(W, H, block), block](*args, cone_f, cone_n, *out)
+    with sdcuda.quiet_small_launches():
+        kernel()[_launch_grid(W, H, block), block](*args, cone_f, cone_n, *out)
     return out
 
 
@@ -395,6 +406,9 @@ def render_cuda(scene, *, progress=None, transforms=None, relax=None, omega=None
                                       and math.isfinite(value) and value >= 0):
             raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
     progress = progress_callback(progress, scene)
+    if isinstance(progress, ProgressBar) and not _KERNELS:     # this process's first
+        progress.stream.write(f"{progress.label}: {FIRST_LAUNCH}\n")
+        progress.stream.flush()
     camera, args, (H, W) = prepare(scene, transforms, relax, omega, newton)
     use_cone = bool(march.CONE if cone is None else cone)
     t0 = time.perf_counter()
