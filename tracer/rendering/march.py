@@ -940,7 +940,7 @@ def _samples_task(tree, ray, rows, cols, offsets, depth_max, out, opts, eps_px, 
                      dstack)
 
 
-@numba.njit(**NJIT_IR_INLINE)
+@numba.njit(**NJIT)
 def sample_pixel(tree, ray, rows, cols, offsets, out, opts, eps_px, newton_cos, i, stack,
                  dstack):
     """Pixel ``i`` of :func:`trace_samples`: its cone bounds (:func:`sample_bounds`) and the
@@ -953,7 +953,7 @@ def sample_pixel(tree, ray, rows, cols, offsets, out, opts, eps_px, newton_cos, 
                    c_ev if k == 0 else 0, stack, dstack)
 
 
-@numba.njit(**NJIT)
+@numba.njit(**NJIT_IR_INLINE)
 def sample_bounds(tree, ray, rows, cols, out, opts, i, stack, dstack):
     """The cone bounds ``out.t_lo[i]``, ``out.t_hi[i]`` of pixel ``i`` of
     :func:`trace_samples` where they are not given (without the cone: ``0`` and ``inf``);
@@ -978,7 +978,7 @@ def sample_bounds(tree, ray, rows, cols, out, opts, i, stack, dstack):
     return c_ev
 
 
-@numba.njit(**NJIT)
+@numba.njit(**NJIT_IR_INLINE)
 def sample_ray(tree, ray, rows, cols, offsets, out, opts, eps_px, newton_cos, i, k, c_ev,
                stack, dstack):
     """Ray ``k`` (``offsets[k]``) of pixel ``i`` of :func:`trace_samples`, from the pixel's
