@@ -940,17 +940,53 @@ def _samples_task(tree, ray, rows, cols, offsets, depth_max, out, opts, eps_px, 
                      dstack)
 
 
-@numba.njit(**NJIT)
+@numba.njit(**NJIT_IR_INLINE)
 def sample_pixel(tree, ray, rows, cols, offsets, out, opts, eps_px, newton_cos, i, stack,
                  dstack):
-    """Pixel ``i`` of :func:`trace_samples`: its cone bounds (:func:`sample_bounds`) and the
-    rays of its ``offsets`` (:func:`sample_ray`), with the traversal stacks ``stack``,
-    ``dstack`` (the CPU's tasks and the GPU's threads, :mod:`tracer.rendering.gpu_render`, call
-    this; the GPU may also run the two parts as separate launches, one thread per ray)."""
-    c_ev = sample_bounds(tree, ray, rows, cols, out, opts, i, stack, dstack)
+    """Pixel ``i`` of :func:`trace_samples`: its cone bounds (where not given) and the rays of
+    its ``offsets``, with the traversal stacks ``stack``, ``dstack`` (the CPU's tasks and the
+    GPU's threads, :mod:`tracer.rendering.gpu_render`, call this).
+
+    It is :func:`sample_bounds` and then :func:`sample_ray` for each offset, written out: the
+    GPU calls those two apart (one thread per ray), but merged here, into the ``prange`` loop
+    of :func:`trace_samples`, numba's parfors marched no ray with them, and calling them as
+    functions of their own costs the first lit render a second of compiling.
+    ``tests/tracer/rendering/test_march.py::test_sample_pixel_is_bounds_then_rays`` holds the
+    three to the same values, bit for bit."""
+    roots, params, mode, tol, cam, lo, hi, eps, max_steps = ray
+    hit, tbuf, grad, steps, objs, t_lo, t_hi = out
+    relax, omega, cone, newton = opts
+    pixel = 1.0 / min(cam[CAM_WIDTH], cam[CAM_HEIGHT])      # a pixel's size at unit depth
+    r = rows[i]
+    c = cols[i]
+    c_ev = 0
+    if cone and not (math.isfinite(t_lo[i]) and math.isfinite(t_hi[i])):   # CUDA: no ufunc
+        t_lo[i], ev = cone_start(tree, roots, params, mode, tol, cam, lo, hi, eps,
+                                 r - 1, r + 2, c - 1, c + 2, stack, dstack, relax)[:2]
+        c_ev += ev
+        t_hi[i], ev, lv = cone_end(tree, roots, params, mode, tol, cam, lo, hi, eps, r - 1,
+                                   r + 2, c - 1, c + 2, stack, dstack, relax)
+        c_ev += ev
+    elif not cone:
+        t_lo[i] = 0.0
+        t_hi[i] = np.inf
+    t_min = t_lo[i]
+    e = max(eps, eps_px * pixel * t_min)
     for k in range(offsets.shape[0]):
-        sample_ray(tree, ray, rows, cols, offsets, out, opts, eps_px, newton_cos, i, k,
-                   c_ev if k == 0 else 0, stack, dstack)
+        dx, dy, dz = ray_direction(cam, r + offsets[k, 0], c + offsets[k, 1])
+        # every argument given (t_pred and d_lb at their defaults' values): the camera
+        # rays' specialisation of march_ray, compiled once for both
+        h, t, gx, gy, gz, st, lv, bs, ob = march_ray(
+            tree, roots, params, mode, tol, cam[0], cam[1], cam[2], dx, dy, dz, lo, hi,
+            e, max_steps, stack, dstack, relax, omega, t_min, newton, t_hi[i],
+            newton_cos, 0.0, 0.0)
+        hit[i, k] = h == 1
+        tbuf[i, k] = t
+        grad[i, k, 0] = gx
+        grad[i, k, 1] = gy
+        grad[i, k, 2] = gz
+        steps[i, k] = st + (c_ev if k == 0 else 0)
+        objs[i, k] = ob
 
 
 @numba.njit(**NJIT_IR_INLINE)

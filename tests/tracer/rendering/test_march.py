@@ -432,6 +432,48 @@ def test_cone_end_bounds_every_ray_of_the_block(kind, bunny_points):
     assert shortened >= 5
 
 
+@pytest.mark.parametrize("cone", [True, False])
+def test_sample_pixel_is_bounds_then_rays(bunny_points, cone):
+    """The CPU's ``sample_pixel`` (inside ``trace_samples``' prange loop and the serial
+    ``sample_tasks``) and the GPU's pieces, ``sample_bounds`` once per pixel and then
+    ``sample_ray`` for each offset (here called one by one from Python), write the same
+    values bit for bit: ``sample_pixel`` spells the two out (see its docstring)."""
+    from tracer.rendering.film import SAMPLE_NEWTON_COS, SAMPLE_OMEGA, sample_offsets
+
+    scene = _scene(bunny_points, size=24)
+    tree, roots, params, mode, lo, hi, depth_max, tol = scene_arrays(scene)
+    cam = camera_of(scene).as_array()
+    rng = np.random.default_rng(7)
+    m = 40
+    rows = rng.integers(0, scene.height, m).astype(np.int64)
+    cols = rng.integers(0, scene.width, m).astype(np.int64)
+    offsets = np.ascontiguousarray(sample_offsets(6))
+    K = len(offsets)
+    ray = MarchArgs(roots, params, mode, tol, cam, lo, hi, float(scene.eps), 400)
+    opts = TraceOptions(march.RELAX, SAMPLE_OMEGA, cone,
+                        march.newton_distance(scene.eps, lo, hi))
+
+    def buffers():
+        return SampleBuffers(np.zeros((m, K), np.bool_), np.full((m, K), np.nan),
+                             np.zeros((m, K, 3)), np.zeros((m, K), np.int64),
+                             np.full((m, K), -1, np.int32), np.full(m, np.nan),
+                             np.full(m, np.nan))
+
+    whole = buffers()
+    march.trace_samples(tree, ray, rows, cols, offsets, depth_max, whole, opts, 0.02,
+                        SAMPLE_NEWTON_COS, 3)
+    parts = buffers()
+    stack = np.empty(depth_max + 4, np.int64)
+    dstack = np.empty(depth_max + 4)
+    for i in range(m):
+        c_ev = march.sample_bounds(tree, ray, rows, cols, parts, opts, i, stack, dstack)
+        for k in range(K):
+            march.sample_ray(tree, ray, rows, cols, offsets, parts, opts, 0.02,
+                             SAMPLE_NEWTON_COS, i, k, c_ev if k == 0 else 0, stack, dstack)
+    assert whole.hit.any() and not whole.hit.all()       # silhouettes and misses among them
+    assert [a.tobytes() for a in parts] == [a.tobytes() for a in whole]
+
+
 @pytest.mark.parametrize("newton", [False, True])
 def test_samples_equal_a_plain_march(bunny_points, newton):
     """``trace_samples`` (cone passes both ways, over-relaxed steps, bounds reused by a second
