@@ -344,6 +344,10 @@ FILL_SHADOW = 0.1
 #: shadow's edge from one inside it (the brute-force check of ``tracer.checks.self_shadow``
 #: found pixels darkened by a single dark neighbour beside a lit sliver)
 FILL_SHADOW_NEIGHBOURS = 2
+#: ... and only where such neighbours lie on both sides of the pixel along each axis on which
+#: it lies between coarse pixels: neighbours on one side alone do not see what changes
+#: between them and it (False: the rule before 2026-11-28, for comparisons)
+FILL_BETWEEN = True
 #: the ground fades into the background as ``exp(-(r / R)^2)`` with ``R`` this many times the
 #: diagonal of the box that holds the surface (``r``: distance from below its centre) ...
 FADE = 0.9
@@ -391,6 +395,10 @@ def _fill_light(shape, want, coarse, key, depth, normals, shadow, ao, lit_side=N
         s_hi = np.full(i.size, -np.inf)
         a_lo = np.full(i.size, np.inf)
         a_hi = np.full(i.size, -np.inf)
+        # which sides of the pixel an agreeing neighbour lies on (rows above, below; columns
+        # left, right), for the shadow and for the occlusion
+        side_s = np.zeros((4, i.size), dtype=bool)
+        side_a = np.zeros((4, i.size), dtype=bool)
         for dr, dc, w in ((0, 0, (1 - fr) * (1 - fc)), (0, s, (1 - fr) * fc),
                           (s, 0, fr * (1 - fc)), (s, s, fr * fc)):
             rr, cc = r0 + dr, c0 + dc
@@ -411,10 +419,22 @@ def _fill_light(shape, want, coarse, key, depth, normals, shadow, ao, lit_side=N
             s_hi = np.where(ok_s, np.maximum(s_hi, src_s[j]), s_hi)
             a_lo = np.where(ok, np.minimum(a_lo, src_a[j]), a_lo)
             a_hi = np.where(ok, np.maximum(a_hi, src_a[j]), a_hi)
+            for side, here in enumerate((dr == 0, dr == s, dc == 0, dc == s)):
+                if here:
+                    side_s[side] |= ok_s
+                    side_a[side] |= ok
         # across a shadow's edge, or where the occlusion changes fast, the neighbours
-        # disagree: no interpolation of that factor there
-        good_s = (acc_ws > 0) & (n_s >= FILL_SHADOW_NEIGHBOURS) & (s_hi - s_lo <= FILL_SHADOW)
-        good_a = (acc_w > 0) & (a_hi - a_lo <= FILL_SHADOW)
+        # disagree: no interpolation of that factor there. Nor where they lie on one side of
+        # the pixel only (between two rows of coarse pixels, agreeing ones in both): what
+        # changes between them and the pixel is not seen (the contact shadow under an object
+        # standing on the ground, whose coarse row above is the object, was filled in lit)
+        between_s = ((fr == 0) | (side_s[0] & side_s[1])) & ((fc == 0) | (side_s[2] & side_s[3]))
+        between_a = ((fr == 0) | (side_a[0] & side_a[1])) & ((fc == 0) | (side_a[2] & side_a[3]))
+        if not FILL_BETWEEN:
+            between_s = between_a = True
+        good_s = ((acc_ws > 0) & (n_s >= FILL_SHADOW_NEIGHBOURS) & (s_hi - s_lo <= FILL_SHADOW)
+                  & between_s)
+        good_a = (acc_w > 0) & (a_hi - a_lo <= FILL_SHADOW) & between_a
         shadow[i[good_s]] = acc_s[good_s] / acc_ws[good_s]
         ao[i[good_a]] = acc_a[good_a] / acc_w[good_a]
         got_s[i[good_s]] = True

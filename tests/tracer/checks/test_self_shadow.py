@@ -48,16 +48,22 @@ def test_an_occluded_pixel_is_not_counted():
 def test_the_fill_rule_that_darkened_lit_pixels():
     """The coarse octopus at the defaults, 128²: filled from one neighbour, a few pixels by a
     shadow's edge came out dark with nothing in the way; from two, none
-    (benchmarks/data/self_shadow.json and self_shadow_before.json: 14 shapes, 3 surfaces)."""
+    (benchmarks/data/self_shadow.json and self_shadow_before.json: 14 shapes, 3 surfaces).
+    Neighbours on both sides of the pixel (``FILL_BETWEEN``, 2026-11-28) rule those pixels
+    out on their own too."""
     from benchmarks.bench_fidelity import corpus
 
     shape = corpus()["bunny_low"]
-    old = film.FILL_SHADOW_NEIGHBOURS
-    try:
-        film.FILL_SHADOW_NEIGHBOURS = 1
-        before = wrongly_dark(tracer.render_mesh(shape, size=(128, 128), progress=None))
-    finally:
-        film.FILL_SHADOW_NEIGHBOURS = old
-    after = wrongly_dark(tracer.render_mesh(shape, size=(128, 128), progress=None))
-    assert before["wrong"] > 0
+
+    def wrong(neighbours, between):
+        old = film.FILL_SHADOW_NEIGHBOURS, film.FILL_BETWEEN
+        try:
+            film.FILL_SHADOW_NEIGHBOURS, film.FILL_BETWEEN = neighbours, between
+            return wrongly_dark(tracer.render_mesh(shape, size=(128, 128), progress=None))
+        finally:
+            film.FILL_SHADOW_NEIGHBOURS, film.FILL_BETWEEN = old
+
+    assert wrong(1, False)["wrong"] > 0
+    assert wrong(1, True)["wrong"] == 0
+    after = wrong(film.FILL_SHADOW_NEIGHBOURS, film.FILL_BETWEEN)
     assert after["wrong"] == 0 and after["checked"] > 100
