@@ -190,6 +190,28 @@ def test_the_h200_sentences_follow_the_files():
     assert f"a lit frame above made {_range(calls, 'd')} samples and light calls" in text
 
 
+def test_the_fill_rule_sentence_follows_its_file():
+    """The tuning-constant entry of ``film.FILL_BETWEEN`` (``fill_between.json``)."""
+    text = _flat(_guide())
+    scenes = _load("fill_between.json")["scenes"]
+    lion, trefoil = scenes["lion_points"], scenes["trefoil"]
+    assert (f"{lion['off']['shadow_ground']} -> {lion['on']['shadow_ground']} under the scanned "
+            f"lion and {trefoil['off']['shadow_ground']} -> {trefoil['on']['shadow_ground']} "
+            "under the trefoil") in text
+    assert (f"{lion['off']['colour']} -> {lion['on']['colour']} and {trefoil['off']['colour']} "
+            f"-> {trefoil['on']['colour']}") in text
+    rest = [scenes[n] for n in scenes if n not in ("lion_points", "trefoil")]
+    assert (f"the other three scenes {_range([r['off']['colour'] for r in rest], 'd')} -> "
+            f"{_range([r['on']['colour'] for r in rest], 'd')}") in text
+    more = [100 * (r["on"]["light_queries"] / r["off"]["light_queries"] - 1)
+            for r in scenes.values()]
+    slower = [100 * (min(r["on"]["seconds"]) / min(r["off"]["seconds"]) - 1)
+              for r in scenes.values()]
+    assert f"light queries {_range(more, '.0f')} % more" in text
+    assert f"the render's time {min(slower):.1f} to {max(slower):+.1f} %" in text
+    assert all(r["on"]["shadow_ground"] == 0 for r in scenes.values())
+
+
 def test_the_readme_quotes_the_files():
     """The README's 16-core and GPU sentence, figure by figure, from the same files."""
     text = _flat((ROOT / "README.md").read_text(encoding="utf-8"))
