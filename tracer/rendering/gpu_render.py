@@ -50,8 +50,12 @@ __all__ = ["render_cuda", "normal_colour", "BLOCK", "trace_samples_cuda",
 #: entries of each thread's traversal stack (a constant of this module: a local array's size
 #: must be a compile-time constant)
 STACK = sdcuda.STACK
-#: threads per block, (columns, rows): 128 threads, neighbouring rays in one warp
-BLOCK = (16, 8)
+#: threads per block of the render kernel, (columns, rows): 8 x 8 was the fastest of 16 x 8,
+#: 8 x 8, 32 x 4 and 32 x 8 on an H100 and again on an H200, by 0.4-5.0 % against 16 x 8
+#: (``gpu_by_block`` in ``benchmarks/data/gpu_h100.json`` and ``gpu_h200.json``)
+BLOCK = (8, 8)
+#: threads per block of the cone kernel (one thread per tile), as measured with
+CONE_BLOCK = (16, 8)
 #: threads per block of the one-dimensional kernels (samples, light)
 THREADS = 128
 #: the parts of ``_samples_kernel``: a pixel's bounds and rays in one thread, the bounds only,
@@ -369,7 +373,7 @@ def launch(args, shape, cone=True, block=BLOCK, out=None):
         cone_f = cuda.device_array((nty, ntx, 6))
         cone_n = cuda.device_array((nty, ntx, 2), dtype=np.int64)
         with sdcuda.quiet_small_launches():     # small images: a few blocks of tiles
-            kernel("cone")[_launch_grid(ntx, nty, BLOCK), BLOCK](
+            kernel("cone")[_launch_grid(ntx, nty, CONE_BLOCK), CONE_BLOCK](
                 args.data, args.mode, args.tol, args.eps, args.relax, args.newton, cone_f,
                 cone_n)
     else:
