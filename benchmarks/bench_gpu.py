@@ -6,7 +6,8 @@ Measures, on an NVIDIA GPU through numba-cuda (``pip install "smoothdist[gpu]"``
   beta 0.5) sphere-traced at ``--size`` (default 1920 x 1080) with the ``"normals"`` shading,
   at the authors' hit threshold eps = 1e-3 (absolute) unless ``--eps`` is given; the GPU
   time is the best of ``--repeat`` launches of the render kernel with the scene already on
-  the device (kernel plus copying the image back), the CPU time the best ``tracer.rendering.renderer``;
+  the device (kernel plus copying the image back), the CPU time the best
+  ``tracer.rendering.renderer``;
 * the 1e6-point grid of ``benchmarks/bench_grid.py`` (``--grid 100``: the voxel centres of
   the unit cube, the bunny normalised to a 0.5 diagonal, alpha = 1 / shortest edge, beta 0.5)
   for the smooth distance of points, edges and triangles; GPU time: kernel plus copies (the
@@ -39,6 +40,7 @@ import os
 import platform
 import sys
 import time
+import types
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
@@ -48,8 +50,6 @@ if str(REPO) not in sys.path:
 import numba  # noqa: E402
 import numpy as np  # noqa: E402
 
-from smoothdist._kernels.query import smooth_distance_point_tol  # noqa: E402
-from smoothdist.cuda import STACK  # noqa: E402
 
 KINDS = ("points", "edges", "triangles")
 DEFAULT_JSON = REPO / "renders" / "gpu" / "bench_gpu.json"
@@ -254,8 +254,8 @@ def bench_grid(kind, n, repeat, variants=()):
     cpu_s, cpu = best(lambda: field.smooth_distance(Q, **kw), repeat)
     alpha, beta, S, wgrad_scale = field.kernel_args(alpha, 0.5)
     dtree = field.device_tree()
-    gpu_s, gpu = best(lambda: sdcuda.smooth_distance(field.tree, Q, alpha, beta, S, wgrad_scale, 0.0,
-                                                     dtree), repeat)
+    gpu_s, gpu = best(lambda: sdcuda.smooth_distance(field.tree, Q, alpha, beta, S, wgrad_scale,
+                                                     0.0, dtree), repeat)
     # the kernel alone, the queries and the outputs already on the device (no copies)
     cu = sdcuda.cuda_module()
     dQ = cu.to_device(Q)
@@ -300,26 +300,22 @@ def bench_grid(kind, n, repeat, variants=()):
                 mean_leaves_gpu=float(gpu[3].mean()), gpu_variants=trials)
 
 
-#: ``numba.cuda`` once a variant kernel is built (a module global, as in smoothdist.cuda)
-cuda = None
 VARIANTS = ("stack32", "box32")
 
 
-def _smooth_stack32(tree, Q, alpha, beta, tol, S, wgrad_scale, out_d, out_g, out_nodes,
-                    out_leaves):
-    # smoothdist.cuda's smooth kernel with an int32 traversal stack (half its local memory)
-    i = cuda.grid(1)
-    if i < Q.shape[0]:
-        stack = cuda.local.array(STACK, numba.int32)
-        dstack = cuda.local.array(STACK, numba.float64)
-        d, gx, gy, gz, nodes, leaves = smooth_distance_point_tol(
-            tree, Q[i, 0], Q[i, 1], Q[i, 2], alpha, beta, tol, S, wgrad_scale, stack, dstack, 0)
-        out_d[i] = d
-        out_g[i, 0] = gx
-        out_g[i, 1] = gy
-        out_g[i, 2] = gz
-        out_nodes[i] = nodes
-        out_leaves[i] = leaves
+def smooth_stack32():
+    """``smoothdist.cuda``'s smooth kernel function with an int32 traversal stack (half its
+    local memory): the same code object, read with globals in which ``numba.int64`` is
+    ``numba.int32`` (the stack is the kernel's only int64 local array), so that the variant
+    cannot drift from the kernel it is measured against. Call it after
+    ``smoothdist.cuda.kernels()`` (the kernel's global ``cuda`` must be set)."""
+    from smoothdist import cuda as sdcuda
+
+    fn = sdcuda._smooth_kernel
+    types32 = types.ModuleType("numba_int32_stack")
+    types32.int64, types32.float64 = numba.int32, numba.float64
+    return types.FunctionType(fn.__code__, dict(fn.__globals__, numba=types32),
+                              "_smooth_kernel_stack32", fn.__defaults__, fn.__closure__)
 
 
 def boxes32(tree):
@@ -336,11 +332,11 @@ def boxes32(tree):
 def variant_launch(variant, tree, dtree):
     """A function ``(dQ, alpha, beta, S, wgrad_scale, outs)`` that launches the smooth
     kernel's ``variant`` (tol 0) and waits for it."""
-    global cuda
     from smoothdist import cuda as sdcuda
     cuda = sdcuda.cuda_module()
     if variant == "stack32":
-        kern, tr = cuda.jit(_smooth_stack32), dtree
+        sdcuda.kernels()
+        kern, tr = cuda.jit(smooth_stack32()), dtree
     elif variant == "box32":
         kern, tr = sdcuda.kernels()["smooth"], sdcuda.device_tree(boxes32(tree))
     else:

@@ -76,7 +76,6 @@ def main(argv=None):
     from tracer.rendering.renderer import kernel_roots
 
     from benchmarks import bench_gpu
-    bench_gpu.cuda = cuda
 
     tr, roots, params, mode, lo, hi, depth_max, tol = scene_arrays(scene)
     roots = gpu_render._root_array(kernel_roots(roots, params, mode, tol))
@@ -105,7 +104,7 @@ def main(argv=None):
             ("tracer.rendering.gpu_render light", gpu_render._light_kernel,
              (ty(ldata), numba.int64)),
             # bench_gpu.py's kernel variants (issue 49 item 3: --variants stack32 box32)
-            ("benchmarks.bench_gpu stack32", bench_gpu._smooth_stack32,
+            ("benchmarks.bench_gpu stack32", bench_gpu.smooth_stack32(),
              (ty(tree), ty(Q), f64, f64, f64, f64, f64, ty(d), ty(g), ty(n), ty(n))),
             ("benchmarks.bench_gpu box32 render", gpu_render._render_kernel,
              (ty((bench_gpu.boxes32(rargs.data[0]),) + tuple(rargs.data[1:])),)

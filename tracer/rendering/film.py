@@ -346,7 +346,8 @@ FILL_SHADOW = 0.1
 FILL_SHADOW_NEIGHBOURS = 2
 #: ... and only where such neighbours lie on both sides of the pixel along each axis on which
 #: it lies between coarse pixels: neighbours on one side alone do not see what changes
-#: between them and it (False: the rule before 2026-11-28, for comparisons)
+#: between them and it (False: the older rule, kept for comparisons; measured in
+#: docs/guide/performance.md, "Tuning constants")
 FILL_BETWEEN = True
 #: the ground fades into the background as ``exp(-(r / R)^2)`` with ``R`` this many times the
 #: diagonal of the box that holds the surface (``r``: distance from below its centre) ...

@@ -54,7 +54,7 @@ STACK = sdcuda.STACK
 #: 8 x 8, 32 x 4 and 32 x 8 on an H100 and again on an H200, by 0.4-5.0 % against 16 x 8
 #: (``gpu_by_block`` in ``benchmarks/data/gpu_h100.json`` and ``gpu_h200.json``)
 BLOCK = (8, 8)
-#: threads per block of the cone kernel (one thread per tile), as measured with
+#: threads per block of the cone kernel (one thread per tile), as every card run launched it
 CONE_BLOCK = (16, 8)
 #: threads per block of the one-dimensional kernels (samples, light)
 THREADS = 128
