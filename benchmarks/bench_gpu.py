@@ -95,7 +95,7 @@ def bench_render(kind, size, eps, repeat, blocks=()):
     t0 = time.perf_counter()
     gpu = render(scene, device="cuda")
     first_s = time.perf_counter() - t0
-    camera, args, shape = gpu_render.prepare(scene)
+    camera, args, shape, _ = gpu_render.prepare(scene)
 
     def frame(cone=True, block=gpu_render.BLOCK, out=None):
         out = gpu_render.launch(args, shape, cone, block, out)
@@ -135,7 +135,7 @@ def bench_render_box32(kind, size, eps, repeat):
     if eps is not None:
         over["eps"] = eps
     scene = load_scene(REPO / "scenes" / f"bunny_{kind}.json", over)
-    camera, args, shape = gpu_render.prepare(scene)
+    camera, args, shape, _ = gpu_render.prepare(scene)
     ref = [a.copy_to_host() for a in gpu_render.launch(args, shape)]
     tree = scene_arrays(scene)[0]
     args32 = args._replace(data=(sdcuda.device_tree(boxes32(tree)),) + tuple(args.data[1:]))

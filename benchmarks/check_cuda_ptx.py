@@ -64,7 +64,7 @@ def main(argv=None):
     f64 = numba.float64
     Q, d, g = np.zeros((4, 3)), np.zeros(4), np.zeros((4, 3))
     n = np.zeros(4, np.int64)
-    camera, rargs, (H, W) = gpu_render.prepare(scene)
+    camera, rargs, (H, W), _ = gpu_render.prepare(scene)
     outs = (np.zeros((H, W), np.bool_), np.zeros((H, W)), np.zeros((H, W, 3)),
             np.zeros((H, W), np.int64), np.zeros((H, W), np.int64), np.zeros((H, W), np.int64),
             np.zeros((H, W), np.int32), np.zeros((H, W, 3), np.uint8))

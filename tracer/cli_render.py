@@ -11,7 +11,7 @@ from smoothdist.cuda import CudaUnavailable, cuda_module
 from smoothdist.mesh import MESH_EXTENSIONS, needs_trimesh
 from tracer.image import false_color, save_npy, save_png
 from tracer.outputs import CLIError, atomic_write, check_outputs, make_parents
-from tracer.rendering.camera import UP_AXES, VIEWS, frame_points, look_at
+from tracer.rendering.camera import UP_AXES, VIEWS, LookAt, frame_points, look_at
 from tracer.rendering.film import MAX_SAMPLES
 from tracer.rendering.renderer import ProgressBar, render, scene_arrays
 from tracer.scenes import from_mesh
@@ -286,12 +286,12 @@ def run(args):
     if args.save_scene:
         written.append(_save_scene(args, scene, source))
     stats = result.summary()
-    stats.update(scene=os.path.abspath(args.scene), mode=scene.mode, beta=scene.beta,
-                 tol=scene.tol, newton=scene.newton,
-                 eps=scene.eps, objects=[{"name": o.name, "alpha": o.alpha, "alpha_u": o.alpha_u,
-                                          "offset": o.level(scene.mode),
-                                          "primitives": o.field.num_primitives}
-                                         for o in scene.objects])
+    mode = scene.march.mode
+    stats.update(scene=os.path.abspath(args.scene), mode=mode, beta=scene.march.beta,
+                 tol=scene.march.tol, newton=scene.march.newton, eps=scene.march.eps,
+                 objects=[{"name": o.name, "alpha": o.alpha, "alpha_u": o.alpha_u,
+                           "offset": o.level(mode), "primitives": o.field.num_primitives}
+                          for o in scene.objects])
     if args.stats:
         with atomic_write(args.stats, overwrite=args.overwrite) as tmp:
             with open(tmp, "w", encoding="utf-8") as fh:
@@ -311,7 +311,7 @@ def run(args):
                                 " (guessed; --up to change)"))
         print(f"Rendered {name}: {s['width']}x{s['height']} px, {len(s['objects'])} object(s) "
               f"with {prims} primitives ({describe_parameters(scene)}), "
-              f"{scene.mode} mode, beta {scene.beta:g}{view}, in "
+              f"{scene.march.mode} mode, beta {scene.march.beta:g}{view}, in "
               f"{s['seconds']:.2f} s; {s['hits']} hits ({100 * s['hit_fraction']:.1f}%), "
               f"{s['mean_steps']:.1f} distance evaluations and {s['mean_leaves']:.0f} leaves "
               f"visited per pixel on average. Wrote {', '.join(map(str, written))}.")
@@ -348,26 +348,22 @@ def _mesh_scene(args):
         raise
 
 
+#: the settings ``tracer render MESH`` takes as options of the same name (the others keep the
+#: mesh entry points' defaults)
+_MESH_OPTIONS = ("alpha", "alpha_u", "beta", "view", "up", "mode", "offset", "eps", "shading",
+                 "tol", "newton", "samples", "adaptive", "transparent", "color", "background")
+
+
 def _build_mesh_scene(args):
     d = defaults("mesh")  # the options left out: as render_mesh's
-
-    def given(key):
-        value = getattr(args, key)
-        return d[key] if value is None else value
-
-    width, height = args.size or (d["width"], d["height"])
-    return from_mesh.mesh_scene(args.scene, kind=args.kind, alpha=given("alpha"),
-                                alpha_u=given("alpha_u"),
-                                beta=given("beta"), size=(width, height), view=given("view"),
-                                up=given("up"), camera=_camera_arg(args) if args.camera else None,
-                                mode=given("mode"), offset=given("offset"), eps=given("eps"),
-                                shading=given("shading"), tol=given("tol"), newton=given("newton"),
-                                samples=given("samples"), adaptive=bool(given("adaptive")),
-                                transparent=bool(given("transparent")),
-                                lighting={k: v for k, v in _lighting_args(args).items()
-                                          if v is not None},
-                                color=given("color"),
-                                background=tuple(given("background")))
+    given = {k: d[k] if getattr(args, k) is None else getattr(args, k) for k in _MESH_OPTIONS}
+    given.update(size=args.size or (d["width"], d["height"]),
+                 adaptive=bool(given["adaptive"]), transparent=bool(given["transparent"]),
+                 background=tuple(given["background"]),
+                 lighting={k: v for k, v in _lighting_args(args).items() if v is not None})
+    return from_mesh.build_mesh_scene(args.scene, None, args.kind,
+                                      *from_mesh.settings_groups(given),
+                                      camera=_camera_arg(args) if args.camera else None)
 
 
 def _replace_camera(scene, args):
@@ -379,10 +375,10 @@ def _replace_camera(scene, args):
     else:
         grow = float(scene.bounds[0][0] - scene_arrays(scene)[4][0])
         P = np.concatenate([o.field.mesh.used_vertices() for o in scene.objects])
-        origin, dest, up = frame_points(P, grow, args.view, scene.width, scene.height,
+        origin, dest, up = frame_points(P, grow, args.view, scene.film.width, scene.film.height,
                                         up=args.up if args.up not in (None, "auto") else "y")
-    look_at(origin, dest, up, scene.width, scene.height)  # validates
-    scene.camera_origin, scene.camera_dest, scene.camera_up = origin, dest, up
+    look_at(origin, dest, up, scene.film.width, scene.film.height)  # validates
+    scene.camera = LookAt(origin, dest, up)
 
 
 def _save_scene(args, scene, source):
@@ -391,7 +387,7 @@ def _save_scene(args, scene, source):
     if source == "mesh":
         data = scene_dict(scene, args.save_scene, [args.scene])
         if args.eps is not None:
-            data["eps"] = scene.eps
+            data["eps"] = scene.march.eps
     else:
         data = _edited_scene(read_scene_json(args.scene), args, scene)
     make_parents([args.save_scene])
@@ -426,8 +422,8 @@ def _edited_scene(data, args, scene):
                     value = part.pop(old)
                     part[ours] = BVH_TYPES.get(value, value) if ours == "kind" else value
     data["camera"] = {k: [float(f"{v:.9g}") for v in np.asarray(vec, dtype=float)]
-                      for k, vec in (("origin", scene.camera_origin), ("dest", scene.camera_dest),
-                                     ("up", scene.camera_up))}
+                      for k, vec in (("origin", scene.camera.origin), ("dest", scene.camera.dest),
+                                     ("up", scene.camera.up))}
     first = data["objects"][0]
     if args.alpha is not None:
         first["alpha"] = args.alpha

@@ -215,10 +215,11 @@ def scene_field(scene, points, chunk=_CHUNK):
     -----
     Same formula as :func:`tracer.rendering.march.scene_distance`, evaluated with the library's
     parallel batch queries per object: smooth mode
-    ``d_k = field_k.smooth_distance(alpha_k, beta_k, alpha_u_k, scene.gradient) - c_k`` (``c_k`` the
-    object's smooth offset), combined for several objects by ``m - log(sum exp(-a (d_k - m))) / a``
-    with ``a`` the largest alpha and ``m = min d_k`` (gradient: the ``exp``-weighted mean); exact
-    mode ``min_k (exact_k - offset_k)`` with the gradient of the minimiser.
+    ``d_k = field_k.smooth_distance(alpha_k, beta_k, alpha_u_k, scene.march.gradient) - c_k``
+    (``c_k`` the object's smooth offset), combined for several objects by
+    ``m - log(sum exp(-a (d_k - m))) / a`` with ``a`` the largest alpha and ``m = min d_k``
+    (gradient: the ``exp``-weighted mean); exact mode ``min_k (exact_k - offset_k)`` with the
+    gradient of the minimiser.
     """
     P = np.ascontiguousarray(np.asarray(points, dtype=np.float64).reshape(-1, 3))
     n = P.shape[0]
@@ -231,7 +232,7 @@ def scene_field(scene, points, chunk=_CHUNK):
 
 def _scene_field_chunk(scene, Q):
     objs = scene.objects
-    if scene.mode == "exact":
+    if scene.march.mode == "exact":
         best = None
         for o in objs:
             dk, gk = o.field.exact_distance(Q)
@@ -246,7 +247,7 @@ def _scene_field_chunk(scene, Q):
     ds, gs = [], []
     for o in objs:
         dk, gk = o.field.smooth_distance(Q, alpha=o.alpha, beta=o.beta, alpha_u=o.alpha_u,
-                                         gradient=scene.gradient, tol=scene.tol)
+                                         gradient=scene.march.gradient, tol=scene.march.tol)
         ds.append(dk - o.level("smooth"))
         gs.append(gk)
     if len(objs) == 1:
@@ -273,7 +274,7 @@ def positive_margin(scene):
     term. Exact mode: the largest offset.
     """
     objs = scene.objects
-    if scene.mode == "exact":
+    if scene.march.mode == "exact":
         return max(o.offset for o in objs)
     margin = max(o.field.inflation(o.alpha, o.alpha_u) + o.level("smooth") for o in objs)
     if len(objs) > 1:
@@ -360,7 +361,7 @@ def sample_grid(scene, n, prune=True):
     lo, hi = (np.asarray(v, dtype=np.float64) for v in scene_box(scene))
     spacing = (hi - lo) / (n - 1)
     axes = tuple(lo[a] + spacing[a] * np.arange(n) for a in range(3))
-    if prune and scene.mode == "smooth":
+    if prune and scene.march.mode == "smooth":
         cert, thr = _certainly_positive(scene, n, axes, spacing)
         need = ~cert
         grown = need.copy()
@@ -652,16 +653,16 @@ def compare_scene(scene, grid=128, trace=None):
     surface = isosurface(scene, grid)
     secs["isosurface"] = time.perf_counter() - t0
     t0 = time.perf_counter()
-    focal = float(np.linalg.norm(np.asarray(scene.camera_dest) - np.asarray(scene.camera_origin)))
-    pvr = render_isosurface(surface, camera, background=scene.background,
+    focal = float(np.linalg.norm(np.asarray(scene.camera.dest) - np.asarray(scene.camera.origin)))
+    pvr = render_isosurface(surface, camera, background=scene.film.background,
                             focal_distance=focal if focal > 0 else 1.0)
     secs["pyvista"] = time.perf_counter() - t0
     diag = scene.diagonal if scene.diagonal > 0 else 1.0
-    metrics = {"scene": scene.name, "mode": scene.mode, "grid": int(grid),
-               "size": [int(scene.width), int(scene.height)]}
+    metrics = {"scene": scene.name, "mode": scene.march.mode, "grid": int(grid),
+               "size": [int(scene.film.width), int(scene.film.height)]}
     metrics.update(compare_renders(trace, pvr, diag))
     tracer_rgb = shade_normals(view_normals(trace.normals, trace.camera), trace.hit,
-                               background=tuple(scene.background))
+                               background=tuple(scene.film.background))
     img = compare_images(tracer_rgb, pvr.rgb)
     lo, hi = (np.asarray(v) for v in scene_box(scene))
     metrics.update(
@@ -672,7 +673,7 @@ def compare_scene(scene, grid=128, trace=None):
         grid_evaluated_fraction=float(surface.field_data["evaluated_fraction"][0]))
     secs["total"] = time.perf_counter() - t_start
     metrics["seconds"] = {k: round(v, 3) for k, v in secs.items()}
-    diff = diff_image(trace, pvr, diag, background=scene.background)
+    diff = diff_image(trace, pvr, diag, background=scene.film.background)
     return Comparison(metrics=metrics, trace=trace, pyvista=pvr, tracer_rgb=tracer_rgb,
                       diff=diff, surface=surface)
 

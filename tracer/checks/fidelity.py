@@ -66,7 +66,7 @@ def fidelity(res, **render_options):
     o = scene.objects[0]
     field = o.field
     L = field.diagonal if field.diagonal > 0 else 1.0
-    common = dict(size=(scene.width, scene.height), camera=res.camera, progress=None,
+    common = dict(size=(scene.film.width, scene.film.height), camera=res.camera, progress=None,
                   alpha=o.alpha, up="y")
     common.update(render_options)
     c = mean_offset(res, field)
@@ -86,8 +86,8 @@ def fidelity(res, **render_options):
            "p50_deg": float("nan"), "streak_share": float("nan"), "compared": 0}
     if not np.isfinite(c) or not c > 0:
         return out
-    ref = render_mesh(field.mesh, mode="exact", offset=c, shading=scene.shading,
-                             lighting=scene.lighting, color=o.color, **common)
+    ref = render_mesh(field.mesh, mode="exact", offset=c, shading=scene.film.shading,
+                             lighting=scene.film.lighting, color=o.color, **common)
     both = _inside(res.hit, INSIDE) & _inside(ref.hit, INSIDE)
     n = int(both.sum())
     out["compared"] = n

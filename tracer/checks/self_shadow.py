@@ -45,7 +45,7 @@ def wrongly_dark(res, tol=1e-3, max_pixels=4000, seed=0):
     o = scene.objects[0]
     field = o.field
     L = field.diagonal
-    key = light_directions(scene.lighting, res.camera, scene.camera_up)[0]
+    key = light_directions(scene.film.lighting, res.camera, scene.camera.up)[0]
     shadow = res.aovs["shadow"]
     rays = primary_rays(res.camera)
     P = res.camera.origin + res.depth[..., None].astype(np.float64) * rays
@@ -67,7 +67,7 @@ def wrongly_dark(res, tol=1e-3, max_pixels=4000, seed=0):
     with np.errstate(divide="ignore", invalid="ignore"):
         t1 = np.where(key > 0, (hi + pad - start) / key, (lo - pad - start) / key)
     t_exit = np.nanmin(np.where(np.isfinite(t1), t1, np.inf), axis=1)
-    k = 1.0 / scene.lighting.penumbra
+    k = 1.0 / scene.film.lighting.penumbra
     clear = np.ones(idx.size, dtype=bool)
     C = o.smooth_offset
     t = START * L

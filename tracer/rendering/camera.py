@@ -35,6 +35,7 @@ from smoothdist.kernels import NJIT
 
 __all__ = [
     "Camera",
+    "LookAt",
     "look_at",
     "ray_direction",
     "primary_rays",
@@ -151,6 +152,21 @@ def _pixels(value, name):
     if value <= 0:
         raise ValueError(f"{name} must be a positive integer, got {value}")
     return int(value)
+
+
+class LookAt(NamedTuple):
+    """A camera as scene files give it (``camera: {origin, dest, up}``), without an image size:
+    the eye ``origin``, the point ``dest`` it looks at and an approximate ``up``, each a (3,)
+    float64 array in world units. ``look_at(*pose, width, height)`` builds its :class:`Camera`
+    (:meth:`camera`)."""
+
+    origin: np.ndarray
+    dest: np.ndarray
+    up: np.ndarray
+
+    def camera(self, width, height):
+        """The pinhole :class:`Camera` of this pose for a ``width x height`` image."""
+        return look_at(self.origin, self.dest, self.up, width, height)
 
 
 def look_at(origin, dest, up, width, height):

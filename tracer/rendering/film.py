@@ -125,16 +125,16 @@ class _Shader:
         self.camera = camera
         self.arrays = arrays
         self.kargs = kargs  # tracer.rendering.frame.RayArgs: the render's own queries
-        self.lit = scene.shading == "lit"
+        self.lit = scene.film.shading == "lit"
         self.transparent = bool(getattr(scene, "transparent", False))
         self.nobj = len(scene.objects)
         self.origin = np.asarray(camera.origin, dtype=np.float64)
-        bg = np.asarray(scene.background, dtype=np.float64) / 255.0
+        bg = np.asarray(scene.film.background, dtype=np.float64) / 255.0
         if self.lit:
-            light = scene.lighting
+            light = scene.film.lighting
             self.light = light
             self.key, self.fill, self.up = _lighting.light_directions(light, camera,
-                                                                       scene.camera_up)
+                                                                       scene.camera.up)
             self.bg = _lighting.srgb_to_linear(bg)
             self.base = _lighting.srgb_to_linear(np.array(
                 [_object_color(o, i, self.nobj) for i, o in enumerate(scene.objects)]) / 255.0)
@@ -151,7 +151,7 @@ class _Shader:
                 verts = np.concatenate([o.field.mesh.V for o in scene.objects]) \
                     if arrays.params.shape[1] == march.P_COLUMNS else None
                 if verts is not None:
-                    self.ground = _lighting.ground_height(arrays, verts, self.up, scene.eps)
+                    self.ground = _lighting.ground_height(arrays, verts, self.up, scene.march.eps)
                 else:   # posed objects: the bottom of the posed scene box
                     self.ground = float((box_corners(arrays.lo, arrays.hi) @ self.up).min())
             self.queries = 0
@@ -159,8 +159,8 @@ class _Shader:
             self.slack = _lighting.LIGHT_SLACK * self.diag   # 0: the render's own queries
         else:
             self.bg = bg
-            if scene.shading == "matcap":
-                self.matcap = load_matcap(scene.matcap)
+            if scene.film.shading == "matcap":
+                self.matcap = load_matcap(scene.film.matcap)
 
     # ------------------------------------------------------------------ pieces
     def objects_at(self, P):
@@ -189,7 +189,7 @@ class _Shader:
         k = self.kargs                      # the render's own queries
         tree, roots, params, mode, tol = k.tree, k.roots, k.params, k.mode, k.tol
         lo, hi, depth_max = self.arrays.lo, self.arrays.hi, self.arrays.depth_max
-        eps = float(self.scene.eps)
+        eps = float(self.scene.march.eps)
         if self.ground is not None:     # shadow rays may start on the ground, below the box
             lo, hi = _box_with_ground(lo, hi, self.up, self.ground)
         work = np.zeros((n, 2), dtype=np.int64)
@@ -251,9 +251,9 @@ class _Shader:
         if not self.lit:
             nv = view_normals(normals.reshape(n, 1, 3), self.camera)
             h2 = hit.reshape(n, 1)
-            if self.scene.shading == "matcap":
+            if self.scene.film.shading == "matcap":
                 rgb = shade_matcap(nv, h2, self.matcap)
-            elif self.scene.shading == "headlight":
+            elif self.scene.film.shading == "headlight":
                 rgb = shade_headlight(nv, h2)
             else:
                 rgb = shade_normals(nv, h2)
@@ -708,10 +708,9 @@ def _sample_shading_normals(skargs, depth_max, options, pixels, W, offsets, posi
                             gpu)
 
 
-def form_image(scene, camera, arrays, kargs, options, centre, samples=1, adaptive=False,
-               gpu=None):
-    """Shade the centre samples, add ``samples - 1`` more per pixel (all pixels, or the
-    adaptive selection), and average.
+def form_image(scene, camera, arrays, kargs, options, centre, gpu=None):
+    """Shade the centre samples, add ``scene.film.samples - 1`` more per pixel (all pixels, or
+    the adaptive selection when ``scene.film.adaptive``), and average.
 
     ``kargs``: :class:`tracer.rendering.frame.RayArgs`, the march kernels' leading arguments;
     ``options``: :class:`tracer.rendering.frame.TraceOptions`;
@@ -727,12 +726,13 @@ def form_image(scene, camera, arrays, kargs, options, centre, samples=1, adaptiv
     ``gpu``: :mod:`tracer.rendering.gpu_render` (passed in by it: this module does not import
     it) to trace the samples' and the light's rays on the GPU (the same per-ray functions);
     None on the CPU. Everything else runs on the host either way."""
-    H, W = scene.height, scene.width
+    film = scene.film
+    H, W, samples, adaptive = film.height, film.width, film.samples, film.adaptive
     hit0, t0, grad0, objs0 = (np.asarray(a) for a in centre)
     hit0, t0, objs0 = hit0.ravel(), t0.ravel(), objs0.ravel()
     grad0 = grad0.reshape(-1, 3)        # a view: written in place
     dirs = primary_rays(camera).reshape(-1, 3)
-    skargs = _shading_args(kargs) if scene.shading == "lit" else None
+    skargs = _shading_args(kargs) if scene.film.shading == "lit" else None
     shade_evals = 0
     if skargs is not None:
         shade_evals += _centre_shading_normals(skargs, arrays.depth_max, options, (H, W), hit0,

@@ -8,6 +8,7 @@ and :func:`scene_arrays`, the march kernels' named arguments (:class:`RayArgs`,
 progress bar. :mod:`tracer.rendering.renderer` re-exports every name.
 """
 
+import dataclasses
 import io
 import math
 import os
@@ -28,7 +29,7 @@ __all__ = ["RenderResult", "RayArgs", "MarchArgs", "PixelBuffers", "SampleBuffer
            "LightBuffers",           "TraceOptions", "SceneArrays", "scene_arrays",
            "object_level", "kernel_roots", "camera_of", "distance_at_camera", "shade",
            "ProgressBar", "MAX_SAMPLES", "pixel_buffers", "posed_params", "checked_samples",
-           "progress_callback"]
+           "progress_callback", "check_steps", "with_overrides", "trace_options"]
 
 #: the most anti-aliasing samples per pixel (:mod:`tracer.rendering.film`)
 MAX_SAMPLES = 1024
@@ -276,20 +277,20 @@ def scene_arrays(scene, transforms=None):
     margin = 0.0
     for k, o in enumerate(scene.objects):
         alpha, beta, S, wgrad_scale = o.field.kernel_args(o.alpha, o.beta, o.alpha_u,
-                                                          scene.gradient)
-        level = object_level(o, scene.mode)
+                                                          scene.march.gradient)
+        level = object_level(o, scene.march.mode)
         params[k, columns] = (alpha, beta, S, wgrad_scale, level)
-        if scene.mode == "exact":
+        if scene.march.mode == "exact":
             margin = max(margin, level)
         else:
             margin = max(margin, o.field.inflation(alpha, o.alpha_u) + level)
-    if scene.mode == "smooth" and len(trees) > 1:
+    if scene.march.mode == "smooth" and len(trees) > 1:
         a = params[:, march.P_ALPHA].max()
         margin += np.log(len(trees)) / a
     tol = float(getattr(scene, "tol", DEFAULT_TOL))
     lo, hi = scene.bounds
-    grow = margin + 2 * scene.eps + 1e-9 * scene.diagonal
-    mode = march.MODE_EXACT if scene.mode == "exact" else march.MODE_SMOOTH
+    grow = margin + 2 * scene.march.eps + 1e-9 * scene.diagonal
+    mode = march.MODE_EXACT if scene.march.mode == "exact" else march.MODE_SMOOTH
     tree, roots = concatenate_trees(trees) if len(trees) > 1 else (trees[0], np.zeros(1, np.int64))
     if transforms is not None:
         params, lo, hi = posed_params(scene, transforms, params, grow)
@@ -342,14 +343,14 @@ def kernel_roots(roots, params, mode, tol):
 
 def camera_of(scene):
     """The scene's :class:`~tracer.rendering.camera.Camera` (validated)."""
-    return look_at(scene.camera_origin, scene.camera_dest, scene.camera_up, scene.width,
-                   scene.height)
+    return look_at(scene.camera.origin, scene.camera.dest, scene.camera.up, scene.film.width,
+                   scene.film.height)
 
 
 def distance_at_camera(scene, arrays=None):
     """Scene distance at the camera origin (> 0 when the camera is outside the surface)."""
     tree, roots, params, mode, lo, hi, depth_max, tol = arrays or scene_arrays(scene)
-    o = scene.camera_origin
+    o = scene.camera.origin
     return float(march.distance_at(tree, kernel_roots(roots, params, mode, tol), params, mode,
                                    tol, float(o[0]), float(o[1]), float(o[2]), depth_max))
 
@@ -360,6 +361,43 @@ def pixel_buffers(H, W):
                         np.zeros((H, W, 3)), np.zeros((H, W), dtype=np.int64),
                         np.zeros((H, W), dtype=np.int64), np.zeros((H, W), dtype=np.int64),
                         np.full((H, W), -1, dtype=np.int32))
+
+
+def check_steps(newton, relax):
+    """``newton`` and ``relax`` of :func:`tracer.render`: None or a finite number >= 0, else a
+    ``ValueError`` naming the argument."""
+    for name, value in (("newton", newton), ("relax", relax)):
+        if value is not None and not (isinstance(value, (int, float, np.number))
+                                      and not isinstance(value, bool)
+                                      and math.isfinite(value) and value >= 0):
+            raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
+
+
+def with_overrides(scene, newton=None, samples=None, adaptive=None):
+    """``scene`` as :func:`tracer.render` draws it: its ``march.newton``, ``film.samples`` and
+    ``film.adaptive`` replaced by the arguments that are not None, each checked (the scene
+    itself when nothing changes; else a copy, the scene given is left as it was)."""
+    check_steps(newton, None)
+    march_ = scene.march if newton is None else dataclasses.replace(scene.march,
+                                                                    newton=float(newton))
+    film = dataclasses.replace(
+        scene.film, samples=checked_samples(scene.film.samples if samples is None else samples),
+        adaptive=bool(scene.film.adaptive if adaptive is None else adaptive))
+    if march_ == scene.march and film == scene.film:
+        return scene
+    return dataclasses.replace(scene, march=march_, film=film)
+
+
+def trace_options(scene, lo, hi, relax=None, omega=None, cone=None):
+    """The :class:`TraceOptions` of a render of ``scene`` in the box ``lo, hi``: ``relax``,
+    ``omega`` and ``cone`` as :func:`tracer.render` takes them (None: the defaults of
+    :mod:`tracer.rendering.march`), the Newton distance from ``scene.march``
+    (:func:`tracer.rendering.march.newton_distance`)."""
+    return TraceOptions(
+        float(march.RELAX if relax is None else relax),
+        float(march.OMEGA if omega is None else max(1.0, float(omega))),
+        bool(march.CONE if cone is None else cone),
+        march.newton_distance(scene.march.eps, lo, hi, max(0.0, float(scene.march.newton))))
 
 
 def checked_samples(value):
@@ -390,11 +428,11 @@ def shade(scene, camera, normals, hit, matcap=None):
     """Colour a render with the scene's shading mode; ``(H, W, 3)`` uint8 (``matcap``: the
     scene's texture, if already loaded)."""
     nv = view_normals(normals, camera)
-    bg = tuple(scene.background)
-    if scene.shading == "matcap":
-        return shade_matcap(nv, hit, load_matcap(scene.matcap) if matcap is None else matcap,
+    bg = tuple(scene.film.background)
+    if scene.film.shading == "matcap":
+        return shade_matcap(nv, hit, load_matcap(scene.film.matcap) if matcap is None else matcap,
                             background=bg)
-    if scene.shading == "headlight":
+    if scene.film.shading == "headlight":
         return shade_headlight(nv, hit, background=bg)
     return shade_normals(nv, hit, background=bg)
 

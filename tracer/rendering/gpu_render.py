@@ -40,9 +40,9 @@ from tracer.errors import RenderError
 from tracer.rendering import lighting, march
 from tracer.rendering.camera import CAM_HEIGHT, CAM_WIDTH, ray_direction
 from tracer.rendering.film import form_image
-from tracer.rendering.frame import (ProgressBar, RayArgs, RenderResult, TraceOptions,
-                                    camera_of, checked_samples, distance_at_camera,
-                                    progress_callback, scene_arrays, shade)
+from tracer.rendering.frame import (ProgressBar, RayArgs, RenderResult, camera_of,
+                                    check_steps, distance_at_camera, progress_callback,
+                                    scene_arrays, shade, trace_options)
 
 __all__ = ["render_cuda", "normal_colour", "BLOCK", "trace_samples_cuda",
            "light_points_cuda"]
@@ -323,10 +323,12 @@ def light_points_cuda(tree, roots, params, mode, tol, P, N, light, out):
     _copy_back(pairs)
 
 
-def prepare(scene, transforms=None, relax=None, omega=None, newton=None):
-    """Everything a launch needs, on the device: ``(camera, args, shape)`` with ``args`` the
-    kernel's leading arguments (up to ``newton``) and ``shape = (H, W)``. Checks the camera
-    as ``render`` does."""
+def prepare(scene, transforms=None, relax=None, omega=None, cone=None):
+    """Everything a launch needs, on the device: ``(camera, args, shape, options)`` with
+    ``args`` the kernel's leading arguments (up to ``newton``), ``shape = (H, W)`` and
+    ``options`` the render's :class:`~tracer.rendering.frame.TraceOptions` (``relax``,
+    ``omega``, ``cone`` as :func:`tracer.render` takes them). Checks the camera as ``render``
+    does."""
 
     cu = sdcuda.cuda_module()
     kernel()
@@ -334,26 +336,24 @@ def prepare(scene, transforms=None, relax=None, omega=None, newton=None):
     arrays = scene_arrays(scene, transforms)
     tree, roots, params, mode, lo, hi, depth_max, tol = arrays
     sdcuda.check_depth(int(depth_max))
+    march_ = scene.march
     d0 = distance_at_camera(scene, arrays)
-    if not d0 > scene.eps:
-        raise RenderError(f"the camera at {np.round(scene.camera_origin, 6).tolist()} is inside "
-                          f"the surface (distance there {d0:.4g} <= eps {scene.eps:.3g}); move "
+    if not d0 > march_.eps:
+        raise RenderError(f"the camera at {np.round(scene.camera.origin, 6).tolist()} is inside "
+                          f"the surface (distance there {d0:.4g} <= eps {march_.eps:.3g}); move "
                           "camera.origin outside or lower alpha's blur")
     on = (lambda a: a) if sdcuda.simulated() else cu.to_device
-    bg = tuple(int(v) for v in scene.background)
+    bg = tuple(int(v) for v in scene.film.background)
     # roots as the (k,) array: the general path of tracer.rendering.march.scene_distance (the same
     # values as the lean one that tracer.rendering.renderer.kernel_roots picks for the CPU with an
     # int root)
     data = (sdcuda.device_tree(tree), on(np.ascontiguousarray(roots, np.int64)), on(params),
             on(camera.as_array()), on(np.asarray(lo, np.float64)),
             on(np.asarray(hi, np.float64)), bg)
-    args = GpuArgs(data, int(mode), float(tol), float(scene.eps), int(scene.max_steps),
-                   march.RELAX if relax is None else float(relax),
-                   march.OMEGA if omega is None else max(1.0, float(omega)),
-                   march.newton_distance(scene.eps, lo, hi,
-                                         max(0.0, float(scene.newton if newton is None
-                                                        else newton))))
-    return camera, args, (scene.height, scene.width)
+    options = trace_options(scene, lo, hi, relax, omega, cone)
+    args = GpuArgs(data, int(mode), float(tol), float(march_.eps), int(march_.max_steps),
+                   options.relax, options.omega, options.newton)
+    return camera, args, (scene.film.height, scene.film.width), options
 
 
 def _launch_grid(W, H, block):
@@ -394,47 +394,39 @@ def launch(args, shape, cone=True, block=BLOCK, out=None):
     return out
 
 
-def render_cuda(scene, *, progress=None, transforms=None, relax=None, omega=None, newton=None,
-                samples=None, adaptive=None, cone=None):
-    """:func:`tracer.render` on the GPU (its arguments; ``band_rows`` does not apply). Returns a
+def render_cuda(scene, *, progress=None, transforms=None, relax=None, omega=None, cone=None):
+    """:func:`tracer.render` on the GPU (its arguments, the scene's ``newton``, ``samples``
+    and ``adaptive`` already applied; ``band_rows`` does not apply). Returns a
     :class:`tracer.rendering.frame.RenderResult`; ``seconds`` is the time of the launch, the
     copies back and (lit, sampled or transparent renders) the film."""
-    samples = checked_samples(scene.samples if samples is None else samples)
-    adaptive = bool(scene.adaptive if adaptive is None else adaptive)
     # no card is the first thing to say (issue 49): an option the card would refuse matters
     # only where there is a card
     sdcuda.cuda_module()
-    for name, value in (("newton", newton), ("relax", relax)):
-        if value is not None and not (isinstance(value, (int, float, np.number))
-                                      and not isinstance(value, bool)
-                                      and math.isfinite(value) and value >= 0):
-            raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
+    check_steps(None, relax)
     progress = progress_callback(progress, scene)
     if isinstance(progress, ProgressBar) and not _KERNELS:     # this process's first
         progress.stream.write(f"{progress.label}: {FIRST_LAUNCH}\n")
         progress.stream.flush()
-    camera, args, (H, W) = prepare(scene, transforms, relax, omega, newton)
-    use_cone = bool(march.CONE if cone is None else cone)
+    camera, args, (H, W), options = prepare(scene, transforms, relax, omega, cone)
     t0 = time.perf_counter()
-    out = launch(args, (H, W), use_cone)
+    out = launch(args, (H, W), options.cone)
     hit, tbuf, grad, steps, leaves, bis, objs, rgb = (a.copy_to_host() for a in out)
-    film = samples != 1 or scene.shading == "lit" or scene.transparent
+    film = scene.film
+    use_film = film.samples != 1 or film.shading == "lit" or film.transparent
     alpha, spp, aovs = hit.astype(np.float32), np.ones((H, W), np.int32), {"rays": H * W}
-    if film:
+    if use_film:
         arrays = scene_arrays(scene, transforms)
         tree, roots, params, mode, lo, hi, depth_max, tol = arrays
         kargs = RayArgs(tree, _root_array(roots), params, mode, tol, camera.as_array(), lo, hi,
-                        float(scene.eps), int(scene.max_steps))
-        options = TraceOptions(args.relax, args.omega, use_cone, args.newton)
+                        float(scene.march.eps), int(scene.march.max_steps))
         rgb, alpha, spp, aovs = form_image(scene, camera, arrays, kargs, options,
-                                           (hit, tbuf, grad, objs), samples, adaptive,
-                                           gpu=sys.modules[__name__])
+                                           (hit, tbuf, grad, objs), gpu=sys.modules[__name__])
     seconds = time.perf_counter() - t0
     if progress is not None:
         progress(H * W, H * W, seconds)
     norm = np.linalg.norm(grad, axis=2, keepdims=True)
     normals = np.where(norm > 0, grad / np.where(norm > 0, norm, 1.0), 0.0)
-    if not film and scene.shading != "normals":
+    if not use_film and film.shading != "normals":
         rgb = shade(scene, camera, normals, hit)
     return RenderResult(rgb=rgb, hit=hit, depth=tbuf.astype(np.float32), normals=normals,
                         steps=steps, leaves=leaves, bisections=bis, seconds=seconds,

@@ -7,20 +7,20 @@ below the film, the light and the GPU path that use them; their names are import
 before.
 """
 
-import math
 import threading
 import time
 
 import numpy as np
 
-from smoothdist.cuda import check_device
+from smoothdist.cuda import check_device, cuda_module
 from tracer.rendering import march
 from tracer.rendering.camera import CAM_WIDTH
 from tracer.errors import RenderError  # noqa: F401  (defined there; imported from here too)
 from tracer.rendering.frame import (PixelBuffers, ProgressBar, RayArgs, RenderResult,
-                                    SceneArrays, TraceOptions, camera_of, checked_samples,
+                                    SceneArrays, TraceOptions, camera_of, check_steps,
                                     distance_at_camera, kernel_roots, pixel_buffers,
-                                    progress_callback, scene_arrays, shade)
+                                    progress_callback, scene_arrays, shade, trace_options,
+                                    with_overrides)
 from tracer.rendering.film import form_image
 from tracer.rendering.gpu_render import render_cuda
 from tracer.rendering.shading import load_matcap
@@ -31,16 +31,6 @@ __all__ = ["render", "RenderResult", "RenderError", "camera_of", "distance_at_ca
            "ProgressBar"]
 
 
-def _check_steps(newton, relax):
-    """``newton`` and ``relax`` of :func:`render`: None or a finite number >= 0, else a
-    ``ValueError`` naming the argument."""
-    for name, value in (("newton", newton), ("relax", relax)):
-        if value is not None and not (isinstance(value, (int, float, np.number))
-                                      and not isinstance(value, bool)
-                                      and math.isfinite(value) and value >= 0):
-            raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
-
-
 def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None, omega=None,
            cone=None, newton=None, samples=None, adaptive=None, device="cpu"):
     """Trace and shade ``scene``.
@@ -48,6 +38,8 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
     Parameters
     ----------
     scene : tracer.scenes.scene.Scene
+        The scene; the result's ``scene`` is the one drawn: this one with the ``newton``,
+        ``samples`` and ``adaptive`` given here (:func:`~tracer.rendering.frame.with_overrides`).
     transforms : list of (R (3, 3), t (3,)), optional
         A rigid pose per object (see :func:`~tracer.rendering.frame.scene_arrays`); the trees are
         not rebuilt.
@@ -90,31 +82,31 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
     RenderError
         When the camera is inside the surface (distance <= eps at the camera).
     """
-    if check_device(device) == "cuda":
+    on_card = check_device(device) == "cuda"
+    if on_card:
+        cuda_module()       # no card is the first thing to say (issue 49)
+    check_steps(newton, relax)
+    scene = with_overrides(scene, newton, samples, adaptive)
+    if on_card:
         return render_cuda(scene, progress=progress, transforms=transforms, relax=relax,
-                           omega=omega, newton=newton, samples=samples, adaptive=adaptive,
-                           cone=cone)
-    _check_steps(newton, relax)
+                           omega=omega, cone=cone)
     progress = progress_callback(progress, scene)
     camera = camera_of(scene)
     arrays = scene_arrays(scene, transforms)
     tree, roots, params, mode, lo, hi, depth_max, tol = arrays
+    march_ = scene.march
     d0 = distance_at_camera(scene, arrays)
-    if not d0 > scene.eps:
-        raise RenderError(f"the camera at {np.round(scene.camera_origin, 6).tolist()} is inside "
-                          f"the surface (distance there {d0:.4g} <= eps {scene.eps:.3g}); move "
+    if not d0 > march_.eps:
+        raise RenderError(f"the camera at {np.round(scene.camera.origin, 6).tolist()} is inside "
+                          f"the surface (distance there {d0:.4g} <= eps {march_.eps:.3g}); move "
                           "camera.origin outside or lower alpha's blur")
-    H, W = scene.height, scene.width
+    film = scene.film
+    H, W = film.height, film.width
     hit, tbuf, grad, steps, leaves, bis, objs = pixel_buffers(H, W)
     cam = camera.as_array()
     args = RayArgs(tree, kernel_roots(roots, params, mode, tol), params, mode, tol, cam, lo, hi,
-                   float(scene.eps), int(scene.max_steps))
-    options = TraceOptions(
-        float(march.RELAX if relax is None else relax),
-        float(march.OMEGA if omega is None else max(1.0, float(omega))),
-        bool(march.CONE if cone is None else cone),
-        march.newton_distance(scene.eps, lo, hi,
-                              max(0.0, float(scene.newton if newton is None else newton))))
+                   float(march_.eps), int(march_.max_steps))
+    options = trace_options(scene, lo, hi, relax, omega, cone)
     band = band_rows or H
     t0 = time.perf_counter()
     for r0 in range(0, H, band):
@@ -132,13 +124,11 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
         norm = np.linalg.norm(g, axis=2, keepdims=True)
         normals[r0:r1] = np.where(norm > 0, g / np.where(norm > 0, norm, 1.0), 0.0)
 
-    samples = checked_samples(scene.samples if samples is None else samples)
-    adaptive = bool(scene.adaptive if adaptive is None else adaptive)
-    if samples == 1 and scene.shading != "lit" and not scene.transparent:
+    if film.samples == 1 and film.shading != "lit" and not film.transparent:
         in_bands(unit, H)
         seconds = time.perf_counter() - t0
         rgb = np.empty((H, W, 3), dtype=np.uint8)
-        matcap = load_matcap(scene.matcap) if scene.shading == "matcap" else None
+        matcap = load_matcap(film.matcap) if film.shading == "matcap" else None
 
         def colour(r0, r1):
             rgb[r0:r1] = shade(scene, camera, normals[r0:r1], hit[r0:r1], matcap)
@@ -147,7 +137,7 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
         alpha, spp, aovs = hit.astype(np.float32), np.ones((H, W), np.int32), {"rays": H * W}
     else:
         rgb, alpha, spp, aovs = form_image(scene, camera, arrays, args, options,
-                                           (hit, tbuf, grad, objs), samples, adaptive)
+                                           (hit, tbuf, grad, objs))
         in_bands(unit, H)       # after the film: a lit render's normals are its shading's
         seconds = time.perf_counter() - t0
     depth = tbuf.astype(np.float32)

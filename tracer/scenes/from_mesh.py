@@ -12,7 +12,7 @@
 
 import os
 import warnings
-from dataclasses import asdict
+from dataclasses import asdict, fields, replace
 
 import numpy as np
 
@@ -20,16 +20,16 @@ import smoothdist
 from smoothdist import DataMesh, SmoothDistanceField
 from smoothdist.convert import is_foreign_geometry
 from tracer.errors import ThinFeatureWarning
-from tracer.rendering.camera import UP_AXES, frame_points
+from tracer.rendering.camera import UP_AXES, LookAt, frame_points
 from tracer.rendering.renderer import render
-from tracer.scenes.scene import default_eps, scene_from_field
-from tracer.scenes.settings import KINDS, defaults
+from tracer.scenes.scene import field_scene, with_default_eps
+from tracer.scenes.settings import KINDS, Film, March, Surface, View, defaults
 
 #: defaults of the mesh entry points (:mod:`tracer.scenes.settings`; ``tracer render MESH`` too)
 _MESH = defaults("mesh")
 
-__all__ = ["render_mesh", "mesh_scene", "is_mesh_list", "load_geometry", "guess_up", "resolve_up",
-           "describe_parameters", "scene_dict"]
+__all__ = ["render_mesh", "mesh_scene", "build_mesh_scene", "settings_groups", "is_mesh_list",
+           "load_geometry", "guess_up", "resolve_up", "describe_parameters", "scene_dict"]
 
 
 def load_geometry(mesh, F=None, kind=None):
@@ -130,30 +130,44 @@ def mesh_scene(mesh, F=None, *, kind=None, alpha=_MESH["alpha"], alpha_u=_MESH["
     name : str, optional
         The scene's name (default: the mesh's).
     """
-    if is_mesh_list(mesh):
-        if F is not None:
-            raise ValueError("F must be None with a list of meshes: give (V, F) pairs")
-        return _several_objects(
-            mesh, kind=kind, alpha=alpha, alpha_u=alpha_u, beta=beta, size=size, view=view,
-            camera=camera, mode=mode, offset=offset, eps=eps, shading=shading, matcap=matcap,
-            name=name, tol=tol, newton=newton, up=up, samples=samples, adaptive=adaptive,
-            transparent=transparent, lighting=lighting, color=color, background=background)
-    guessed = up is None or up == "auto"
-    up = resolve_up(mesh, up)
-    data = load_geometry(mesh, F, kind)
+    settings = locals()     # the keyword arguments by name, for settings_groups
+    return build_mesh_scene(mesh, F, kind, *settings_groups(settings), camera=camera, name=name)
+
+
+def settings_groups(settings):
+    """``(surface, march, film, view)``, the groups of :mod:`tracer.scenes.settings`, from the
+    keyword arguments of :func:`mesh_scene` or :func:`render_mesh` by name (``size`` is the
+    film's ``(width, height)``; a setting not given keeps its ``"mesh"`` default); not yet
+    checked (:func:`tracer.scenes.scene.field_scene` checks them)."""
+    size = settings["size"]
     try:
         width, height = size
     except (TypeError, ValueError):
         raise ValueError(f"size must be (width, height), got {size!r}") from None
+    given = dict(settings, width=width, height=height)
+
+    def group(cls):
+        return cls(**{f.name: given.get(f.name, _MESH[f.name]) for f in fields(cls)})
+    return group(Surface), group(March), group(Film), group(View)
+
+
+def build_mesh_scene(mesh, F, kind, surface, march, film, view, camera=None, name=None):
+    """:func:`mesh_scene` with its settings as groups (:func:`settings_groups`): one object,
+    or one per entry of a list of meshes (``kind``, the surface's fields and ``film.matcap``
+    may then hold one value per mesh)."""
+    if is_mesh_list(mesh):
+        if F is not None:
+            raise ValueError("F must be None with a list of meshes: give (V, F) pairs")
+        return _several_objects(mesh, kind, surface, march, film, view, camera, name)
+    up = view.up
+    guessed = up is None or up == "auto"
+    up = resolve_up(mesh, up)
+    data = load_geometry(mesh, F, kind)
     field = SmoothDistanceField(data)
-    scene = scene_from_field(field, alpha=alpha, alpha_u=alpha_u, beta=beta,
-                            view=view if camera is None else None, camera=camera, width=width,
-                            height=height, mode=mode, eps=eps, offset=offset, shading=shading,
-                            matcap=matcap, name=name or os.path.splitext(data.name)[0], tol=tol,
-                            newton=newton, up=up, samples=samples, adaptive=adaptive,
-                            transparent=transparent, lighting=lighting, color=color,
-                            background=background)
-    if guessed and camera is None and view == "front":
+    scene = field_scene(field, surface, march, film,
+                        replace(view, view=view.view if camera is None else None, up=up),
+                        camera=camera, name=name or os.path.splitext(data.name)[0])
+    if guessed and camera is None and view.view == "front":
         new_up, front, why = auto_orientation(data, up)
         scene.extra["orientation"] = why
         if front != "front" or new_up != up:
@@ -197,22 +211,22 @@ def _per_object(name, value, n):
     return [value] * n
 
 
-def _several_objects(meshes, *, kind, alpha, alpha_u, offset, color, matcap, camera, view,
-                     up, size, eps, name, **common):
-    """A scene of one object per entry of ``meshes`` (:func:`mesh_scene` with a list)."""
+def _several_objects(meshes, kind, surface, march, film, view, camera, name):
+    """A scene of one object per entry of ``meshes`` (:func:`build_mesh_scene` with a list)."""
     n = len(meshes)
-    per = {k: _per_object(k, v, n) for k, v in (("kind", kind), ("alpha", alpha),
-                                                ("alpha_u", alpha_u), ("offset", offset),
-                                                ("color", color), ("matcap", matcap))}
-    ups = [resolve_up(m, up) for m in meshes]
+    given = dict(asdict(surface), kind=kind, matcap=film.matcap)
+    per = {k: _per_object(k, given[k], n) for k in PER_OBJECT}
+    ups = [resolve_up(m, view.up) for m in meshes]
     parts, names = [], set()
     for i, m in enumerate(meshes):
         V_F = m if isinstance(m, tuple) else (m, None)
+        mine = Surface(**{f.name: per[f.name][i] for f in fields(Surface)})
         try:
             with warnings.catch_warnings():     # warned once, for the whole scene, below
                 warnings.simplefilter("ignore", ThinFeatureWarning)
-                s = mesh_scene(V_F[0], V_F[1], camera=camera, view=view, up=ups[0], size=size,
-                               eps=eps, **{k: per[k][i] for k in PER_OBJECT}, **common)
+                s = build_mesh_scene(V_F[0], V_F[1], per["kind"][i], mine, march,
+                                     replace(film, matcap=per["matcap"][i]),
+                                     replace(view, up=ups[0]), camera=camera)
         except ValueError as exc:
             raise ValueError(f"mesh {i}: {exc}") from None
         o = s.objects[0]
@@ -225,10 +239,11 @@ def _several_objects(meshes, *, kind, alpha, alpha_u, offset, color, matcap, cam
     scene = parts[0]
     scene.objects = [s.objects[0] for s in parts]
     scene.path = f"{name or '+'.join(o.name for o in scene.objects)}.json"
-    if eps is None:
-        scene.eps = default_eps(scene)
+    if march.eps is None:
+        scene.march = replace(scene.march, eps=None)
+        with_default_eps(scene)
     if camera is None:      # frame every object's surface (each grown by its own bound)
-        frame_scene(scene, view, ups[0])
+        frame_scene(scene, view.view, ups[0])
     warn_thin_tubes(scene)
     return scene
 
@@ -242,12 +257,11 @@ def frame_scene(scene, view, up="y"):
     P, grow = [], 0.0
     for o in scene.objects:
         P.append(o.field.mesh.used_vertices())
-        g = (o.level("exact") if scene.mode == "exact" else
+        g = (o.level("exact") if scene.march.mode == "exact" else
              o.field.inflation(o.alpha, o.alpha_u) + o.level("smooth"))
         grow = max(grow, g)
-    origin, dest, cup = frame_points(np.concatenate(P), grow + 2.0 * scene.eps, view,
-                                     scene.width, scene.height, up=up)
-    scene.camera_origin, scene.camera_dest, scene.camera_up = origin, dest, cup
+    scene.camera = LookAt(*frame_points(np.concatenate(P), grow + 2.0 * scene.march.eps, view,
+                                        scene.film.width, scene.film.height, up=up))
 
 
 #: keep the up axis the file's convention gives while its front view shows at least this
@@ -350,17 +364,17 @@ def warn_thin_tubes(scene, probes=128):
     o = scene.objects[0]
     fld = o.field
     m = fld.mesh
-    if scene.mode != "smooth" or not m.edges.size or m.triangles.size or m.points.size \
+    if scene.march.mode != "smooth" or not m.edges.size or m.triangles.size or m.points.size \
             or not fld.diagonal > 0:
         return
-    dist = float(np.linalg.norm(np.asarray(scene.camera_dest) - scene.camera_origin))
-    half = 0.5 * dist / min(scene.width, scene.height)
+    dist = float(np.linalg.norm(np.asarray(scene.camera.dest) - scene.camera.origin))
+    half = 0.5 * dist / min(scene.film.width, scene.film.height)
     q, _ = fld._offset_probes(half, count=probes)
     c = o.level("smooth")
     ratio = o.alpha_u / o.alpha
 
     def covered(a):
-        dh = fld.smooth_distance(q, alpha=a, alpha_u=ratio * a, beta=scene.beta).distance
+        dh = fld.smooth_distance(q, alpha=a, alpha_u=ratio * a, beta=scene.march.beta).distance
         return float(np.median(dh)) <= c
 
     if covered(o.alpha):
@@ -371,7 +385,7 @@ def warn_thin_tubes(scene, probes=128):
         if a * fld.diagonal < 1.0 or covered(a):
             break
     warnings.warn(f"the {m.edges.shape[0]} edges are drawn as tubes thinner than half a pixel "
-                  f"({half:.3g} scene units at {scene.width}x{scene.height}) at alpha "
+                  f"({half:.3g} scene units at {scene.film.width}x{scene.film.height}) at alpha "
                   f"{o.alpha:.4g}: they show as specks; alpha {a:.3g} or lower, or a larger "
                   f"offset (--offset {half:.3g}), would show them", ThinFeatureWarning,
                   stacklevel=3)
@@ -410,11 +424,8 @@ def render_mesh(mesh, F=None, *, kind=None, alpha=_MESH["alpha"], alpha_u=_MESH[
                                  samples=8, adaptive=True)     # anti-aliased, lit
         res.save("renders/ico.png")         # res.rgb, res.depth, res.hit, ... are arrays
     """
-    scene = mesh_scene(mesh, F, kind=kind, alpha=alpha, alpha_u=alpha_u, beta=beta, size=size,
-                       view=view, camera=camera, mode=mode, offset=offset, eps=eps,
-                       shading=shading, matcap=matcap, up=up, samples=samples,
-                       adaptive=adaptive, transparent=transparent, lighting=lighting,
-                       color=color, background=background, tol=tol, newton=newton)
+    settings = locals()     # the keyword arguments by name, for settings_groups
+    scene = build_mesh_scene(mesh, F, kind, *settings_groups(settings), camera=camera)
     return render(scene, progress=progress, device=device)
 
 
@@ -426,12 +437,12 @@ def describe_parameters(scene):
     diag = scene.diagonal if scene.diagonal > 0 else 1.0
     parts = []
     for o in scene.objects:
-        infl = (o.offset if scene.mode == "exact" else o.field.inflation(o.alpha, o.alpha_u))
-        what = "offset" if scene.mode == "exact" else "inflation <="
+        infl = (o.offset if scene.march.mode == "exact" else o.field.inflation(o.alpha, o.alpha_u))
+        what = "offset" if scene.march.mode == "exact" else "inflation <="
         text = (f"alpha {o.alpha:.4g}, alpha_U {o.alpha_u:.4g}, {what} {infl:.3g} "
                 f"({100 * infl / diag:.2g}% of the diagonal)")
-        c = o.level(scene.mode)
-        if scene.mode == "smooth" and c > 0:
+        c = o.level(scene.march.mode)
+        if scene.march.mode == "smooth" and c > 0:
             text += f", offset {c:.3g} ({100 * c / diag:.2g}%)"
         parts.append(text)
     return "; ".join(parts)
@@ -454,38 +465,38 @@ def scene_dict(scene, scene_path, source_paths):
     for o, src in zip(scene.objects, source_paths):
         od = {"path": rel(src), "alpha": float(f"{o.alpha:.6g}"),
               "alpha_u": float(f"{o.alpha_u:.6g}"), "kind": o.field.mesh.kind}
-        if scene.mode == "exact" or o.level(scene.mode) > 0:
-            od["offset"] = float(f"{o.level(scene.mode):.6g}")
+        if scene.march.mode == "exact" or o.level(scene.march.mode) > 0:
+            od["offset"] = float(f"{o.level(scene.march.mode):.6g}")
         objs.append(od)
     out = {"description": ("written by tracer render --save-scene from "
                            f"{os.path.basename(source_paths[0])}"),
            "camera": {k: [float(f"{v:.9g}") for v in np.asarray(vec, dtype=float)]
-                      for k, vec in (("origin", scene.camera_origin), ("dest", scene.camera_dest),
-                                     ("up", scene.camera_up))},
-           "objects": objs, "width": int(scene.width), "height": int(scene.height),
-           "beta": float(scene.beta), "mode": scene.mode, "shading": scene.shading}
-    if scene.matcap:
-        out["matcap"] = rel(scene.matcap)
-    if scene.tol != file["tol"]:
-        out["tol"] = float(scene.tol)
-    if scene.samples != file["samples"]:
-        out["samples"] = int(scene.samples)
-    if scene.adaptive != file["adaptive"]:
-        out["adaptive"] = bool(scene.adaptive)
-    if scene.transparent != file["transparent"]:
-        out["transparent"] = bool(scene.transparent)
-    if tuple(scene.background) != tuple(file["background"]):
-        out["background"] = [int(v) for v in scene.background]
-    if scene.shading == "lit":
+                      for k, vec in (("origin", scene.camera.origin), ("dest", scene.camera.dest),
+                                     ("up", scene.camera.up))},
+           "objects": objs, "width": int(scene.film.width), "height": int(scene.film.height),
+           "beta": float(scene.march.beta), "mode": scene.march.mode, "shading": scene.film.shading}
+    if scene.film.matcap:
+        out["matcap"] = rel(scene.film.matcap)
+    if scene.march.tol != file["tol"]:
+        out["tol"] = float(scene.march.tol)
+    if scene.film.samples != file["samples"]:
+        out["samples"] = int(scene.film.samples)
+    if scene.film.adaptive != file["adaptive"]:
+        out["adaptive"] = bool(scene.film.adaptive)
+    if scene.film.transparent != file["transparent"]:
+        out["transparent"] = bool(scene.film.transparent)
+    if tuple(scene.film.background) != tuple(file["background"]):
+        out["background"] = [int(v) for v in scene.film.background]
+    if scene.film.shading == "lit":
         default = asdict(file["lighting"])
         changed = {k: (list(v) if isinstance(v, tuple) else v)
-                   for k, v in asdict(scene.lighting).items() if v != default[k]}
+                   for k, v in asdict(scene.film.lighting).items() if v != default[k]}
         if changed:
             out["lighting"] = changed
     for od, o in zip(objs, scene.objects):
         if o.color is not None:
             od["color"] = [int(round(v)) for v in o.color]
-    if scene.newton != file["newton"]:
-        out["newton"] = float(scene.newton)
+    if scene.march.newton != file["newton"]:
+        out["newton"] = float(scene.march.newton)
     return out
 

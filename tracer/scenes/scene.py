@@ -47,6 +47,7 @@ no extent (a single point) the default ``eps`` is ``1e-4 x`` the surface's size
 (``max(1/alpha, offset)``) instead of the bbox diagonal.
 """
 
+import dataclasses
 import os
 import warnings
 from dataclasses import dataclass, field as dc_field, fields
@@ -55,15 +56,16 @@ import numpy as np
 
 import smoothdist
 from smoothdist import DataMesh, SmoothDistanceField
-from tracer.rendering.camera import frame_points, look_at
+from tracer.rendering.camera import LookAt, frame_points, look_at
 from tracer.rendering.film import MAX_SAMPLES
 from tracer.rendering.lighting import Lighting, check_color
-from tracer.scenes.settings import KINDS, SCENE_KEYS, Film, March, defaults
+from tracer.scenes.settings import KINDS, SCENE_KEYS, Film, March, Surface, View, defaults
 from tracer.validate import (SceneError, check_keys, choice, file_error, number, read_json,
                              resolve_path, show, vec3)
 
 __all__ = ["Scene", "SceneObject", "SceneError", "load_scene", "read_scene_json",
-           "scene_from_field", "default_eps", "merge_meshes", "AUTHORS_KEYS"]
+           "scene_from_field", "field_scene", "default_eps", "with_default_eps", "merge_meshes",
+           "AUTHORS_KEYS"]
 
 #: the values of ``bvh_type``, the authors' spelling of ``kind`` (their ``"faces"`` is
 #: ``"triangles"``)
@@ -114,46 +116,49 @@ class SceneObject:
         return float(self.offset if mode == "exact" else self.smooth_offset)
 
 
-@dataclass
+@dataclass(init=False)
 class Scene:
-    """A validated, loaded scene; meshes are built into fields on load."""
+    """A validated, loaded scene; meshes are built into fields on load.
+
+    Its settings travel as the frozen groups of :mod:`tracer.scenes.settings`: ``camera``
+    (:class:`~tracer.rendering.camera.LookAt`), ``march``
+    (:class:`~tracer.scenes.settings.March`) and ``film``
+    (:class:`~tracer.scenes.settings.Film`, with its
+    :class:`~tracer.rendering.lighting.Lighting`). Every setting is also an attribute of its
+    own, a shorthand that reads and writes the group: ``scene.film.width`` is
+    ``scene.film.width``, ``scene.eps = e`` replaces ``scene.march`` by one with ``eps = e``,
+    and ``camera_origin``, ``camera_dest``, ``camera_up`` are the camera's vectors. The
+    constructor and ``dataclasses.replace`` take the same names (``replace(scene,
+    width=64)``), applied on top of the groups given.
+    """
 
     path: str
-    camera_origin: np.ndarray
-    camera_dest: np.ndarray
-    camera_up: np.ndarray
+    camera: LookAt
     objects: list
-    width: int = _FILE["width"]
-    height: int = _FILE["height"]
-    beta: float = _FILE["beta"]
-    eps: float = _FILE["eps"]
-    mode: str = _FILE["mode"]
-    shading: str = _FILE["shading"]
-    matcap: str = _FILE["matcap"]
-    background: tuple = _FILE["background"]
-    max_steps: int = _FILE["max_steps"]
-    gradient: str = _FILE["gradient"]
+    march: March = dc_field(default_factory=March)
+    film: Film = dc_field(default_factory=Film)
     description: str = ""
     extra: dict = dc_field(default_factory=dict)
-    tol: float = _FILE["tol"]
-    newton: float = _FILE["newton"]
-    #: anti-aliasing samples per pixel, and whether only disagreeing pixels get them all
-    samples: int = _FILE["samples"]
-    adaptive: bool = _FILE["adaptive"]
-    #: RGBA output whose alpha is the pixel's coverage (background not painted)
-    transparent: bool = _FILE["transparent"]
-    #: settings of the ``"lit"`` shading
-    lighting: Lighting = _FILE["lighting"]
 
-    @property
-    def march(self):
-        """The tracer's settings as a frozen :class:`tracer.scenes.settings.March`."""
-        return March(**{f.name: getattr(self, f.name) for f in fields(March)})
-
-    @property
-    def film(self):
-        """The image's settings as a frozen :class:`tracer.scenes.settings.Film`."""
-        return Film(**{f.name: getattr(self, f.name) for f in fields(Film)})
+    def __init__(self, path, *, camera=None, objects=(), march=None, film=None,
+                 description="", extra=None, **settings):
+        unknown = sorted(set(settings) - set(_SHORTHANDS))
+        if unknown:
+            raise TypeError(f"Scene() got unknown setting(s) {', '.join(map(repr, unknown))}")
+        vectors = {k[len("camera_"):]: np.asarray(settings[k], dtype=float)
+                   for k in _CAMERA_SHORTHANDS if k in settings}
+        if camera is None:
+            if len(vectors) != 3:
+                raise TypeError("Scene() needs camera=LookAt(origin, dest, up) (or "
+                                "camera_origin, camera_dest and camera_up)")
+            camera = LookAt(**vectors)
+        self.path = path
+        self.camera = LookAt(*camera)._replace(**vectors)
+        self.objects = list(objects)
+        self.march = _replaced(march or March(), settings)
+        self.film = _replaced(film or Film(), settings)
+        self.description = description
+        self.extra = {} if extra is None else extra
 
     @property
     def name(self):
@@ -172,6 +177,43 @@ class Scene:
         """Bounding-box diagonal of all objects' data."""
         lo, hi = self.bounds
         return float(np.linalg.norm(hi - lo))
+
+
+def _replaced(group, settings):
+    """``group`` (a frozen settings dataclass) with the values ``settings`` gives its fields."""
+    mine = {f.name: settings[f.name] for f in fields(group) if f.name in settings}
+    return dataclasses.replace(group, **mine) if mine else group
+
+
+def _shorthand(group, name):
+    """The property ``Scene.<name>``: ``scene.<group>.<name>``, set by replacing the group."""
+    def get(self):
+        return getattr(getattr(self, group), name)
+
+    def set_(self, value):
+        setattr(self, group, dataclasses.replace(getattr(self, group), **{name: value}))
+
+    return property(get, set_, doc=f"Shorthand of ``scene.{group}.{name}`` (settable).")
+
+
+def _camera_shorthand(name):
+    """The property ``Scene.camera_<name>``: ``scene.camera.<name>`` (settable)."""
+    def get(self):
+        return getattr(self.camera, name)
+
+    def set_(self, value):
+        self.camera = self.camera._replace(**{name: np.asarray(value, dtype=float)})
+
+    return property(get, set_, doc=f"Shorthand of ``scene.camera.{name}`` (settable).")
+
+
+#: the shorthand attributes of :class:`Scene`: each setting of its groups, by name
+_CAMERA_SHORTHANDS = ("camera_origin", "camera_dest", "camera_up")
+_SHORTHANDS = {**{f.name: "march" for f in fields(March)}, **{f.name: "film" for f in fields(Film)},
+               **{k: "camera" for k in _CAMERA_SHORTHANDS}}
+for _name, _group in _SHORTHANDS.items():
+    setattr(Scene, _name, _camera_shorthand(_name[len("camera_"):]) if _group == "camera"
+            else _shorthand(_group, _name))
 
 
 # ---------------------------------------------------------------------- limits
@@ -314,14 +356,19 @@ def load_scene(path, overrides=None):
     # everything checked: now read the meshes and build the fields
     objects = [_build_object(dict(sp, mode=mode), path, gradient) for sp in specs]
     desc = data.get("description", "")
-    scene = Scene(path=path, camera_origin=origin, camera_dest=dest, camera_up=up,
-                  objects=objects, width=width, height=height, beta=beta, eps=eps, mode=mode,
-                  shading=shading, matcap=matcap, background=tuple(bg), max_steps=max_steps,
-                  gradient=gradient, description=str(desc), tol=tol, newton=newton,
-                  samples=samples, adaptive=adaptive, transparent=transparent,
-                  lighting=lighting)
-    if scene.eps is None:
-        scene.eps = default_eps(scene)
+    march = March(mode=mode, beta=beta, eps=eps, tol=tol, newton=newton, max_steps=max_steps,
+                  gradient=gradient)
+    film = Film(width=width, height=height, samples=samples, adaptive=adaptive,
+                transparent=transparent, background=tuple(bg), shading=shading, matcap=matcap,
+                lighting=lighting)
+    return with_default_eps(Scene(path=path, camera=LookAt(origin, dest, up), objects=objects,
+                                  march=march, film=film, description=str(desc)))
+
+
+def with_default_eps(scene):
+    """``scene``, its ``march.eps`` set to :func:`default_eps` when it is None."""
+    if scene.march.eps is None:
+        scene.march = dataclasses.replace(scene.march, eps=default_eps(scene))
     return scene
 
 
@@ -603,47 +650,47 @@ def scene_from_field(field, *, alpha, alpha_u=_API["alpha_u"], beta=_API["beta"]
     background : (3,) int
         Background colour, sRGB 0-255.
     """
-    if mode not in MODES:
-        raise ValueError(f"mode must be one of {MODES}, got {mode!r}")
-    if shading not in SHADINGS:
-        raise ValueError(f"shading must be one of {SHADINGS}, got {shading!r}")
-    alpha, alpha_u, beta, offset = _api_surface(field, alpha, alpha_u, beta, offset, mode,
-                                                gradient)
-    if eps is not None:
-        eps = _api_number(eps, "eps", positive=True)
-    tol = _api_number(tol, "tol", non_negative=True)
-    newton = _API["newton"] if newton is None else _api_number(newton, "newton", non_negative=True)
-    max_steps = int(_api_number(max_steps, "max_steps", positive=True, integer=True))
-    if max_steps > MAX_STEPS:
-        raise ValueError(f"max_steps must be at most {MAX_STEPS}, got {max_steps}")
-    width, height, samples = _api_film(width, height, samples)
+    return field_scene(
+        field, Surface(alpha=alpha, alpha_u=alpha_u, offset=offset, color=color),
+        March(mode=mode, beta=beta, eps=eps, tol=tol, newton=newton, max_steps=max_steps,
+              gradient=gradient),
+        Film(width=width, height=height, samples=samples, adaptive=adaptive,
+             transparent=transparent, background=background, shading=shading, matcap=matcap,
+             lighting=lighting),
+        View(view=view, up=up), camera=camera, name=name)
 
-    lighting = _api_lighting(lighting)
-    if color is not None:
-        color = check_color(color, "color")
-    background = tuple(int(round(v)) for v in check_color(background, "background"))
-    origin, dest, up = _api_camera(field, _view_or_camera(view, camera), alpha, alpha_u, offset,
-                                   eps, mode, width, height, up)
-    obj = SceneObject(name=name, field=field, alpha=alpha, alpha_u=alpha_u, beta=beta,
-                      offset=offset if offset is not None else 1.0 / alpha,
-                      matcap=matcap, color=color,
+
+def field_scene(field, surface, march, film, view=View(), camera=None, name="scene"):
+    """:func:`scene_from_field` with its settings as the groups of
+    :mod:`tracer.scenes.settings`: ``surface`` (:class:`~tracer.scenes.settings.Surface`),
+    ``march``, ``film`` and ``view`` hold the keyword arguments of the same names, unchecked;
+    each is checked here (a ``ValueError`` naming the setting) and the scene holds the checked
+    groups. ``camera`` as in :func:`scene_from_field`."""
+    if march.mode not in MODES:
+        raise ValueError(f"mode must be one of {MODES}, got {march.mode!r}")
+    if film.shading not in SHADINGS:
+        raise ValueError(f"shading must be one of {SHADINGS}, got {film.shading!r}")
+    surface, beta = _api_surface(field, surface, march)
+    march = _api_march(march, beta)
+    film = _api_film(film)
+    color = None if surface.color is None else check_color(surface.color, "color")
+    camera = _api_camera(field, _view_or_camera(view.view, camera), surface, march, film,
+                         view.up)
+    offset = surface.offset
+    obj = SceneObject(name=name, field=field, alpha=surface.alpha, alpha_u=surface.alpha_u,
+                      beta=beta, offset=offset if offset is not None else 1.0 / surface.alpha,
+                      matcap=film.matcap, color=color,
                       smooth_offset=offset if offset is not None else 0.0)
-    scene = Scene(path=f"{name}.json", camera_origin=origin, camera_dest=dest, camera_up=up,
-                  objects=[obj], width=width, height=height, beta=beta,
-                  eps=eps, mode=mode, shading=shading, matcap=matcap, max_steps=max_steps,
-                  gradient=gradient, tol=tol, newton=newton, samples=samples,
-                  adaptive=bool(adaptive), transparent=bool(transparent), lighting=lighting,
-                  background=background)
-    if scene.eps is None:
-        scene.eps = default_eps(scene)
-    return scene
+    return with_default_eps(Scene(path=f"{name}.json", camera=camera, objects=[obj],
+                                  march=march, film=film))
 
 
-def _api_surface(field, alpha, alpha_u, beta, offset, mode, gradient):
-    """``(alpha, alpha_u, beta, offset)`` of :func:`scene_from_field`: ``"auto"`` and
-    ``"off"`` resolved, every value checked (``offset`` None: the mode's default level)."""
+def _api_surface(field, surface, march):
+    """``(surface, beta)`` of :func:`field_scene`: ``"auto"`` and ``"off"`` resolved, alpha,
+    alpha_U, beta and the offset checked (``offset`` None: the mode's default level)."""
+    alpha, alpha_u, offset = surface.alpha, surface.alpha_u, surface.offset
     if (isinstance(alpha, str) and alpha == "auto" and isinstance(alpha_u, str)
-            and alpha_u == "auto" and offset is None and mode == "smooth"):
+            and alpha_u == "auto" and offset is None and march.mode == "smooth"):
         # all three left to "auto": chosen together (issue 35; see
         # SmoothDistanceField.auto_surface)
         alpha, alpha_u, offset = field.auto_surface()
@@ -654,23 +701,42 @@ def _api_surface(field, alpha, alpha_u, beta, offset, mode, gradient):
         alpha_u = field.auto_alpha_u(field.check_alpha(alpha))
     alpha_u = alpha if alpha_u is None or (isinstance(alpha_u, str) and alpha_u == "off") \
         else alpha_u
-    alpha, beta, _, _ = field.kernel_args(alpha, beta, alpha_u, gradient)  # validates all three
+    # validates alpha, beta and alpha_U together
+    alpha, beta, _, _ = field.kernel_args(alpha, march.beta, alpha_u, march.gradient)
     if offset is not None:
         offset = _api_number(offset, "offset", non_negative=True)
-    return alpha, float(alpha_u), beta, offset
+    return dataclasses.replace(surface, alpha=alpha, alpha_u=float(alpha_u), offset=offset), beta
 
 
-def _api_film(width, height, samples):
-    """``(width, height, samples)`` of :func:`scene_from_field`, checked."""
-    width = int(_api_number(width, "width", positive=True, integer=True))
-    height = int(_api_number(height, "height", positive=True, integer=True))
+def _api_march(march, beta):
+    """:func:`field_scene`'s ``march`` checked, with the checked ``beta``."""
+    eps = None if march.eps is None else _api_number(march.eps, "eps", positive=True)
+    tol = _api_number(march.tol, "tol", non_negative=True)
+    newton = (_API["newton"] if march.newton is None else
+              _api_number(march.newton, "newton", non_negative=True))
+    max_steps = int(_api_number(march.max_steps, "max_steps", positive=True, integer=True))
+    if max_steps > MAX_STEPS:
+        raise ValueError(f"max_steps must be at most {MAX_STEPS}, got {max_steps}")
+    return dataclasses.replace(march, beta=beta, eps=eps, tol=tol, newton=newton,
+                               max_steps=max_steps)
+
+
+def _api_film(film):
+    """:func:`field_scene`'s ``film`` checked: size, samples, lighting and background."""
+    width = int(_api_number(film.width, "width", positive=True, integer=True))
+    height = int(_api_number(film.height, "height", positive=True, integer=True))
     if width * height > MAX_PIXELS:
         raise ValueError(f"width x height is {width}x{height}: larger than "
                          f"{MAX_PIXELS // 1_000_000} megapixels")
-    samples = int(_api_number(samples, "samples", positive=True, integer=True))
+    samples = int(_api_number(film.samples, "samples", positive=True, integer=True))
     if samples > MAX_SAMPLES:
         raise ValueError(f"samples must be at most {MAX_SAMPLES}, got {samples}")
-    return width, height, samples
+    lighting = _api_lighting(film.lighting)
+    background = tuple(int(round(v)) for v in check_color(film.background, "background"))
+    return dataclasses.replace(film, width=width, height=height, samples=samples,
+                               adaptive=bool(film.adaptive),
+                               transparent=bool(film.transparent), lighting=lighting,
+                               background=background)
 
 
 def _api_lighting(lighting):
@@ -696,7 +762,7 @@ def _view_or_camera(view, camera):
     if isinstance(camera, str):
         warnings.warn(f"scene_from_field(camera={camera!r}): a view name is view={camera!r} now; "
                       "camera= takes (origin, dest, up) (the old use goes in the next release)",
-                      DeprecationWarning, stacklevel=3)
+                      DeprecationWarning, stacklevel=4)
         if view is None:
             camera, view = None, camera
     if view is not None and camera is not None:
@@ -704,10 +770,12 @@ def _view_or_camera(view, camera):
     return camera if view is None else view
 
 
-def _api_camera(field, camera, alpha, alpha_u, offset, eps, mode, width, height, up):
-    """``(origin, dest, up)`` of :func:`scene_from_field`'s ``camera``: three vectors, a view
-    name framing the surface, or None (the paper's beta-study camera); validated."""
+def _api_camera(field, camera, surface, march, film, up):
+    """The :class:`~tracer.rendering.camera.LookAt` of :func:`field_scene`'s ``camera``: three
+    vectors, a view name framing the surface (data's ``up`` axis), or None (the paper's
+    beta-study camera); validated."""
     lo, hi = field.bounds
+    alpha, alpha_u, offset, eps = surface.alpha, surface.alpha_u, surface.offset, march.eps
     if hasattr(camera, "forward") and hasattr(camera, "vertical"):
         # a tracer.rendering.camera.Camera (a render's ``res.camera``): the same view
         camera = (camera.origin, np.asarray(camera.origin) + np.asarray(camera.forward),
@@ -715,11 +783,11 @@ def _api_camera(field, camera, alpha, alpha_u, offset, eps, mode, width, height,
     if isinstance(camera, str):
         # the surface lies within its inflation bound plus its offset (exact mode: the
         # offset) of the data
-        grow = (offset if mode == "exact" and offset is not None else
-                1.0 / alpha if mode == "exact" else
+        grow = (offset if march.mode == "exact" and offset is not None else
+                1.0 / alpha if march.mode == "exact" else
                 field.inflation(alpha, alpha_u) + (offset or 0.0))
         camera = frame_points(field.mesh.used_vertices(), grow + 2.0 * (eps or 0.0), camera,
-                              width, height, up=up)
+                              film.width, film.height, up=up)
     elif camera is None:
         c = 0.5 * (lo + hi)
         # a single point (or identical points) has no extent: back off by the surface's size
@@ -732,8 +800,8 @@ def _api_camera(field, camera, alpha, alpha_u, offset, eps, mode, width, height,
         raise ValueError(f"camera must be (origin, dest, up), three 3-vectors; got {camera!r}") \
             from None
 
-    look_at(origin, dest, up, width, height)  # validates the camera
-    return origin, dest, up
+    look_at(origin, dest, up, film.width, film.height)  # validates the camera
+    return LookAt(origin, dest, up)
 
 
 def _api_number(value, name, **kw):

@@ -498,3 +498,20 @@ def test_cli_missing_scene_is_a_one_line_error(tmp_path):
     lines = p.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("error:") and "nope.json" in lines[0]
     assert not (tmp_path / "x.png").exists()
+
+
+def test_render_overrides_travel_in_the_scene_it_returns():
+    # render's newton / samples / adaptive are applied to a copy of the scene (the one the
+    # result holds); the scene given is left as it was, and is returned as is without them
+    field = SmoothDistanceField(fibonacci_sphere(40))
+    scene = scene_from_field(field, alpha=40.0, width=24, height=20, view="front")
+    plain = render(scene)
+    assert plain.scene is scene
+    res = render(scene, samples=3, newton=0.0)
+    assert (res.scene.film.samples, res.scene.march.newton) == (3, 0.0)
+    assert (scene.film.samples, scene.march.newton) == (1, scene_from_field.__kwdefaults__[
+        "newton"])
+    assert res.samples.max() == 3 and plain.samples.max() == 1
+    assert res.scene.objects == scene.objects and res.scene.film.width == 24
+    with pytest.raises(ValueError, match="samples"):
+        render(scene, samples=0)

@@ -3,15 +3,18 @@ dataclass, scene_from_field, mesh_scene / render_mesh, ``tracer render`` (flags,
 the mesh path), the scene loader and tracer/scenes/scene.schema.json agree with it."""
 
 import argparse
+import ast
 import dataclasses
 import inspect
 import json
+import pathlib
 
 import numpy as np
 import pytest
 
 from tracer import cli_render
 from tracer.scenes import from_mesh, scene as scene_mod, settings
+from tracer.rendering.lighting import Lighting
 from tracer.scenes.scene_schema import load_schema
 from tracer.scenes.settings import REQUIRED, default_text, defaults, table
 
@@ -49,12 +52,37 @@ def test_table_has_every_group_field_once_and_says_why_entries_differ():
             setattr(obj, dataclasses.fields(group)[0].name, 0)
 
 
-def test_scene_dataclass_defaults_are_the_file_defaults():
-    fields = {f.name: f for f in dataclasses.fields(scene_mod.Scene)}
-    shared = set(fields) & set(FILE)
+def test_scene_defaults_are_the_file_defaults():
+    # a Scene built without settings holds the groups' defaults, which are the file column;
+    # each setting also reads through the scene's shorthand of the same name
+    scene = scene_mod.Scene("s.json", camera_origin=[0, 0, 3], camera_dest=[0, 0, 0],
+                            camera_up=[0, 1, 0])
+    assert scene.march == settings.March() and scene.film == settings.Film()
+    shared = set(scene_mod._SHORTHANDS) & set(FILE)
     assert {"width", "beta", "newton", "shading", "lighting", "background"} <= shared
     for key in shared:
-        assert fields[key].default == FILE[key], key
+        assert getattr(scene, key) == FILE[key], key
+
+
+def test_scene_settings_travel_as_groups_and_shorthands_write_them():
+    scene = scene_mod.Scene("s.json", camera_origin=[0, 0, 3], camera_dest=[0, 0, 0],
+                            camera_up=[0, 1, 0], width=64, eps=1e-3, newton=0.0)
+    assert (scene.film.width, scene.march.eps, scene.march.newton) == (64, 1e-3, 0.0)
+    march, film = scene.march, scene.film
+    scene.eps, scene.samples = 2e-3, 4        # a shorthand replaces its (frozen) group
+    assert (scene.march.eps, scene.film.samples) == (2e-3, 4)
+    assert (march.eps, film.samples) == (1e-3, 1)      # the old groups are unchanged
+    scene.camera_origin = [0, 0, 5]
+    assert scene.camera.origin.tolist() == [0, 0, 5] and scene.camera.origin.dtype == float
+    # dataclasses.replace takes the shorthands too, over the groups of the scene it copies
+    other = dataclasses.replace(scene, height=32, camera_up=[1, 0, 0])
+    assert (other.film.height, other.film.width, other.film.samples) == (32, 64, 4)
+    assert other.camera.up.tolist() == [1, 0, 0] and scene.camera.up.tolist() == [0, 1, 0]
+    assert other.march is scene.march
+    with pytest.raises(TypeError, match="'widht'"):
+        scene_mod.Scene("s.json", camera=scene.camera, widht=3)
+    with pytest.raises(TypeError, match="camera"):
+        scene_mod.Scene("s.json", camera_origin=[0, 0, 3])
 
 
 def test_scene_from_field_signature_is_the_api_column():
@@ -83,16 +111,19 @@ def _render_parser():
 def test_cli_mesh_file_without_flags_gets_the_mesh_column(monkeypatch):
     seen = {}
 
-    def fake(path, **kw):
-        seen.update(kw)
+    def fake(path, F, kind, *groups, camera=None):
+        seen.clear()
+        for group in groups:
+            seen.update(dataclasses.asdict(group))
+        seen.update(kind=kind, camera=camera)
         return "scene"
 
-    monkeypatch.setattr(from_mesh, "mesh_scene", fake)
+    monkeypatch.setattr(from_mesh, "build_mesh_scene", fake)
     args = _render_parser().parse_args(["bunny.obj"])
     assert cli_render._build_mesh_scene(args) == "scene"
-    seen["width"], seen["height"] = seen.pop("size")
     assert seen.pop("camera") is None and seen.pop("kind") is None
-    assert seen.pop("lighting") == {}  # no flag given: Lighting() inside scene_from_field
+    assert seen.pop("lighting") == {}  # no flag given: Lighting() inside field_scene
+    assert set(seen) == set(MESH) - {"lighting"}
     for key, value in seen.items():
         assert value == MESH[key], key
     # and a flag wins
@@ -159,3 +190,34 @@ def test_loader_fills_left_out_keys_with_the_file_column(tmp_path):
     # the research API's deliberate difference: no attenuation unless asked
     api = scene_mod.scene_from_field(o.field, alpha=20.0, width=8, height=8)
     assert api.objects[0].alpha_u == 20.0 and api.shading == API["shading"]
+
+
+#: the modules a render goes through, scene to kernels
+RENDER_PATH = ("tracer/scenes/scene.py", "tracer/scenes/from_mesh.py", "tracer/cli_render.py",
+               "tracer/rendering/renderer.py", "tracer/rendering/frame.py",
+               "tracer/rendering/film.py", "tracer/rendering/gpu_render.py",
+               "tracer/rendering/march.py", "tracer/rendering/lighting.py",
+               "tracer/rendering/shading.py", "tracer/rendering/camera.py")
+#: the public entry points, which keep one keyword argument per setting (a pyvista user's
+#: habit) and build the settings groups once
+KEYWORD_ENTRY_POINTS = {"scene_from_field", "mesh_scene", "render_mesh"}
+#: the most settings a function below them takes one by one (the march kernels' ray function
+#: takes 8 scalars: numba compiles it for the GPU too, a NamedTuple of them is no cheaper)
+MOST_SETTINGS = 8
+
+
+def test_no_function_of_the_render_path_takes_more_than_eight_settings_one_by_one():
+    root = pathlib.Path(__file__).resolve().parents[3]
+    names = ({r.key for r in table()} | {f.name for f in dataclasses.fields(Lighting)}
+             | {"relax", "omega", "cone", "size", "newton_cos", "kind"})
+    seen, over = 0, {}
+    for module in RENDER_PATH:
+        for node in ast.walk(ast.parse((root / module).read_text())):
+            if isinstance(node, ast.FunctionDef):
+                a = node.args
+                mine = [p.arg for p in a.posonlyargs + a.args + a.kwonlyargs if p.arg in names]
+                seen += 1
+                if len(mine) > MOST_SETTINGS:
+                    over[node.name] = mine
+    assert seen > 200, seen     # the walk found the functions
+    assert set(over) == KEYWORD_ENTRY_POINTS, sorted(over)
