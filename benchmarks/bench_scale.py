@@ -34,7 +34,8 @@ import numba  # noqa: E402
 
 import smoothdist  # noqa: E402
 from smoothdist import DataMesh, SmoothDistanceField  # noqa: E402
-from tracer.rendering.renderer import ProgressBar, render  # noqa: E402
+from tracer.rendering.frame import ProgressBar  # noqa: E402
+from tracer.rendering.renderer import render  # noqa: E402
 from tracer.scenes.scene import scene_from_field  # noqa: E402
 
 SCENE = ROOT / "scenes" / "lidar_autzen.json"

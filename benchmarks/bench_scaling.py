@@ -6,7 +6,7 @@ threads up to the machine's cores (``numba.set_num_threads`` in this one process
 thread counts alternate within each repeat, so that their ratios are measured back to back),
 best of ``--repeat`` (3) per count. Two times per render:
 
-* ``seconds``: :attr:`tracer.rendering.renderer.RenderResult.seconds`, what ``tracer render --stats``
+* ``seconds``: :attr:`tracer.rendering.frame.RenderResult.seconds`, what ``tracer render --stats``
   reports (tracing, normals and, for the ``lit`` kind, the shading and samples), and
 * ``frame``: the whole frame in this process: ``render()`` plus writing the PNG.
 

@@ -40,7 +40,8 @@ import smoothdist  # noqa: E402
 from smoothdist import SmoothDistanceField  # noqa: E402
 from tracer.rendering import march  # noqa: E402
 from tracer.rendering.frame import MarchArgs  # noqa: E402
-from tracer.rendering.renderer import camera_of, render, scene_arrays  # noqa: E402
+from tracer.rendering.frame import camera_of, scene_arrays  # noqa: E402
+from tracer.rendering.renderer import render  # noqa: E402
 from tracer.scenes.scene import scene_from_field  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))

@@ -73,7 +73,7 @@ def main(argv=None):
     # film passes (tracer.rendering.film._trace and _Shader.light_at)
     from tracer.rendering.frame import (LightArgs, LightBuffers, MarchArgs, SampleBuffers,
                                         TraceOptions, scene_arrays)
-    from tracer.rendering.renderer import kernel_roots
+    from tracer.rendering.frame import kernel_roots
 
     from benchmarks import bench_gpu
 

@@ -32,7 +32,7 @@ import sys
 import traceback
 import warnings
 
-from tracer.outputs import CLIError
+from tracer.errors import CLIError
 
 #: command name -> the module that implements it (see the module docstring)
 COMMANDS = {

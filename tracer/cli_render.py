@@ -10,10 +10,12 @@ import numpy as np
 from smoothdist.cuda import CudaUnavailable, cuda_module
 from smoothdist.mesh import MESH_EXTENSIONS, needs_trimesh
 from tracer.image import false_color, save_npy, save_png
-from tracer.outputs import CLIError, atomic_write, check_outputs, make_parents
+from tracer.errors import CLIError
+from tracer.outputs import atomic_write, check_outputs, make_parents
 from tracer.rendering.camera import UP_AXES, VIEWS, LookAt, frame_points, look_at
-from tracer.rendering.film import MAX_SAMPLES
-from tracer.rendering.renderer import ProgressBar, render, scene_arrays
+from tracer.rendering.frame import MAX_SAMPLES
+from tracer.rendering.frame import ProgressBar, scene_arrays
+from tracer.rendering.renderer import render
 from tracer.scenes import from_mesh
 from tracer.scenes.from_mesh import describe_parameters, resolve_up, scene_dict
 from tracer.scenes.scene import AUTHORS_KEYS, BVH_TYPES, load_scene, mesh_paths, read_scene_json

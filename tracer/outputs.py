@@ -23,10 +23,9 @@ import os
 import secrets
 from contextlib import contextmanager
 from pathlib import Path
-from tracer.errors import CLIError  # noqa: F401  (defined there; imported from here too)
+from tracer.errors import CLIError
 
 __all__ = [
-    "CLIError",
     "MAX_SIDE",
     "positive",
     "non_negative",

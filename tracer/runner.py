@@ -42,7 +42,8 @@ import time
 import uuid
 
 from tracer.compiling import COMPILING, Eta
-from tracer.outputs import CLIError, csv_value, write_csv
+from tracer.errors import CLIError
+from tracer.outputs import csv_value, write_csv
 
 #: below this estimated serial cost (seconds) ``--scheduler local`` runs in-process
 LOCAL_MIN_SECONDS = 10.0

@@ -16,9 +16,9 @@ import numbers
 import os
 
 import numpy as np
-from tracer.errors import SceneError  # noqa: F401  (defined there; imported from here too)
+from tracer.errors import SceneError
 
-__all__ = ["SceneError", "MAX_JSON_BYTES", "file_error", "show", "json_type", "number", "vec3",
+__all__ = ["MAX_JSON_BYTES", "file_error", "show", "json_type", "number", "vec3",
            "choice", "check_keys", "resolve_path", "read_json"]
 
 #: largest JSON file we agree to parse (a scene or simulation file is a few kilobytes)

@@ -35,7 +35,8 @@ import tracer.validate
 from smoothdist import DataMesh, MeshRepairWarning, SmoothDistanceField
 from tracer.image import save_npy, save_png
 from tracer.outputs import atomic_write
-from tracer.rendering.renderer import RenderResult, render
+from tracer.rendering.frame import RenderResult
+from tracer.rendering.renderer import render
 from tracer.scenes.scene import load_scene, scene_from_field
 
 REPO = Path(__file__).resolve().parents[2]

@@ -17,7 +17,7 @@ import pytest
 
 from tracer import runner
 from tracer.cli import main
-from tracer.outputs import CLIError
+from tracer.errors import CLIError
 from tracer.studies import beta, grid
 
 TESTS = Path(__file__).resolve().parents[1]

@@ -97,9 +97,11 @@ import numpy as np
 
 from smoothdist.mesh import needs_trimesh
 from tracer.image import compare_images, false_color, save_png
-from tracer.outputs import CLIError, atomic_write, check_outputs
+from tracer.errors import CLIError
+from tracer.outputs import atomic_write, check_outputs
 from tracer.rendering.camera import primary_rays, pyvista_camera_params
-from tracer.rendering.renderer import camera_of, render, scene_arrays
+from tracer.rendering.frame import camera_of, scene_arrays
+from tracer.rendering.renderer import render
 from tracer.rendering.shading import shade_normals, view_normals
 from tracer.scenes.scene import load_scene, mesh_paths
 
@@ -435,7 +437,7 @@ def render_isosurface(surface, camera, background=(255, 255, 255), focal_distanc
 
     Raises
     ------
-    tracer.outputs.CLIError
+    tracer.errors.CLIError
         ``VTK cannot render off-screen here: ...`` when VTK fails.
     """
     W, H = camera.width, camera.height

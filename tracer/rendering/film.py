@@ -46,14 +46,13 @@ from smoothdist.schedule import parallel_tasks, run_tasks
 from tracer.rendering import lighting as _lighting
 from tracer.rendering import march
 from tracer.rendering.camera import CAM_HEIGHT, CAM_WIDTH, _scales, box_corners, primary_rays
-from tracer.rendering.frame import MAX_SAMPLES  # noqa: F401  (the film's limit; defined in frame)
 from tracer.rendering.frame import (LightArgs, LightBuffers, MarchArgs, SampleBuffers,
                                     TraceOptions)
 from tracer.rendering.shading import (load_matcap, shade_headlight, shade_matcap, shade_normals,
                             view_normals)
 from tracer.rendering.threads import in_bands
 
-__all__ = ["sample_offsets", "form_image", "MAX_SAMPLES", "ADAPTIVE_FIRST", "ADAPTIVE_SECOND"]
+__all__ = ["sample_offsets", "form_image", "ADAPTIVE_FIRST", "ADAPTIVE_SECOND"]
 
 #: samples of a pixel flagged by the adaptive pass before its own samples are compared
 ADAPTIVE_FIRST = 4

@@ -3,8 +3,7 @@
 :func:`render` and the tile scheduler (:func:`trace_tiles`); the pieces a frame is made of
 (:class:`~tracer.rendering.frame.RenderResult`, :func:`~tracer.rendering.frame.scene_arrays`, ...)
 live in :mod:`tracer.rendering.frame` and the thread helpers in :mod:`tracer.rendering.threads`,
-below the film, the light and the GPU path that use them; their names are importable from here as
-before.
+below the film, the light and the GPU path that use them; import them from there.
 """
 
 import threading
@@ -13,11 +12,10 @@ import time
 import numpy as np
 
 from smoothdist.cuda import check_device, cuda_module
+from tracer.errors import RenderError
 from tracer.rendering import march
 from tracer.rendering.camera import CAM_WIDTH
-from tracer.errors import RenderError  # noqa: F401  (defined there; imported from here too)
-from tracer.rendering.frame import (PixelBuffers, ProgressBar, RayArgs, RenderResult,
-                                    SceneArrays, TraceOptions, camera_of, check_steps,
+from tracer.rendering.frame import (PixelBuffers, RayArgs, RenderResult, camera_of, check_steps,
                                     distance_at_camera, kernel_roots, pixel_buffers,
                                     progress_callback, scene_arrays, shade, trace_options,
                                     with_overrides)
@@ -26,9 +24,7 @@ from tracer.rendering.gpu_render import render_cuda
 from tracer.rendering.shading import load_matcap
 from tracer.rendering.threads import in_bands, render_threads
 
-__all__ = ["render", "RenderResult", "RenderError", "camera_of", "distance_at_camera",
-           "scene_arrays", "SceneArrays", "RayArgs", "TraceOptions", "render_threads",
-           "ProgressBar"]
+__all__ = ["render", "trace_tiles", "CHUNKS_PER_THREAD"]
 
 
 def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None, omega=None,

@@ -22,7 +22,8 @@ from pathlib import Path
 
 from tracer import runner
 from tracer.cli import main
-from tracer.outputs import CLIError, write_json, write_text
+from tracer.errors import CLIError
+from tracer.outputs import write_json, write_text
 from tracer.reproduce import docs, experiments
 from tracer.reproduce.experiments import (EXPERIMENTS, NEEDS, SETTINGS, TABLE3_PAPER,
                                           load_average, merge_table3, provenance)

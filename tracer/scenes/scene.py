@@ -56,14 +56,15 @@ import numpy as np
 
 import smoothdist
 from smoothdist import DataMesh, SmoothDistanceField
+from tracer.errors import SceneError
 from tracer.rendering.camera import LookAt, frame_points, look_at
-from tracer.rendering.film import MAX_SAMPLES
+from tracer.rendering.frame import MAX_SAMPLES
 from tracer.rendering.lighting import Lighting, check_color
 from tracer.scenes.settings import KINDS, SCENE_KEYS, Film, March, Surface, View, defaults
-from tracer.validate import (SceneError, check_keys, choice, file_error, number, read_json,
-                             resolve_path, show, vec3)
+from tracer.validate import (check_keys, choice, file_error, number, read_json, resolve_path, show,
+                             vec3)
 
-__all__ = ["Scene", "SceneObject", "SceneError", "load_scene", "read_scene_json",
+__all__ = ["Scene", "SceneObject", "load_scene", "read_scene_json",
            "scene_from_field", "field_scene", "default_eps", "with_default_eps", "merge_meshes",
            "AUTHORS_KEYS"]
 
@@ -637,7 +638,7 @@ def scene_from_field(field, *, alpha, alpha_u=_API["alpha_u"], beta=_API["beta"]
         The data's up axis, for ``view``
         (:func:`tracer.rendering.camera.view_vectors`).
     samples : int
-        Anti-aliasing samples per pixel (1 to ``tracer.rendering.film.MAX_SAMPLES``), as the scene
+        Anti-aliasing samples per pixel (1 to ``tracer.rendering.frame.MAX_SAMPLES``), as the scene
         key.
     adaptive : bool
         Extra samples only where neighbouring pixels disagree (:mod:`tracer.rendering.film`).

@@ -19,9 +19,10 @@ from smoothdist import SmoothDistanceField
 from tracer.image import gif_frame, save_png
 from tracer.outputs import atomic_write
 from tracer.rendering.lighting import Lighting
-from tracer.rendering.renderer import ProgressBar, render
+from tracer.rendering.frame import ProgressBar
+from tracer.rendering.renderer import render
 from tracer.scenes.scene import Scene, SceneObject, default_eps
-from tracer.sim.simfile import auto_camera
+from tracer.sim.simulation import auto_camera
 
 __all__ = ["animate", "body_scene", "render_frames", "frame_indices", "write_mp4", "write_gif"]
 

@@ -14,7 +14,7 @@ written.
 import os
 import sys
 
-from tracer.outputs import CLIError
+from tracer.errors import CLIError
 from tracer.sim import run as sim_run
 from tracer.sim.frames import add_frame_arguments, check_frame_arguments, frame_needs, render_movie
 from tracer.sim.simfile import load_simulation

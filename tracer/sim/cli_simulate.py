@@ -14,8 +14,9 @@ and nothing is written.
 import os
 import sys
 
-from tracer.outputs import CLIError, at_least
-from tracer.rendering.renderer import ProgressBar
+from tracer.errors import CLIError
+from tracer.outputs import at_least
+from tracer.rendering.frame import ProgressBar
 from tracer.sim import run as sim_run
 from tracer.sim.frames import add_frame_arguments, check_frame_arguments, frame_needs, render_movie
 from tracer.sim.simfile import load_simulation

@@ -26,7 +26,8 @@ import numpy as np
 
 from tracer import runner
 from tracer.image import save_png
-from tracer.outputs import CLIError, at_least, check_size
+from tracer.errors import CLIError
+from tracer.outputs import at_least, check_size
 from tracer.rendering.renderer import render
 from tracer.runner import file_stamp
 from tracer.sim.animate import body_scene, frame_indices, write_gif, write_mp4

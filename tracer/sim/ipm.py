@@ -48,7 +48,7 @@ from typing import NamedTuple
 
 import numpy as np
 from scipy.linalg import cho_factor, cho_solve
-from tracer.errors import InfeasibleStart  # noqa: F401  (defined there; imported from here too)
+from tracer.errors import InfeasibleStart
 
 TAU = 0.995
 KAPPA = 1e10

@@ -31,14 +31,14 @@ import time
 import numpy as np
 
 from smoothdist import SmoothDistanceField
-from tracer.errors import OverlapError  # noqa: F401  (defined there; imported from here too)
+from tracer.errors import OverlapError
 from tracer.outputs import atomic_write
 from tracer.sim.bodies import thickness
 from tracer.sim.constraint import DEFAULT_TORQUES, ContactConstraint
 from tracer.sim.integrator import Integrator
 
-__all__ = ["simulate", "build", "OverlapError", "check_initial_state", "save_trajectory",
-           "load_trajectory", "restore", "closest_gap", "describe_gap", "FRAME_KEYS"]
+__all__ = ["simulate", "build", "check_initial_state", "save_trajectory",
+           "load_trajectory", "restore_frame", "closest_gap", "describe_gap", "FRAME_KEYS"]
 
 #: keys with one row per frame
 FRAME_KEYS = ("rotations", "translations", "centers", "velocities", "angular_velocities", "time",

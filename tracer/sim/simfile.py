@@ -69,26 +69,21 @@ import os
 import numpy as np
 
 from smoothdist import DataMesh
-from tracer.errors import SimFileError  # noqa: F401  (defined there; imported from here too)
 from tracer.scenes.scene import SHADINGS
 from tracer.sim import primitives
 from tracer.sim.authors_format import build_simulation
 from tracer.sim.bodies import (AUTO_THICKNESS_OFFSET, Body, auto_alpha, rotation_matrix,
                                thickness)
 from tracer.sim.constraint import DEFAULT_TORQUES, TORQUES
-from tracer.validate import (SceneError, check_keys, choice, number, read_json, resolve_path,
-                             show, vec3)
-# the loaded simulation's types, defined in tracer.sim.simulation and imported from here too
+from tracer.errors import SceneError
+from tracer.validate import check_keys, choice, number, read_json, resolve_path, show, vec3
 from smoothdist.field import AUTO_ALPHA_U_FACTOR
+from tracer.errors import SimFileError
 from tracer.rendering.camera import look_at
-from tracer.sim.simulation import (AUTO_CAMERA_ELEVATION, AUTO_CAMERA_FOCUS,  # noqa: F401
-                                   AUTO_CAMERA_FOCUS_ELEVATION, AUTO_CAMERA_FOCUS_GROW,
-                                   AUTO_CAMERA_MARGIN, DEFAULT_FRAMES, MovieCamera, Simulation,
-                                   auto_camera)
+from tracer.sim.simulation import DEFAULT_FRAMES, MovieCamera, Simulation
 from tracer.sim.simulation import wrap_scene_error as _wrap
 
-__all__ = ["Simulation", "MovieCamera", "SimFileError", "load_simulation", "read_simulation_json",
-           "auto_camera"]
+__all__ = ["load_simulation", "read_simulation_json"]
 
 _TOP = {"name", "description", "dt", "steps", "gravity", "beta", "constraint", "gap_tol",
         "torques", "camera", "bodies"}

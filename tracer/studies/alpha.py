@@ -34,9 +34,11 @@ from types import SimpleNamespace
 import numpy as np
 
 from tracer import runner
-from tracer.outputs import (CLIError, check_size, float_list, non_negative, output_folder,
-                            positive, write_bytes, write_json, write_text)
-from tracer.rendering.renderer import RenderError, render
+from tracer.errors import CLIError
+from tracer.outputs import (check_size, float_list, non_negative, output_folder, positive,
+                            write_bytes, write_json, write_text)
+from tracer.errors import RenderError
+from tracer.rendering.renderer import render
 from tracer.runner import duration
 from tracer.scenes.scene import scene_from_field
 from tracer.studies.common import (REPO, TYPES, add_common, add_view_arguments, field_of,

@@ -45,8 +45,8 @@ import numba
 import numpy as np
 
 from tracer import runner
-from tracer.outputs import (CLIError, check_size, float_list, output_folder, positive,
-                            write_bytes, write_json)
+from tracer.errors import CLIError
+from tracer.outputs import check_size, float_list, output_folder, positive, write_bytes, write_json
 from tracer.rendering import renderer
 from tracer.runner import duration
 from tracer.scenes.scene import scene_from_field

@@ -19,8 +19,8 @@ import numpy as np
 
 from smoothdist import DataMesh, SmoothDistanceField
 from tracer import runner
-from tracer.outputs import (CLIError, at_least, non_negative, output_folder, positive, write_csv,
-                            write_json)
+from tracer.errors import CLIError
+from tracer.outputs import at_least, non_negative, output_folder, positive, write_csv, write_json
 from tracer.runner import duration, file_stamp
 from tracer.studies.common import REPO, add_common, load_mesh_checked, machine_info, study_needs
 from tracer.studies.plots import PAPER_BH, bh_plot

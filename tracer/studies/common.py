@@ -20,7 +20,7 @@ import numpy as np
 
 from smoothdist import DataMesh, MeshRepairWarning, SmoothDistanceField
 from smoothdist.mesh import needs_trimesh
-from tracer.outputs import CLIError
+from tracer.errors import CLIError
 from tracer.rendering.camera import UP_AXES, VIEWS, frame_points
 from tracer.runner import file_stamp, needs as cluster_needs
 from tracer.scenes.from_mesh import resolve_up

@@ -23,7 +23,8 @@ import numpy as np
 
 from smoothdist import DataMesh, MeshRepairWarning, SmoothDistanceField
 from tracer import runner
-from tracer.outputs import CLIError, non_negative, output_folder, positive, write_json
+from tracer.errors import CLIError
+from tracer.outputs import non_negative, output_folder, positive, write_json
 from tracer.runner import duration, file_stamp
 from tracer.studies.common import (REPO, TYPE_LETTER, TYPES, add_common, machine_info,
                                    parse_types, study_needs)

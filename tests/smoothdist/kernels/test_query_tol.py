@@ -238,7 +238,8 @@ def _scene_file(tmp_path, **extra):
 
 
 def test_scene_key_tol(tmp_path):
-    from tracer.scenes.scene import SceneError, load_scene
+    from tracer.errors import SceneError
+    from tracer.scenes.scene import load_scene
 
     assert load_scene(_scene_file(tmp_path)).tol == 0.0
     assert load_scene(_scene_file(tmp_path, tol=1e-3)).tol == 1e-3

@@ -26,8 +26,10 @@ import pytest
 from smoothdist import SmoothDistanceField
 from tracer.rendering import film
 from tracer.rendering.camera import ray_direction
-from tracer.rendering.film import MAX_SAMPLES, sample_offsets
-from tracer.rendering.renderer import camera_of, render
+from tracer.rendering.film import sample_offsets
+from tracer.rendering.frame import MAX_SAMPLES
+from tracer.rendering.frame import camera_of
+from tracer.rendering.renderer import render
 from tracer.scenes.scene import load_scene, scene_from_field
 
 ROOT = Path(__file__).resolve().parents[3]

@@ -28,7 +28,8 @@ from tracer.rendering.camera import primary_rays
 from tracer.rendering.lighting import (AO_SAMPLES, Lighting, ambient_occlusion, light_directions,
                              linear_to_srgb, shade_ground, shade_lit, soft_shadow,
                              srgb_to_linear)
-from tracer.rendering.renderer import camera_of, kernel_roots, render, scene_arrays
+from tracer.rendering.frame import camera_of, kernel_roots, scene_arrays
+from tracer.rendering.renderer import render
 from tracer.scenes.scene import Scene, SceneObject, default_eps, load_scene, scene_from_field
 
 UP = np.array([0.0, 1.0, 0.0])
@@ -132,7 +133,7 @@ def test_ground_pixels_are_where_the_rays_meet_the_plane(ball):
     sphere = b * b - (oc @ oc - BALL_R ** 2) >= 0
     # the ground fades out (tracer.rendering.film.FADE, GROUND_MIN_FADE) around the surface's box
     from tracer.rendering import film
-    from tracer.rendering.renderer import scene_arrays
+    from tracer.rendering.frame import scene_arrays
 
     arrays = scene_arrays(scene)
     centre = 0.5 * (arrays.lo + arrays.hi)
@@ -435,7 +436,7 @@ def write_scene(folder, **edits):
     (dict(object={"color": [0, 0, 0.5]}), "objects[0].color must be [r, g, b] integers"),
 ])
 def test_bad_scene_file_values(tmp_path, edits, message):
-    from tracer.scenes.scene import SceneError
+    from tracer.errors import SceneError
 
     path = write_scene(tmp_path, **edits)
     with pytest.raises(SceneError) as info:

@@ -27,8 +27,10 @@ from tracer.rendering.camera import primary_rays
 from tracer.rendering.frame import MarchArgs, SampleBuffers, TraceOptions
 from tracer.cli import main
 from tracer.image import load_png
-from tracer.rendering.renderer import camera_of, render, scene_arrays
-from tracer.scenes.scene import SceneError, load_scene, scene_from_field
+from tracer.rendering.frame import camera_of, scene_arrays
+from tracer.rendering.renderer import render
+from tracer.errors import SceneError
+from tracer.scenes.scene import load_scene, scene_from_field
 from test_query_tol import BUNNY, ROOT
 
 SCENES = ROOT / "scenes"

@@ -15,7 +15,7 @@ import pytest
 
 from smoothdist import DataMesh, SmoothDistanceField
 from tracer.rendering import march
-from tracer.rendering.renderer import scene_arrays
+from tracer.rendering.frame import scene_arrays
 from tracer.scenes.scene import Scene, SceneObject
 
 

@@ -19,7 +19,8 @@ import pytest
 
 from smoothdist import SmoothDistanceField
 from tracer.rendering.camera import look_at, primary_rays, project
-from tracer.rendering.renderer import RenderError, render
+from tracer.errors import RenderError
+from tracer.rendering.renderer import render
 from tracer.scenes.scene import Scene, SceneObject, load_scene, scene_from_field
 
 ROOT = Path(__file__).resolve().parents[3]

@@ -26,8 +26,8 @@ from smoothdist import DataMesh, SmoothDistanceField
 from tracer.rendering import march, renderer as render_mod
 from tracer.rendering.frame import (LightArgs, LightBuffers, MarchArgs, PixelBuffers,
                                     SampleBuffers)
-from tracer.rendering.renderer import (RayArgs, TraceOptions, camera_of, kernel_roots, render, scene_arrays,
-                           trace_tiles)
+from tracer.rendering.frame import RayArgs, TraceOptions, camera_of, kernel_roots, scene_arrays
+from tracer.rendering.renderer import render, trace_tiles
 from tracer.scenes.scene import load_scene, scene_from_field
 
 ROOT = Path(__file__).resolve().parents[3]

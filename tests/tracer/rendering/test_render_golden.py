@@ -162,7 +162,8 @@ def test_identical_render_passes(reference):
 
 def test_shifted_camera_fails(reference):
     """Moving the camera sideways by 1.5 pixels' worth must be caught."""
-    from tracer.rendering.renderer import camera_of, render
+    from tracer.rendering.frame import camera_of
+    from tracer.rendering.renderer import render
 
     scene, rgb = reference
     cam = camera_of(scene)
@@ -280,7 +281,7 @@ def test_pyvista_isosurface_matches_tracer(compare_render, name, min_iou, max_an
 def test_scene_field_matches_the_tracer_kernel(compare_mod):
     """The grid sampler evaluates exactly the function the tracer marches."""
     from tracer.rendering import march
-    from tracer.rendering.renderer import scene_arrays
+    from tracer.rendering.frame import scene_arrays
 
     rng = np.random.default_rng(3)
     for name in ("two_objects", "capillary_exact", "bunny_points"):
@@ -337,7 +338,8 @@ def test_sphere_point_cloud_matches_analytic_disc(compare_render):
     r_iso ~ 1.08 (the 'continuum' estimate: density 1500 / 4 pi, sum of exp(-alpha r) over
     the sphere = 1). Both pipelines' silhouettes must match the analytic disc of radius r_iso."""
     from tracer.rendering.camera import primary_rays
-    from tracer.rendering.renderer import camera_of, render
+    from tracer.rendering.frame import camera_of
+    from tracer.rendering.renderer import render
 
     alpha, beta = 20.0, 0.5           # beta as in the scenes (0 would take ~20 x longer)
     scene = _sphere_cloud_scene(beta=beta)

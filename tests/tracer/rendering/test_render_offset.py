@@ -18,8 +18,10 @@ from tracer.rendering import lighting
 from tracer.rendering.camera import primary_rays
 from tracer.cli import main
 from tracer.scenes.from_mesh import describe_parameters, mesh_scene
-from tracer.rendering.renderer import render, scene_arrays
-from tracer.scenes.scene import Scene, SceneError, SceneObject, load_scene, scene_from_field
+from tracer.rendering.frame import scene_arrays
+from tracer.rendering.renderer import render
+from tracer.errors import SceneError
+from tracer.scenes.scene import Scene, SceneObject, load_scene, scene_from_field
 
 SIZE = 40
 CAMERA = ((0.6, 0.8, 3.2), (0.0, 0.0, 0.0), (0.0, 1.0, 0.0))

@@ -16,7 +16,9 @@ import pytest
 from tracer.cli import main
 from tracer.sim import run
 from tracer.sim.authors_format import EDGE_MASS_SCALE
-from tracer.sim.simfile import SimFileError, auto_camera, load_simulation
+from tracer.errors import SimFileError
+from tracer.sim.simfile import load_simulation
+from tracer.sim.simulation import auto_camera
 
 DATA = os.path.join(os.path.dirname(__file__), "..", "..", "data", "authors_sims")
 ROT_Z = [[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]       # +90 degrees about z
@@ -354,7 +356,7 @@ def test_the_automatic_camera_focuses_on_the_motion_over_terrain(tmp_path, plane
     frame: the moving cube's swept box fills a good part of the image, seen from higher up.
     A static body of the motion's size is framed whole, as before."""
     from tracer.rendering.camera import look_at, project
-    from tracer.sim.simfile import AUTO_CAMERA_ELEVATION, AUTO_CAMERA_FOCUS_ELEVATION
+    from tracer.sim.simulation import AUTO_CAMERA_ELEVATION, AUTO_CAMERA_FOCUS_ELEVATION
 
     spec = _spec()
     a = plane_size

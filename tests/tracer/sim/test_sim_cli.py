@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 from tracer.cli import main
-from tracer.sim.simfile import SimFileError, load_simulation
+from tracer.errors import SimFileError
+from tracer.sim.simfile import load_simulation
 
 
 def _sim(tmp_path, **changes):

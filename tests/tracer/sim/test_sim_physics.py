@@ -10,6 +10,7 @@ import pytest
 import trimesh
 
 from smoothdist import DataMesh, SmoothDistanceField
+from tracer.errors import InfeasibleStart
 from tracer.sim import ipm, primitives
 from tracer.sim.bodies import Body, left_jacobian, mass_properties, rotation_matrix
 from tracer.sim.constraint import ContactConstraint
@@ -208,7 +209,7 @@ def test_ipm_projects_onto_a_sphere_and_every_iterate_is_feasible():
 
 
 def test_ipm_refuses_an_infeasible_start():
-    with pytest.raises(ipm.InfeasibleStart):
+    with pytest.raises(InfeasibleStart):
         ipm.solve(np.zeros(3), lambda x: (0.0, 0 * x), lambda x: np.eye(3),
                   lambda x: (-1.0, np.ones(3)), mu0=1, mu_min=1e-6, tol=1e-6)
 

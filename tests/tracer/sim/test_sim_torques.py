@@ -394,7 +394,8 @@ def test_torques_key_and_cli_flag(tmp_path, capsys):
     same run; exact and split differ once the box tilts on the floor; a bad value is a
     one-line error."""
     from tracer.cli import main
-    from tracer.sim.simfile import SimFileError, load_simulation
+    from tracer.errors import SimFileError
+    from tracer.sim.simfile import load_simulation
 
     assert load_simulation(_box_file(tmp_path)).torques == "exact"
     assert load_simulation(_box_file(tmp_path, torques="split")).torques == "split"

@@ -528,7 +528,7 @@ def test_beta_study_estimated_above_the_threshold_is_not_run_in_process(tmp_path
                                                                          monkeypatch):
     """A 64² study whose probes say 72 s (the bunny's beta = 0 renders are that slow) is not
     judged small enough for in-process: --scheduler local asks for its cluster (stubbed)."""
-    from tracer.outputs import CLIError
+    from tracer.errors import CLIError
     from tracer.studies import beta
 
     def fake_probe(tasks, probe_size):
