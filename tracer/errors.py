@@ -17,8 +17,25 @@ catches ``ValueError`` around a render or a load keeps working. Only the standar
 imported here.
 """
 
+import os
+import sys
+
 __all__ = ["TracerError", "CLIError", "SceneError", "SimFileError", "RenderError",
-           "OverlapError", "InfeasibleStart", "ThinFeatureWarning"]
+           "OverlapError", "InfeasibleStart", "ThinFeatureWarning", "user_stacklevel"]
+
+#: the tracer package's folder (frames of its modules are not the user's)
+_PACKAGE = os.path.dirname(os.path.abspath(__file__)) + os.sep
+
+
+def user_stacklevel():
+    """The ``stacklevel`` for ``warnings.warn`` in the function that calls this one, such that
+    the warning names the first caller outside the tracer package (the user's line), however
+    many of the package's functions lie between (``render_mesh`` -> ``build_mesh_scene`` ->
+    ...)."""
+    frame, level = sys._getframe(1), 1
+    while frame is not None and os.path.abspath(frame.f_code.co_filename).startswith(_PACKAGE):
+        frame, level = frame.f_back, level + 1
+    return level
 
 
 class ThinFeatureWarning(UserWarning):

@@ -19,7 +19,7 @@ import numpy as np
 import smoothdist
 from smoothdist import DataMesh, SmoothDistanceField
 from smoothdist.convert import is_foreign_geometry
-from tracer.errors import ThinFeatureWarning
+from tracer.errors import ThinFeatureWarning, user_stacklevel
 from tracer.rendering.camera import UP_AXES, LookAt, frame_points
 from tracer.rendering.renderer import render
 from tracer.scenes.scene import field_scene, with_default_eps
@@ -388,7 +388,7 @@ def warn_thin_tubes(scene, probes=128):
                   f"({half:.3g} scene units at {scene.film.width}x{scene.film.height}) at alpha "
                   f"{o.alpha:.4g}: they show as specks; alpha {a:.3g} or lower, or a larger "
                   f"offset (--offset {half:.3g}), would show them", ThinFeatureWarning,
-                  stacklevel=3)
+                  stacklevel=user_stacklevel())
 
 
 def render_mesh(mesh, F=None, *, kind=None, alpha=_MESH["alpha"], alpha_u=_MESH["alpha_u"],

@@ -56,7 +56,7 @@ import numpy as np
 
 import smoothdist
 from smoothdist import DataMesh, SmoothDistanceField
-from tracer.errors import SceneError
+from tracer.errors import SceneError, user_stacklevel
 from tracer.rendering.camera import LookAt, frame_points, look_at
 from tracer.rendering.frame import MAX_SAMPLES
 from tracer.rendering.lighting import Lighting, check_color
@@ -763,7 +763,7 @@ def _view_or_camera(view, camera):
     if isinstance(camera, str):
         warnings.warn(f"scene_from_field(camera={camera!r}): a view name is view={camera!r} now; "
                       "camera= takes (origin, dest, up) (the old use goes in the next release)",
-                      DeprecationWarning, stacklevel=4)
+                      DeprecationWarning, stacklevel=user_stacklevel())
         if view is None:
             camera, view = None, camera
     if view is not None and camera is not None:

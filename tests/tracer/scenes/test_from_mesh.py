@@ -409,9 +409,10 @@ def test_alpha_u_auto_everywhere():
     # scene_from_field keeps None = no attenuation (alpha_u = alpha)
     assert scene_from_field(field, alpha=5.0, width=8, height=8).objects[0].alpha_u == 5.0
     # the old spelling: a view name as camera= warns, and frames the same camera (issue 50)
-    with pytest.warns(DeprecationWarning, match="view='iso'"):
+    with pytest.warns(DeprecationWarning, match="view='iso'") as rec:
         old = scene_from_field(field, alpha="auto", alpha_u="auto", width=8, height=8,
                                camera="iso")
+    assert rec[0].filename == __file__      # the warning names the caller's line
     for a, b in ((old.camera_origin, s.camera_origin), (old.camera_dest, s.camera_dest),
                  (old.camera_up, s.camera_up)):
         np.testing.assert_array_equal(a, b)

@@ -325,6 +325,10 @@ def test_tubes_thinner_than_half_a_pixel_give_a_warning(tmp_path, capsys):
         tracer.mesh_scene(mesh, alpha=500.0, size=(512, 512), view="iso")
     suggested = float(str(rec[0].message).split("; alpha ")[1].split(" or lower")[0])
     assert suggested < 500.0
+    assert rec[0].filename == __file__      # it names the user's line, not the package's
+    with pytest.warns(ThinFeatureWarning) as rec:
+        tracer.mesh_scene([mesh, mesh], alpha=500.0, size=(64, 64), view="iso")
+    assert rec[0].filename == __file__
     with warnings.catch_warnings():
         warnings.simplefilter("error", ThinFeatureWarning)
         tracer.mesh_scene(mesh, alpha=suggested, size=(512, 512), view="iso")
