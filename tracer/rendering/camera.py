@@ -266,23 +266,28 @@ def ray_direction(cam, row, col):
     return rx / norm, ry / norm, rz / norm
 
 
-def primary_rays(camera):
+def primary_rays(camera, rows=None):
     """Unit directions of all primary rays (vectorised :func:`ray_direction`).
 
     Parameters
     ----------
     camera : Camera
+    rows : (int, int), optional
+        ``(r0, r1)``: only the image rows ``r0 <= row < r1`` (the same values as those rows of
+        the whole image).
 
     Returns
     -------
     (H, W, 3) float64 array
         ``rays[row, col]`` is the world-space unit direction for image row ``row`` (0 = top)
-        and column ``col``; every ray starts at ``camera.origin``.
+        and column ``col``; every ray starts at ``camera.origin``. With ``rows``:
+        ``(r1 - r0, W, 3)``.
     """
     width, height = float(camera.width), float(camera.height)
     sx, sy = _scales(width, height)
     cols = np.arange(camera.width, dtype=np.float64)
-    rows = np.arange(camera.height, dtype=np.float64)
+    r0, r1 = (0, camera.height) if rows is None else rows
+    rows = np.arange(r0, r1, dtype=np.float64)
     dx = ((cols / width - 0.5) * sx)[None, :, None]
     dy = (((height - 1.0 - rows) / height - 0.5) * sy)[:, None, None]
     rays = camera.forward + dx * camera.horizontal + dy * camera.vertical

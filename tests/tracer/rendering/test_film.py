@@ -25,10 +25,9 @@ import pytest
 
 from smoothdist import SmoothDistanceField
 from tracer.rendering import film
-from tracer.rendering.camera import ray_direction
+from tracer.rendering.camera import look_at, primary_rays, ray_direction
 from tracer.rendering.film import sample_offsets
-from tracer.rendering.frame import MAX_SAMPLES
-from tracer.rendering.frame import camera_of
+from tracer.rendering.frame import MAX_SAMPLES, camera_of
 from tracer.rendering.renderer import render
 from tracer.scenes.scene import load_scene, scene_from_field
 
@@ -409,3 +408,28 @@ def test_light_fill_takes_no_shadow_from_across_the_terminator(monkeypatch):
     # all four on the other side (all 0, agreeing): the pixel's shadow is traced on its own
     (got_s, got_a), sh, oc = _fill_case([0.0] * 4, a, lit_side=(False,) * 4)
     assert not got_s[5] and got_a[5] and sh == -1.0
+
+
+def test_the_films_host_shortcuts_give_numpys_values_bit_for_bit():
+    # the film's faster forms (issue 49: its host work) must not move a pixel: lengths as
+    # np.linalg.norm's, unit vectors as the division they replace (0 for a zero or NaN
+    # length), primary rays in bands as in one piece, and the sRGB encoding in bands
+    rng = np.random.default_rng(3)
+    v = rng.normal(size=(5000, 3)) * rng.lognormal(sigma=4.0, size=(5000, 1))
+    v[:3] = 0.0
+    v[3, 1] = np.nan
+    n = np.linalg.norm(v, axis=-1, keepdims=True)
+    assert np.array_equal(film._norm3(v), n[:, 0], equal_nan=True)
+    old = np.where(n > 0, v / np.where(n > 0, n, 1.0), 0.0)
+    assert np.array_equal(film._unit(v), old) and np.array_equal(
+        film._unit(v.reshape(50, 100, 3)), old.reshape(50, 100, 3))
+    cam = look_at([0.3, 0.2, 3.0], [0, 0, 0], [0, 1, 0], 37, 53)
+    whole = primary_rays(cam)
+    bands = np.concatenate([primary_rays(cam, rows=(a, b)) for a, b in ((0, 20), (20, 53))])
+    assert np.array_equal(whole, bands)
+
+    class Lit:
+        lit = True
+    colour = rng.random((1000, 3)) * 1.3 - 0.1
+    assert np.array_equal(film._Shader.encode(Lit(), colour),
+                          film._lighting.linear_to_srgb(colour))
