@@ -345,3 +345,13 @@ def test_the_self_shadow_sentence_follows_its_files():
     page = (ROOT / "docs" / "guide" / "troubleshooting.md").read_text(encoding="utf-8")
     assert words(d, before) in _flat(page)
     assert d["wrong"] == sum(r["wrong"] for r in d["rows"])
+
+
+def test_the_film_host_sentence_follows_its_file():
+    """The film's host work before and after (``film_host.json``, issue 49)."""
+    text = _flat(_guide())
+    data = _load("film_host.json")
+    assert (f"{data['before_host_s_median']:.2f} -> {data['after_host_s_median']:.2f} s "
+            "(medians), with the same image") in text
+    assert data["same_image"] and data["size"] == [1920, 1080] and data["samples"] == 16
+    assert len(data["before"]) == len(data["after"]) == 3 and data["threads"] == 2
