@@ -50,7 +50,7 @@ from tracer.rendering.frame import (LightArgs, LightBuffers, MarchArgs, SampleBu
                                     TraceOptions)
 from tracer.rendering.shading import (load_matcap, shade_headlight, shade_matcap, shade_normals,
                             view_normals)
-from tracer.rendering.threads import in_bands
+from tracer.rendering.threads import CHUNK, in_bands, in_chunks
 
 __all__ = ["sample_offsets", "form_image", "ADAPTIVE_FIRST", "ADAPTIVE_SECOND"]
 
@@ -220,18 +220,22 @@ class _Shader:
         fade = np.zeros(n)
         if self.ground is None or not miss.any():
             return on, pts, fade
-        du = dirs @ self.up
-        t = (self.ground - self.origin @ self.up) / np.where(du < 0, du, -1.0)
-        on = miss & (du < -1e-9) & (t > 0) & np.isfinite(t)
-        idx = np.flatnonzero(on)
-        pts[idx] = p = self.origin + t[idx, None] * dirs[idx]
+        height = self.ground - self.origin @ self.up
         # the ground fades into the background away from the object (a studio floor)
-        r = _norm3(p - (self.centre - (self.centre @ self.up - self.ground) * self.up))
-        f = np.exp(-(r / self.fade_radius) ** 2)
-        # where the ground has faded into the background it is background (and needs no light)
-        keep = f >= GROUND_MIN_FADE
-        fade[idx[keep]] = f[keep]
-        on[idx[~keep]] = False
+        below = self.centre - (self.centre @ self.up - self.ground) * self.up
+
+        def chunk(a, b):                  # each ray on its own
+            du = dirs[a:b] @ self.up
+            t = height / np.where(du < 0, du, -1.0)
+            idx = np.flatnonzero(miss[a:b] & (du < -1e-9) & (t > 0) & np.isfinite(t))
+            p = self.origin + t[idx, None] * dirs[a:b][idx]
+            f = np.exp(-(_norm3(p - below) / self.fade_radius) ** 2)
+            # where the ground has faded into the background it is background (no light)
+            keep = f >= GROUND_MIN_FADE
+            pts[a:b][idx] = p
+            on[a:b][idx[keep]] = True
+            fade[a:b][idx[keep]] = f[keep]
+        in_chunks(chunk, n)
         return on, pts, fade
 
     # ------------------------------------------------------------------ samples
@@ -246,7 +250,14 @@ class _Shader:
         at every LIGHT_STRIDE-th pixel of every LIGHT_STRIDE-th row and filled in between
         (``_fill_light``)."""
         n = len(hit)
-        normals = _unit(grad)
+        normals = np.empty((n, 3))
+        P = np.empty((n, 3)) if self.lit else None
+
+        def geometry(a, b):
+            normals[a:b] = _unit(grad[a:b])
+            if P is not None:
+                P[a:b] = self.origin + np.where(hit[a:b], t[a:b], 0.0)[:, None] * dirs[a:b]
+        in_chunks(geometry, n)
         if not self.lit:
             nv = view_normals(normals.reshape(n, 1, 3), self.camera)
             h2 = hit.reshape(n, 1)
@@ -258,7 +269,6 @@ class _Shader:
                 rgb = shade_normals(nv, h2)
             colour = rgb.reshape(n, 3).astype(np.float64) / 255.0
             return colour, hit.astype(np.float64), {"obj": np.zeros(n, np.int64), "hit": hit}
-        P = self.origin + np.where(hit, t, 0.0)[:, None] * dirs
         obj = self.objects_at(P[hit]) if objs is None else np.asarray(objs, np.int64)[hit]
         obj_all = np.full(n, -1, dtype=np.int64)
         obj_all[hit] = obj
@@ -275,8 +285,13 @@ class _Shader:
             ao[same] = a_i[same]
             fresh &= ~same
         # the gradient points out of the surface, towards the side the ray came from
-        facing = np.where(hit[:, None], normals, self.up)
-        depth = np.where(hit, t, _norm3(G - self.origin))
+        facing = np.empty((n, 3))
+        depth = np.empty(n)
+
+        def side(a, b):
+            facing[a:b] = np.where(hit[a:b, None], normals[a:b], self.up)
+            depth[a:b] = np.where(hit[a:b], t[a:b], _norm3(G[a:b] - self.origin))
+        in_chunks(side, n)
 
         def light(idx, shadows=True, occlusion=True):
             for part, pts, ground in ((idx[hit[idx]], P, False), (idx[~hit[idx]], G, True)):
@@ -289,8 +304,9 @@ class _Shader:
 
         if grid is not None and LIGHT_STRIDE > 1:
             H, W = grid
-            r, c = np.divmod(np.arange(n), W)
-            coarse = fresh & (r % LIGHT_STRIDE == 0) & (c % LIGHT_STRIDE == 0)
+            on_grid = np.zeros((H, W), dtype=bool)
+            on_grid[::LIGHT_STRIDE, ::LIGHT_STRIDE] = True
+            coarse = fresh & on_grid.ravel()
             light(np.flatnonzero(coarse))
             key = np.where(hit, obj_all, np.where(on_ground, -2, -1))
             got_s, got_a = _fill_light((H, W), fresh & ~coarse, coarse, key, depth, facing,
@@ -301,13 +317,27 @@ class _Shader:
             light(np.flatnonzero(rest & got_s & ~got_a), shadows=False)
         else:
             light(np.flatnonzero(fresh))
+        colour, alpha = self.colours(hit, obj, normals, dirs, shadow, ao, on_ground, fade)
+        record = {"obj": obj_all, "ground": on_ground, "shadow": shadow, "ao": ao, "hit": hit,
+                  "on_ground": on_ground}
+        return colour, alpha, record
+
+    def colours(self, hit, obj, normals, dirs, shadow, ao, on_ground, fade):
+        """Linear colours ``(n, 3)`` and alphas ``(n,)`` of lit samples: the surface's at the
+        hits (``obj``: the object of each hit, in order), the ground's where rays meet it
+        (``fade``), nothing elsewhere."""
+        n = len(hit)
         colour = np.zeros((n, 3))
         alpha = np.zeros(n)
-        if hit.any():
-            colour[hit] = _lighting.shade_lit(normals[hit], dirs[hit], self.base[obj],
-                                              shadow[hit], ao[hit], self.key, self.fill,
-                                              self.up, self.light.exposure)
-            alpha[hit] = 1.0
+        h = np.flatnonzero(hit)
+
+        def surface(a, b):                  # each hit on its own
+            i = h[a:b]
+            colour[i] = _lighting.shade_lit(normals[i], dirs[i], self.base[obj[a:b]],
+                                            shadow[i], ao[i], self.key, self.fill, self.up,
+                                            self.light.exposure)
+        in_chunks(surface, h.size)
+        alpha[h] = 1.0
         g = np.flatnonzero(on_ground)
         if g.size:
             lit_ground = _lighting.shade_ground(self.ground_base, shadow[g], ao[g], self.key,
@@ -320,9 +350,7 @@ class _Shader:
             else:
                 colour[g] = fade[g, None] * lit_ground + (1.0 - fade[g, None]) * self.bg
                 alpha[g] = 1.0
-        record = {"obj": obj_all, "ground": on_ground, "shadow": shadow, "ao": ao, "hit": hit,
-                  "on_ground": on_ground}
-        return colour, alpha, record
+        return colour, alpha
 
     def encode(self, colour):
         """Display values in ``[0, 1]`` of averaged colours ``(n, ...)``, in bands of ``n``
@@ -331,9 +359,9 @@ class _Shader:
         out = np.empty(colour.shape)
         encode = _lighting.linear_to_srgb if self.lit else _clip01
 
-        def band(a, b):
+        def chunk(a, b):
             out[a:b] = encode(colour[a:b])
-        in_bands(band, len(colour))
+        in_chunks(chunk, len(colour))
         return out
 
 
@@ -638,7 +666,21 @@ def _norm3(v):
 
 
 def _unit(v):
-    """``v (..., 3)`` divided by its lengths; 0 where the length is not > 0 (zero or NaN)."""
+    """``v (..., 3)`` divided by its lengths; 0 where the length is not > 0 (zero or NaN).
+    Large arrays in chunks over the render's threads (:func:`_unit_of`)."""
+    flat = v.reshape(-1, 3)
+    if flat.shape[0] <= CHUNK:
+        return _unit_of(v)
+    out = np.empty(flat.shape)
+
+    def chunk(a, b):
+        out[a:b] = _unit_of(flat[a:b])
+    in_chunks(chunk, flat.shape[0])
+    return out.reshape(v.shape)
+
+
+def _unit_of(v):
+    """:func:`_unit` in one piece."""
     n = _norm3(v)
     zero = ~(n > 0)
     out = v / np.where(zero, 1.0, n)[..., None]
@@ -757,12 +799,7 @@ def form_image(scene, camera, arrays, kargs, options, centre, gpu=None):
     hit0, t0, grad0, objs0 = (np.asarray(a) for a in centre)
     hit0, t0, objs0 = hit0.ravel(), t0.ravel(), objs0.ravel()
     grad0 = grad0.reshape(-1, 3)        # a view: written in place
-    dirs = np.empty((H, W, 3))
-
-    def rays(r0, r1):
-        dirs[r0:r1] = primary_rays(camera, rows=(r0, r1))
-    in_bands(rays, H)
-    dirs = dirs.reshape(-1, 3)
+    dirs = _primary_dirs(camera)
     skargs = _shading_args(kargs) if scene.film.shading == "lit" else None
     shade_evals = 0
     if skargs is not None:
@@ -844,20 +881,7 @@ def form_image(scene, camera, arrays, kargs, options, centre, gpu=None):
                 spread |= edges[pix]
             pix, disp, keys = pix[spread], disp[spread], keys[spread]
 
-    cover = np.empty(H * W)
-    rgb = np.empty((H * W, 3), dtype=np.uint8)
-
-    def composite(a, b):                # each pixel on its own: in bands over the threads
-        cover[a:b] = acc_a[a:b] / spp[a:b]
-        if shader.transparent:
-            colour = np.where(acc_a[a:b, None] > 0,
-                              acc[a:b] / np.maximum(acc_a[a:b], 1e-300)[:, None], 0.0)
-        else:
-            mean = acc[a:b] / spp[a:b, None]       # premultiplied
-            colour = mean + (1.0 - cover[a:b])[:, None] * shader.bg
-        encode = _lighting.linear_to_srgb if shader.lit else _clip01
-        rgb[a:b] = np.round(255.0 * encode(colour)).astype(np.uint8)
-    in_bands(composite, H * W)
+    rgb, cover = _composite(shader, acc, acc_a, spp)
     rgb = rgb.reshape(H, W, 3)
     info = {"rays": int(H * W + rays), "sample_steps": work[0], "shading_queries": shade_evals}
     if shader.lit:
@@ -865,6 +889,39 @@ def form_image(scene, camera, arrays, kargs, options, centre, gpu=None):
                     object=rec0["obj"].reshape(H, W), ground=rec0["on_ground"].reshape(H, W),
                     light_queries=shader.queries, light_leaves=shader.leaves)
     return rgb, cover.reshape(H, W).astype(np.float32), spp.reshape(H, W), info
+
+
+def _primary_dirs(camera):
+    """The camera's primary rays ``(H W, 3)`` (:func:`tracer.rendering.camera.primary_rays`),
+    in bands of rows over the render's threads."""
+    dirs = np.empty((camera.height, camera.width, 3))
+
+    def rays(r0, r1):
+        dirs[r0:r1] = primary_rays(camera, rows=(r0, r1))
+    in_bands(rays, camera.height)
+    return dirs.reshape(-1, 3)
+
+
+def _composite(shader, acc, acc_a, spp):
+    """``(rgb (n, 3) uint8, cover (n,))`` of pixels from their sums over samples: colours
+    ``acc`` (premultiplied), alphas ``acc_a`` and sample counts ``spp``, over the background
+    unless transparent; each pixel on its own, in chunks over the render's threads."""
+    n = len(spp)
+    cover = np.empty(n)
+    rgb = np.empty((n, 3), dtype=np.uint8)
+    encode = _lighting.linear_to_srgb if shader.lit else _clip01
+
+    def chunk(a, b):
+        cover[a:b] = acc_a[a:b] / spp[a:b]
+        if shader.transparent:
+            colour = np.where(acc_a[a:b, None] > 0,
+                              acc[a:b] / np.maximum(acc_a[a:b], 1e-300)[:, None], 0.0)
+        else:
+            mean = acc[a:b] / spp[a:b, None]       # premultiplied
+            colour = mean + (1.0 - cover[a:b])[:, None] * shader.bg
+        rgb[a:b] = np.round(255.0 * encode(colour)).astype(np.uint8)
+    in_chunks(chunk, n)
+    return rgb, cover
 
 
 def _dir(cam, rows, cols):
