@@ -722,8 +722,9 @@ def _centre_shading_normals(skargs, depth_max, options, shape, hit, t, grad, obj
     distance evaluations made."""
     H, W = shape
     s = SHADE_STRIDE
-    r, c = np.divmod(np.arange(H * W), W)
-    coarse = hit & (r % s == 0) & (c % s == 0)
+    on_grid = np.zeros((H, W), dtype=bool)
+    on_grid[::s, ::s] = True
+    coarse = hit & on_grid.ravel()
     cpix = np.flatnonzero(coarse)
     g = grad[cpix]
     evals = _shading_normals(skargs, depth_max, options, cpix, W, np.zeros((1, 2)),
@@ -731,17 +732,24 @@ def _centre_shading_normals(skargs, depth_max, options, shape, hit, t, grad, obj
     grad[cpix] = g
     rest = np.flatnonzero(hit & ~coarse)
     if rest.size:
-        rr, cc = r[rest], c[rest]
-        r0, c0 = (rr // s) * s, (cc // s) * s
-        fr, fc = (rr - r0) / s, (cc - c0) / s
-        corners = []
-        for dr, dc, w in ((0, 0, (1 - fr) * (1 - fc)), (0, s, (1 - fr) * fc),
-                          (s, 0, fr * (1 - fc)), (s, s, fr * fc)):
-            ri, ci = r0 + dr, c0 + dc
-            j = np.where((ri < H) & (ci < W), ri * W + np.minimum(ci, W - 1), -1)
-            corners.append((np.where((j >= 0) & coarse[np.maximum(j, 0)], j, -1), w))
         key = np.where(hit, objs, -1)
-        n, ok = _blend_normals(corners, _unit(grad), key, t, key[rest], t[rest])
+        units = _unit(grad)
+        n = np.empty((rest.size, 3))
+        ok = np.empty(rest.size, dtype=bool)
+
+        def chunk(a, b):                    # each pixel on its own
+            rr, cc = np.divmod(rest[a:b], W)
+            r0, c0 = (rr // s) * s, (cc // s) * s
+            fr, fc = (rr - r0) / s, (cc - c0) / s
+            corners = []
+            for dr, dc, w in ((0, 0, (1 - fr) * (1 - fc)), (0, s, (1 - fr) * fc),
+                              (s, 0, fr * (1 - fc)), (s, s, fr * fc)):
+                ri, ci = r0 + dr, c0 + dc
+                j = np.where((ri < H) & (ci < W), ri * W + np.minimum(ci, W - 1), -1)
+                corners.append((np.where((j >= 0) & coarse[np.maximum(j, 0)], j, -1), w))
+            n[a:b], ok[a:b] = _blend_normals(corners, units, key, t, key[rest[a:b]],
+                                             t[rest[a:b]])
+        in_chunks(chunk, rest.size)
         grad[rest[ok]] = n[ok]
         todo = rest[~ok]
         g = grad[todo]
