@@ -545,20 +545,26 @@ def _neighbour_flags(colour, record, shape):
     keys = [record["hit"].reshape(H, W), record["obj"].reshape(H, W)]
     flags = np.zeros((H, W), dtype=bool)
     edges = np.zeros((H, W), dtype=bool)
-    # the 8 neighbours (a pixel's tent filter reaches one pixel into each of them)
-    for dr, dc in ((0, 1), (1, 0), (1, 1), (1, -1)):
-        a = (slice(0, H - dr), slice(max(0, -dc), W - max(0, dc)))
-        b = (slice(dr, H), slice(max(0, dc), W - max(0, -dc)))
-        geo = np.zeros(c[a].shape[:2], dtype=bool)
-        for k in keys:
-            geo |= k[a] != k[b]
-        d = np.abs(c[a] - c[b])
-        # the largest channel (np.max along the short axis, three times slower)
-        diff = geo | (np.maximum(np.maximum(d[..., 0], d[..., 1]), d[..., 2]) > COLOR_CONTRAST)
-        flags[a] |= diff
-        flags[b] |= diff
-        edges[a] |= geo
-        edges[b] |= geo
+
+    def band(r0, r1):
+        # rows r0 <= r < r1 against their 8 neighbours (a pixel's tent filter reaches one
+        # pixel into each): each band writes its own rows only
+        for dr in (-1, 0, 1):
+            a0, a1 = max(r0, -dr), min(r1, H - dr)
+            for dc in (-1, 0, 1):
+                if (dr, dc) == (0, 0) or a0 >= a1:
+                    continue
+                a = (slice(a0, a1), slice(max(0, -dc), W - max(0, dc)))
+                b = (slice(a0 + dr, a1 + dr), slice(max(0, dc), W - max(0, -dc)))
+                geo = np.zeros((a1 - a0, W - abs(dc)), dtype=bool)
+                for k in keys:
+                    geo |= k[a] != k[b]
+                d = np.abs(c[a] - c[b])
+                # the largest channel (np.max along the short axis, three times slower)
+                flags[a] |= geo | (np.maximum(np.maximum(d[..., 0], d[..., 1]), d[..., 2])
+                                   > COLOR_CONTRAST)
+                edges[a] |= geo
+    in_bands(band, H)
     return flags.ravel(), edges.ravel()
 
 

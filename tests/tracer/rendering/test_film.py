@@ -433,3 +433,37 @@ def test_the_films_host_shortcuts_give_numpys_values_bit_for_bit():
     colour = rng.random((1000, 3)) * 1.3 - 0.1
     assert np.array_equal(film._Shader.encode(Lit(), colour),
                           film._lighting.linear_to_srgb(colour))
+
+
+def test_neighbour_flags_in_bands_are_the_pairwise_comparison():
+    # the adaptive pass's flags, computed band by band over the threads (each band against
+    # its rows' 8 neighbours), against the direct form: every pair of neighbouring pixels
+    # compared once, both flagged when they differ
+    H, W = 67, 45
+    y, x = np.mgrid[0:H, 0:W].astype(float)
+    hit = (x - 22) ** 2 + (y - 33) ** 2 < 20 ** 2
+    obj = np.where(hit, (x > 30).astype(int), -1)
+    # a smooth shade with a step (a shadow's edge) across the disk
+    colour = np.stack([0.3 + 0.002 * x, 0.4 + 0.5 * (y > 40), 0.5 + 0.001 * y], -1) * hit[..., None]
+    colour = colour.reshape(-1, 3)
+    record = {"hit": hit.ravel(), "obj": obj.ravel()}
+    c, keys = colour.reshape(H, W, 3), [record["hit"].reshape(H, W), record["obj"].reshape(H, W)]
+    flags, edges = np.zeros((H, W), bool), np.zeros((H, W), bool)
+    for r in range(H):
+        for q in range(W):
+            for r2, q2 in ((r, q + 1), (r + 1, q - 1), (r + 1, q), (r + 1, q + 1)):
+                if r2 < H and 0 <= q2 < W:
+                    geo = any(k[r, q] != k[r2, q2] for k in keys)
+                    diff = geo or np.abs(c[r, q] - c[r2, q2]).max() > film.COLOR_CONTRAST
+                    flags[r, q] |= diff
+                    flags[r2, q2] |= diff
+                    edges[r, q] |= geo
+                    edges[r2, q2] |= geo
+    for threads in (1, 3):
+        numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
+        try:
+            f, e = film._neighbour_flags(colour, record, (H, W))
+        finally:
+            numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
+        assert np.array_equal(f, flags.ravel()) and np.array_equal(e, edges.ravel())
+    assert 0 < flags.sum() < H * W and 0 < edges.sum() < flags.sum()
