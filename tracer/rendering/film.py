@@ -413,7 +413,7 @@ def _fill_light(shape, want, coarse, key, depth, normals, shadow, ao, lit_side=N
     got_a = np.zeros(key.size, dtype=bool)
     if idx.size == 0:
         return got_s, got_a
-    # bands of the wanted pixels on the render's threads; they read the coarse pixels' light
+    # chunks of the wanted pixels on the render's threads; they read the coarse pixels' light
     # from these copies and write only their own pixels
     src_s, src_a = shadow.copy(), ao.copy()
 
@@ -442,7 +442,7 @@ def _fill_light(shape, want, coarse, key, depth, normals, shadow, ao, lit_side=N
             j = np.where(inside, rr * W + np.minimum(cc, W - 1), 0)
             ok = inside & coarse[j] & (key[j] == key[i]) & (w > 0)
             ok &= np.abs(depth[j] - depth[i]) <= FILL_DEPTH * depth[i]
-            ok &= (normals[j] * normals[i]).sum(axis=1) >= FILL_COS
+            ok &= _dot3(normals[j], normals[i]) >= FILL_COS
             wt = np.where(ok, w, 0.0)
             ok_s = ok if lit_side is None else ok & (lit_side[j] == lit_side[i])
             wt_s = np.where(ok_s, w, 0.0)
@@ -476,7 +476,7 @@ def _fill_light(shape, want, coarse, key, depth, normals, shadow, ao, lit_side=N
         got_s[i[good_s]] = True
         got_a[i[good_a]] = True
 
-    in_bands(fill, idx.size)
+    in_chunks(fill, idx.size)
     return got_s, got_a
 
 
@@ -671,6 +671,12 @@ def _norm3(v):
     return np.sqrt(x * x + y * y + z * z)
 
 
+def _dot3(u, v):
+    """Row-wise dot products of ``u, v (n, 3)``: ``(u * v).sum(axis=1)`` bit for bit (the same
+    sum, in the same order), without its reduction along a short axis."""
+    return u[:, 0] * v[:, 0] + u[:, 1] * v[:, 1] + u[:, 2] * v[:, 2]
+
+
 def _unit(v):
     """``v (..., 3)`` divided by its lengths; 0 where the length is not > 0 (zero or NaN).
     Large arrays in chunks over the render's threads (:func:`_unit_of`)."""
@@ -714,7 +720,7 @@ def _blend_normals(corners, normals, key, depth, my_key, my_depth):
     m = _unit(acc)
     for j, w in corners:
         jj = np.where(j >= 0, j, 0)
-        ok &= (w <= 0) | ((normals[jj] * m).sum(axis=1) >= SHADE_FILL_COS)
+        ok &= (w <= 0) | (_dot3(normals[jj], m) >= SHADE_FILL_COS)
     return m, ok
 
 

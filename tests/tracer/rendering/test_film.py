@@ -420,6 +420,8 @@ def test_the_films_host_shortcuts_give_numpys_values_bit_for_bit():
     v[3, 1] = np.nan
     n = np.linalg.norm(v, axis=-1, keepdims=True)
     assert np.array_equal(film._norm3(v), n[:, 0], equal_nan=True)
+    u = rng.normal(size=v.shape)
+    assert np.array_equal(film._dot3(u, v), (u * v).sum(axis=1), equal_nan=True)
     old = np.where(n > 0, v / np.where(n > 0, n, 1.0), 0.0)
     assert np.array_equal(film._unit(v), old) and np.array_equal(
         film._unit(v.reshape(50, 100, 3)), old.reshape(50, 100, 3))
