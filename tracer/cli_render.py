@@ -9,12 +9,11 @@ import numpy as np
 
 from smoothdist.cuda import CudaUnavailable, cuda_module
 from smoothdist.mesh import MESH_EXTENSIONS, needs_trimesh
-from tracer.image import false_color, save_npy, save_png
 from tracer.errors import CLIError
+from tracer.image import false_color, save_npy, save_png
 from tracer.outputs import atomic_write, check_outputs, make_parents
 from tracer.rendering.camera import UP_AXES, VIEWS, LookAt, frame_points, look_at
-from tracer.rendering.frame import MAX_SAMPLES
-from tracer.rendering.frame import ProgressBar, scene_arrays
+from tracer.rendering.frame import MAX_SAMPLES, ProgressBar, scene_arrays
 from tracer.rendering.renderer import render
 from tracer.scenes import from_mesh
 from tracer.scenes.from_mesh import describe_parameters, resolve_up, scene_dict

@@ -96,8 +96,8 @@ from typing import NamedTuple
 import numpy as np
 
 from smoothdist.mesh import needs_trimesh
-from tracer.image import compare_images, false_color, save_png
 from tracer.errors import CLIError
+from tracer.image import compare_images, false_color, save_png
 from tracer.outputs import atomic_write, check_outputs
 from tracer.rendering.camera import primary_rays, pyvista_camera_params
 from tracer.rendering.frame import camera_of, scene_arrays

@@ -21,8 +21,8 @@ import math
 import sys
 from typing import NamedTuple
 
-from tracer.image import compare_images, save_png
 from tracer.errors import CLIError
+from tracer.image import compare_images, save_png
 from tracer.outputs import check_outputs
 
 __all__ = ["DiffVerdict", "check_images", "HELP", "add_arguments", "needs", "run"]

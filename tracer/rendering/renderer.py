@@ -15,11 +15,11 @@ from smoothdist.cuda import check_device, cuda_module
 from tracer.errors import RenderError
 from tracer.rendering import march
 from tracer.rendering.camera import CAM_WIDTH
+from tracer.rendering.film import form_image
 from tracer.rendering.frame import (PixelBuffers, RayArgs, RenderResult, camera_of, check_steps,
                                     distance_at_camera, kernel_roots, pixel_buffers,
                                     progress_callback, scene_arrays, shade, trace_options,
                                     with_overrides)
-from tracer.rendering.film import form_image
 from tracer.rendering.gpu_render import render_cuda
 from tracer.rendering.shading import load_matcap
 from tracer.rendering.threads import in_bands, render_threads

@@ -18,8 +18,8 @@ import numpy as np
 from smoothdist import SmoothDistanceField
 from tracer.image import gif_frame, save_png
 from tracer.outputs import atomic_write
-from tracer.rendering.lighting import Lighting
 from tracer.rendering.frame import ProgressBar
+from tracer.rendering.lighting import Lighting
 from tracer.rendering.renderer import render
 from tracer.scenes.scene import Scene, SceneObject, default_eps
 from tracer.sim.simulation import auto_camera

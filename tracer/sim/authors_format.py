@@ -71,11 +71,10 @@ import numpy as np
 
 from smoothdist import DataMesh
 from smoothdist.mesh import read_mesh_file, unique_edges
-from tracer.errors import SimFileError
+from tracer.errors import SceneError, SimFileError
 from tracer.sim.bodies import INERTIA_FLOOR, Body
 from tracer.sim.simulation import DEFAULT_FRAMES, MovieCamera, Simulation, auto_camera
 from tracer.sim.simulation import wrap_scene_error as _wrap
-from tracer.errors import SceneError
 from tracer.validate import check_keys, choice, number, resolve_path, show, vec3
 
 __all__ = ["build_simulation", "EDGE_MASS_SCALE", "BVH_TYPES"]

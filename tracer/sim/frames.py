@@ -25,8 +25,8 @@ import os
 import numpy as np
 
 from tracer import runner
-from tracer.image import save_png
 from tracer.errors import CLIError
+from tracer.image import save_png
 from tracer.outputs import at_least, check_size
 from tracer.rendering.renderer import render
 from tracer.runner import file_stamp

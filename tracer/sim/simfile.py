@@ -69,19 +69,17 @@ import os
 import numpy as np
 
 from smoothdist import DataMesh
+from smoothdist.field import AUTO_ALPHA_U_FACTOR
+from tracer.errors import SceneError, SimFileError
+from tracer.rendering.camera import look_at
 from tracer.scenes.scene import SHADINGS
 from tracer.sim import primitives
 from tracer.sim.authors_format import build_simulation
-from tracer.sim.bodies import (AUTO_THICKNESS_OFFSET, Body, auto_alpha, rotation_matrix,
-                               thickness)
+from tracer.sim.bodies import AUTO_THICKNESS_OFFSET, Body, auto_alpha, rotation_matrix, thickness
 from tracer.sim.constraint import DEFAULT_TORQUES, TORQUES
-from tracer.errors import SceneError
-from tracer.validate import check_keys, choice, number, read_json, resolve_path, show, vec3
-from smoothdist.field import AUTO_ALPHA_U_FACTOR
-from tracer.errors import SimFileError
-from tracer.rendering.camera import look_at
 from tracer.sim.simulation import DEFAULT_FRAMES, MovieCamera, Simulation
 from tracer.sim.simulation import wrap_scene_error as _wrap
+from tracer.validate import check_keys, choice, number, read_json, resolve_path, show, vec3
 
 __all__ = ["load_simulation", "read_simulation_json"]
 

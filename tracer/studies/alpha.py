@@ -34,10 +34,9 @@ from types import SimpleNamespace
 import numpy as np
 
 from tracer import runner
-from tracer.errors import CLIError
+from tracer.errors import CLIError, RenderError
 from tracer.outputs import (check_size, float_list, non_negative, output_folder, positive,
                             write_bytes, write_json, write_text)
-from tracer.errors import RenderError
 from tracer.rendering.renderer import render
 from tracer.runner import duration
 from tracer.scenes.scene import scene_from_field
