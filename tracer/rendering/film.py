@@ -125,6 +125,8 @@ class _Shader:
         self.arrays = arrays
         self.kargs = kargs  # tracer.rendering.frame.RayArgs: the render's own queries
         self.lit = scene.film.shading == "lit"
+        #: display values of colours: sRGB of linear light (lit), else clipped to [0, 1]
+        self.encoder = _lighting.linear_to_srgb if self.lit else _clip01
         self.transparent = bool(getattr(scene, "transparent", False))
         self.nobj = len(scene.objects)
         self.origin = np.asarray(camera.origin, dtype=np.float64)
@@ -353,14 +355,13 @@ class _Shader:
         return colour, alpha
 
     def encode(self, colour):
-        """Display values in ``[0, 1]`` of averaged colours ``(n, ...)``, in bands of ``n``
-        over the render's threads (elementwise: the same values as in one piece)."""
+        """Display values in ``[0, 1]`` of averaged colours ``(n, ...)`` (:attr:`encoder`), in
+        chunks of ``n`` over the render's threads (the same values as in one piece)."""
         colour = np.asarray(colour, dtype=np.float64)
         out = np.empty(colour.shape)
-        encode = _lighting.linear_to_srgb if self.lit else _clip01
 
         def chunk(a, b):
-            out[a:b] = encode(colour[a:b])
+            out[a:b] = self.encoder(colour[a:b])
         in_chunks(chunk, len(colour))
         return out
 
@@ -929,7 +930,6 @@ def _composite(shader, acc, acc_a, spp):
     n = len(spp)
     cover = np.empty(n)
     rgb = np.empty((n, 3), dtype=np.uint8)
-    encode = _lighting.linear_to_srgb if shader.lit else _clip01
 
     def chunk(a, b):
         cover[a:b] = acc_a[a:b] / spp[a:b]
@@ -939,7 +939,7 @@ def _composite(shader, acc, acc_a, spp):
         else:
             mean = acc[a:b] / spp[a:b, None]       # premultiplied
             colour = mean + (1.0 - cover[a:b])[:, None] * shader.bg
-        rgb[a:b] = np.round(255.0 * encode(colour)).astype(np.uint8)
+        rgb[a:b] = np.round(255.0 * shader.encoder(colour)).astype(np.uint8)
     in_chunks(chunk, n)
     return rgb, cover
 

@@ -18,6 +18,7 @@ from typing import NamedTuple
 import numpy as np
 
 from smoothdist.kernels import DEFAULT_TOL, concatenate_trees
+from tracer.errors import RenderError
 from tracer.compiling import COMPILING, Eta
 from tracer.image import save_npy, save_png
 from tracer.rendering import march
@@ -29,7 +30,8 @@ __all__ = ["RenderResult", "RayArgs", "MarchArgs", "PixelBuffers", "SampleBuffer
            "LightBuffers",           "TraceOptions", "SceneArrays", "scene_arrays",
            "object_level", "kernel_roots", "camera_of", "distance_at_camera", "shade",
            "ProgressBar", "MAX_SAMPLES", "pixel_buffers", "posed_params", "checked_samples",
-           "progress_callback", "check_steps", "with_overrides", "trace_options"]
+           "progress_callback", "check_steps", "with_overrides", "trace_options",
+           "check_camera_outside"]
 
 #: the most anti-aliasing samples per pixel (:mod:`tracer.rendering.film`)
 MAX_SAMPLES = 1024
@@ -353,6 +355,17 @@ def distance_at_camera(scene, arrays=None):
     o = scene.camera.origin
     return float(march.distance_at(tree, kernel_roots(roots, params, mode, tol), params, mode,
                                    tol, float(o[0]), float(o[1]), float(o[2]), depth_max))
+
+
+def check_camera_outside(scene, arrays=None):
+    """Raise :class:`~tracer.errors.RenderError` when the camera is inside the surface (the
+    distance at the camera is not above ``eps``)."""
+    d0 = distance_at_camera(scene, arrays)
+    if not d0 > scene.march.eps:
+        raise RenderError(f"the camera at {np.round(scene.camera.origin, 6).tolist()} is inside "
+                          f"the surface (distance there {d0:.4g} <= eps "
+                          f"{scene.march.eps:.3g}); move camera.origin outside or lower "
+                          "alpha's blur")
 
 
 def pixel_buffers(H, W):

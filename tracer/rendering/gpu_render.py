@@ -36,12 +36,11 @@ import numpy as np
 
 from smoothdist import cuda as sdcuda
 from smoothdist.kernels import NJIT
-from tracer.errors import RenderError
 from tracer.rendering import lighting, march
 from tracer.rendering.camera import CAM_HEIGHT, CAM_WIDTH, ray_direction
 from tracer.rendering.film import form_image
 from tracer.rendering.frame import (ProgressBar, RayArgs, RenderResult, camera_of,
-                                    check_steps, distance_at_camera, progress_callback,
+                                    check_camera_outside, check_steps, progress_callback,
                                     scene_arrays, shade, trace_options)
 
 __all__ = ["render_cuda", "normal_colour", "BLOCK", "trace_samples_cuda",
@@ -337,11 +336,7 @@ def prepare(scene, transforms=None, relax=None, omega=None, cone=None):
     tree, roots, params, mode, lo, hi, depth_max, tol = arrays
     sdcuda.check_depth(int(depth_max))
     march_ = scene.march
-    d0 = distance_at_camera(scene, arrays)
-    if not d0 > march_.eps:
-        raise RenderError(f"the camera at {np.round(scene.camera.origin, 6).tolist()} is inside "
-                          f"the surface (distance there {d0:.4g} <= eps {march_.eps:.3g}); move "
-                          "camera.origin outside or lower alpha's blur")
+    check_camera_outside(scene, arrays)
     on = (lambda a: a) if sdcuda.simulated() else cu.to_device
     bg = tuple(int(v) for v in scene.film.background)
     # roots as the (k,) array: the general path of tracer.rendering.march.scene_distance (the same

@@ -12,14 +12,13 @@ import time
 import numpy as np
 
 from smoothdist.cuda import check_device, cuda_module
-from tracer.errors import RenderError
 from tracer.rendering import march
 from tracer.rendering.camera import CAM_WIDTH
 from tracer.rendering.film import form_image
-from tracer.rendering.frame import (PixelBuffers, RayArgs, RenderResult, camera_of, check_steps,
-                                    distance_at_camera, kernel_roots, pixel_buffers,
-                                    progress_callback, scene_arrays, shade, trace_options,
-                                    with_overrides)
+from tracer.rendering.frame import (PixelBuffers, RayArgs, RenderResult, camera_of,
+                                    check_camera_outside, check_steps, kernel_roots,
+                                    pixel_buffers, progress_callback, scene_arrays, shade,
+                                    trace_options, with_overrides)
 from tracer.rendering.gpu_render import render_cuda
 from tracer.rendering.shading import load_matcap
 from tracer.rendering.threads import in_bands, render_threads
@@ -91,11 +90,7 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
     arrays = scene_arrays(scene, transforms)
     tree, roots, params, mode, lo, hi, depth_max, tol = arrays
     march_ = scene.march
-    d0 = distance_at_camera(scene, arrays)
-    if not d0 > march_.eps:
-        raise RenderError(f"the camera at {np.round(scene.camera.origin, 6).tolist()} is inside "
-                          f"the surface (distance there {d0:.4g} <= eps {march_.eps:.3g}); move "
-                          "camera.origin outside or lower alpha's blur")
+    check_camera_outside(scene, arrays)
     film = scene.film
     H, W = film.height, film.width
     hit, tbuf, grad, steps, leaves, bis, objs = pixel_buffers(H, W)

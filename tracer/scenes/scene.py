@@ -126,7 +126,7 @@ class Scene:
     (:class:`~tracer.scenes.settings.March`) and ``film``
     (:class:`~tracer.scenes.settings.Film`, with its
     :class:`~tracer.rendering.lighting.Lighting`). Every setting is also an attribute of its
-    own, a shorthand that reads and writes the group: ``scene.film.width`` is
+    own, a shorthand that reads and writes the group: ``scene.width`` is
     ``scene.film.width``, ``scene.eps = e`` replaces ``scene.march`` by one with ``eps = e``,
     and ``camera_origin``, ``camera_dest``, ``camera_up`` are the camera's vectors. The
     constructor and ``dataclasses.replace`` take the same names (``replace(scene,
@@ -154,7 +154,7 @@ class Scene:
                                 "camera_origin, camera_dest and camera_up)")
             camera = LookAt(**vectors)
         self.path = path
-        self.camera = LookAt(*camera)._replace(**vectors)
+        self.camera = LookAt(*(np.asarray(v, dtype=float) for v in camera))._replace(**vectors)
         self.objects = list(objects)
         self.march = _replaced(march or March(), settings)
         self.film = _replaced(film or Film(), settings)

@@ -431,7 +431,7 @@ def test_the_films_host_shortcuts_give_numpys_values_bit_for_bit():
     assert np.array_equal(whole, bands)
 
     class Lit:
-        lit = True
+        encoder = staticmethod(film._lighting.linear_to_srgb)
     colour = rng.random((1000, 3)) * 1.3 - 0.1
     assert np.array_equal(film._Shader.encode(Lit(), colour),
                           film._lighting.linear_to_srgb(colour))
