@@ -35,6 +35,7 @@ Usage (from the repository root)::
 """
 
 import argparse
+import functools
 import json
 import os
 import platform
@@ -121,10 +122,14 @@ def bench_render(kind, size, eps, repeat, blocks=()):
                 mean_steps_cpu=float(cpu.steps.mean()), mean_steps_gpu=float(gpu.steps.mean()))
 
 
-def bench_render_box32(kind, size, eps, repeat):
-    """The 1080p frame of :func:`bench_render` with the node boxes stored as float32, rounded
-    outwards (:func:`boxes32`; issue 49 item 3): its time, and what differs from the float64
-    boxes' frame on the card (hit mask, depth over the diagonal, colour)."""
+def bench_render_variant(kind, size, eps, repeat, variant="box32"):
+    """The 1080p frame of :func:`bench_render` with a kernel ``variant`` (issue 49 item 3):
+    ``box32``, the node boxes stored as float32, rounded outwards (:func:`boxes32`); ``regsN``,
+    the cone and render kernels compiled with at most N registers a thread (more threads
+    resident on each multiprocessor, the rest spilled to local memory; see
+    ``benchmarks/check_cuda_ptx.py --ptxas``). Returns its time beside the default kernels'
+    in the same process, its first launch (the variant's compile), and what differs from the
+    default frame (hit mask, depth over the diagonal, colour, leaves visited)."""
     from smoothdist import cuda as sdcuda
     from tracer.rendering import gpu_render
     from tracer.rendering.frame import scene_arrays
@@ -136,17 +141,27 @@ def bench_render_box32(kind, size, eps, repeat):
         over["eps"] = eps
     scene = load_scene(REPO / "scenes" / f"bunny_{kind}.json", over)
     camera, args, shape, _ = gpu_render.prepare(scene)
+    ref_args = args
     ref = [a.copy_to_host() for a in gpu_render.launch(args, shape)]
-    tree = scene_arrays(scene)[0]
-    args32 = args._replace(data=(sdcuda.device_tree(boxes32(tree)),) + tuple(args.data[1:]))
+    kernels = None
+    if variant == "box32":
+        tree = scene_arrays(scene)[0]
+        args = args._replace(data=(sdcuda.device_tree(boxes32(tree)),) + tuple(args.data[1:]))
+    elif variant.startswith("regs"):
+        regs = registers_of(variant)
+        kernels = {k: capped_jit(getattr(gpu_render, f"_{k}_kernel"), regs)
+                   for k in ("cone", "render")}
+    else:
+        raise ValueError(f"unknown render variant {variant!r}; one of {RENDER_VARIANTS}")
 
     t0 = time.perf_counter()
-    out = [a.copy_to_host() for a in gpu_render.launch(args32, shape)]
+    out = [a.copy_to_host() for a in gpu_render.launch(args, shape, kernels=kernels)]
     first_s = time.perf_counter() - t0
     # timed as bench_render's "GPU ms": the launches and the image copied back, each side
     # best of ``repeat``, one after the other in this process
-    gpu_s, _ = best(lambda: gpu_render.launch(args32, shape)[7].copy_to_host(), repeat)
-    ref_s, _ = best(lambda: gpu_render.launch(args, shape)[7].copy_to_host(), repeat)
+    gpu_s, _ = best(lambda: gpu_render.launch(args, shape, kernels=kernels)[7].copy_to_host(),
+                    repeat)
+    ref_s, _ = best(lambda: gpu_render.launch(ref_args, shape)[7].copy_to_host(), repeat)
     both = ref[0] & out[0]
     return dict(gpu_s=gpu_s, gpu_ref_s=ref_s, first_s=first_s,
                 hit_differs=int((ref[0] != out[0]).sum()),
@@ -300,7 +315,29 @@ def bench_grid(kind, n, repeat, variants=()):
                 mean_leaves_gpu=float(gpu[3].mean()), gpu_variants=trials)
 
 
-VARIANTS = ("stack32", "box32")
+#: the kernel variants ``--variants`` times: a 32-bit traversal stack (the grid), float32 node
+#: boxes (the grid and the renders), a cap on the registers a thread uses (both)
+VARIANTS = ("stack32", "box32", "regs128", "regs96", "regs64")
+#: the variants that apply to the render kernels too
+RENDER_VARIANTS = ("box32", "regs128", "regs96", "regs64")
+
+
+def registers_of(variant):
+    """The register cap N of a ``regsN`` variant."""
+    return int(variant[len("regs"):])
+
+
+@functools.lru_cache(maxsize=None)
+def capped_jit(fn, registers):
+    """``fn`` as a CUDA kernel compiled with at most ``registers`` registers a thread
+    (``numba.cuda.jit(max_registers=...)``; the simulator, which has no registers, takes none),
+    one per process (its compile is paid once, at its first launch). Call it after the
+    kernels' module has set its global ``cuda``."""
+    from smoothdist import cuda as sdcuda
+    cuda = sdcuda.cuda_module()
+    if sdcuda.simulated():
+        return cuda.jit(fn)
+    return cuda.jit(fn, max_registers=int(registers))
 
 
 def smooth_stack32():
@@ -339,6 +376,9 @@ def variant_launch(variant, tree, dtree):
         kern, tr = cuda.jit(smooth_stack32()), dtree
     elif variant == "box32":
         kern, tr = sdcuda.kernels()["smooth"], sdcuda.device_tree(boxes32(tree))
+    elif variant.startswith("regs"):
+        sdcuda.kernels()
+        kern, tr = capped_jit(sdcuda._smooth_kernel, registers_of(variant)), dtree
     else:
         raise ValueError(f"unknown variant {variant!r}; one of {VARIANTS}")
 
@@ -417,8 +457,9 @@ def main(argv=None):
                    help="the bunny's kinds, in this order (default: all three)")
     p.add_argument("--variants", nargs="*", default=[], choices=VARIANTS,
                    help="also time the grid's kernel alone with a 32-bit traversal stack "
-                        "(stack32) or float32 node boxes rounded outwards (box32), and the "
-                        "renders with box32 (after every other case)")
+                        "(stack32), float32 node boxes rounded outwards (box32) or at most N "
+                        "registers a thread (regsN), and the renders with box32 and regsN "
+                        "(after every other case)")
     p.add_argument("--images", default=None, metavar="DIR",
                    help="write the GPU's lit images there (lit_KIND_gpu.png)")
     p.add_argument("--image-kinds", nargs="*", default=list(KINDS), choices=KINDS,
@@ -445,12 +486,15 @@ def main(argv=None):
     for kind in args.kinds if "lit" in cases else ():
         done(bench_lit(kind, tuple(args.size), max(1, min(args.repeat, 3)),
                        images=args.images if kind in args.image_kinds else None))
-    if "box32" in args.variants and "render" in cases:
+    render_variants = [v for v in args.variants if v in RENDER_VARIANTS]
+    if render_variants and "render" in cases:
         for row, kind in zip(rows, args.kinds):
-            row["gpu_variants"] = {"box32": bench_render_box32(
-                kind, tuple(args.size), args.eps or None, args.repeat)}
-            print(kind, row["gpu_variants"], flush=True)
-            write_results(args.json, card, rows)
+            row["gpu_variants"] = {}
+            for variant in render_variants:
+                row["gpu_variants"][variant] = bench_render_variant(
+                    kind, tuple(args.size), args.eps or None, args.repeat, variant)
+                print(kind, variant, row["gpu_variants"][variant], flush=True)
+                write_results(args.json, card, rows)
     print(write_results(args.json, card, rows))
     print(f"wrote {args.json}")
     return 0

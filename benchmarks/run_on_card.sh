@@ -12,6 +12,10 @@
 #               the GPU's lit images of $IMAGE_KINDS (lit_KIND_gpu.png)
 #   card        machine gpu gpu-lit: issue 49's table, about 8 minutes from a bare machine
 #               (the two steps' limits add up to 600 s; the first launches compile the kernels)
+#   regs        the normals frames and the grid with the kernels' registers capped
+#               ($REG_VARIANTS, default regs128 regs64: more threads resident on each
+#               multiprocessor, the rest spilled), beside the default kernels in the same
+#               process; its own call (each variant compiles the cone and render kernels anew)
 #   gpu-small   the GPU benchmark at 320x180 twice: an empty kernel cache, then a warm one
 #               (the first-call compile time, and that numba-cuda's disk cache keeps the kernels)
 #   scaling     the 1080p thread-scaling table of issue 32 for 1, 2, 4, ... up to every core
@@ -48,7 +52,7 @@ step() {  # step NAME SECONDS COMMAND...: runs it with a limit, its output to NA
 }
 
 steps=("$@")
-[ "${steps[*]}" = all ] && steps=(machine gpu gpu-lit gpu-small scaling stored)
+[ "${steps[*]}" = all ] && steps=(machine gpu gpu-lit regs gpu-small scaling stored)
 [ "${steps[*]}" = card ] && steps=(machine gpu gpu-lit)
 for s in "${steps[@]}"; do
     case $s in
@@ -78,6 +82,12 @@ for s in "${steps[@]}"; do
             --kinds ${LIT_KINDS:-triangles points edges} \
             --images "$out" --image-kinds ${IMAGE_KINDS:-points triangles} \
             --json "$out/bench_gpu_lit.json"
+        ;;
+    regs)
+        # issue 49 item 3: occupancy against spills (benchmarks/check_cuda_ptx.py --ptxas)
+        # shellcheck disable=SC2086
+        step gpu_regs 540 "$py" benchmarks/bench_gpu.py --repeat 3 --cases render grid \
+            --variants ${REG_VARIANTS:-regs128 regs64} --json "$out/bench_gpu_regs.json"
         ;;
     scaling)
         # shellcheck disable=SC2086

@@ -13,6 +13,7 @@ Usage::
     python benchmarks/tables.py exact-mix benchmarks/data/exact_mix.json
     python benchmarks/tables.py smooth-cost benchmarks/data/exact_mix.json
     python benchmarks/tables.py mesh-distance benchmarks/data/mesh_distance_authors.json
+    python benchmarks/tables.py registers benchmarks/data/cuda_registers.json
 """
 
 import argparse
@@ -185,9 +186,31 @@ def mesh_distance_words(path):
                         for r in d["side_by_side"]))
 
 
+def registers_table(path):
+    """The kernels' registers and occupancy of a ``check_cuda_ptx.py --ptxas`` report: per
+    kernel of the GPU path its threads a block, then per register cap (none first) the
+    registers a thread uses, the spill stores in its code (bytes) and the occupancy."""
+    d = _load(path)
+    caps = [a["max_registers"] for a in d["kernels"][0]["assembled"]]
+    cells = ["kernel", "threads a block"]
+    for cap in caps:
+        name = "no cap" if cap is None else f"cap {cap}"
+        cells += [f"{name}: registers", "spill stores, bytes", "occupancy"]
+    lines = ["| " + " | ".join(cells) + " |", "|" + "---|" * len(cells)]
+    for k in d["kernels"]:
+        if k["kernel"].startswith("benchmarks."):
+            continue                       # bench_gpu's own variants
+        row = [f"`{k['kernel']}`", str(k["threads_per_block"])]
+        for a in k["assembled"]:
+            row += [str(a["registers"]), str(a["spill_stores"]), f"{a['occupancy']:.1%}"]
+        lines.append("| " + " | ".join(row) + " |")
+    return "\n".join(lines)
+
+
 TABLES = {"scaling": scaling_table, "gpu": gpu_table, "coldstart": coldstart_table,
           "coldstart-steps": coldstart_steps_table, "exact-mix": exact_mix_table,
-          "smooth-cost": smooth_cost_table, "mesh-distance": mesh_distance_table}
+          "smooth-cost": smooth_cost_table, "mesh-distance": mesh_distance_table,
+          "registers": registers_table}
 
 
 def main(argv=None):

@@ -239,6 +239,8 @@ def _worker(out):
             bench_gpu.bench_grid("triangles", 6, 1, variants=bench_gpu.VARIANTS),
             bench_gpu.bench_lit("points", (12, 10), 1, samples=4)]
     meta["bench_rows"] = rows
+    meta["bench_render_regs"] = bench_gpu.bench_render_variant("edges", (16, 12), 1e-3, 1,
+                                                               "regs64")
     meta["bench_table"] = bench_gpu.markdown("simulator", rows, 1)
     _device_arrays(sdcuda, arrays, meta)
     _launch_warnings(sdcuda, meta)
@@ -350,9 +352,15 @@ def test_bench_gpu_measures_on_the_simulator(sim):
     # out to float32 (at most 1 float32 ulp, 6e-8 of a unit coordinate) move the Barnes-Hut
     # far-field distances by about that much, and may open a node more or less
     trials = grid_row["gpu_variants"]
-    assert set(trials) == {"stack32", "box32"}
-    assert trials["stack32"]["distance_max_diff"] == 0.0
-    assert trials["stack32"]["leaves_ratio"] == 1.0
+    assert set(trials) == {"stack32", "box32", "regs128", "regs96", "regs64"}
+    # a 32-bit stack and a register cap (which the simulator, having no registers, ignores;
+    # on a card it moves values between registers and local memory) change nothing
+    for same in ("stack32", "regs128", "regs96", "regs64"):
+        assert trials[same]["distance_max_diff"] == 0.0
+        assert trials[same]["leaves_ratio"] == 1.0
+    regs = sim["bench_render_regs"]
+    assert regs["hit_differs"] == 0 and regs["depth_max_over_diag"] == 0.0
+    assert regs["rgb_max"] == 0 and regs["leaves_ratio"] == 1.0 and regs["gpu_s"] > 0
     assert 0.0 <= trials["box32"]["distance_max_diff"] <= 1e-6
     assert 0.9 <= trials["box32"]["leaves_ratio"] <= 1.1
     assert all(r["cpu_s"] > 0 and r["gpu_s"] > 0 for r in (render_row, grid_row))

@@ -355,12 +355,15 @@ def _launch_grid(W, H, block):
     return ((W + block[0] - 1) // block[0], (H + block[1] - 1) // block[1])
 
 
-def launch(args, shape, cone=True, block=BLOCK, out=None):
+def launch(args, shape, cone=True, block=BLOCK, out=None, kernels=None):
     """Trace one frame on the device; returns the device output arrays ``(hit, tbuf, grad,
     steps, leaves, bisect, objs, rgb)`` (the launches are asynchronous). ``cone``: the tile
     kernel's cone pass first (as the CPU's ``cone``); ``block``: threads per block of the
     render kernel, (columns, rows); ``out``: the output arrays of an earlier launch of the
-    same shape, to be written again (none: new ones)."""
+    same shape, to be written again (none: new ones); ``kernels``: ``{"cone": ..., "render":
+    ...}``, other compilations of the two kernels to launch (``benchmarks/bench_gpu.py``'s
+    variants; none: :func:`kernel`'s)."""
+    kernels = kernels or {"cone": kernel("cone"), "render": kernel()}
     H, W = shape
     T = march.TILE
     nty, ntx = (H + T - 1) // T, (W + T - 1) // T
@@ -368,7 +371,7 @@ def launch(args, shape, cone=True, block=BLOCK, out=None):
         cone_f = cuda.device_array((nty, ntx, 6))
         cone_n = cuda.device_array((nty, ntx, 2), dtype=np.int64)
         with sdcuda.quiet_small_launches():     # small images: a few blocks of tiles
-            kernel("cone")[_launch_grid(ntx, nty, CONE_BLOCK), CONE_BLOCK](
+            kernels["cone"][_launch_grid(ntx, nty, CONE_BLOCK), CONE_BLOCK](
                 args.data, args.mode, args.tol, args.eps, args.relax, args.newton, cone_f,
                 cone_n)
     else:
@@ -385,7 +388,7 @@ def launch(args, shape, cone=True, block=BLOCK, out=None):
                cuda.device_array((H, W), dtype=np.int32),
                cuda.device_array((H, W, 3), dtype=np.uint8))
     with sdcuda.quiet_small_launches():
-        kernel()[_launch_grid(W, H, block), block](*args, cone_f, cone_n, *out)
+        kernels["render"][_launch_grid(W, H, block), block](*args, cone_f, cone_n, *out)
     return out
 
 
