@@ -12,6 +12,7 @@ Usage (from the repository root)::
 
     python benchmarks/bench_film_host.py                         # bunny, 1920 x 1080, 16 adaptive
     python benchmarks/bench_film_host.py --size 960 540 --repeat 3 --out out.json
+    python benchmarks/bench_film_host.py --batches benchmarks/data/film_batches.json
 """
 
 import argparse
@@ -28,6 +29,7 @@ if str(REPO) not in sys.path:
     sys.path.insert(0, str(REPO))
 
 import numba  # noqa: E402
+import numpy as np  # noqa: E402
 
 from tracer.rendering import film, renderer  # noqa: E402
 from tracer.scenes.scene import load_scene  # noqa: E402
@@ -58,6 +60,33 @@ def one_frame(scene, samples):
     return whole.seconds, kernels.seconds, res.seconds, hashlib.sha1(res.rgb.tobytes()).hexdigest()
 
 
+def sample_batches(scene, samples):
+    """The film's batches of extra samples in one lit render of ``scene``: per call of its
+    sample kernel, the pixels, the samples each and the distance evaluations of each ray (its
+    mean, 99th percentile and largest; the pixel's cone bounds are booked on its first ray).
+    On a card each batch is one launch, one thread a ray (``gpu_render.SPLIT_SAMPLES``), so a
+    batch that fills the card once takes as long as its slowest ray."""
+    batches = []
+    trace = film._trace
+
+    def counted(kargs, depth_max, options, pixels, W, offsets, *rest, **kw):
+        out = trace(kargs, depth_max, options, pixels, W, offsets, *rest, **kw)
+        ev = out[3]
+        if ev.size:
+            batches.append({"pixels": int(pixels.size), "samples": len(offsets),
+                            "rays": int(ev.size), "evals_mean": float(ev.mean()),
+                            "evals_p99": float(np.percentile(ev, 99)),
+                            "evals_max": int(ev.max())})
+        return out
+
+    film._trace = counted
+    try:
+        renderer.render(scene, samples=samples, adaptive=True)
+    finally:
+        film._trace = trace
+    return batches
+
+
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--scene", default="bunny_triangles")
@@ -65,6 +94,9 @@ def main(argv=None):
     p.add_argument("--samples", type=int, default=16)
     p.add_argument("--repeat", type=int, default=3)
     p.add_argument("--out", default=None, help="JSON results file")
+    p.add_argument("--batches", default=None, metavar="JSON",
+                   help="instead: count the evaluations of the film's sample batches in one "
+                        "frame (sample_batches) and write them there")
     args = p.parse_args(argv)
     W, H = args.size
     small = load_scene(REPO / "scenes" / f"{args.scene}.json",
@@ -72,6 +104,14 @@ def main(argv=None):
     one_frame(small, args.samples)          # compile (or load) the kernels first
     scene = load_scene(REPO / "scenes" / f"{args.scene}.json",
                        {"width": W, "height": H, "shading": "lit"})
+    if args.batches:
+        batches = sample_batches(scene, args.samples)
+        for b in batches:
+            print(b)
+        Path(args.batches).write_text(json.dumps(
+            {"scene": args.scene, "size": [W, H], "samples": args.samples, "adaptive": True,
+             "eps": float(scene.march.eps), "batches": batches}, indent=1) + "\n")
+        return batches
     runs = []
     for _ in range(args.repeat):
         film_s, kernel_s, total_s, sha = one_frame(scene, args.samples)

@@ -57,6 +57,7 @@ def generated_lines():
             T.coldstart_steps_table(DATA / "coldstart_issue51_steps.json"),
             T.exact_mix_table(DATA / "exact_mix.json"),
             T.smooth_cost_table(DATA / "exact_mix.json"),
+            T.registers_table(DATA / "cuda_registers.json"),
             markdown(json.loads((DATA / "fidelity.json").read_text(encoding="utf-8")))]
     if (DATA / "mesh_distance_authors.json").is_file():
         made.append(T.mesh_distance_table(DATA / "mesh_distance_authors.json"))

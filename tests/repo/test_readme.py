@@ -94,6 +94,8 @@ TINY = {
     "benchmarks/bench_scaling.py": ["--size", "16", "9", "--repeat", "1", "--threads", "1", "2"],
     "benchmarks/bench_png.py": ["--size", "16", "9", "--repeat", "1", "--threads", "1", "2",
                                 "--kinds", "points"],
+    "benchmarks/bench_gpu_cone_end.py": ["--size", "16", "9", "--kinds", "points"],
+    "benchmarks/bench_film_host.py": ["--size", "16", "9", "--samples", "4"],
 }
 
 SHIM = textwrap.dedent('''\
@@ -176,6 +178,14 @@ NOT_RUN = {
         "it needs an NVIDIA GPU (nvidia-smi, numba-cuda on a card) and takes minutes; "
         "tests/smoothdist/test_cuda_sim.py runs bench_gpu's measurement functions under the "
         "simulator, and its refusal without a GPU",
+    "bash benchmarks/run_on_card.sh OUT regs":
+        "it needs an NVIDIA GPU (nvidia-smi, numba-cuda on a card) and takes minutes; "
+        "tests/smoothdist/test_cuda_sim.py runs bench_gpu's register-capped variants (grid and "
+        "render) under the simulator",
+    "python benchmarks/check_cuda_ptx.py --ptxas --max-registers 128 96 64":
+        "it needs NVIDIA's NVVM and ptxas (pip wheels CI does not install) and assembles every "
+        "kernel four times (minutes); tests/smoothdist/test_cuda_registers.py tests its "
+        "occupancy arithmetic, its reading of ptxas and the committed report",
     "bash benchmarks/run_on_card.sh OUT card":
         "it needs an NVIDIA GPU (nvidia-smi, numba-cuda on a card) and takes about 8 minutes; "
         "tests/smoothdist/test_cuda_sim.py runs bench_gpu's measurement functions (the kernel "
