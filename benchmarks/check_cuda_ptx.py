@@ -55,9 +55,9 @@ def main(argv=None):
     p.add_argument("--scene", default=str(REPO / "scenes" / "bunny_triangles.json"))
     p.add_argument("--verbose", action="store_true", help="the whole error of a failure")
     p.add_argument("--ptxas", nargs="?", const="", default=None, metavar="PATH",
-                   help="also assemble each kernel with ptxas (found on PATH or beside the "
-                        "nvidia wheels when no PATH is given) and report its registers, "
-                        "spills and occupancy")
+                   help="also assemble each kernel with ptxas (when no PATH is given: the "
+                        "one of the nvidia wheels, else the one on PATH) and report its "
+                        "registers, spills and occupancy")
     p.add_argument("--max-registers", nargs="*", type=int, default=[], metavar="N",
                    help="with --ptxas: also assemble with each of these register caps")
     p.add_argument("--json", default=None, help="write the report there (JSON)")
@@ -69,6 +69,10 @@ def main(argv=None):
         if not assembler:
             print("check_cuda_ptx: no ptxas found; pip install nvidia-cuda-nvcc, or give its "
                   "path to --ptxas")
+            return 2
+        if cc not in SM_LIMITS:
+            print(f"check_cuda_ptx: no occupancy limits for compute capability {args.cc}; "
+                  f"one of {', '.join(f'{a}.{b}' for a, b in SM_LIMITS)}")
             return 2
     status = 0
     report = {"cc": list(cc), "ptxas": assembler and ptxas_version(assembler),
@@ -92,7 +96,12 @@ def main(argv=None):
         if assembler:
             row["assembled"] = []
             for cap in [None] + list(args.max_registers):
-                info = assemble(assembler, ptx, cc, cap)
+                try:
+                    info = assemble(assembler, ptx, cc, cap)
+                except (RuntimeError, ValueError) as exc:
+                    print(f"    {name}: ptxas FAILED: {str(exc).splitlines()[0]}")
+                    status = 1
+                    break
                 info.update(max_registers=cap,
                             occupancy=occupancy(info["registers"], threads, cc))
                 row["assembled"].append(info)
