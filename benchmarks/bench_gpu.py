@@ -122,7 +122,7 @@ def bench_render(kind, size, eps, repeat, blocks=()):
                 mean_steps_cpu=float(cpu.steps.mean()), mean_steps_gpu=float(gpu.steps.mean()))
 
 
-def bench_render_variant(kind, size, eps, repeat, variant="box32"):
+def bench_render_variant(kind, size, eps, repeat, variant):
     """The 1080p frame of :func:`bench_render` with a kernel ``variant`` (issue 49 item 3):
     ``box32``, the node boxes stored as float32, rounded outwards (:func:`boxes32`); ``regsN``,
     the cone and render kernels compiled with at most N registers a thread (more threads

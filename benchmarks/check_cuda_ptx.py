@@ -155,9 +155,10 @@ def find_ptxas():
     """The path of ``ptxas``: from the ``nvidia`` wheels beside numba-cuda's NVVM first (``pip
     install nvidia-cuda-nvcc``; the same CUDA release as the NVVM that wrote the PTX, whose
     ``.version`` an older ``ptxas`` refuses), else on PATH; None when there is none."""
-    for site in sys.path:
-        for hit in sorted(Path(site).glob("nvidia/*/bin/ptxas")) if site else ():
-            return str(hit)
+    for site in filter(None, sys.path):
+        hits = sorted(Path(site).glob("nvidia/*/bin/ptxas"))
+        if hits:
+            return str(hits[0])
     return shutil.which("ptxas")
 
 

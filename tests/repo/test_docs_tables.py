@@ -358,12 +358,6 @@ def test_the_film_host_sentence_follows_its_file():
     assert len(data["before"]) == len(data["after"]) == 3 and data["threads"] == 2
 
 
-def _span(values, fmt="{:.0f}", sep="-"):
-    lo, hi = min(values), max(values)
-    return fmt.format(lo) if fmt.format(lo) == fmt.format(hi) else (
-        fmt.format(lo) + sep + fmt.format(hi))
-
-
 def test_the_gpu_kernels_section_follows_its_files():
     """The registers table and the sentences of "What holds the GPU kernels back"
     (``cuda_registers.json``, ``film_batches.json``, ``gpu_h200_lit.json``,
@@ -379,31 +373,31 @@ def test_the_gpu_kernels_section_follows_its_files():
     occ = {a["occupancy"] for a in render_path}
     assert len(occ) == 1
     occ = occ.pop()
-    assert (f"uses {_span(regs)} registers a thread. A multiprocessor then holds "
+    assert (f"uses {_range(regs, '.0f')} registers a thread. A multiprocessor then holds "
             f"{occ * 64:.0f} of its 64 warps ({occ:.1%} occupancy)".replace("%", " %")) in text
     smooth = kernels["smooth"]["assembled"][0]
     assert (f"smooth kernel uses {smooth['registers']} registers "
             f"({smooth['occupancy']:.0%})".replace("%", " %")) in text
     # the sample launches of several rays a pixel, counted on the CPU and timed on the H200
     batches = [b for b in _load("film_batches.json")["batches"] if b["samples"] > 1]
-    assert f"carry {_span([b['rays'] for b in batches], '{:,}')} rays each" in text
+    assert f"carry {_range([b['rays'] for b in batches], ',')} rays each" in text
     samples = kernels["samples"]
     resident = 132 * 64 * occupancy(samples["assembled"][0]["registers"],
                                     samples["threads_per_block"]) * 32
     assert f"holds {resident:,.0f} of its threads at once" in text
     assert all(0.7 < b["rays"] / resident < 1.2 for b in batches)      # about one wave
-    assert (f"slowest ray: {_span([b['evals_max'] for b in batches])} distance evaluations"
+    assert (f"slowest ray: {_range([b['evals_max'] for b in batches], 'd')} distance evaluations"
             in text)
-    assert f"against a mean of {_span([b['evals_mean'] for b in batches])}" in text
+    assert f"against a mean of {_range([b['evals_mean'] for b in batches], '.0f')}" in text
     lit = next(r for r in _load("gpu_h200_lit.json")["rows"] if "triangles" in r["what"])
     timed = [(n, k, s) for n, k, s in lit["gpu_parts"]["samples"] if k > 1]
     assert [(n, k) for n, k, _ in timed] == [(b["pixels"], b["samples"]) for b in batches]
-    assert f"took {_span([s for _, _, s in timed], '{:.2f}')} s for each" in text
+    assert f"took {_range([s for _, _, s in timed], '.2f')} s for each" in text
     # the common end depth on the card
     rows = _load("gpu_cone_end.json")["rows"]
     assert all(r["eps"] == 1e-3 and r["size"] == "1920x1080" for r in rows)
     fall = [100 * (1 - r["render_ratio"]) for r in rows]
-    assert f"warp-summed leaves fall by {_span(fall)} %" in text
+    assert f"warp-summed leaves fall by {_range(fall, '.0f')} %" in text
     assert min(r["cone_ratio"] for r in rows) > 2             # "more than double"
-    assert f"do {_span([r['both_ratio'] for r in rows], '{:.2f}')}x the work" in text
+    assert f"do {_range([r['both_ratio'] for r in rows], '.2f')}x the work" in text
     assert sum(r["hit_differs"] for r in rows) == 1 and "One grazing pixel of the edges" in text
