@@ -13,6 +13,7 @@ from smoothdist._kernels.bvh import build_tree
 from smoothdist._kernels.exact_query import GROUP, build_exact_tree, exact_tree_batch
 from smoothdist._kernels.spacing import gap_probes, local_smooth_distance
 from smoothdist.error_budget import Within, point_alpha, within
+from smoothdist.connectivity import unique_sorted_rows
 from smoothdist.mesh import as_data_mesh, unique_edges
 from smoothdist.query_order import coherent_order, restore, scattered
 from smoothdist.schedule import parallel_tasks, run_tasks
@@ -358,10 +359,11 @@ class SmoothDistanceField:
         """Mean length of the distinct edges of the edges and triangles (None for a point
         cloud)."""
         m = self.mesh
-        E = np.concatenate([m.edges, unique_edges(m.triangles)])
+        n = m.V.shape[0]
+        E = np.concatenate([m.edges, unique_edges(m.triangles, n)])
         if E.shape[0] == 0:
             return None
-        E = np.unique(np.sort(E, axis=1), axis=0)
+        E = unique_sorted_rows(np.sort(E, axis=1), n)
         return float(np.mean(np.linalg.norm(m.V[E[:, 1]] - m.V[E[:, 0]], axis=1)))
 
     def is_wire_net(self):
@@ -371,7 +373,7 @@ class SmoothDistanceField:
         m = self.mesh
         if not m.edges.size or m.triangles.size or m.points.size:
             return False
-        E = np.unique(np.sort(m.edges, axis=1), axis=0)
+        E = unique_sorted_rows(np.sort(m.edges, axis=1), m.V.shape[0])
         deg = np.bincount(E.ravel())
         return float(deg[deg > 0].mean()) > AUTO_WIRE_DEGREE
 

@@ -14,11 +14,15 @@ import logging
 import os
 import re
 import warnings
+from typing import NamedTuple
 
 import numpy as np
 
 from smoothdist._cast import COORD_LIMIT, as_indices, as_points, non_finite_rows
 from smoothdist._kernels import weights as _weights
+from smoothdist.connectivity import (first_of_each, has_equal_rows, row_counts,
+                                     triangle_half_edges, unique_sorted_rows)
+from smoothdist.connectivity import unique_edges as _unique_edges
 from smoothdist.convert import foreign_arrays, is_foreign_geometry, trimesh_arrays
 
 KIND_POINT, KIND_EDGE, KIND_TRIANGLE = 0, 1, 2
@@ -123,14 +127,12 @@ class DataMesh:
         if kind == "mixed":
             return self
         if kind == "points":
-            used = np.unique(np.concatenate([self.points, self.edges.ravel(),
-                                             self.triangles.ravel()]))
-            return DataMesh(self.V, points=used, name=self.name)
+            return DataMesh(self.V, points=self.used_indices(), name=self.name)
         if kind == "edges":
-            E = np.concatenate([self.edges, unique_edges(self.triangles)])
+            E = np.concatenate([self.edges, unique_edges(self.triangles, self.V.shape[0])])
             if E.shape[0] == 0:
                 raise ValueError(f"{self.name}: has no edges or triangles to take edges from")
-            E = np.unique(np.sort(E, axis=1), axis=0)
+            E = unique_sorted_rows(np.sort(E, axis=1), self.V.shape[0])
             return DataMesh(self.V, edges=E, name=self.name)
         if self.triangles.shape[0] == 0:
             raise ValueError(f"{self.name}: has no triangles (it holds "
@@ -150,10 +152,17 @@ class DataMesh:
                                   ("triangles", self.triangles)) if len(a)]
         return present[0] if len(present) == 1 else "mixed"
 
+    def used_indices(self):
+        """``(u,)`` int64 indices, ascending, of the vertices referenced by some primitive."""
+        n = self.V.shape[0]
+        hit = np.zeros(n, dtype=bool)
+        for a in (self.points, self.edges, self.triangles):
+            hit[a.ravel()] = True
+        return np.flatnonzero(hit)
+
     def used_vertices(self):
         """``(u, 3)`` positions of the vertices referenced by some primitive."""
-        used = np.unique(np.concatenate([self.points, self.edges.ravel(), self.triangles.ravel()]))
-        return self.V[used]
+        return self.V[self.used_indices()]
 
     @property
     def bounds(self):
@@ -169,7 +178,7 @@ class DataMesh:
 
     def min_edge_length(self):
         """Shortest edge of the edges and triangles, or ``None`` for a pure point cloud."""
-        E = np.concatenate([self.edges, unique_edges(self.triangles)])
+        E = np.concatenate([self.edges, unique_edges(self.triangles, self.V.shape[0])])
         if E.shape[0] == 0:
             return None
         return float(np.linalg.norm(self.V[E[:, 1]] - self.V[E[:, 0]], axis=1).min())
@@ -195,10 +204,39 @@ class DataMesh:
             Symmetric degree-7 coefficients of each triangle's ``w~(s, t)``.
         tri_whi : (t,) float64
             Upper clamp of each triangle's raw weight ``A w~`` (sampled maximum, >= 1).
+
+        The arrays are expanded from :meth:`weight_classes` on each call (a few distinct
+        polynomials serve every primitive; the mesh keeps only those).
         """
+        w = self.weight_classes()
+        return (w.A, w.edge_coeffs[w.edge_class], w.edge_whi[w.edge_class],
+                w.tri_coeffs[w.tri_class], w.tri_whi[w.tri_class])
+
+    def weight_classes(self):
+        """The weight data of :meth:`weight_data`, compact: a :class:`WeightClasses` whose
+        few distinct polynomials (one per pair of valences) each primitive indexes. Computed
+        once and kept."""
         if self._weights is None:
-            self._weights = _compute_weights(self.V.shape[0], self.edges, self.triangles)
+            self._weights = _weight_classes(self.V.shape[0], self.edges, self.triangles)
         return self._weights
+
+
+class WeightClasses(NamedTuple):
+    """Weight polynomials of a mesh's edges and triangles, one per class of valences.
+
+    ``A`` the valence bound (float); ``edge_coeffs (ke, 5)`` and ``edge_whi (ke,)`` float64
+    per edge class, ``edge_class (e,)`` int64 each edge's class; ``tri_coeffs (kt, 13)``,
+    ``tri_whi (kt,)`` and ``tri_class (t,)`` the same for triangles (see
+    :meth:`DataMesh.weight_data`).
+    """
+
+    A: float
+    edge_coeffs: np.ndarray
+    edge_whi: np.ndarray
+    edge_class: np.ndarray
+    tri_coeffs: np.ndarray
+    tri_whi: np.ndarray
+    tri_class: np.ndarray
 
 
 # ---------------------------------------------------------------------- the one door
@@ -254,15 +292,17 @@ def as_data_mesh(mesh, F=None, *, name=None, **mesh_kwargs):
 
 
 # ---------------------------------------------------------------------- helpers
-def unique_edges(T):
-    """Unique undirected edges ``(e, 2)`` int64 of triangles ``T (t, 3)``, sorted per row."""
-    if T.shape[0] == 0:
-        return np.zeros((0, 2), dtype=np.int64)
-    E = np.concatenate([T[:, [0, 1]], T[:, [1, 2]], T[:, [2, 0]]])
-    return np.unique(np.sort(E, axis=1), axis=0)
+def unique_edges(T, n=None):
+    """Unique undirected edges ``(e, 2)`` int64 of triangles ``T (t, 3)``, sorted per row and
+    in lexicographic order (``n``: the number of vertices, default ``T.max() + 1``)."""
+    return _unique_edges(T, n)
 
 
-def _compute_weights(n, E, T):
+def _weight_classes(n, E, T):
+    """:class:`WeightClasses` of a mesh of ``n`` vertices with edges ``E`` and triangles
+    ``T``: each primitive's class is its pair of valences (edges: the valences of its two
+    ends; triangles: the largest vertex and edge valence), found with one ``np.unique`` over
+    the pairs, and the polynomial of each class is computed once."""
     A = 1
     ev = np.bincount(E.ravel(), minlength=n) if E.shape[0] else None
     if ev is not None:
@@ -270,41 +310,44 @@ def _compute_weights(n, E, T):
     if T.shape[0]:
         tv = np.bincount(T.ravel(), minlength=n)
         A = max(A, int(tv.max()))
-        half = np.sort(np.concatenate([T[:, [0, 1]], T[:, [1, 2]], T[:, [2, 0]]]), axis=1)
-        _, inv, counts = np.unique(half, axis=0, return_inverse=True, return_counts=True)
-        ecount = counts[inv.ravel()].reshape(3, -1).T  # (t, 3) valence of each triangle edge
+        ecount = row_counts(triangle_half_edges(T), n).reshape(3, -1).T  # (t, 3) edge valences
         vmax = tv[T].max(axis=1)
         emax = ecount.max(axis=1)
     A = float(A)
-    edge_coeffs = np.zeros((E.shape[0], 5))
-    edge_whi = np.ones(E.shape[0])
-    cache = {}
-    for i, (a, b) in enumerate(E):
-        key = (int(ev[a]), int(ev[b]))
-        if key not in cache:
-            c = _weights.edge_weight_coefficients(*key)
-            cache[key] = (c, max(1.0, A * _weights.edge_weight_max(c)))
-        edge_coeffs[i], edge_whi[i] = cache[key]
-    tri_coeffs = np.zeros((T.shape[0], 13))
-    tri_whi = np.ones(T.shape[0])
+    edge_coeffs, edge_whi = np.zeros((0, 5)), np.ones(0)
+    edge_class = np.zeros(E.shape[0], dtype=np.int64)
+    if E.shape[0]:
+        pairs, edge_class = _classes(ev[E[:, 0]], ev[E[:, 1]])
+        edge_coeffs = np.array([_weights.edge_weight_coefficients(int(a), int(b))
+                                for a, b in pairs]).reshape(-1, 5)
+        edge_whi = np.array([max(1.0, A * _weights.edge_weight_max(c)) for c in edge_coeffs])
+    tri_coeffs, tri_whi = np.zeros((0, 13)), np.ones(0)
+    tri_class = np.zeros(T.shape[0], dtype=np.int64)
     if T.shape[0]:
-        pairs, inv = np.unique(np.stack([vmax, emax], axis=1), axis=0, return_inverse=True)
-        inv = inv.ravel()
-        for j, (v, e) in enumerate(pairs):
-            c = _weights.triangle_weight_coefficients(int(v), int(e))
-            whi = max(1.0, A * _weights.triangle_weight_range(c)[1])
-            tri_coeffs[inv == j] = c
-            tri_whi[inv == j] = whi
-    return A, edge_coeffs, edge_whi, tri_coeffs, tri_whi
+        pairs, tri_class = _classes(vmax, emax)
+        tri_coeffs = np.array([_weights.triangle_weight_coefficients(int(v), int(e))
+                               for v, e in pairs]).reshape(-1, 13)
+        tri_whi = np.array([max(1.0, A * _weights.triangle_weight_range(c)[1])
+                            for c in tri_coeffs])
+    return WeightClasses(A, edge_coeffs, edge_whi, edge_class, tri_coeffs, tri_whi, tri_class)
+
+
+def _classes(a, b):
+    """``(pairs (k, 2), inverse (r,))``: the distinct pairs ``(a[i], b[i])`` of two int64
+    arrays of valences, sorted, and each row's index among them."""
+    a = np.asarray(a, dtype=np.int64)
+    b = np.asarray(b, dtype=np.int64)
+    base = int(b.max()) + 1
+    keys, inverse = np.unique(a * base + b, return_inverse=True)
+    return np.stack([keys // base, keys % base], axis=1), inverse.ravel().astype(np.int64)
 
 
 def _repair(V, P, E, T, repair, name, quiet_duplicates):
     """Merge duplicate vertices, drop degenerate and duplicate primitives (see DataMesh)."""
     notes = []
-    # merge exactly duplicated vertices (a lexsort finds out cheaply whether there are any)
-    order = np.lexsort((V[:, 2], V[:, 1], V[:, 0]))
-    Vs = V[order]
-    has_dups = V.shape[0] > 1 and bool(np.any(np.all(Vs[1:] == Vs[:-1], axis=1)))
+    # merge exactly duplicated vertices (a hash of the rows finds out cheaply whether there
+    # are any)
+    has_dups = has_equal_rows(V)
     if has_dups:
         Vu, inv = np.unique(V, axis=0, return_inverse=True)
         inv = inv.ravel()
@@ -330,11 +373,10 @@ def _repair(V, P, E, T, repair, name, quiet_duplicates):
                 raise ValueError(f"{name}: has {int(bad.sum())} zero-length edges")
             notes.append(f"dropped {int(bad.sum())} zero-length edges")
             E = E[~bad]
-        Es = np.sort(E, axis=1)
-        _, keep = np.unique(Es, axis=0, return_index=True)
+        keep = first_of_each(np.sort(E, axis=1), V.shape[0])
         if keep.size < E.shape[0]:
             notes.append(f"dropped {E.shape[0] - keep.size} duplicated edges")
-            E = E[np.sort(keep)]
+            E = E[keep]
     # triangles: zero-area and duplicates
     if T.shape[0]:
         area2 = np.linalg.norm(np.cross(V[T[:, 1]] - V[T[:, 0]], V[T[:, 2]] - V[T[:, 0]]), axis=1)
@@ -344,11 +386,10 @@ def _repair(V, P, E, T, repair, name, quiet_duplicates):
                 raise ValueError(f"{name}: has {int(bad.sum())} zero-area triangles")
             notes.append(f"dropped {int(bad.sum())} zero-area triangles")
             T = T[~bad]
-        Ts = np.sort(T, axis=1)
-        _, keep = np.unique(Ts, axis=0, return_index=True)
+        keep = first_of_each(np.sort(T, axis=1), V.shape[0])
         if keep.size < T.shape[0]:
             notes.append(f"dropped {T.shape[0] - keep.size} duplicated triangles")
-            T = T[np.sort(keep)]
+            T = T[keep]
     if P.size + E.shape[0] + T.shape[0] == 0:
         raise ValueError(f"{name}: no valid primitives left after removing degenerate ones")
     if notes:
