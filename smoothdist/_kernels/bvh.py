@@ -19,7 +19,7 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
-from smoothdist._config import NJIT, NJIT_IR_INLINE
+from smoothdist._config import NJIT, NJIT_IR_INLINE, PARALLEL
 from smoothdist.mesh import KIND_EDGE, KIND_POINT, KIND_TRIANGLE
 
 
@@ -84,35 +84,74 @@ class TreeData(NamedTuple):
     depth: int
 
 
-def primitive_table(mesh):
-    """Gather ``(kind, pts, wc, pwhi, A)`` for every primitive of a :class:`~smoothdist.DataMesh`.
+def primitive_table(mesh, order=None):
+    """Gather ``(kind, pts, wc, pwhi, A)`` for every primitive of a :class:`~smoothdist.DataMesh`,
+    in the mesh's own numbering (points, edges, triangles) or, given ``order (m,)`` int64, in
+    that order (row ``k`` is primitive ``order[k]``): the tree's table is written once, in
+    tree order, with no copy in the mesh's order before it.
 
-    ``wc`` holds the coefficients of the raw weight ``A w~`` (already multiplied by ``A``).
+    ``wc`` holds the coefficients of the raw weight ``A w~`` (already multiplied by ``A``),
+    gathered from the mesh's few weight classes (:meth:`~smoothdist.DataMesh.weight_classes`).
     """
     V = mesh.V
     P, E, T = mesh.points, mesh.edges, mesh.triangles
-    A, ecoef, ewhi, tcoef, twhi = mesh.weight_data()
-    m = P.size + E.shape[0] + T.shape[0]
+    w = mesh.weight_classes()
+    A = w.A
+    p, e = P.size, E.shape[0]
+    m = p + e + T.shape[0]
+    if order is None:
+        order = np.arange(m, dtype=np.int64)
     kind = np.empty(m, dtype=np.int64)
     pts = np.zeros((m, 9))
     # np.zeros maps untouched pages lazily: for a point cloud ``wc`` is never written or read,
     # so it costs no memory (1 GB for 1e7 points otherwise); build_tree keeps it that way
     wc = np.zeros((m, 13))
     pwhi = np.ones(m)
-    p, e = P.size, E.shape[0]
-    kind[:p] = KIND_POINT
-    pts[:p, 0:3] = V[P]
-    kind[p:p + e] = KIND_EDGE
-    pts[p:p + e, 0:3] = V[E[:, 0]]
-    pts[p:p + e, 3:6] = V[E[:, 1]]
-    wc[p:p + e, :5] = A * ecoef
-    pwhi[p:p + e] = ewhi
-    kind[p + e:] = KIND_TRIANGLE
-    for j in range(3):
-        pts[p + e:, 3 * j:3 * j + 3] = V[T[:, j]]
-    wc[p + e:] = A * tcoef
-    pwhi[p + e:] = twhi
+    for code, first, rows in ((KIND_POINT, 0, P[:, None]), (KIND_EDGE, p, E),
+                              (KIND_TRIANGLE, p + e, T)):
+        if rows.shape[0] == 0:
+            continue
+        if rows.shape[0] == m:                  # one kind: every row, no selection
+            at, i = slice(None), order
+        else:
+            at = np.flatnonzero((order >= first) & (order < first + rows.shape[0]))
+            i = order[at] - first
+        kind[at] = code
+        for j in range(rows.shape[1]):
+            pts[at, 3 * j:3 * j + 3] = V[rows[i, j]]
+        if code == KIND_EDGE:
+            wc[at, :5] = A * w.edge_coeffs[w.edge_class[i]]
+            pwhi[at] = w.edge_whi[w.edge_class[i]]
+        elif code == KIND_TRIANGLE:
+            wc[at] = A * w.tri_coeffs[w.tri_class[i]]
+            pwhi[at] = w.tri_whi[w.tri_class[i]]
     return kind, pts, wc, pwhi, A
+
+
+def primitive_boxes(mesh):
+    """``(cent, plo, phi)``, each ``(m, 3)`` float64: every primitive's centroid and bounding
+    box, in the mesh's own numbering (points, edges, triangles)."""
+    V = mesh.V
+    parts = [([V[mesh.points]]) if mesh.points.size else None,
+             [V[mesh.edges[:, j]] for j in range(2)] if mesh.edges.size else None,
+             [V[mesh.triangles[:, j]] for j in range(3)] if mesh.triangles.size else None]
+    parts = [X for X in parts if X is not None]
+    if len(parts) == 1 and len(parts[0]) == 1:   # a point cloud: a point is its own box
+        c = np.ascontiguousarray(parts[0][0])
+        return c, c, c
+    cent, plo, phi = [], [], []
+    for X in parts:
+        s = X[0].copy()
+        for Xj in X[1:]:
+            s += Xj
+        s /= len(X)
+        cent.append(s)
+        plo.append(np.minimum.reduce(X) if len(X) > 1 else X[0])
+        phi.append(np.maximum.reduce(X) if len(X) > 1 else X[0])
+        del X
+    if len(cent) == 1:
+        return cent[0], plo[0], phi[0]
+    return np.concatenate(cent), np.concatenate(plo), np.concatenate(phi)
 
 
 def build_tree(mesh, leaf_size=1, progress=None):
@@ -127,32 +166,14 @@ def build_tree(mesh, leaf_size=1, progress=None):
         Called about twice a second while the tree is built (``done`` primitives of
         ``total`` placed in leaves), and once at the end.
 
-    Memory: about ``(9 + 13 + 4) x 8`` bytes per primitive for the primitive table plus 96
-    bytes per node (at most ``2 m - 1`` nodes), plus transients of the
-    same order during the build. A point cloud needs no weight coefficients and no per-primitive
-    boxes (a point is its own box), which the build exploits.
+    Memory: the primitive table, ``(9 + 13 + 2) x 8`` bytes per primitive, written once in
+    tree order (a point cloud's weight-coefficient table is never touched, so it costs
+    nothing), plus 96 bytes per node (at most ``2 m - 1`` nodes); during the build the
+    primitives' centroids and boxes, 72 bytes per primitive (24 for a point cloud).
     """
-    points_only = mesh.edges.shape[0] == 0 and mesh.triangles.shape[0] == 0
-    if points_only:
-        # lean path (1e7-point clouds): no primitive table before the build, a point is its
-        # own centroid and box, and no weight coefficients are ever touched
-        cent = plo = phi = np.ascontiguousarray(mesh.V[mesh.points])
-        A = mesh.weight_data()[0]
-        m = cent.shape[0]
-    else:
-        kind, pts, wc, pwhi, A = primitive_table(mesh)
-        nv = np.where(kind == KIND_POINT, 1, np.where(kind == KIND_EDGE, 2, 3))
-        cent = np.zeros((kind.size, 3))
-        plo = np.full((kind.size, 3), np.inf)
-        phi = np.full((kind.size, 3), -np.inf)
-        for j in range(3):
-            use = nv > j
-            Xj = pts[:, 3 * j:3 * j + 3]
-            cent[use] += Xj[use]
-            plo[use] = np.minimum(plo[use], Xj[use])
-            phi[use] = np.maximum(phi[use], Xj[use])
-        cent /= nv[:, None]
-    done = np.zeros(1, dtype=np.int64)
+    cent, plo, phi = primitive_boxes(mesh)
+    m = cent.shape[0]
+    done = np.zeros(numba.get_num_threads() + 1, dtype=np.int64)
     if progress is None:
         built = _run_build(cent, plo, phi, int(leaf_size), done)
     else:
@@ -165,37 +186,46 @@ def build_tree(mesh, leaf_size=1, progress=None):
         while worker.is_alive():
             worker.join(0.5)
             if worker.is_alive():
-                progress(int(done[0]), cent.shape[0], time.perf_counter() - t0)
-        progress(int(done[0]), cent.shape[0], time.perf_counter() - t0)
+                progress(int(done.sum()), m, time.perf_counter() - t0)
+        progress(int(done.sum()), m, time.perf_counter() - t0)
         if not box:
             raise RuntimeError("BVH build failed")
         built = box[0]
+    del cent, plo, phi
     order, lo, hi, left, right, start, count, depth = built
     diag = np.sqrt(((hi - lo) ** 2).sum(axis=1))
-    if points_only:
-        pts = np.zeros((m, 9))
-        pts[:, 0:3] = cent[order]
-        del cent, plo, phi
-        kind = np.full(m, KIND_POINT, dtype=np.int64)
-        wc = np.zeros((m, 13))
-        pwhi = np.ones(m)
-        whi = np.ones(lo.shape[0])
-    else:
-        del cent, plo, phi
-        whi = _node_max(pwhi[order], start, count)
-        pts = np.ascontiguousarray(pts[order])
-        wc = np.ascontiguousarray(wc[order])
-        kind = np.ascontiguousarray(kind[order])
-        pwhi = np.ascontiguousarray(pwhi[order])
+    kind, pts, wc, pwhi, A = primitive_table(mesh, order)
+    points_only = mesh.edges.shape[0] == 0 and mesh.triangles.shape[0] == 0
+    whi = np.ones(lo.shape[0]) if points_only else _node_max(pwhi, start, count)
     return TreeData(lo=lo, hi=hi, left=left, right=right, start=start, count=count, diag=diag,
                     whi=whi, lwhi=np.log(whi), kind=kind, pts=pts, wc=wc, pwhi=pwhi,
-                    orig=np.ascontiguousarray(order), A=float(A), depth=int(depth))
+                    orig=order, A=float(A), depth=int(depth))
 
 
-def _run_build(cent, plo, phi, leaf_size, done):
+#: trees of at least this many primitives are built on several threads (below it a thread's
+#: start costs more than it saves)
+PARALLEL_BUILD_MIN = 1 << 15
+#: ... in about this many subtrees per thread, handed out largest first
+BUILD_TASKS_PER_THREAD = 4
+
+
+def _run_build(cent, plo, phi, leaf_size, done, threads=None, parallel_min=None):
     """``(order, lo, hi, left, right, start, count, depth)`` of the tree over the primitives'
-    centroids ``cent`` and boxes ``plo, phi`` (``done[0]`` counts the primitives placed)."""
+    centroids ``cent`` and boxes ``plo, phi``; ``done (k,)`` int64 counts the primitives placed
+    (summed over its entries: one per thread of the build, each written by its own thread).
+
+    On ``threads`` threads (default numba's, 1 under ``SMOOTHDIST_PARALLEL=0``) when there are
+    at least ``parallel_min`` primitives (default :data:`PARALLEL_BUILD_MIN`): the top of the
+    tree is split on this thread down to nodes of at most ``m / (threads x``
+    :data:`BUILD_TASKS_PER_THREAD` ``)`` primitives, whose subtrees are then built side by
+    side, each into rows of its own, numbered as the serial build numbers them (leaf size 1:
+    a subtree's node count is known in advance) or renumbered so afterwards (larger leaves):
+    the tree is the serial build's, bit for bit, whatever the thread count.
+    """
     m = cent.shape[0]
+    threads = threads or (numba.get_num_threads() if PARALLEL else 1)
+    threads = max(1, min(threads, done.size - 1))      # a progress counter each
+    parallel_min = PARALLEL_BUILD_MIN if parallel_min is None else parallel_min
     # every leaf holds a primitive or more, so a binary tree has at most 2 m - 1 nodes. The
     # arrays are made here, so that the kernel compiles none of numpy's constructors (a
     # cold-start cost)
@@ -204,10 +234,116 @@ def _run_build(cent, plo, phi, leaf_size, done):
     nodes = (np.empty((cap, 3)), np.empty((cap, 3)), np.full(cap, -1, dtype=np.int64),
              np.full(cap, -1, dtype=np.int64), np.zeros(cap, dtype=np.int64),
              np.zeros(cap, dtype=np.int64))
-    n_nodes, depth = _build(cent, plo, phi, leaf_size, done, order, *nodes, np.empty(m),
-                            np.empty(m), np.empty(m, dtype=np.int64),
-                            np.empty((4, 256), dtype=np.int64))
-    return (order,) + tuple(a[:n_nodes].copy() for a in nodes) + (depth,)
+    scratch = (np.empty(m), np.empty(m), np.empty(m, dtype=np.int64))
+    split = threads > 1 and m >= max(parallel_min, 2)
+    defer = max(leaf_size, m // (threads * BUILD_TASKS_PER_THREAD)) if split else 0
+    # a deferred node holds more than SAH_MIN of its parent's (> defer) primitives
+    frontier = np.empty((16 * (m // max(defer, 1)) + 16 if split else 1, 5), dtype=np.int64)
+    n_nodes, depth, n_front = _build(cent, plo, phi, leaf_size, done[0:1], order, *nodes,
+                                     *scratch, np.empty((5, RADIX_BUCKETS), dtype=np.int64), 0, 0, m, 0,
+                                     1, defer, frontier)
+    tasks = frontier[:n_front]
+    sizes = tasks[:, 2] - tasks[:, 1]
+    # leaf size 1 (or no subtrees left): the numbers are the serial build's already
+    serial = leaf_size == 1 or n_front == 0
+    if not serial:
+        # task i numbers its nodes after the top's and the earlier tasks': a subtree of k
+        # primitives has at most 2 k - 1 nodes, its root among them already numbered
+        tasks[:, 4] = n_nodes + np.concatenate([[0], np.cumsum(2 * sizes - 2)[:-1]])
+    results = [(n_nodes, depth)]
+
+    def one(i, slot):
+        node, s, e, d, first = (int(v) for v in tasks[i])
+        results.append(_build(cent, plo, phi, leaf_size, done[slot:slot + 1], order, *nodes,
+                              *scratch, np.empty((5, RADIX_BUCKETS), dtype=np.int64), node, s, e, d,
+                              first, 0, frontier)[:2])
+
+    _largest_first(one, np.argsort(-sizes, kind="stable"), threads)
+    depth = max(r[1] for r in results)
+    if serial:
+        n_nodes = max(r[0] for r in results)
+        # a leaf-size-1 tree fills 2 m - 1 of the 2 m rows: keep the arrays (no copy, no
+        # second peak); a sparser one is copied to its size (np.empty's untouched rows cost
+        # no memory)
+        if 2 * n_nodes > cap:
+            return (order,) + tuple(a[:n_nodes] for a in nodes) + (depth,)
+        return (order,) + tuple(a[:n_nodes].copy() for a in nodes) + (depth,)
+    return (order,) + _serial_numbering(*nodes) + (depth,)
+
+
+def _largest_first(fn, items, threads):
+    """Call ``fn(item, slot)`` for every entry of ``items`` on ``threads`` Python threads, each
+    taking the next item when it is done (``slot``: ``1 + `` the thread's index, for its own
+    progress counter); exceptions are re-raised here. The kernels release the GIL."""
+    items = list(items)
+    lock = threading.Lock()
+    errors = []
+
+    def work(slot):
+        while not errors:
+            with lock:
+                if not items:
+                    return
+                i = items.pop(0)
+            try:
+                fn(i, slot)
+            except BaseException as exc:  # handed to the calling thread
+                errors.append(exc)
+
+    workers = [threading.Thread(target=work, args=(k + 1,), daemon=True)
+               for k in range(1, threads)]
+    for t in workers:
+        t.start()
+    work(1)
+    for t in workers:
+        t.join()
+    if errors:
+        raise errors[0]
+
+
+def _serial_numbering(lo, hi, left, right, start, count):
+    """The node arrays renumbered in place as the serial build numbers them (children of the
+    ``k``-th inner node in preorder, left subtree first, are ``2 k + 1`` and ``2 k + 2``), and
+    returned trimmed to the tree's nodes (views): rows not reached from the root (a task's
+    unused ones) are dropped. One array at a time, so the extra memory is one array's."""
+    new_of = _preorder_ids(left, right)
+    reached = np.flatnonzero(new_of >= 0)
+    n = reached.size
+    old = np.empty(n, dtype=np.int64)
+    old[new_of[reached]] = reached
+    del reached
+    for a in (lo, hi, start, count):
+        a[:n] = a[old]
+    for child in (left, right):
+        c = child[old]
+        inner = c >= 0
+        c[inner] = new_of[c[inner]]
+        child[:n] = c
+    return tuple(a[:n] for a in (lo, hi, left, right, start, count))
+
+
+@numba.njit(**NJIT)
+def _preorder_ids(left, right):
+    """``(rows,)`` int64: each node's number in the serial build's order (see
+    :func:`_serial_numbering`), ``-1`` for rows not in the tree."""
+    new_of = np.full(left.size, -1, dtype=np.int64)
+    stack = np.empty(left.size + 1, dtype=np.int64)
+    stack[0] = 0
+    sp = 1
+    new_of[0] = 0
+    k = 0
+    while sp > 0:
+        sp -= 1
+        node = stack[sp]
+        if left[node] < 0:
+            continue
+        new_of[left[node]] = 2 * k + 1
+        new_of[right[node]] = 2 * k + 2
+        k += 1
+        stack[sp] = right[node]
+        stack[sp + 1] = left[node]
+        sp += 2
+    return new_of
 
 
 #: an empty box ``(lo0, lo1, lo2, hi0, hi1, hi2)``
@@ -232,28 +368,49 @@ def _half_area(box):
 
 @numba.njit(**NJIT)
 def _build(cent, plo, phi, leaf_size, done, order, lo, hi, left, right, start, count, keys,
-           kbuf, obuf, stacks):
-    """Build into the given arrays (``order`` starts as ``0..m-1``; node arrays hold at least
-    the number of nodes; ``keys, kbuf, obuf (m,)`` and ``stacks (4, 256)`` are scratch);
-    returns ``(number of nodes, depth)``."""
-    m = cent.shape[0]
+           kbuf, obuf, stacks, root, s0, e0, d0, next_node, defer, frontier):
+    """Build the subtree of node ``root``, the primitives ``order[s0:e0]`` at depth ``d0``,
+    into the given arrays (``order`` starts as ``0..m-1``; node arrays hold at least the
+    number of nodes; ``keys, kbuf, obuf (m,)`` and ``stacks (5, RADIX_BUCKETS)`` are scratch;
+    new nodes
+    are numbered from ``next_node`` on). A node of more than ``leaf_size`` and at most
+    ``defer`` primitives is not split but listed in ``frontier`` as ``(node, s, e, depth,
+    first)``, for a later call (``defer = 0``: none): with ``leaf_size = 1`` its subtree's
+    size is known (``2 (e - s) - 1`` nodes) and ``first`` is the number the serial build
+    gives its first child, the numbers up to its last node skipped here; ``-1`` otherwise.
+    Returns ``(next free node number, depth, number
+    of nodes listed)``."""
     st_node = stacks[0]
     st_s = stacks[1]
     st_e = stacks[2]
     st_d = stacks[3]
-    st_node[0] = 0
-    st_s[0] = 0
-    st_e[0] = m
-    st_d[0] = 0
+    st_node[0] = root
+    st_s[0] = s0
+    st_e[0] = e0
+    st_d[0] = d0
     sp = 1
-    n_nodes = 1
-    depth = 0
+    n_nodes = next_node
+    depth = d0
+    n_front = 0
     while sp > 0:
         sp -= 1
         node = st_node[sp]
         s = st_s[sp]
         e = st_e[sp]
         d = st_d[sp]
+        if leaf_size < e - s <= defer:
+            frontier[n_front, 0] = node
+            frontier[n_front, 1] = s
+            frontier[n_front, 2] = e
+            frontier[n_front, 3] = d
+            frontier[n_front, 4] = -1
+            if leaf_size == 1:
+                # its subtree has e - s - 1 inner nodes, whose children the serial build
+                # numbers next: skip their numbers, and the later call starts there
+                frontier[n_front, 4] = n_nodes
+                n_nodes += 2 * (e - s - 1)
+            n_front += 1
+            continue
         if d > depth:
             depth = d
         box = _EMPTY_BOX
@@ -280,7 +437,7 @@ def _build(cent, plo, phi, leaf_size, done, order, lo, hi, left, right, start, c
             axis = 2
         for k in range(s, e):
             keys[k] = cent[order[k], axis]
-        _sort_by_key(keys, order, kbuf, obuf, s, e)
+        _sort_order(keys, order, kbuf, obuf, s, e, stacks[4])
         mid = _sah_split(plo, phi, order, kbuf, s, e)
         l = n_nodes
         r = n_nodes + 1
@@ -297,7 +454,7 @@ def _build(cent, plo, phi, leaf_size, done, order, lo, hi, left, right, start, c
         st_e[sp] = mid
         st_d[sp] = d + 1
         sp += 1
-    return n_nodes, depth
+    return n_nodes, depth, n_front
 
 
 #: each side of a split holds at least this fraction of the node's primitives (bounds the
@@ -330,6 +487,78 @@ def _sah_split(plo, phi, order, area, s, e):
             best = cost
             arg = k
     return arg
+
+
+#: ranges of at least this many keys are sorted by :func:`_radix_sort`, shorter ones by
+#: :func:`_sort_by_key` (both stable: the same order)
+RADIX_MIN = 1024
+#: bits of the radix sort's digit (six passes over a 64-bit key) and its buckets
+RADIX_BITS = 11
+RADIX_BUCKETS = 1 << RADIX_BITS
+_SIGN = np.uint64(1 << 63)
+_ONES = np.uint64(0xFFFFFFFFFFFFFFFF)
+_DIGIT = np.uint64(RADIX_BUCKETS - 1)
+
+
+@numba.njit(**NJIT_IR_INLINE)
+def _sort_order(keys, items, kbuf, ibuf, s, e, counts):
+    """Sort ``items[s:e]`` by ``keys[s:e]`` (finite float64), stably; ``keys`` and the buffers
+    are left as scratch. Nothing to do for keys in order already (a child split along its
+    parent's axis); long ranges by :func:`_radix_sort`, short ones by :func:`_sort_by_key`."""
+    for k in range(s + 1, e):
+        if keys[k] < keys[k - 1]:
+            break
+    else:
+        return
+    if e - s >= RADIX_MIN:
+        _radix_sort(keys, items, kbuf, ibuf, s, e, counts)
+    else:
+        _sort_by_key(keys, items, kbuf, ibuf, s, e)
+
+
+@numba.njit(**NJIT_IR_INLINE)
+def _radix_sort(keys, items, kbuf, ibuf, s, e, counts):
+    """Stable LSD radix sort of ``items[s:e]`` by ``keys[s:e]`` (finite float64, ``-0.0``
+    equal to ``0.0`` as in a comparison sort): the keys' bits, made to order as the numbers
+    do, in :data:`RADIX_BITS`-bit digits; a digit that every key shares is skipped.
+    ``counts (RADIX_BUCKETS,)`` int64 scratch; ``keys`` is left as scratch."""
+    uk = keys.view(np.uint64)
+    ub = kbuf.view(np.uint64)
+    for k in range(s, e):
+        keys[k] = keys[k] + 0.0                      # -0.0 becomes 0.0
+        u = uk[k]
+        uk[k] = (u ^ _ONES) if u & _SIGN else (u | _SIGN)
+    n = e - s
+    src_k, src_i, dst_k, dst_i = uk, items, ub, ibuf
+    shift = 0
+    while shift < 64:
+        sh = np.uint64(shift)
+        counts[:] = 0
+        for k in range(s, e):
+            counts[(src_k[k] >> sh) & _DIGIT] += 1
+        skip = False
+        for b in range(RADIX_BUCKETS):
+            if counts[b] == n:
+                skip = True
+            if counts[b] != 0:
+                break
+        if not skip:
+            total = s
+            for b in range(RADIX_BUCKETS):
+                c = counts[b]
+                counts[b] = total
+                total += c
+            for k in range(s, e):
+                b = (src_k[k] >> sh) & _DIGIT
+                o = counts[b]
+                counts[b] = o + 1
+                dst_k[o] = src_k[k]
+                dst_i[o] = src_i[k]
+            src_k, src_i, dst_k, dst_i = dst_k, dst_i, src_k, src_i
+        shift += RADIX_BITS
+    if src_i is not items:
+        for k in range(s, e):
+            items[k] = src_i[k]
 
 
 #: runs of this many keys are insertion-sorted before the merge passes of _sort_by_key
