@@ -19,6 +19,7 @@ from tracer.scenes import from_mesh
 from tracer.scenes.from_mesh import describe_parameters, resolve_up, scene_dict
 from tracer.scenes.scene import AUTHORS_KEYS, BVH_TYPES, load_scene, mesh_paths, read_scene_json
 from tracer.scenes.settings import KINDS, default_text, defaults
+from tracer.stages import StageClock, stage
 
 HELP = "sphere-trace a scene file to a PNG (and AOVs)"
 
@@ -124,6 +125,9 @@ def add_arguments(p):
     p.add_argument("--leaves-png", metavar="OUT.png",
                    help="false-colour heat map of BVH leaves visited per pixel")
     p.add_argument("--stats", metavar="OUT.json", help="write the render statistics as JSON")
+    p.add_argument("--stage-times", metavar="OUT.json", dest="stage_times",
+                   help="write the seconds of each stage (load, tree, parameters, framing, "
+                        "trace, light, write) as JSON")
     p.add_argument("--threads", type=int, help="number of threads (default: all cores)")
     p.add_argument("--device", choices=("cpu", "cuda"), default="cpu",
                    help="trace on the CPU (default) or on an NVIDIA GPU (needs the gpu extra: "
@@ -249,18 +253,36 @@ def run(args):
     for opt, path, ext in (("--depth", args.depth, ".npy"), ("--normals", args.normals, ".npy"),
                            ("--steps-png", args.steps_png, ".png"),
                            ("--leaves-png", args.leaves_png, ".png"),
-                           ("--stats", args.stats, ".json")):
+                           ("--stats", args.stats, ".json"),
+                           ("--stage-times", args.stage_times, ".json")):
         if path is not None and not path.lower().endswith(ext):
             raise ValueError(f"{opt} must name a {ext} file, got {path}")
     if args.save_scene is not None and not args.save_scene.lower().endswith(".json"):
         raise ValueError(f"--save-scene must name a .json file, got {args.save_scene}")
     outputs = [out, args.depth, args.normals, args.steps_png, args.leaves_png, args.stats,
-               args.save_scene]
+               args.save_scene, args.stage_times]
     check_outputs(outputs, args.overwrite, create=False)
+    clock = StageClock(name, quiet=args.quiet)
+    with clock:
+        _render_and_write(args, source, overrides, name, out, outputs)
+    if args.stage_times:
+        with atomic_write(args.stage_times, overwrite=args.overwrite) as tmp:
+            with open(tmp, "w", encoding="utf-8") as fh:
+                json.dump(clock.as_dict(), fh, indent=2)
+        if not args.quiet:
+            print(f"Stage times: {', '.join(f'{n} {t:.2f} s' for n, t in clock.times)}; "
+                  f"wrote {args.stage_times}.")
+    sys.stdout.flush()
+    return 0
+
+
+def _render_and_write(args, source, overrides, name, out, outputs):
+    """Build the scene, render it and write every output; returns the paths written."""
     if source == "mesh":
         scene = _mesh_scene(args)
     else:
-        scene = load_scene(args.scene, overrides)
+        with stage("load", "reading the scene and building its trees"):
+            scene = load_scene(args.scene, overrides)
         if args.view or args.camera:
             _replace_camera(scene, args)
         if args.color is not None:
@@ -269,6 +291,14 @@ def run(args):
             scene.background = tuple(args.background)
     bar = None if args.quiet else ProgressBar(f"render {name}")
     result = render(scene, progress=bar, device=args.device)
+    with stage("write", "writing the image"):
+        written = _write(args, source, scene, result, out, outputs)
+    _summary(args, source, scene, result, name, written)
+    return written
+
+
+def _write(args, source, scene, result, out, outputs):
+    """Write the image and the other outputs asked for; returns their paths."""
     make_parents(outputs)
     written = [result.save(out, overwrite=args.overwrite)]
     if args.depth:
@@ -286,6 +316,16 @@ def run(args):
                                 overwrite=args.overwrite))
     if args.save_scene:
         written.append(_save_scene(args, scene, source))
+    if args.stats:
+        with atomic_write(args.stats, overwrite=args.overwrite) as tmp:
+            with open(tmp, "w", encoding="utf-8") as fh:
+                json.dump(_stats(args, scene, result), fh, indent=2)
+        written.append(args.stats)
+    return written
+
+
+def _stats(args, scene, result):
+    """The render statistics of ``--stats`` (and the summary line)."""
     stats = result.summary()
     mode = scene.march.mode
     stats.update(scene=os.path.abspath(args.scene), mode=mode, beta=scene.march.beta,
@@ -293,13 +333,13 @@ def run(args):
                  objects=[{"name": o.name, "alpha": o.alpha, "alpha_u": o.alpha_u,
                            "offset": o.level(mode), "primitives": o.field.num_primitives}
                           for o in scene.objects])
-    if args.stats:
-        with atomic_write(args.stats, overwrite=args.overwrite) as tmp:
-            with open(tmp, "w", encoding="utf-8") as fh:
-                json.dump(stats, fh, indent=2)
-        written.append(args.stats)
+    return stats
+
+
+def _summary(args, source, scene, result, name, written):
+    """Print the one-line summary of the render (not with ``--quiet``)."""
     if not args.quiet:
-        s = stats
+        s = _stats(args, scene, result)
         prims = sum(o["primitives"] for o in s["objects"])
         view = ""
         if source == "mesh" and not args.camera:
@@ -316,8 +356,6 @@ def run(args):
               f"{s['seconds']:.2f} s; {s['hits']} hits ({100 * s['hit_fraction']:.1f}%), "
               f"{s['mean_steps']:.1f} distance evaluations and {s['mean_leaves']:.0f} leaves "
               f"visited per pixel on average. Wrote {', '.join(map(str, written))}.")
-    sys.stdout.flush()
-    return 0
 
 
 def _lighting_args(args):

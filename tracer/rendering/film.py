@@ -797,7 +797,7 @@ def _sample_shading_normals(skargs, depth_max, options, pixels, W, offsets, posi
                             gpu)
 
 
-def form_image(scene, camera, arrays, kargs, options, centre, gpu=None):
+def form_image(scene, camera, arrays, kargs, options, centre, gpu=None, progress=None):
     """Shade the centre samples, add ``scene.film.samples - 1`` more per pixel (all pixels, or
     the adaptive selection when ``scene.film.adaptive``), and average.
 
@@ -814,7 +814,8 @@ def form_image(scene, camera, arrays, kargs, options, centre, gpu=None):
     ``centre``'s ``grad`` (in place: the render's normals are those the image is lit with).
     ``gpu``: :mod:`tracer.rendering.gpu_render` (passed in by it: this module does not import
     it) to trace the samples' and the light's rays on the GPU (the same per-ray functions);
-    None on the CPU. Everything else runs on the host either way."""
+    None on the CPU. Everything else runs on the host either way. ``progress``: called with
+    the share of the film's work done (0 to 1) after each of its passes, and 1 at the end."""
     film = scene.film
     H, W, samples, adaptive = film.height, film.width, film.samples, film.adaptive
     hit0, t0, grad0, objs0 = (np.asarray(a) for a in centre)
@@ -827,8 +828,11 @@ def form_image(scene, camera, arrays, kargs, options, centre, gpu=None):
         shade_evals += _centre_shading_normals(skargs, arrays.depth_max, options, (H, W), hit0,
                                                t0, grad0, objs0, gpu)
         centre_normals = (H, W, np.where(hit0, objs0, -1), t0, _unit(grad0))
+    tell = progress or (lambda fraction: None)
+    tell(0.1 if skargs is not None else 0.0)
     shader = _Shader(scene, camera, arrays, kargs, gpu)
     colour0, alpha0, rec0 = shader.shade(hit0, t0, grad0, dirs, grid=(H, W), objs=objs0)
+    tell(0.5 if samples > 1 else 0.9)
     acc = colour0 * alpha0[:, None]
     acc_a = alpha0.copy()
     spp = np.ones(H * W, dtype=np.int32)
@@ -887,6 +891,7 @@ def form_image(scene, camera, arrays, kargs, options, centre, gpu=None):
             if n <= done or pix.size == 0:
                 continue
             out = add(pix, range(done, n))
+            tell(0.5 + 0.15 * (stage + 1))
             m = n - done
             disp = np.concatenate([disp, shader.encode(out[1]).reshape(pix.size, m, 3)], axis=1)
             keys = np.concatenate([keys, _sample_keys(out[2]).reshape(pix.size, m)], axis=1)
@@ -904,6 +909,7 @@ def form_image(scene, camera, arrays, kargs, options, centre, gpu=None):
 
     rgb, cover = _composite(shader, acc, acc_a, spp)
     rgb = rgb.reshape(H, W, 3)
+    tell(1.0)
     info = {"rays": int(H * W + rays), "sample_steps": work[0], "shading_queries": shade_evals}
     if shader.lit:
         info.update(shadow=rec0["shadow"].reshape(H, W), ao=rec0["ao"].reshape(H, W),

@@ -22,6 +22,7 @@ from tracer.rendering.frame import (PixelBuffers, RayArgs, RenderResult, camera_
 from tracer.rendering.gpu_render import render_cuda
 from tracer.rendering.shading import load_matcap
 from tracer.rendering.threads import in_bands, render_threads
+from tracer.stages import stage
 
 __all__ = ["render", "trace_tiles", "CHUNKS_PER_THREAD"]
 
@@ -100,14 +101,20 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
     options = trace_options(scene, lo, hi, relax, omega, cone)
     band = band_rows or H
     t0 = time.perf_counter()
-    for r0 in range(0, H, band):
-        r1 = min(H, r0 + band)
-        report = None
-        if progress is not None:
-            def report(done, r0=r0):
-                _report(progress, done and r0 * W + done, H * W, time.perf_counter() - t0)
-        trace_tiles(args, r0, r1, depth_max, (hit, tbuf, grad, steps, leaves, bis, objs),
-                    options, report)
+    # a film after the trace (light, samples, RGBA): the trace is the bar's first
+    # FILM_SHARE-less part and the film the rest, so that it reaches 100 % at the end
+    plain = film.samples == 1 and film.shading != "lit" and not film.transparent
+    share = 1.0 if plain else 1.0 - FILM_SHARE
+    with stage("trace", "tracing"):
+        for r0 in range(0, H, band):
+            r1 = min(H, r0 + band)
+            report = None
+            if progress is not None:
+                def report(done, r0=r0):
+                    _report(progress, done and int(share * (r0 * W + done)), H * W,
+                            time.perf_counter() - t0)
+            trace_tiles(args, r0, r1, depth_max, (hit, tbuf, grad, steps, leaves, bis, objs),
+                        options, report)
     normals = np.empty_like(grad)
 
     def unit(r0, r1):
@@ -115,7 +122,7 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
         norm = np.linalg.norm(g, axis=2, keepdims=True)
         normals[r0:r1] = np.where(norm > 0, g / np.where(norm > 0, norm, 1.0), 0.0)
 
-    if film.samples == 1 and film.shading != "lit" and not film.transparent:
+    if plain:
         in_bands(unit, H)
         seconds = time.perf_counter() - t0
         rgb = np.empty((H, W, 3), dtype=np.uint8)
@@ -127,14 +134,29 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
         in_bands(colour, H)
         alpha, spp, aovs = hit.astype(np.float32), np.ones((H, W), np.int32), {"rays": H * W}
     else:
-        rgb, alpha, spp, aovs = form_image(scene, camera, arrays, args, options,
-                                           (hit, tbuf, grad, objs))
+        with stage("light", "lighting and sampling"):
+            rgb, alpha, spp, aovs = form_image(scene, camera, arrays, args, options,
+                                               (hit, tbuf, grad, objs),
+                                               progress=_film_report(progress, share, H * W, t0))
         in_bands(unit, H)       # after the film: a lit render's normals are its shading's
         seconds = time.perf_counter() - t0
     depth = tbuf.astype(np.float32)
     return RenderResult(rgb=rgb, hit=hit, depth=depth, normals=normals, steps=steps,
                         leaves=leaves, bisections=bis, seconds=seconds, camera=camera,
                         scene=scene, alpha=alpha, samples=spp, aovs=aovs)
+
+
+#: the share of a render's progress bar given to its film (light, samples) when it has one
+FILM_SHARE = 0.5
+
+
+def _film_report(progress, share, total, t0):
+    """The film's ``report(fraction)``: the bar from ``share`` of ``total`` to all of it
+    (None without a progress display)."""
+    if progress is None:
+        return None
+    return lambda fraction: _report(progress, int(total * (share + (1.0 - share) * fraction)),
+                                    total, time.perf_counter() - t0)
 
 
 def _report(progress, done, total, elapsed):

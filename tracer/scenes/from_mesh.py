@@ -24,6 +24,7 @@ from tracer.rendering.camera import UP_AXES, LookAt, frame_points
 from tracer.rendering.renderer import render
 from tracer.scenes.scene import field_scene, with_default_eps
 from tracer.scenes.settings import KINDS, Film, March, Surface, View, defaults
+from tracer.stages import StageClock, stage, stage_progress
 
 #: defaults of the mesh entry points (:mod:`tracer.scenes.settings`; ``tracer render MESH`` too)
 _MESH = defaults("mesh")
@@ -162,17 +163,21 @@ def build_mesh_scene(mesh, F, kind, surface, march, film, view, camera=None, nam
     up = view.up
     guessed = up is None or up == "auto"
     up = resolve_up(mesh, up)
-    data = load_geometry(mesh, F, kind)
-    field = SmoothDistanceField(data)
-    scene = field_scene(field, surface, march, film,
-                        replace(view, view=view.view if camera is None else None, up=up),
-                        camera=camera, name=name or os.path.splitext(data.name)[0])
-    if guessed and camera is None and view.view == "front":
-        new_up, front, why = auto_orientation(data, up)
-        scene.extra["orientation"] = why
-        if front != "front" or new_up != up:
-            frame_scene(scene, front, new_up)
-    warn_thin_tubes(scene)
+    with stage("load", "reading the mesh"):
+        data = load_geometry(mesh, F, kind)
+    with stage("tree", "building the tree"):
+        field = SmoothDistanceField(data, progress=stage_progress("building the tree"))
+    with stage("parameters", "choosing alpha and the offset"):
+        scene = field_scene(field, surface, march, film,
+                            replace(view, view=view.view if camera is None else None, up=up),
+                            camera=camera, name=name or os.path.splitext(data.name)[0])
+    with stage("framing", "framing the view"):
+        if guessed and camera is None and view.view == "front":
+            new_up, front, why = auto_orientation(data, up)
+            scene.extra["orientation"] = why
+            if front != "front" or new_up != up:
+                frame_scene(scene, front, new_up)
+        warn_thin_tubes(scene)
     return scene
 
 
@@ -405,7 +410,9 @@ def render_mesh(mesh, F=None, *, kind=None, alpha=_MESH["alpha"], alpha_u=_MESH[
     Parameters are those of :func:`mesh_scene` (the ``"lit"`` shading by default;
     ``shading="normals"`` gives the paper's normal colours); ``progress`` and ``device``
     (``"cpu"`` or ``"cuda"``) as in :func:`tracer.render`: by default (``"auto"``) a progress
-    bar appears on stderr once the render has run 3 s (``progress=None``: never).
+    bar appears on stderr once the render has run 3 s, and each stage before and after the
+    trace that runs longer (reading a big mesh, building its tree, the automatic parameters,
+    the light) says what it is doing (:mod:`tracer.stages`; ``progress=None``: never).
 
     Returns
     -------
@@ -425,8 +432,14 @@ def render_mesh(mesh, F=None, *, kind=None, alpha=_MESH["alpha"], alpha_u=_MESH[
         res.save("renders/ico.png")         # res.rgb, res.depth, res.hit, ... are arrays
     """
     settings = locals()     # the keyword arguments by name, for settings_groups
-    scene = build_mesh_scene(mesh, F, kind, *settings_groups(settings), camera=camera)
-    return render(scene, progress=progress, device=device)
+    # a progress bar asked for (or "auto"): the stages before and after the trace say what
+    # they do once they pass a few seconds too (a big mesh's tree, the light)
+    talk = progress is True or (isinstance(progress, str) and progress == "auto")
+    label = (os.path.splitext(os.path.basename(os.fspath(mesh)))[0]
+             if isinstance(mesh, (str, os.PathLike)) else "render_mesh")
+    with StageClock(label, quiet=not talk):
+        scene = build_mesh_scene(mesh, F, kind, *settings_groups(settings), camera=camera)
+        return render(scene, progress=progress, device=device)
 
 
 def describe_parameters(scene):
