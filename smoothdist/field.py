@@ -15,7 +15,7 @@ from smoothdist._kernels.spacing import gap_probes, local_smooth_distance
 from smoothdist.error_budget import Within, point_alpha, within
 from smoothdist.connectivity import unique_sorted_rows
 from smoothdist.mesh import as_data_mesh, unique_edges
-from smoothdist.query_order import coherent_order, restore, scattered
+from smoothdist.query_order import coherent_order, scattered
 from smoothdist.schedule import parallel_tasks, run_tasks
 
 GRADIENTS = ("exact", "metric")
@@ -626,12 +626,22 @@ class SmoothDistanceField:
                                                        tol, self.device_tree())
             res = SmoothDistanceResult(d, g)
             return (d, g, QueryStats(nodes, leaves)) if return_stats else res
+        out = _outputs(Q.shape[0], return_stats)
+        for a, b in _chunks(Q.shape[0]):
+            self._smooth_chunk(Q[a:b], (alpha, beta, S, wgrad_scale, tol), method,
+                               _part(out, a, b))
+        d, g, nodes, leaves = out
+        return (d, g, QueryStats(nodes, leaves)) if return_stats else SmoothDistanceResult(d, g)
+
+    def _smooth_chunk(self, Q, params, method, out):
+        """:meth:`smooth_distance` of the queries ``Q (k, 3)`` (at most :data:`QUERY_CHUNK`)
+        into ``out = [d (k,), g (k, 3), nodes, leaves]`` (views of the whole batch's arrays;
+        the stats None when not asked for), in the queries' coherent order."""
+        alpha, beta, S, wgrad_scale, tol = params
         n = Q.shape[0]
-        d = np.empty(n)
-        g = np.empty((n, 3))
-        nodes = np.empty(n, dtype=np.int64)
-        leaves = np.empty(n, dtype=np.int64)
         order = coherent_order(Q) if method == "bvh" else None
+        res = _scratch(n, out, reuse=order is None)
+        d, g, nodes, leaves = res
         if order is not None:
             Q = Q[order]
         if 0 < n <= TASK_BATCH and method == "bvh" and tol == 0.0:
@@ -641,12 +651,7 @@ class SmoothDistanceField:
             brute = method == "brute"     # every primitive summed, no tree
             _q.smooth_distance_batch(self.tree, Q, alpha, beta, S, wgrad_scale, brute, d, g, nodes,
                                      leaves, tol, parallel_tasks(n))
-        if order is not None:     # only what is returned
-            d, g = restore(order, d, g)
-            if return_stats:
-                nodes, leaves = restore(order, nodes, leaves)
-        res = SmoothDistanceResult(d, g)
-        return (res.distance, res.gradient, QueryStats(nodes, leaves)) if return_stats else res
+        _scatter(order, res, out)
 
     def exact_distance(self, Q, *, return_closest=False, return_stats=False, device=None):
         """Exact unsigned distance, unit gradient, and (optionally) the closest primitive.
@@ -672,39 +677,41 @@ class SmoothDistanceField:
             out = ExactDistanceResult(d, g, prim) if return_closest else SmoothDistanceResult(d, g)
             return (*out, QueryStats(nodes, leaves)) if return_stats else out
         n = Q.shape[0]
-        d = np.empty(n)
-        g = np.empty((n, 3))
-        prim = np.empty(n, dtype=np.int64)
-        nodes = np.empty(n, dtype=np.int64)
-        leaves = np.empty(n, dtype=np.int64)
-        order = coherent_order(Q)
+        out = _outputs(n, return_stats, closest=True)
         if n:
             self._exact_queries = self.__dict__.get("_exact_queries", 0) + n
-            if ("_exact_tree" in self.__dict__
-                    or self._exact_queries >= EXACT_TREE_AFTER * self.num_primitives):
-                # the kernel takes the queries in the coherent order itself (no copies);
-                # queries too few to sort and far apart are searched one by one (a group of
-                # unrelated queries opens the union of their searches: 10x slower)
-                group = 1 if order is None and scattered(Q, self.diagonal) else GROUP
-                exact_tree_batch(self.exact_tree, Q, True, d, g, prim, nodes, leaves,
-                                 parallel_tasks(n), bool(return_stats),
-                                 _NO_ORDER if order is None else order, group)
-            else:
-                Qo = Q if order is None else Q[order]
-                if n <= TASK_BATCH:
-                    _tasks(_q.exact_distance_tasks, n, self.tree, Qo, -1.0, d, g, prim, nodes,
-                           leaves, 0)
-                else:
-                    _q.exact_distance_batch(self.tree, Qo, d, g, prim, nodes, leaves,
-                                            parallel_tasks(n))
-                if order is not None:     # only what is returned
-                    d, g = restore(order, d, g)
-                    if return_closest:
-                        prim, = restore(order, prim)
-                    if return_stats:
-                        nodes, leaves = restore(order, nodes, leaves)
+            use_exact_tree = ("_exact_tree" in self.__dict__
+                              or self._exact_queries >= EXACT_TREE_AFTER * self.num_primitives)
+            for a, b in _chunks(n):
+                self._exact_chunk(Q[a:b], use_exact_tree, _part(out, a, b), return_stats)
+        d, g, prim, nodes, leaves = out
         out = ExactDistanceResult(d, g, prim) if return_closest else SmoothDistanceResult(d, g)
         return (*out, QueryStats(nodes, leaves)) if return_stats else out
+
+    def _exact_chunk(self, Q, use_exact_tree, out, return_stats):
+        """:meth:`exact_distance` of the queries ``Q (k, 3)`` (at most :data:`QUERY_CHUNK`)
+        into ``out = [d, g, prim, nodes, leaves]`` (views of the whole batch's arrays; the
+        stats None when not asked for), on :attr:`exact_tree` or the smooth tree."""
+        n = Q.shape[0]
+        order = coherent_order(Q)
+        if use_exact_tree:
+            # the kernel takes the queries in the coherent order itself (no copies); queries
+            # too few to sort and far apart are searched one by one (a group of unrelated
+            # queries opens the union of their searches: 10x slower)
+            group = 1 if order is None and scattered(Q, self.diagonal) else GROUP
+            d, g, prim, nodes, leaves = _scratch(n, out, reuse=True)
+            exact_tree_batch(self.exact_tree, Q, True, d, g, prim, nodes, leaves,
+                             parallel_tasks(n), bool(return_stats),
+                             _NO_ORDER if order is None else order, group)
+            return
+        res = _scratch(n, out, reuse=order is None)
+        d, g, prim, nodes, leaves = res
+        Qo = Q if order is None else Q[order]
+        if n <= TASK_BATCH:
+            _tasks(_q.exact_distance_tasks, n, self.tree, Qo, -1.0, d, g, prim, nodes, leaves, 0)
+        else:
+            _q.exact_distance_batch(self.tree, Qo, d, g, prim, nodes, leaves, parallel_tasks(n))
+        _scatter(order, res, out)
 
     def device_tree(self):
         """The field's ``tree`` on the GPU (:func:`smoothdist.cuda.device_tree`: the same
@@ -784,6 +791,51 @@ def _device_and_points(device, Q, method="bvh"):
     on_gpu = cuda.is_device_array(Q)
     device = _check_device(device, method, on_gpu)
     return device, (cuda.device_points(Q, "Q") if on_gpu else as_points(Q, "Q"))
+
+
+#: queries answered per pass (``smooth_distance`` and ``exact_distance`` on the CPU): a
+#: larger batch runs as several passes of this many, each sorted along its own Morton curve, so
+#: that its working memory (the sorted copy, per-query scratch) stays fixed while the outputs
+#: grow with the batch. The values do not depend on it (each query's is its own)
+QUERY_CHUNK = 1 << 20
+
+
+def _chunks(n):
+    """``(a, b)`` ranges covering ``0 .. n`` in passes of :data:`QUERY_CHUNK` (one empty
+    range for ``n = 0``)."""
+    return [(a, min(n, a + QUERY_CHUNK)) for a in range(0, max(n, 1), QUERY_CHUNK)]
+
+
+def _outputs(n, stats, closest=False):
+    """The whole batch's result arrays ``[d (n,), g (n, 3), (prim,) nodes, leaves]``; the stats
+    (``nodes``, ``leaves``) only when asked for (else None: each pass uses scratch)."""
+    out = [np.empty(n), np.empty((n, 3))]
+    if closest:
+        out.append(np.empty(n, dtype=np.int64))
+    return out + [np.empty(n, dtype=np.int64) if stats else None for _ in range(2)]
+
+
+def _part(out, a, b):
+    """Rows ``a:b`` of each array of ``out`` (views; None stays None)."""
+    return [None if x is None else x[a:b] for x in out]
+
+
+def _scratch(n, out, reuse=False):
+    """Arrays for one pass of ``n`` queries shaped as ``out``: with ``reuse``, ``out``'s own
+    where given; new ones otherwise (the kernels write every array they are given)."""
+    return [a if (a is not None and reuse) else
+            np.empty((n,) + (() if a is None else a.shape[1:]),
+                     dtype=np.int64 if a is None else a.dtype) for a in out]
+
+
+def _scatter(order, res, out):
+    """Write a pass's results ``res`` (in the coherent ``order``) into ``out`` (the queries'
+    order); nothing to do without an order (``res`` is ``out``)."""
+    if order is None:
+        return
+    for r, o in zip(res, out):
+        if o is not None:
+            o[order] = r
 
 
 def _tasks(kernel, n, *args):
