@@ -12,6 +12,8 @@ before (512^2 bunny renders at beta 0.5, V / E / F): 18 / 22 / 31 % fewer leaves
 17-31 % less time, at the same error against beta 0 (docs/guide/performance.md).
 """
 
+import ctypes
+import sys
 import threading
 import time
 from typing import NamedTuple
@@ -193,6 +195,8 @@ def build_tree(mesh, leaf_size=1, progress=None):
         built = box[0]
     del cent, plo, phi
     order, lo, hi, left, right, start, count, depth = built
+    del built
+    release_freed_memory()          # the boxes and the build's scratch: back to the system
     diag = np.sqrt(((hi - lo) ** 2).sum(axis=1))
     kind, pts, wc, pwhi, A = primitive_table(mesh, order)
     points_only = mesh.edges.shape[0] == 0 and mesh.triangles.shape[0] == 0
@@ -239,9 +243,9 @@ def _run_build(cent, plo, phi, leaf_size, done, threads=None, parallel_min=None)
     defer = max(leaf_size, m // (threads * BUILD_TASKS_PER_THREAD)) if split else 0
     # a deferred node holds more than SAH_MIN of its parent's (> defer) primitives
     frontier = np.empty((16 * (m // max(defer, 1)) + 16 if split else 1, 5), dtype=np.int64)
+    stacks = np.empty((5, RADIX_BUCKETS), dtype=np.int64)
     n_nodes, depth, n_front = _build(cent, plo, phi, leaf_size, done[0:1], order, *nodes,
-                                     *scratch, np.empty((5, RADIX_BUCKETS), dtype=np.int64), 0, 0, m, 0,
-                                     1, defer, frontier)
+                                     *scratch, stacks, 0, 0, m, 0, 1, defer, frontier)
     tasks = frontier[:n_front]
     sizes = tasks[:, 2] - tasks[:, 1]
     # leaf size 1 (or no subtrees left): the numbers are the serial build's already
@@ -344,6 +348,32 @@ def _preorder_ids(left, right):
         stack[sp + 1] = left[node]
         sp += 2
     return new_of
+
+
+def release_freed_memory():
+    """Hand the memory freed so far back to the operating system (glibc's ``malloc_trim``;
+    nothing elsewhere). glibc raises its threshold for serving large arrays from their own
+    mappings after the first such array is freed, so the build's transients (hundreds of MB
+    for a million triangles) would otherwise stay in the process's heap, and in its resident
+    size, after the build: a second field built later reuses them, other programs cannot."""
+    trim = _malloc_trim()
+    if trim is not None:
+        trim(0)
+
+
+def _malloc_trim():
+    """glibc's ``malloc_trim``, or None (another C library, another system)."""
+    if "trim" not in _LIBC:
+        _LIBC["trim"] = None
+        if sys.platform.startswith("linux"):
+            try:
+                _LIBC["trim"] = ctypes.CDLL("libc.so.6").malloc_trim
+            except (OSError, AttributeError):
+                pass
+    return _LIBC["trim"]
+
+
+_LIBC = {}
 
 
 #: an empty box ``(lo0, lo1, lo2, hi0, hi1, hi2)``
