@@ -13,8 +13,8 @@ from smoothdist._kernels.bvh import build_tree
 from smoothdist._kernels.exact_query import GROUP, build_exact_tree, exact_tree_batch
 from smoothdist._kernels.spacing import gap_probes, local_smooth_distance
 from smoothdist.error_budget import Within, point_alpha, within
-from smoothdist.connectivity import unique_sorted_rows
-from smoothdist.mesh import as_data_mesh, unique_edges
+from smoothdist.connectivity import unique_edges, unique_sorted_rows
+from smoothdist.mesh import as_data_mesh
 from smoothdist.query_order import coherent_order, scattered
 from smoothdist.schedule import parallel_tasks, run_tasks
 

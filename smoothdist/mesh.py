@@ -21,8 +21,7 @@ import numpy as np
 from smoothdist._cast import COORD_LIMIT, as_indices, as_points, non_finite_rows
 from smoothdist._kernels import weights as _weights
 from smoothdist.connectivity import (first_of_each, has_equal_rows, row_counts,
-                                     triangle_half_edges, unique_sorted_rows)
-from smoothdist.connectivity import unique_edges as _unique_edges
+                                     triangle_half_edges, unique_edges, unique_sorted_rows)
 from smoothdist.convert import foreign_arrays, is_foreign_geometry, trimesh_arrays
 
 KIND_POINT, KIND_EDGE, KIND_TRIANGLE = 0, 1, 2
@@ -292,12 +291,6 @@ def as_data_mesh(mesh, F=None, *, name=None, **mesh_kwargs):
 
 
 # ---------------------------------------------------------------------- helpers
-def unique_edges(T, n=None):
-    """Unique undirected edges ``(e, 2)`` int64 of triangles ``T (t, 3)``, sorted per row and
-    in lexicographic order (``n``: the number of vertices, default ``T.max() + 1``)."""
-    return _unique_edges(T, n)
-
-
 def _weight_classes(n, E, T):
     """:class:`WeightClasses` of a mesh of ``n`` vertices with edges ``E`` and triangles
     ``T``: each primitive's class is its pair of valences (edges: the valences of its two
@@ -359,8 +352,9 @@ def _repair(V, P, E, T, repair, name, quiet_duplicates):
         V, P, E, T = Vu, inv[P], inv[E], inv[T]
     scale = float(np.linalg.norm(V.max(axis=0) - V.min(axis=0))) if V.shape[0] > 1 else 1.0
     scale = scale if scale > 0 else 1.0
-    # points: duplicates would be counted twice
-    Pu = np.unique(P)
+    # points: duplicates would be counted twice (an increasing list, as every point cloud's
+    # arange, has none and is its own np.unique)
+    Pu = P if P.size < 2 or bool(np.all(P[1:] > P[:-1])) else np.unique(P)
     if Pu.size < P.size:
         notes.append(f"dropped {P.size - Pu.size} duplicated points")
         P = Pu

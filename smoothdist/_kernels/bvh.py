@@ -51,9 +51,14 @@ class TreeData(NamedTuple):
         0 point, 1 edge, 2 triangle.
     pts : (m, 9) float64
         Vertex coordinates ``x0 y0 z0 x1 y1 z1 x2 y2 z2`` (unused slots are 0).
-    wc : (m, 13) float64
-        Coefficients of the raw weight polynomial ``A w~`` (the paper's ``w~`` scaled by the
-        mesh's ``A``; edges use the first 5; points: unused).
+    wc : (k, 13) float64
+        Coefficients of the raw weight polynomials ``A w~`` (the paper's ``w~`` scaled by the
+        mesh's ``A``; edges use the first 5), one row per class of valences: the few distinct
+        polynomials of the mesh (:meth:`~smoothdist.DataMesh.weight_classes`; one row of zeros
+        for a point cloud).
+    wcls : (m,) int64
+        The row of ``wc`` that is each primitive's weight polynomial (points: 0, unused). A
+        primitive's coefficients are ``wc[wcls[i]]``: 8 bytes a primitive instead of 104.
     pwhi : (m,) float64
         Upper clamp of the primitive's raw weight ``A w~`` (the lower clamp is 1).
     orig : (m,) int64
@@ -80,6 +85,7 @@ class TreeData(NamedTuple):
     kind: np.ndarray
     pts: np.ndarray
     wc: np.ndarray
+    wcls: np.ndarray
     pwhi: np.ndarray
     orig: np.ndarray
     A: float
@@ -87,13 +93,15 @@ class TreeData(NamedTuple):
 
 
 def primitive_table(mesh, order=None):
-    """Gather ``(kind, pts, wc, pwhi, A)`` for every primitive of a :class:`~smoothdist.DataMesh`,
-    in the mesh's own numbering (points, edges, triangles) or, given ``order (m,)`` int64, in
-    that order (row ``k`` is primitive ``order[k]``): the tree's table is written once, in
-    tree order, with no copy in the mesh's order before it.
+    """Gather ``(kind, pts, wc, wcls, pwhi, A)`` for every primitive of a
+    :class:`~smoothdist.DataMesh`, in the mesh's own numbering (points, edges, triangles) or,
+    given ``order (m,)`` int64, in that order (row ``k`` is primitive ``order[k]``): the tree's
+    table is written once, in tree order, with no copy in the mesh's order before it.
 
-    ``wc`` holds the coefficients of the raw weight ``A w~`` (already multiplied by ``A``),
-    gathered from the mesh's few weight classes (:meth:`~smoothdist.DataMesh.weight_classes`).
+    ``wc (k, 13)`` holds the coefficients of the mesh's raw weights ``A w~`` (``A`` folded
+    in), one row per weight class (:meth:`~smoothdist.DataMesh.weight_classes`: the edges'
+    classes first, then the triangles'; a point cloud has one row of zeros), and ``wcls (m,)``
+    each primitive's row.
     """
     V = mesh.V
     P, E, T = mesh.points, mesh.edges, mesh.triangles
@@ -103,11 +111,13 @@ def primitive_table(mesh, order=None):
     m = p + e + T.shape[0]
     if order is None:
         order = np.arange(m, dtype=np.int64)
+    ke = w.edge_coeffs.shape[0]
+    wc = np.zeros((max(1, ke + w.tri_coeffs.shape[0]), 13))
+    wc[:ke, :5] = A * w.edge_coeffs
+    wc[ke:ke + w.tri_coeffs.shape[0]] = A * w.tri_coeffs
     kind = np.empty(m, dtype=np.int64)
     pts = np.zeros((m, 9))
-    # np.zeros maps untouched pages lazily: for a point cloud ``wc`` is never written or read,
-    # so it costs no memory (1 GB for 1e7 points otherwise); build_tree keeps it that way
-    wc = np.zeros((m, 13))
+    wcls = np.zeros(m, dtype=np.int64)
     pwhi = np.ones(m)
     for code, first, rows in ((KIND_POINT, 0, P[:, None]), (KIND_EDGE, p, E),
                               (KIND_TRIANGLE, p + e, T)):
@@ -122,12 +132,12 @@ def primitive_table(mesh, order=None):
         for j in range(rows.shape[1]):
             pts[at, 3 * j:3 * j + 3] = V[rows[i, j]]
         if code == KIND_EDGE:
-            wc[at, :5] = A * w.edge_coeffs[w.edge_class[i]]
+            wcls[at] = w.edge_class[i]
             pwhi[at] = w.edge_whi[w.edge_class[i]]
         elif code == KIND_TRIANGLE:
-            wc[at] = A * w.tri_coeffs[w.tri_class[i]]
+            wcls[at] = ke + w.tri_class[i]
             pwhi[at] = w.tri_whi[w.tri_class[i]]
-    return kind, pts, wc, pwhi, A
+    return kind, pts, wc, wcls, pwhi, A
 
 
 def primitive_boxes(mesh):
@@ -168,10 +178,10 @@ def build_tree(mesh, leaf_size=1, progress=None):
         Called about twice a second while the tree is built (``done`` primitives of
         ``total`` placed in leaves), and once at the end.
 
-    Memory: the primitive table, ``(9 + 13 + 2) x 8`` bytes per primitive, written once in
-    tree order (a point cloud's weight-coefficient table is never touched, so it costs
-    nothing), plus 96 bytes per node (at most ``2 m - 1`` nodes); during the build the
-    primitives' centroids and boxes, 72 bytes per primitive (24 for a point cloud).
+    Memory: the primitive table, ``(9 + 4) x 8`` bytes per primitive, written once in tree
+    order (the weight polynomials are a few rows that the primitives index), plus 104 bytes
+    per node (at most ``2 m - 1`` nodes); during the build the primitives' centroids and
+    boxes, 72 bytes per primitive (24 for a point cloud).
     """
     cent, plo, phi = primitive_boxes(mesh)
     m = cent.shape[0]
@@ -198,11 +208,11 @@ def build_tree(mesh, leaf_size=1, progress=None):
     del built
     release_freed_memory()          # the boxes and the build's scratch: back to the system
     diag = np.sqrt(((hi - lo) ** 2).sum(axis=1))
-    kind, pts, wc, pwhi, A = primitive_table(mesh, order)
+    kind, pts, wc, wcls, pwhi, A = primitive_table(mesh, order)
     points_only = mesh.edges.shape[0] == 0 and mesh.triangles.shape[0] == 0
     whi = np.ones(lo.shape[0]) if points_only else _node_max(pwhi, start, count)
     return TreeData(lo=lo, hi=hi, left=left, right=right, start=start, count=count, diag=diag,
-                    whi=whi, lwhi=np.log(whi), kind=kind, pts=pts, wc=wc, pwhi=pwhi,
+                    whi=whi, lwhi=np.log(whi), kind=kind, pts=pts, wc=wc, wcls=wcls, pwhi=pwhi,
                     orig=order, A=float(A), depth=int(depth))
 
 
@@ -660,6 +670,7 @@ def concatenate_trees(trees):
     """
     node_off = np.cumsum([0] + [t.lo.shape[0] for t in trees])[:-1]
     prim_off = np.cumsum([0] + [t.kind.size for t in trees])[:-1]
+    class_off = np.cumsum([0] + [t.wc.shape[0] for t in trees])[:-1]
 
     def cat(name):
         return np.ascontiguousarray(np.concatenate([getattr(t, name) for t in trees]))
@@ -675,6 +686,7 @@ def concatenate_trees(trees):
                       right=shifted("right", node_off), start=shifted("start", prim_off),
                       count=cat("count"), diag=cat("diag"), whi=cat("whi"), lwhi=cat("lwhi"),
                       kind=cat("kind"),
-                      pts=cat("pts"), wc=cat("wc"), pwhi=cat("pwhi"), orig=cat("orig"),
+                      pts=cat("pts"), wc=cat("wc"), wcls=shifted("wcls", class_off),
+                      pwhi=cat("pwhi"), orig=cat("orig"),
                       A=float(max(t.A for t in trees)), depth=int(max(t.depth for t in trees)))
     return forest, np.asarray(node_off, dtype=np.int64)

@@ -62,8 +62,8 @@ def pair_term_moment(tree, i, kq, Q, S, wgrad_scale, cx, cy, cz):
     Returns ``(d, W, vx, vy, vz, mx, my, mz)``: ``v`` as there, and
     ``M = (p - c) x v + wgrad_scale y (q x r)`` (module notes).
     """
-    return pair_terms(tree.kind, tree.pts, tree.wc, tree.pwhi, i, kq, Q, S, wgrad_scale, kq >= 0,
-                      cx, cy, cz, tree.kind[i])
+    return pair_terms(tree.kind, tree.pts, tree.wc, tree.wcls, tree.pwhi, i, kq, Q, S,
+                      wgrad_scale, kq >= 0, cx, cy, cz, tree.kind[i])
 
 
 @numba.njit(**NJIT)
@@ -180,9 +180,10 @@ def smooth_vertex_brute_primitive(tree, kq, Q, alpha, S, wgrad_scale):
         gx = gy = gz = 0.0
         mx = my = mz = 0.0
         for i in range(tree.kind.size):
-            d, W, vx, vy, vz, tx, ty, tz = pair_terms(tree.kind, tree.pts, tree.wc, tree.pwhi, i,
-                                                      kq, Q, S, wgrad_scale, VERTEX_1 + v - 1,
-                                                      0.0, 0.0, 0.0, tree.kind[i])
+            d, W, vx, vy, vz, tx, ty, tz = pair_terms(tree.kind, tree.pts, tree.wc, tree.wcls,
+                                                      tree.pwhi, i, kq, Q, S, wgrad_scale,
+                                                      VERTEX_1 + v - 1, 0.0, 0.0, 0.0,
+                                                      tree.kind[i])
             m, s, gx, gy, gz, mx, my, mz = _accumulate(m, s, gx, gy, gz, mx, my, mz, d, W, vx,
                                                        vy, vz, tx, ty, tz, alpha, True)
         G[v, 0] = mx / s

@@ -195,7 +195,7 @@ def query_coefficient(nd, d1x, d1y, d1z, w1, nq, q1x, q1y, q1z):
 
 
 @numba.njit(**NJIT_INLINE)
-def _pair(kind, pts, wc, pwhi, i, kq, Q, S, wgrad_scale, moment, cx, cy, cz, k):
+def _pair(kind, pts, wc, wcls, pwhi, i, kq, Q, S, wgrad_scale, moment, cx, cy, cz, k):
     """Term of data primitive ``i`` (tree order) for query primitive ``(kq, Q)``.
 
     Returns ``(d, W, vx, vy, vz, mx, my, mz)``: distance, attenuated weight, the gradient
@@ -219,7 +219,7 @@ def _pair(kind, pts, wc, pwhi, i, kq, Q, S, wgrad_scale, moment, cx, cy, cz, k):
     if k != 0:
         df = c[9]
         if k == 1:
-            w, dw = _edge_weight(wc, i, c[7])
+            w, dw = _edge_weight(wc, wcls[i], c[7])
             W, fac = _attenuate_inline(w, dw, pwhi[i], S)
             if fac != 0.0 and df == SEG_INTERIOR:
                 # feature_directions and weight_gradient with the data edge's one direction
@@ -238,7 +238,7 @@ def _pair(kind, pts, wc, pwhi, i, kq, Q, S, wgrad_scale, moment, cx, cy, cz, k):
                 if moment:
                     y = query_coefficient(1, d1x, d1y, d1z, fac, nq, q1x, q1y, q1z)
         else:
-            w, dws, dwt = eval_triangle_weight(wc[i], c[7], c[8])
+            w, dws, dwt = eval_triangle_weight(wc[wcls[i]], c[7], c[8])
             W, fac = _attenuate_inline(w, 1.0, pwhi[i], S)
             if df == TRI_INTERIOR:
                 w1 = fac * dws
@@ -329,8 +329,9 @@ def pair_term(tree, i, kq, Q, S, wgrad_scale):
     """
     # ``kq < 0`` is a run-time False: the moment reference (``moment=kq >= 0``) shares the
     # compiled pair_terms
-    d, W, vx, vy, vz, _, _, _ = pair_terms(tree.kind, tree.pts, tree.wc, tree.pwhi, i, kq, Q, S,
-                                           wgrad_scale, kq < 0, 0.0, 0.0, 0.0, tree.kind[i])
+    d, W, vx, vy, vz, _, _, _ = pair_terms(tree.kind, tree.pts, tree.wc, tree.wcls, tree.pwhi, i,
+                                           kq, Q, S, wgrad_scale, kq < 0, 0.0, 0.0, 0.0,
+                                           tree.kind[i])
     return d, W, vx, vy, vz
 
 
@@ -540,11 +541,13 @@ def _prim_leaf(tree, q, node, st):
         if kq == 1 and k == 1:
             # edges against edges: a copy of the inlined term in which the compiler knows both
             # kinds (and keeps only that case)
-            d, W, vx, vy, vz, tx, ty, tz = _pair(kind, tree.pts, tree.wc, tree.pwhi, i, kq, q.Q,
-                                                 q.S, q.wgrad_scale, q.moment, q.cx, q.cy, q.cz, k)
+            d, W, vx, vy, vz, tx, ty, tz = _pair(kind, tree.pts, tree.wc, tree.wcls, tree.pwhi, i,
+                                                 kq, q.Q, q.S, q.wgrad_scale, q.moment, q.cx,
+                                                 q.cy, q.cz, k)
         else:
-            d, W, vx, vy, vz, tx, ty, tz = _pair(kind, tree.pts, tree.wc, tree.pwhi, i, kq, q.Q,
-                                                 q.S, q.wgrad_scale, q.moment, q.cx, q.cy, q.cz, k)
+            d, W, vx, vy, vz, tx, ty, tz = _pair(kind, tree.pts, tree.wc, tree.wcls, tree.pwhi, i,
+                                                 kq, q.Q, q.S, q.wgrad_scale, q.moment, q.cx,
+                                                 q.cy, q.cz, k)
         m, s, gx, gy, gz, mx, my, mz = _accumulate(
             m, s, gx, gy, gz, mx, my, mz, d, W, vx, vy, vz, tx, ty, tz, q.alpha, q.moment)
     cut = max(m + q.reach, 0.0)

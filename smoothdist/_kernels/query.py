@@ -73,7 +73,7 @@ def primitive_term(tree, i, px, py, pz, S, wgrad_scale):
         cz = P[2]
     elif k == 1:
         cx, cy, cz, t, feat = closest_point_segment(px, py, pz, P[0], P[1], P[2], P[3], P[4], P[5])
-        w, dw = eval_edge_weight(tree.wc[i], t)
+        w, dw = eval_edge_weight(tree.wc[tree.wcls[i]], t)
         W, fac = _attenuate(w, dw, tree.pwhi[i], S)
         if fac != 0.0 and feat == SEG_INTERIOR:
             ex = P[3] - P[0]
@@ -86,7 +86,7 @@ def primitive_term(tree, i, px, py, pz, S, wgrad_scale):
     else:
         cx, cy, cz, s, t, feat = closest_point_triangle(px, py, pz, P[0], P[1], P[2], P[3], P[4],
                                                        P[5], P[6], P[7], P[8])
-        w, dws, dwt = eval_triangle_weight(tree.wc[i], s, t)
+        w, dws, dwt = eval_triangle_weight(tree.wc[tree.wcls[i]], s, t)
         W, fac = _attenuate(w, 1.0, tree.pwhi[i], S)
         if fac != 0.0 and feat <= TRI_BC:
             abx = P[3] - P[0]

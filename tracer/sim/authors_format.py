@@ -70,7 +70,8 @@ import warnings
 import numpy as np
 
 from smoothdist import DataMesh
-from smoothdist.mesh import read_mesh_file, unique_edges
+from smoothdist.connectivity import unique_edges
+from smoothdist.mesh import read_mesh_file
 from tracer.errors import SceneError, SimFileError
 from tracer.sim.bodies import INERTIA_FLOOR, Body
 from tracer.sim.simulation import DEFAULT_FRAMES, MovieCamera, Simulation, auto_camera

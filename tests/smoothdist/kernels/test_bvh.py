@@ -38,7 +38,7 @@ def check_tree(mesh, leaf_size):
     kind_mesh = np.concatenate([np.zeros(mesh.points.size), np.ones(mesh.edges.shape[0]),
                                 np.full(mesh.triangles.shape[0], 2)])
     for arr in (tree.lo, tree.hi, tree.left, tree.right, tree.start, tree.count, tree.diag,
-                tree.whi, tree.kind, tree.pts, tree.wc, tree.pwhi, tree.orig):
+                tree.whi, tree.kind, tree.pts, tree.wc, tree.wcls, tree.pwhi, tree.orig):
         assert arr.flags.c_contiguous
     # primitive table: a permutation of the mesh's primitives, with their data
     np.testing.assert_array_equal(np.sort(tree.orig), np.arange(m))
@@ -52,11 +52,12 @@ def check_tree(mesh, leaf_size):
         assert np.all(tree.pts[i, 3 * k:] == 0)
         # wc: coefficients of the raw weight A w~ (A folded in)
         if k == 2:
-            np.testing.assert_allclose(tree.wc[i, :5], A * ec[tree.orig[i] - mesh.points.size],
+            np.testing.assert_allclose(tree.wc[tree.wcls[i], :5],
+                                       A * ec[tree.orig[i] - mesh.points.size],
                                        rtol=1e-15, atol=0)
         if k == 3:
             j = tree.orig[i] - mesh.points.size - mesh.edges.shape[0]
-            np.testing.assert_allclose(tree.wc[i], A * tc[j], rtol=1e-15, atol=0)
+            np.testing.assert_allclose(tree.wc[tree.wcls[i]], A * tc[j], rtol=1e-15, atol=0)
     # root covers everything
     assert tree.start[0] == 0 and tree.count[0] == m
     seen = np.zeros(m, dtype=int)
