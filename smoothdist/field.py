@@ -627,9 +627,8 @@ class SmoothDistanceField:
             res = SmoothDistanceResult(d, g)
             return (d, g, QueryStats(nodes, leaves)) if return_stats else res
         out = _outputs(Q.shape[0], return_stats)
-        for a, b in _chunks(Q.shape[0]):
-            self._smooth_chunk(Q[a:b], (alpha, beta, S, wgrad_scale, tol), method,
-                               _part(out, a, b))
+        for part, rows in _passes(Q, out):
+            self._smooth_chunk(part, (alpha, beta, S, wgrad_scale, tol), method, rows)
         d, g, nodes, leaves = out
         return (d, g, QueryStats(nodes, leaves)) if return_stats else SmoothDistanceResult(d, g)
 
@@ -682,8 +681,8 @@ class SmoothDistanceField:
             self._exact_queries = self.__dict__.get("_exact_queries", 0) + n
             use_exact_tree = ("_exact_tree" in self.__dict__
                               or self._exact_queries >= EXACT_TREE_AFTER * self.num_primitives)
-            for a, b in _chunks(n):
-                self._exact_chunk(Q[a:b], use_exact_tree, _part(out, a, b), return_stats)
+            for part, rows in _passes(Q, out):
+                self._exact_chunk(part, use_exact_tree, rows, return_stats)
         d, g, prim, nodes, leaves = out
         out = ExactDistanceResult(d, g, prim) if return_closest else SmoothDistanceResult(d, g)
         return (*out, QueryStats(nodes, leaves)) if return_stats else out
@@ -800,29 +799,33 @@ def _device_and_points(device, Q, method="bvh"):
 QUERY_CHUNK = 1 << 20
 
 
-def _chunks(n):
-    """``(a, b)`` ranges covering ``0 .. n`` in passes of :data:`QUERY_CHUNK` (one empty
-    range for ``n = 0``)."""
-    return [(a, min(n, a + QUERY_CHUNK)) for a in range(0, max(n, 1), QUERY_CHUNK)]
+def _passes(Q, out):
+    """``(queries, outputs)`` of each pass over the batch ``Q``: the rows ``a:b`` of ``Q`` and
+    of each array of ``out`` (views; None stays None), in passes of :data:`QUERY_CHUNK`; one
+    pass, ``(Q, out)`` itself, for a batch that fits (a small call pays nothing for it)."""
+    n = Q.shape[0]
+    if n <= QUERY_CHUNK:
+        return ((Q, out),)
+    return [(Q[a:a + QUERY_CHUNK], [None if x is None else x[a:a + QUERY_CHUNK] for x in out])
+            for a in range(0, n, QUERY_CHUNK)]
 
 
 def _outputs(n, stats, closest=False):
     """The whole batch's result arrays ``[d (n,), g (n, 3), (prim,) nodes, leaves]``; the stats
-    (``nodes``, ``leaves``) only when asked for (else None: each pass uses scratch)."""
+    (``nodes``, ``leaves``) of a batch larger than a pass only when asked for (else None: each
+    pass uses scratch)."""
     out = [np.empty(n), np.empty((n, 3))]
     if closest:
         out.append(np.empty(n, dtype=np.int64))
-    return out + [np.empty(n, dtype=np.int64) if stats else None for _ in range(2)]
-
-
-def _part(out, a, b):
-    """Rows ``a:b`` of each array of ``out`` (views; None stays None)."""
-    return [None if x is None else x[a:b] for x in out]
+    keep = stats or n <= QUERY_CHUNK
+    return out + [np.empty(n, dtype=np.int64) if keep else None for _ in range(2)]
 
 
 def _scratch(n, out, reuse=False):
     """Arrays for one pass of ``n`` queries shaped as ``out``: with ``reuse``, ``out``'s own
     where given; new ones otherwise (the kernels write every array they are given)."""
+    if reuse and out[-1] is not None:
+        return out
     return [a if (a is not None and reuse) else
             np.empty((n,) + (() if a is None else a.shape[1:]),
                      dtype=np.int64 if a is None else a.dtype) for a in out]

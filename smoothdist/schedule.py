@@ -67,6 +67,9 @@ def run_tasks(fn, ntasks, threads=None, pool=False):
     than on new threads. Only for ``fn`` that never waits on the pool itself (a kernel call):
     a worker that did could wait for a worker that never comes.
     """
+    if ntasks <= 1:         # one task: this thread (no need to ask numba for its threads)
+        fn(0, ntasks)
+        return
     threads = threads or (numba.get_num_threads() if PARALLEL else 1)
     threads = max(1, min(threads, ntasks))
     if threads == 1:

@@ -659,4 +659,6 @@ def exact_distance_tasks(tree, Q, floor, out_d, out_g, out_prim, out_nodes, out_
 def chunk_tasks(n):
     """Strided tasks for ``n`` queries in chunks of :data:`CHUNK`: one per thread
     (:func:`smoothdist.schedule.parallel_tasks`), at most one per chunk."""
+    if n <= CHUNK:          # one chunk: one task (no need to ask numba for its threads)
+        return 1
     return max(1, min(parallel_tasks(n), (n + CHUNK - 1) // CHUNK))
