@@ -14,6 +14,7 @@ Usage::
     python benchmarks/tables.py smooth-cost benchmarks/data/exact_mix.json
     python benchmarks/tables.py mesh-distance benchmarks/data/mesh_distance_authors.json
     python benchmarks/tables.py registers benchmarks/data/cuda_registers.json
+    python benchmarks/tables.py build-scale benchmarks/data/build_scale.json
 """
 
 import argparse
@@ -207,10 +208,159 @@ def registers_table(path):
     return "\n".join(lines)
 
 
+#: the peers of ``bench_build_scale.py``, in the table's order
+BUILD_SCALE_PEERS = ("fcpw", "open3d", "warp", "libigl", "scipy")
+
+
+def _mib(x, bound=False):
+    """MiB to 2 significant figures at least; ``bound``: an upper bound (``<=``)."""
+    return ("<=" if bound else "") + (f"{x:.0f}" if abs(x) >= 10 else f"{x:.2g}")
+
+
+def _peer_cell(r):
+    """A peer's build cell: ``seconds, extra MiB`` (a lazy build: ``add s + first query s*``),
+    ``skipped`` or ``-`` (not run on this kind)."""
+    if r is None:
+        return "-"
+    if "skipped" in r:
+        return "skipped"
+    secs = (f"{r['build_s']:.2g} + {r['first_query_s']:.2g}*" if r["lazy_build"]
+            else f"{r['build_s']:.2g}")
+    return (f"{secs} s, {_mib(r['build_extra_mib'], r['build_extra_bound'])} MiB"
+            + (" (differs)" if r.get("agrees") is False else ""))
+
+
+def build_scale_markdown(d):
+    """The tables of a ``bench_build_scale.py`` results dict: the builds, then the renders'
+    stages (where there are renders)."""
+    return "\n\n".join(t for t in (_build_scale_builds(d), _build_scale_renders(d)) if t)
+
+
+def _build_scale_builds(d):
+    """Per kind and size ours' build seconds, extra memory and its ratio to the input arrays,
+    the exact tree's seconds, each peer's build seconds and extra memory, ours' exact queries
+    per second against the best peer's and ours' smooth queries per second."""
+    rows = d["rows"]
+    peers = [p for p in BUILD_SCALE_PEERS if any(p in r["libraries"] for r in rows)]
+    head = (["kind", "primitives", "arrays MiB", "ours build s", "ours extra MiB (x arrays)",
+             "ours exact tree s (peak +MiB)"] + [f"{p} build s, extra MiB" for p in peers]
+            + ["ours exact q/s", "best peer q/s", "ours / best", "ours smooth q/s"])
+    lines = ["| " + " | ".join(head) + " |", "|---|" + "---:|" * (len(head) - 1)]
+    for r in rows:
+        libs = r["libraries"]
+        o = libs.get("ours", {})
+        arrays = r["input_bytes"] / 2 ** 20
+        cells = [r["kind"], f"{r['n']:,}", _mib(arrays)]
+        if "build_s" in o:
+            extra = o["build_extra_mib"]
+            cells += [f"{o['build_s']:.2g}",
+                      _mib(extra, True) if o["build_extra_bound"]
+                      else f"{_mib(extra)} ({extra / arrays:.1f}x)",
+                      f"{o['exact_tree_s']:.2g} "
+                      f"(+{_mib(o['exact_tree_extra_mib'] - extra)})"]
+        else:
+            cells += [o.get("skipped", "-")[:40], "-", "-"]
+        cells += [_peer_cell(libs.get(p)) for p in peers]
+        rates = {p: libs[p]["queries_per_s"] for p in peers
+                 if "queries_per_s" in libs.get(p, {}) and libs[p].get("agrees") is not False}
+        best = max(rates, key=rates.get) if rates else None
+        cells += [f"{o['queries_per_s']:.3g}" if "build_s" in o else "-",
+                  f"{rates[best]:.3g} ({best})" if best else "-",
+                  f"{o['queries_per_s'] / rates[best]:.2f}" if best and "build_s" in o else "-",
+                  f"{o['smooth_queries_per_s']:.3g}" if "build_s" in o else "-"]
+        lines.append("| " + " | ".join(cells) + " |")
+    m = d["machine"]
+    loads = [m["load_start"], m.get("load_end", m["load_start"])] + [
+        x for r in rows for v in r["libraries"].values() for x in (v.get("load_before"),
+                                                                     v.get("load_after"))
+        if x is not None]
+    lazy = sorted({lib for r in rows for lib, v in r["libraries"].items()
+                   if v.get("lazy_build")})
+    compiled = [r["libraries"]["ours"].get("compiled_in_timing") for r in rows
+                if "build_s" in r["libraries"].get("ours", {})]
+    lines += ["", f"{m['cpu']}, {m['cores']} cores, numba {m['threads']} threads, "
+              f"{d['queries']:,} queries within 1-4 % of the diagonal, {m['date']}, commit "
+              f"{(m.get('commit') or '?')[:10]}{' (dirty)' if m.get('dirty') else ''}, load "
+              f"average {min(loads):.1f}-{max(loads):.1f}. Each library in a fresh process, "
+              "compile excluded (numba compile events in ours' timed stages: "
+              f"{max(compiled) if compiled else '-'}); extra MiB: peak RSS after the build "
+              "minus RSS before (<=: the peak stayed at the warm-up's, an upper bound); "
+              "queries/s from a second batch"
+              + "".join(f"; * {lib} builds its tree in its first query (build s + first "
+                        "query s)" for lib in lazy) + "."]
+    return "\n".join(lines)
+
+
+def _build_scale_renders(d):
+    """Per kind and size the ``tracer render`` command's wall seconds, its ratio to the
+    small reference's, its peak RSS and its stages' seconds."""
+    renders = d.get("renders") or []
+    if not renders:
+        return ""
+    names = list(dict.fromkeys(s["name"] for r in renders for s in (r["stages"] or [])))
+    head = (["kind", "primitives", "whole command s", "x small", "peak RSS MiB"]
+            + ([f"{n} s" for n in names] + ["startup s"] if names else ["stages"]))
+    lines = ["| " + " | ".join(head) + " |", "|---|" + "---:|" * (len(head) - 1)]
+    for r in renders:
+        st = {s["name"]: s["seconds"] for s in (r["stages"] or [])}
+        label = f"{r['n']:,}" + (f" ({r['label']})" if r["label"] else "")
+        ratio = ("-" if r["rc"] else "1" if r["label"]
+                 else f"{r['ratio_to_small']:.1f}" if r.get("ratio_to_small") else "-")
+        cells = [r["kind"], label, f"{r['wall_s']:.2f}" + (" (failed)" if r["rc"] else ""),
+                 ratio, f"{r['peak_rss_mib']:.0f}"]
+        if names:
+            cells += [f"{st[n]:.2f}" if n in st else "-" for n in names]
+            cells.append(f"{r['wall_s'] - r['total_seconds']:.2f}"
+                         if r["total_seconds"] is not None else "-")
+        else:
+            cells.append("- (no --stage-times)")
+        lines.append("| " + " | ".join(cells) + " |")
+    size = d["args"]["render_size"]
+    lines += ["", f"`python -m tracer render FILE --size {size} {size}` of the PLY, a fresh "
+              "process, its kernels cached; x small: whole command / the small reference's; "
+              "startup: whole command minus the stages' clock (imports)."]
+    return "\n".join(lines)
+
+
+def build_scale_words(path, before_path):
+    """The sentences the README and the performance guide quote from a
+    ``bench_build_scale.py`` results file (``path``) and the code before's (``before_path``):
+    the largest triangle mesh's build, its memory and its render against the small one's."""
+    d, b = _load(path), _load(before_path)
+
+    def largest(res):
+        rows = [r for r in res["rows"] if r["kind"] == "triangles"
+                and "build_s" in r["libraries"].get("ours", {})]
+        return max(rows, key=lambda r: r["n"])
+
+    def render_ratio(res, n):
+        return next(r["ratio_to_small"] for r in res["renders"]
+                    if r["kind"] == "triangles" and r["n"] == n and not r["label"])
+
+    r, rb = largest(d), largest(b)
+    o, ob = r["libraries"]["ours"], rb["libraries"]["ours"]
+    fcpw = r["libraries"].get("fcpw", {})
+    arrays = r["input_bytes"] / 2 ** 20
+    peer = (f" (fcpw {fcpw['build_s']:.2g} s)" if "build_s" in fcpw else "")
+    return [f"a mesh of {r['n']:,} triangles builds in {o['build_s']:.2g} s{peer}, "
+            f"{ob['build_s']:.2g} s before",
+            f"with {o['build_extra_mib']:.0f} MiB of extra memory "
+            f"({o['build_extra_mib'] / arrays:.0f}x its arrays; {ob['build_extra_mib']:.0f} MiB "
+            f"before)",
+            f"`tracer render` of it at {d['args']['render_size']}² takes "
+            f"{render_ratio(d, r['n']):.1f}x the time of a 20k-triangle mesh "
+            f"({render_ratio(b, rb['n']):.1f}x before)"]
+
+
+def build_scale_table(path):
+    """The build-time and memory tables of a ``bench_build_scale.py`` results file."""
+    return build_scale_markdown(_load(path))
+
+
 TABLES = {"scaling": scaling_table, "gpu": gpu_table, "coldstart": coldstart_table,
           "coldstart-steps": coldstart_steps_table, "exact-mix": exact_mix_table,
           "smooth-cost": smooth_cost_table, "mesh-distance": mesh_distance_table,
-          "registers": registers_table}
+          "registers": registers_table, "build-scale": build_scale_table}
 
 
 def main(argv=None):

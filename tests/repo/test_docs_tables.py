@@ -18,7 +18,8 @@ DATA = ROOT / "benchmarks" / "data"
 sys.path.insert(0, str(ROOT))
 
 from benchmarks.coldstart_words import warm_sentences  # noqa: E402
-from benchmarks.tables import (coldstart_steps_table, coldstart_table, exact_mix_table,  # noqa: E402
+from benchmarks.tables import (build_scale_table, build_scale_words,  # noqa: E402
+                               coldstart_steps_table, coldstart_table, exact_mix_table,
                                exact_mix_words, gpu_table, mesh_distance_table,
                                mesh_distance_words, registers_table, scaling_table,
                                smooth_cost_table)
@@ -50,6 +51,24 @@ def test_the_guide_holds_the_table_of_the_results_file(kind, name):
     want = [ln.strip() for ln in table.splitlines()]
     starts = [i for i, ln in enumerate(lines) if ln == want[0]]
     assert any(lines[i:i + len(want)] == want for i in starts), f"{name}: paste it again"
+
+
+@pytest.mark.parametrize("name", ["build_scale.json", "build_scale_before.json"])
+def test_the_guide_holds_the_build_scale_tables(name):
+    """Issue 60's build-time and memory tables, this code's and the code before's, as
+    ``benchmarks/tables.py build-scale`` makes them from the results files."""
+    lines = [ln.strip() for ln in _guide().splitlines()]
+    want = [ln.strip() for ln in build_scale_table(DATA / name).splitlines()]
+    starts = [i for i, ln in enumerate(lines) if ln == want[0]]
+    assert any(lines[i:i + len(want)] == want for i in starts), f"{name}: paste it again"
+
+
+def test_the_build_scale_sentences_follow_the_files():
+    """The largest mesh's build, memory and render, in the guide and in the README."""
+    words = build_scale_words(DATA / "build_scale.json", DATA / "build_scale_before.json")
+    for where in (_flat(_guide()), _flat((ROOT / "README.md").read_text(encoding="utf-8"))):
+        for sentence in words:
+            assert sentence in where, sentence
 
 
 def test_the_guide_holds_the_cold_start_table():

@@ -82,6 +82,8 @@ TINY = {
     "benchmarks/bench_tol.py": ["--size", "8", "--types", "points", "--tol", "0.01",
                                 "--stride", "4", "--repeat", "1"],
     "benchmarks/bench_scale.py": ["--points", "20000", "--size", "8"],
+    "benchmarks/bench_build_scale.py": ["--sizes", "1e3", "--kinds", "triangles", "--libraries",
+                                        "ours", "--queries", "300", "--no-render"],
     "benchmarks/bench_sim.py": ["--steps", "3"],
     "tracer simulate": ["--size", "16", "12", "--steps", "3"],
     "tracer animate": ["--size", "16", "12"],
