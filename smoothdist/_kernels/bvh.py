@@ -21,7 +21,7 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
-from smoothdist._config import NJIT, NJIT_IR_INLINE, PARALLEL
+from smoothdist._config import NJIT, NJIT_GENERIC, NJIT_IR_INLINE, PARALLEL
 from smoothdist.mesh import KIND_EDGE, KIND_POINT, KIND_TRIANGLE
 
 
@@ -230,11 +230,12 @@ def _run_build(cent, plo, phi, leaf_size, done, threads=None, parallel_min=None)
 
     On ``threads`` threads (default numba's, 1 under ``SMOOTHDIST_PARALLEL=0``) when there are
     at least ``parallel_min`` primitives (default :data:`PARALLEL_BUILD_MIN`): the top of the
-    tree is split on this thread down to nodes of at most ``m / (threads x``
-    :data:`BUILD_TASKS_PER_THREAD` ``)`` primitives, whose subtrees are then built side by
-    side, each into rows of its own, numbered as the serial build numbers them (leaf size 1:
-    a subtree's node count is known in advance) or renumbered so afterwards (larger leaves):
-    the tree is the serial build's, bit for bit, whatever the thread count.
+    tree is split one level at a time, the nodes of a level side by side, down to nodes of at
+    most ``m / (threads x`` :data:`BUILD_TASKS_PER_THREAD` ``)`` primitives, whose subtrees
+    are then built side by side, each into rows of its own: numbered as the serial build
+    numbers them (leaf size 1: a subtree's node count is known in advance) or renumbered so
+    afterwards (larger leaves). The tree is the serial build's, bit for bit, whatever the
+    thread count.
     """
     m = cent.shape[0]
     threads = threads or (numba.get_num_threads() if PARALLEL else 1)
@@ -249,40 +250,68 @@ def _run_build(cent, plo, phi, leaf_size, done, threads=None, parallel_min=None)
              np.full(cap, -1, dtype=np.int64), np.zeros(cap, dtype=np.int64),
              np.zeros(cap, dtype=np.int64))
     scratch = (np.empty(m), np.empty(m), np.empty(m, dtype=np.int64))
-    split = threads > 1 and m >= max(parallel_min, 2)
-    defer = max(leaf_size, m // (threads * BUILD_TASKS_PER_THREAD)) if split else 0
-    # a deferred node holds more than SAH_MIN of its parent's (> defer) primitives
-    frontier = np.empty((16 * (m // max(defer, 1)) + 16 if split else 1, 5), dtype=np.int64)
-    stacks = np.empty((5, RADIX_BUCKETS), dtype=np.int64)
-    n_nodes, depth, n_front = _build(cent, plo, phi, leaf_size, done[0:1], order, *nodes,
-                                     *scratch, stacks, 0, 0, m, 0, 1, defer, frontier)
-    tasks = frontier[:n_front]
-    sizes = tasks[:, 2] - tasks[:, 1]
-    # leaf size 1 (or no subtrees left): the numbers are the serial build's already
-    serial = leaf_size == 1 or n_front == 0
-    if not serial:
-        # task i numbers its nodes after the top's and the earlier tasks': a subtree of k
-        # primitives has at most 2 k - 1 nodes, its root among them already numbered
-        tasks[:, 4] = n_nodes + np.concatenate([[0], np.cumsum(2 * sizes - 2)[:-1]])
-    results = [(n_nodes, depth)]
 
-    def one(i, slot):
-        node, s, e, d, first = (int(v) for v in tasks[i])
-        results.append(_build(cent, plo, phi, leaf_size, done[slot:slot + 1], order, *nodes,
-                              *scratch, np.empty((5, RADIX_BUCKETS), dtype=np.int64), node, s, e, d,
-                              first, 0, frontier)[:2])
+    def build(slot, node, s, e, d, first, defer):
+        """One call of the kernel: ``(next free number, depth, deferred nodes)``."""
+        front = np.empty((2, 5), dtype=np.int64)
+        kernel = _build_long if m >= RADIX_BUILD_MIN else _build
+        nxt, depth, n_front = kernel(cent, plo, phi, leaf_size, done[slot:slot + 1], order,
+                                     *nodes, *scratch,
+                                     np.empty((5, RADIX_BUCKETS), dtype=np.int64), node, s, e,
+                                     d, first, defer, front)
+        return nxt, depth, [tuple(int(v) for v in front[j]) for j in range(n_front)]
 
-    _largest_first(one, np.argsort(-sizes, kind="stable"), threads)
+    if threads == 1 or m < max(parallel_min, 2):
+        n_nodes, depth, _ = build(0, 0, 0, m, 0, 1, 0)
+        return (order,) + _trimmed(nodes, n_nodes, cap) + (depth,)
+    small = max(leaf_size, m // (threads * BUILD_TASKS_PER_THREAD))
+    serial = leaf_size == 1       # the subtrees' numbers are the serial build's already
+    free = [1]                    # larger leaves: the next number not handed out yet
+
+    def numbered(entry):
+        """``entry`` with the number its call starts from: given by its parent's call (leaf
+        size 1), else the next free ones (a split names 2 children; a subtree of k
+        primitives has at most 2 k - 2 nodes below its root)."""
+        node, s, e, d, first = entry
+        if first < 0:
+            first = free[0]
+            free[0] += 2 if e - s > small else 2 * (e - s) - 2
+        return node, s, e, d, first
+
+    results, tasks = [], []
+    level = [(0, 0, m, 0, 1 if serial else -1)]
+    while level:
+        level = [numbered(x) for x in level]
+        tasks += [x for x in level if x[2] - x[1] <= small]
+        big = [x for x in level if x[2] - x[1] > small]
+        level = []
+
+        def split(i, slot, big=big, level=level):
+            node, s, e, d, first = big[i]
+            nxt, depth, children = build(slot, node, s, e, d, first, e - s - 1)
+            results.append((nxt, depth))
+            level.extend(children)
+
+        _largest_first(split, range(len(big)), threads)
+
+    def subtree(i, slot):
+        results.append(build(slot, *tasks[i], 0)[:2])
+
+    _largest_first(subtree, np.argsort([s - e for _, s, e, _, _ in tasks], kind="stable"),
+                   threads)
     depth = max(r[1] for r in results)
     if serial:
-        n_nodes = max(r[0] for r in results)
-        # a leaf-size-1 tree fills 2 m - 1 of the 2 m rows: keep the arrays (no copy, no
-        # second peak); a sparser one is copied to its size (np.empty's untouched rows cost
-        # no memory)
-        if 2 * n_nodes > cap:
-            return (order,) + tuple(a[:n_nodes] for a in nodes) + (depth,)
-        return (order,) + tuple(a[:n_nodes].copy() for a in nodes) + (depth,)
+        return (order,) + _trimmed(nodes, max(r[0] for r in results), cap) + (depth,)
     return (order,) + _serial_numbering(*nodes) + (depth,)
+
+
+def _trimmed(nodes, n_nodes, cap):
+    """The node arrays cut to ``n_nodes`` rows: a leaf-size-1 tree fills 2 m - 1 of the 2 m
+    rows, and keeps its arrays (no copy, no second peak); a sparser one is copied to its size
+    (np.empty's untouched rows cost no memory)."""
+    if 2 * n_nodes > cap:
+        return tuple(a[:n_nodes] for a in nodes)
+    return tuple(a[:n_nodes].copy() for a in nodes)
 
 
 def _largest_first(fn, items, threads):
@@ -409,6 +438,28 @@ def _half_area(box):
 @numba.njit(**NJIT)
 def _build(cent, plo, phi, leaf_size, done, order, lo, hi, left, right, start, count, keys,
            kbuf, obuf, stacks, root, s0, e0, d0, next_node, defer, frontier):
+    """:func:`_build_with` sorting by :func:`_sort_short` (merge sort only): for trees of
+    fewer than :data:`RADIX_BUILD_MIN` primitives, whose first build (a fresh install's first
+    call) then compiles no radix sort."""
+    return _build_with(_sort_short, cent, plo, phi, leaf_size, done, order, lo, hi, left,
+                       right, start, count, keys, kbuf, obuf, stacks, root, s0, e0, d0,
+                       next_node, defer, frontier)
+
+
+@numba.njit(**NJIT)
+def _build_long(cent, plo, phi, leaf_size, done, order, lo, hi, left, right, start, count,
+                keys, kbuf, obuf, stacks, root, s0, e0, d0, next_node, defer, frontier):
+    """:func:`_build_with` sorting long ranges by radix (:func:`_sort_order`): for trees of
+    :data:`RADIX_BUILD_MIN` primitives or more."""
+    return _build_with(_sort_order, cent, plo, phi, leaf_size, done, order, lo, hi, left,
+                       right, start, count, keys, kbuf, obuf, stacks, root, s0, e0, d0,
+                       next_node, defer, frontier)
+
+
+@numba.njit(**NJIT_GENERIC)
+def _build_with(sort, cent, plo, phi, leaf_size, done, order, lo, hi, left, right, start,
+                count, keys, kbuf, obuf, stacks, root, s0, e0, d0, next_node, defer,
+                frontier):
     """Build the subtree of node ``root``, the primitives ``order[s0:e0]`` at depth ``d0``,
     into the given arrays (``order`` starts as ``0..m-1``; node arrays hold at least the
     number of nodes; ``keys, kbuf, obuf (m,)`` and ``stacks (5, RADIX_BUCKETS)`` are scratch;
@@ -477,7 +528,7 @@ def _build(cent, plo, phi, leaf_size, done, order, lo, hi, left, right, start, c
             axis = 2
         for k in range(s, e):
             keys[k] = cent[order[k], axis]
-        _sort_order(keys, order, kbuf, obuf, s, e, stacks[4])
+        sort(keys, order, kbuf, obuf, s, e, stacks[4])
         mid = _sah_split(plo, phi, order, kbuf, s, e)
         l = n_nodes
         r = n_nodes + 1
@@ -532,12 +583,25 @@ def _sah_split(plo, phi, order, area, s, e):
 #: ranges of at least this many keys are sorted by :func:`_radix_sort`, shorter ones by
 #: :func:`_sort_by_key` (both stable: the same order)
 RADIX_MIN = 1024
+#: trees of at least this many primitives are built by :func:`_build_long` (its radix sort
+#: pays for its compile time), smaller ones by :func:`_build`
+RADIX_BUILD_MIN = 1 << 15
 #: bits of the radix sort's digit (six passes over a 64-bit key) and its buckets
 RADIX_BITS = 11
 RADIX_BUCKETS = 1 << RADIX_BITS
 _SIGN = np.uint64(1 << 63)
 _ONES = np.uint64(0xFFFFFFFFFFFFFFFF)
 _DIGIT = np.uint64(RADIX_BUCKETS - 1)
+
+
+@numba.njit(**NJIT_IR_INLINE)
+def _sort_short(keys, items, kbuf, ibuf, s, e, counts):
+    """Sort ``items[s:e]`` by ``keys[s:e]`` stably with :func:`_sort_by_key` (nothing to do
+    for keys in order already); ``counts`` unused (the signature of :func:`_sort_order`)."""
+    for k in range(s + 1, e):
+        if keys[k] < keys[k - 1]:
+            _sort_by_key(keys, items, kbuf, ibuf, s, e)
+            return
 
 
 @numba.njit(**NJIT_IR_INLINE)
