@@ -316,7 +316,7 @@ def _build_scale_renders(d):
             cells.append("- (no --stage-times)")
         lines.append("| " + " | ".join(cells) + " |")
     size = d["args"]["render_size"]
-    lines += ["", f"`python -m tracer render FILE --size {size} {size}` of the PLY, a fresh "
+    lines += ["", f"`tracer render FILE --size {size} {size}` of the PLY, a fresh "
               "process, its kernels cached; x small: whole command / the small reference's; "
               "startup: whole command minus the stages' clock (imports)."]
     return "\n".join(lines)
@@ -343,7 +343,7 @@ def build_scale_words(path, before_path):
     arrays = r["input_bytes"] / 2 ** 20
     peer = (f" (fcpw {fcpw['build_s']:.2g} s)" if "build_s" in fcpw else "")
     return [f"a mesh of {r['n']:,} triangles builds in {o['build_s']:.2g} s{peer}, "
-            f"{ob['build_s']:.2g} s before",
+            f"{ob['build_s']:.2g} s before issue 60",
             f"with {o['build_extra_mib']:.0f} MiB of extra memory "
             f"({o['build_extra_mib'] / arrays:.0f}x its arrays; {ob['build_extra_mib']:.0f} MiB "
             f"before)",

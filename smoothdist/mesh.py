@@ -212,7 +212,7 @@ class DataMesh:
                 w.tri_coeffs[w.tri_class], w.tri_whi[w.tri_class])
 
     def weight_classes(self):
-        """The weight data of :meth:`weight_data`, compact: a :class:`WeightClasses` whose
+        """The weight data of :meth:`weight_data`, compact: a ``WeightClasses`` whose
         few distinct polynomials (one per pair of valences) each primitive indexes. Computed
         once and kept."""
         if self._weights is None:

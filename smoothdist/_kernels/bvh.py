@@ -580,11 +580,11 @@ def _sah_split(plo, phi, order, area, s, e):
     return arg
 
 
-#: ranges of at least this many keys are sorted by :func:`_radix_sort`, shorter ones by
-#: :func:`_sort_by_key` (both stable: the same order)
+#: ranges of at least this many keys are sorted by ``_radix_sort``, shorter ones by
+#: ``_sort_by_key`` (both stable: the same order)
 RADIX_MIN = 1024
-#: trees of at least this many primitives are built by :func:`_build_long` (its radix sort
-#: pays for its compile time), smaller ones by :func:`_build`
+#: trees of at least this many primitives are built by ``_build_long`` (its radix sort
+#: pays for its compile time), smaller ones by ``_build``
 RADIX_BUILD_MIN = 1 << 15
 #: bits of the radix sort's digit (six passes over a 64-bit key) and its buckets
 RADIX_BITS = 11

@@ -58,6 +58,8 @@ def generated_lines():
             T.exact_mix_table(DATA / "exact_mix.json"),
             T.smooth_cost_table(DATA / "exact_mix.json"),
             T.registers_table(DATA / "cuda_registers.json"),
+            T.build_scale_table(DATA / "build_scale.json"),
+            T.build_scale_table(DATA / "build_scale_before.json"),
             markdown(json.loads((DATA / "fidelity.json").read_text(encoding="utf-8")))]
     if (DATA / "mesh_distance_authors.json").is_file():
         made.append(T.mesh_distance_table(DATA / "mesh_distance_authors.json"))

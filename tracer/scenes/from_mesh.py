@@ -412,7 +412,7 @@ def render_mesh(mesh, F=None, *, kind=None, alpha=_MESH["alpha"], alpha_u=_MESH[
     (``"cpu"`` or ``"cuda"``) as in :func:`tracer.render`: by default (``"auto"``) a progress
     bar appears on stderr once the render has run 3 s, and each stage before and after the
     trace that runs longer (reading a big mesh, building its tree, the automatic parameters,
-    the light) says what it is doing (:mod:`tracer.stages`; ``progress=None``: never).
+    the light) says what it is doing (``tracer.stages``; ``progress=None``: never).
 
     Returns
     -------
