@@ -120,8 +120,19 @@ def unique_edges(T, n=None):
     T = np.asarray(T, dtype=np.int64)
     if T.shape[0] == 0:
         return np.zeros((0, 2), dtype=np.int64)
-    n = int(T.max()) + 1 if n is None else n
-    return unique_sorted_rows(triangle_half_edges(T), n)
+    n = int(T.max()) + 1 if n is None else max(int(n), 1)
+    if n * n - 1 > _KEY_MAX:
+        return unique_sorted_rows(triangle_half_edges(T), n)
+    # the keys straight from the corners, no (3 t, 2) rows in between
+    keys = np.empty(3 * T.shape[0], dtype=np.int64)
+    for j, (a, b) in enumerate(((0, 1), (1, 2), (2, 0))):
+        out = keys[j * T.shape[0]:(j + 1) * T.shape[0]]
+        np.minimum(T[:, a], T[:, b], out=out)
+        out *= n
+        out += np.maximum(T[:, a], T[:, b])
+    keys.sort()
+    keys = keys[np.concatenate([[True], keys[1:] != keys[:-1]])]
+    return np.stack([keys // n, keys % n], axis=1)
 
 
 def has_equal_rows(X):

@@ -360,10 +360,11 @@ class SmoothDistanceField:
         cloud)."""
         m = self.mesh
         n = m.V.shape[0]
-        E = np.concatenate([m.edges, unique_edges(m.triangles, n)])
+        E = unique_edges(m.triangles, n)
+        if m.edges.shape[0]:
+            E = unique_sorted_rows(np.sort(np.concatenate([m.edges, E]), axis=1), n)
         if E.shape[0] == 0:
             return None
-        E = unique_sorted_rows(np.sort(E, axis=1), n)
         return float(np.mean(np.linalg.norm(m.V[E[:, 1]] - m.V[E[:, 0]], axis=1)))
 
     def is_wire_net(self):

@@ -331,8 +331,17 @@ def _classes(a, b):
     a = np.asarray(a, dtype=np.int64)
     b = np.asarray(b, dtype=np.int64)
     base = int(b.max()) + 1
-    keys, inverse = np.unique(a * base + b, return_inverse=True)
-    return np.stack([keys // base, keys % base], axis=1), inverse.ravel().astype(np.int64)
+    key = a * base + b
+    top = int(key.max()) + 1
+    if top > 4 * key.size + (1 << 16):    # valences far apart: sort them
+        keys, inverse = np.unique(key, return_inverse=True)
+        return np.stack([keys // base, keys % base], axis=1), inverse.ravel().astype(np.int64)
+    # valences are small numbers: a table over every key, no sort
+    present = np.zeros(top, dtype=bool)
+    present[key] = True
+    keys = np.flatnonzero(present)
+    index = np.cumsum(present, dtype=np.int64) - 1
+    return np.stack([keys // base, keys % base], axis=1), index[key]
 
 
 def _repair(V, P, E, T, repair, name, quiet_duplicates):

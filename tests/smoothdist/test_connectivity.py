@@ -53,6 +53,7 @@ def test_unique_edges_of_triangles(rng):
                     for i in range(3)})
     np.testing.assert_array_equal(cn.unique_edges(T), np.array(brute))
     np.testing.assert_array_equal(cn.unique_edges(T, 40), np.array(brute))
+    np.testing.assert_array_equal(cn.unique_edges(T, 2 ** 40), np.array(brute))  # no keys
     assert cn.unique_edges(np.zeros((0, 3), dtype=np.int64)).shape == (0, 2)
 
 
