@@ -352,6 +352,18 @@ def build_scale_words(path, before_path):
             f"({render_ratio(b, rb['n']):.1f}x before)"]
 
 
+def scale_points_words(path):
+    """The performance guide's sentence on ``bench_scale.py``'s 1e7-point cloud, from its
+    results file."""
+    d = _load(path)
+    return (f"building the `DataMesh` took {d['mesh_s']:.1f} s, the BVH ({d['nodes']:,} nodes, "
+            f"leaf size {d['leaf_size']}, with a progress bar) {d['build_s']:.1f} s, a "
+            f"{d['size']}² render (beta {d['beta']:g}) {d['render_s']:.1f} s with "
+            f"{d['mean_leaves']:.0f} leaves per pixel, and the peak resident memory of the whole "
+            f"process was {d['peak_rss_gb']:.2f} GB ({d['threads']} threads, load average "
+            f"{d['load'][0]:.1f})")
+
+
 def build_scale_table(path):
     """The build-time and memory tables of a ``bench_build_scale.py`` results file."""
     return build_scale_markdown(_load(path))

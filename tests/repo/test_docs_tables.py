@@ -19,6 +19,7 @@ sys.path.insert(0, str(ROOT))
 
 from benchmarks.coldstart_words import warm_sentences  # noqa: E402
 from benchmarks.tables import (build_scale_table, build_scale_words,  # noqa: E402
+                               scale_points_words,
                                coldstart_steps_table, coldstart_table, exact_mix_table,
                                exact_mix_words, gpu_table, mesh_distance_table,
                                mesh_distance_words, registers_table, scaling_table,
@@ -69,6 +70,11 @@ def test_the_build_scale_sentences_follow_the_files():
     for where in (_flat(_guide()), _flat((ROOT / "README.md").read_text(encoding="utf-8"))):
         for sentence in words:
             assert sentence in where, sentence
+
+
+def test_the_ten_million_points_sentence_follows_its_file():
+    """``bench_scale.py``'s 1e7-point cloud: the sentence is the results file's."""
+    assert scale_points_words(DATA / "scale_points_1e7.json") in _flat(_guide())
 
 
 def test_the_guide_holds_the_cold_start_table():
