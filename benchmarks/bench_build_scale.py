@@ -532,13 +532,9 @@ def machine():
     """CPU, cores, numba threads, versions (the peers' where installed), commit, date."""
     import numba
 
-    model = platform.processor() or platform.machine()
-    try:
-        with open("/proc/cpuinfo", encoding="utf-8") as f:
-            model = next((ln.split(":", 1)[1].strip() for ln in f if ln.startswith("model name")),
-                         model)
-    except OSError:
-        pass
+    from benchmarks.bench_scaling import machine as scaling_machine
+
+    model = scaling_machine()["cpu"] or platform.machine()
     versions = {}
     for dist in ("numpy", "numba", "scipy", "trimesh", "fcpw", "libigl", "open3d", "warp-lang"):
         try:
