@@ -31,9 +31,22 @@ def row_keys(rows, n):
     return key
 
 
-def _lex_order(rows):
-    """A stable order sorting ``rows (r, k)`` lexicographically."""
-    return np.lexsort(rows.T[::-1])
+def _runs(rows, key, stable=False):
+    """``(order, new)``: an order sorting ``rows (r, k)`` (r >= 1) lexicographically, by their
+    ``key`` where given (stably with ``stable``; the lexsort fallback always is), and ``new
+    (r,) bool``, True where a sorted row differs from the one before (the start of a run of
+    equal rows)."""
+    new = np.empty(rows.shape[0], dtype=bool)
+    new[0] = True
+    if key is None:
+        order = np.lexsort(rows.T[::-1])
+        sr = rows[order]
+        np.any(sr[1:] != sr[:-1], axis=1, out=new[1:])
+    else:
+        order = np.argsort(key, kind="stable" if stable else None)
+        sk = key[order]
+        np.not_equal(sk[1:], sk[:-1], out=new[1:])
+    return order, new
 
 
 def first_of_each(rows, n):
@@ -48,17 +61,7 @@ def first_of_each(rows, n):
         s = np.sort(key)
         if not np.any(s[1:] == s[:-1]):       # the common case: nothing repeats
             return np.arange(rows.shape[0])
-        order = np.argsort(key, kind="stable")
-        sk = key[order]
-        new = np.empty(sk.size, dtype=bool)
-        new[0] = True
-        np.not_equal(sk[1:], sk[:-1], out=new[1:])
-    else:
-        order = _lex_order(rows)
-        sr = rows[order]
-        new = np.empty(sr.shape[0], dtype=bool)
-        new[0] = True
-        np.any(sr[1:] != sr[:-1], axis=1, out=new[1:])
+    order, new = _runs(rows, key, stable=True)
     return np.sort(order[new])
 
 
@@ -68,14 +71,7 @@ def unique_sorted_rows(rows, n):
     rows = np.asarray(rows, dtype=np.int64)
     if rows.shape[0] == 0:
         return rows.reshape(0, rows.shape[1])
-    key = row_keys(rows, n)
-    if key is None:
-        return np.unique(rows, axis=0)
-    order = np.argsort(key)
-    sk = key[order]
-    new = np.empty(sk.size, dtype=bool)
-    new[0] = True
-    np.not_equal(sk[1:], sk[:-1], out=new[1:])
+    order, new = _runs(rows, row_keys(rows, n))
     return np.ascontiguousarray(rows[order[new]])
 
 
@@ -85,19 +81,7 @@ def row_counts(rows, n):
     r = rows.shape[0]
     if r == 0:
         return np.zeros(0, dtype=np.int64)
-    key = row_keys(rows, n)
-    if key is None:
-        order = _lex_order(rows)
-        sr = rows[order]
-        new = np.empty(r, dtype=bool)
-        new[0] = True
-        np.any(sr[1:] != sr[:-1], axis=1, out=new[1:])
-    else:
-        order = np.argsort(key)
-        sk = key[order]
-        new = np.empty(r, dtype=bool)
-        new[0] = True
-        np.not_equal(sk[1:], sk[:-1], out=new[1:])
+    order, new = _runs(rows, row_keys(rows, n))
     starts = np.flatnonzero(new)
     lengths = np.diff(np.append(starts, r))
     out = np.empty(r, dtype=np.int64)

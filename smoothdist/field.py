@@ -13,7 +13,7 @@ from smoothdist._kernels.bvh import build_tree
 from smoothdist._kernels.exact_query import GROUP, build_exact_tree, exact_tree_batch
 from smoothdist._kernels.spacing import gap_probes, local_smooth_distance
 from smoothdist.error_budget import Within, point_alpha, within
-from smoothdist.connectivity import unique_edges, unique_sorted_rows
+from smoothdist.connectivity import unique_sorted_rows
 from smoothdist.mesh import as_data_mesh
 from smoothdist.query_order import coherent_order, scattered
 from smoothdist.schedule import parallel_tasks, run_tasks
@@ -359,10 +359,7 @@ class SmoothDistanceField:
         """Mean length of the distinct edges of the edges and triangles (None for a point
         cloud)."""
         m = self.mesh
-        n = m.V.shape[0]
-        E = unique_edges(m.triangles, n)
-        if m.edges.shape[0]:
-            E = unique_sorted_rows(np.sort(np.concatenate([m.edges, E]), axis=1), n)
+        E = m.distinct_edges()
         if E.shape[0] == 0:
             return None
         return float(np.mean(np.linalg.norm(m.V[E[:, 1]] - m.V[E[:, 0]], axis=1)))

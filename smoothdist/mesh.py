@@ -128,10 +128,9 @@ class DataMesh:
         if kind == "points":
             return DataMesh(self.V, points=self.used_indices(), name=self.name)
         if kind == "edges":
-            E = np.concatenate([self.edges, unique_edges(self.triangles, self.V.shape[0])])
+            E = self.distinct_edges()
             if E.shape[0] == 0:
                 raise ValueError(f"{self.name}: has no edges or triangles to take edges from")
-            E = unique_sorted_rows(np.sort(E, axis=1), self.V.shape[0])
             return DataMesh(self.V, edges=E, name=self.name)
         if self.triangles.shape[0] == 0:
             raise ValueError(f"{self.name}: has no triangles (it holds "
@@ -150,6 +149,15 @@ class DataMesh:
         present = [k for k, a in (("points", self.points), ("edges", self.edges),
                                   ("triangles", self.triangles)) if len(a)]
         return present[0] if len(present) == 1 else "mixed"
+
+    def distinct_edges(self):
+        """``(e, 2)`` int64: every undirected edge of the mesh's edges and triangles once,
+        each row sorted, in lexicographic order."""
+        n = self.V.shape[0]
+        E = unique_edges(self.triangles, n)
+        if self.edges.shape[0]:
+            E = unique_sorted_rows(np.sort(np.concatenate([self.edges, E]), axis=1), n)
+        return E
 
     def used_indices(self):
         """``(u,)`` int64 indices, ascending, of the vertices referenced by some primitive."""
@@ -294,8 +302,8 @@ def as_data_mesh(mesh, F=None, *, name=None, **mesh_kwargs):
 def _weight_classes(n, E, T):
     """:class:`WeightClasses` of a mesh of ``n`` vertices with edges ``E`` and triangles
     ``T``: each primitive's class is its pair of valences (edges: the valences of its two
-    ends; triangles: the largest vertex and edge valence), found with one ``np.unique`` over
-    the pairs, and the polynomial of each class is computed once."""
+    ends; triangles: the largest vertex and edge valence), and the polynomial of each class is
+    computed once."""
     A = 1
     ev = np.bincount(E.ravel(), minlength=n) if E.shape[0] else None
     if ev is not None:

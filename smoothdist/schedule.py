@@ -38,7 +38,7 @@ import numba
 
 from smoothdist._config import PARALLEL
 
-__all__ = ["TASKS", "parallel_tasks", "run_tasks"]
+__all__ = ["TASKS", "parallel_tasks", "run_largest_first", "run_tasks"]
 
 #: most parallel tasks
 TASKS = 64
@@ -100,6 +100,38 @@ def run_tasks(fn, ntasks, threads=None, pool=False):
     for t in workers:
         t.start()
     work(edges[0], edges[1])
+    for t in workers:
+        t.join()
+    if errors:
+        raise errors[0]
+
+
+def run_largest_first(fn, items, threads):
+    """Call ``fn(item, slot)`` for every entry of ``items`` (largest first, as the caller
+    orders them) on ``threads`` Python threads, each taking the next item when it is done:
+    for GIL-free kernels whose items differ in size (the subtrees of a tree build), where
+    :func:`run_tasks`'s fixed groups would leave a thread idle. ``slot`` is ``1 +`` the
+    thread's index (each thread's own progress counter); exceptions are re-raised here."""
+    items = list(items)
+    lock = threading.Lock()
+    errors = []
+
+    def work(slot):
+        while not errors:
+            with lock:
+                if not items:
+                    return
+                i = items.pop(0)
+            try:
+                fn(i, slot)
+            except BaseException as exc:  # handed to the calling thread
+                errors.append(exc)
+
+    workers = [threading.Thread(target=work, args=(k + 1,), daemon=True)
+               for k in range(1, threads)]
+    for t in workers:
+        t.start()
+    work(1)
     for t in workers:
         t.join()
     if errors:

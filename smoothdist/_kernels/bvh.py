@@ -23,6 +23,7 @@ import numpy as np
 
 from smoothdist._config import NJIT, NJIT_GENERIC, NJIT_IR_INLINE, PARALLEL
 from smoothdist.mesh import KIND_EDGE, KIND_POINT, KIND_TRIANGLE
+from smoothdist.schedule import run_largest_first
 
 
 class TreeData(NamedTuple):
@@ -292,12 +293,12 @@ def _run_build(cent, plo, phi, leaf_size, done, threads=None, parallel_min=None)
             results.append((nxt, depth))
             level.extend(children)
 
-        _largest_first(split, range(len(big)), threads)
+        run_largest_first(split, range(len(big)), threads)
 
     def subtree(i, slot):
         results.append(build(slot, *tasks[i], 0)[:2])
 
-    _largest_first(subtree, np.argsort([s - e for _, s, e, _, _ in tasks], kind="stable"),
+    run_largest_first(subtree, np.argsort([s - e for _, s, e, _, _ in tasks], kind="stable"),
                    threads)
     depth = max(r[1] for r in results)
     if serial:
@@ -312,36 +313,6 @@ def _trimmed(nodes, n_nodes, cap):
     if 2 * n_nodes > cap:
         return tuple(a[:n_nodes] for a in nodes)
     return tuple(a[:n_nodes].copy() for a in nodes)
-
-
-def _largest_first(fn, items, threads):
-    """Call ``fn(item, slot)`` for every entry of ``items`` on ``threads`` Python threads, each
-    taking the next item when it is done (``slot``: ``1 + `` the thread's index, for its own
-    progress counter); exceptions are re-raised here. The kernels release the GIL."""
-    items = list(items)
-    lock = threading.Lock()
-    errors = []
-
-    def work(slot):
-        while not errors:
-            with lock:
-                if not items:
-                    return
-                i = items.pop(0)
-            try:
-                fn(i, slot)
-            except BaseException as exc:  # handed to the calling thread
-                errors.append(exc)
-
-    workers = [threading.Thread(target=work, args=(k + 1,), daemon=True)
-               for k in range(1, threads)]
-    for t in workers:
-        t.start()
-    work(1)
-    for t in workers:
-        t.join()
-    if errors:
-        raise errors[0]
 
 
 def _serial_numbering(lo, hi, left, right, start, count):

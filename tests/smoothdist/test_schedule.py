@@ -109,3 +109,19 @@ def test_run_tasks_covers_every_task_once(pool):
 
     with pytest.raises(RuntimeError, match="task failed"):
         run_tasks(broken, 4, 2, pool=pool)
+
+
+def test_largest_first_runs_every_item_once_and_raises_errors():
+    from smoothdist.schedule import run_largest_first
+
+    seen = []
+    run_largest_first(lambda i, slot: seen.append((i, slot)), range(20), threads=3)
+    assert sorted(i for i, _ in seen) == list(range(20))
+    assert {slot for _, slot in seen} <= {1, 2, 3}
+
+    def fail(i, slot):
+        if i == 5:
+            raise ValueError("item 5")
+
+    with pytest.raises(ValueError, match="item 5"):
+        run_largest_first(fail, range(10), threads=2)
