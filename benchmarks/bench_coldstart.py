@@ -20,6 +20,13 @@ trimesh's ``icosphere(3)``, its 1,920 edges, its 642 vertices, 2,000 points on a
   (``scenes/bunny_triangles.json --shading lit --samples 16 --adaptive``);
 * ``sim``: ``tracer simulate scenes/simulations/ico_bowl.json --steps 1 --no-render``.
 
+With ``--copies`` (issue 63) each case also runs (a) in a second copy of the source (its
+``smoothdist`` and ``tracer`` folders copied elsewhere, as a fresh clone, a new virtual
+environment or another install of the same version would be) with the cache the first run
+filled, and (b) with a new cache that ``tracer warmup`` filled once beforehand (its wall and CPU
+seconds, children included, are reported once); a case may not write into that cache for the
+next one, so each gets a copy of it.
+
 Results go to ``benchmarks/data/coldstart.json`` with the load average before and after each
 run (other jobs slow a compile down as much as a render), the commit and whether the tree was
 dirty. ``--source DIR`` measures another checkout (e.g. a ``git worktree`` of an older
@@ -33,12 +40,14 @@ Usage::
     python benchmarks/bench_coldstart.py --cases exact smooth md_triangles --out out/cs.json
     git worktree add /tmp/before HEAD~5
     python benchmarks/bench_coldstart.py --source /tmp/before --out benchmarks/data/coldstart_before.json
+    python benchmarks/bench_coldstart.py --copies --out benchmarks/data/coldstart_issue63.json
 """
 
 import argparse
 import json
 import os
 import platform
+import resource
 import shutil
 import subprocess
 import sys
@@ -171,6 +180,7 @@ def run(args, cache, work, threads, source):
     """One child process: ``args`` as given by :func:`write_inputs`, with the kernel cache in
     ``cache`` and ``source`` (a checkout) first on the path."""
     env = dict(os.environ, NUMBA_CACHE_DIR=str(cache), MPLBACKEND="Agg")
+    env.pop("SMOOTHDIST_CACHE_DIR", None)  # the kernels' cache: $NUMBA_CACHE_DIR/smoothdist
     env["PYTHONPATH"] = str(source) + os.pathsep + env.get("PYTHONPATH", "")
     if args[0] == "library":
         cmd = [sys.executable, "-c", CHILD, *args]
@@ -193,6 +203,39 @@ def run(args, cache, work, threads, source):
         raise SystemExit(f"error: {' '.join(args)} exited {r['rc']}:\n{p.stderr[-2000:]}")
     r.update(wall_s=wall, load_before=load, load_after=os.getloadavg()[0])
     return r
+
+
+def copy_source(source, dest):
+    """The ``smoothdist`` and ``tracer`` packages of ``source`` copied to ``dest`` (no
+    ``__pycache__``): a second copy of the same version."""
+    skip = shutil.ignore_patterns("__pycache__", "*.pyc")
+    for pkg in ("smoothdist", "tracer"):
+        if (source / pkg).is_dir():
+            shutil.copytree(source / pkg, dest / pkg, ignore=skip)
+    return dest
+
+
+def run_warmup(cache, source):
+    """``tracer warmup`` into the empty ``cache``: ``{wall_s, cpu_s (children included),
+    compiled}``."""
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(cache), MPLBACKEND="Agg")
+    env.pop("SMOOTHDIST_CACHE_DIR", None)
+    env["PYTHONPATH"] = str(source) + os.pathsep + env.get("PYTHONPATH", "")
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    load = os.getloadavg()[0]
+    t0 = time.perf_counter()
+    p = subprocess.run([sys.executable, "-m", "tracer", "warmup"], env=env, capture_output=True,
+                       text=True, cwd=source)
+    wall = time.perf_counter() - t0
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    if p.returncode != 0:
+        raise SystemExit(f"error: tracer warmup failed:\n{p.stderr.strip()[-2000:]}")
+    last = p.stderr.strip().splitlines()[-1]
+    compiled = int(last.split(" kernel specialisations")[0].rsplit(" ", 1)[-1])
+    return {"wall_s": wall, "cpu_s": (after.ru_utime + after.ru_stime) - (before.ru_utime +
+                                                                          before.ru_stime),
+            "compiled": compiled, "cores": os.cpu_count(), "load_before": load,
+            "load_after": os.getloadavg()[0], "summary": last}
 
 
 def describe(case, args, work):
@@ -226,6 +269,8 @@ def main(argv=None):
     p.add_argument("--source", default=str(ROOT),
                    help="the checkout to measure (default: this one)")
     p.add_argument("--out", default=str(DEFAULT_OUT), help="results JSON")
+    p.add_argument("--copies", action="store_true",
+                   help="also a second copy of the source, and after tracer warmup (issue 63)")
     args = p.parse_args(argv)
     if not args.out.endswith(".json"):
         p.error("--out must name a .json file")
@@ -240,18 +285,33 @@ def main(argv=None):
     work = Path(tempfile.mkdtemp(prefix="coldstart-"))
     try:
         inputs = write_inputs(work)
+        if args.copies:
+            second = copy_source(source, work / "second-copy")
+            warmed = work / "cache-warmup"
+            warmed.mkdir()
+            results["warmup"] = run_warmup(warmed, source)
+            print(f"warmup: {results['warmup']['wall_s']:.1f} s wall, "
+                  f"{results['warmup']['cpu_s']:.1f} s CPU", flush=True)
         print(f"{'case':15} {'cold s':>7} {'cpu s':>6} {'warm s':>7} {'compiled':>9} "
-              f"{'load':>9}")
+              f"{'load':>9}{'  copy cpu s  after warmup cpu s' if args.copies else ''}")
         for case in args.cases:
             cache = work / f"cache-{case}"
             cache.mkdir()
             cold = run(inputs[case], cache, work, args.threads, source)
             warm = run(inputs[case], cache, work, args.threads, source)
-            results["cases"][case] = {"command": describe(case, inputs[case], work),
-                                      "cold": cold, "warm": warm}
+            r = results["cases"][case] = {"command": describe(case, inputs[case], work),
+                                          "cold": cold, "warm": warm}
+            extra = ""
+            if args.copies:
+                r["second_copy"] = run(inputs[case], cache, work, args.threads, second)
+                mine = work / f"cache-warmup-{case}"
+                shutil.copytree(warmed, mine)
+                r["after_warmup"] = run(inputs[case], mine, work, args.threads, source)
+                extra = (f"  {r['second_copy']['cpu_s']:11.1f}  "
+                         f"{r['after_warmup']['cpu_s']:16.1f}")
             print(f"{case:15} {cold['wall_s']:7.1f} {cold['cpu_s']:6.1f} {warm['wall_s']:7.1f} "
-                  f"{cold['compiled']:9d} {cold['load_before']:4.1f}-{cold['load_after']:.1f}",
-                  flush=True)
+                  f"{cold['compiled']:9d} {cold['load_before']:4.1f}-{cold['load_after']:.1f}"
+                  f"{extra}", flush=True)
     finally:
         shutil.rmtree(work, ignore_errors=True)
     os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)

@@ -11,10 +11,15 @@ Conventions
 * The smooth distance is conservative: ``d - log(A**S N)/alpha <= d_hat <= d``.
 """
 
-from smoothdist._cache_guard import guard_once as _guard_kernel_cache
+__version__ = "0.1.0"
 
-# before any kernel module is imported: drop numba caches compiled from other sources
+from smoothdist._cache_guard import guard_once as _guard_kernel_cache  # noqa: E402
+from smoothdist import _kernel_cache  # noqa: E402
+
+# before any kernel module is imported: drop numba caches compiled from other sources, and
+# keep our kernels in the per-machine cache keyed on the sources' content
 _guard_kernel_cache()
+_kernel_cache.install(__version__)
 
 from smoothdist import _moved  # noqa: E402,F401  (the old paths' import hook)
 
@@ -29,7 +34,6 @@ __all__ = ["DataMesh", "MeshRepairWarning", "SmoothDistanceField", "SmoothDistan
            "ExactDistanceResult", "QueryStats", "smooth_distance", "exact_distance",
            "load_mesh", "as_data_mesh", "MeshDistance", "mesh_distance", "combine_distances",
            "within", "Within"]
-__version__ = "0.1.0"
 
 
 def load_mesh(path, kind=None):

@@ -37,6 +37,7 @@ import warnings
 import numba
 import numpy as np
 
+from smoothdist import _kernel_cache
 from smoothdist._cast import COORD_LIMIT
 from smoothdist._kernels.query import exact_distance_point, smooth_distance_point_tol
 
@@ -100,6 +101,7 @@ def cuda_module():
     if not ok:
         raise CudaUnavailable("device 'cuda': no CUDA GPU found (numba.cuda.is_available() is "
                               "False); use device 'cpu'")
+    _kernel_cache.install_cuda()  # the CUDA kernels' cache in the per-machine folder too
     return cuda
 
 

@@ -46,6 +46,7 @@ COMMANDS = {
     "simulate": "tracer.sim.cli_simulate",
     "animate": "tracer.sim.cli_animate",
     "reproduce": "tracer.reproduce.cli",
+    "warmup": "tracer.cli_warmup",
 }
 
 

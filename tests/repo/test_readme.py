@@ -61,6 +61,9 @@ pytestmark = pytest.mark.slow
 #: options appended by the shim, per ``python -m tracer <command>`` or script
 TINY = {
     "tracer render": ["--size", "16", "16"],
+    # two quick jobs of the warm-up (every job: minutes of compiling on a cold CI cache)
+    "tracer warmup": ["--only", "render-points", "smooth-distance"],
+    "smoothdist warmup": ["--only", "smooth-distance"],
     "tracer compare": ["--grid", "8", "--size", "16", "16"],
     # the studies (issue 13 owns them; adjust these when their options change)
     "tracer ablate-beta": ["--size", "8", "--betas", "0,1", "--grid-betas", "0,1",

@@ -1,0 +1,273 @@
+"""Compile the kernels ahead of their first use, side by side on the machine's cores.
+
+numba compiles a kernel's specialisation on its first call, on one core, and keeps it in the
+per-machine cache (:mod:`smoothdist._kernel_cache`). :func:`run` starts one child process per
+job, up to ``workers`` at a time (the machine's cores by default), longest job first; each job
+makes the first calls of one entry point on a small made-up mesh, so that its kernels land in
+the cache and a user's first call loads them instead. Run it once per machine and version (after
+``pip install``, in a Docker image, before a CI suite): ``python -m smoothdist warmup`` for the
+library, ``tracer warmup`` for the library and the renderer.
+
+A job is ``(module, name)``: ``module.JOBS[name]()`` runs in the child. Jobs overlap (every
+entry point builds a tree): two children that need one kernel both compile it at first, and the
+later jobs find it cached. Each child reports the specialisations it compiled (numba's
+``numba:compile`` events of our functions); a failed job is reported with the end of its error
+output and the others go on.
+"""
+
+import argparse
+import importlib
+import json
+import os
+import subprocess
+import sys
+import time
+
+import numpy as np
+
+import smoothdist as sd
+from smoothdist import _kernel_cache
+
+__all__ = ["JOBS", "run", "jobs_of", "main"]
+
+#: runs in a child process: ``module.JOBS[name]()``, then one JSON line with what it compiled
+CHILD = r"""
+import importlib, json, resource, sys, time
+t0 = time.perf_counter()
+from numba.core import event
+
+compiled = {}
+
+
+class Count(event.Listener):
+    def on_start(self, ev):
+        pass
+
+    def on_end(self, ev):
+        fn = getattr(ev.data.get("dispatcher"), "py_func", None)
+        name = f"{getattr(fn, '__module__', '')}.{getattr(fn, '__qualname__', '?')}"
+        if name.split(".")[0] in ("smoothdist", "tracer"):
+            compiled[name] = compiled.get(name, 0) + 1
+
+
+event.register("numba:compile", Count())
+importlib.import_module(sys.argv[1]).JOBS[sys.argv[2]]()
+ru = resource.getrusage(resource.RUSAGE_SELF)
+print(json.dumps({"compiled": sum(compiled.values()), "kernels": compiled,
+                  "cpu_s": ru.ru_utime + ru.ru_stime, "wall_s": time.perf_counter() - t0}))
+"""
+
+
+def octahedron():
+    """``(V (6, 3), F (8, 3), E (12, 2))``: a closed mesh small enough for any first call."""
+    V = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]], float)
+    F = np.array([[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4],
+                  [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]])
+    E = np.unique(np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1),
+                  axis=0)
+    return V, F, E
+
+
+def _queries(n=200):
+    return np.random.default_rng(0).uniform(-1.5, 1.5, (n, 3))
+
+
+def _mesh(kind):
+    V, F, E = octahedron()
+    return {"triangles": (V, F), "edges": (V, E), "points": (V, None)}[kind]
+
+
+def _distances(kind, which):
+    """A library user's first calls on a mesh of ``kind``: ``which`` is ``"exact"`` (exact
+    distance, the field's too) or ``"smooth"`` (smooth distance with gradients, alpha_U
+    automatic too, and a field's repeated queries)."""
+    V, F = _mesh(kind)
+    Q = _queries()
+
+    def job():
+        if which == "exact":
+            sd.exact_distance(Q, V, F)
+            sd.SmoothDistanceField(V, F).exact_distance(Q)
+        else:
+            sd.smooth_distance(Q, V, F, alpha=50.0)
+            sd.smooth_distance(Q, V, F, alpha=50.0, alpha_u="auto")
+            sd.SmoothDistanceField(V, F).smooth_distance(Q, alpha=50.0)
+
+    return job
+
+
+def _whole_mesh(kind, which):
+    """A collision constraint between two meshes of ``kind``: ``which`` is ``"call"`` (value
+    and gradient), ``"vertex"`` (the gradient per query vertex) or ``"exact"`` (the exact
+    distance)."""
+    V, F = _mesh(kind)
+    data = V if F is None else (V, F)
+    query = 0.3 * V if F is None else (0.3 * V, F)
+
+    def job():
+        R, t = np.eye(3), np.array([0.0, 0.0, 2.0])
+        md = sd.MeshDistance(data, query, alpha=50, alpha_q=50)
+        if which == "call":
+            md(R, t)
+        elif which == "vertex":
+            md.vertex_gradient(R, t)
+        else:
+            md.exact(R, t)
+
+    return job
+
+
+def _every_kind():
+    """Every entry point above on edges and points (mostly loaded from the cache by then)."""
+    calls = [f(kind, w) for kind in ("edges", "points")
+             for f, ws in ((_distances, ("exact", "smooth")),
+                           (_whole_mesh, ("call", "vertex", "exact"))) for w in ws]
+
+    def job():
+        for call in calls:
+            call()
+
+    return job
+
+
+class _Lazy(dict):
+    """``{name: factory}`` whose items are made when looked up: a job makes its input (and
+    imports what only it needs) in its own child, not in the parent that lists the jobs."""
+
+    def __getitem__(self, name):
+        return dict.__getitem__(self, name)()
+
+
+#: the library's jobs, the longest chain first (a job starts when a worker is free and the jobs
+#: it waits for have ended): the entry points on triangles, then every entry point on the
+#: other kinds, which by then are loaded from the cache
+JOBS = _Lazy({
+    "mesh-distance": lambda: _whole_mesh("triangles", "call"),
+    "mesh-distance-vertex": lambda: _whole_mesh("triangles", "vertex"),
+    "exact-distance": lambda: _distances("triangles", "exact"),
+    "smooth-distance": lambda: _distances("triangles", "smooth"),
+    "mesh-distance-exact": lambda: _whole_mesh("triangles", "exact"),
+    "edges-and-points": _every_kind,
+})
+#: ``{job: jobs it waits for}``: the vertex gradient and the whole-mesh exact distance share
+#: most of ``mesh-distance``'s kernels (66 of 68), so they start once those are cached
+AFTER = {"mesh-distance-vertex": ("mesh-distance",), "mesh-distance-exact": ("mesh-distance",),
+         "edges-and-points": ("mesh-distance-vertex", "mesh-distance-exact", "smooth-distance",
+                              "exact-distance")}
+
+
+def jobs_of(module):
+    """``[(module name, job name, jobs it waits for)]`` of a jobs module, in its order."""
+    mod = importlib.import_module(module)
+    after = getattr(mod, "AFTER", {})
+    return [(module, name, tuple(after.get(name, ()))) for name in mod.JOBS.keys()]
+
+
+def _next(pending, done, known):
+    """Index in ``pending`` of the first job whose prerequisites (those among ``known``) are
+    all ``done``; None if every pending job still waits."""
+    for i, (_, _, after) in enumerate(pending):
+        if all(a in done or a not in known for a in after):
+            return i
+    return None
+
+
+def _child(module, name):
+    env = dict(os.environ)
+    return subprocess.Popen([sys.executable, "-c", CHILD, module, name], env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+def _result(proc):
+    out, err = proc.communicate()
+    if proc.returncode == 0:
+        try:
+            return json.loads(out.strip().splitlines()[-1]), None
+        except (ValueError, IndexError):
+            pass
+    tail = (err or out or "").strip().splitlines()[-3:]
+    return None, " | ".join(tail) or f"exit status {proc.returncode}"
+
+
+def run(jobs, workers=None, progress=None):
+    """Run ``jobs`` (``[(module, name, after)]``, :func:`jobs_of`) in child processes,
+    ``workers`` at a time (default: the machine's cores), each once the jobs it waits for (and
+    that are in ``jobs``) have ended, in the order given otherwise; ``progress(done, total,
+    line)`` after each. Returns
+    ``{"jobs": {name: result or {"error": text}}, "wall_s": s, "compiled": n}``."""
+    workers = max(1, int(workers or os.cpu_count() or 1))
+    pending = list(jobs)
+    running = {}
+    results = {}
+    t0 = time.perf_counter()
+    known = {name for _, name, _ in jobs}
+    while pending or running:
+        while pending and len(running) < workers:
+            i = _next(pending, results, known)
+            if i is None:
+                break
+            module, name, _ = pending.pop(i)
+            running[name] = _child(module, name)
+        finished = [n for n, p in running.items() if p.poll() is not None]
+        if not finished:
+            time.sleep(0.05)
+            continue
+        for name in finished:
+            res, err = _result(running.pop(name))
+            results[name] = res if err is None else {"error": err}
+            if progress is not None:
+                line = (f"{name}: {res['compiled']} compiled, {res['wall_s']:.1f} s"
+                        if err is None else f"{name}: failed ({err})")
+                progress(len(results), len(jobs), line)
+    return {"jobs": results, "wall_s": time.perf_counter() - t0,
+            "compiled": sum(r.get("compiled", 0) for r in results.values())}
+
+
+def report(summary, jobs, out=sys.stderr):
+    """Print the closing line of a warm-up; returns the exit status (1 if a job failed)."""
+    failed = [n for n, r in summary["jobs"].items() if "error" in r]
+    where = _kernel_cache.folder() or "numba's default cache folders"
+    print(f"warmup: {len(jobs) - len(failed)} of {len(jobs)} jobs, {summary['compiled']} "
+          f"kernel specialisations compiled in {summary['wall_s']:.1f} s; cache: {where}",
+          file=out)
+    return 1 if failed else 0
+
+
+def _print_progress(done, total, line):
+    print(f"warmup [{done}/{total}] {line}", file=sys.stderr, flush=True)
+
+
+def main(argv=None, modules=("smoothdist.warmup",), prog="python -m smoothdist warmup"):
+    """The ``warmup`` command over the jobs of ``modules``; returns the exit status."""
+    p = argparse.ArgumentParser(prog=prog, description=__doc__.split("\n\n")[0])
+    add_arguments(p)
+    args = p.parse_args(argv)
+    return warmup_command(args, modules)
+
+
+def add_arguments(p):
+    """The warm-up's options (also ``tracer warmup``'s)."""
+    p.add_argument("--workers", type=int, default=None,
+                   help="child processes at a time (default: the machine's cores)")
+    p.add_argument("--only", nargs="+", metavar="JOB", help="run these jobs only")
+    p.add_argument("--list", action="store_true", help="list the jobs and exit")
+    p.add_argument("-q", "--quiet", action="store_true", help="print the closing line only")
+
+
+def warmup_command(args, modules):
+    """Run the parsed ``warmup`` command over the jobs of ``modules``."""
+    jobs = [j for m in modules for j in jobs_of(m)]
+    if args.list:
+        print("\n".join(name for _, name, _ in jobs))
+        return 0
+    if args.only:
+        unknown = sorted(set(args.only) - {n for _, n, _ in jobs})
+        if unknown:
+            print(f"error: unknown job(s) {', '.join(unknown)} (see --list)", file=sys.stderr)
+            return 2
+        jobs = [j for j in jobs if j[1] in args.only]
+    if args.workers is not None and args.workers < 1:
+        print("error: --workers must be at least 1", file=sys.stderr)
+        return 2
+    summary = run(jobs, args.workers, None if args.quiet else _print_progress)
+    return report(summary, jobs)

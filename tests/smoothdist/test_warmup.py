@@ -1,0 +1,116 @@
+"""The warm-up (``smoothdist.warmup``, ``python -m smoothdist warmup``, ``tracer warmup``).
+
+* The scheduler, on a throwaway jobs module: at most ``workers`` children at a time, a job
+  waits for those it names, a failed job is reported with its error and the others still run.
+* For real: after ``python -m smoothdist warmup --only smooth-distance`` into an empty cache, a
+  new process's first ``smooth_distance`` compiles nothing.
+* The command lines list their jobs and refuse unknown ones.
+"""
+
+import json
+import os
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import pytest
+
+from smoothdist import warmup
+
+ROOT = Path(__file__).resolve().parents[2]
+
+TOY = textwrap.dedent('''
+    import os, sys, time
+
+    OUT = os.environ["TOY_OUT"]
+
+
+    def stamp(name, seconds=0.0, fail=False):
+        def job():
+            start = time.time()
+            time.sleep(seconds)
+            if fail:
+                raise RuntimeError("toy job failed on purpose")
+            with open(os.path.join(OUT, name), "w") as f:
+                f.write(f"{start} {time.time()}")
+        return job
+
+
+    JOBS = {"slow": stamp("slow", 0.6), "after-slow": stamp("after-slow"),
+            "broken": stamp("broken", fail=True), "quick": stamp("quick")}
+    AFTER = {"after-slow": ("slow",), "unknown-waits": ("nothing",)}
+''')
+
+
+def _times(out, name):
+    start, end = map(float, (out / name).read_text().split())
+    return start, end
+
+
+def test_jobs_wait_for_theirs_and_a_failure_is_reported(tmp_path, monkeypatch):
+    (tmp_path / "toyjobs.py").write_text(TOY)
+    out = tmp_path / "out"
+    out.mkdir()
+    monkeypatch.setenv("PYTHONPATH", str(tmp_path) + os.pathsep + os.environ.get("PYTHONPATH",
+                                                                                   ""))
+    monkeypatch.setenv("TOY_OUT", str(out))
+    monkeypatch.syspath_prepend(str(tmp_path))
+    jobs = warmup.jobs_of("toyjobs")
+    assert [j[1] for j in jobs] == ["slow", "after-slow", "broken", "quick"]
+    seen = []
+    summary = warmup.run(jobs, workers=2, progress=lambda d, t, line: seen.append((d, t, line)))
+    assert set(summary["jobs"]) == {"slow", "after-slow", "broken", "quick"}
+    assert "toy job failed on purpose" in summary["jobs"]["broken"]["error"]
+    assert all("error" not in summary["jobs"][n] for n in ("slow", "after-slow", "quick"))
+    assert [d for d, _, _ in seen] == [1, 2, 3, 4] and all(t == 4 for _, t, _ in seen)
+    # the waiting job started after the one it waits for ended
+    assert _times(out, "after-slow")[0] >= _times(out, "slow")[1]
+    # while it waited, a free worker took the next job
+    assert _times(out, "quick")[0] < _times(out, "slow")[1]
+    # one worker: one at a time
+    for f in out.iterdir():
+        f.unlink()
+    warmup.run([j for j in jobs if j[1] != "broken"], workers=1)
+    spans = sorted(_times(out, n) for n in ("slow", "after-slow", "quick"))
+    assert all(a[1] <= b[0] for a, b in zip(spans, spans[1:]))
+    assert warmup.report(summary, jobs, out=open(os.devnull, "w")) == 1
+
+
+def _env(cache):
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
+    env["SMOOTHDIST_CACHE_DIR"] = str(cache)
+    return env
+
+
+@pytest.mark.slow
+def test_after_the_warmup_a_first_call_compiles_nothing(tmp_path):
+    env = _env(tmp_path / "cache")
+    p = subprocess.run([sys.executable, "-m", "smoothdist", "warmup", "--only", "smooth-distance"],
+                       env=env, capture_output=True, text=True, timeout=600, cwd=tmp_path)
+    assert p.returncode == 0, p.stderr
+    last = p.stderr.strip().splitlines()[-1]
+    assert last.startswith("warmup: 1 of 1 jobs,") and str(tmp_path / "cache") in last
+    compiled = int(last.split(" kernel specialisations")[0].rsplit(" ", 1)[-1])
+    assert compiled > 0
+    first = subprocess.run(
+        [sys.executable, "-c", warmup.CHILD, "smoothdist.warmup", "smooth-distance"], env=env,
+        capture_output=True, text=True, timeout=600, cwd=tmp_path)
+    assert first.returncode == 0, first.stderr
+    assert json.loads(first.stdout.strip().splitlines()[-1])["compiled"] == 0
+
+
+def test_the_commands_list_their_jobs_and_refuse_unknown_ones(tmp_path):
+    env = _env(tmp_path / "cache")
+    lib = subprocess.run([sys.executable, "-m", "smoothdist", "warmup", "--list"], env=env,
+                         capture_output=True, text=True, timeout=120)
+    assert lib.returncode == 0, lib.stderr
+    assert lib.stdout.split() == list(warmup.JOBS.keys())
+    both = subprocess.run([sys.executable, "-m", "tracer", "warmup", "--list"], env=env,
+                          capture_output=True, text=True, timeout=120)
+    assert both.returncode == 0, both.stderr
+    names = both.stdout.split()
+    assert set(warmup.JOBS.keys()) <= set(names) and "render-mesh" in names
+    bad = subprocess.run([sys.executable, "-m", "tracer", "warmup", "--only", "nope"], env=env,
+                         capture_output=True, text=True, timeout=120)
+    assert bad.returncode == 2 and "unknown job(s) nope" in bad.stderr
