@@ -15,6 +15,7 @@ Usage::
     python benchmarks/tables.py mesh-distance benchmarks/data/mesh_distance_authors.json
     python benchmarks/tables.py registers benchmarks/data/cuda_registers.json
     python benchmarks/tables.py build-scale benchmarks/data/build_scale.json
+    python benchmarks/tables.py coldstart-copies benchmarks/data/coldstart_issue63.json
 """
 
 import argparse
@@ -97,6 +98,38 @@ def coldstart_table(path, before_path=None):
     loads = [x for r in d["cases"].values() for x in (r["cold"]["load_before"],
                                                        r["cold"]["load_after"])]
     lines += ["", f"{d['date']}, commit {(d.get('commit') or '?')[:10]}"
+              f"{' (dirty)' if d.get('dirty') else ''}, {d['machine']['cores']} cores, Python "
+              f"{d['machine']['python']}, load average {min(loads):.1f}-{max(loads):.1f}"]
+    return "\n".join(lines)
+
+
+#: issue 63's target: CPU seconds of any first call in a second copy of the same version (a
+#: fresh clone or environment) after one compile on the machine
+SECOND_COPY_TARGET = 3
+
+
+def coldstart_copies_table(path):
+    """Issue 63's first-call table of a ``bench_coldstart.py --copies`` results file: per case
+    the CPU and wall seconds and compiled specialisations with an empty cache, in a second copy
+    of the source after that, and with a new cache that ``tracer warmup`` filled; then the
+    warm-up's own cost."""
+    d = _load(path)
+    cells = ["first call", "empty cache: CPU s", "wall s", "compiled", "second copy: CPU s",
+             "wall s", "compiled", "after warmup: CPU s", "wall s", "compiled"]
+    lines = ["| " + " | ".join(cells) + " |", "|" + "---|" * len(cells)]
+    for r in d["cases"].values():
+        row = f"| `{r['command']}` |"
+        for mode in ("cold", "second_copy", "after_warmup"):
+            m = r[mode]
+            row += f" {m['cpu_s']:.1f} | {m['wall_s']:.1f} | {m['compiled']} |"
+        lines.append(row)
+    w = d["warmup"]
+    loads = [x for r in d["cases"].values() for mode in ("cold", "second_copy", "after_warmup")
+             for x in (r[mode]["load_before"], r[mode]["load_after"])]
+    lines += ["", f"`python -m tracer warmup` into an empty cache: {w['wall_s']:.1f} s wall, "
+              f"{w['cpu_s']:.1f} s CPU (its child processes), {w['compiled']} specialisations "
+              f"compiled, on {w['cores']} cores.",
+              "", f"{d['date']}, commit {(d.get('commit') or '?')[:10]}"
               f"{' (dirty)' if d.get('dirty') else ''}, {d['machine']['cores']} cores, Python "
               f"{d['machine']['python']}, load average {min(loads):.1f}-{max(loads):.1f}"]
     return "\n".join(lines)
@@ -372,7 +405,8 @@ def build_scale_table(path):
 TABLES = {"scaling": scaling_table, "gpu": gpu_table, "coldstart": coldstart_table,
           "coldstart-steps": coldstart_steps_table, "exact-mix": exact_mix_table,
           "smooth-cost": smooth_cost_table, "mesh-distance": mesh_distance_table,
-          "registers": registers_table, "build-scale": build_scale_table}
+          "registers": registers_table, "build-scale": build_scale_table,
+          "coldstart-copies": coldstart_copies_table}
 
 
 def main(argv=None):

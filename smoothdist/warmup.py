@@ -3,7 +3,8 @@
 numba compiles a kernel's specialisation on its first call, on one core, and keeps it in the
 per-machine cache (:mod:`smoothdist._kernel_cache`). :func:`run` starts one child process per
 job, up to ``workers`` at a time (the machine's cores by default), longest job first; each job
-makes the first calls of one entry point on a small made-up mesh, so that its kernels land in
+makes the first calls of one entry point on made-up meshes of the sizes at which its path
+changes (:data:`LEVELS`), so that its kernels land in
 the cache and a user's first call loads them instead. Run it once per machine and version (after
 ``pip install``, in a Docker image, before a CI suite): ``python -m smoothdist warmup`` for the
 library, ``tracer warmup`` for the library and the renderer.
@@ -58,68 +59,90 @@ print(json.dumps({"compiled": sum(compiled.values()), "kernels": compiled,
 """
 
 
-def octahedron():
-    """``(V (6, 3), F (8, 3), E (12, 2))``: a closed mesh small enough for any first call."""
-    V = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]], float)
-    F = np.array([[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4],
-                  [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]])
+def sphere(level):
+    """``(V, F, E)`` of the octahedron subdivided ``level`` times onto the unit sphere
+    (``8 * 4**level`` triangles)."""
+    V = [[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]]
+    F = [[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]]
+    V = np.array(V, float)
+    F = np.array(F, np.int64)
+    for _ in range(level):
+        edges = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
+        uniq, inv = np.unique(edges, axis=0, return_inverse=True)
+        mid = V[uniq].mean(axis=1)
+        m = len(V) + inv.reshape(3, -1).T  # the middles of edges 01, 12, 20 of each triangle
+        V = np.concatenate([V, mid])
+        a, b, c = F.T
+        F = np.concatenate([np.stack([a, m[:, 0], m[:, 2]], 1), np.stack([b, m[:, 1], m[:, 0]], 1),
+                            np.stack([c, m[:, 2], m[:, 1]], 1), m])
+    V /= np.linalg.norm(V, axis=1, keepdims=True)
     E = np.unique(np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1),
                   axis=0)
     return V, F, E
+
+
+#: the meshes' subdivision levels: 8 triangles (below every size at which a call changes path:
+#: serial loops, ``whole_mesh.SERIAL_BELOW``) and 2,048 (above them); the point queries also
+#: build a tree of 32,768 triangles (``bvh.RADIX_BUILD_MIN``: the radix-sorted parallel build)
+LEVELS = (0, 4)
+BIG_LEVEL = 6
 
 
 def _queries(n=200):
     return np.random.default_rng(0).uniform(-1.5, 1.5, (n, 3))
 
 
-def _mesh(kind):
-    V, F, E = octahedron()
+def _mesh(kind, level):
+    V, F, E = sphere(level)
     return {"triangles": (V, F), "edges": (V, E), "points": (V, None)}[kind]
 
 
-def _distances(kind, which):
-    """A library user's first calls on a mesh of ``kind``: ``which`` is ``"exact"`` (exact
+def _distances(kind, which, levels=(*LEVELS, BIG_LEVEL)):
+    """A library user's first calls on meshes of ``kind``: ``which`` is ``"exact"`` (exact
     distance, the field's too) or ``"smooth"`` (smooth distance with gradients, alpha_U
     automatic too, and a field's repeated queries)."""
-    V, F = _mesh(kind)
+    meshes = [_mesh(kind, level) for level in levels]
     Q = _queries()
 
     def job():
-        if which == "exact":
-            sd.exact_distance(Q, V, F)
-            sd.SmoothDistanceField(V, F).exact_distance(Q)
-        else:
-            sd.smooth_distance(Q, V, F, alpha=50.0)
-            sd.smooth_distance(Q, V, F, alpha=50.0, alpha_u="auto")
-            sd.SmoothDistanceField(V, F).smooth_distance(Q, alpha=50.0)
+        for V, F in meshes:
+            if which == "exact":
+                sd.exact_distance(Q, V, F)
+                sd.SmoothDistanceField(V, F).exact_distance(Q)
+            else:
+                sd.smooth_distance(Q, V, F, alpha=50.0)
+                sd.smooth_distance(Q, V, F, alpha=50.0, alpha_u="auto")
+                sd.SmoothDistanceField(V, F).smooth_distance(Q, alpha=50.0)
 
     return job
 
 
-def _whole_mesh(kind, which):
+def _whole_mesh(kind, which, levels=LEVELS):
     """A collision constraint between two meshes of ``kind``: ``which`` is ``"call"`` (value
     and gradient), ``"vertex"`` (the gradient per query vertex) or ``"exact"`` (the exact
     distance)."""
-    V, F = _mesh(kind)
-    data = V if F is None else (V, F)
-    query = 0.3 * V if F is None else (0.3 * V, F)
+    pairs = []
+    for level in levels:
+        V, F = _mesh(kind, level)
+        pairs.append((V if F is None else (V, F), 0.3 * V if F is None else (0.3 * V, F)))
 
     def job():
         R, t = np.eye(3), np.array([0.0, 0.0, 2.0])
-        md = sd.MeshDistance(data, query, alpha=50, alpha_q=50)
-        if which == "call":
-            md(R, t)
-        elif which == "vertex":
-            md.vertex_gradient(R, t)
-        else:
-            md.exact(R, t)
+        for data, query in pairs:
+            md = sd.MeshDistance(data, query, alpha=50, alpha_q=50)
+            if which == "call":
+                md(R, t)
+            elif which == "vertex":
+                md.vertex_gradient(R, t)
+            else:
+                md.exact(R, t)
 
     return job
 
 
 def _every_kind():
     """Every entry point above on edges and points (mostly loaded from the cache by then)."""
-    calls = [f(kind, w) for kind in ("edges", "points")
+    calls = [f(kind, w, LEVELS) for kind in ("edges", "points")
              for f, ws in ((_distances, ("exact", "smooth")),
                            (_whole_mesh, ("call", "vertex", "exact"))) for w in ws]
 
