@@ -111,18 +111,18 @@ SECOND_COPY_TARGET = 3
 def coldstart_copies_table(path):
     """Issue 63's first-call table of a ``bench_coldstart.py --copies`` results file: per case
     the CPU and wall seconds and compiled specialisations with an empty cache, in a second copy
-    of the source after that, and with a new cache that ``tracer warmup`` filled; then the
-    warm-up's own cost."""
+    of the source after that, and with a new cache that ``tracer warmup`` filled, and the CPU
+    seconds of a warm run in the first copy; then the warm-up's own cost."""
     d = _load(path)
     cells = ["first call", "empty cache: CPU s", "wall s", "compiled", "second copy: CPU s",
-             "wall s", "compiled", "after warmup: CPU s", "wall s", "compiled"]
+             "wall s", "compiled", "after warmup: CPU s", "wall s", "compiled", "warm: CPU s"]
     lines = ["| " + " | ".join(cells) + " |", "|" + "---|" * len(cells)]
     for r in d["cases"].values():
         row = f"| `{r['command']}` |"
         for mode in ("cold", "second_copy", "after_warmup"):
             m = r[mode]
             row += f" {m['cpu_s']:.1f} | {m['wall_s']:.1f} | {m['compiled']} |"
-        lines.append(row)
+        lines.append(row + f" {r['warm']['cpu_s']:.1f} |")
     w = d["warmup"]
     loads = [x for r in d["cases"].values() for mode in ("cold", "second_copy", "after_warmup")
              for x in (r[mode]["load_before"], r[mode]["load_after"])]

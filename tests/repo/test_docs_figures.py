@@ -55,6 +55,7 @@ def generated_lines():
             T.gpu_table(DATA / "gpu_h200.json"), T.gpu_table(DATA / "gpu_h200_lit.json"),
             T.coldstart_table(DATA / "coldstart.json", DATA / "coldstart_issue51_before.json"),
             T.coldstart_steps_table(DATA / "coldstart_issue51_steps.json"),
+            T.coldstart_copies_table(DATA / "coldstart_issue63.json"),
             T.exact_mix_table(DATA / "exact_mix.json"),
             T.smooth_cost_table(DATA / "exact_mix.json"),
             T.registers_table(DATA / "cuda_registers.json"),

@@ -20,7 +20,8 @@ sys.path.insert(0, str(ROOT))
 from benchmarks.coldstart_words import warm_sentences  # noqa: E402
 from benchmarks.tables import (build_scale_table, build_scale_words,  # noqa: E402
                                scale_points_words,
-                               coldstart_steps_table, coldstart_table, exact_mix_table,
+                               coldstart_copies_table, coldstart_steps_table,
+                               coldstart_table, exact_mix_table,
                                exact_mix_words, gpu_table, mesh_distance_table,
                                mesh_distance_words, registers_table, scaling_table,
                                smooth_cost_table)
@@ -85,6 +86,19 @@ def test_the_guide_holds_the_cold_start_table():
     want = [ln.strip() for ln in table.splitlines()]
     starts = [i for i, ln in enumerate(lines) if ln == want[0]]
     assert any(lines[i:i + len(want)] == want for i in starts), "paste it again"
+
+
+def test_the_guide_holds_the_second_copy_and_warmup_table():
+    """Issue 63's table (``coldstart_issue63.json``, ``tables.py coldstart-copies``) between
+    its markers, and the file says what the page says of it: nothing compiled in a second copy
+    or after the warm-up."""
+    want = coldstart_copies_table(DATA / "coldstart_issue63.json").strip()
+    text = _guide()
+    start = text.index("<!-- coldstart-copies -->") + len("<!-- coldstart-copies -->")
+    assert text[start:text.index("<!-- /coldstart-copies -->")].strip() == want, "paste it again"
+    d = json.loads((DATA / "coldstart_issue63.json").read_text(encoding="utf-8"))
+    assert all(r[m]["compiled"] == 0 for r in d["cases"].values()
+               for m in ("second_copy", "after_warmup"))
 
 
 def test_the_guide_holds_the_cold_start_steps_and_sentences():

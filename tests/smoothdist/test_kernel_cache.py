@@ -198,3 +198,39 @@ def test_the_cache_command_lists_and_clears(tmp_path):
     assert [p.name for p in tmp_path.iterdir()] == [current.name]
     assert "removed 1 folder(s)" in cache("--clear")
     assert not list(tmp_path.iterdir())
+
+
+CUDA_RUN = r"""
+import json
+import smoothdist
+from smoothdist import _kernel_cache as kc
+try:
+    from numba.cuda.core import caching
+    from numba.cuda.dispatcher import CUDACacheImpl
+except ImportError as exc:
+    print(json.dumps({"skip": str(exc)}))
+    raise SystemExit(0)
+kc.install_cuda()
+from smoothdist import cuda as sdcuda
+impl = CUDACacheImpl(sdcuda._exact_kernel)
+print(json.dumps({"first": caching.CacheImpl._locator_classes[0].__name__,
+                  "locked": hasattr(caching.IndexDataCacheFile.save, "__wrapped__"),
+                  "path": impl.locator.get_cache_path(), "folder": kc.folder()}))
+"""
+
+
+@pytest.mark.slow
+def test_the_cuda_kernels_use_the_same_cache(tmp_path):
+    """numba-cuda's own locator list gets the locator too (in a child: importing numba.cuda
+    fixes the simulator choice for the process). No card here: where the CUDA kernels' cache
+    would go, not that a card's second process loads them."""
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
+    env["SMOOTHDIST_CACHE_DIR"] = str(tmp_path)
+    p = subprocess.run([sys.executable, "-c", CUDA_RUN], env=env, capture_output=True,
+                       text=True, timeout=300)
+    assert p.returncode == 0, p.stderr
+    out = json.loads(p.stdout.strip().splitlines()[-1])
+    if "skip" in out:
+        pytest.skip(f"numba-cuda's caching module is not importable: {out['skip']}")
+    assert out["first"] == "SourceKeyedLocator" and out["locked"]
+    assert out["path"] == os.path.join(out["folder"], "smoothdist")
