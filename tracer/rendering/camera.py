@@ -243,9 +243,10 @@ def ray_direction(cam, row, col):
     ----------
     cam : (14,) float64 array
         :meth:`Camera.as_array`.
-    row : int
-        Image row, 0 = top.
-    col : int
+    row : float
+        Image row, 0 = top (a pixel's own row, or a sample's row with its sub-pixel offset:
+        callers pass floats, so that one specialisation serves both).
+    col : float
         Image column, 0 = left.
 
     Returns

@@ -164,7 +164,7 @@ def _render_kernel(data, mode, tol, eps, max_steps, relax, omega, newton, cone, 
     if r < tbuf.shape[0] and c < tbuf.shape[1]:
         stack = cuda.local.array(STACK, numba.int64)
         dstack = cuda.local.array(STACK, numba.float64)
-        dx, dy, dz = ray_direction(cam, r, c)
+        dx, dy, dz = ray_direction(cam, float(r), float(c))
         ty = r // march.TILE
         tx = c // march.TILE
         r_lo, r_hi, c_lo, c_hi = _tile_of(cam, ty, tx)

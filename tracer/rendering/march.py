@@ -580,7 +580,7 @@ def _cone_axis(cam, r_lo, r_hi, c_lo, c_hi):
     uz = 0.0
     for r in (r_lo, r_hi - 1):
         for c in (c_lo, c_hi - 1):
-            vx, vy, vz = ray_direction(cam, r, c)
+            vx, vy, vz = ray_direction(cam, float(r), float(c))
             ux += vx
             uy += vy
             uz += vz
@@ -591,7 +591,7 @@ def _cone_axis(cam, r_lo, r_hi, c_lo, c_hi):
     delta = 0.0
     for r in (r_lo, r_hi - 1):
         for c in (c_lo, c_hi - 1):
-            vx, vy, vz = ray_direction(cam, r, c)
+            vx, vy, vz = ray_direction(cam, float(r), float(c))
             delta = max(delta, math.sqrt((vx - ux) ** 2 + (vy - uy) ** 2 + (vz - uz) ** 2))
     return ux, uy, uz, delta * 1.0001 + 1e-12
 
@@ -725,7 +725,7 @@ def tile_cone(tree, roots, params, mode, tol, cam, lo, hi, eps, r_lo, r_hi, c_lo
     for r in range(r_lo, r_hi):
         for c in range(c_lo, c_hi):
             if first < 0:
-                dx, dy, dz = ray_direction(cam, r, c)
+                dx, dy, dz = ray_direction(cam, float(r), float(c))
                 t_in, t_out = ray_box(cam[0], cam[1], cam[2], dx, dy, dz, lo, hi)
                 if t_in <= t_out:
                     first = k
@@ -776,7 +776,7 @@ def _render_tile(tree, ray, r_lo, r_hi, c_lo, c_hi, depth_max, out, opts):
     k = 0
     for r in range(r_lo, r_hi):
         for c in range(c_lo, c_hi):
-            dx, dy, dz = ray_direction(cam, r, c)
+            dx, dy, dz = ray_direction(cam, float(r), float(c))
             c_ev = c_ev0 if k == first else 0
             c_lv = c_lv0 if k == first else 0
             k += 1
@@ -873,7 +873,7 @@ def trace_pixels(tree, ray, rows, cols, depth_max, hit, tbuf, steps, leaves, rel
     for i in prange(rows.size):
         stack = np.empty(depth_max + 4, dtype=np.int64)
         dstack = np.empty(depth_max + 4)
-        dx, dy, dz = ray_direction(cam, rows[i], cols[i])
+        dx, dy, dz = ray_direction(cam, float(rows[i]), float(cols[i]))
         h, t, gx, gy, gz, st, lv, bs, ob = march_ray(tree, roots, params, mode, tol, cam[0],
                                                      cam[1], cam[2], dx, dy, dz, lo, hi, eps,
                                                      max_steps, stack, dstack, relax, omega, 0.0,
