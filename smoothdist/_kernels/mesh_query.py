@@ -61,11 +61,6 @@ from smoothdist._kernels.traversal import (NONE, ZERO, always, nearest_first, no
                                            python_function)
 from smoothdist._kernels.weights import eval_triangle_weight
 
-#: the feature count of a data edge's one direction as ``int64``, not the literal ``1``: with the
-#: literal, ``weight_gradient`` and ``query_coefficient`` compiled twice (for ``Literal[int](1)``
-#: and for the ``int64`` counts of triangles)
-ONE = np.int64(1)
-
 #: :func:`smoothdist._kernels.query._attenuate`, inlined (it calls no other kernel)
 _attenuate_inline = numba.njit(**NJIT_INLINE)(python_function(_attenuate))
 #: ``moment`` values of :func:`smooth_traverse` (and its pair terms) beyond True (the moment):
@@ -238,10 +233,10 @@ def _pair(kind, pts, wc, wcls, pwhi, i, kq, Q, S, wgrad_scale, moment, cx, cy, c
                     q1z = Q[5] - Q[2]
                 else:
                     nq, q1x, q1y, q1z, _, _, _ = feature_directions(kq, c[6], Q)
-                gwx, gwy, gwz = weight_gradient(ONE, d1x, d1y, d1z, 0.0, 0.0, 0.0, fac, 0.0, nq,
+                gwx, gwy, gwz = weight_gradient(1, d1x, d1y, d1z, 0.0, 0.0, 0.0, fac, 0.0, nq,
                                                 q1x, q1y, q1z)
                 if moment:
-                    y = query_coefficient(ONE, d1x, d1y, d1z, fac, nq, q1x, q1y, q1z)
+                    y = query_coefficient(1, d1x, d1y, d1z, fac, nq, q1x, q1y, q1z)
         else:
             w, dws, dwt = eval_triangle_weight(wc[wcls[i]], c[7], c[8])
             W, fac = _attenuate_inline(w, 1.0, pwhi[i], S)
