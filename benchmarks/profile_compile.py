@@ -68,6 +68,7 @@ def profile(args, opt):
     with tempfile.TemporaryDirectory() as tmp:
         env = dict(os.environ, NUMBA_CACHE_DIR=str(Path(tmp) / "cache"), NUMBA_OPT=str(opt),
                    PYTHONPATH=os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]))
+        env.pop("SMOOTHDIST_CACHE_DIR", None)  # it would win over NUMBA_CACHE_DIR
         spans_file = Path(tmp) / "spans.json"
         out_png = Path(tmp) / "out.png"
         t0 = time.perf_counter()

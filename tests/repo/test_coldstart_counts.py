@@ -30,6 +30,7 @@ def first_call(tmp_path, case):
     inputs = bench_coldstart.write_inputs(tmp_path)
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"), MPLBACKEND="Agg",
                PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    env.pop("SMOOTHDIST_CACHE_DIR", None)  # it would win over NUMBA_CACHE_DIR
     p = subprocess.run([sys.executable, "-c", bench_coldstart.CHILD, *inputs[case]], env=env,
                        cwd=tmp_path, capture_output=True, text=True, timeout=900)
     assert p.returncode == 0, p.stderr[-3000:]

@@ -200,6 +200,7 @@ def test_a_kind_in_another_module_leaves_no_cache_entry_behind(tmp_path):
     (tmp_path / "mine" / "user_kind.py").write_text(KIND.format(tag="A"))
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"),
                PYTHONPATH=os.pathsep.join([str(tmp_path / "mine"), root]))
+    env.pop("SMOOTHDIST_CACHE_DIR", None)  # it would win over NUMBA_CACHE_DIR
     first = subprocess.run([sys.executable, "-c", "import user_kind"], env=env,
                            capture_output=True, text=True, cwd=root)
     assert first.returncode == 0, first.stderr[-2000:]

@@ -169,6 +169,7 @@ def cli_render(tmp_path, *args, cache=None):
     env = dict(os.environ)
     if cache is not None:
         env["NUMBA_CACHE_DIR"] = str(cache)
+        env.pop("SMOOTHDIST_CACHE_DIR", None)  # it would win over NUMBA_CACHE_DIR
     env["PYTHONPATH"] = str(ROOT) + os.pathsep + env.get("PYTHONPATH", "")
     env.pop("MPLBACKEND", None)
     p = subprocess.run([sys.executable, "-c", CLI_RENDER, *map(str, args)], env=env,
