@@ -145,6 +145,11 @@ NOT_RUN = {
         "it compiles every kernel from an empty cache six times (minutes); "
         "tests/tracer/rendering/test_render_coldstart.py runs a first lit render with an empty "
         "cache",
+    "python benchmarks/bench_coldstart.py --copies --out benchmarks/data/coldstart_issue63.json":
+        "it compiles every kernel from an empty cache more than six times over, and the warm-up "
+        "once (minutes); tests/smoothdist/test_kernel_cache.py shows a second copy loading the "
+        "kernels and tests/smoothdist/test_warmup.py a first call after the warm-up compiling "
+        "nothing",
     "python benchmarks/bench_authors.py --authors-bin PATH":
         "it needs the authors' renderer built outside the repository "
         "(../shared/tools/authors-bench); the same script without --authors-bin is run",

@@ -80,8 +80,11 @@ def cache_files(d):
 
 @pytest.fixture(autouse=True)
 def user_cache(tmp_path, monkeypatch):
-    """numba's user-wide cache directory lies inside the test's temporary directory."""
+    """numba's user-wide cache directory lies inside the test's temporary directory, and the
+    children's kernel cache is the ``NUMBA_CACHE_DIR`` each test gives
+    (``SMOOTHDIST_CACHE_DIR``, which would win over it, is not passed on)."""
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "user-cache"))
+    monkeypatch.delenv("SMOOTHDIST_CACHE_DIR", raising=False)
 
 
 @pytest.fixture
