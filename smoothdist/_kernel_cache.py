@@ -176,18 +176,27 @@ def _put_first(impl_class):
 
 def _locked_save(save):
     """numba's ``IndexDataCacheFile.save``, under an exclusive lock on ``<index>.lock`` for the
-    files in our cache folders (elsewhere, and where ``fcntl`` is missing, numba's as it is)."""
+    files in our cache folders (elsewhere numba's as it is). In our folders a file-system error
+    (the folder cleared by ``python -m smoothdist cache --clear`` or pruned by a process of
+    another version meanwhile, a full disk) leaves the kernel uncached instead of failing the
+    call that compiled it; a cleared folder is made again first."""
 
     def locked(self, key, data):
         here = folder()
-        if fcntl is None or here is None or not self._cache_path.startswith(here):
+        if here is None or not self._cache_path.startswith(here):
             return save(self, key, data)
-        with open(self._index_path + LOCK_SUFFIX, "a") as lock:
-            fcntl.flock(lock, fcntl.LOCK_EX)
-            try:
+        try:
+            os.makedirs(self._cache_path, exist_ok=True)
+            if fcntl is None:
                 return save(self, key, data)
-            finally:
-                fcntl.flock(lock, fcntl.LOCK_UN)
+            with open(self._index_path + LOCK_SUFFIX, "a") as lock:
+                fcntl.flock(lock, fcntl.LOCK_EX)
+                try:
+                    return save(self, key, data)
+                finally:
+                    fcntl.flock(lock, fcntl.LOCK_UN)
+        except OSError:
+            return None
 
     locked.__wrapped__ = save
     return locked

@@ -64,6 +64,8 @@ TINY = {
     # two quick jobs of the warm-up (every job: minutes of compiling on a cold CI cache)
     "tracer warmup": ["--only", "render-points", "smooth-distance"],
     "smoothdist warmup": ["--only", "smooth-distance"],
+    # 1080p renders of 50k and 1M points, three ways each: two minutes of the suite (issue 63)
+    "benchmarks/bench_cloud_1080.py": ["--points", "2000", "--size", "64", "36"],
     "tracer compare": ["--grid", "8", "--size", "16", "16"],
     # the studies (issue 13 owns them; adjust these when their options change)
     "tracer ablate-beta": ["--size", "8", "--betas", "0,1", "--grid-betas", "0,1",

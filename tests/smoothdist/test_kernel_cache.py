@@ -176,6 +176,27 @@ def test_the_save_lock_applies_to_our_folders_only(tmp_path, monkeypatch):
     assert calls == [(ours, True), (str(elsewhere), False)]
 
 
+def test_a_save_into_a_cleared_folder_makes_it_again_and_never_fails(tmp_path, monkeypatch):
+    monkeypatch.setenv(kc.ENV_VAR, str(tmp_path / "cache"))
+    ours = os.path.join(kc.folder(), "smoothdist._kernels")
+
+    def save(self, key, data):
+        with open(self._index_path, "w") as f:
+            f.write(data)
+
+    class File:
+        _cache_path = ours
+        _index_path = os.path.join(ours, "f.nbi")
+
+    kc._locked_save(save)(File(), "k", "d")    # the folder was never made (or was cleared)
+    assert Path(File._index_path).read_text() == "d"
+
+    def broken(self, key, data):
+        raise OSError(28, "No space left on device")
+
+    assert kc._locked_save(broken)(File(), "k", "d") is None
+
+
 def test_the_cache_command_lists_and_clears(tmp_path):
     env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
     env["SMOOTHDIST_CACHE_DIR"] = str(tmp_path)
