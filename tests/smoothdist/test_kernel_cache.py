@@ -255,3 +255,44 @@ def test_the_cuda_kernels_use_the_same_cache(tmp_path):
         pytest.skip(f"numba-cuda's caching module is not importable: {out['skip']}")
     assert out["first"] == "SourceKeyedLocator" and out["locked"]
     assert out["path"] == os.path.join(out["folder"], "smoothdist")
+
+
+# one signature of a small kernel per process: float64 (argv[1] == "f") or int64 arguments
+TWO = r"""
+import json, sys, time
+import smoothdist
+from numba.core import caching
+# numba's index update made slow (read, then 1 s, then write): two processes that save at about
+# the same moment overlap for sure, as they may by chance when compiling for minutes
+write_index = caching.IndexDataCacheFile._save_index
+caching.IndexDataCacheFile._save_index = lambda self, o: (time.sleep(1.0), write_index(self, o))
+from smoothdist._kernels.closest_point import closest_point_segment as f
+args = (0.0, 1.0, 0.0, -1.0, 0.0, 0.0, 1.0, 0.0, 0.0) if sys.argv[1] == "f" else (0, 1, 0, -1, 0,
+                                                                                0, 1, 0, 0)
+f(*args)
+if len(sys.argv) > 2:
+    f(0, 1, 0, -1, 0, 0, 1, 0, 0)
+print(json.dumps({"hits": sum(f.stats.cache_hits.values()),
+                  "misses": sum(f.stats.cache_misses.values())}))
+"""
+
+
+@pytest.mark.slow
+def test_two_processes_saving_two_signatures_at_once_keep_both(tmp_path):
+    """Two processes compile one kernel for two signatures at the same moment into an empty
+    cache, each taking a second between reading numba's index and writing it back; a third
+    loads both (without the lock the later write drops the other's entry: checked by hand with
+    the lock switched off, 2026-12-06)."""
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
+    env["SMOOTHDIST_CACHE_DIR"] = str(tmp_path / "cache")
+    procs = [subprocess.Popen([sys.executable, "-c", TWO, kind], env=env, text=True,
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+             for kind in ("f", "i")]
+    for p in procs:
+        out, err = p.communicate(timeout=300)
+        assert p.returncode == 0, err
+        assert json.loads(out.strip().splitlines()[-1]) == {"hits": 0, "misses": 1}
+    third = subprocess.run([sys.executable, "-c", TWO, "f", "both"], env=env,
+                           capture_output=True, text=True, timeout=300)
+    assert third.returncode == 0, third.stderr
+    assert json.loads(third.stdout.strip().splitlines()[-1]) == {"hits": 2, "misses": 0}
