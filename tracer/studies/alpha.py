@@ -43,7 +43,7 @@ from tracer.scenes.scene import scene_from_field
 from tracer.studies.common import (REPO, TYPES, add_common, add_view_arguments, field_of,
                                    load_mesh_checked, resolve_view, study_needs, unweighted_field,
                                    view_camera)
-from tracer.studies.plots import alpha_report, panel_grid_png, pyplot
+from tracer.studies.plots import alpha_report, panel_grid_png, pyplot, significant
 
 HELP = "the paper's alpha studies as image grids"
 
@@ -349,7 +349,7 @@ def _study_underestimate(args, size, alphas):
     camera = _camera(args, src, field, camera, alphas)
     specs = [(field, dict(alpha=a, beta=args.beta, shading=args.shading)) for a in alphas]
     res, cam = _render_group(specs, camera, size, frame=not args.no_frame)
-    row = [(f"α = {a:g}  ({r.seconds:.1f} s)", r.rgb) for a, r in zip(alphas, res)]
+    row = [(f"α = {a:g}  ({significant(r.seconds)} s)", r.rgb) for a, r in zip(alphas, res)]
     # nesting on a slice through the data, perpendicular to the view direction
     slice_img, nest = _nesting_slice(field, alphas, args.beta, camera, size,
                                      n=min(160, max(32, size)))

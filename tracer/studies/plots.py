@@ -16,6 +16,7 @@ import io
 import json
 import math
 import os
+import textwrap
 from pathlib import Path
 
 import numpy as np
@@ -41,10 +42,19 @@ AUTHORS_TIMES_SETUP = ("authors' C++ (beta_error_test) run side by side with our
                        "machine, 2 threads each, eps 1e-3 absolute, N x N px")
 
 
-def percent(fraction, digits):
-    """``fraction`` (of the diagonal) as a percentage with ``digits`` decimals, or
-    "undefined" where it is not finite (too few pixels to measure it)."""
-    return f"{100 * fraction:.{digits}f}%" if math.isfinite(fraction) else "undefined"
+def significant(value, digits=2):
+    """``value`` with ``digits`` significant digits, in positional notation (``0.0031``,
+    ``5.0``, ``120``): a small value keeps its digits instead of rounding to ``0.00``."""
+    text = np.format_float_positional(float(value), precision=digits, fractional=False,
+                                      unique=False, trim="k")
+    return text[:-1] if text.endswith(".") else text
+
+
+def percent(fraction, digits=2):
+    """``fraction`` (of the diagonal) as a percentage with ``digits`` significant digits
+    (``0.0031%``, never ``0.00%``), or "undefined" where it is not finite (too few pixels to
+    measure it)."""
+    return f"{significant(100 * fraction, digits)}%" if math.isfinite(fraction) else "undefined"
 
 
 def has_reference(params):
@@ -121,6 +131,51 @@ def pyplot():
     return plt
 
 
+#: a marker per type, of different shapes and sizes (the larger hollow), so that series that
+#: coincide (edges and triangles at the same error) both stay visible
+SERIES_MARKERS = {"points": dict(marker="o", ms=6),
+                  "edges": dict(marker="s", ms=9, mfc="none", mew=1.5),
+                  "triangles": dict(marker="^", ms=5)}
+
+
+def fit_title(ax, text, fontsize=10):
+    """Set ``text`` as the title of ``ax``, broken into as many lines as it needs to stay
+    inside the figure (measured with the figure's renderer, around the axes' centre, where
+    matplotlib centres it: a mesh's long file name or parameter list stays inside the figure).
+    Call it again after the layout moved the axes (:func:`legend_below` does)."""
+    fig = ax.figure
+    renderer = fig.canvas.get_renderer()
+    box = ax.get_position()
+    centre = (box.x0 + box.x1) / 2 * fig.get_size_inches()[0] * fig.dpi
+    limit = 2 * min(centre, fig.get_size_inches()[0] * fig.dpi - centre) - 8
+    width = max(len(line) for line in text.split("\n"))
+    title = ax.set_title(text, fontsize=fontsize)
+    while title.get_window_extent(renderer).width > limit and width > 20:
+        width = int(width * 0.85)
+        title.set_text("\n".join(textwrap.fill(part, width) for part in text.split("\n")))
+    ax._fit_title = (text, fontsize)
+    return title
+
+
+def legend_below(fig, ax, fontsize=7, ncol=1):
+    """The legend of ``ax`` under the axes, in a band of its own that the figure grows by, so
+    that it never covers the data, the title or the axis labels; then ``tight_layout`` for the
+    rest."""
+    handles, labels = ax.get_legend_handles_labels()
+    if not handles:
+        fig.tight_layout()
+        return
+    leg = fig.legend(handles, labels, loc="lower center", bbox_to_anchor=(0.5, 0.0),
+                     fontsize=fontsize, ncol=ncol, frameon=False)
+    w, h = fig.get_size_inches()
+    band = leg.get_window_extent(fig.canvas.get_renderer()).height / fig.dpi + 0.1
+    fig.set_size_inches(w, h + band)
+    fig.tight_layout(rect=(0.0, band / (h + band), 1.0, 1.0))
+    if hasattr(ax, "_fit_title"):       # the axes moved: wrap the title for where it is now
+        fit_title(ax, *ax._fit_title)
+        fig.tight_layout(rect=(0.0, band / (h + band), 1.0, 1.0))
+
+
 def savefig(fig, path, dpi=100, max_bytes=195_000):
     """Save a matplotlib figure as PNG atomically (see :func:`png_bytes`)."""
     data = png_bytes(fig, dpi, max_bytes)
@@ -194,8 +249,8 @@ def beta_plots(out, rows, params):
     fig, ax = plt.subplots(figsize=(6.4, 4.0))
     for k in present:
         rs = sorted((r for r in rows if r["type"] == k), key=lambda r: r["beta"])
-        ax.plot([r["beta"] for r in rs], [max(r["seconds"], 1e-4) for r in rs], "o-",
-                color=TYPE_COLORS[k],
+        ax.plot([r["beta"] for r in rs], [max(r["seconds"], 1e-4) for r in rs], "-",
+                color=TYPE_COLORS[k], **SERIES_MARKERS[k],
                 label=f"{k} (ours, {params['width']}², {type_parameters(params, k)})")
         ref = authors_times(params)
         if ref:
@@ -207,11 +262,9 @@ def beta_plots(out, rows, params):
     ax.set_yscale("log")
     ax.set_xlabel("β")
     ax.set_ylabel("render time (s)")
-    ax.set_title(f"{params['mesh_name']}: time vs β ({parameters_title(params)})",
-                 fontsize=10)
+    fit_title(ax, f"{params['mesh_name']}: time vs β ({parameters_title(params)})")
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=7, ncol=2)
-    fig.tight_layout()
+    legend_below(fig, ax)
     savefig(fig, out / "beta_time.png")
     plt.close(fig)
     # ---- error (% of diagonal) vs beta
@@ -221,7 +274,7 @@ def beta_plots(out, rows, params):
         b = np.array([r["beta"] for r in rs])
         m = 100 * np.array([r["error_rel_diag"] for r in rs])
         sd = 100 * np.array([r["error_std_rel_diag"] for r in rs])
-        ax.plot(b, m, "o-", color=TYPE_COLORS[k],
+        ax.plot(b, m, "-", color=TYPE_COLORS[k], **SERIES_MARKERS[k],
                 label=f"{k} (ours, {type_parameters(params, k)})")
         ax.fill_between(b, np.maximum(m - sd, 0), m + sd, color=TYPE_COLORS[k], alpha=0.12)
         ref_e = authors_errors(params)
@@ -232,11 +285,10 @@ def beta_plots(out, rows, params):
         tol_series(ax, k, "error_rel_diag", 100.0)
     ax.set_xlabel("β")
     ax.set_ylabel("mean |t_β − t_0| (% of bbox diagonal)")
-    ax.set_title(f"{params['mesh_name']}: isosurface error vs β (band: ±1 std)\n"
-                 f"{parameters_title(params)}", fontsize=10)
+    fit_title(ax, f"{params['mesh_name']}: isosurface error vs β (band: ±1 std)\n"
+              f"{parameters_title(params)}")
     ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=7, ncol=2)
-    fig.tight_layout()
+    legend_below(fig, ax)
     savefig(fig, out / "beta_error.png")
     plt.close(fig)
     return present

@@ -605,4 +605,15 @@ def test_beta_error_over_a_tiny_hit_set_is_undefined(tmp_path):
     assert tiny["n_both"] == 4 and np.isnan(tiny["error_rel_diag"])
     assert percent(tiny["error_rel_diag"], 2) == "undefined"
     assert enough["n_both"] == n and enough["error_abs"] == pytest.approx(0.5)
-    assert percent(enough["error_rel_diag"], 2) == "5.00%"
+    assert percent(enough["error_rel_diag"], 2) == "5.0%"
+
+
+def test_small_errors_and_times_keep_their_digits():
+    """A figure's numbers have significant digits: the beta grid's "mean 0.00%" for an error of
+    0.003 % of the diagonal, and the alpha panels' "(0.0 s)" for 40 ms renders, were wrong."""
+    from tracer.studies.plots import percent, significant
+
+    assert percent(3.1e-5) == "0.0031%" and percent(0.05) == "5.0%" and percent(1.0) == "100%"
+    assert percent(0.0) == "0.0%" and percent(float("nan")) == "undefined"
+    assert significant(0.04312) == "0.043" and significant(12.34) == "12"
+    assert significant(123.4, 3) == "123" and significant(0.1) == "0.10"

@@ -1,0 +1,115 @@
+"""The beta study's plots on a user's mesh with a long name and per-type parameters (issue 61):
+every text inside the figure, titles inside it too, the legend off the axes' data area, and
+series that coincide both visible. Checked with matplotlib's own extents, on the figures as
+``beta_plots`` saves them (``savefig`` intercepted before the PNG is written)."""
+
+import numpy as np
+import pytest
+
+pytest.importorskip("matplotlib")
+
+from tracer.studies import plots  # noqa: E402
+
+NAME = "mobius_strip_scanned_at_home_with_a_rather_long_file_name_v2.obj"
+PARAMS = {
+    "mesh": NAME, "mesh_name": NAME, "alpha": None, "alpha_u": None, "width": 128,
+    "height": 128, "eps": 3.4e-4, "authors_reference": False,
+    "surfaces": {"points": {"alpha": 12.729, "alpha_u": 254.58, "offset": 0.0,
+                            "parameters": "auto"},
+                 "edges": {"alpha": 2677.93, "alpha_u": 2677.93, "offset": 0.0112,
+                           "parameters": "auto"},
+                 "triangles": {"alpha": 1955.69, "alpha_u": 1955.69, "offset": 0.0102,
+                               "parameters": "auto"}}}
+
+
+def rows():
+    """A study's rows: points' error grows with beta; edges' and triangles' coincide at 0."""
+    out = []
+    for k, scale in (("points", 1.0), ("edges", 0.0), ("triangles", 0.0)):
+        for b in (0.0, 0.25, 0.5, 1.0):
+            out.append({"type": k, "beta": b, "tol": 0.0, "seconds": 0.05 / (1 + 4 * b),
+                        "error_rel_diag": scale * 0.03 * b, "error_std_rel_diag": 0.01 * b})
+    return out
+
+
+def _inside(inner, outer, slack=1.0):
+    return (inner.x0 >= outer.x0 - slack and inner.y0 >= outer.y0 - slack
+            and inner.x1 <= outer.x1 + slack and inner.y1 <= outer.y1 + slack)
+
+
+def _overlap(a, b):
+    return a.x0 < b.x1 and b.x0 < a.x1 and a.y0 < b.y1 and b.y0 < a.y1
+
+
+def texts(fig):
+    """The texts ``fig`` draws: titles, axis labels, the tick labels inside each axis' view
+    (matplotlib keeps labels of ticks outside it, undrawn), legends', the figure's own."""
+    out = list(fig.texts)
+    for leg in [a.get_legend() for a in fig.axes if a.get_legend()] + list(fig.legends):
+        out += leg.get_texts()
+    for ax in fig.axes:
+        out += [ax.title, ax._left_title, ax._right_title, ax.xaxis.label, ax.yaxis.label]
+        for axis in (ax.xaxis, ax.yaxis):
+            lo, hi = sorted(axis.get_view_interval())
+            for tick in axis.get_major_ticks() + axis.get_minor_ticks():
+                if lo - 1e-12 <= tick.get_loc() <= hi + 1e-12:
+                    out.append(tick.label1)
+    return [t for t in out if t.get_visible() and str(t.get_text()).strip()]
+
+
+def check_layout(fig):
+    """Problems of ``fig``: texts outside the figure, a legend over an axes' data area."""
+    renderer = fig.canvas.get_renderer()
+    problems = [f"text outside the figure: {t.get_text()[:60]!r}" for t in texts(fig)
+                if not _inside(t.get_window_extent(renderer), fig.bbox)]
+    legends = [a.get_legend() for a in fig.axes if a.get_legend()] + list(fig.legends)
+    for leg in legends:
+        box = leg.get_window_extent(renderer)
+        for ax in fig.axes:
+            if _overlap(box, ax.get_window_extent(renderer)):
+                problems.append("legend over the data area")
+    return problems
+
+
+@pytest.fixture
+def saved(monkeypatch):
+    figs = {}
+
+    def capture(fig, path, dpi=100, max_bytes=195_000):
+        fig.canvas.draw()
+        figs[path.name] = (check_layout(fig), fig)
+
+    monkeypatch.setattr(plots, "savefig", capture)
+    return figs
+
+
+def test_beta_plots_keep_their_texts_in_the_figure_and_off_the_data(tmp_path, saved):
+    present = plots.beta_plots(tmp_path, rows(), PARAMS)
+    assert present == ["points", "edges", "triangles"]
+    assert set(saved) == {"beta_time.png", "beta_error.png"}
+    for name, (problems, _) in saved.items():
+        assert not problems, (name, problems)
+
+
+def test_the_old_layout_fails_the_check(tmp_path, saved, monkeypatch):
+    """The check can fail: the legend inside the axes and the title on one line, as before."""
+    def inside(fig, ax, fontsize=7, ncol=1):
+        ax.legend(fontsize=fontsize, ncol=2)
+        ax.set_title(ax.get_title().replace("\n", " "))
+        fig.tight_layout()
+
+    monkeypatch.setattr(plots, "legend_below", inside)
+    plots.beta_plots(tmp_path, rows(), PARAMS)
+    assert all(problems for problems, _ in saved.values())
+
+
+def test_coinciding_series_stay_visible(tmp_path, saved):
+    """Edges and triangles at the same errors: different marker shapes and sizes, the larger
+    one hollow, so that neither hides the other."""
+    plots.beta_plots(tmp_path, rows(), PARAMS)
+    _, fig = saved["beta_error.png"]
+    lines = {ln.get_label().split(" ")[0]: ln for ln in fig.axes[0].get_lines()}
+    e, t = lines["edges"], lines["triangles"]
+    assert np.allclose(e.get_ydata(), t.get_ydata())
+    assert e.get_marker() != t.get_marker() and e.get_markersize() > t.get_markersize()
+    assert e.get_markerfacecolor() == "none"
