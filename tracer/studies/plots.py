@@ -157,18 +157,24 @@ def fit_title(ax, text, fontsize=10):
     return title
 
 
-def legend_below(fig, ax, fontsize=7, ncol=1):
+def legend_below(fig, ax, fontsize=7):
     """The legend of ``ax`` under the axes, in a band of its own that the figure grows by, so
-    that it never covers the data, the title or the axis labels; then ``tight_layout`` for the
-    rest."""
+    that it never covers the data, the title or the axis labels; in as many columns as fit the
+    figure's width (one per six entries at most); then ``tight_layout`` for the rest."""
     handles, labels = ax.get_legend_handles_labels()
     if not handles:
         fig.tight_layout()
         return
-    leg = fig.legend(handles, labels, loc="lower center", bbox_to_anchor=(0.5, 0.0),
-                     fontsize=fontsize, ncol=ncol, frameon=False)
+    renderer = fig.canvas.get_renderer()
+    width_px = fig.get_size_inches()[0] * fig.dpi
+    for ncol in range(min(4, -(-len(handles) // 6)), 0, -1):
+        leg = fig.legend(handles, labels, loc="lower center", bbox_to_anchor=(0.5, 0.0),
+                         fontsize=fontsize, ncol=ncol, frameon=False)
+        if ncol == 1 or leg.get_window_extent(renderer).width <= 0.98 * width_px:
+            break
+        leg.remove()
     w, h = fig.get_size_inches()
-    band = leg.get_window_extent(fig.canvas.get_renderer()).height / fig.dpi + 0.1
+    band = leg.get_window_extent(renderer).height / fig.dpi + 0.1
     fig.set_size_inches(w, h + band)
     fig.tight_layout(rect=(0.0, band / (h + band), 1.0, 1.0))
     if hasattr(ax, "_fit_title"):       # the axes moved: wrap the title for where it is now

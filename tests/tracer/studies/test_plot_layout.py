@@ -93,7 +93,7 @@ def test_beta_plots_keep_their_texts_in_the_figure_and_off_the_data(tmp_path, sa
 
 def test_the_old_layout_fails_the_check(tmp_path, saved, monkeypatch):
     """The check can fail: the legend inside the axes and the title on one line, as before."""
-    def inside(fig, ax, fontsize=7, ncol=1):
+    def inside(fig, ax, fontsize=7):
         ax.legend(fontsize=fontsize, ncol=2)
         ax.set_title(ax.get_title().replace("\n", " "))
         fig.tight_layout()
