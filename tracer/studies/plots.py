@@ -616,25 +616,36 @@ def _reference_lines(params):
 
 
 def panel_grid_png(panels, title, cell=2.3):
-    """Rows of ``(label, rgb)`` panels as one labelled PNG (bytes)."""
+    """Rows of ``(label, rgb)`` panels as one labelled PNG (bytes). Labels are wrapped to their
+    panel's width and each row gets the height its longest label needs above its images (laid
+    out by hand, in inches: no label runs into the panel above or out of the figure); the
+    title is wrapped to the figure's width."""
     plt = pyplot()
     nr = len(panels)
     nc = max(len(r) for r in panels)
-    fig, axes = plt.subplots(nr, nc, squeeze=False,
-                             figsize=(cell * nc, 1.07 * cell * nr + 0.35))
+    pad = 0.06
+    img = cell - 2 * pad
+    per_line = max(16, int(cell * 72 / (0.6 * 7)))        # characters of a 7 pt label line
+    labels = [[textwrap.fill(label, per_line) for label, _ in row] for row in panels]
+    title = textwrap.fill(title, max(30, int(cell * nc * 72 / (0.6 * 8))))
+    line = 7 * 1.3 / 72                                    # a label line's height, inches
+    bands = [line * max(lab.count("\n") + 1 for lab in row) + 0.12 for row in labels]
+    top = 8 * 1.3 / 72 * (title.count("\n") + 1) + 2 * pad
+    W = cell * nc
+    H = top + sum(b + img + pad for b in bands) + pad
+    fig = plt.figure(figsize=(W, H))
+    y = top                                                # inches from the top
     for i, row in enumerate(panels):
-        for j in range(nc):
-            ax = axes[i][j]
+        y += bands[i]
+        for j, (_, rgb) in enumerate(row):
+            ax = fig.add_axes(((j * cell + pad) / W, (H - y - img) / H, img / W, img / H))
             ax.set_xticks([])
             ax.set_yticks([])
-            if j < len(row):
-                label, img = row[j]
-                ax.imshow(thumb(img, 256), interpolation="lanczos")
-                ax.set_title(label, fontsize=7)
-            else:
-                ax.axis("off")
-    fig.suptitle(title, fontsize=8)
-    fig.tight_layout(pad=0.4, rect=(0, 0, 1, 1 - 0.3 / (1.07 * cell * nr + 0.35)))
+            ax.set_anchor("S")          # the image at the bottom of its box, the label above
+            ax.imshow(thumb(rgb, 256), interpolation="lanczos")
+            ax.set_title(labels[i][j], fontsize=7)
+        y += img + pad
+    fig.suptitle(title, fontsize=8, y=1 - pad / H, va="top")
     data = png_bytes(fig, dpi=100)
     plt.close(fig)
     return data

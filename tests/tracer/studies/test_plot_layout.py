@@ -113,3 +113,29 @@ def test_coinciding_series_stay_visible(tmp_path, saved):
     assert np.allclose(e.get_ydata(), t.get_ydata())
     assert e.get_marker() != t.get_marker() and e.get_markersize() > t.get_markersize()
     assert e.get_markerfacecolor() == "none"
+
+
+def test_panel_grids_keep_labels_off_the_panels_above(monkeypatch):
+    """The alpha study's panel grids (metric.png, weights.png, ...): long labels and a long
+    title stay inside the figure and off the other panels."""
+    found = []
+
+    def capture(fig, dpi=100, max_bytes=195_000):
+        fig.canvas.draw()
+        renderer = fig.canvas.get_renderer()
+        problems = check_layout(fig)
+        for ax in fig.axes:
+            title = ax.title.get_window_extent(renderer)
+            problems += [f"label over another panel: {ax.get_title()[:40]!r}"
+                         for other in fig.axes if other is not ax
+                         and _overlap(title, other.get_window_extent(renderer))]
+        found.append(problems)
+        return b""
+
+    monkeypatch.setattr(plots, "png_bytes", capture)
+    img = np.full((64, 64, 3), 200, np.uint8)
+    label = "metric on: α-metric weight gradient of the gear_with_long_name.stl (α=30, α_U=30)"
+    plots.panel_grid_png([[(label, img), ("off", img)], [(label, img), (label, img)]],
+                         "α-metric weight gradient off (left) / on (right): " + NAME
+                         + ", α_U = α, β=0.5, the mesh's own orientation")
+    assert found == [[]]
