@@ -131,6 +131,16 @@ def pyplot():
     return plt
 
 
+def threads_note(rows):
+    """``", 2 threads"`` from the rows' ``threads`` (the numba threads each render ran on;
+    ``", 1-2 threads"`` when they differ, ``""`` when the rows do not say)."""
+    n = sorted({int(float(r["threads"])) for r in rows if r.get("threads") not in (None, "")})
+    if not n:
+        return ""
+    return f", {n[0]} thread{'s' if n[0] > 1 else ''}" if len(n) == 1 else \
+        f", {n[0]}-{n[-1]} threads"
+
+
 #: a marker per type, of different shapes and sizes (the larger hollow), so that series that
 #: coincide (edges and triangles at the same error) both stay visible
 SERIES_MARKERS = {"points": dict(marker="o", ms=6),
@@ -268,7 +278,8 @@ def beta_plots(out, rows, params):
     ax.set_yscale("log")
     ax.set_xlabel("β")
     ax.set_ylabel("render time (s)")
-    fit_title(ax, f"{params['mesh_name']}: time vs β ({parameters_title(params)})")
+    fit_title(ax, f"{params['mesh_name']}: time vs β{threads_note(all_rows)} "
+              f"({parameters_title(params)})")
     ax.grid(True, which="both", alpha=0.3)
     legend_below(fig, ax)
     savefig(fig, out / "beta_time.png")

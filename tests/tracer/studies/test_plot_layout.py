@@ -28,7 +28,8 @@ def rows():
     for k, scale in (("points", 1.0), ("edges", 0.0), ("triangles", 0.0)):
         for b in (0.0, 0.25, 0.5, 1.0):
             out.append({"type": k, "beta": b, "tol": 0.0, "seconds": 0.05 / (1 + 4 * b),
-                        "error_rel_diag": scale * 0.03 * b, "error_std_rel_diag": 0.01 * b})
+                        "error_rel_diag": scale * 0.03 * b, "error_std_rel_diag": 0.01 * b,
+                        "threads": 16})
     return out
 
 
@@ -89,6 +90,8 @@ def test_beta_plots_keep_their_texts_in_the_figure_and_off_the_data(tmp_path, sa
     assert set(saved) == {"beta_time.png", "beta_error.png"}
     for name, (problems, _) in saved.items():
         assert not problems, (name, problems)
+    # the time plot says how many threads each render had
+    assert "16 threads" in saved["beta_time.png"][1].axes[0].get_title().replace("\n", " ")
 
 
 def test_the_old_layout_fails_the_check(tmp_path, saved, monkeypatch):
