@@ -41,8 +41,8 @@ from tracer.rendering.renderer import render
 from tracer.runner import duration
 from tracer.scenes.scene import scene_from_field
 from tracer.studies.common import (REPO, TYPES, add_common, add_view_arguments, field_of,
-                                   load_mesh_checked, resolve_view, study_needs, unweighted_field,
-                                   view_camera)
+                                   load_mesh_checked, render_orientation, resolve_view,
+                                   study_needs, unweighted_field, view_camera)
 from tracer.studies.plots import alpha_report, panel_grid_png, pyplot, significant
 
 HELP = "the paper's alpha studies as image grids"
@@ -266,16 +266,22 @@ def _paper(alphas, override):
 
 def _camera(args, src, field, camera, alphas):
     """The figure's camera: with ``--view``, or for a mesh of your own (``--mesh`` without
-    ``--paper-parameters``: the front view), the data file ``src`` framed as ``tracer render``
-    frames it (its vertices grown by the inflation bound at the smallest alpha; ``--up`` auto
-    guessed from the file's format); else ``camera`` (the default data's scene camera) or the
+    ``--paper-parameters``: oriented as ``tracer render`` orients it, the file's up convention
+    or else the view that shows the data's largest silhouette), the data file ``src`` framed
+    as ``tracer render`` frames it (its vertices grown by the inflation bound at the smallest
+    alpha); else ``camera`` (the default data's scene camera) or the
     paper's beta-study camera."""
     view = getattr(args, "view", None)
-    if not view and getattr(args, "mesh", None) and not getattr(args, "paper", False):
+    up = getattr(args, "view_up", None)
+    path = src if os.path.isabs(src) else REPO / src
+    own = getattr(args, "mesh", None) and not getattr(args, "paper", False)
+    if not view and own and not up:
+        view, up, _ = render_orientation(path, field.mesh)
+    elif not view and own:
         view = "front"
+    if view and isinstance(view, str):
+        view, up = resolve_view(SimpleNamespace(view=view, up=up), path)
     if view:
-        view, up = resolve_view(SimpleNamespace(view=view, up=getattr(args, "view_up", None)),
-                                src if os.path.isabs(src) else REPO / src)
         grow = field.inflation(min(alphas))
         return tuple(np.asarray(v, float) for v in view_camera(field, view, up, grow, args.size))
     return camera or _default_camera(field)
@@ -544,7 +550,8 @@ def _study_attenuate(args, size, alphas):
         alpha_u, why = args.alpha_u, "given, --alpha-u"
     elif override and not args.paper:
         a0 = field.auto_alpha()
-        alpha_u, why = float(f"{a0 * d['u_factor']:.4g}"), f"{d['u_factor']:g} × the mesh's auto α"
+        alpha_u = float(f"{a0 * d['u_factor']:.4g}")
+        why = f"{d['u_factor']:g} × the mesh's auto α"
     else:
         alpha_u, why = d["alpha_u"], "the paper's"
     par["parameters_rule"] += f"; α_U = {alpha_u:g} ({why})"

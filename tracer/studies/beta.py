@@ -52,7 +52,8 @@ from tracer.runner import duration
 from tracer.scenes.scene import scene_from_field
 from tracer.studies.common import (TYPES, add_common, add_view_arguments, beta_tag,
                                    cached_field, close, is_paper_bunny, load_mesh_checked,
-                                   parse_types, resolve_view, study_needs, view_camera)
+                                   parse_types, render_orientation, resolve_view, study_needs,
+                                   view_camera, view_name)
 from tracer.studies.plots import beta_outputs
 
 HELP = "the paper's beta ablation: time and error vs beta"
@@ -472,8 +473,8 @@ def _study_params(args, types, size, alpha, alpha_u, cache):
     view, up = resolve_view(args, args.mesh)
     framed = "--view" if view else None
     if not view and not paper:
-        view, up = resolve_view(SimpleNamespace(view="front", up=None), args.mesh)
-        framed = "default for a mesh of your own"
+        view, up, why = render_orientation(args.mesh, mesh_all)
+        framed = f"as tracer render orients a mesh of your own: {why}"
     camera = None
     if view:  # one camera for every type: the largest surface of them all in view
         fields = [cached_field(os.path.abspath(args.mesh), k) for k in types]
@@ -492,10 +493,10 @@ def _study_params(args, types, size, alpha, alpha_u, cache):
               "eps_rule": "given" if args.eps is not None else "1e-4 x bbox diagonal",
               "diag": diag, "camera": "bbox centre + 2 x largest extent along +z, looking at "
               "the centre, up +y (authors' beta_error_test)" if camera is None else
-              f"{view} view, up {up} ({framed}): the whole surface in view, as tracer render "
-              f"frames it (origin {_vec(camera[0])}, looking at {_vec(camera[1])}, up "
+              f"{view_name(view)} view, up {up} ({framed}): the whole surface in view, as tracer "
+              f"render frames it (origin {_vec(camera[0])}, looking at {_vec(camera[1])}, up "
               f"{_vec(camera[2])})",
-              "view": view, "up": up, "camera_vectors": camera,
+              "view": view_name(view), "up": up, "camera_vectors": camera,
               "authors_reference": reference,
               "reference_rule": "the authors' errors and times are shown for the paper's bunny "
               "at alpha 200, alpha_U 1200 and their camera only" + (

@@ -23,7 +23,7 @@ from smoothdist.mesh import needs_trimesh
 from tracer.errors import CLIError
 from tracer.rendering.camera import UP_AXES, VIEWS, frame_points
 from tracer.runner import file_stamp, needs as cluster_needs
-from tracer.scenes.from_mesh import resolve_up
+from tracer.scenes.from_mesh import auto_orientation, resolve_up
 
 #: repository root (``tracer/studies/../..``)
 REPO = Path(__file__).resolve().parents[2]
@@ -90,6 +90,24 @@ def resolve_view(args, mesh):
     if not view and not up:
         return None, None
     return view or "front", resolve_up(os.fspath(mesh), up)
+
+
+def render_orientation(mesh, data):
+    """``(view, up, why)`` of a study of a mesh of one's own given neither ``--view`` nor
+    ``--up``: the orientation ``tracer render FILE`` chooses (the file's up convention, or else
+    the view that shows the data's largest silhouette:
+    :func:`tracer.scenes.from_mesh.auto_orientation`); ``view`` a name or ``(direction to the
+    eye, image up)``, ``data`` the :class:`smoothdist.DataMesh` of the file ``mesh``."""
+    up, view, why = auto_orientation(data, resolve_up(os.fspath(mesh), None))
+    return view, up, why
+
+
+def view_name(view):
+    """A view for the study's report: its name, or ``along (x, y, z)`` for a side view."""
+    if isinstance(view, str) or view is None:
+        return view
+    d = np.asarray(view[0], float)
+    return "along (" + ", ".join(f"{-v:g}" for v in d) + ")"
 
 
 def view_camera(fields, view, up, grow, size):

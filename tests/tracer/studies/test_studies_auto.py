@@ -159,3 +159,47 @@ def test_alpha_metric_on_a_users_mesh(noisy_ico, tmp_path):
     assert np.allclose(info["alphas"], [f * a0 for f in factors], rtol=1e-3)
     assert all(r["exact"]["hit_fraction"] > NON_TRIVIAL for r in info["renders"])
     assert "the mesh's auto α" in (out / "report.md").read_text(encoding="utf-8")
+
+
+@pytest.fixture(scope="module")
+def flat_gear(tmp_path_factory):
+    """A flat toothed ring lying in the xy plane of a z-up STL (thickness 0.12, width 2): seen
+    from the z-up convention's front it is a strip; tracer render looks at it face-on."""
+    trimesh = pytest.importorskip("trimesh")
+    parts = [trimesh.creation.annulus(0.3, 0.85, height=0.12)]
+    for k in range(24):
+        tooth = trimesh.creation.box((0.2, 0.09, 0.12))
+        tooth.apply_translation((0.9, 0.0, 0.0))
+        tooth.apply_transform(trimesh.transformations.rotation_matrix(2 * np.pi * k / 24,
+                                                                      (0, 0, 1)))
+        parts.append(tooth)
+    path = tmp_path_factory.mktemp("gear") / "gear.stl"
+    trimesh.util.concatenate(parts).export(path)
+    return path
+
+
+def _forward(camera):
+    origin, dest = np.asarray(camera[0], float), np.asarray(camera[1], float)
+    return (dest - origin) / np.linalg.norm(dest - origin)
+
+
+def test_the_studies_orient_a_flat_mesh_as_tracer_render_does(flat_gear, tmp_path):
+    """ablate-alpha and ablate-beta on a user's flat z-up gear: the camera looks along z, as
+    tracer render's does (issue 61: the alpha figure showed the gear edge-on)."""
+    out = tmp_path / "render.png"
+    assert main(["render", str(flat_gear), "--size", "16", "16", "-o", str(out), "-q"]) == 0
+    from tracer.scenes.from_mesh import mesh_scene
+
+    want = _forward(mesh_scene(str(flat_gear), size=(16, 16)).camera)
+    assert abs(want[2]) > 0.99, want
+    alpha_out = tmp_path / "alpha"
+    assert main(["ablate-alpha", "underestimate", "-o", str(alpha_out), "--mesh",
+                 str(flat_gear), "--size", str(SIZE), "--scheduler", "serial", "-q"]) == 0
+    info = json.loads((alpha_out / "underestimate.json").read_text())
+    assert np.allclose(_forward(info["camera"]), want, atol=1e-6), info["camera"]
+    beta_out = tmp_path / "beta"
+    assert main(["ablate-beta", str(flat_gear), "-o", str(beta_out), "--size", "16",
+                 "--betas", "0,1", "--types", "points"]) == 0
+    params = json.loads((beta_out / "beta_params.json").read_text())
+    assert np.allclose(_forward(params["camera_vectors"]), want, atol=1e-6), params["camera"]
+    assert "as tracer render orients" in params["camera"]
