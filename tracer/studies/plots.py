@@ -167,29 +167,48 @@ def fit_title(ax, text, fontsize=10):
     return title
 
 
-def legend_below(fig, ax, fontsize=7):
-    """The legend of ``ax`` under the axes, in a band of its own that the figure grows by, so
-    that it never covers the data, the title or the axis labels; in as many columns as fit the
-    figure's width (one per six entries at most); then ``tight_layout`` for the rest."""
-    handles, labels = ax.get_legend_handles_labels()
+def legend_below(fig, ax, fontsize=7, handles=None, top=0.0):
+    """The legend of ``ax`` (or ``handles``: artists with labels, for a legend that several
+    panels share) under the axes, in a band of its own that the figure grows by, so that it
+    never covers the data, the title or the axis labels; in as many columns as fit the
+    figure's width (one per six entries at most); then ``tight_layout`` for the rest, below a
+    band of ``top`` inches kept for a suptitle."""
+    if handles is None:
+        handles, labels = ax.get_legend_handles_labels()
+    else:
+        labels = [h.get_label() for h in handles]
+    w, h = fig.get_size_inches()
     if not handles:
-        fig.tight_layout()
+        fig.tight_layout(rect=(0.0, 0.0, 1.0, 1.0 - top / h))
         return
     renderer = fig.canvas.get_renderer()
-    width_px = fig.get_size_inches()[0] * fig.dpi
+    width_px = w * fig.dpi
     for ncol in range(min(4, -(-len(handles) // 6)), 0, -1):
         leg = fig.legend(handles, labels, loc="lower center", bbox_to_anchor=(0.5, 0.0),
                          fontsize=fontsize, ncol=ncol, frameon=False)
         if ncol == 1 or leg.get_window_extent(renderer).width <= 0.98 * width_px:
             break
         leg.remove()
-    w, h = fig.get_size_inches()
     band = leg.get_window_extent(renderer).height / fig.dpi + 0.1
     fig.set_size_inches(w, h + band)
-    fig.tight_layout(rect=(0.0, band / (h + band), 1.0, 1.0))
+    rect = (0.0, band / (h + band), 1.0, 1.0 - top / (h + band))
+    fig.tight_layout(rect=rect)
     if hasattr(ax, "_fit_title"):       # the axes moved: wrap the title for where it is now
         fit_title(ax, *ax._fit_title)
-        fig.tight_layout(rect=(0.0, band / (h + band), 1.0, 1.0))
+        fig.tight_layout(rect=rect)
+
+
+def fit_suptitle(fig, text, fontsize=9):
+    """``fig``'s suptitle, wrapped to the figure's width (measured); returns the height in
+    inches that it needs at the top (for ``tight_layout``'s ``rect``)."""
+    renderer = fig.canvas.get_renderer()
+    limit = 0.96 * fig.get_size_inches()[0] * fig.dpi
+    width = max(len(line) for line in text.split("\n"))
+    title = fig.suptitle(text, fontsize=fontsize, y=0.995, va="top")
+    while title.get_window_extent(renderer).width > limit and width > 20:
+        width = int(width * 0.85)
+        title.set_text("\n".join(textwrap.fill(part, width) for part in text.split("\n")))
+    return title.get_window_extent(renderer).height / fig.dpi + 0.1
 
 
 def savefig(fig, path, dpi=100, max_bytes=195_000):
@@ -387,8 +406,7 @@ def beta_frontier(out, rows, params, present):
         ref = next((r for r in rows if r["type"] == k and r["beta"] == 0.0
                     and not r.get("tol", 0.0)), None)
         if ref is not None:
-            ax.axvline(ref["seconds"], color=c, ls="--", lw=0.8,
-                       label=f"β 0 (reference) {ref['seconds']:.3g} s")
+            ax.axvline(ref["seconds"], color=c, ls="--", lw=0.8)
         ax.set_xscale("log")
         ax.set_yscale("log")
         for axis in (ax.xaxis, ax.yaxis):
@@ -397,13 +415,20 @@ def beta_frontier(out, rows, params, present):
         ax.set_xlabel("render time (s)")
         ax.set_ylabel("mean |t − t_0| (% of bbox diagonal)")
         n_dom = sum(1 for f in front if f["by"])
-        ax.set_title(f"{k}: {n_dom} of {len(front)} β dominated by a tol", fontsize=9)
+        ref_s = f"; β 0 takes {ref['seconds']:.3g} s" if ref is not None else ""
+        ax.set_title(f"{k}: {n_dom} of {len(front)} β dominated by a tol{ref_s}", fontsize=8)
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=6, loc="best")
-    fig.suptitle(f"{params['mesh_name']}: error against time, β and tol "
-                 f"({params['width']}², {parameters_title(params)}; "
-                 "hollow: a tol render is as accurate and as fast)", fontsize=9)
-    fig.tight_layout()
+    # matplotlib (studies extra): loaded on use
+    from matplotlib.lines import Line2D
+
+    shared = [Line2D([], [], color="0.4", marker="o", label="β series (tol 0), β beside each; "
+                     "the type's colour, hollow: a tol render is as accurate and as fast"),
+              Line2D([], [], color="0.25", ls=":", marker="^", ms=5,
+                     label="tol series, tol beside each (at the β given)"),
+              Line2D([], [], color="0.4", ls="--", lw=0.8, label="β 0 render's time (reference)")]
+    top = fit_suptitle(fig, f"{params['mesh_name']}: error against time, β and tol "
+                       f"({params['width']}², {parameters_title(params)})")
+    legend_below(fig, axes[0][0], handles=shared, top=top)
     savefig(fig, out / "beta_frontier.png")
     plt.close(fig)
     return True
@@ -728,10 +753,8 @@ def bench_plots(out, rows, params):
         a.set_xscale("log")
         a.set_yscale("log")
         a.grid(True, which="both", alpha=0.3)
-        if a.get_legend_handles_labels()[0]:
-            a.legend(fontsize=8)
-    fig.tight_layout()
-    fig2.tight_layout()
+    legend_below(fig, ax, fontsize=8)
+    legend_below(fig2, ax2, fontsize=8)
     savefig(fig, out / "bench_time_vs_leaves.png")
     savefig(fig2, out / "bench_leaf_fraction.png")
     plt.close(fig)
@@ -762,11 +785,14 @@ def bh_plot(path, rows, summary):
     a2.set_xscale("log")
     a2.axvline(1 - PAPER_BH["min_cosine"], color="k", ls="--", lw=0.8, label="paper 1 − min cos")
     a2.set_xlabel("1 − cos(∇d̂_β, ∇d̂_{β+Δβ})")
+    handles, seen = [], set()
     for a in (a1, a2):
-        if a.get_legend_handles_labels()[0]:
-            a.legend(fontsize=6)
-    fig.suptitle(f"Barnes-Hut switch study: {os.path.basename(summary['cloud'])}, "
-                 f"α={summary['alpha']:g}, β={summary['beta']:g}", fontsize=9)
-    fig.tight_layout()
+        for h, lab in zip(*a.get_legend_handles_labels()):
+            if lab not in seen:
+                seen.add(lab)
+                handles.append(h)
+    top = fit_suptitle(fig, f"Barnes-Hut switch study: {os.path.basename(summary['cloud'])}, "
+                       f"α={summary['alpha']:g}, β={summary['beta']:g}")
+    legend_below(fig, a1, fontsize=7, handles=handles, top=top)
     savefig(fig, path)
     plt.close(fig)

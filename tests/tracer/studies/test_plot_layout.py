@@ -142,3 +142,45 @@ def test_panel_grids_keep_labels_off_the_panels_above(monkeypatch):
                          "α-metric weight gradient off (left) / on (right): " + NAME
                          + ", α_U = α, β=0.5, the mesh's own orientation")
     assert found == [[]]
+
+
+def tol_rows():
+    """rows() with a tol series at beta 0 for every type."""
+    out = rows()
+    for k in ("points", "edges", "triangles"):
+        for tol in (0.001, 0.01, 0.1, 1.0):
+            out.append({"type": k, "beta": 0.0, "tol": tol, "seconds": 0.02 / (1 + tol),
+                        "error_rel_diag": 0.01 * tol, "error_std_rel_diag": 0.0, "threads": 16})
+    return out
+
+
+def test_the_frontier_shares_one_legend_below_its_panels(tmp_path, saved):
+    assert plots.beta_frontier(tmp_path, tol_rows(), PARAMS, ["points", "edges", "triangles"])
+    problems, fig = saved["beta_frontier.png"]
+    assert not problems, problems
+    assert len(fig.legends) == 1 and not any(a.get_legend() for a in fig.axes)
+
+
+def test_bench_grid_and_bh_switch_plots(tmp_path, saved):
+    from tracer.studies.common import TYPE_LETTER
+
+    grid_rows = []
+    for i, n in enumerate((1_000, 10_000, 100_000)):
+        row = {"nV": n, "nE": 3 * n, "nF": 2 * n}
+        for k in ("points", "edges", "triangles"):
+            L = TYPE_LETTER[k]
+            row[f"leaves_{L}"] = 20.0 * (i + 1)
+            row[f"seconds_{L}"] = 0.1 * (i + 1)
+        grid_rows.append(row)
+    plots.bench_plots(tmp_path, grid_rows, {"grid": 32, "alpha": 200.0, "beta": 0.5,
+                                            "threads": 16})
+    rng = np.random.default_rng(0)
+    bh_rows = [{"kept": bool(i % 3), "discrepancy": float(10 ** rng.uniform(-8, -2)),
+                "cosine": float(1 - 10 ** rng.uniform(-12, -2))} for i in range(200)]
+    plots.bh_plot(tmp_path / "bh_switch.png", bh_rows,
+                  {"cloud": "/data/" + NAME.replace(".obj", ".ply"), "alpha": 1000.0,
+                   "beta": 0.5})
+    assert set(saved) == {"bench_time_vs_leaves.png", "bench_leaf_fraction.png",
+                          "bh_switch.png"}
+    for name, (problems, _) in saved.items():
+        assert not problems, (name, problems)
