@@ -113,7 +113,7 @@ def test_a_ply_file_without_trimesh_says_what_to_install():
     assert "ImportError:" in p.stdout and "pip install" in p.stdout and "trimesh" in p.stdout
 
 
-@pytest.mark.parametrize("scene", ["bunny_triangles", "bunny_points"])  # the README's first
+@pytest.mark.parametrize("scene", ["bunny", "bunny_points"])  # the README's first
 def test_tracer_render_needs_only_the_tracer_extra(tmp_path, scene):
     out = tmp_path / "b.png"
     p = _run("""
