@@ -38,7 +38,7 @@ import numpy as np  # noqa: E402
 from numba import prange  # noqa: E402
 
 from tracer.rendering import gpu_render, march  # noqa: E402
-from tracer.rendering.camera import ray_direction  # noqa: E402
+from tracer.rendering.camera import camera_ray  # noqa: E402
 from tracer.rendering.frame import camera_of, scene_arrays, trace_options  # noqa: E402
 from tracer.scenes.scene import load_scene  # noqa: E402
 
@@ -75,11 +75,11 @@ def kernels_work(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, re
             tile_leaves[ty, tx, 1] = e_lv
         for r in range(r_lo, r_hi):
             for c in range(c_lo, c_hi):
-                dx, dy, dz = ray_direction(cam, r, c)
+                ray = camera_ray(cam, float(r), float(c))
                 t_pred, d_lb = march.cone_first_step(cam, r_lo, r_hi, c_lo, c_hi, t_min, D, gx,
-                                                     gy, gz, dx, dy, dz)
+                                                     gy, gz, ray)
                 h, t, _, _, _, st, lv2, _, _ = march.march_ray(
-                    tree, roots, params, mode, tol, cam[0], cam[1], cam[2], dx, dy, dz, lo, hi,
+                    tree, roots, params, mode, tol, *ray, lo, hi,
                     eps, max_steps, stack, dstack, relax, omega, t_min, newton, t_end,
                     march.NEWTON_COS, t_pred, d_lb)
                 hit[r, c] = h == 1

@@ -12,7 +12,8 @@ from smoothdist.mesh import MESH_EXTENSIONS, needs_trimesh
 from tracer.errors import CLIError
 from tracer.image import false_color, save_npy, save_png
 from tracer.outputs import atomic_write, check_outputs, make_parents
-from tracer.rendering.camera import UP_AXES, VIEWS, LookAt, frame_points, look_at
+from tracer.rendering.camera import (PROJECTIONS, UP_AXES, VIEWS, LookAt, frame_points,
+                                     frame_width)
 from tracer.rendering.frame import MAX_SAMPLES, ProgressBar, scene_arrays
 from tracer.rendering.renderer import render
 from tracer.scenes import from_mesh
@@ -65,6 +66,12 @@ def add_arguments(p):
     p.add_argument("--camera", nargs=9, type=float,
                    metavar=("OX", "OY", "OZ", "DX", "DY", "DZ", "UX", "UY", "UZ"),
                    help="explicit camera: ORIGIN DEST UP, 9 numbers")
+    p.add_argument("--projection", choices=PROJECTIONS,
+                   help="perspective (the authors' pinhole; default: scene's, else "
+                   f"{_def('projection', 'mesh')}) or orthographic (parallel rays)")
+    p.add_argument("--view-width", type=float, metavar="W",
+                   help="orthographic: the view's width in scene units (default: the width "
+                   "framing the surface, or the perspective camera's width at dest)")
     p.add_argument("--save-scene", metavar="OUT.json",
                    help="write the scene file used (camera, alpha, alpha_U, ...) to edit and "
                    "render again")
@@ -156,7 +163,7 @@ _NUMBERS = (("--alpha", "alpha", 0.0, False), ("--alpha-u", "alpha_u", 0.0, Fals
             ("--beta", "beta", 0.0, True), ("--eps", "eps", 0.0, False),
             ("--tol", "tol", 0.0, True), ("--newton", "newton", 0.0, True),
             ("--offset", "offset", 0.0, True), ("--penumbra", "penumbra", 0.0, False),
-            ("--samples", "samples", 1, True))
+            ("--samples", "samples", 1, True), ("--view-width", "view_width", 0.0, False))
 
 
 def check_options(args):
@@ -177,6 +184,8 @@ def check_options(args):
         if v < low or (v == low and not closed):
             raise CLIError(f"{flag} must be {'>=' if closed else '>'} {low:g}, got {v}")
 
+    if args.view_width is not None and args.projection != "orthographic":
+        raise CLIError("--view-width applies to --projection orthographic")
     if args.samples is not None and args.samples > MAX_SAMPLES:
         raise CLIError(f"--samples must be at most {MAX_SAMPLES}, got {args.samples}")
     for flag in ("color", "background"):
@@ -243,7 +252,8 @@ def run(args):
                  "mode": args.mode, "eps": args.eps, "shading": args.shading,
                  "offset": args.offset, "tol": args.tol, "newton": args.newton,
                  "samples": args.samples, "adaptive": args.adaptive,
-                 "transparent": args.transparent, "lighting": _lighting_args(args)}
+                 "transparent": args.transparent, "lighting": _lighting_args(args),
+                 "projection": args.projection, "view_width": args.view_width}
     if args.size:
         overrides["width"], overrides["height"] = args.size
     name = os.path.splitext(os.path.basename(args.scene))[0]
@@ -372,7 +382,8 @@ def _camera_arg(args):
 #: API parameter names of ``mesh_scene`` and the options that set them (error messages name
 #: the option, as the scene-file path's ``--eps must be > 0`` does)
 _OPTION_OF = {"alpha_u": "--alpha-u", "alpha": "--alpha", "beta": "--beta", "eps": "--eps",
-              "tol": "--tol", "newton": "--newton", "offset": "--offset"}
+              "tol": "--tol", "newton": "--newton", "offset": "--offset",
+              "view_width": "--view-width"}
 
 
 def _mesh_scene(args):
@@ -390,7 +401,8 @@ def _mesh_scene(args):
 #: the settings ``tracer render MESH`` takes as options of the same name (the others keep the
 #: mesh entry points' defaults)
 _MESH_OPTIONS = ("alpha", "alpha_u", "beta", "view", "up", "mode", "offset", "eps", "shading",
-                 "tol", "newton", "samples", "adaptive", "transparent", "color", "background")
+                 "tol", "newton", "samples", "adaptive", "transparent", "color", "background",
+                 "projection", "view_width")
 
 
 def _build_mesh_scene(args):
@@ -409,15 +421,20 @@ def _replace_camera(scene, args):
     """``--view`` / ``--camera`` for a scene file: a new camera (for ``--view``, framing every
     object's vertices grown by the tracer's conservative margin, which contains the surface)."""
 
+    projection, view_width = scene.camera.projection, args.view_width
     if args.camera:
-        origin, dest, up = _camera_arg(args)
+        pose = _camera_arg(args)
     else:
         grow = float(scene.bounds[0][0] - scene_arrays(scene)[4][0])
         P = np.concatenate([o.field.mesh.used_vertices() for o in scene.objects])
-        origin, dest, up = frame_points(P, grow, args.view, scene.film.width, scene.film.height,
-                                        up=args.up if args.up not in (None, "auto") else "y")
-    look_at(origin, dest, up, scene.film.width, scene.film.height)  # validates
-    scene.camera = LookAt(origin, dest, up)
+        W, H = scene.film.width, scene.film.height
+        pose = frame_points(P, grow, args.view, W, H,
+                            up=args.up if args.up not in (None, "auto") else "y")
+        if projection == "orthographic" and view_width is None:
+            view_width = frame_width(P, grow, pose, W, H)
+    camera = LookAt(*pose, projection, view_width)
+    camera.camera(scene.film.width, scene.film.height)  # validates
+    scene.camera = camera
 
 
 def _save_scene(args, scene, source):
@@ -460,9 +477,7 @@ def _edited_scene(data, args, scene):
                 if old in part:
                     value = part.pop(old)
                     part[ours] = BVH_TYPES.get(value, value) if ours == "kind" else value
-    data["camera"] = {k: [float(f"{v:.9g}") for v in np.asarray(vec, dtype=float)]
-                      for k, vec in (("origin", scene.camera.origin), ("dest", scene.camera.dest),
-                                     ("up", scene.camera.up))}
+    data["camera"] = scene.camera.as_dict()
     first = data["objects"][0]
     if args.alpha is not None:
         first["alpha"] = args.alpha

@@ -370,8 +370,8 @@ def python_code(code):
 
 # ----------------------------------------------------------------------------- running
 def make_work(work):
-    """A scratch folder: copies of scenes/, benchmarks/, examples/ and two small images for the
-    diff synopsis (A.png, B.png)."""
+    """A scratch folder: copies of scenes/, benchmarks/, examples/, an empty renders/ and two
+    small images for the diff synopsis (A.png, B.png)."""
     import numpy as np
 
     from tracer.image import save_png
@@ -379,6 +379,9 @@ def make_work(work):
     work.mkdir()
     for name in ("scenes", "benchmarks", "examples"):
         shutil.copytree(ROOT / name, work / name)
+    # a clone has renders/ (the gallery): snippets that save there must not depend on an
+    # earlier command of the same test worker having made it
+    (work / "renders").mkdir()
     img = np.full((8, 8, 3), 200, np.uint8)
     save_png(work / "a.png", img)
     save_png(work / "b.png", img)

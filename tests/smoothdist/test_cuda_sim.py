@@ -43,7 +43,10 @@ FILM = (("bunny_triangles", "lit", {"shading": "lit"}),
         ("bunny_edges", "lit_adaptive", {"shading": "lit", "samples": 4, "adaptive": True}),
         ("bunny_points", "samples", {"shading": "normals", "samples": 4}),
         ("bunny_triangles", "transparent", {"shading": "lit", "transparent": True}),
-        ("two_objects", "two_lit", {"shading": "lit", "samples": 2}))
+        ("two_objects", "two_lit", {"shading": "lit", "samples": 2}),
+        # the orthographic camera (issue 64): the same camera functions on both devices
+        ("bunny_triangles", "ortho", {"shading": "lit", "samples": 4, "adaptive": True,
+                                      "projection": "orthographic"}))
 #: float32 rounding, relative
 F32 = 2.0 ** -23
 

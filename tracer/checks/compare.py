@@ -465,7 +465,11 @@ def render_isosurface(surface, camera, background=(255, 255, 255), focal_distanc
             cam.position = tuple(params["position"])
             cam.focal_point = tuple(params["focal_point"])
             cam.up = tuple(params["view_up"])
-            cam.view_angle = params["view_angle"]
+            if params["parallel_projection"]:
+                cam.enable_parallel_projection()
+                cam.parallel_scale = params["parallel_scale"]
+            else:
+                cam.view_angle = params["view_angle"]
             cam.SetWindowCenter(*params["window_center"])
             plotter.renderer.ResetCameraClippingRange()
             plotter.render()

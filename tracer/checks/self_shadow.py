@@ -19,7 +19,7 @@ with no occluder in the way.
 
 import numpy as np
 
-from tracer.rendering.camera import primary_rays
+from tracer.rendering.camera import pixel_points
 from tracer.rendering.lighting import light_directions
 
 __all__ = ["wrongly_dark", "STEP", "START", "DARK", "FACING"]
@@ -47,8 +47,7 @@ def wrongly_dark(res, tol=1e-3, max_pixels=4000, seed=0):
     L = field.diagonal
     key = light_directions(scene.film.lighting, res.camera, scene.camera.up)[0]
     shadow = res.aovs["shadow"]
-    rays = primary_rays(res.camera)
-    P = res.camera.origin + res.depth[..., None].astype(np.float64) * rays
+    P = pixel_points(res.camera, res.depth)
     facing = res.hit & (res.normals @ key >= FACING)
     dark = facing & (shadow < DARK)
     idx = np.flatnonzero(dark)

@@ -22,6 +22,25 @@ the *bottom* edge: the whole picture is shifted by half a pixel towards the top-
 with a symmetric pinhole camera (the view direction ``forward`` is hit by the sample at
 ``col = W / 2``, ``row = H / 2 - 1``, when those are integers).  :func:`pyvista_camera_params`
 gives the VTK window centre that reproduces this shift.
+
+Projections
+-----------
+``projection="perspective"`` (the default) is the authors' pinhole above: every ray starts at
+``origin``. ``projection="orthographic"`` keeps the same image-plane offsets ``(dx, dy)`` but
+turns them into parallel rays: the ray of ``(row, col)`` starts at ``origin + s (dx horizontal +
+dy vertical)`` and runs along ``forward``, where ``s = view_width / scale_x``, so the image is
+``view_width`` scene units wide at any distance (pyvista's ``enable_parallel_projection``). A
+ray's parameter ``t`` is then the depth in front of the image plane through ``origin``.
+
+The camera seam
+---------------
+Kernels see a camera only as the (16,) float64 array :meth:`Camera.as_array` and read it
+only through the functions of this module: :func:`camera_ray` (a pixel, or a sample of it, to
+a ray's origin and unit direction), :func:`block_rays` (the central ray of a block of pixels
+and how far its rays stray from it: what the cone passes may assume), :func:`far_depth`,
+:func:`footprint` (a pixel's size at a depth), :func:`image_size` and
+:func:`view_coordinates`; the numpy twins :func:`sample_rays`, :func:`primary_rays`,
+:func:`ray_origins` and :func:`pixel_points` give the same rays to the film and the checks.
 """
 
 import math
@@ -31,10 +50,21 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
-from smoothdist.kernels import NJIT
+from smoothdist.kernels import NJIT, NJIT_IR_INLINE
 
 __all__ = [
     "Camera",
+    "PROJECTIONS",
+    "camera_ray",
+    "block_rays",
+    "far_depth",
+    "footprint",
+    "image_size",
+    "view_coordinates",
+    "sample_rays",
+    "ray_origins",
+    "pixel_points",
+    "frame_width",
     "LookAt",
     "look_at",
     "ray_direction",
@@ -50,10 +80,15 @@ __all__ = [
 ]
 
 #: Number of values in :meth:`Camera.as_array`.
-CAMERA_ARRAY_SIZE = 14
-#: entries of that array: the origin at 0-2 (then forward, horizontal, vertical), and the
-#: image's width and height in pixels
-CAM_WIDTH, CAM_HEIGHT = 12, 13
+CAMERA_ARRAY_SIZE = 16
+#: entries of that array: the origin at 0-2 (then forward, horizontal, vertical), the image's
+#: width and height in pixels, the projection (:data:`PROJECTIONS` index) and the view width
+#: (orthographic, scene units). Only this module reads them.
+CAM_WIDTH, CAM_HEIGHT, CAM_PROJECTION, CAM_VIEW_WIDTH = 12, 13, 14, 15
+#: the projections, by their index in the camera array
+PROJECTIONS = ("perspective", "orthographic")
+#: the orthographic projection's index (numba compiles it in as a constant)
+ORTHOGRAPHIC = 1.0
 
 #: ``|forward x up| / |up|`` (the sine of the angle between them) below which ``up`` counts as
 #: parallel to the view direction.
@@ -61,7 +96,7 @@ _PARALLEL_TOL = 1e-9
 
 
 class Camera(NamedTuple):
-    """An orthonormal pinhole camera and its image size.
+    """An orthonormal camera, its image size and its projection.
 
     Build one with :func:`look_at` rather than by hand, so that the frame is orthonormal.
 
@@ -79,6 +114,11 @@ class Camera(NamedTuple):
         Image width ``W`` in pixels (number of columns).
     height : int
         Image height ``H`` in pixels (number of rows).
+    projection : {"perspective", "orthographic"}
+        Perspective rays start at ``origin``; orthographic rays are parallel to ``forward``
+        and start on the image plane through ``origin`` (see the module notes).
+    view_width : float
+        Orthographic: the image's width in scene units (> 0); 0 for a perspective camera.
     """
 
     origin: np.ndarray
@@ -87,6 +127,20 @@ class Camera(NamedTuple):
     vertical: np.ndarray
     width: int
     height: int
+    projection: str = "perspective"
+    view_width: float = 0.0
+
+    @property
+    def orthographic(self):
+        """bool: the rays are parallel (``projection == "orthographic"``)."""
+        return self.projection == "orthographic"
+
+    def pixel_size(self, depth=1.0):
+        """The size of one pixel in scene units at ``depth`` along the rays (float or
+        array): ``depth / min(W, H)`` for a perspective camera, ``view_width / W`` at every
+        depth for an orthographic one (:func:`footprint`)."""
+        a, b = footprint.py_func(self.as_array())      # in Python: nothing to compile
+        return a + b * np.asarray(depth, dtype=np.float64)
 
     @property
     def scale_x(self):
@@ -107,7 +161,10 @@ class Camera(NamedTuple):
             ``(horizontal_fov, vertical_fov)``, each ``2 atan(0.5 * scale)``; the shorter image
             axis spans ``2 atan(0.5) ~ 53.13`` degrees. These are the extents of the pixel
             footprints; the sample rays themselves span one pixel less (see the module notes).
+            An orthographic camera has no field of view: ``(0.0, 0.0)``.
         """
+        if self.orthographic:
+            return 0.0, 0.0
         return (
             float(np.degrees(2.0 * np.arctan(0.5 * self.scale_x))),
             float(np.degrees(2.0 * np.arctan(0.5 * self.scale_y))),
@@ -118,9 +175,10 @@ class Camera(NamedTuple):
 
         Returns
         -------
-        (14,) float64 array
+        (16,) float64 array
             ``origin[0:3], forward[3:6], horizontal[6:9], vertical[9:12], width[12],
-            height[13]``; read it in kernels with :func:`ray_direction`.
+            height[13], projection[14]`` (the index in :data:`PROJECTIONS`) ``and
+            view_width[15]``; kernels read it only through this module (:func:`camera_ray`).
         """
         out = np.empty(CAMERA_ARRAY_SIZE, dtype=np.float64)
         out[0:3] = self.origin
@@ -129,6 +187,8 @@ class Camera(NamedTuple):
         out[9:12] = self.vertical
         out[CAM_WIDTH] = self.width
         out[CAM_HEIGHT] = self.height
+        out[CAM_PROJECTION] = PROJECTIONS.index(self.projection)
+        out[CAM_VIEW_WIDTH] = self.view_width
         return out
 
 
@@ -155,21 +215,57 @@ def _pixels(value, name):
 
 
 class LookAt(NamedTuple):
-    """A camera as scene files give it (``camera: {origin, dest, up}``), without an image size:
-    the eye ``origin``, the point ``dest`` it looks at and an approximate ``up``, each a (3,)
-    float64 array in world units. ``look_at(*pose, width, height)`` builds its :class:`Camera`
-    (:meth:`camera`)."""
+    """A camera as scene files give it (``camera: {origin, dest, up, projection,
+    view_width}``), without an image size: the eye ``origin``, the point ``dest`` it looks at
+    and an approximate ``up``, each a (3,) float64 array in world units, the ``projection``
+    (:data:`PROJECTIONS`) and, orthographic, the view's width in scene units (None: the width
+    the perspective camera sees at ``dest``, :func:`look_at`). ``pose.camera(width,
+    height)`` builds its :class:`Camera`."""
 
     origin: np.ndarray
     dest: np.ndarray
     up: np.ndarray
+    projection: str = "perspective"
+    view_width: float = None
 
     def camera(self, width, height):
-        """The pinhole :class:`Camera` of this pose for a ``width x height`` image."""
-        return look_at(self.origin, self.dest, self.up, width, height)
+        """The :class:`Camera` of this pose for a ``width x height`` image."""
+        return look_at(self.origin, self.dest, self.up, width, height,
+                       projection=self.projection, view_width=self.view_width)
+
+    def as_dict(self):
+        """The scene file's ``camera`` object: ``origin``, ``dest``, ``up`` (9 significant
+        digits), and ``projection`` / ``view_width`` when orthographic."""
+        out = {k: [float(f"{v:.9g}") for v in np.asarray(vec, dtype=float)]
+               for k, vec in (("origin", self.origin), ("dest", self.dest), ("up", self.up))}
+        if self.projection != "perspective":
+            out["projection"] = self.projection
+            if self.view_width is not None:
+                out["view_width"] = float(f"{self.view_width:.9g}")
+        return out
 
 
-def look_at(origin, dest, up, width, height):
+def check_projection(projection, view_width):
+    """``(projection, view_width)`` checked: a name of :data:`PROJECTIONS`, and None or a
+    finite number > 0 (orthographic only); raises ValueError otherwise."""
+    if projection not in PROJECTIONS:
+        raise ValueError(f"projection must be one of {', '.join(PROJECTIONS)}; "
+                         f"got {projection!r}")
+    if view_width is None:
+        return projection, None
+    if projection != "orthographic":
+        raise ValueError("view_width applies to the orthographic projection only "
+                         "(give projection=\"orthographic\")")
+    if isinstance(view_width, (bool, np.bool_)) or not isinstance(view_width, (int, float,
+                                                                              np.number)):
+        raise ValueError(f"view_width must be a number > 0 (scene units), got {view_width!r}")
+    if not (math.isfinite(view_width) and view_width > 0):
+        raise ValueError(f"view_width must be a finite number > 0 (scene units), "
+                         f"got {view_width!r}")
+    return projection, float(view_width)
+
+
+def look_at(origin, dest, up, width, height, projection="perspective", view_width=None):
     """Build the authors' ``lookAt`` camera.
 
     Parameters
@@ -182,6 +278,12 @@ def look_at(origin, dest, up, width, height):
         Approximate up direction; any length, not parallel to ``dest - origin``.
     width, height : int
         Image size in pixels, both > 0.
+    projection : {"perspective", "orthographic"}
+        Rays from ``origin``, or parallel rays from the image plane through ``origin``.
+    view_width : float, optional
+        Orthographic: the image's width in scene units; None: the width the perspective
+        camera sees at ``dest`` (``|dest - origin| x scale_x``), so that the object at
+        ``dest`` keeps its size in the image.
 
     Returns
     -------
@@ -193,7 +295,8 @@ def look_at(origin, dest, up, width, height):
     ------
     ValueError
         For non-finite or wrongly shaped vectors, ``dest == origin``, ``up`` zero or parallel
-        to the view direction, or a size that is not a positive integer.
+        to the view direction, a size that is not a positive integer, an unknown projection
+        or a view width that is not a number > 0.
 
     Examples
     --------
@@ -206,6 +309,7 @@ def look_at(origin, dest, up, width, height):
     up = _vector3(up, "up")
     width = _pixels(width, "width")
     height = _pixels(height, "height")
+    projection, view_width = check_projection(projection, view_width)
 
     view = dest - origin
     view_len = np.linalg.norm(view)
@@ -224,7 +328,11 @@ def look_at(origin, dest, up, width, height):
     horizontal = side / side_len
     vertical = np.cross(horizontal, forward)
     vertical /= np.linalg.norm(vertical)
-    return Camera(origin, forward, horizontal, vertical, width, height)
+    if projection == "perspective":
+        return Camera(origin, forward, horizontal, vertical, width, height)
+    if view_width is None:
+        view_width = float(view_len * _scales(float(width), float(height))[0])
+    return Camera(origin, forward, horizontal, vertical, width, height, projection, view_width)
 
 
 @numba.njit(**NJIT)
@@ -235,13 +343,31 @@ def _scales(width, height):
     return 1.0, height / width
 
 
+@numba.njit(**NJIT_IR_INLINE)
+def _image_offsets(cam, row, col):
+    """The authors' image-plane offsets ``(dx, dy)`` of ``(row, col)`` (module notes):
+    ``dx = scale_x (col / W - 0.5)``, ``dy = scale_y ((H - 1 - row) / H - 0.5)``."""
+    width = cam[CAM_WIDTH]
+    height = cam[CAM_HEIGHT]
+    sx, sy = _scales(width, height)
+    dx = (col / width - 0.5) * sx
+    dy = ((height - 1.0 - row) / height - 0.5) * sy
+    return dx, dy
+
+
+@numba.njit(**NJIT_IR_INLINE)
+def _plane_scale(cam):
+    """Orthographic: scene units per unit of ``dx`` / ``dy`` (``view_width / scale_x``)."""
+    return cam[CAM_VIEW_WIDTH] / _scales(cam[CAM_WIDTH], cam[CAM_HEIGHT])[0]
+
+
 @numba.njit(**NJIT)
-def ray_direction(cam, row, col):
-    """Unit direction of the primary ray through one pixel.
+def camera_ray(cam, row, col):
+    """The ray through one pixel, or a sample of one: ``(ox, oy, oz, dx, dy, dz)``.
 
     Parameters
     ----------
-    cam : (14,) float64 array
+    cam : (16,) float64 array
         :meth:`Camera.as_array`.
     row : float
         Image row, 0 = top (a pixel's own row, or a sample's row with its sub-pixel offset:
@@ -251,20 +377,163 @@ def ray_direction(cam, row, col):
 
     Returns
     -------
-    (float, float, float)
-        Unit world-space direction ``normalize(forward + dx horizontal + dy vertical)`` with
-        ``dx = scale_x (col / W - 0.5)``, ``dy = scale_y ((H - 1 - row) / H - 0.5)``.
+    (float, float, float, float, float, float)
+        The ray's origin (world units) and unit direction: perspective, the eye and
+        ``normalize(forward + dx horizontal + dy vertical)``; orthographic, the image-plane
+        point ``origin + s (dx horizontal + dy vertical)`` and ``forward`` (module notes).
     """
-    width = cam[CAM_WIDTH]
-    height = cam[CAM_HEIGHT]
-    sx, sy = _scales(width, height)
-    dx = (col / width - 0.5) * sx
-    dy = ((height - 1.0 - row) / height - 0.5) * sy
+    dx, dy = _image_offsets(cam, row, col)
+    if cam[CAM_PROJECTION] == ORTHOGRAPHIC:
+        s = _plane_scale(cam)
+        return (cam[0] + s * (dx * cam[6] + dy * cam[9]),
+                cam[1] + s * (dx * cam[7] + dy * cam[10]),
+                cam[2] + s * (dx * cam[8] + dy * cam[11]), cam[3], cam[4], cam[5])
     rx = cam[3] + dx * cam[6] + dy * cam[9]
     ry = cam[4] + dx * cam[7] + dy * cam[10]
     rz = cam[5] + dx * cam[8] + dy * cam[11]
     norm = math.sqrt(rx * rx + ry * ry + rz * rz)
-    return rx / norm, ry / norm, rz / norm
+    return cam[0], cam[1], cam[2], rx / norm, ry / norm, rz / norm
+
+
+@numba.njit(**NJIT_IR_INLINE)
+def ray_direction(cam, row, col):
+    """Unit direction ``(dx, dy, dz)`` of the ray through ``(row, col)`` (:func:`camera_ray`'s
+    last three values; ``forward`` for an orthographic camera)."""
+    ray = camera_ray(cam, row, col)
+    return ray[3], ray[4], ray[5]
+
+
+@numba.njit(**NJIT)
+def block_rays(cam, r_lo, r_hi, c_lo, c_hi):
+    """The rays of pixels ``[r_lo, r_hi) x [c_lo, c_hi)`` as one beam, for the cone passes:
+    ``(ox, oy, oz, ux, uy, uz, near, spread)``.
+
+    ``o + t u`` is the beam's central ray (``u`` unit) and every pixel ray ``p + t v`` of the
+    block stays within ``near + spread t`` of it at the same ``t``:
+    ``|p + t v - o - t u| <= near + spread t``. Perspective: ``o`` is the eye, ``near = 0`` and
+    ``spread >= |v - u|`` (the rays of a rectangle form a spherically convex set, whose
+    farthest point from ``u`` is a corner). Orthographic: ``u = forward``, ``o`` the mean of
+    the corner rays' origins, ``near`` their largest distance from it and ``spread = 0``.
+    Both bounds carry a relative margin of 1e-4 (and 1e-12 absolute)."""
+    ox = 0.0
+    oy = 0.0
+    oz = 0.0
+    ux = 0.0
+    uy = 0.0
+    uz = 0.0
+    for r in (r_lo, r_hi - 1):
+        for c in (c_lo, c_hi - 1):
+            px, py, pz, vx, vy, vz = camera_ray(cam, float(r), float(c))
+            ox += 0.25 * px
+            oy += 0.25 * py
+            oz += 0.25 * pz
+            ux += vx
+            uy += vy
+            uz += vz
+    n = math.sqrt(ux * ux + uy * uy + uz * uz)
+    ux /= n
+    uy /= n
+    uz /= n
+    if cam[CAM_PROJECTION] == ORTHOGRAPHIC:
+        near = 0.0
+        for r in (r_lo, r_hi - 1):
+            for c in (c_lo, c_hi - 1):
+                px, py, pz, vx, vy, vz = camera_ray(cam, float(r), float(c))
+                near = max(near, math.sqrt((px - ox) ** 2 + (py - oy) ** 2 + (pz - oz) ** 2))
+        return ox, oy, oz, cam[3], cam[4], cam[5], near * 1.0001 + 1e-12, 0.0
+    delta = 0.0
+    for r in (r_lo, r_hi - 1):
+        for c in (c_lo, c_hi - 1):
+            vx, vy, vz = ray_direction(cam, float(r), float(c))
+            delta = max(delta, math.sqrt((vx - ux) ** 2 + (vy - uy) ** 2 + (vz - uz) ** 2))
+    return cam[0], cam[1], cam[2], ux, uy, uz, 0.0, delta * 1.0001 + 1e-12
+
+
+@numba.njit(**NJIT_IR_INLINE)
+def far_depth(cam, lo, hi):
+    """A ray parameter ``t`` beyond which every camera ray is outside the box ``lo..hi``
+    (rays have unit speed): the farthest corner's distance from the eye (perspective), or
+    its depth in front of the image plane (orthographic)."""
+    t = 0.0
+    ortho = cam[CAM_PROJECTION] == ORTHOGRAPHIC
+    for k in range(8):
+        cx = (hi[0] if k & 1 else lo[0]) - cam[0]
+        cy = (hi[1] if k & 2 else lo[1]) - cam[1]
+        cz = (hi[2] if k & 4 else lo[2]) - cam[2]
+        if ortho:
+            t = max(t, cx * cam[3] + cy * cam[4] + cz * cam[5])
+        else:
+            t = max(t, math.sqrt(cx ** 2 + cy ** 2 + cz ** 2))
+    return t
+
+
+@numba.njit(**NJIT_IR_INLINE)
+def footprint(cam):
+    """``(a, b)``: one pixel is ``a + b t`` scene units across at depth ``t`` along the rays;
+    ``(0, 1 / min(W, H))`` for a perspective camera (the shorter image axis spans one unit at
+    unit depth), ``(view_width / W, 0)`` for an orthographic one."""
+    shorter = min(cam[CAM_WIDTH], cam[CAM_HEIGHT])
+    if cam[CAM_PROJECTION] == ORTHOGRAPHIC:
+        return _plane_scale(cam) / shorter, 0.0
+    return 0.0, 1.0 / shorter
+
+
+@numba.njit(**NJIT_IR_INLINE)
+def image_size(cam):
+    """``(W, H)``: the image's width and height in pixels (ints)."""
+    return int(cam[CAM_WIDTH]), int(cam[CAM_HEIGHT])
+
+
+@numba.njit(**NJIT_IR_INLINE)
+def view_coordinates(cam, x, y, z):
+    """A world vector in the camera frame: ``(v . horizontal, v . vertical, -v . forward)``
+    (right, up, towards the camera)."""
+    return (x * cam[6] + y * cam[7] + z * cam[8], x * cam[9] + y * cam[10] + z * cam[11],
+            -(x * cam[3] + y * cam[4] + z * cam[5]))
+
+
+def sample_rays(cam, rows, cols):
+    """Rays through fractional image positions (vectorised :func:`camera_ray`).
+
+    Parameters
+    ----------
+    cam : (16,) float64 array
+        :meth:`Camera.as_array`.
+    rows, cols : (n,) float64 arrays
+        Image positions (0 = top row, left column; sub-pixel offsets allowed).
+
+    Returns
+    -------
+    origins : (3,) or (n, 3) float64 array
+        The eye (perspective: one origin for every ray), or each ray's image-plane origin.
+    dirs : (n, 3) float64 array
+        Unit directions.
+    """
+    width, height = cam[CAM_WIDTH], cam[CAM_HEIGHT]
+    sx, sy = _scales(width, height)
+    dx = (cols / width - 0.5) * sx
+    dy = ((height - 1.0 - rows) / height - 0.5) * sy
+    if cam[CAM_PROJECTION] == ORTHOGRAPHIC:
+        s = _plane_scale(cam)
+        origins = cam[0:3][None, :] + s * (dx[:, None] * cam[6:9][None, :]
+                                           + dy[:, None] * cam[9:12][None, :])
+        return origins, np.repeat(cam[3:6][None, :], len(dx), axis=0)
+    d = cam[3:6][None, :] + dx[:, None] * cam[6:9][None, :] + dy[:, None] * cam[9:12][None, :]
+    norm = np.sqrt(d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1] + d[:, 2] * d[:, 2])
+    return cam[0:3].copy(), d / norm[:, None]
+
+
+def _grid_offsets(camera, rows):
+    """``(dx (1, W, 1), dy (h, 1, 1))``: the image-plane offsets of rows ``rows = (r0, r1)``
+    (None: all) and every column."""
+    width, height = float(camera.width), float(camera.height)
+    sx, sy = _scales(width, height)
+    cols = np.arange(camera.width, dtype=np.float64)
+    r0, r1 = (0, camera.height) if rows is None else rows
+    rows = np.arange(r0, r1, dtype=np.float64)
+    dx = ((cols / width - 0.5) * sx)[None, :, None]
+    dy = (((height - 1.0 - rows) / height - 0.5) * sy)[:, None, None]
+    return dx, dy
 
 
 def primary_rays(camera, rows=None):
@@ -281,20 +550,34 @@ def primary_rays(camera, rows=None):
     -------
     (H, W, 3) float64 array
         ``rays[row, col]`` is the world-space unit direction for image row ``row`` (0 = top)
-        and column ``col``; every ray starts at ``camera.origin``. With ``rows``:
+        and column ``col``; the rays start at :func:`ray_origins`. With ``rows``:
         ``(r1 - r0, W, 3)``.
     """
-    width, height = float(camera.width), float(camera.height)
-    sx, sy = _scales(width, height)
-    cols = np.arange(camera.width, dtype=np.float64)
-    r0, r1 = (0, camera.height) if rows is None else rows
-    rows = np.arange(r0, r1, dtype=np.float64)
-    dx = ((cols / width - 0.5) * sx)[None, :, None]
-    dy = (((height - 1.0 - rows) / height - 0.5) * sy)[:, None, None]
+    dx, dy = _grid_offsets(camera, rows)
+    if camera.orthographic:
+        return np.broadcast_to(camera.forward, (dy.shape[0], dx.shape[1], 3)).copy()
     rays = camera.forward + dx * camera.horizontal + dy * camera.vertical
     norm = np.sqrt(rays[..., 0] * rays[..., 0] + rays[..., 1] * rays[..., 1]
                    + rays[..., 2] * rays[..., 2])
     return rays / norm[..., None]
+
+
+def ray_origins(camera, rows=None):
+    """Where the primary rays start: ``camera.origin`` (3,) for a perspective camera (every
+    ray), an ``(H, W, 3)`` float64 array of image-plane points for an orthographic one
+    (``rows`` as in :func:`primary_rays`)."""
+    if not camera.orthographic:
+        return np.asarray(camera.origin, dtype=np.float64)
+    dx, dy = _grid_offsets(camera, rows)
+    s = camera.view_width / camera.scale_x
+    return camera.origin + s * (dx * camera.horizontal + dy * camera.vertical)
+
+
+def pixel_points(camera, depth):
+    """World points ``(H, W, 3)`` float64 at ray parameter ``depth (H, W)`` along every
+    pixel's primary ray (a render's t-buffer: its hit points)."""
+    depth = np.asarray(depth, dtype=np.float64)
+    return ray_origins(camera) + depth[..., None] * primary_rays(camera)
 
 
 def project(camera, points):
@@ -315,8 +598,9 @@ def project(camera, points):
     cols : (n,) float64 array
         Fractional image column (0 = left), same convention.
     depth_along_ray : (n,) float64 array
-        Distance from ``camera.origin``, i.e. the ``t`` of the unit primary ray through the
-        point (the quantity a sphere tracer's t-buffer stores).
+        The ``t`` of the unit primary ray through the point (the quantity a sphere tracer's
+        t-buffer stores): the distance from ``camera.origin`` (perspective), or the depth in
+        front of the image plane (orthographic).
 
     Points on or behind the camera plane (``(p - origin) . forward <= 0``) get NaN in all three
     outputs. A (3,) input gives (1,) outputs.
@@ -334,11 +618,13 @@ def project(camera, points):
     upward = rel @ camera.vertical
     with np.errstate(divide="ignore", invalid="ignore"):
         front = along > 0.0
-        dx = np.where(front, right / along, np.nan)
-        dy = np.where(front, upward / along, np.nan)
+        scale = camera.view_width / sx if camera.orthographic else along
+        dx = np.where(front, right / scale, np.nan)
+        dy = np.where(front, upward / scale, np.nan)
         cols = (dx / sx + 0.5) * width
         rows = height - 1.0 - (dy / sy + 0.5) * height
-        depth = np.where(front, np.linalg.norm(rel, axis=1), np.nan)
+        depth = np.where(front, along if camera.orthographic else np.linalg.norm(rel, axis=1),
+                         np.nan)
     return rows, cols, depth
 
 
@@ -362,6 +648,9 @@ def pyvista_camera_params(camera, focal_distance=1.0):
           ``2 atan(0.5 scale_y)`` (VTK's ``ViewAngle`` with ``UseHorizontalViewAngle`` off).
         * ``window_center`` : (float, float), ``(-1 / W, -1 / H)``.
         * ``window_size`` : (int, int), ``(W, H)`` for ``pyvista.Plotter(window_size=...)``.
+        * ``parallel_projection`` : bool, the camera is orthographic; then
+          ``parallel_scale`` : float, half the view's height in scene units (VTK's
+          ``ParallelScale``), and ``view_angle`` is 0.
 
     Notes
     -----
@@ -377,8 +666,12 @@ def pyvista_camera_params(camera, focal_distance=1.0):
         p.camera.position = params["position"]
         p.camera.focal_point = params["focal_point"]
         p.camera.up = params["view_up"]
-        p.camera.view_angle = params["view_angle"]
         p.camera.SetWindowCenter(*params["window_center"])
+        if params["parallel_projection"]:
+            p.camera.enable_parallel_projection()
+            p.camera.parallel_scale = params["parallel_scale"]
+        else:
+            p.camera.view_angle = params["view_angle"]
 
     Without the window centre the pyvista image is shifted by half a pixel (a sub-pixel
     error; fine for a visual comparison, not for pixel-exact diffs).
@@ -391,6 +684,8 @@ def pyvista_camera_params(camera, focal_distance=1.0):
         "view_angle": camera.fov_deg()[1],
         "window_center": (-1.0 / width, -1.0 / height),
         "window_size": (camera.width, camera.height),
+        "parallel_projection": camera.orthographic,
+        "parallel_scale": 0.5 * camera.view_width * height / width,
     }
 
 
@@ -583,3 +878,19 @@ def frame_points(points, radius, view="front", width=512, height=512, margin=FRA
                float(np.max((upward + radius * np.hypot(1.0, ky)) / ky - along)),
                float(np.max(-along)) + radius + max(margin, 0.01) * extent)
     return centre + dist * direction, centre, up
+
+
+def frame_width(points, radius, pose, width, height, margin=FRAME_MARGIN):
+    """The orthographic view width (scene units) at which every ball of ``radius`` around
+    ``points`` lies in the image of ``pose = (origin, dest, up)``, with a free border of
+    ``margin`` (a fraction of the image's half-size) and one pixel, as :func:`frame_points`
+    frames them for a perspective camera."""
+    P = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    cam = look_at(*pose, width, height)
+    rel = P - np.asarray(pose[1], dtype=np.float64)
+    right = float(np.max(np.abs(rel @ cam.horizontal))) + float(radius)
+    upward = float(np.max(np.abs(rel @ cam.vertical))) + float(radius)
+    kx = max(0.5 * (1.0 - margin) - 1.0 / width, 0.05)
+    ky = max(0.5 * (1.0 - margin) - 1.0 / height, 0.05)
+    view_width = max(right / kx, upward / ky * width / height)
+    return view_width if view_width > 0.0 else 1.0

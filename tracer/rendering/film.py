@@ -45,7 +45,7 @@ import numpy as np
 from smoothdist.schedule import parallel_tasks, run_tasks
 from tracer.rendering import lighting as _lighting
 from tracer.rendering import march
-from tracer.rendering.camera import CAM_HEIGHT, CAM_WIDTH, _scales, box_corners, primary_rays
+from tracer.rendering.camera import box_corners, primary_rays, ray_origins, sample_rays
 from tracer.rendering.frame import (LightArgs, LightBuffers, MarchArgs, SampleBuffers,
                                     TraceOptions)
 from tracer.rendering.shading import (load_matcap, shade_headlight, shade_matcap, shade_normals,
@@ -129,7 +129,6 @@ class _Shader:
         self.encoder = _lighting.linear_to_srgb if self.lit else _clip01
         self.transparent = bool(getattr(scene, "transparent", False))
         self.nobj = len(scene.objects)
-        self.origin = np.asarray(camera.origin, dtype=np.float64)
         bg = np.asarray(scene.film.background, dtype=np.float64) / 255.0
         if self.lit:
             light = scene.film.lighting
@@ -214,23 +213,26 @@ class _Shader:
         self.leaves += int(work[:, 1].sum())
         return shadow, ao
 
-    def ground_hits(self, dirs, miss):
-        """``(on_ground (n,) bool, points (n, 3), fade (n,))`` for camera rays ``dirs``."""
+    def ground_hits(self, rays, miss):
+        """``(on_ground (n,) bool, points (n, 3), fade (n,))`` for camera rays ``rays =
+        (origins, dirs)`` (:func:`tracer.rendering.camera.sample_rays`)."""
+        origins, dirs = rays
         n = len(dirs)
         on = np.zeros(n, dtype=bool)
         pts = np.zeros((n, 3))
         fade = np.zeros(n)
         if self.ground is None or not miss.any():
             return on, pts, fade
-        height = self.ground - self.origin @ self.up
         # the ground fades into the background away from the object (a studio floor)
         below = self.centre - (self.centre @ self.up - self.ground) * self.up
 
         def chunk(a, b):                  # each ray on its own
+            org = _at(origins, slice(a, b))
+            height = self.ground - org @ self.up
             du = dirs[a:b] @ self.up
             t = height / np.where(du < 0, du, -1.0)
             idx = np.flatnonzero(miss[a:b] & (du < -1e-9) & (t > 0) & np.isfinite(t))
-            p = self.origin + t[idx, None] * dirs[a:b][idx]
+            p = _at(org, idx) + t[idx, None] * dirs[a:b][idx]
             f = np.exp(-(_norm3(p - below) / self.fade_radius) ** 2)
             # where the ground has faded into the background it is background (no light)
             keep = f >= GROUND_MIN_FADE
@@ -241,9 +243,11 @@ class _Shader:
         return on, pts, fade
 
     # ------------------------------------------------------------------ samples
-    def shade(self, hit, t, grad, dirs, reuse=None, grid=None, objs=None):
+    def shade(self, hit, t, grad, rays, reuse=None, grid=None, objs=None):
         """Colours ``(n, 3)`` (linear if lit, display values otherwise), alphas ``(n,)`` and a
-        record of what each sample saw (for reuse by later samples of the same pixel).
+        record of what each sample saw (for reuse by later samples of the same pixel), of
+        samples along the camera rays ``rays = (origins, dirs)``
+        (:func:`tracer.rendering.camera.sample_rays`).
 
         ``objs (n,)``: the object each hit shows, as the march found it at the hit
         (:func:`tracer.rendering.march.march_ray`); None: found here (:meth:`objects_at`).
@@ -252,13 +256,15 @@ class _Shader:
         at every LIGHT_STRIDE-th pixel of every LIGHT_STRIDE-th row and filled in between
         (``_fill_light``)."""
         n = len(hit)
+        origins, dirs = rays
         normals = np.empty((n, 3))
         P = np.empty((n, 3)) if self.lit else None
 
         def geometry(a, b):
             normals[a:b] = _unit(grad[a:b])
             if P is not None:
-                P[a:b] = self.origin + np.where(hit[a:b], t[a:b], 0.0)[:, None] * dirs[a:b]
+                P[a:b] = (_at(origins, slice(a, b))
+                          + np.where(hit[a:b], t[a:b], 0.0)[:, None] * dirs[a:b])
         in_chunks(geometry, n)
         if not self.lit:
             nv = view_normals(normals.reshape(n, 1, 3), self.camera)
@@ -275,7 +281,7 @@ class _Shader:
         obj_all = np.full(n, -1, dtype=np.int64)
         obj_all[hit] = obj
         miss = ~hit
-        on_ground, G, fade = self.ground_hits(dirs, miss)
+        on_ground, G, fade = self.ground_hits(rays, miss)
         shadow = np.ones(n)
         ao = np.ones(n)
         fresh = hit | on_ground
@@ -292,7 +298,7 @@ class _Shader:
 
         def side(a, b):
             facing[a:b] = np.where(hit[a:b, None], normals[a:b], self.up)
-            depth[a:b] = np.where(hit[a:b], t[a:b], _norm3(G[a:b] - self.origin))
+            depth[a:b] = np.where(hit[a:b], t[a:b], _norm3(G[a:b] - _at(origins, slice(a, b))))
         in_chunks(side, n)
 
         def light(idx, shadows=True, occlusion=True):
@@ -821,7 +827,7 @@ def form_image(scene, camera, arrays, kargs, options, centre, gpu=None, progress
     hit0, t0, grad0, objs0 = (np.asarray(a) for a in centre)
     hit0, t0, objs0 = hit0.ravel(), t0.ravel(), objs0.ravel()
     grad0 = grad0.reshape(-1, 3)        # a view: written in place
-    dirs = _primary_dirs(camera)
+    rays0 = _primary_rays(camera)
     skargs = _shading_args(kargs) if scene.film.shading == "lit" else None
     shade_evals = 0
     if skargs is not None:
@@ -831,7 +837,7 @@ def form_image(scene, camera, arrays, kargs, options, centre, gpu=None, progress
     tell = progress or (lambda fraction: None)
     tell(0.1 if skargs is not None else 0.0)
     shader = _Shader(scene, camera, arrays, kargs, gpu)
-    colour0, alpha0, rec0 = shader.shade(hit0, t0, grad0, dirs, grid=(H, W), objs=objs0)
+    colour0, alpha0, rec0 = shader.shade(hit0, t0, grad0, rays0, grid=(H, W), objs=objs0)
     tell(0.5 if samples > 1 else 0.9)
     acc = colour0 * alpha0[:, None]
     acc_a = alpha0.copy()
@@ -852,7 +858,7 @@ def form_image(scene, camera, arrays, kargs, options, centre, gpu=None, progress
         kk = np.tile(ks, pixels.size)
         r = (pix // W).astype(np.float64) + offsets[kk, 0]
         c = (pix % W).astype(np.float64) + offsets[kk, 1]
-        d = _dir(kargs.cam, r, c)
+        rays_k = sample_rays(kargs.cam, r, c)
         bounds = (cone_lo[pixels], cone_hi[pixels])
         hit, t, grad, st, obj = _trace(kargs, arrays.depth_max, options, pixels, W, offsets[ks],
                                        bounds, gpu=gpu)
@@ -868,7 +874,7 @@ def form_image(scene, camera, arrays, kargs, options, centre, gpu=None, progress
             # a sample's light: interpolated from the centre samples around it (that see
             # what it sees), else its own
             reuse = {"position": (r, c), "centre": rec0, "shape": (H, W)}
-        col, a, rec = shader.shade(hit, t, grad, d, reuse, objs=obj)
+        col, a, rec = shader.shade(hit, t, grad, rays_k, reuse, objs=obj)
         np.add.at(acc, pix, col * a[:, None])
         np.add.at(acc_a, pix, a)
         np.add.at(spp, pix, 1)
@@ -918,15 +924,24 @@ def form_image(scene, camera, arrays, kargs, options, centre, gpu=None, progress
     return rgb, cover.reshape(H, W).astype(np.float32), spp.reshape(H, W), info
 
 
-def _primary_dirs(camera):
-    """The camera's primary rays ``(H W, 3)`` (:func:`tracer.rendering.camera.primary_rays`),
-    in bands of rows over the render's threads."""
+def _primary_rays(camera):
+    """The camera's primary rays ``(origins, dirs)``: ``dirs (H W, 3)``
+    (:func:`tracer.rendering.camera.primary_rays`), in bands of rows over the render's threads,
+    and ``origins`` (:func:`tracer.rendering.camera.ray_origins`: the eye ``(3,)``, or ``(H W,
+    3)`` for parallel rays)."""
     dirs = np.empty((camera.height, camera.width, 3))
 
     def rays(r0, r1):
         dirs[r0:r1] = primary_rays(camera, rows=(r0, r1))
     in_bands(rays, camera.height)
-    return dirs.reshape(-1, 3)
+    origins = ray_origins(camera)
+    return (origins if origins.ndim == 1 else origins.reshape(-1, 3)), dirs.reshape(-1, 3)
+
+
+def _at(origins, index):
+    """The rays' origins at ``index`` (a slice or indices): ``origins`` itself when all rays
+    share one (a perspective camera's eye, ``(3,)``), else its rows."""
+    return origins if origins.ndim == 1 else origins[index]
 
 
 def _composite(shader, acc, acc_a, spp):
@@ -948,14 +963,3 @@ def _composite(shader, acc, acc_a, spp):
         rgb[a:b] = np.round(255.0 * shader.encoder(colour)).astype(np.uint8)
     in_chunks(chunk, n)
     return rgb, cover
-
-
-def _dir(cam, rows, cols):
-    """Unit ray directions through fractional image positions (vectorised
-    :func:`tracer.rendering.camera.ray_direction`)."""
-    width, height = cam[CAM_WIDTH], cam[CAM_HEIGHT]
-    sx, sy = _scales(width, height)
-    dx = (cols / width - 0.5) * sx
-    dy = ((height - 1.0 - rows) / height - 0.5) * sy
-    d = cam[3:6][None, :] + dx[:, None] * cam[6:9][None, :] + dy[:, None] * cam[9:12][None, :]
-    return d / _norm3(d)[:, None]

@@ -22,7 +22,7 @@ from tracer.errors import RenderError
 from tracer.compiling import COMPILING, Eta
 from tracer.image import save_npy, save_png
 from tracer.rendering import march
-from tracer.rendering.camera import box_corners, look_at
+from tracer.rendering.camera import box_corners
 from tracer.rendering.shading import (load_matcap, shade_headlight, shade_matcap, shade_normals,
                             view_normals)
 
@@ -345,8 +345,7 @@ def kernel_roots(roots, params, mode, tol):
 
 def camera_of(scene):
     """The scene's :class:`~tracer.rendering.camera.Camera` (validated)."""
-    return look_at(scene.camera.origin, scene.camera.dest, scene.camera.up, scene.film.width,
-                   scene.film.height)
+    return scene.camera.camera(scene.film.width, scene.film.height)
 
 
 def distance_at_camera(scene, arrays=None):

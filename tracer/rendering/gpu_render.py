@@ -37,7 +37,7 @@ import numpy as np
 from smoothdist import cuda as sdcuda
 from smoothdist.kernels import NJIT
 from tracer.rendering import lighting, march
-from tracer.rendering.camera import CAM_HEIGHT, CAM_WIDTH, ray_direction
+from tracer.rendering.camera import camera_ray, image_size, view_coordinates
 from tracer.rendering.film import form_image
 from tracer.rendering.frame import (ProgressBar, RayArgs, RenderResult, camera_of,
                                     check_camera_outside, check_steps, progress_callback,
@@ -116,9 +116,7 @@ def normal_colour(gx, gy, gz, cam):
         ux = gx / n
         uy = gy / n
         uz = gz / n
-    vx = ux * cam[6] + uy * cam[7] + uz * cam[8]
-    vy = ux * cam[9] + uy * cam[10] + uz * cam[11]
-    vz = -(ux * cam[3] + uy * cam[4] + uz * cam[5])
+    vx, vy, vz = view_coordinates(cam, ux, uy, uz)
     return _channel(vx), _channel(vy), _channel(vz)
 
 
@@ -149,8 +147,8 @@ def _tile_of(cam, ty, tx):
     """Pixel rectangle ``(r_lo, r_hi, c_lo, c_hi)`` of tile ``(ty, tx)`` (``march.TILE``
     square, clipped to the image)."""
     T = march.TILE
-    return (ty * T, min(int(cam[CAM_HEIGHT]), (ty + 1) * T), tx * T,
-            min(int(cam[CAM_WIDTH]), (tx + 1) * T))
+    W, H = image_size(cam)
+    return ty * T, min(H, (ty + 1) * T), tx * T, min(W, (tx + 1) * T)
 
 
 def _render_kernel(data, mode, tol, eps, max_steps, relax, omega, newton, cone, cone_n, hit,
@@ -164,16 +162,17 @@ def _render_kernel(data, mode, tol, eps, max_steps, relax, omega, newton, cone, 
     if r < tbuf.shape[0] and c < tbuf.shape[1]:
         stack = cuda.local.array(STACK, numba.int64)
         dstack = cuda.local.array(STACK, numba.float64)
-        dx, dy, dz = ray_direction(cam, float(r), float(c))
+        ray = camera_ray(cam, float(r), float(c))
+        ox, oy, oz, dx, dy, dz = ray
         ty = r // march.TILE
         tx = c // march.TILE
         r_lo, r_hi, c_lo, c_hi = _tile_of(cam, ty, tx)
         t_min = cone[ty, tx, 1]
         t_pred, d_lb = march.cone_first_step(cam, r_lo, r_hi, c_lo, c_hi, t_min,
                                              cone[ty, tx, 2], cone[ty, tx, 3], cone[ty, tx, 4],
-                                             cone[ty, tx, 5], dx, dy, dz)
+                                             cone[ty, tx, 5], ray)
         h, t, gx, gy, gz, st, lv, bs, ob = march.march_ray(
-            tree, roots, params, mode, tol, cam[0], cam[1], cam[2], dx, dy, dz, lo, hi, eps,
+            tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, lo, hi, eps,
             max_steps, stack, dstack, relax, omega, t_min, newton, np.inf, march.NEWTON_COS,
             t_pred, d_lb)
         if (r - r_lo) * (c_hi - c_lo) + c - c_lo == int(cone[ty, tx, 0]):

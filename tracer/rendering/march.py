@@ -53,7 +53,7 @@ from smoothdist.kernels import (NJIT, NJIT_IR_INLINE, NJIT_PARALLEL, borrowed, b
                                 exact_distance_point,
                                 logsumexp_accumulate, smooth_distance_point,
                                 smooth_distance_point_tol)
-from tracer.rendering.camera import CAM_HEIGHT, CAM_WIDTH, ray_direction
+from tracer.rendering.camera import (block_rays, camera_ray, far_depth, footprint, image_size)
 
 MODE_SMOOTH, MODE_EXACT = 0, 1
 #: columns of the per-object parameter table ``params`` (see the module docstring); numba
@@ -570,53 +570,27 @@ def march_ray(tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, lo, hi, ep
     return 0, np.nan, 0.0, 0.0, 0.0, steps, leaves, bis, -1
 
 @numba.njit(**NJIT)
-def _cone_axis(cam, r_lo, r_hi, c_lo, c_hi):
-    """``(ux, uy, uz, delta)``: the unit central direction of the rays of pixels
-    ``[r_lo, r_hi) x [c_lo, c_hi)`` and a bound ``delta >= |v - u|`` over those rays ``v`` (the
-    rays of a rectangle form a spherically convex set, whose farthest point from ``u`` is a
-    corner)."""
-    ux = 0.0
-    uy = 0.0
-    uz = 0.0
-    for r in (r_lo, r_hi - 1):
-        for c in (c_lo, c_hi - 1):
-            vx, vy, vz = ray_direction(cam, float(r), float(c))
-            ux += vx
-            uy += vy
-            uz += vz
-    n = math.sqrt(ux * ux + uy * uy + uz * uz)
-    ux /= n
-    uy /= n
-    uz /= n
-    delta = 0.0
-    for r in (r_lo, r_hi - 1):
-        for c in (c_lo, c_hi - 1):
-            vx, vy, vz = ray_direction(cam, float(r), float(c))
-            delta = max(delta, math.sqrt((vx - ux) ** 2 + (vy - uy) ** 2 + (vz - uz) ** 2))
-    return ux, uy, uz, delta * 1.0001 + 1e-12
-
-
-@numba.njit(**NJIT)
 def cone_start(tree, roots, params, mode, tol, cam, lo, hi, eps, r_lo, r_hi, c_lo, c_hi, stack,
                dstack, relax=RELAX):
     """Conservative common start depth for the rays of pixels ``[r_lo, r_hi) x [c_lo, c_hi)``.
 
-    Cone marching along the tile's central direction ``u``: every pixel ray ``v`` of the tile
-    has ``|v - u| <= delta`` (``_cone_axis``). A point at
-    parameter ``s`` of ray ``v`` lies within ``|s - t| + t delta`` of the central point at
-    ``t``, so if the scene distance there is ``D``, every ray is surface-free on
-    ``[t, t + D - t delta)`` (the ball of radius ``D`` is, by the same Lipschitz argument as
-    sphere tracing, docs/design-notes.md §4). Steps ``t += D - t delta`` start at the camera
-    (outside the surface) and stop once the cone is wider than a quarter of ``D`` (or leaves
-    the box).
+    Cone marching along the tile's central ray ``o + t u``: every pixel ray of the tile stays
+    within ``near + t spread`` of it at the same ``t`` (the camera's
+    :func:`~tracer.rendering.camera.block_rays`: ``near = 0`` and ``spread >= |v - u|`` for the
+    pinhole, ``spread = 0`` for parallel rays). A point at parameter ``s`` of a pixel ray lies
+    within ``|s - t| + w(t)``, ``w(t) = near + t spread``, of the central point at ``t``, so if
+    the scene distance there is ``D``, every ray is surface-free on ``[t, t + D - w(t))`` (the
+    ball of radius ``D`` is, by the same Lipschitz argument as sphere tracing,
+    docs/design-notes.md §4). Steps ``t += D - w(t)`` start at the camera (outside the
+    surface) and stop once the cone is wider than a quarter of ``D`` (or leaves the box).
     For ``tol > 0`` scenes the evaluations are loosened like the march's (``relax``): an
     under-estimated ``D`` is still a surface-free radius. Returns ``(t_start, evaluations,
     leaves, D, gx, gy, gz)``: ``D`` and ``g`` are the distance and gradient at the returned
     depth on the central ray (``D = -1``: none; with ``relax``, ``D`` may be a loosened value,
     which is still a lower bound).
     """
-    ux, uy, uz, delta = _cone_axis(cam, r_lo, r_hi, c_lo, c_hi)
-    t_in, t_out = ray_box(cam[0], cam[1], cam[2], ux, uy, uz, lo, hi)
+    ox, oy, oz, ux, uy, uz, near, spread = block_rays(cam, r_lo, r_hi, c_lo, c_hi)
+    t_in, t_out = ray_box(ox, oy, oz, ux, uy, uz, lo, hi)
     t = 0.0
     evals = 0
     leaves = 0
@@ -626,13 +600,13 @@ def cone_start(tree, roots, params, mode, tol, cam, lo, hi, eps, r_lo, r_hi, c_l
     gx = gy = gz = 0.0
     while evals < CONE_STEPS:
         d, gx, gy, gz, nn, ll, ob = scene_distance(tree, roots, params, mode, tol,
-                                                   cam[0] + t * ux, cam[1] + t * uy,
-                                                   cam[2] + t * uz, stack, dstack, slack)
+                                                   ox + t * ux, oy + t * uy, oz + t * uz,
+                                                   stack, dstack, slack)
         if loose:
             slack = relax * d
         evals += 1
         leaves += ll
-        step = d - t * delta
+        step = d - (near + t * spread)
         if step <= 0.25 * d or step <= eps:
             break
         t += step
@@ -643,23 +617,29 @@ def cone_start(tree, roots, params, mode, tol, cam, lo, hi, eps, r_lo, r_hi, c_l
 
 
 @numba.njit(**NJIT)
-def cone_newton_step(t_min, D, gx, gy, gz, ux, uy, uz, delta, dx, dy, dz):
+def cone_newton_step(t_min, D, gx, gy, gz, beam, ray):
     """A ray's first step from its tile's cone pass: ``(t_pred, d_lb)``.
 
-    The cone's last evaluation, at depth ``t_min`` on the central ray ``u``, gave the distance
-    ``D`` and gradient ``g``. The ray ``v`` (``|v - u| <= delta``) is at most ``t_min delta``
-    from that point at the same depth, so its distance there is at least ``d_lb = D - t_min
-    delta`` (Lipschitz, as for :func:`cone_start`). ``t_pred`` is where the tangent plane
-    ``D + g . (p - t_min u) = 0`` meets the ray, capped at ``t_min + NEWTON_CAP d_lb`` as a
-    Newton step from distance ``d_lb`` would be; 0 where the ray meets the plane at a cosine
-    below ``NEWTON_COS`` (grazing) or not at all. :func:`march_ray` takes it as its first step
-    and checks it as it checks its own Newton steps (an uncertified step that lands where the
-    distance grows along the ray is undone)."""
-    d_lb = D - t_min * delta
+    The cone's last evaluation, at depth ``t_min`` on the central ray ``o + t u`` of ``beam``
+    (:func:`~tracer.rendering.camera.block_rays`: ``(ox, oy, oz, ux, uy, uz, near,
+    spread)``), gave the distance ``D`` and gradient ``g``. The ray ``ray = (px, py, pz, vx,
+    vy, vz)`` of the beam is at most ``w = near + t_min spread`` from that point at the same
+    depth, so its distance there is at least ``d_lb = D - w`` (Lipschitz, as for
+    :func:`cone_start`). ``t_pred`` is where the tangent plane ``D + g . (x - o - t_min u) =
+    0`` meets the ray, capped at ``t_min + NEWTON_CAP d_lb`` as a Newton step from distance
+    ``d_lb`` would be; 0 where the ray meets the plane at a cosine below ``NEWTON_COS``
+    (grazing) or not at all. :func:`march_ray` takes it as its first step and checks it as
+    it checks its own Newton steps (an uncertified step that lands where the distance grows
+    along the ray is undone)."""
+    ox, oy, oz, ux, uy, uz, near, spread = beam
+    px, py, pz, dx, dy, dz = ray
+    d_lb = D - (near + t_min * spread)
     gv = gx * dx + gy * dy + gz * dz
     if not gv < -NEWTON_COS * math.sqrt(gx * gx + gy * gy + gz * gz):
         return 0.0, d_lb
-    cu = t_min * (gx * ux + gy * uy + gz * uz)
+    # g . (o + t_min u - p): the central point seen from the ray's origin
+    cu = t_min * (gx * ux + gy * uy + gz * uz) + (gx * (ox - px) + gy * (oy - py)
+                                                  + gz * (oz - pz))
     return min((cu - D) / gv, t_min + NEWTON_CAP * d_lb), d_lb
 
 
@@ -667,39 +647,33 @@ def cone_newton_step(t_min, D, gx, gy, gz, ux, uy, uz, delta, dx, dy, dz):
 def cone_end(tree, roots, params, mode, tol, cam, lo, hi, eps, r_lo, r_hi, c_lo, c_hi, stack,
              dstack, relax=RELAX):
     """Conservative common end depth for the rays of pixels ``[r_lo, r_hi) x [c_lo, c_hi)``:
-    :func:`cone_start` run backwards, from the distance of the box's farthest corner
-    towards the camera.
+    :func:`cone_start` run backwards, from the depth beyond which every ray has left the box
+    (:func:`~tracer.rendering.camera.far_depth`) towards the camera.
 
-    Every ray ``v`` of the block is surface-free from the returned ``t_end`` on: beyond the
-    farthest corner's distance a point is outside the box (no surface there), and each
-    step ``t -= D - t delta`` keeps, by the argument of :func:`cone_start` (symmetric in
-    ``s - t``), the part of every ray within ``D - t delta`` of ``t`` surface-free. A ray
+    Every ray of the block is surface-free from the returned ``t_end`` on: beyond that
+    depth a point is outside the box (no surface there), and each step ``t -= D - w(t)``
+    keeps, by the argument of :func:`cone_start` (symmetric in ``s - t``), the part of every
+    ray within ``D - w(t)`` of ``t`` surface-free. A ray
     that passes a silhouette then stops at ``t_end`` instead of stepping out of the box with
     the growing distances behind the silhouette. Stops when the step falls below a quarter
     of ``D`` (or ``eps``), or the cone reaches the camera. Returns ``(t_end, evaluations,
     leaves)``."""
-    ux, uy, uz, delta = _cone_axis(cam, r_lo, r_hi, c_lo, c_hi)
-    # every point farther from the camera than the box's farthest corner is outside the box
-    # (rays have unit speed): the cone starts there
-    t = 0.0
-    for k in range(8):
-        cx = hi[0] if k & 1 else lo[0]
-        cy = hi[1] if k & 2 else lo[1]
-        cz = hi[2] if k & 4 else lo[2]
-        t = max(t, math.sqrt((cx - cam[0]) ** 2 + (cy - cam[1]) ** 2 + (cz - cam[2]) ** 2))
+    ox, oy, oz, ux, uy, uz, near, spread = block_rays(cam, r_lo, r_hi, c_lo, c_hi)
+    # every ray is outside the box beyond the camera's far_depth: the cone starts there
+    t = far_depth(cam, lo, hi)
     evals = 0
     leaves = 0
     loose = mode == MODE_SMOOTH and tol > 0.0 and relax > 0.0
     slack = np.inf if loose else 0.0
     while evals < CONE_STEPS:
         d, gx, gy, gz, nn, ll, ob = scene_distance(tree, roots, params, mode, tol,
-                                                   cam[0] + t * ux, cam[1] + t * uy,
-                                                   cam[2] + t * uz, stack, dstack, slack)
+                                                   ox + t * ux, oy + t * uy, oz + t * uz,
+                                                   stack, dstack, slack)
         if loose:
             slack = relax * d
         evals += 1
         leaves += ll
-        step = d - t * delta
+        step = d - (near + t * spread)
         if step <= 0.25 * d or step <= eps:
             break
         t -= step
@@ -725,8 +699,8 @@ def tile_cone(tree, roots, params, mode, tol, cam, lo, hi, eps, r_lo, r_hi, c_lo
     for r in range(r_lo, r_hi):
         for c in range(c_lo, c_hi):
             if first < 0:
-                dx, dy, dz = ray_direction(cam, float(r), float(c))
-                t_in, t_out = ray_box(cam[0], cam[1], cam[2], dx, dy, dz, lo, hi)
+                ox, oy, oz, dx, dy, dz = camera_ray(cam, float(r), float(c))
+                t_in, t_out = ray_box(ox, oy, oz, dx, dy, dz, lo, hi)
                 if t_in <= t_out:
                     first = k
             k += 1
@@ -741,13 +715,13 @@ def tile_cone(tree, roots, params, mode, tol, cam, lo, hi, eps, r_lo, r_hi, c_lo
 
 
 @numba.njit(**NJIT)
-def cone_first_step(cam, r_lo, r_hi, c_lo, c_hi, t_min, D, gx, gy, gz, dx, dy, dz):
-    """``(t_pred, d_lb)`` of a ray ``(dx, dy, dz)`` of the tile from its :func:`tile_cone`
-    result (``D <= 0``: none, ``(0, 0)``); see :func:`cone_newton_step`."""
+def cone_first_step(cam, r_lo, r_hi, c_lo, c_hi, t_min, D, gx, gy, gz, ray):
+    """``(t_pred, d_lb)`` of a ray ``ray = (ox, oy, oz, dx, dy, dz)`` of the tile from its
+    :func:`tile_cone` result (``D <= 0``: none, ``(0, 0)``); see :func:`cone_newton_step`."""
     if not D > 0.0:
         return 0.0, 0.0
-    ux, uy, uz, delta = _cone_axis(cam, r_lo, r_hi, c_lo, c_hi)
-    return cone_newton_step(t_min, D, gx, gy, gz, ux, uy, uz, delta, dx, dy, dz)
+    beam = block_rays(cam, r_lo, r_hi, c_lo, c_hi)
+    return cone_newton_step(t_min, D, gx, gy, gz, beam, ray)
 
 
 @numba.njit(**NJIT_IR_INLINE)
@@ -759,9 +733,6 @@ def _render_tile(tree, ray, r_lo, r_hi, c_lo, c_hi, depth_max, out, opts):
     relax, omega, cone, newton = opts
     stack = np.empty(depth_max + 4, dtype=np.int64)
     dstack = np.empty(depth_max + 4)
-    ox = cam[0]
-    oy = cam[1]
-    oz = cam[2]
     first = -1
     t_min = 0.0
     t_max = np.inf
@@ -776,12 +747,13 @@ def _render_tile(tree, ray, r_lo, r_hi, c_lo, c_hi, depth_max, out, opts):
     k = 0
     for r in range(r_lo, r_hi):
         for c in range(c_lo, c_hi):
-            dx, dy, dz = ray_direction(cam, float(r), float(c))
+            ray = camera_ray(cam, float(r), float(c))
+            ox, oy, oz, dx, dy, dz = ray
             c_ev = c_ev0 if k == first else 0
             c_lv = c_lv0 if k == first else 0
             k += 1
             t_pred, d_lb = cone_first_step(cam, r_lo, r_hi, c_lo, c_hi, t_min, D, cgx, cgy,
-                                           cgz, dx, dy, dz)
+                                           cgz, ray)
             h, t, gx, gy, gz, st, lv, bs, ob = march_ray(tree, roots, params, mode, tol, ox, oy,
                                                          oz, dx, dy, dz, lo, hi, eps, max_steps,
                                                          stack, dstack, relax, omega, t_min,
@@ -810,7 +782,7 @@ def _render_tile(tree, ray, r_lo, r_hi, c_lo, c_hi, depth_max, out, opts):
 def _tile_grid(cam, row0, row1):
     """Tiles of rows ``row0 <= r < row1``: ``(image width, tiles per row, number of tiles,
     stride of the scattered visiting order)``."""
-    W = int(cam[CAM_WIDTH])
+    W = image_size(cam)[0]
     ntx = (W + TILE - 1) // TILE
     n = ntx * ((row1 - row0 + TILE - 1) // TILE)
     return W, ntx, n, (STRIDE if n % STRIDE != 0 else 1)
@@ -873,9 +845,9 @@ def trace_pixels(tree, ray, rows, cols, depth_max, hit, tbuf, steps, leaves, rel
     for i in prange(rows.size):
         stack = np.empty(depth_max + 4, dtype=np.int64)
         dstack = np.empty(depth_max + 4)
-        dx, dy, dz = ray_direction(cam, float(rows[i]), float(cols[i]))
-        h, t, gx, gy, gz, st, lv, bs, ob = march_ray(tree, roots, params, mode, tol, cam[0],
-                                                     cam[1], cam[2], dx, dy, dz, lo, hi, eps,
+        ox, oy, oz, dx, dy, dz = camera_ray(cam, float(rows[i]), float(cols[i]))
+        h, t, gx, gy, gz, st, lv, bs, ob = march_ray(tree, roots, params, mode, tol, ox,
+                                                     oy, oz, dx, dy, dz, lo, hi, eps,
                                                      max_steps, stack, dstack, relax, omega, 0.0,
                                                      newton)
         hit[i] = h == 1
@@ -956,7 +928,7 @@ def sample_pixel(tree, ray, rows, cols, offsets, out, opts, eps_px, newton_cos, 
     roots, params, mode, tol, cam, lo, hi, eps, max_steps = ray
     hit, tbuf, grad, steps, objs, t_lo, t_hi = out
     relax, omega, cone, newton = opts
-    pixel = 1.0 / min(cam[CAM_WIDTH], cam[CAM_HEIGHT])      # a pixel's size at unit depth
+    near_px, pixel = footprint(cam)      # a pixel's size at depth t: near_px + pixel t
     r = rows[i]
     c = cols[i]
     c_ev = 0
@@ -971,13 +943,13 @@ def sample_pixel(tree, ray, rows, cols, offsets, out, opts, eps_px, newton_cos, 
         t_lo[i] = 0.0
         t_hi[i] = np.inf
     t_min = t_lo[i]
-    e = max(eps, eps_px * pixel * t_min)
+    e = max(eps, eps_px * pixel * t_min + eps_px * near_px)
     for k in range(offsets.shape[0]):
-        dx, dy, dz = ray_direction(cam, r + offsets[k, 0], c + offsets[k, 1])
+        ox, oy, oz, dx, dy, dz = camera_ray(cam, r + offsets[k, 0], c + offsets[k, 1])
         # every argument given (t_pred and d_lb at their defaults' values): the camera
         # rays' specialisation of march_ray, compiled once for both
         h, t, gx, gy, gz, st, lv, bs, ob = march_ray(
-            tree, roots, params, mode, tol, cam[0], cam[1], cam[2], dx, dy, dz, lo, hi,
+            tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, lo, hi,
             e, max_steps, stack, dstack, relax, omega, t_min, newton, t_hi[i],
             newton_cos, 0.0, 0.0)
         hit[i, k] = h == 1
@@ -1022,14 +994,14 @@ def sample_ray(tree, ray, rows, cols, offsets, out, opts, eps_px, newton_cos, i,
     roots, params, mode, tol, cam, lo, hi, eps, max_steps = ray
     hit, tbuf, grad, steps, objs, t_lo, t_hi = out
     relax, omega, cone, newton = opts
-    pixel = 1.0 / min(cam[CAM_WIDTH], cam[CAM_HEIGHT])      # a pixel's size at unit depth
+    near_px, pixel = footprint(cam)      # a pixel's size at depth t: near_px + pixel t
     t_min = t_lo[i]
-    e = max(eps, eps_px * pixel * t_min)
-    dx, dy, dz = ray_direction(cam, rows[i] + offsets[k, 0], cols[i] + offsets[k, 1])
+    e = max(eps, eps_px * pixel * t_min + eps_px * near_px)
+    ox, oy, oz, dx, dy, dz = camera_ray(cam, rows[i] + offsets[k, 0], cols[i] + offsets[k, 1])
     # every argument given (t_pred and d_lb at their defaults' values): the camera
     # rays' specialisation of march_ray, compiled once for both
     h, t, gx, gy, gz, st, lv, bs, ob = march_ray(
-        tree, roots, params, mode, tol, cam[0], cam[1], cam[2], dx, dy, dz, lo, hi,
+        tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, lo, hi,
         e, max_steps, stack, dstack, relax, omega, t_min, newton, t_hi[i],
         newton_cos, 0.0, 0.0)
     hit[i, k] = h == 1

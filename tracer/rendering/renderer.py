@@ -13,7 +13,7 @@ import numpy as np
 
 from smoothdist.cuda import check_device, cuda_module
 from tracer.rendering import march
-from tracer.rendering.camera import CAM_WIDTH
+from tracer.rendering.camera import image_size
 from tracer.rendering.film import form_image
 from tracer.rendering.frame import (PixelBuffers, RayArgs, RenderResult, camera_of,
                                     check_camera_outside, check_steps, kernel_roots,
@@ -198,7 +198,7 @@ def trace_tiles(args, row0, row1, depth_max, outputs, options, report=None, thre
     and at the end. Ctrl-C (KeyboardInterrupt) stops the workers after their
     current chunk and is re-raised.
     """
-    W = int(args.cam[CAM_WIDTH])
+    W = image_size.py_func(args.cam)[0]     # in Python: nothing to compile
     outputs = PixelBuffers(*outputs)
     n = -(-W // march.TILE) * -(-(row1 - row0) // march.TILE)
     threads = max(1, min(threads or render_threads(), n))

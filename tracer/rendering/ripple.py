@@ -23,7 +23,7 @@ extra).
 
 import numpy as np
 
-from tracer.rendering.camera import primary_rays
+from tracer.rendering.camera import pixel_points
 
 __all__ = ["Sphere", "Capsule", "Torus", "Box", "RoundedCube", "Circle", "Helix", "Segments",
            "hit_points", "normal_angles", "ripple", "mean_offset"]
@@ -258,8 +258,7 @@ class Segments:
 # ---------------------------------------------------------------------------- the metric
 def hit_points(res):
     """World positions ``(n, 3)`` of a render's hit pixels (row-major order of ``res.hit``)."""
-    rays = primary_rays(res.camera)
-    return (res.camera.origin + res.depth.astype(np.float64)[..., None] * rays)[res.hit]
+    return pixel_points(res.camera, res.depth)[res.hit]
 
 
 def normal_angles(res, shape):

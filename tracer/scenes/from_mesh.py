@@ -20,7 +20,7 @@ import smoothdist
 from smoothdist import DataMesh, SmoothDistanceField
 from smoothdist.convert import is_foreign_geometry
 from tracer.errors import ThinFeatureWarning, user_stacklevel
-from tracer.rendering.camera import UP_AXES, LookAt, frame_points
+from tracer.rendering.camera import UP_AXES, LookAt, frame_points, frame_width
 from tracer.rendering.renderer import render
 from tracer.scenes.scene import field_scene, with_default_eps
 from tracer.scenes.settings import KINDS, Film, March, Surface, View, defaults
@@ -82,7 +82,8 @@ def mesh_scene(mesh, F=None, *, kind=None, alpha=_MESH["alpha"], alpha_u=_MESH["
                newton=_MESH["newton"], up=_MESH["up"], samples=_MESH["samples"],
                adaptive=_MESH["adaptive"], transparent=_MESH["transparent"],
                lighting=_MESH["lighting"], color=_MESH["color"],
-               background=_MESH["background"]):
+               background=_MESH["background"], projection=_MESH["projection"],
+               view_width=_MESH["view_width"]):
     """A one-object :class:`tracer.scenes.scene.Scene` for ``mesh``, camera framing the surface.
 
     Parameters
@@ -123,6 +124,12 @@ def mesh_scene(mesh, F=None, *, kind=None, alpha=_MESH["alpha"], alpha_u=_MESH["
     camera : (origin, dest, up) or tracer.rendering.camera.Camera, optional
         An explicit camera instead of ``view``; the ``camera`` of a
         :class:`~tracer.rendering.frame.RenderResult` renders the same view again.
+    projection : {"perspective", "orthographic"}
+        The authors' pinhole (the default), or parallel rays (pyvista's parallel projection;
+        :mod:`tracer.rendering.camera`).
+    view_width : float, optional
+        Orthographic: the image's width in scene units (None: the width that frames the
+        surface from ``view``, with the same border as the perspective framing).
     shading : {"lit", "normals", "matcap", "headlight"}
         ``"lit"`` (the default here): key and fill lights, soft shadows, ambient occlusion
         and a ground (:mod:`tracer.rendering.lighting`); ``"normals"``: the paper's normal colours.
@@ -176,7 +183,7 @@ def build_mesh_scene(mesh, F, kind, surface, march, film, view, camera=None, nam
             new_up, front, why = auto_orientation(data, up)
             scene.extra["orientation"] = why
             if front != "front" or new_up != up:
-                frame_scene(scene, front, new_up)
+                frame_scene(scene, front, new_up, view.view_width)
         warn_thin_tubes(scene)
     return scene
 
@@ -248,25 +255,31 @@ def _several_objects(meshes, kind, surface, march, film, view, camera, name):
         scene.march = replace(scene.march, eps=None)
         with_default_eps(scene)
     if camera is None:      # frame every object's surface (each grown by its own bound)
-        frame_scene(scene, view.view, ups[0])
+        frame_scene(scene, view.view, ups[0], view.view_width)
     warn_thin_tubes(scene)
     return scene
 
 
-def frame_scene(scene, view, up="y"):
+def frame_scene(scene, view, up="y", view_width=None):
     """Point ``scene``'s camera from ``view`` (a name of
     :data:`tracer.rendering.camera.VIEWS`, or ``(direction to the eye, image up)``) at the
     region every object's surface can occupy: its data's vertices grown by its inflation
     bound and offset (exact mode: its offset), plus two hit tolerances
-    (:func:`tracer.rendering.camera.frame_points`)."""
+    (:func:`tracer.rendering.camera.frame_points`). The camera keeps its projection; an
+    orthographic one gets ``view_width``, or else the width that frames that region
+    (:func:`tracer.rendering.camera.frame_width`)."""
     P, grow = [], 0.0
     for o in scene.objects:
         P.append(o.field.mesh.used_vertices())
         g = (o.level("exact") if scene.march.mode == "exact" else
              o.field.inflation(o.alpha, o.alpha_u) + o.level("smooth"))
         grow = max(grow, g)
-    scene.camera = LookAt(*frame_points(np.concatenate(P), grow + 2.0 * scene.march.eps, view,
-                                        scene.film.width, scene.film.height, up=up))
+    fit = (np.concatenate(P), grow + 2.0 * scene.march.eps)
+    pose = frame_points(*fit, view, scene.film.width, scene.film.height, up=up)
+    projection = scene.camera.projection
+    if projection == "orthographic" and view_width is None:
+        view_width = frame_width(*fit, pose, scene.film.width, scene.film.height)
+    scene.camera = LookAt(*pose, projection, view_width)
 
 
 #: keep the up axis the file's convention gives while its front view shows at least this
@@ -373,7 +386,7 @@ def warn_thin_tubes(scene, probes=128):
             or not fld.diagonal > 0:
         return
     dist = float(np.linalg.norm(np.asarray(scene.camera.dest) - scene.camera.origin))
-    half = 0.5 * dist / min(scene.film.width, scene.film.height)
+    half = 0.5 * float(scene.camera.camera(scene.film.width, scene.film.height).pixel_size(dist))
     q, _ = fld._offset_probes(half, count=probes)
     c = o.level("smooth")
     ratio = o.alpha_u / o.alpha
@@ -404,7 +417,7 @@ def render_mesh(mesh, F=None, *, kind=None, alpha=_MESH["alpha"], alpha_u=_MESH[
                 adaptive=_MESH["adaptive"], transparent=_MESH["transparent"],
                 lighting=_MESH["lighting"], color=_MESH["color"],
                 background=_MESH["background"], tol=_MESH["tol"], newton=_MESH["newton"],
-                device="cpu"):
+                device="cpu", projection=_MESH["projection"], view_width=_MESH["view_width"]):
     """Sphere-trace the smooth-distance surface of ``mesh``; arrays back, nothing written.
 
     Parameters are those of :func:`mesh_scene` (the ``"lit"`` shading by default;
@@ -483,9 +496,7 @@ def scene_dict(scene, scene_path, source_paths):
         objs.append(od)
     out = {"description": ("written by tracer render --save-scene from "
                            f"{os.path.basename(source_paths[0])}"),
-           "camera": {k: [float(f"{v:.9g}") for v in np.asarray(vec, dtype=float)]
-                      for k, vec in (("origin", scene.camera.origin), ("dest", scene.camera.dest),
-                                     ("up", scene.camera.up))},
+           "camera": scene.camera.as_dict(),
            "objects": objs, "width": int(scene.film.width), "height": int(scene.film.height),
            "beta": float(scene.march.beta), "mode": scene.march.mode, "shading": scene.film.shading}
     if scene.film.matcap:

@@ -57,7 +57,8 @@ import numpy as np
 import smoothdist
 from smoothdist import DataMesh, SmoothDistanceField
 from tracer.errors import SceneError, user_stacklevel
-from tracer.rendering.camera import LookAt, frame_points, look_at
+from tracer.rendering.camera import (PROJECTIONS, LookAt, check_projection, frame_points,
+                                      frame_width, look_at)
 from tracer.rendering.frame import MAX_SAMPLES
 from tracer.rendering.lighting import Lighting, check_color
 from tracer.scenes.settings import KINDS, SCENE_KEYS, Film, March, Surface, View, defaults
@@ -85,7 +86,7 @@ _API = defaults("api")
 _TOP_KEYS = set(SCENE_KEYS) | {"camera", "objects", "description", "name"}
 _LIGHTING_KEYS = {"shadows", "penumbra", "ao", "ao_distance", "ground", "ground_color", "key",
                   "exposure"}
-_CAMERA_KEYS = {"origin", "dest", "up"}
+_CAMERA_KEYS = {"origin", "dest", "up", "projection", "view_width"}
 _OBJECT_KEYS = {"path", "parts", "alpha", "alpha_u", "max_alpha", "kind", "bvh_type", "matcap",
                 "beta", "offset", "name", "scale", "translate", "color"}
 _PART_KEYS = {"path", "kind", "bvh_type", "scale", "translate"}
@@ -154,7 +155,7 @@ class Scene:
                                 "camera_origin, camera_dest and camera_up)")
             camera = LookAt(**vectors)
         self.path = path
-        self.camera = LookAt(*(np.asarray(v, dtype=float) for v in camera))._replace(**vectors)
+        self.camera = _pose(camera)._replace(**vectors)
         self.objects = list(objects)
         self.march = _replaced(march or March(), settings)
         self.film = _replaced(film or Film(), settings)
@@ -178,6 +179,15 @@ class Scene:
         """Bounding-box diagonal of all objects' data."""
         lo, hi = self.bounds
         return float(np.linalg.norm(hi - lo))
+
+
+def _pose(camera):
+    """``camera`` (a :class:`~tracer.rendering.camera.LookAt`, or ``(origin, dest, up)``) as a
+    ``LookAt`` whose vectors are float arrays."""
+    vectors = [np.asarray(v, dtype=float) for v in tuple(camera)[:3]]
+    if isinstance(camera, LookAt):
+        return camera._replace(origin=vectors[0], dest=vectors[1], up=vectors[2])
+    return LookAt(*vectors)
 
 
 def _replaced(group, settings):
@@ -288,6 +298,7 @@ def load_scene(path, overrides=None):
     origin = vec3(cam["origin"], path, "camera.origin")
     dest = vec3(cam["dest"], path, "camera.dest")
     up = vec3(cam["up"], path, "camera.up")
+    projection, view_width = _projection(cam, overrides, path)
 
     def top(key, default, flag=None, **kw):
         if key in overrides and overrides[key] is not None:
@@ -333,8 +344,9 @@ def load_scene(path, overrides=None):
             raise file_error(path, key, f"must be a string, got {show(data[key])}")
     # the camera, before any mesh is loaded
 
+    pose = LookAt(origin, dest, up, projection, view_width)
     try:
-        look_at(origin, dest, up, width, height)
+        pose.camera(width, height)
     except ValueError as exc:
         raise SceneError(f"{os.path.basename(path)}: {exc}") from None
     objs = data.get("objects")
@@ -362,8 +374,26 @@ def load_scene(path, overrides=None):
     film = Film(width=width, height=height, samples=samples, adaptive=adaptive,
                 transparent=transparent, background=tuple(bg), shading=shading, matcap=matcap,
                 lighting=lighting)
-    return with_default_eps(Scene(path=path, camera=LookAt(origin, dest, up), objects=objects,
+    return with_default_eps(Scene(path=path, camera=pose, objects=objects,
                                   march=march, film=film, description=str(desc)))
+
+
+def _projection(cam, overrides, path):
+    """``(projection, view_width)`` of a scene file's ``camera`` (the command line's
+    ``--projection`` / ``--view-width``, when given, win)."""
+    projection = overrides.get("projection") or cam.get("projection", "perspective")
+    where = "--projection" if overrides.get("projection") else "camera.projection"
+    projection = choice(projection, PROJECTIONS, path, where)
+    view_width = cam.get("view_width")
+    where = "camera.view_width"
+    if overrides.get("view_width") is not None:
+        view_width, where = overrides["view_width"], "--view-width"
+    if view_width is None:
+        return projection, None
+    if projection != "orthographic":
+        raise file_error(path, where, "applies to the orthographic projection only (give "
+                                      "camera.projection \"orthographic\")")
+    return projection, number(view_width, path, where, positive=True)
 
 
 def with_default_eps(scene):
@@ -598,7 +628,8 @@ def scene_from_field(field, *, alpha, alpha_u=_API["alpha_u"], beta=_API["beta"]
                      tol=_API["tol"], newton=_API["newton"], up=_API["up"],
                      samples=_API["samples"], adaptive=_API["adaptive"],
                      transparent=_API["transparent"], lighting=_API["lighting"],
-                     color=_API["color"], background=_API["background"]):
+                     color=_API["color"], background=_API["background"],
+                     projection=_API["projection"], view_width=_API["view_width"]):
     """Build a one-object :class:`Scene` in code (no JSON), e.g. for parameter studies.
 
     Parameters
@@ -650,6 +681,13 @@ def scene_from_field(field, *, alpha, alpha_u=_API["alpha_u"], beta=_API["beta"]
         Base colour of the object in the ``"lit"`` shading, sRGB 0-255.
     background : (3,) int
         Background colour, sRGB 0-255.
+    projection : {"perspective", "orthographic"}
+        The authors' pinhole, or parallel rays (:mod:`tracer.rendering.camera`); a
+        ``camera`` given as a render's ``res.camera`` keeps its own unless this says
+        ``"orthographic"``.
+    view_width : float, optional
+        Orthographic: the image's width in scene units. None: the width that frames the
+        surface (with ``view``), else the width the perspective camera sees at ``dest``.
     """
     return field_scene(
         field, Surface(alpha=alpha, alpha_u=alpha_u, offset=offset, color=color),
@@ -658,7 +696,8 @@ def scene_from_field(field, *, alpha, alpha_u=_API["alpha_u"], beta=_API["beta"]
         Film(width=width, height=height, samples=samples, adaptive=adaptive,
              transparent=transparent, background=background, shading=shading, matcap=matcap,
              lighting=lighting),
-        View(view=view, up=up), camera=camera, name=name)
+        View(view=view, up=up, projection=projection, view_width=view_width), camera=camera,
+        name=name)
 
 
 def field_scene(field, surface, march, film, view=View(), camera=None, name="scene"):
@@ -675,8 +714,7 @@ def field_scene(field, surface, march, film, view=View(), camera=None, name="sce
     march = _api_march(march, beta)
     film = _api_film(film)
     color = None if surface.color is None else check_color(surface.color, "color")
-    camera = _api_camera(field, _view_or_camera(view.view, camera), surface, march, film,
-                         view.up)
+    camera = _api_camera(field, _view_or_camera(view.view, camera), surface, march, film, view)
     offset = surface.offset
     obj = SceneObject(name=name, field=field, alpha=surface.alpha, alpha_u=surface.alpha_u,
                       beta=beta, offset=offset if offset is not None else 1.0 / surface.alpha,
@@ -771,24 +809,30 @@ def _view_or_camera(view, camera):
     return camera if view is None else view
 
 
-def _api_camera(field, camera, surface, march, film, up):
+def _api_camera(field, camera, surface, march, film, view):
     """The :class:`~tracer.rendering.camera.LookAt` of :func:`field_scene`'s ``camera``: three
-    vectors, a view name framing the surface (data's ``up`` axis), or None (the paper's
-    beta-study camera); validated."""
+    vectors, a render's camera, a view name framing the surface (``view.up``: the data's up
+    axis), or None (the paper's beta-study camera), with ``view``'s projection; validated."""
     lo, hi = field.bounds
     alpha, alpha_u, offset, eps = surface.alpha, surface.alpha_u, surface.offset, march.eps
+    projection, view_width = check_projection(view.projection, view.view_width)
     if hasattr(camera, "forward") and hasattr(camera, "vertical"):
         # a tracer.rendering.camera.Camera (a render's ``res.camera``): the same view
+        if projection == "perspective" and camera.projection == "orthographic":
+            projection, view_width = camera.projection, camera.view_width
         camera = (camera.origin, np.asarray(camera.origin) + np.asarray(camera.forward),
                   camera.vertical)
+    elif isinstance(camera, LookAt) and projection == "perspective":
+        projection, view_width = camera.projection, camera.view_width
+    fit = None
     if isinstance(camera, str):
         # the surface lies within its inflation bound plus its offset (exact mode: the
         # offset) of the data
         grow = (offset if march.mode == "exact" and offset is not None else
                 1.0 / alpha if march.mode == "exact" else
                 field.inflation(alpha, alpha_u) + (offset or 0.0))
-        camera = frame_points(field.mesh.used_vertices(), grow + 2.0 * (eps or 0.0), camera,
-                              film.width, film.height, up=up)
+        fit = (field.mesh.used_vertices(), grow + 2.0 * (eps or 0.0))
+        camera = frame_points(*fit, camera, film.width, film.height, up=view.up)
     elif camera is None:
         c = 0.5 * (lo + hi)
         # a single point (or identical points) has no extent: back off by the surface's size
@@ -796,13 +840,15 @@ def _api_camera(field, camera, surface, march, film, up):
                   offset if offset is not None else 1.0 / alpha)
         camera = (c + np.array([0.0, 0.0, 2.0 * ext]), c, np.array([0.0, 1, 0]))
     try:
-        origin, dest, up = (np.asarray(v, dtype=float) for v in camera)
+        origin, dest, up = (np.asarray(v, dtype=float) for v in tuple(camera)[:3])
     except (TypeError, ValueError):
         raise ValueError(f"camera must be (origin, dest, up), three 3-vectors; got {camera!r}") \
             from None
-
-    look_at(origin, dest, up, film.width, film.height)  # validates the camera
-    return LookAt(origin, dest, up)
+    if projection == "orthographic" and view_width is None and fit is not None:
+        view_width = frame_width(*fit, (origin, dest, up), film.width, film.height)
+    pose = LookAt(origin, dest, up, projection, view_width)
+    pose.camera(film.width, film.height)  # validates the camera
+    return pose
 
 
 def _api_number(value, name, **kw):

@@ -75,7 +75,8 @@ def _opt(default, help, *, api=_SAME, mesh=_SAME, file=_SAME, why="", text=None,
 class View:
     """How a camera is chosen when it is not given as three vectors (scene files always give
     ``camera: {origin, dest, up}``): the side it frames the surface from, and the data's up
-    axis. The camera itself is :class:`tracer.rendering.camera.Camera`."""
+    axis; and its projection (scene files: ``camera.projection``, ``camera.view_width``).
+    The camera itself is :class:`tracer.rendering.camera.Camera`."""
 
     view: str = _opt(None, "camera framing the whole surface from this side (front, back, "
                      "left, right, top, iso)", mesh="front", file=REQUIRED, key=False,
@@ -87,6 +88,11 @@ class View:
                    "silhouette)", mesh="auto",
                    file=REQUIRED, key=False,
                    why="a mesh file's extension tells its up axis")
+    projection: str = _opt("perspective", "perspective (the authors' pinhole) or orthographic "
+                           "(parallel rays, as pyvista's parallel projection)", key=False)
+    view_width: float = _opt(None, "orthographic: the view's width in scene units", key=False,
+                             text="the width framing the surface (a view), or the "
+                                  "perspective camera's width at dest")
 
 
 @dataclass(frozen=True)

@@ -45,7 +45,7 @@ def test_ray_direction_matches_primary_rays(size):
     rays = primary_rays(cam)
     assert rays.shape == (size[1], size[0], 3) and rays.dtype == np.float64
     arr = cam.as_array()
-    assert arr.shape == (14,) and arr.dtype == np.float64
+    assert arr.shape == (16,) and arr.dtype == np.float64
     kernel = np.array([[ray_direction(arr, r, c) for c in range(cam.width)]
                        for r in range(cam.height)])
     npt.assert_allclose(kernel, rays, rtol=0, atol=1e-15)

@@ -23,7 +23,7 @@ import pytest
 
 from smoothdist import DataMesh, SmoothDistanceField
 from tracer.rendering import march
-from tracer.rendering.camera import primary_rays
+from tracer.rendering.camera import block_rays, camera_ray, primary_rays
 from tracer.rendering.frame import MarchArgs, SampleBuffers, TraceOptions
 from tracer.cli import main
 from tracer.image import load_png
@@ -388,9 +388,9 @@ def _plain_first_hit(arrays, cam, r, c, eps, max_steps):
     tree, roots, params, mode, lo, hi, depth_max, tol = arrays
     stack = np.empty(depth_max + 4, dtype=np.int64)
     dstack = np.empty(depth_max + 4)
-    d3 = march.ray_direction(cam, r, c)
-    h, t, *_ = march.march_ray(tree, roots, params, mode, tol, cam[0], cam[1], cam[2], *d3, lo,
-                               hi, eps, max_steps, stack, dstack, 0.0, 1.0, 0.0, 0.0)
+    ray = camera_ray(cam, r, c)
+    h, t, *_ = march.march_ray(tree, roots, params, mode, tol, *ray, lo, hi, eps, max_steps,
+                               stack, dstack, 0.0, 1.0, 0.0, 0.0)
     return t if h == 1 else np.inf
 
 
@@ -428,8 +428,7 @@ def test_cone_end_bounds_every_ray_of_the_block(kind, bunny_points):
             t = _plain_first_hit(arrays, cam, r + dr, c + dc, scene.eps, 4000)
             if np.isfinite(t):
                 assert t_lo - 1e-12 <= t <= t_hi + 1e-12, (r, c, dr, dc, t_lo, t, t_hi)
-            d3 = march.ray_direction(cam, r + dr, c + dc)
-            exits.append(march.ray_box(cam[0], cam[1], cam[2], *d3, lo, hi)[1])
+            exits.append(march.ray_box(*camera_ray(cam, r + dr, c + dc), lo, hi)[1])
         shortened += t_hi < min(exits)
     assert shortened >= 5
 
@@ -518,8 +517,8 @@ def test_samples_equal_a_plain_march(bunny_points, newton):
         assert both.sum() >= 10
         # every hit is a point of the band d <= eps (evaluated on its own)
         for i, j in zip(*np.nonzero(hit)):
-            p = cam[:3] + t[i, j] * np.array(march.ray_direction(cam, rows[i] + part[j, 0],
-                                                                  cols[i] + part[j, 1]))
+            ray = np.array(camera_ray(cam, rows[i] + part[j, 0], cols[i] + part[j, 1]))
+            p = ray[:3] + t[i, j] * ray[3:]
             assert march.distance_at(tree, roots, params, mode, tol, *p, depth_max) \
                 <= scene.eps * (1 + 1e-9)
         # the steps stop anywhere in the band: within a few eps / cos of plain sphere
@@ -604,21 +603,21 @@ def test_cone_newton_step_against_plain(case, eps_rel, bunny_points):
                                                           stack, dstack)
             if not 0.0 < D <= nd:
                 continue
-            ux, uy, uz, delta = march._cone_axis(cam, r0, r0 + 4, c0, c0 + 4)
+            beam = block_rays(cam, r0, r0 + 4, c0, c0 + 4)
             for r in range(r0, r0 + 4):
                 for c in range(c0, c0 + 4):
-                    v = march.ray_direction(cam, r, c)
-                    t_pred, d_lb = march.cone_newton_step(t_min, D, gx, gy, gz, ux, uy, uz,
-                                                          delta, *v)
-                    p = cam[:3] + t_min * np.asarray(v)
+                    ray = camera_ray(cam, float(r), float(c))
+                    v = ray[3:]
+                    t_pred, d_lb = march.cone_newton_step(t_min, D, gx, gy, gz, beam, ray)
+                    p = np.asarray(ray[:3]) + t_min * np.asarray(v)
                     d_own = march.scene_distance(tree, roots, params, mode, tol, *p, stack,
                                                  dstack, 0.0)[0]
                     assert d_lb <= d_own + 1e-12
                     if not (t_pred > t_min and d_lb > 0.0):
                         continue
                     predicted += 1
-                    common = (tree, roots, params, mode, tol, cam[0], cam[1], cam[2], *v, lo,
-                              hi, eps, 4000, stack, dstack, march.RELAX, 1.0, t_min, nd)
+                    common = (tree, roots, params, mode, tol, *ray, lo, hi, eps, 4000, stack,
+                              dstack, march.RELAX, 1.0, t_min, nd)
                     a = march.march_ray(*common, np.inf, march.NEWTON_COS, t_pred, d_lb)
                     b = march.march_ray(*common)
                     ref = _plain_first_hit(arrays, cam, r, c, eps, 4000)

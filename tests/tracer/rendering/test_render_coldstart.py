@@ -24,6 +24,7 @@ import pytest
 
 from smoothdist import DataMesh, SmoothDistanceField
 from tracer.rendering import march, renderer as render_mod
+from tracer.rendering.camera import sample_rays
 from tracer.rendering.frame import (LightArgs, LightBuffers, MarchArgs, PixelBuffers,
                                     SampleBuffers)
 from tracer.rendering.frame import RayArgs, TraceOptions, camera_of, kernel_roots, scene_arrays
@@ -283,8 +284,8 @@ def test_task_kernels_equal_the_prange_kernels(name):
         assert [x.tobytes() for x in got] == [x.tobytes() for x in ref], (ntasks, threads)
     # light at the hits
     hit = ref[0].ravel()
-    P = np.ascontiguousarray(cam[:3] + ref[1].ravel()[hit, None] * _dirs(cam, rows, cols, off,
-                                                                          hit))
+    origins, dirs = _rays(cam, rows, cols, off)
+    P = np.ascontiguousarray(origins + ref[1].ravel()[hit, None] * dirs[hit])
     g = ref[2].reshape(-1, 3)[hit]
     N = np.ascontiguousarray(g / np.linalg.norm(g, axis=1, keepdims=True))
     n = len(P)
@@ -306,12 +307,11 @@ def test_task_kernels_equal_the_prange_kernels(name):
         assert [x.tobytes() for x in got] == [x.tobytes() for x in ref_l], (ntasks, threads)
 
 
-def _dirs(cam, rows, cols, off, hit):
-    from tracer.rendering.film import _dir
-
+def _rays(cam, rows, cols, off):
+    """``(origins, dirs)`` of the samples ``off`` of pixels ``(rows, cols)``, pixel-major."""
     r = (rows[:, None] + off[None, :, 0]).ravel()
     c = (cols[:, None] + off[None, :, 1]).ravel()
-    return _dir(cam, r, c)[hit]
+    return sample_rays(cam, r, c)
 
 
 def test_run_tasks_and_bands_cover_everything_once():

@@ -80,7 +80,8 @@ def test_scene_settings_travel_as_groups_and_shorthands_write_them():
     assert other.camera.up.tolist() == [1, 0, 0] and scene.camera.up.tolist() == [0, 1, 0]
     assert other.march is scene.march
     listed = scene_mod.Scene("s.json", camera=([0, 0, 3], [0, 0, 0], [0, 1, 0]))
-    assert all(isinstance(v, np.ndarray) and v.dtype == float for v in listed.camera)
+    assert all(isinstance(v, np.ndarray) and v.dtype == float for v in listed.camera[:3])
+    assert listed.camera.projection == "perspective" and listed.camera.view_width is None
     with pytest.raises(TypeError, match="'widht'"):
         scene_mod.Scene("s.json", camera=scene.camera, widht=3)
     with pytest.raises(TypeError, match="camera"):
