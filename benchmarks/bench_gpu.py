@@ -100,7 +100,7 @@ def bench_render(kind, size, eps, repeat, blocks=()):
 
     def frame(cone=True, block=gpu_render.BLOCK, out=None):
         out = gpu_render.launch(args, shape, cone, block, out)
-        return out[7].copy_to_host()         # the image; waits for the kernel
+        return gpu_render.to_host(out[7])    # the image; waits for the kernel
 
     gpu_s, _ = best(frame, repeat)
     # without the cone pass; and with the output arrays of an earlier launch (no allocation)
@@ -142,7 +142,7 @@ def bench_render_variant(kind, size, eps, repeat, variant):
     scene = load_scene(REPO / "scenes" / f"bunny_{kind}.json", over)
     camera, args, shape, _ = gpu_render.prepare(scene)
     ref_args = args
-    ref = [a.copy_to_host() for a in gpu_render.launch(args, shape)]
+    ref = [gpu_render.to_host(a) for a in gpu_render.launch(args, shape)]
     kernels = None
     if variant == "box32":
         tree = scene_arrays(scene)[0]
@@ -155,13 +155,14 @@ def bench_render_variant(kind, size, eps, repeat, variant):
         raise ValueError(f"unknown render variant {variant!r}; one of {RENDER_VARIANTS}")
 
     t0 = time.perf_counter()
-    out = [a.copy_to_host() for a in gpu_render.launch(args, shape, kernels=kernels)]
+    out = [gpu_render.to_host(a) for a in gpu_render.launch(args, shape, kernels=kernels)]
     first_s = time.perf_counter() - t0
     # timed as bench_render's "GPU ms": the launches and the image copied back, each side
     # best of ``repeat``, one after the other in this process
-    gpu_s, _ = best(lambda: gpu_render.launch(args, shape, kernels=kernels)[7].copy_to_host(),
-                    repeat)
-    ref_s, _ = best(lambda: gpu_render.launch(ref_args, shape)[7].copy_to_host(), repeat)
+    def image(a, kernels=None):
+        return gpu_render.to_host(gpu_render.launch(a, shape, kernels=kernels)[7])
+    gpu_s, _ = best(lambda: image(args, kernels), repeat)
+    ref_s, _ = best(lambda: image(ref_args), repeat)
     both = ref[0] & out[0]
     return dict(gpu_s=gpu_s, gpu_ref_s=ref_s, first_s=first_s,
                 hit_differs=int((ref[0] != out[0]).sum()),

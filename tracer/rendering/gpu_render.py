@@ -19,7 +19,7 @@ numba's CUDA simulator the images equal the CPU's bit for bit
 The lit look, anti-aliasing samples (adaptive too) and transparent backgrounds (issue 49) take
 the CPU's film (:func:`tracer.rendering.film.form_image`) over the GPU's centre samples, with
 its two per-ray kernels on the GPU: the extra samples (``_samples_kernel``, the CPU's
-:func:`tracer.rendering.march.sample_pixel`) and the shadow and occlusion rays
+:func:`tracer.rendering.march.sample_tasks`) and the shadow and occlusion rays
 (``_light_kernel``, :func:`tracer.rendering.lighting.light_point`), one thread per sample
 or point. What stays on the host: the film's bookkeeping (which pixels get samples, the light
 interpolated between centre samples, the colours), the ground's height and, with several
@@ -151,44 +151,34 @@ def _tile_of(cam, ty, tx):
     return ty * T, min(H, (ty + 1) * T), tx * T, min(W, (tx + 1) * T)
 
 
-def _render_kernel(data, mode, tol, eps, max_steps, relax, omega, newton, cone, cone_n, hit,
-                   tbuf, grad, steps, leaves, bisect, objs, rgb):
-    # ``data = (tree, roots, params, cam, lo, hi, bg)``, one tuple: the simulator hands
-    # tuples to the kernel as they are (and top-level arrays as its own wrappers, which the
-    # CPU-compiled functions it calls cannot take). ``cone``: the tile kernel's results (no
-    # cone pass: ``first = -1``, ``t_min = 0``, ``D = -1`` everywhere)
+def _render_kernel(data, mode, tol, eps, max_steps, relax, omega, newton, cone, cone_n, out,
+                   rgb):
+    # ``data = (tree, roots, params, cam, lo, hi, bg)`` and ``out`` (the PixelBuffers arrays),
+    # tuples: the simulator hands tuples to the kernel as they are (and top-level arrays as
+    # its own wrappers, which the CPU-compiled functions it calls cannot take). ``cone``: the
+    # tile kernel's results (no cone pass: ``first = -1``, ``t_min = 0``, ``D = -1``
+    # everywhere). The pixel itself is march.march_pixel and march.store_pixel, as on the CPU
     tree, roots, params, cam, lo, hi, bg = data
     c, r = cuda.grid(2)
-    if r < tbuf.shape[0] and c < tbuf.shape[1]:
+    if r < rgb.shape[0] and c < rgb.shape[1]:
         stack = cuda.local.array(STACK, numba.int64)
         dstack = cuda.local.array(STACK, numba.float64)
-        ray = camera_ray(cam, float(r), float(c))
-        ox, oy, oz, dx, dy, dz = ray
         ty = r // march.TILE
         tx = c // march.TILE
-        r_lo, r_hi, c_lo, c_hi = _tile_of(cam, ty, tx)
-        t_min = cone[ty, tx, 1]
-        t_pred, d_lb = march.cone_first_step(cam, r_lo, r_hi, c_lo, c_hi, t_min,
-                                             cone[ty, tx, 2], cone[ty, tx, 3], cone[ty, tx, 4],
-                                             cone[ty, tx, 5], ray)
-        h, t, gx, gy, gz, st, lv, bs, ob = march.march_ray(
-            tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, lo, hi, eps,
-            max_steps, stack, dstack, relax, omega, t_min, newton, np.inf, march.NEWTON_COS,
-            t_pred, d_lb)
-        if (r - r_lo) * (c_hi - c_lo) + c - c_lo == int(cone[ty, tx, 0]):
-            st += cone_n[ty, tx, 0]
-            lv += cone_n[ty, tx, 1]
-        hit[r, c] = h == 1
-        tbuf[r, c] = t
-        grad[r, c, 0] = gx
-        grad[r, c, 1] = gy
-        grad[r, c, 2] = gz
-        steps[r, c] = st
-        leaves[r, c] = lv
-        bisect[r, c] = bs
-        objs[r, c] = ob
-        if h == 1:
-            cr, cg, cb = normal_colour(gx, gy, gz, cam)
+        tile = _tile_of(cam, ty, tx)
+        seed = (cone[ty, tx, 1], cone[ty, tx, 2], cone[ty, tx, 3], cone[ty, tx, 4],
+                cone[ty, tx, 5])
+        ray = (roots, params, mode, tol, cam, lo, hi, eps, max_steps)
+        res = march.march_pixel(tree, ray, (relax, omega, True, newton), r, c, tile, seed,
+                                np.inf, stack, dstack)
+        ev = 0
+        lv = 0
+        if (r - tile[0]) * (tile[3] - tile[2]) + c - tile[2] == int(cone[ty, tx, 0]):
+            ev = cone_n[ty, tx, 0]
+            lv = cone_n[ty, tx, 1]
+        march.store_pixel(out, r, c, res, ev, lv)
+        if res[0] == 1:
+            cr, cg, cb = normal_colour(res[2], res[3], res[4], cam)
         else:
             cr = bg[0]
             cg = bg[1]
@@ -202,7 +192,7 @@ def _samples_kernel(data, n, eps_px, newton_cos, part):
     # the film's extra samples: ``data = (tree, ray, rows, cols, offsets, out, opts)`` as
     # :func:`tracer.rendering.march.sample_tasks` takes them, one tuple (see _render_kernel).
     # ``part`` WHOLE: one thread per pixel, its bounds and then its K rays (as the CPU's
-    # march.sample_pixel); BOUNDS: one thread per pixel, its bounds (their evaluations parked
+    # march.sample_tasks); BOUNDS: one thread per pixel, its bounds (their evaluations parked
     # in ``steps[i, 0]``); RAYS: one thread per ray (pixel ``j // K``, ray ``j % K``), after a
     # BOUNDS launch. One call site each of sample_bounds and sample_ray: the device functions
     # are inlined, and march_ray is the kernel's bulk
@@ -354,6 +344,11 @@ def _launch_grid(W, H, block):
     return ((W + block[0] - 1) // block[0], (H + block[1] - 1) // block[1])
 
 
+def to_host(a):
+    """A host copy of one of :func:`launch`'s outputs (the simulator's are host arrays)."""
+    return a if isinstance(a, np.ndarray) else a.copy_to_host()
+
+
 def launch(args, shape, cone=True, block=BLOCK, out=None, kernels=None):
     """Trace one frame on the device; returns the device output arrays ``(hit, tbuf, grad,
     steps, leaves, bisect, objs, rgb)`` (the launches are asynchronous). ``cone``: the tile
@@ -380,14 +375,15 @@ def launch(args, shape, cone=True, block=BLOCK, out=None, kernels=None):
         cone_f = cuda.to_device(none)
         cone_n = cuda.to_device(np.zeros((nty, ntx, 2), dtype=np.int64))
     if out is None:
-        out = (cuda.device_array((H, W), dtype=np.bool_), cuda.device_array((H, W)),
-               cuda.device_array((H, W, 3)), cuda.device_array((H, W), dtype=np.int64),
-               cuda.device_array((H, W), dtype=np.int64),
-               cuda.device_array((H, W), dtype=np.int64),
-               cuda.device_array((H, W), dtype=np.int32),
-               cuda.device_array((H, W, 3), dtype=np.uint8))
+        # the simulator: host arrays, which the kernel's CPU-compiled functions can take
+        empty = np.empty if sdcuda.simulated() else cuda.device_array
+        out = (empty((H, W), dtype=np.bool_), empty((H, W)), empty((H, W, 3)),
+               empty((H, W), dtype=np.int64), empty((H, W), dtype=np.int64),
+               empty((H, W), dtype=np.int64), empty((H, W), dtype=np.int32),
+               empty((H, W, 3), dtype=np.uint8))
     with sdcuda.quiet_small_launches():
-        kernels["render"][_launch_grid(W, H, block), block](*args, cone_f, cone_n, *out)
+        kernels["render"][_launch_grid(W, H, block), block](*args, cone_f, cone_n, out[:7],
+                                                             out[7])
     return out
 
 
@@ -407,7 +403,7 @@ def render_cuda(scene, *, progress=None, transforms=None, relax=None, omega=None
     camera, args, (H, W), options = prepare(scene, transforms, relax, omega, cone)
     t0 = time.perf_counter()
     out = launch(args, (H, W), options.cone)
-    hit, tbuf, grad, steps, leaves, bis, objs, rgb = (a.copy_to_host() for a in out)
+    hit, tbuf, grad, steps, leaves, bis, objs, rgb = (to_host(a) for a in out)
     film = scene.film
     use_film = film.samples != 1 or film.shading == "lit" or film.transparent
     alpha, spp, aovs = hit.astype(np.float32), np.ones((H, W), np.int32), {"rays": H * W}

@@ -659,7 +659,9 @@ def cone_end(tree, roots, params, mode, tol, cam, lo, hi, eps, r_lo, r_hi, c_lo,
     of ``D`` (or ``eps``), or the cone reaches the camera. Returns ``(t_end, evaluations,
     leaves)``."""
     ox, oy, oz, ux, uy, uz, near, spread = block_rays(cam, r_lo, r_hi, c_lo, c_hi)
-    # every ray is outside the box beyond the camera's far_depth: the cone starts there
+    # every ray is outside the box beyond the camera's far_depth: the cone starts there.
+    # (The loop below is cone_start's, run backwards. One function for both, inlined,
+    # measured 0.45 s more compiling of a first lit render, 16.0 against 15.6 CPU s.)
     t = far_depth(cam, lo, hi)
     evals = 0
     leaves = 0
@@ -729,7 +731,6 @@ def _render_tile(tree, ray, r_lo, r_hi, c_lo, c_hi, depth_max, out, opts):
     """Trace the pixels ``r_lo <= r < r_hi, c_lo <= c < c_hi`` of one tile (see
     :func:`render_rows`; ``tree``, ``ray``, ``out``, ``opts`` as there)."""
     roots, params, mode, tol, cam, lo, hi, eps, max_steps = ray
-    hit, tbuf, grad, steps, leaves, bisect, objs = out
     relax, omega, cone, newton = opts
     stack = np.empty(depth_max + 4, dtype=np.int64)
     dstack = np.empty(depth_max + 4)
@@ -744,38 +745,60 @@ def _render_tile(tree, ray, r_lo, r_hi, c_lo, c_hi, depth_max, out, opts):
             tree, roots, params, mode, tol, cam, lo, hi, eps, r_lo, r_hi, c_lo, c_hi, stack,
             dstack, relax, newton)
     pending_end = cone
+    tile = (r_lo, r_hi, c_lo, c_hi)
+    seed = (t_min, D, cgx, cgy, cgz)
     k = 0
     for r in range(r_lo, r_hi):
         for c in range(c_lo, c_hi):
-            ray = camera_ray(cam, float(r), float(c))
-            ox, oy, oz, dx, dy, dz = ray
             c_ev = c_ev0 if k == first else 0
             c_lv = c_lv0 if k == first else 0
             k += 1
-            t_pred, d_lb = cone_first_step(cam, r_lo, r_hi, c_lo, c_hi, t_min, D, cgx, cgy,
-                                           cgz, ray)
-            h, t, gx, gy, gz, st, lv, bs, ob = march_ray(tree, roots, params, mode, tol, ox, oy,
-                                                         oz, dx, dy, dz, lo, hi, eps, max_steps,
-                                                         stack, dstack, relax, omega, t_min,
-                                                         newton, t_max, NEWTON_COS, t_pred,
-                                                         d_lb)
-            if h == 0 and pending_end and st > END_AFTER:
+            res = march_pixel(tree, ray, opts, r, c, tile, seed, t_max, stack, dstack)
+            if res[0] == 0 and pending_end and res[5] > END_AFTER:
                 t_max, e_ev, e_lv = cone_end(tree, roots, params, mode, tol, cam, lo, hi, eps,
                                              r_lo, r_hi, c_lo, c_hi, stack, dstack, relax)
                 c_ev += e_ev
                 c_lv += e_lv
                 pending_end = False
-            st += c_ev
-            lv += c_lv
-            hit[r, c] = h == 1
-            tbuf[r, c] = t
-            grad[r, c, 0] = gx
-            grad[r, c, 1] = gy
-            grad[r, c, 2] = gz
-            steps[r, c] = st
-            leaves[r, c] = lv
-            bisect[r, c] = bs
-            objs[r, c] = ob
+            store_pixel(out, r, c, res, c_ev, c_lv)
+
+
+@numba.njit(**NJIT_IR_INLINE)
+def march_pixel(tree, ray, opts, r, c, tile, seed, t_max, stack, dstack):
+    """The camera ray of pixel ``(r, c)`` of the tile ``tile = (r_lo, r_hi, c_lo, c_hi)``,
+    marched from the tile's cone pass ``seed = (t_min, D, gx, gy, gz)`` (:func:`tile_cone`;
+    ``D <= 0``: no first-step prediction) and ended at ``t_max``: :func:`march_ray`'s nine
+    values. ``ray``: :class:`tracer.rendering.frame.MarchArgs`; ``opts``:
+    :class:`tracer.rendering.frame.TraceOptions`. The one per-pixel path of the CPU's tiles and
+    the GPU's render kernel."""
+    roots, params, mode, tol, cam, lo, hi, eps, max_steps = ray
+    relax, omega, cone, newton = opts
+    t_min, D, gx, gy, gz = seed
+    pr = camera_ray(cam, float(r), float(c))
+    ox, oy, oz, dx, dy, dz = pr
+    t_pred, d_lb = cone_first_step(cam, tile[0], tile[1], tile[2], tile[3], t_min, D, gx, gy,
+                                   gz, pr)
+    return march_ray(tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, lo, hi, eps,
+                     max_steps, stack, dstack, relax, omega, t_min, newton, t_max, NEWTON_COS,
+                     t_pred, d_lb)
+
+
+@numba.njit(**NJIT_IR_INLINE)
+def store_pixel(out, r, c, res, evals, leaves):
+    """Write :func:`march_pixel`'s result ``res`` into pixel ``(r, c)`` of ``out``
+    (:class:`tracer.rendering.frame.PixelBuffers`), with ``evals`` and ``leaves`` of the
+    tile's cone passes added to the pixel's own."""
+    hit, tbuf, grad, steps, lvs, bisect, objs = out
+    h, t, gx, gy, gz, st, lv, bs, ob = res
+    hit[r, c] = h == 1
+    tbuf[r, c] = t
+    grad[r, c, 0] = gx
+    grad[r, c, 1] = gy
+    grad[r, c, 2] = gz
+    steps[r, c] = st + evals
+    lvs[r, c] = lv + leaves
+    bisect[r, c] = bs
+    objs[r, c] = ob
 
 
 @numba.njit(**NJIT)
@@ -821,10 +844,11 @@ def render_rows(tree, ray, row0, row1, depth_max, out, opts):
     are visited in a scattered order (``j * STRIDE mod n``) so that the static split of the
     loop between threads gives each thread a similar mix of empty and busy tiles.
     """
-    W, ntx, n, stride = _tile_grid(ray.cam, row0, row1)
+    n = _tile_grid(ray.cam, row0, row1)[2]
     for j in prange(n):
-        r_lo, r_hi, c_lo, c_hi = _tile_rect(j, n, stride, ntx, row0, row1, W)
-        _render_tile(tree, ray, r_lo, r_hi, c_lo, c_hi, depth_max, out, opts)
+        # a call of the serial kernel, not its code inlined into the parallel loop: numba's
+        # parfors marched no ray with the per-pixel functions inlined here
+        render_tiles(tree, ray, row0, row1, depth_max, out, opts, j, j + 1)
 
 
 @numba.njit(**NJIT)
@@ -883,8 +907,10 @@ def trace_samples(tree, ray, rows, cols, offsets, depth_max, out, opts, eps_px=0
     """
     ntasks = max(1, min(rows.size, ntasks))
     for task in prange(ntasks):
-        _samples_task(tree, ray, rows, cols, offsets, depth_max, out, opts, eps_px, newton_cos,
-                      task, ntasks)
+        # a call, not code inlined into the parallel loop: numba's parfors marched no ray with
+        # the per-pixel functions inlined here
+        sample_tasks(tree, ray, rows, cols, offsets, depth_max, out, opts, eps_px, newton_cos,
+                     ntasks, task, task + 1)
 
 
 @numba.njit(**NJIT)
@@ -908,57 +934,11 @@ def _samples_task(tree, ray, rows, cols, offsets, depth_max, out, opts, eps_px, 
     stack = np.empty(depth_max + 4, dtype=np.int64)
     dstack = np.empty(depth_max + 4)
     for i in range(task, n, ntasks):    # every ntasks-th pixel
-        sample_pixel(tree, ray, rows, cols, offsets, out, opts, eps_px, newton_cos, i, stack,
-                     dstack)
-
-
-@numba.njit(**NJIT_IR_INLINE)
-def sample_pixel(tree, ray, rows, cols, offsets, out, opts, eps_px, newton_cos, i, stack,
-                 dstack):
-    """Pixel ``i`` of :func:`trace_samples`: its cone bounds (where not given) and the rays of
-    its ``offsets``, with the traversal stacks ``stack``, ``dstack`` (the CPU's tasks and the
-    GPU's threads, :mod:`tracer.rendering.gpu_render`, call this).
-
-    It is :func:`sample_bounds` and then :func:`sample_ray` for each offset, written out: the
-    GPU calls those two apart (one thread per ray), but merged here, into the ``prange`` loop
-    of :func:`trace_samples`, numba's parfors marched no ray with them, and calling them as
-    functions of their own costs the first lit render a second of compiling.
-    ``tests/tracer/rendering/test_march.py::test_sample_pixel_is_bounds_then_rays`` holds the
-    three to the same values, bit for bit."""
-    roots, params, mode, tol, cam, lo, hi, eps, max_steps = ray
-    hit, tbuf, grad, steps, objs, t_lo, t_hi = out
-    relax, omega, cone, newton = opts
-    near_px, pixel = footprint(cam)      # a pixel's size at depth t: near_px + pixel t
-    r = rows[i]
-    c = cols[i]
-    c_ev = 0
-    if cone and not (math.isfinite(t_lo[i]) and math.isfinite(t_hi[i])):   # CUDA: no ufunc
-        t_lo[i], ev = cone_start(tree, roots, params, mode, tol, cam, lo, hi, eps,
-                                 r - 1, r + 2, c - 1, c + 2, stack, dstack, relax)[:2]
-        c_ev += ev
-        t_hi[i], ev, lv = cone_end(tree, roots, params, mode, tol, cam, lo, hi, eps, r - 1,
-                                   r + 2, c - 1, c + 2, stack, dstack, relax)
-        c_ev += ev
-    elif not cone:
-        t_lo[i] = 0.0
-        t_hi[i] = np.inf
-    t_min = t_lo[i]
-    e = max(eps, eps_px * pixel * t_min + eps_px * near_px)
-    for k in range(offsets.shape[0]):
-        ox, oy, oz, dx, dy, dz = camera_ray(cam, r + offsets[k, 0], c + offsets[k, 1])
-        # every argument given (t_pred and d_lb at their defaults' values): the camera
-        # rays' specialisation of march_ray, compiled once for both
-        h, t, gx, gy, gz, st, lv, bs, ob = march_ray(
-            tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, lo, hi,
-            e, max_steps, stack, dstack, relax, omega, t_min, newton, t_hi[i],
-            newton_cos, 0.0, 0.0)
-        hit[i, k] = h == 1
-        tbuf[i, k] = t
-        grad[i, k, 0] = gx
-        grad[i, k, 1] = gy
-        grad[i, k, 2] = gz
-        steps[i, k] = st + (c_ev if k == 0 else 0)
-        objs[i, k] = ob
+        # its cone bounds, then its rays: the GPU's threads call the same two functions
+        c_ev = sample_bounds(tree, ray, rows, cols, out, opts, i, stack, dstack)
+        for k in range(offsets.shape[0]):
+            sample_ray(tree, ray, rows, cols, offsets, out, opts, eps_px, newton_cos, i, k,
+                       c_ev if k == 0 else 0, stack, dstack)
 
 
 @numba.njit(**NJIT_IR_INLINE)

@@ -434,11 +434,11 @@ def test_cone_end_bounds_every_ray_of_the_block(kind, bunny_points):
 
 
 @pytest.mark.parametrize("cone", [True, False])
-def test_sample_pixel_is_bounds_then_rays(bunny_points, cone):
-    """The CPU's ``sample_pixel`` (inside ``trace_samples``' prange loop and the serial
-    ``sample_tasks``) and the GPU's pieces, ``sample_bounds`` once per pixel and then
-    ``sample_ray`` for each offset (here called one by one from Python), write the same
-    values bit for bit: ``sample_pixel`` spells the two out (see its docstring)."""
+def test_samples_are_bounds_then_rays(bunny_points, cone):
+    """``trace_samples``' prange loop (each task a call of the serial ``sample_tasks``) and
+    the GPU's pieces, ``sample_bounds`` once per pixel and then ``sample_ray`` for each offset
+    (here called one by one from Python), write the same values bit for bit. (With the two
+    inlined into the prange loop, numba's parfors marched no ray: this test failed.)"""
     from tracer.rendering.film import SAMPLE_NEWTON_COS, SAMPLE_OMEGA, sample_offsets
 
     scene = _scene(bunny_points, size=24)
