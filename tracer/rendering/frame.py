@@ -22,7 +22,7 @@ from tracer.errors import RenderError
 from tracer.compiling import COMPILING, Eta
 from tracer.image import save_npy, save_png
 from tracer.rendering import march
-from tracer.rendering.camera import box_corners
+from tracer.rendering.camera import box_corners, ray_origins
 from tracer.rendering.shading import (load_matcap, shade_headlight, shade_matcap, shade_normals,
                             view_normals)
 
@@ -31,7 +31,7 @@ __all__ = ["RenderResult", "RayArgs", "MarchArgs", "PixelBuffers", "SampleBuffer
            "object_level", "kernel_roots", "camera_of", "distance_at_camera", "shade",
            "ProgressBar", "MAX_SAMPLES", "pixel_buffers", "posed_params", "checked_samples",
            "progress_callback", "check_steps", "with_overrides", "trace_options",
-           "check_camera_outside"]
+           "check_camera_outside", "check_image_plane"]
 
 #: the most anti-aliasing samples per pixel (:mod:`tracer.rendering.film`)
 MAX_SAMPLES = 1024
@@ -358,13 +358,46 @@ def distance_at_camera(scene, arrays=None):
 
 def check_camera_outside(scene, arrays=None):
     """Raise :class:`~tracer.errors.RenderError` when the camera is inside the surface (the
-    distance at the camera is not above ``eps``)."""
+    distance at the camera is not above ``eps``), or, orthographic, when its image plane, where
+    the rays start, cuts the surface (:func:`check_image_plane`)."""
+    arrays = arrays or scene_arrays(scene)
     d0 = distance_at_camera(scene, arrays)
     if not d0 > scene.march.eps:
         raise RenderError(f"the camera at {np.round(scene.camera.origin, 6).tolist()} is inside "
                           f"the surface (distance there {d0:.4g} <= eps "
                           f"{scene.march.eps:.3g}); move camera.origin outside or lower "
                           "alpha's blur")
+    camera = camera_of(scene)
+    if camera.orthographic:
+        check_image_plane(scene, camera, arrays)
+
+
+#: ray origins per image side at which :func:`check_image_plane` looks for the surface
+PLANE_PROBES = 64
+
+
+def check_image_plane(scene, camera, arrays):
+    """An orthographic camera's rays start on its image plane: raise
+    :class:`~tracer.errors.RenderError` when the surface is there. Nothing to check when the
+    whole scene box lies in front of the plane; else the distance is probed at up to
+    :data:`PLANE_PROBES` x :data:`PLANE_PROBES` ray origins spread over the image (a surface
+    thinner than their spacing may slip between them)."""
+    tree, roots, params, mode, lo, hi, depth_max, tol = arrays
+    depth = (box_corners(lo, hi) - camera.origin) @ camera.forward
+    if depth.min() > 0.0:
+        return
+    rows = np.unique(np.linspace(0, camera.height - 1, min(PLANE_PROBES, camera.height)).round())
+    cols = np.unique(np.linspace(0, camera.width - 1, min(PLANE_PROBES, camera.width)).round())
+    origins = ray_origins(camera)[rows.astype(int)][:, cols.astype(int)].reshape(-1, 3)
+    root = kernel_roots(roots, params, mode, tol)
+    inside = sum(march.distance_at(tree, root, params, mode, tol, float(p[0]), float(p[1]),
+                                   float(p[2]), depth_max) <= scene.march.eps for p in origins)
+    if inside:
+        raise RenderError(f"the orthographic camera's image plane through "
+                          f"{np.round(camera.origin, 6).tolist()} cuts the surface: rays would "
+                          f"start inside it ({inside} of {len(origins)} probed); move "
+                          f"camera.origin back along the view direction by "
+                          f"{-depth.min():.4g} (the whole scene box is then in front)")
 
 
 def pixel_buffers(H, W):

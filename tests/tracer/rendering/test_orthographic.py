@@ -303,3 +303,23 @@ def test_pyvista_comparison_uses_a_parallel_projection():
     assert m["both_hit"] > 300, m
     assert m["iou"] >= 0.97, m
     assert m["depth_error_rel_diag"] <= 0.02, m
+
+
+def test_image_plane_through_the_surface_is_refused():
+    """Parallel rays start on the image plane: a plane that cuts the sphere (its centre
+    outside it) would start rays inside the surface, drawn as hits at depth 0; it is refused
+    with the distance to move back, and moving back that far renders."""
+    from tracer.errors import RenderError
+
+    field = SmoothDistanceField(np.zeros((1, 3)))
+
+    def scene(z):
+        return scene_from_field(field, alpha=10.0, mode="exact", offset=R, width=32, height=32,
+                                camera=([2.5, 0, z], [2.5, 0, -1], [0, 1, 0]),
+                                projection="orthographic", view_width=8.0)
+
+    with pytest.raises(RenderError, match="image plane .* cuts the surface") as err:
+        render(scene(0.5))
+    back = float(str(err.value).split("by ")[-1].split(" ")[0])
+    res = render(scene(0.5 + back))
+    assert res.hit.any() and np.nanmin(res.depth) > 0.0
