@@ -19,7 +19,7 @@ from tracer.rendering.renderer import render
 from tracer.scenes import from_mesh
 from tracer.scenes.from_mesh import describe_parameters, resolve_up, scene_dict
 from tracer.scenes.scene import AUTHORS_KEYS, BVH_TYPES, load_scene, mesh_paths, read_scene_json
-from tracer.scenes.settings import KINDS, default_text, defaults
+from tracer.scenes.settings import KINDS, default_text, defaults, table
 from tracer.stages import StageClock, stage
 
 HELP = "sphere-trace a scene file to a PNG (and AOVs)"
@@ -379,35 +379,36 @@ def _camera_arg(args):
     return (np.array(c[0:3]), np.array(c[3:6]), np.array(c[6:9]))
 
 
-#: API parameter names of ``mesh_scene`` and the options that set them (error messages name
-#: the option, as the scene-file path's ``--eps must be > 0`` does)
-_OPTION_OF = {"alpha_u": "--alpha-u", "alpha": "--alpha", "beta": "--beta", "eps": "--eps",
-              "tol": "--tol", "newton": "--newton", "offset": "--offset",
-              "view_width": "--view-width"}
-
-
 def _mesh_scene(args):
-    """The scene for a mesh file given on the command line."""
+    """The scene for a mesh file given on the command line (an error about a setting names
+    its option, as the scene-file path's ``--eps must be > 0`` does)."""
     try:
         return _build_mesh_scene(args)
     except ValueError as exc:
         msg = str(exc)
-        for name, option in _OPTION_OF.items():
-            if msg.startswith(name + " ") and getattr(args, name, None) is not None:
-                raise CLIError(option + msg[len(name):]) from None
+        for name in mesh_options(args):
+            if msg.startswith(name + " ") and getattr(args, name) is not None:
+                raise CLIError(_flag_of(name) + msg[len(name):]) from None
         raise
 
 
-#: the settings ``tracer render MESH`` takes as options of the same name (the others keep the
-#: mesh entry points' defaults)
-_MESH_OPTIONS = ("alpha", "alpha_u", "beta", "view", "up", "mode", "offset", "eps", "shading",
-                 "tol", "newton", "samples", "adaptive", "transparent", "color", "background",
-                 "projection", "view_width")
+def mesh_options(args):
+    """The settings ``tracer render MESH`` takes from options of the same name: every key of
+    the settings table (:func:`tracer.scenes.settings.table`) that the command line has (the
+    others keep the mesh entry points' defaults). A new setting with an option of its name is
+    taken with no list to edit."""
+    return [r.key for r in table() if r.key in vars(args)]
+
+
+def _flag_of(name):
+    """The option of the setting ``name``: ``alpha_u`` -> ``--alpha-u``."""
+    return "--" + name.replace("_", "-")
 
 
 def _build_mesh_scene(args):
     d = defaults("mesh")  # the options left out: as render_mesh's
-    given = {k: d[k] if getattr(args, k) is None else getattr(args, k) for k in _MESH_OPTIONS}
+    given = {k: d[k] if getattr(args, k) is None else getattr(args, k)
+             for k in mesh_options(args)}
     given.update(size=args.size or (d["width"], d["height"]),
                  adaptive=bool(given["adaptive"]), transparent=bool(given["transparent"]),
                  background=tuple(given["background"]),

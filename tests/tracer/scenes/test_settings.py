@@ -224,3 +224,16 @@ def test_no_function_of_the_render_path_takes_more_than_eight_settings_one_by_on
                     over[node.name] = mine
     assert seen > 200, seen     # the walk found the functions
     assert set(over) == KEYWORD_ENTRY_POINTS, sorted(over)
+
+
+def test_cli_mesh_options_come_from_the_table():
+    """``tracer render MESH`` takes every setting it has an option of the same name for, with
+    no list to keep: the keys are the table's, the flags their names with dashes."""
+    p = argparse.ArgumentParser()
+    cli_render.add_arguments(p)
+    args = p.parse_args(["m.obj"])
+    taken = cli_render.mesh_options(args)
+    assert {"projection", "view_width", "alpha_u", "samples", "background"} <= set(taken)
+    assert set(taken) <= {r.key for r in table()}
+    flags = {s for a in p._actions for s in a.option_strings}
+    assert all(cli_render._flag_of(k) in flags for k in taken)
