@@ -523,17 +523,15 @@ def sample_rays(cam, rows, cols):
     return cam[0:3].copy(), d / norm[:, None]
 
 
-def _grid_offsets(camera, rows):
-    """``(dx (1, W, 1), dy (h, 1, 1))``: the image-plane offsets of rows ``rows = (r0, r1)``
-    (None: all) and every column."""
-    width, height = float(camera.width), float(camera.height)
-    sx, sy = _scales(width, height)
-    cols = np.arange(camera.width, dtype=np.float64)
+def _grid_rays(camera, rows=None):
+    """:func:`sample_rays` of every pixel of rows ``rows = (r0, r1)`` (None: all), as
+    ``(origins, dirs)``: ``(3,)`` or ``(h, W, 3)``, and ``(h, W, 3)``."""
     r0, r1 = (0, camera.height) if rows is None else rows
-    rows = np.arange(r0, r1, dtype=np.float64)
-    dx = ((cols / width - 0.5) * sx)[None, :, None]
-    dy = (((height - 1.0 - rows) / height - 0.5) * sy)[:, None, None]
-    return dx, dy
+    rr, cc = np.meshgrid(np.arange(r0, r1, dtype=np.float64),
+                         np.arange(camera.width, dtype=np.float64), indexing="ij")
+    origins, dirs = sample_rays(camera.as_array(), rr.ravel(), cc.ravel())
+    shape = (r1 - r0, camera.width, 3)
+    return (origins if origins.ndim == 1 else origins.reshape(shape)), dirs.reshape(shape)
 
 
 def primary_rays(camera, rows=None):
@@ -553,13 +551,7 @@ def primary_rays(camera, rows=None):
         and column ``col``; the rays start at :func:`ray_origins`. With ``rows``:
         ``(r1 - r0, W, 3)``.
     """
-    dx, dy = _grid_offsets(camera, rows)
-    if camera.orthographic:
-        return np.broadcast_to(camera.forward, (dy.shape[0], dx.shape[1], 3)).copy()
-    rays = camera.forward + dx * camera.horizontal + dy * camera.vertical
-    norm = np.sqrt(rays[..., 0] * rays[..., 0] + rays[..., 1] * rays[..., 1]
-                   + rays[..., 2] * rays[..., 2])
-    return rays / norm[..., None]
+    return _grid_rays(camera, rows)[1]
 
 
 def ray_origins(camera, rows=None):
@@ -568,9 +560,7 @@ def ray_origins(camera, rows=None):
     (``rows`` as in :func:`primary_rays`)."""
     if not camera.orthographic:
         return np.asarray(camera.origin, dtype=np.float64)
-    dx, dy = _grid_offsets(camera, rows)
-    s = camera.view_width / camera.scale_x
-    return camera.origin + s * (dx * camera.horizontal + dy * camera.vertical)
+    return _grid_rays(camera, rows)[0]
 
 
 def pixel_points(camera, depth):
