@@ -1,5 +1,6 @@
 """The build-once object: a data mesh, its BVH, and batch queries against it."""
 
+import copy
 import hashlib
 import math
 from typing import NamedTuple
@@ -9,10 +10,11 @@ import numpy as np
 from smoothdist import cuda
 from smoothdist._cast import as_points, non_negative, positive
 from smoothdist._kernels import query as _q
-from smoothdist._kernels.bvh import build_tree
+from smoothdist._kernels.bvh import build_tree, tree_with_weights
 from smoothdist._kernels.exact_query import GROUP, build_exact_tree, exact_tree_batch
 from smoothdist._kernels.spacing import gap_probes, local_smooth_distance
 from smoothdist.error_budget import Within, point_alpha, within
+from smoothdist.junctions import check_weights
 from smoothdist.connectivity import unique_sorted_rows
 from smoothdist.mesh import as_data_mesh
 from smoothdist.query_order import coherent_order, scattered
@@ -159,6 +161,12 @@ class SmoothDistanceField:
         Primitives per BVH leaf.
     progress : callable(done, total, elapsed_s), optional
         Reports the BVH build (see :func:`smoothdist._kernels.bvh.build_tree`), for very large data.
+    weights : {"paper", "inclusion-exclusion"}
+        The weights of edges and triangles: the paper's polynomials (Sec. 3.3, App. C; the
+        default), or inclusion-exclusion over the junctions (:mod:`smoothdist.junctions`):
+        the exact distance's sum above flat faces and outside convex edges and corners (no
+        groove along the internal edges of a flat face), for ``alpha`` large against the
+        edges. :meth:`with_weights` switches an existing field. Point clouds: no difference.
 
     Notes
     -----
@@ -178,14 +186,33 @@ class SmoothDistanceField:
     True
     """
 
-    def __init__(self, mesh, F=None, *, leaf_size=1, progress=None, **mesh_kwargs):
+    def __init__(self, mesh, F=None, *, leaf_size=1, progress=None, weights="paper",
+                 **mesh_kwargs):
+        check_weights(weights)
         mesh = as_data_mesh(mesh, F, **mesh_kwargs)
         if (isinstance(leaf_size, bool) or not isinstance(leaf_size, (int, np.integer))
                 or leaf_size < 1):
             raise ValueError(f"leaf_size must be an integer >= 1, got {leaf_size!r}")
         self.mesh = mesh
         self.leaf_size = int(leaf_size)
+        self.weights = "paper"
         self.tree = build_tree(mesh, leaf_size=self.leaf_size, progress=progress)
+        if weights != "paper":
+            self.tree = tree_with_weights(self.tree, mesh, weights)
+            self.weights = weights
+
+    def with_weights(self, weights):
+        """This field with the weight scheme ``weights`` (``"paper"`` or
+        ``"inclusion-exclusion"``, see the class notes): ``self`` when it already has it,
+        otherwise a new field that shares the mesh, the tree's nodes and corners and the
+        exact-distance tree (cheap: the weight arrays only)."""
+        if check_weights(weights) == self.weights:
+            return self
+        out = copy.copy(self)
+        out.__dict__ = {k: v for k, v in self.__dict__.items() if k != "_cuda_tree"}
+        out.tree = tree_with_weights(self.tree, self.mesh, weights)
+        out.weights = weights
+        return out
 
     # ------------------------------------------------------------------ properties
     @property

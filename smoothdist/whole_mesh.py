@@ -293,6 +293,9 @@ class MeshDistance:
     def __init__(self, data, query, *, alpha, alpha_q=None, beta=0.5, alpha_u=None,
                  gradient="exact", leaf_size=1, tol=DEFAULT_TOL, box_test=True):
         self.field = _as_field(data, leaf_size)
+        if self.field.weights != "paper":
+            raise ValueError("whole-mesh distance uses the paper's weights: pass a field made "
+                             "with weights='paper' (field.with_weights('paper'))")
         self.tol = non_negative(tol, "tol")
         if not isinstance(box_test, (bool, np.bool_)):
             raise ValueError(f"box_test must be True or False, got {box_test!r}")

@@ -22,6 +22,7 @@ import numba
 import numpy as np
 
 from smoothdist._config import NJIT, NJIT_GENERIC, NJIT_IR_INLINE, PARALLEL
+from smoothdist.junctions import check_weights, junction_table
 from smoothdist.mesh import KIND_EDGE, KIND_POINT, KIND_TRIANGLE
 from smoothdist.schedule import run_largest_first
 
@@ -695,6 +696,21 @@ def _node_max(values, start, count):
     return out
 
 
+def tree_with_weights(tree, mesh, weights):
+    """``tree`` (built on ``mesh``) with the weight scheme ``weights``: ``"paper"`` (the
+    polynomials of :meth:`~smoothdist.DataMesh.weight_classes`, as :func:`build_tree` makes
+    them) or ``"inclusion-exclusion"`` (:mod:`smoothdist.junctions`). A shallow copy: the
+    nodes and corners are shared, the weight arrays (``wc``, ``wcls``, ``pwhi``, ``whi``,
+    ``lwhi``, ``A``) are new."""
+    if check_weights(weights) == "paper":
+        _, _, wc, wcls, pwhi, A = primitive_table(mesh, tree.orig)
+    else:
+        wc, wcls, pwhi = junction_table(mesh, tree.kind, tree.orig)
+        A = float(pwhi.max()) if pwhi.size else 1.0
+    whi = _node_max(pwhi, tree.start, tree.count)
+    return tree._replace(wc=wc, wcls=wcls, pwhi=pwhi, whi=whi, lwhi=np.log(whi), A=float(A))
+
+
 def concatenate_trees(trees):
     """Merge several :class:`TreeData` into one forest.
 
@@ -703,6 +719,9 @@ def concatenate_trees(trees):
     of each input's root. Query it with the ``root`` argument of the point kernels. ``orig``
     keeps each input's own primitive numbering; ``A`` and ``depth`` are the maxima.
     """
+    if len({t.wc.shape[1] for t in trees}) > 1:
+        raise ValueError("the trees of a forest must share one weight scheme (paper or "
+                         "inclusion-exclusion weights, smoothdist.junctions)")
     node_off = np.cumsum([0] + [t.lo.shape[0] for t in trees])[:-1]
     prim_off = np.cumsum([0] + [t.kind.size for t in trees])[:-1]
     class_off = np.cumsum([0] + [t.wc.shape[0] for t in trees])[:-1]

@@ -30,6 +30,7 @@ from smoothdist._kernels.closest_point import (SEG_INTERIOR, TRI_AB, TRI_AC, TRI
 from smoothdist._kernels.traversal import (NONE, ZERO, always, beyond_best, nearest_first, never,
                                           no_far_field, within_best)
 from smoothdist._kernels.weights import eval_edge_weight, eval_triangle_weight
+from smoothdist.junctions import JUNCTION_COLUMNS
 from smoothdist.schedule import parallel_tasks
 
 #: queries handled by one parallel task (one traversal stack each)
@@ -53,16 +54,93 @@ def _attenuate(raw, dwfac_in, whi, S):
     return W, S * W / raw * dwfac_in
 
 
+#: a junction cell whose exponent ``alpha (d_x - d)`` exceeds this adds less than ``exp(-37)``
+#: (1e-16) of the primitive's own term, below a float64's rounding: not added
+JUNCTION_REACH = 37.0
+
+
 @numba.njit(**NJIT_INLINE)
-def primitive_term(tree, i, px, py, pz, S, wgrad_scale):
+def junction_term(P, k, c, px, py, pz, S, alpha):
+    """Term of a primitive with inclusion-exclusion junction weights (:mod:`smoothdist.junctions`):
+    corners ``P (9,)``, kind ``k``, coefficient row ``c`` (``a_01 a_12 a_20 b_0 b_1 b_2`` of a
+    triangle, ``a_0 a_1`` of an edge). Returns ``(d, W, vx, vy, vz)`` as :func:`primitive_term`;
+    the weight and gradient are exact (the junction terms are distances' exponentials)."""
+    if k == 0:
+        cx = P[0]
+        cy = P[1]
+        cz = P[2]
+    elif k == 1:
+        cx, cy, cz, _, _ = closest_point_segment(px, py, pz, P[0], P[1], P[2], P[3], P[4], P[5])
+    else:
+        cx, cy, cz, _, _, _ = closest_point_triangle(px, py, pz, P[0], P[1], P[2], P[3], P[4],
+                                                     P[5], P[6], P[7], P[8])
+    rx = px - cx
+    ry = py - cy
+    rz = pz - cz
+    d = math.sqrt(rx * rx + ry * ry + rz * rz)
+    W = 1.0
+    vx = 0.0
+    vy = 0.0
+    vz = 0.0
+    if d > 0.0:
+        vx = rx / d
+        vy = ry / d
+        vz = rz / d
+    # the junction cells: a triangle's edges 01, 12, 20 (subtracted) and corners 0, 1, 2
+    # (added); an edge's two ends (subtracted). Each adds coef exp(-alpha (d_x - d)) to W and
+    # that times the unit gradient of d_x to v
+    cells = 0 if k == 0 else (2 if k == 1 else 6)
+    for j in range(cells):
+        coef = c[j]
+        if coef == 0.0:
+            continue
+        if k == 1:
+            coef = -S * coef
+            cx = P[3 * j]
+            cy = P[3 * j + 1]
+            cz = P[3 * j + 2]
+        elif j < 3:
+            coef = -S * coef
+            a = 3 * j
+            b = 3 * ((j + 1) % 3)
+            cx, cy, cz, _, _ = closest_point_segment(px, py, pz, P[a], P[a + 1], P[a + 2], P[b],
+                                                     P[b + 1], P[b + 2])
+        else:
+            coef = S * coef
+            cx = P[3 * (j - 3)]
+            cy = P[3 * (j - 3) + 1]
+            cz = P[3 * (j - 3) + 2]
+        rx = px - cx
+        ry = py - cy
+        rz = pz - cz
+        dx = math.sqrt(rx * rx + ry * ry + rz * rz)
+        x = alpha * (dx - d)
+        if x > JUNCTION_REACH:
+            continue
+        e = coef * math.exp(-x)
+        W += e
+        if dx > 0.0:
+            f = e / dx
+            vx += f * rx
+            vy += f * ry
+            vz += f * rz
+    return d, W, vx, vy, vz
+
+
+@numba.njit(**NJIT_INLINE)
+def primitive_term(tree, i, px, py, pz, S, wgrad_scale, alpha):
     """Term of primitive ``i`` (tree order) for query ``p``.
 
     Returns ``(d, W, vx, vy, vz)``: distance, attenuated weight ``W``, and the gradient
     numerator ``W * unit(p - c) - wgrad_scale * grad W`` (to be multiplied by ``exp(-alpha d)``).
     ``wgrad_scale`` is ``1/alpha`` for the exact derivative, ``1/alpha**2`` for the paper's metric.
+    A tree with junction weights (rows of ``JUNCTION_COLUMNS`` in ``wc``) takes
+    :func:`junction_term` (its weights have no metric: ``wgrad_scale`` is not used).
     """
     k = tree.kind[i]
     P = tree.pts[i]
+    if tree.wc.shape[1] == JUNCTION_COLUMNS:
+        return junction_term(P, k, tree.wc[tree.wcls[i]], px, py, pz, S, alpha)
     gwx = 0.0
     gwy = 0.0
     gwz = 0.0
@@ -240,7 +318,7 @@ def _smooth_leaf(tree, q, node, st):
     st_ = tree.start[node]
     cnt = tree.count[node]
     for i in range(st_, st_ + cnt):
-        d, W, vx, vy, vz = primitive_term(tree, i, px, py, pz, S, wgrad_scale)
+        d, W, vx, vy, vz = primitive_term(tree, i, px, py, pz, S, wgrad_scale, alpha)
         m, s, gx, gy, gz = logsumexp_accumulate(m, s, gx, gy, gz, d, W, vx, vy, vz, alpha)
     cut = m + reach
     return True, (m, s, gx, gy, gz, cut * cut, leaves + cnt)
@@ -290,6 +368,8 @@ def smooth_distance_point(tree, px, py, pz, alpha, beta, S, wgrad_scale, stack, 
         tree, q, (np.inf, 0.0, 0.0, 0.0, 0.0, np.inf, ZERO), stack, dstack, root,
         box_distance2(px, py, pz, tree.lo, tree.hi, root)[0], _smooth_skip, _smooth_far,
         _smooth_leaf, _box_children, always)
+    if s < 1.0:
+        s = 1.0     # only junction weights go below: d_hat <= m (JUNCTION_CLAMP)
     inv = 1.0 / s
     return m - math.log(s) / alpha, gx * inv, gy * inv, gz * inv, nodes, leaves
 
@@ -315,6 +395,12 @@ def negligible_reach(tree, root, S, alpha):
     n = max(tree.count[root], 1)
     return (math.log(n / NEGLIGIBLE) + S * max(tree.lwhi[root], 0.0)) / alpha
 
+
+#: JUNCTION_CLAMP: the sum relative to the smallest distance ``m`` is clamped to ``>= 1`` (``d_hat
+#: <= m``) at the end of every smooth kernel. With the paper's weights (every ``W >= 1``) it
+#: always is, so nothing changes; with junction weights (:mod:`smoothdist.junctions`), whose
+#: terms can be negative, the clamp keeps ``d_hat`` finite and at most the exact distance where
+#: they cancel too much.
 
 #: ``tol`` when none is given: tolerance-controlled pruning off. The one definition of that
 #: default (the library's functions, ``tracer.rendering.frame.scene_arrays``; ``smoothdist.kernels``
@@ -419,7 +505,7 @@ def _tol_leaf(tree, q, node, st):
     m, s, gx, gy, gz, s_ex, e_far, s_ref, n_cov, n_ref, near, leaves = st
     st_ = tree.start[node]
     for i in range(st_, st_ + cnt):
-        d, W, vx, vy, vz = primitive_term(tree, i, px, py, pz, S, wgrad_scale)
+        d, W, vx, vy, vz = primitive_term(tree, i, px, py, pz, S, wgrad_scale, alpha)
         m, s, gx, gy, gz, s_ex, e_far, s_ref = _shift_sums(m, d, alpha, s, gx, gy, gz, s_ex,
                                                            e_far, s_ref)
         e = math.exp(-alpha * (d - m))
@@ -470,6 +556,8 @@ def smooth_distance_point_tol(tree, px, py, pz, alpha, beta, tol, S, wgrad_scale
         (np.inf, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, ZERO, ZERO, np.inf, ZERO), stack, dstack, root,
         math.sqrt(box_distance2(px, py, pz, tree.lo, tree.hi, root)[0]), never, _tol_far,
         _tol_leaf, _box_children_sqrt, always)
+    if s < 1.0:
+        s = 1.0     # only junction weights go below: d_hat <= m (JUNCTION_CLAMP)
     inv = 1.0 / s
     return m - math.log(s) / alpha, gx * inv, gy * inv, gz * inv, nodes, leaves
 
@@ -536,8 +624,10 @@ def smooth_distance_brute_point(tree, px, py, pz, alpha, S, wgrad_scale):
     gy = 0.0
     gz = 0.0
     for i in range(tree.kind.size):
-        d, W, vx, vy, vz = primitive_term(tree, i, px, py, pz, S, wgrad_scale)
+        d, W, vx, vy, vz = primitive_term(tree, i, px, py, pz, S, wgrad_scale, alpha)
         m, s, gx, gy, gz = logsumexp_accumulate(m, s, gx, gy, gz, d, W, vx, vy, vz, alpha)
+    if s < 1.0:
+        s = 1.0     # only junction weights go below: d_hat <= m (JUNCTION_CLAMP)
     return m - math.log(s) / alpha, gx / s, gy / s, gz / s
 
 

@@ -1,0 +1,147 @@
+"""Inclusion-exclusion junction weights: the alternative to the paper's weight polynomials.
+
+Why: the LogSumExp counts a junction once per primitive that meets there. Above an edge shared
+by two coplanar triangles both are at the same distance, so the sum doubles and the surface
+bulges by ``log 2 / alpha``; the paper's weight polynomials (Sec. 3.3, App. C) halve each
+triangle's weight near the edge, but they vary over the triangle's size, while the doubling
+fades within ``sqrt(2 d / alpha)`` of the edge. Between the two lengths the surface sinks by
+up to ``log 2 / alpha``: a groove along every internal edge of a flat face (about a pixel
+wide in the renderer's thin shell, where it shows as a dotted seam).
+
+These weights subtract each junction as often as it was counted too often, by
+inclusion-exclusion over the mesh's cells. For a triangle mesh the sum is
+
+    sum_T exp(-alpha d_T) - sum_E (n_E - 1) exp(-alpha d_E) + sum_v c_v exp(-alpha d_v),
+
+``n_E`` the triangles on edge ``E``, ``c_v = 1 - k_v + sum_{E at v} (n_E - 1)`` (``k_v`` the
+triangles at ``v``: 1 at an interior vertex of a closed fan, 0 on a boundary). Whenever the
+closest points of all the triangles at a junction lie on it (any query above a flat face, or
+outside a convex edge or corner) the terms cancel to exactly one ``exp(-alpha d)``: the sum is
+the exact distance's, with no groove, no bulge and no weight gradient. Inside a concave
+crease both faces are nearer than their edge and the sum blends them (at most twice the
+largest term), as the LogSumExp does. Each edge's and vertex's terms are shared out among the
+triangles that meet there, so a triangle's term is its own distance's with the weight
+
+    W_T = 1 - sum_{E of T} a_E exp(-alpha (d_E - d_T)) + sum_{v of T} b_v exp(-alpha (d_v - d_T)),
+
+``a_E = (n_E - 1) / n_E``, ``b_v = c_v / k_v``; an edge mesh (a polyline) likewise has
+``W_E = 1 - sum_{v of E} a_v exp(-alpha (d_v - d_E))``, ``a_v = (n_v - 1) / n_v``. Points keep
+weight 1. The weight and its gradient are exact (``smoothdist._kernels.query.primitive_term``).
+
+Limits: a term's weight can be negative (a sliver's corner), and seen from far away the sum
+over a closed surface tends to its Euler characteristic times one term (0 for a torus) instead
+of ``N`` terms. Where ``alpha`` times the edge length is small and the whole object is in
+reach, the sum can therefore fall below one term; the kernels clamp it there to the nearest
+primitive's (``d_hat <= d``, the conservative property, always holds). The renderer uses
+these weights for its automatic thin shell and tubes (``alpha`` large against the edges);
+the paper's weights stay the default of the library and of scene files.
+
+Attenuation ``S`` (``alpha_u``) scales the junction terms: ``W = 1 + S (W_ie - 1)``; the bound
+``pwhi = exp(B)`` (``B`` the sum of a primitive's positive ``b_v``) keeps ``pwhi ** S >= W``
+for every ``S`` in ``(0, 1]``, so the far fields stay upper bounds.
+"""
+
+from typing import NamedTuple
+
+import numpy as np
+
+from smoothdist.connectivity import row_counts, triangle_half_edges
+
+__all__ = ["WEIGHTS", "JUNCTION_COLUMNS", "JunctionWeights", "junction_weights",
+           "junction_table", "check_weights"]
+
+#: the weight schemes: the paper's polynomials, and inclusion-exclusion over the junctions
+WEIGHTS = ("paper", "inclusion-exclusion")
+#: columns of a junction row of ``TreeData.wc``: ``a_01 a_12 a_20 b_0 b_1 b_2`` (triangles) or
+#: ``a_0 a_1`` (edges), zeros, and a last column of 1 that marks the row as a junction row (the
+#: paper's rows have 13 columns)
+JUNCTION_COLUMNS = 14
+
+
+def check_weights(weights):
+    """``weights`` as given, after checking it is one of :data:`WEIGHTS` (``ValueError``)."""
+    if not isinstance(weights, str) or weights not in WEIGHTS:
+        raise ValueError(f"weights must be one of {', '.join(map(repr, WEIGHTS))}, "
+                         f"got {weights!r}")
+    return weights
+
+
+class JunctionWeights(NamedTuple):
+    """Per-primitive junction coefficients of a mesh (module notes).
+
+    ``edge (e, 2)`` float64: ``a_v`` of each edge's two ends (subtracted); ``tri (t, 6)``
+    float64: ``a_01, a_12, a_20`` of each triangle's edges (subtracted) and ``b_0, b_1, b_2`` of
+    its corners (added), in the order of the triangle's vertices.
+    """
+
+    edge: np.ndarray
+    tri: np.ndarray
+
+
+def junction_weights(mesh):
+    """:class:`JunctionWeights` of a :class:`~smoothdist.DataMesh` (edges and triangles are
+    separate meshes: an edge's ends count edges, a triangle's junctions count triangles)."""
+    n = mesh.V.shape[0]
+    E, T = mesh.edges, mesh.triangles
+    edge = np.zeros((E.shape[0], 2))
+    if E.shape[0]:
+        nv = np.bincount(E.ravel(), minlength=n).astype(np.float64)
+        edge = (nv[E] - 1.0) / nv[E]
+    tri = np.zeros((T.shape[0], 6))
+    if T.shape[0]:
+        half = triangle_half_edges(T)                          # (01), (12), (20) of each
+        ne = row_counts(half, n).astype(np.float64)            # (3 t,) triangles on each
+        tri[:, :3] = ((ne - 1.0) / ne).reshape(3, -1).T
+        k = np.bincount(T.ravel(), minlength=n).astype(np.float64)
+        # c_v = 1 - k_v + sum over the distinct edges at v of (n_E - 1): each half-edge row
+        # adds (n_E - 1) / n_E (its share of the edge) to both of its ends
+        share = (ne - 1.0) / ne
+        c = 1.0 - k
+        np.add.at(c, half[:, 0], share)
+        np.add.at(c, half[:, 1], share)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            b = np.where(k > 0, c / k, 0.0)
+        tri[:, 3:] = b[T]
+    return JunctionWeights(edge, tri)
+
+
+def junction_table(mesh, kind, order):
+    """``(wc, wcls, pwhi)`` of a tree with junction weights (``TreeData`` fields), for the
+    primitives in tree order ``order (m,)`` (mesh numbering: points, edges, triangles) of kind
+    ``kind (m,)`` (0, 1, 2).
+
+    ``wc (k, JUNCTION_COLUMNS)``: the distinct coefficient rows (a point cloud: one row of
+    zeros with the marker); ``wcls (m,)`` each primitive's row; ``pwhi (m,)`` the bound
+    ``exp(sum of the positive b_v)`` (1 for points and edges).
+    """
+    jw = junction_weights(mesh)
+    p, e = mesh.points.size, mesh.edges.shape[0]
+    rows = np.zeros((order.shape[0], JUNCTION_COLUMNS))
+    is_edge = kind == 1
+    is_tri = kind == 2
+    if is_edge.any():
+        rows[is_edge, :2] = jw.edge[order[is_edge] - p]
+    if is_tri.any():
+        rows[is_tri, :6] = jw.tri[order[is_tri] - p - e]
+    rows[:, -1] = 1.0
+    wc, wcls = _distinct_rows(rows)
+    pwhi = np.exp(np.maximum(rows[:, 3:6], 0.0).sum(axis=1) * is_tri)
+    return wc, wcls, pwhi
+
+
+def _distinct_rows(rows):
+    """``(distinct (k, c), index (m,) int64)`` of the float rows ``rows (m, c)``: a 64-bit hash
+    of each row's bits, made unique (``np.unique(rows, axis=0)`` sorts the rows themselves, 15x
+    slower: 3 s per million triangles); a hash collision, which the check finds, falls back
+    to it."""
+    bits = np.ascontiguousarray(rows + 0.0).view(np.uint64)      # + 0.0: -0.0 becomes 0.0
+    h = np.zeros(rows.shape[0], dtype=np.uint64)
+    with np.errstate(over="ignore"):
+        for j in range(bits.shape[1]):
+            h *= np.uint64(0x9E3779B97F4A7C15)
+            h ^= bits[:, j]
+    _, first, index = np.unique(h, return_index=True, return_inverse=True)
+    distinct = rows[first]
+    if not np.array_equal(distinct[index], rows):
+        distinct, index = np.unique(rows, axis=0, return_inverse=True)
+    return np.ascontiguousarray(distinct), index.ravel().astype(np.int64)
