@@ -33,6 +33,10 @@ if str(REPO) not in sys.path:
 import numpy as np  # noqa: E402
 
 TARGETS = {"iou": 0.90, "p95_deg": 10.0, "streak_share": 0.001}
+#: issue 62's targets for flat faces (tracer.checks.fidelity.flat_seams): at most 0.5 % of
+#: the flat pixels turned more than 1 degree, none more than 5, at most 0.05 % of them more
+#: than 4 levels off their 5 x 5 median
+SEAM_TARGETS = {"seam_turned_share": 0.005, "seam_max_deg": 5.0, "seam_off_share": 0.0005}
 
 
 def _trimesh_shapes():
@@ -92,6 +96,25 @@ def _pyvista_shapes():
     }
 
 
+def _new_user_shapes():
+    """Issue 62's families, made in a few lines as a new user would: platonic solids, text in
+    several fonts and lengths, open cones and pyramids, discs and annuli, a terrain."""
+    import pyvista as pv
+
+    shapes = {f"pv_{k}": pv.PlatonicSolid(k).triangulate()
+              for k in ("tetrahedron", "cube", "octahedron", "dodecahedron", "icosahedron")}
+    shapes.update({
+        "pv_text_seed": pv.Text3D("Seed 2026").triangulate(),
+        "pv_text_courier": pv.Text3D("tracer", depth=0.3).triangulate(),
+        "pv_cone_open": pv.Cone(capping=False, resolution=24).triangulate(),
+        "pv_pyramid": pv.Pyramid().triangulate(),
+        "pv_disc": pv.Disc(inner=0.0, c_res=24).triangulate(),
+        "pv_annulus": pv.Disc(inner=0.5, outer=1.0, r_res=2, c_res=32).triangulate(),
+        "pv_hills": pv.ParametricRandomHills(random_seed=1).triangulate(),
+    })
+    return shapes
+
+
 def _clouds_and_curves():
     rng = np.random.default_rng(0)
 
@@ -102,12 +125,21 @@ def _clouds_and_curves():
 
     s = np.linspace(0, 6 * np.pi, 200)
     helix = np.stack([np.cos(s), np.sin(s), 0.15 * s], 1)
+    t = np.linspace(0, 2 * np.pi, 400)
+    lissajous = np.stack([np.sin(3 * t), np.sin(4 * t + 0.5), np.sin(5 * t)], 1)
+    ring = rng.uniform(0, 2 * np.pi, 500)
+    box = rng.uniform(-0.5, 0.5, (100_000, 3))
+    side = rng.integers(0, 6, box.shape[0])
+    box[np.arange(box.shape[0]), side % 3] = np.where(side < 3, -0.5, 0.5)
     g = np.linspace(-1, 1, 25)
     X, Y = np.meshgrid(g, g)
     return {
         "torus_points_200": torus_points(200), "torus_points_5000": torus_points(5000),
         "grid_points": np.stack([X.ravel(), Y.ravel(), 0.1 * np.sin(3 * X.ravel())], 1),
         "helix_polyline": (helix, np.stack([np.arange(199), np.arange(1, 200)], 1)),
+        "lissajous_polyline": (lissajous, np.stack([np.arange(399), np.arange(1, 400)], 1)),
+        "ring_points_500": np.stack([np.cos(ring), np.sin(ring), np.zeros_like(ring)], 1),
+        "box_points_100k": box,
         "bunny_low": str(REPO / "scenes" / "data" / "meshes" / "bunny_low.obj"),
         "octopus_low": str(REPO / "scenes" / "data" / "meshes" / "octopus_low.obj"),
     }
@@ -129,12 +161,13 @@ def corpus(shared=None):
     shapes = {}
     shapes.update(_trimesh_shapes())
     shapes.update(_pyvista_shapes())
+    shapes.update(_new_user_shapes())
     shapes.update(_clouds_and_curves())
     shapes.update(_shared(shared))
     return shapes
 
 
-def run_shape(name, shape, size):
+def run_shape(name, shape, size, weights="auto"):
     import tracer
     from tracer.checks.fidelity import fidelity
 
@@ -144,7 +177,7 @@ def run_shape(name, shape, size):
         shape, F = shape
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        res = tracer.render_mesh(shape, F, size=(size, size), progress=None)
+        res = tracer.render_mesh(shape, F, size=(size, size), progress=None, weights=weights)
         render_s = time.perf_counter() - t0
         f = fidelity(res)
     o = res.scene.objects[0]
@@ -154,30 +187,47 @@ def run_shape(name, shape, size):
     f.update(shape=name, kind="+".join(kinds), primitives=o.field.num_primitives,
              alpha=o.alpha, level=o.smooth_offset, diagonal=o.field.diagonal,
              render_s=render_s, orientation=res.scene.extra.get("orientation", ""))
+    f["weights"] = res.scene.march.weights
     f["meets"] = {k: bool(f[k] >= v) if k == "iou" else bool(f[k] <= v)
                   for k, v in TARGETS.items()}
+    f["meets"].update({k: bool(f[k] <= v) for k, v in SEAM_TARGETS.items()
+                       if np.isfinite(f[k])})
     return f
 
 
 def markdown(result):
-    lines = ["| shape | kind | primitives | IoU | p95 deg | streaks % | offset / diagonal |",
-             "|---|---|---|---|---|---|---|"]
+    lines = ["| shape | kind | primitives | IoU | p95 deg | streaks % | offset / diagonal "
+             "| flat turned % | flat max deg | flat off % |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
     for r in result["rows"]:
         def fmt(v, spec):
             return "-" if not np.isfinite(v) else format(v, spec)
         lines.append(f"| {r['shape']} | {r['kind']} | {r['primitives']:,} | {fmt(r['iou'], '.2f')} | "
                      f"{fmt(r['p95_deg'], '.1f')} | {fmt(100 * r['streak_share'], '.2f')} | "
-                     f"{fmt(100 * r['offset'] / r['diagonal'], '.1f')} % |")
+                     f"{fmt(100 * r['offset'] / r['diagonal'], '.1f')} % | "
+                     f"{fmt(100 * r.get('seam_turned_share', np.nan), '.2f')} | "
+                     f"{fmt(r.get('seam_max_deg', np.nan), '.1f')} | "
+                     f"{fmt(100 * r.get('seam_off_share', np.nan), '.3f')} |")
     return "\n".join(lines)
 
 
 def summary(result):
     rows = result["rows"]
     met = {k: sum(r["meets"][k] for r in rows) for k in TARGETS}
-    return (f"of {len(rows)} shapes at {result['size']}², "
+    text = (f"of {len(rows)} shapes at {result['size']}², "
             f"{met['iou']} reach IoU >= {TARGETS['iou']:.2f}, {met['p95_deg']} a p95 normal "
             f"angle <= {TARGETS['p95_deg']:g} degrees and {met['streak_share']} a streak share "
             f"<= {100 * TARGETS['streak_share']:g} %")
+    flat = [r for r in rows if np.isfinite(r.get("seam_turned_share", np.nan))]
+    if not flat:                        # a file from before the seam measure
+        return text
+    seams = {k: sum(r["meets"].get(k, False) for r in flat) for k in SEAM_TARGETS}
+    return (f"{text}; of the {len(flat)} with flat pixels, "
+            f"{seams['seam_turned_share']} have <= "
+            f"{100 * SEAM_TARGETS['seam_turned_share']:g} % of them turned more than 1 degree, "
+            f"{seams['seam_max_deg']} none more than {SEAM_TARGETS['seam_max_deg']:g} degrees "
+            f"and {seams['seam_off_share']} <= {100 * SEAM_TARGETS['seam_off_share']:g} % of "
+            f"them more than 4 levels off their median")
 
 
 def main(argv=None):
@@ -186,6 +236,8 @@ def main(argv=None):
     p.add_argument("--shapes", nargs="+", help="only these shapes")
     p.add_argument("--shared", default=None, help="a ../shared/data folder (Thingi10K, scans)")
     p.add_argument("--json", help="write the results here")
+    p.add_argument("--weights", default="auto", choices=("auto", "paper", "inclusion-exclusion"),
+                   help="render_mesh's weights (auto: its default)")
     args = p.parse_args(argv)
     shapes = corpus(args.shared)
     if args.shapes:
@@ -193,13 +245,16 @@ def main(argv=None):
         if unknown:
             p.error(f"unknown shapes {unknown}; known: {', '.join(shapes)}")
         shapes = {k: shapes[k] for k in args.shapes}
-    result = {"size": args.size, "targets": TARGETS, "rows": [],
+    result = {"size": args.size, "targets": TARGETS, "seam_targets": SEAM_TARGETS,
+              "weights": args.weights, "rows": [],
               "date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()), "cores": os.cpu_count()}
     for name, shape in shapes.items():
-        r = run_shape(name, shape, args.size)
+        r = run_shape(name, shape, args.size, args.weights)
         result["rows"].append(r)
         print(f"{name:>24}: IoU {r['iou']:.2f}, p95 {r['p95_deg']:.1f} deg, streaks "
-              f"{100 * r['streak_share']:.2f} %, offset {r['offset']:.3g}, {r['render_s']:.1f} s",
+              f"{100 * r['streak_share']:.2f} %, offset {r['offset']:.3g}, flat turned "
+              f"{100 * r['seam_turned_share']:.2f} % (max {r['seam_max_deg']:.1f} deg, off "
+              f"{100 * r['seam_off_share']:.3f} %), {r['render_s']:.1f} s",
               flush=True)
     print(markdown(result))
     print(summary(result))

@@ -61,6 +61,7 @@ def own_meshes(out_dir, size=384):
     import tracer
 
     shapes = (("trimesh annulus", trimesh.creation.annulus(0.5, 1.0, height=0.3)),
+              ("pyvista dodecahedron", pv.PlatonicSolid("dodecahedron").triangulate()),
               ("pyvista arrow", pv.Arrow().triangulate()),
               ("pyvista Text3D", pv.Text3D("Hi", depth=0.2).triangulate()),
               ("octopus, 898 triangles", str(ROOT / "scenes" / "data" / "meshes"

@@ -18,7 +18,8 @@ from tracer.rendering.frame import MAX_SAMPLES, ProgressBar, scene_arrays
 from tracer.rendering.renderer import render
 from tracer.scenes import from_mesh
 from tracer.scenes.from_mesh import describe_parameters, resolve_up, scene_dict
-from tracer.scenes.scene import AUTHORS_KEYS, BVH_TYPES, load_scene, mesh_paths, read_scene_json
+from tracer.scenes.scene import (AUTHORS_KEYS, BVH_TYPES, WEIGHT_CHOICES, load_scene, mesh_paths,
+                                 read_scene_json)
 from tracer.scenes.settings import KINDS, default_text, defaults, table
 from tracer.stages import StageClock, stage
 
@@ -90,6 +91,13 @@ def add_arguments(p):
                         "steps only save distance evaluations")
     p.add_argument("--mode", choices=("smooth", "exact"),
                    help="smooth distance, or exact distance offset surface")
+    p.add_argument("--weights", choices=WEIGHT_CHOICES,
+                   help="weights of edges and triangles: paper (the paper's polynomials; "
+                   f"default for a scene file: {_def('weights')}), inclusion-exclusion (the "
+                   "exact distance's sum above flat faces and outside convex edges: no seams "
+                   f"on flat faces), or auto (default for a mesh file: "
+                   f"{_def('weights', 'mesh')}): inclusion-exclusion for the automatic "
+                   "surface, paper once --alpha, --alpha-u or --offset is given")
     p.add_argument("--offset", type=float, metavar="C",
                    help="the surface's offset C >= 0: smooth mode d_hat = C (default 0; "
                    "with alpha and alpha_U auto, edges and triangles: see --alpha), "
@@ -123,6 +131,12 @@ def add_arguments(p):
                    help="lit shading: no ambient occlusion")
     p.add_argument("--no-ground", dest="ground", action="store_false", default=None,
                    help="lit shading: no ground plane")
+    _add_output_arguments(p)
+
+
+def _add_output_arguments(p):
+    """The outputs of ``tracer render`` beside its PNG (AOVs, heat maps, statistics) and how
+    it runs (threads, device, overwrite, quiet)."""
     p.add_argument("--depth", metavar="OUT.npy",
                    help="write the depth AOV: ray parameter t, float32 (H, W), NaN on misses")
     p.add_argument("--normals", metavar="OUT.npy",
@@ -253,7 +267,8 @@ def run(args):
                  "offset": args.offset, "tol": args.tol, "newton": args.newton,
                  "samples": args.samples, "adaptive": args.adaptive,
                  "transparent": args.transparent, "lighting": _lighting_args(args),
-                 "projection": args.projection, "view_width": args.view_width}
+                 "projection": args.projection, "view_width": args.view_width,
+                 "weights": args.weights}
     if args.size:
         overrides["width"], overrides["height"] = args.size
     name = os.path.splitext(os.path.basename(args.scene))[0]

@@ -318,8 +318,8 @@ def test_the_exact_mix_tables_and_sentences_follow_the_file():
 
 
 def test_the_fidelity_table_follows_its_file():
-    """Issue 46: the troubleshooting guide's fidelity table and its summary sentence are those
-    of ``benchmarks/data/fidelity.json``."""
+    """Issues 46 and 62: the troubleshooting guide's fidelity table and its summary sentences
+    are those of ``benchmarks/data/fidelity.json`` and the files it is compared with."""
     from benchmarks.bench_fidelity import markdown, summary
 
     d = _load("fidelity.json")
@@ -330,6 +330,8 @@ def test_the_fidelity_table_follows_its_file():
     assert any(lines[i:i + len(want)] == want for i in starts), "paste it again"
     assert summary(d) in _flat(page)
     assert summary(_load("fidelity_before_shell.json")) in _flat(page)
+    # issue 62: the same corpus with the paper's weights, the comparison for the junctions
+    assert summary(_load("fidelity_paper_weights.json")) in _flat(page)
 
 
 def test_the_shell_time_sentence_follows_its_file():

@@ -195,10 +195,13 @@ def _worker(out):
         o = scene.objects[0]
         f = o.field
         Q = _queries(f, NQ)
-        for label, kw in (("bh", dict(beta=0.5)), ("tol", dict(beta=0.0, tol=1e-3))):
+        # and the junction weights (smoothdist.junctions): the same kernel, another branch
+        for label, kw in (("bh", dict(beta=0.5)), ("tol", dict(beta=0.0, tol=1e-3)),
+                          ("junctions", dict(beta=0.5))):
             kw.update(alpha=o.alpha, alpha_u=o.alpha_u, return_stats=True)
+            fw = f.with_weights("inclusion-exclusion" if label == "junctions" else "paper")
             for dev in ("cpu", "cuda"):
-                d, g, st = f.smooth_distance(Q, device=dev, **kw)
+                d, g, st = fw.smooth_distance(Q, device=dev, **kw)
                 arrays[f"q_{name}_{label}_{dev}_d"] = d
                 arrays[f"q_{name}_{label}_{dev}_g"] = g
                 arrays[f"q_{name}_{label}_{dev}_leaves"] = st.leaves_visited
@@ -274,7 +277,7 @@ def sim(tmp_path_factory):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("name", tuple(f"bunny_{k}" for k in KINDS) + ("mixed",))
-@pytest.mark.parametrize("label", ("bh", "tol"))
+@pytest.mark.parametrize("label", ("bh", "tol", "junctions"))
 def test_smooth_distance_equals_cpu(sim, name, label):
     cpu_d, gpu_d = sim[f"q_{name}_{label}_cpu_d"], sim[f"q_{name}_{label}_cuda_d"]
     scale = np.maximum(np.abs(cpu_d), sim[f"q_{name}_diag"])

@@ -22,7 +22,7 @@ from smoothdist.convert import is_foreign_geometry
 from tracer.errors import ThinFeatureWarning, user_stacklevel
 from tracer.rendering.camera import UP_AXES, LookAt, frame_points, frame_width
 from tracer.rendering.renderer import render
-from tracer.scenes.scene import field_scene, with_default_eps
+from tracer.scenes.scene import field_scene, with_default_eps, with_weights
 from tracer.scenes.settings import KINDS, Film, March, Surface, View, defaults
 from tracer.stages import StageClock, stage, stage_progress
 
@@ -83,7 +83,7 @@ def mesh_scene(mesh, F=None, *, kind=None, alpha=_MESH["alpha"], alpha_u=_MESH["
                adaptive=_MESH["adaptive"], transparent=_MESH["transparent"],
                lighting=_MESH["lighting"], color=_MESH["color"],
                background=_MESH["background"], projection=_MESH["projection"],
-               view_width=_MESH["view_width"]):
+               view_width=_MESH["view_width"], weights=_MESH["weights"]):
     """A one-object :class:`tracer.scenes.scene.Scene` for ``mesh``, camera framing the surface.
 
     Parameters
@@ -130,6 +130,11 @@ def mesh_scene(mesh, F=None, *, kind=None, alpha=_MESH["alpha"], alpha_u=_MESH["
     view_width : float, optional
         Orthographic: the image's width in scene units (None: the width that frames the
         surface from ``view``, with the same border as the perspective framing).
+    weights : {"auto", "paper", "inclusion-exclusion"}
+        The weights of edges and triangles (:mod:`smoothdist.junctions`). ``"auto"`` (the
+        default here): inclusion-exclusion over the junctions for the automatic surface (no
+        seams along the internal edges of flat faces, the exact offset surface over convex
+        parts), the paper's polynomials once alpha, alpha_u or the offset is given.
     shading : {"lit", "normals", "matcap", "headlight"}
         ``"lit"`` (the default here): key and fill lights, soft shadows, ambient occlusion
         and a ground (:mod:`tracer.rendering.lighting`); ``"normals"``: the paper's normal colours.
@@ -250,6 +255,10 @@ def _several_objects(meshes, kind, surface, march, film, view, camera, name):
         parts.append(s)
     scene = parts[0]
     scene.objects = [s.objects[0] for s in parts]
+    # one weight scheme for the scene (its trees make one forest): auto chose per object
+    weights = {s.march.weights for s in parts}
+    if len(weights) > 1:
+        scene.march = replace(scene.march, weights=with_weights(scene.objects, "paper", []))
     scene.path = f"{name or '+'.join(o.name for o in scene.objects)}.json"
     if march.eps is None:
         scene.march = replace(scene.march, eps=None)
@@ -417,7 +426,8 @@ def render_mesh(mesh, F=None, *, kind=None, alpha=_MESH["alpha"], alpha_u=_MESH[
                 adaptive=_MESH["adaptive"], transparent=_MESH["transparent"],
                 lighting=_MESH["lighting"], color=_MESH["color"],
                 background=_MESH["background"], tol=_MESH["tol"], newton=_MESH["newton"],
-                device="cpu", projection=_MESH["projection"], view_width=_MESH["view_width"]):
+                device="cpu", projection=_MESH["projection"], view_width=_MESH["view_width"],
+                weights=_MESH["weights"]):
     """Sphere-trace the smooth-distance surface of ``mesh``; arrays back, nothing written.
 
     Parameters are those of :func:`mesh_scene` (the ``"lit"`` shading by default;
@@ -503,6 +513,8 @@ def scene_dict(scene, scene_path, source_paths):
         out["matcap"] = rel(scene.film.matcap)
     if scene.march.tol != file["tol"]:
         out["tol"] = float(scene.march.tol)
+    if scene.march.weights != file["weights"]:
+        out["weights"] = scene.march.weights
     if scene.film.samples != file["samples"]:
         out["samples"] = int(scene.film.samples)
     if scene.film.adaptive != file["adaptive"]:

@@ -56,6 +56,7 @@ import numpy as np
 
 import smoothdist
 from smoothdist import DataMesh, SmoothDistanceField
+from smoothdist.junctions import WEIGHTS
 from tracer.errors import SceneError, user_stacklevel
 from tracer.rendering.camera import (PROJECTIONS, LookAt, check_projection, frame_points,
                                       frame_width, look_at)
@@ -77,6 +78,8 @@ BVH_TYPES = {"faces": "triangles", **{k: k for k in KINDS}}
 AUTHORS_KEYS = {"max_alpha": "alpha_u", "bvh_type": "kind"}
 SHADINGS = ("normals", "matcap", "headlight", "lit")
 MODES = ("smooth", "exact")
+#: ``weights`` of a scene: the schemes of :mod:`smoothdist.junctions`, or ``"auto"``
+WEIGHT_CHOICES = ("auto",) + WEIGHTS
 
 #: defaults of scene files and of ``Scene`` (:mod:`tracer.scenes.settings`)
 _FILE = defaults("file")
@@ -327,6 +330,8 @@ def load_scene(path, overrides=None):
     mode = choice(overrides.get("mode") or data.get("mode", _FILE["mode"]), MODES, path, "mode")
     gradient = choice(data.get("gradient", _FILE["gradient"]), ("metric", "exact"), path,
                       "gradient")
+    weights = choice(overrides.get("weights") or data.get("weights", _FILE["weights"]),
+                     WEIGHT_CHOICES, path, "weights")
     bg = data.get("background", list(_FILE["background"]))
     if (not isinstance(bg, list) or len(bg) != 3
             or not all(isinstance(v, int) and not isinstance(v, bool) and 0 <= v <= 255
@@ -368,9 +373,12 @@ def load_scene(path, overrides=None):
         raise file_error(path, "shading", "is 'matcap' but no matcap file is given (key 'matcap')")
     # everything checked: now read the meshes and build the fields
     objects = [_build_object(dict(sp, mode=mode), path, gradient) for sp in specs]
+    weights = with_weights(objects, weights, [
+        sp["alpha"] == "auto" and sp["alpha_u"] == "auto" and sp["offset"] is None
+        and mode == "smooth" for sp in specs])
     desc = data.get("description", "")
     march = March(mode=mode, beta=beta, eps=eps, tol=tol, newton=newton, max_steps=max_steps,
-                  gradient=gradient)
+                  gradient=gradient, weights=weights)
     film = Film(width=width, height=height, samples=samples, adaptive=adaptive,
                 transparent=transparent, background=tuple(bg), shading=shading, matcap=matcap,
                 lighting=lighting)
@@ -550,6 +558,21 @@ def _part_spec(pd, base, path, where):
     return dict(where=where, full=full, kind=kind, scale=scale, shift=shift)
 
 
+def with_weights(objects, weights, automatic):
+    """Give every object's field the weight scheme ``weights`` (one of
+    :data:`WEIGHT_CHOICES`; ``"auto"``: ``"inclusion-exclusion"`` when every object's surface is
+    the automatic one, ``automatic`` a bool per object, ``"paper"`` otherwise: one scheme per
+    scene, as its objects' trees make one forest). Returns the scheme."""
+    if weights not in WEIGHT_CHOICES:
+        raise ValueError(f"weights must be one of {', '.join(map(repr, WEIGHT_CHOICES))}, "
+                         f"got {weights!r}")
+    if weights == "auto":
+        weights = "inclusion-exclusion" if all(automatic) else "paper"
+    for o in objects:
+        o.field = o.field.with_weights(weights)
+    return weights
+
+
 def _build_object(spec, path, gradient):
     """Read an object's meshes, build its field and check its parameters against the data."""
     meshes = [_part_mesh(ps, path) for ps in spec["parts"]]
@@ -629,7 +652,8 @@ def scene_from_field(field, *, alpha, alpha_u=_API["alpha_u"], beta=_API["beta"]
                      samples=_API["samples"], adaptive=_API["adaptive"],
                      transparent=_API["transparent"], lighting=_API["lighting"],
                      color=_API["color"], background=_API["background"],
-                     projection=_API["projection"], view_width=_API["view_width"]):
+                     projection=_API["projection"], view_width=_API["view_width"],
+                     weights=_API["weights"]):
     """Build a one-object :class:`Scene` in code (no JSON), e.g. for parameter studies.
 
     Parameters
@@ -688,11 +712,17 @@ def scene_from_field(field, *, alpha, alpha_u=_API["alpha_u"], beta=_API["beta"]
     view_width : float, optional
         Orthographic: the image's width in scene units. None: the width that frames the
         surface (with ``view``), else the width the perspective camera sees at ``dest``.
+    weights : {"paper", "inclusion-exclusion", "auto"}
+        The weights of edges and triangles (:mod:`smoothdist.junctions`): the paper's
+        polynomials (the default here), inclusion-exclusion over the junctions (no seams on
+        flat faces), or ``"auto"``: inclusion-exclusion for the automatic surface (alpha,
+        alpha_u and offset ``"auto"``), the paper's otherwise. The scene's object gets
+        ``field.with_weights(...)``; ``field`` itself is not changed.
     """
     return field_scene(
         field, Surface(alpha=alpha, alpha_u=alpha_u, offset=offset, color=color),
         March(mode=mode, beta=beta, eps=eps, tol=tol, newton=newton, max_steps=max_steps,
-              gradient=gradient),
+              gradient=gradient, weights=weights),
         Film(width=width, height=height, samples=samples, adaptive=adaptive,
              transparent=transparent, background=background, shading=shading, matcap=matcap,
              lighting=lighting),
@@ -710,6 +740,7 @@ def field_scene(field, surface, march, film, view=View(), camera=None, name="sce
         raise ValueError(f"mode must be one of {MODES}, got {march.mode!r}")
     if film.shading not in SHADINGS:
         raise ValueError(f"shading must be one of {SHADINGS}, got {film.shading!r}")
+    automatic = _automatic(surface, march)
     surface, beta = _api_surface(field, surface, march)
     march = _api_march(march, beta)
     film = _api_film(film)
@@ -720,16 +751,24 @@ def field_scene(field, surface, march, film, view=View(), camera=None, name="sce
                       beta=beta, offset=offset if offset is not None else 1.0 / surface.alpha,
                       matcap=film.matcap, color=color,
                       smooth_offset=offset if offset is not None else 0.0)
+    march = dataclasses.replace(march, weights=with_weights([obj], march.weights, [automatic]))
     return with_default_eps(Scene(path=f"{name}.json", camera=camera, objects=[obj],
                                   march=march, film=film))
+
+
+def _automatic(surface, march):
+    """Whether ``surface`` leaves alpha, alpha_U and the offset to ``"auto"`` in smooth mode:
+    the automatic surface (:meth:`smoothdist.SmoothDistanceField.auto_surface`)."""
+    return (isinstance(surface.alpha, str) and surface.alpha == "auto"
+            and isinstance(surface.alpha_u, str) and surface.alpha_u == "auto"
+            and surface.offset is None and march.mode == "smooth")
 
 
 def _api_surface(field, surface, march):
     """``(surface, beta)`` of :func:`field_scene`: ``"auto"`` and ``"off"`` resolved, alpha,
     alpha_U, beta and the offset checked (``offset`` None: the mode's default level)."""
     alpha, alpha_u, offset = surface.alpha, surface.alpha_u, surface.offset
-    if (isinstance(alpha, str) and alpha == "auto" and isinstance(alpha_u, str)
-            and alpha_u == "auto" and offset is None and march.mode == "smooth"):
+    if _automatic(surface, march):
         # all three left to "auto": chosen together (issue 35; see
         # SmoothDistanceField.auto_surface)
         alpha, alpha_u, offset = field.auto_surface()

@@ -24,6 +24,10 @@ Where an entry point deliberately differs, the field says so (``api=`` / ``mesh=
 * ``alpha_u``: ``"auto"`` in scene files (an object without ``alpha_u``) and for the mesh
   entry points, ``"off"`` in ``scene_from_field``: the parameter studies and golden images
   vary alpha alone over the paper's unattenuated weights;
+* ``weights``: ``"paper"`` in scene files and ``scene_from_field`` (the paper's weight
+  polynomials: the golden images and the studies), ``"auto"`` for the mesh entry points
+  (inclusion-exclusion for the automatic surface, :mod:`smoothdist.junctions`: a user's flat
+  faces without seams);
 * ``view`` and ``up``: scene files carry their camera; ``scene_from_field``'s ``view=None``
   is the paper's beta-study camera, with up ``"y"``; the mesh entry points frame the
   ``"front"`` view with up ``"auto"`` (a mesh file's extension tells its up axis).
@@ -111,6 +115,14 @@ class March:
                          "is below newton x eps (0 = plain sphere tracing)")
     max_steps: int = _opt(1000, "largest number of distance evaluations per ray")
     gradient: str = _opt("metric", "the normal's gradient: metric (the paper's) or exact")
+    weights: str = _opt("paper", "weights of edges and triangles: paper (the paper's "
+                        "polynomials), inclusion-exclusion (the exact distance's sum above flat "
+                        "faces and outside convex edges: no seams), or auto: "
+                        "inclusion-exclusion for the automatic surface (alpha, alpha_u and "
+                        "offset auto), paper otherwise", mesh="auto",
+                        why="scene files and the research API keep the paper's weights "
+                            "(golden images); a user's mesh gets the seam-free automatic "
+                            "surface")
 
 
 @dataclass(frozen=True)

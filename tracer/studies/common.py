@@ -188,6 +188,7 @@ def unweighted_field(field):
     inflation margin ``log(A**S N) / alpha`` use the unweighted bound), and ``A`` becomes 1.
     Point clouds are unchanged (their weight is already 1).
     """
+    field = field.with_weights("paper")     # the constant polynomial 1 (junction rows differ)
     t = field.tree
     wc = np.zeros_like(t.wc)
     wc[:, 0] = 1.0

@@ -115,7 +115,7 @@ def test_cli_renders_a_mesh_file_framed_and_saves_its_scene(tmp_path, capsys):
         and not (~bg[:, -1]).any()
     assert (~bg).mean() > 0.1
     # the summary states the parameters "auto" chose, and the saved scene renders the same
-    field = sd.SmoothDistanceField(sd.load_mesh(stl))
+    field = sd.SmoothDistanceField(sd.load_mesh(stl), weights="inclusion-exclusion")
     a, au, c = field.auto_surface()
     assert f"alpha {a:.4g}, alpha_U {au:.4g}, inflation <= " \
         f"{field.inflation(a, au):.3g}" in summary and f"offset {c:.3g} " in summary

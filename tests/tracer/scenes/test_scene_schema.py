@@ -88,7 +88,7 @@ def _fingerprint(scene):
     """Everything a loaded scene holds, as comparable plain values."""
     out = {k: getattr(scene, k) for k in ("width", "height", "beta", "eps", "mode", "shading",
                                           "matcap", "background", "max_steps", "gradient",
-                                          "description")}
+                                          "weights", "description")}
     out["camera"] = [np.asarray(v).tolist() for v in (scene.camera_origin, scene.camera_dest,
                                                      scene.camera_up)]
     out["objects"] = []
@@ -158,7 +158,8 @@ def test_stated_defaults_have_the_stated_values(schema, tmp_path):
     p.write_text(json.dumps(base))
     s = scene_mod.load_scene(p)
     props = schema["properties"]
-    for key in ("width", "height", "beta", "mode", "max_steps", "gradient", "description"):
+    for key in ("width", "height", "beta", "mode", "max_steps", "gradient", "weights",
+                "description"):
         assert getattr(s, key) == props[key]["default"], key
     assert list(s.background) == props["background"]["default"]
     assert s.shading == "normals"  # x-default: "normals" without a matcap
