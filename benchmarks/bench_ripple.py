@@ -15,7 +15,9 @@ A setting is ``NAME:key=value,...`` with keys
 * ``alpha_u``: ``auto``, ``off`` or ``Kx`` (K x alpha);
 * ``offset``: ``auto``, a number (scene units) or ``Kh`` (K x h), the smooth surface
   ``d_hat = c``;
-* ``cap``: a fraction F of the bbox diagonal: ``c = min(c, F x diagonal)``.
+* ``cap``: a fraction F of the bbox diagonal: ``c = min(c, F x diagonal)``;
+* ``weights``: ``auto``, ``paper`` or ``inclusion-exclusion`` (``render_mesh``'s ``weights``,
+  issue 62).
 
 ``default`` is ``render_mesh``'s defaults (``alpha=auto,alpha_u=auto,offset=auto``: for edges
 and triangles :meth:`smoothdist.SmoothDistanceField.auto_surface` picks all three, issue 35);
@@ -155,14 +157,14 @@ def build_cases():
 def parse_setting(text):
     """``NAME:key=value,...`` (or ``default``) as ``(name, dict)``."""
     name, _, body = text.partition(":")
-    spec = {"alpha": "auto", "alpha_u": "auto", "offset": "auto", "cap": ""}
+    spec = {"alpha": "auto", "alpha_u": "auto", "offset": "auto", "cap": "", "weights": "auto"}
     if name == "today" and not body:
         spec["offset"] = "0"
     for item in filter(None, body.split(",")):
         key, _, value = item.partition("=")
         if key not in spec or not value:
             raise SystemExit(f"error: setting {text!r}: unknown or empty key {key!r} "
-                             f"(keys: alpha, alpha_u, offset, cap)")
+                             f"(keys: alpha, alpha_u, offset, cap, weights)")
         spec[key] = value
     return name, spec
 
@@ -215,7 +217,7 @@ def run_case(name, case, setting, size, beta):
     alpha, alpha_u, c = resolve(setting[1], h, field.diagonal)
     common = dict(kind=kind, size=(size, size), shading="normals", beta=beta, up="z")
     res = tracer.render_mesh(field.mesh, view="iso", alpha=alpha, alpha_u=alpha_u, offset=c,
-                             **common)
+                             weights=setting[1]["weights"], **common)
     o = res.scene.objects[0]
     c = o.smooth_offset
     smooth = rp.ripple(res, shape)
