@@ -89,20 +89,37 @@ def junction_weights(mesh):
         edge = (nv[E] - 1.0) / nv[E]
     tri = np.zeros((T.shape[0], 6))
     if T.shape[0]:
-        half = triangle_half_edges(T)                          # (01), (12), (20) of each
-        ne = row_counts(half, n).astype(np.float64)            # (3 t,) triangles on each
-        tri[:, :3] = ((ne - 1.0) / ne).reshape(3, -1).T
+        lo, hi, ne = _triangle_edges(T, n)                     # (01), (12), (20) of each
+        share = (ne - 1.0) / ne                                # (3 t,) a_E of each
+        tri[:, :3] = share.reshape(3, -1).T
         k = np.bincount(T.ravel(), minlength=n).astype(np.float64)
-        # c_v = 1 - k_v + sum over the distinct edges at v of (n_E - 1): each half-edge row
+        # c_v = 1 - k_v + sum over the distinct edges at v of (n_E - 1): each triangle's edge
         # adds (n_E - 1) / n_E (its share of the edge) to both of its ends
-        share = (ne - 1.0) / ne
-        c = 1.0 - k
-        np.add.at(c, half[:, 0], share)
-        np.add.at(c, half[:, 1], share)
+        c = (1.0 - k + np.bincount(lo, weights=share, minlength=n)
+             + np.bincount(hi, weights=share, minlength=n))
         with np.errstate(invalid="ignore", divide="ignore"):
             b = np.where(k > 0, c / k, 0.0)
         tri[:, 3:] = b[T]
     return JunctionWeights(edge, tri)
+
+
+def _triangle_edges(T, n):
+    """``(lo, hi, count)``, each ``(3 t,)``: the ends of every triangle's edges (01 of every
+    triangle, then 12, then 20; ``lo < hi``) and how many triangles share each, from one int64
+    key per edge (rows of :func:`~smoothdist.connectivity.triangle_half_edges` when ``n**2``
+    does not fit)."""
+    if n * n - 1 > np.iinfo(np.int64).max:
+        half = triangle_half_edges(T)
+        return half[:, 0], half[:, 1], row_counts(half, n).astype(np.float64)
+    t = T.shape[0]
+    lo = np.empty(3 * t, dtype=np.int64)
+    hi = np.empty(3 * t, dtype=np.int64)
+    for j, (a, b) in enumerate(((0, 1), (1, 2), (2, 0))):
+        np.minimum(T[:, a], T[:, b], out=lo[j * t:(j + 1) * t])
+        np.maximum(T[:, a], T[:, b], out=hi[j * t:(j + 1) * t])
+    key = lo * n + hi
+    _, inverse, counts = np.unique(key, return_inverse=True, return_counts=True)
+    return lo, hi, counts[inverse.ravel()].astype(np.float64)
 
 
 def junction_table(mesh, kind, order):
@@ -110,22 +127,25 @@ def junction_table(mesh, kind, order):
     primitives in tree order ``order (m,)`` (mesh numbering: points, edges, triangles) of kind
     ``kind (m,)`` (0, 1, 2).
 
-    ``wc (k, JUNCTION_COLUMNS)``: the distinct coefficient rows (a point cloud: one row of
-    zeros with the marker); ``wcls (m,)`` each primitive's row; ``pwhi (m,)`` the bound
-    ``exp(sum of the positive b_v)`` (1 for points and edges).
+    ``wc (k, JUNCTION_COLUMNS)``: the distinct coefficient rows (the points' row of zeros, then
+    the edges', then the triangles'; each with the marker); ``wcls (m,)`` each primitive's row;
+    ``pwhi (m,)`` the bound ``exp(sum of the positive b_v)`` (1 for points and edges).
+    Memory: the coefficients in the mesh's order (16 bytes an edge, 48 a triangle) and a few
+    ``(m,)`` arrays; the rows are made once per distinct class.
     """
     jw = junction_weights(mesh)
     p, e = mesh.points.size, mesh.edges.shape[0]
-    rows = np.zeros((order.shape[0], JUNCTION_COLUMNS))
-    is_edge = kind == 1
-    is_tri = kind == 2
-    if is_edge.any():
-        rows[is_edge, :2] = jw.edge[order[is_edge] - p]
-    if is_tri.any():
-        rows[is_tri, :6] = jw.tri[order[is_tri] - p - e]
-    rows[:, -1] = 1.0
-    wc, wcls = _distinct_rows(rows)
-    pwhi = np.exp(np.maximum(rows[:, 3:6], 0.0).sum(axis=1) * is_tri)
+    ec, ecls = _distinct_rows(jw.edge)
+    tc, tcls = _distinct_rows(jw.tri)
+    wc = np.zeros((1 + ec.shape[0] + tc.shape[0], JUNCTION_COLUMNS))
+    wc[1:1 + ec.shape[0], :2] = ec
+    wc[1 + ec.shape[0]:, :6] = tc
+    wc[:, -1] = 1.0
+    # each kind's class, in the mesh's numbering: points 0, then the edges' rows, the triangles'
+    cls = np.concatenate([np.zeros(p, dtype=np.int64), 1 + ecls, 1 + ec.shape[0] + tcls])
+    wcls = cls[order]
+    bound = np.exp(np.maximum(tc[:, 3:6], 0.0).sum(axis=1)) if tc.size else np.ones(0)
+    pwhi = np.concatenate([np.ones(1 + ec.shape[0]), bound])[wcls]
     return wc, wcls, pwhi
 
 
@@ -133,15 +153,19 @@ def _distinct_rows(rows):
     """``(distinct (k, c), index (m,) int64)`` of the float rows ``rows (m, c)``: a 64-bit hash
     of each row's bits, made unique (``np.unique(rows, axis=0)`` sorts the rows themselves, 15x
     slower: 3 s per million triangles); a hash collision, which the check finds, falls back
-    to it."""
-    bits = np.ascontiguousarray(rows + 0.0).view(np.uint64)      # + 0.0: -0.0 becomes 0.0
+    to it. The coefficients are never ``-0.0`` (quotients of counts), so equal rows have equal
+    bits."""
+    if rows.shape[0] == 0:
+        return rows.reshape(0, rows.shape[1]), np.zeros(0, dtype=np.int64)
+    bits = np.ascontiguousarray(rows).view(np.uint64)
     h = np.zeros(rows.shape[0], dtype=np.uint64)
     with np.errstate(over="ignore"):
         for j in range(bits.shape[1]):
             h *= np.uint64(0x9E3779B97F4A7C15)
             h ^= bits[:, j]
     _, first, index = np.unique(h, return_index=True, return_inverse=True)
+    index = index.ravel()
     distinct = rows[first]
-    if not np.array_equal(distinct[index], rows):
+    if not all(np.array_equal(distinct[index, j], rows[:, j]) for j in range(rows.shape[1])):
         distinct, index = np.unique(rows, axis=0, return_inverse=True)
     return np.ascontiguousarray(distinct), index.ravel().astype(np.int64)
