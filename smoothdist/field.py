@@ -11,6 +11,7 @@ from smoothdist import cuda
 from smoothdist._cast import as_points, non_negative, positive
 from smoothdist._kernels import query as _q
 from smoothdist._kernels.bvh import build_tree, tree_with_weights
+from smoothdist._kernels.exact_query import CHUNK as EXACT_CHUNK
 from smoothdist._kernels.exact_query import GROUP, build_exact_tree, exact_tree_batch
 from smoothdist._kernels.spacing import gap_probes, local_smooth_distance
 from smoothdist.error_budget import Within, point_alpha, within
@@ -725,7 +726,7 @@ class SmoothDistanceField:
             group = 1 if order is None and scattered(Q, self.diagonal) else GROUP
             d, g, prim, nodes, leaves = _scratch(n, out, reuse=True)
             exact_tree_batch(self.exact_tree, Q, True, d, g, prim, nodes, leaves,
-                             parallel_tasks(n), bool(return_stats),
+                             1 if n <= EXACT_CHUNK else parallel_tasks(n), bool(return_stats),
                              _NO_ORDER if order is None else order, group)
             return
         res = _scratch(n, out, reuse=order is None)

@@ -33,7 +33,7 @@ def test_order_is_a_morton_permutation_only_for_scattered_batches():
     lo, hi = qo.bounds(Q)
     np.testing.assert_array_equal(lo, Q.min(axis=0))
     np.testing.assert_array_equal(hi, Q.max(axis=0))
-    k = np.clip((Q - lo) * (1023.0 / (hi - lo)), 0, 1023).astype(np.uint32)
+    k = np.clip((Q - lo) * (1023.0 / (hi - lo).max()), 0, 1023).astype(np.uint32)
     code = qo._spread(k[:, 0]) | (qo._spread(k[:, 1]) << 1) | (qo._spread(k[:, 2]) << 2)
     assert np.all(np.diff(code[order].astype(np.int64)) >= 0)
     # a grid in raster order, rows of an image, a polyline: kept as they are
@@ -44,6 +44,30 @@ def test_order_is_a_morton_permutation_only_for_scattered_batches():
     assert qo.coherent_order(np.stack([np.cos(s), np.sin(s), s], 1)) is None
     assert qo.coherent_order(Q[:qo.COHERENT_FROM - 1]) is None     # small batches
     assert qo.coherent_order(np.zeros((10000, 3))) is None         # one spot
+
+
+def test_a_long_thin_batch_is_ordered_in_cubic_cells():
+    """Issue 60: queries around a 1000:1 needle. Scaled axis by axis, the curve's cells were
+    250x longer than wide and consecutive queries lay tens of radii apart along the needle
+    (a bad first bound for each exact search: 2.5x the time in ``bench_exact_mix.py``'s
+    needle row); in cubic cells the median step is about the queries' mean spacing along the
+    needle."""
+    rng = np.random.default_rng(4)
+    n = 20000
+    z = rng.uniform(0, 2000, n)
+    a = rng.uniform(0, 2 * np.pi, n)
+    r = rng.uniform(1, 4, n)
+    Q = np.stack([r * np.cos(a), r * np.sin(a), z], 1)
+    order = qo.coherent_order(Q)
+    assert order is not None
+    step = qo.median_step(Q, order)
+    # 10 bits along z: cells of about 2 units (the needle's diameter); the mean spacing of
+    # the queries is (8 * 8 * 2000 / n)^(1/3) = 1.9, so a step within 3 of them is local
+    assert step < 3 * (8 * 8 * 2000 / n) ** (1 / 3), step
+    per_axis = np.clip((Q - Q.min(0)) * (1023.0 / np.ptp(Q, 0)), 0, 1023).astype(np.uint32)
+    code = (qo._spread(per_axis[:, 0]) | (qo._spread(per_axis[:, 1]) << 1)
+            | (qo._spread(per_axis[:, 2]) << 2))
+    assert qo.median_step(Q, np.argsort(code, kind="stable")) > 5 * step
 
 
 def test_reordered_queries_give_the_values_in_the_callers_order():
@@ -100,3 +124,18 @@ def test_short_groups_and_single_queries_search_like_one_query():
     np.testing.assert_allclose(d1, d4, rtol=4e-16, atol=0)
     ref, _, _ = naive.exact_distance(Q[::7], field.mesh)
     np.testing.assert_allclose(d1[::7], ref, rtol=1e-12, atol=1e-15)
+
+
+def test_the_median_step_of_a_small_batch_is_the_median_of_its_steps():
+    """Issue 60: batches of up to ``SAMPLE_STEPS + 1`` rows take every step in a few numpy
+    calls (the general path cost a solver 60 us a call); the value is the median of the
+    steps' lengths, as numpy's ``median`` gives it (to rounding of the norm)."""
+    rng = np.random.default_rng(5)
+    for n in (1, 2, 3, 4, 7, 10, 11, 100, qo.SAMPLE_STEPS, qo.SAMPLE_STEPS + 1,
+              qo.SAMPLE_STEPS + 2):
+        Q = rng.normal(size=(n, 3))
+        ref = float(np.median(np.linalg.norm(np.diff(Q, axis=0), axis=1))) if n > 1 else 0.0
+        if n > qo.SAMPLE_STEPS + 1:       # sampled: evenly spread steps
+            i = np.unique(np.linspace(0, n - 2, qo.SAMPLE_STEPS).astype(np.int64))
+            ref = float(np.median(np.linalg.norm(Q[i + 1] - Q[i], axis=1)))
+        assert qo.median_step(Q) == pytest.approx(ref, rel=1e-14, abs=0), n
