@@ -13,7 +13,17 @@ Mixes (each on its own data; ``Q`` in scene units):
 on bumpy spheres of about 10k, 100k and 1M triangles (``trimesh.creation.uv_sphere`` with a
 5 % bump), and on the 100k sphere's edges and vertices as edge and point data. ``box/100``
 and ``near/100``: the same mixes asked ``--batch`` (100) queries per call, as a solver asks
-(``--batch-queries`` of them in all), on the 100k sphere.
+(``--batch-queries`` of them in all), on the 100k sphere; ``near/1``, ``near/10`` and
+``near/1000`` (``--batches``): the near mix at the other batch sizes (``near/1``: a tenth
+of the queries), where libigl, which builds its tree at every call, is left out.
+
+``--shapes`` adds users' shapes that are not round (issue 60):
+
+* ``needle``: a 1000:1 open tube along z (radius 1, length 2000; 64 sections x 999 rings,
+  127,872 triangles), asked ``tube`` queries: 1 to 4 radii from its axis, uniform along it,
+  in random order;
+* ``plane``: 199,712 coplanar triangles (a 317 x 317 grid of the unit square), near and far;
+* ``cube``: a cube's surface in 1,298,892 triangles (329 x 329 squares a face), box and near.
 
 Protocol: in one process, for ``--repeat`` rounds, each side runs once per round (fcpw, libigl,
 ours, alternating); the table gives each side's best wall and CPU seconds and the spread
@@ -21,7 +31,9 @@ ours, alternating); the table gives each side's best wall and CPU seconds and th
 thread of the machine (fcpw and libigl their own thread pools, ours numba's). Trees are built
 before timing (build times recorded apart). Results are compared: the largest difference of
 the distances (fcpw works in float32). fcpw and libigl are not dependencies of this project;
-a side that is not installed is left out (``pip install fcpw libigl``). fcpw has no 3D line
+a side that is not installed is left out (``pip install fcpw libigl open3d``). open3d's
+``RaycastingScene.compute_distance`` (float32, triangles only) builds its tree at its first
+query: that first call is its build time. fcpw has no 3D line
 segments or points: edges and points go in as degenerate triangles, used only where its
 distances agree with ours to 1e-5 of the diagonal.
 
@@ -66,6 +78,55 @@ def bumpy_sphere(count):
     return np.ascontiguousarray(V), np.ascontiguousarray(m.faces, dtype=np.int64)
 
 
+def needle(sections=64, rings=1000, radius=1.0, ratio=1000):
+    """An open tube along z, ``ratio`` diameters long: ``(V, F)``."""
+    th = np.linspace(0, 2 * np.pi, sections, endpoint=False)
+    z = np.linspace(0, 2 * radius * ratio, rings)
+    ring = np.stack([radius * np.cos(th), radius * np.sin(th), np.zeros(sections)], 1)
+    V = (ring[None] + z[:, None, None] * np.array([0.0, 0.0, 1.0])).reshape(-1, 3)
+    a = np.arange(rings - 1)[:, None] * sections + np.arange(sections)[None]
+    b = a - np.arange(sections)[None] + (np.arange(sections)[None] + 1) % sections
+    F = np.concatenate([np.stack([a, b, b + sections], -1).reshape(-1, 3),
+                        np.stack([a, b + sections, a + sections], -1).reshape(-1, 3)])
+    return np.ascontiguousarray(V), np.ascontiguousarray(F, dtype=np.int64)
+
+
+def grid_square(count):
+    """The unit square of z = 0 as a ``count`` x ``count`` grid of vertices: ``(V, F)``."""
+    c = np.linspace(0.0, 1.0, count)
+    x, y = np.meshgrid(c, c, indexing="ij")
+    V = np.stack([x.ravel(), y.ravel(), np.zeros(x.size)], 1)
+    a = (np.arange(count - 1)[:, None] * count + np.arange(count - 1)[None]).ravel()
+    F = np.concatenate([np.stack([a, a + count, a + count + 1], 1),
+                        np.stack([a, a + count + 1, a + 1], 1)])
+    return V, F.astype(np.int64)
+
+
+def cube_surface(count):
+    """A unit cube's surface, each face a ``count`` x ``count`` grid of squares, as one
+    mesh with shared vertices: ``(V, F)``."""
+    import trimesh
+
+    V0, F0 = grid_square(count + 1)
+    faces = []
+    for axis in range(3):
+        for side in (0.0, 1.0):
+            V = np.roll(V0, axis + 1, axis=1)      # the zero column to ``axis``
+            V[:, axis] = side
+            faces.append(trimesh.Trimesh(V, F0 if side else F0[:, ::-1], process=False))
+    m = trimesh.util.concatenate(faces)
+    m.merge_vertices()
+    return np.ascontiguousarray(m.vertices), np.ascontiguousarray(m.faces, dtype=np.int64)
+
+
+def tube_queries(n, rng, radius=1.0, length=2000.0):
+    """``n`` points 1 to 4 radii from the z axis, uniform along ``[0, length]``."""
+    z = rng.uniform(0.0, length, n)
+    a = rng.uniform(0.0, 2 * np.pi, n)
+    r = rng.uniform(1.0, 4.0, n) * radius
+    return np.stack([r * np.cos(a), r * np.sin(a), z], 1)
+
+
 def mix_queries(name, field, n, rng):
     """``n`` queries of mix ``name`` around ``field``'s data, ``(n, 3)`` float64."""
     lo, hi = field.bounds
@@ -95,8 +156,9 @@ def mix_queries(name, field, n, rng):
     raise ValueError(name)
 
 
-def competitors(field):
-    """``{name: (build_s, query_fn)}`` for fcpw and libigl where installed."""
+def competitors(field, batch=0):
+    """``{name: (build_s, query_fn)}`` for fcpw, open3d (triangles) and libigl (not for
+    batches under 100 per call: it builds its tree at every call) where installed."""
     m = field.mesh
     V = m.V
     if m.triangles.shape[0]:
@@ -127,10 +189,27 @@ def competitors(field):
             return np.array([i.d for i in inter])
         out["fcpw"] = (build, fcpw_query)
     try:
+        import open3d
+    except ImportError:
+        open3d = None
+    if open3d is not None and m.triangles.shape[0] and not m.edges.shape[0] \
+            and not m.points.shape[0]:
+        t0 = time.perf_counter()
+        o3 = open3d.t.geometry.RaycastingScene()
+        o3.add_triangles(open3d.core.Tensor(np.asarray(V, dtype=np.float32)),
+                         open3d.core.Tensor(np.asarray(F, dtype=np.uint32)))
+        o3.compute_distance(open3d.core.Tensor(np.zeros((1, 3), dtype=np.float32)))
+        build = time.perf_counter() - t0
+
+        def open3d_query(Q, o3=o3):
+            return o3.compute_distance(open3d.core.Tensor(
+                np.asarray(Q, dtype=np.float32))).numpy().astype(np.float64)
+        out["open3d"] = (build, open3d_query)
+    try:
         import igl
     except ImportError:
         igl = None
-    if igl is not None:
+    if igl is not None and not 0 < batch < 100:
         Fi = np.ascontiguousarray(F, dtype=np.int64)
 
         def igl_query(Q):
@@ -154,7 +233,7 @@ def _batched(fn, batch):
 
 def run_case(label, kind, mix, field, Q, repeat, smooth=None, batch=0):
     """One row: every side ``repeat`` times, alternating (``batch``: rows per call)."""
-    sides = competitors(field)
+    sides = competitors(field, batch)
     sides["ours"] = (None, lambda Q: field.exact_distance(Q).distance)
     sides = {k: (b, _batched(fn, batch)) for k, (b, fn) in sides.items()}
     if batch:
@@ -232,16 +311,30 @@ def cases(args):
                 yield (f"sphere {size}", "triangles", mix, f,
                        mix_queries(mix, f, args.batch_queries, rng), args.batch)
         if size == args.kinds_on:
+            for batch in args.batches:      # a tenth of the queries one by one
+                n = args.batch_queries // (10 if batch == 1 else 1)
+                yield f"sphere {size}", "triangles", "near", f, mix_queries("near", f, n, rng), batch
+        if size == args.kinds_on:
             for kind in ("edges", "points"):
                 g = SmoothDistanceField(f.mesh.as_kind(kind))
                 for mix in ("box", "near"):
                     yield (f"sphere {size}", kind, mix, g, mix_queries(mix, g, args.queries, rng),
                            0)
+    shapes = {"needle": (needle, ("tube",)), "plane": (lambda: grid_square(317), ("near", "far")),
+              "cube": (lambda: cube_surface(329), ("box", "near"))}
+    for name in args.shapes:
+        make, mixes = shapes[name]
+        f = SmoothDistanceField(*make())
+        for mix in mixes:
+            Q = (tube_queries(args.queries, rng) if mix == "tube"
+                 else mix_queries(mix, f, args.queries, rng))
+            yield name, "triangles", mix, f, Q, 0
 
 
 def markdown(result):
     """The performance guide's table."""
-    names = [n for n in ("fcpw", "libigl") if any(n in r["sides"] for r in result["rows"])]
+    names = [n for n in ("fcpw", "open3d", "libigl")
+             if any(n in r["sides"] for r in result["rows"])]
     head = ["data", "primitives", "mix", "queries", "ours wall s (spread)"]
     for n in names:
         head += [f"{n} wall s", f"ours / {n}"]
@@ -302,6 +395,10 @@ def main(argv=None):
     p.add_argument("--batch", type=int, default=100,
                    help="queries per call of the batched rows (0: none)")
     p.add_argument("--batch-queries", type=int, default=20_000)
+    p.add_argument("--batches", nargs="*", type=int, default=[1, 10, 1000],
+                   help="more batch sizes, on the near mix of the --kinds-on sphere")
+    p.add_argument("--shapes", nargs="*", default=["needle", "plane", "cube"],
+                   choices=["needle", "plane", "cube"], help="users' shapes that are not round")
     p.add_argument("--repeat", type=int, default=3)
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--smooth", action="store_true", help="add the smooth distance's cost")
@@ -310,12 +407,14 @@ def main(argv=None):
                    help="smooth distance: alpha = this / bbox diagonal")
     p.add_argument("--tol", type=float, default=1e-4)
     p.add_argument("--quick", action="store_true",
-                   help="small sizes: 20k queries, grid 40, 10k and 100k spheres, 2 repeats")
+                   help="small sizes: 20k queries, grid 40, 10k and 100k spheres, no cube, "
+                   "2 repeats")
     p.add_argument("--json", help="write the results here")
     args = p.parse_args(argv)
     if args.quick:
         args.queries, args.grid, args.repeat = 20_000, 40, 2
         args.sizes = [s for s in args.sizes if s != "1M"]
+        args.shapes = [s for s in args.shapes if s != "cube"]
         args.smooth_queries = min(args.smooth_queries, 5_000)
     smooth = (dict(queries=args.smooth_queries, alpha_scale=args.alpha_scale, tol=args.tol)
               if args.smooth else None)

@@ -161,8 +161,8 @@ def smooth_cost_table(path):
 
 def exact_mix_words(path):
     """The README's and the guide's sentence: the range of ours / theirs over the mixes asked
-    in one call, and over those asked in small batches (fcpw only: libigl builds its tree at
-    every call)."""
+    in one call, and, per batch size, over those asked a few queries per call (fcpw and
+    open3d only: libigl builds its tree at every call)."""
     d = _load(path)
     whole = [r for r in d["rows"] if "/" not in r["mix"]]
     batched = [r for r in d["rows"] if "/" in r["mix"]]
@@ -170,16 +170,26 @@ def exact_mix_words(path):
     def span(rows, name):
         r = [row["sides"][name]["ours_over_theirs"] for row in rows
              if name in row["sides"] and row["sides"][name]["agrees"]]
-        return f"{min(r):.2f}-{max(r):.2f}" if r else None
+        if not r:
+            return None
+        lo, hi = f"{min(r):.2f}", f"{max(r):.2f}"
+        return lo if lo == hi else f"{lo}-{hi}"
 
-    words = [f"{span(whole, n)} of {n}'s" for n in ("fcpw", "libigl") if span(whole, n)]
+    names = ("fcpw", "open3d", "libigl")
+    words = [f"{span(whole, n)} of {n}'s" for n in names if span(whole, n)]
     m = d["machine"]
-    text = (f"Exact distance takes {' and '.join(words)} wall time on each of {len(whole)} "
-            f"query mixes ({m['date'][:10]}, {m['cores']} cores, {m['threads']} threads each, "
-            "same process, alternating)")
-    if batched and span(batched, "fcpw"):
-        size = batched[0]["mix"].split("/")[1]
-        text += f"; asked {size} queries per call, {span(batched, 'fcpw')} of fcpw's"
+    text = (f"Exact distance takes {', '.join(words[:-1])} and {words[-1]} wall time on each of "
+            f"{len(whole)} query mixes ({m['date'][:10]}, {m['cores']} cores, "
+            f"{m['threads']} threads each, same process, alternating)")
+    sizes = sorted({int(r["mix"].split("/")[1]) for r in batched})
+    parts = []
+    for size in sizes:
+        rows = [r for r in batched if int(r["mix"].split("/")[1]) == size]
+        got = [f"{span(rows, n)} of {n}'s" for n in names[:2] if span(rows, n)]
+        if got:
+            parts.append(f"{size:,} per call, {' and '.join(got)}")
+    if parts:
+        text += "; asked " + "; ".join(parts)
     return text
 
 

@@ -312,9 +312,13 @@ def test_the_exact_mix_tables_and_sentences_follow_the_file():
     assert words in _flat(_guide())
     assert words in _flat((ROOT / "README.md").read_text(encoding="utf-8"))
     d = _load("exact_mix.json")
-    # the claim the sentence makes: on every mix both sides agree on the distances
+    # the claim the sentence makes: on every mix the sides agree on the distances (fcpw
+    # everywhere, open3d on triangles, libigl where it ran: not below 100 queries a call)
     for row in d["rows"]:
-        assert row["sides"]["fcpw"]["agrees"] and row["sides"]["libigl"]["agrees"], row["mix"]
+        sides = row["sides"]
+        assert "fcpw" in sides and ("open3d" in sides or row["kind"] != "triangles"), row
+        assert "libigl" in sides or "/" in row["mix"], row
+        assert all(s["agrees"] for s in sides.values()), (row["data"], row["mix"])
 
 
 def test_the_fidelity_table_follows_its_file():

@@ -78,7 +78,7 @@ TINY = {
     "benchmarks/bench_fidelity.py": ["--size", "16", "--shapes", "icosphere1", "helix_polyline"],
     "benchmarks/bench_exact_mix.py": ["--sizes", "10k", "--mixes", "near", "--kinds-on", "none",
                                       "--grid", "6", "--queries", "5000", "--repeat", "1",
-                                      "--smooth-queries", "300"],
+                                      "--smooth-queries", "300", "--shapes", "needle"],
     "benchmarks/bench_ripple.py": ["--cases", "circle64", "--size", "16"],
     "benchmarks/bench_specks.py": ["--no-clouds", "--scenes", "trefoil"],
     "benchmarks/bench_mesh_distance.py": ["--repeat", "1", "--case", "ring-toss"],
