@@ -196,11 +196,9 @@ class SmoothDistanceField:
             raise ValueError(f"leaf_size must be an integer >= 1, got {leaf_size!r}")
         self.mesh = mesh
         self.leaf_size = int(leaf_size)
-        self.weights = "paper"
-        self.tree = build_tree(mesh, leaf_size=self.leaf_size, progress=progress)
-        if weights != "paper":
-            self.tree = tree_with_weights(self.tree, mesh, weights)
-            self.weights = weights
+        self.weights = weights
+        self.tree = build_tree(mesh, leaf_size=self.leaf_size, progress=progress,
+                               weights=weights)
 
     def with_weights(self, weights):
         """This field with the weight scheme ``weights`` (``"paper"`` or
@@ -434,7 +432,10 @@ class SmoothDistanceField:
         cached = getattr(self, "_auto_surface_value", None)
         if cached is not None:
             return cached
-        h = self.mean_edge_length()
+        m = self.mesh
+        # a mesh of triangles (repaired: no degenerate ones) has edges of positive length and
+        # its shell does not use their mean: not measured (0.35 s at 1M triangles)
+        h = 1.0 if m.triangles.size and not m.points.size else self.mean_edge_length()
         L = self.diagonal
         value = None
         if self.mesh.points.size or h is None or not h > 0 or not L > 0:
@@ -473,10 +474,9 @@ class SmoothDistanceField:
         ``AUTO_FEATURE_STEPS`` times at most. Triangles only (0 data: ``(0,)``).
         """
         m = self.mesh
-        T = m.V[m.triangles]
-        if T.shape[0] == 0:
+        if m.triangles.shape[0] == 0:
             return np.empty(0)
-        cr = np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0])
+        cr = _triangle_normals(m.V, m.triangles)
         area = np.linalg.norm(cr, axis=1)
         ok = area > 0
         if not ok.any():
@@ -486,7 +486,7 @@ class SmoothDistanceField:
         u, v = rng.random((2, count))
         flip = u + v > 1.0
         u[flip], v[flip] = 1.0 - u[flip], 1.0 - v[flip]
-        t = T[pick]
+        t = m.V[m.triangles[pick]]
         P = t[:, 0] + u[:, None] * (t[:, 1] - t[:, 0]) + v[:, None] * (t[:, 2] - t[:, 0])
         n = cr[pick] / area[pick, None]
         P, n = np.concatenate([P, P]), np.concatenate([n, -n])    # both sides
@@ -823,6 +823,20 @@ def _device_and_points(device, Q, method="bvh"):
 #: that its working memory (the sorted copy, per-query scratch) stays fixed while the outputs
 #: grow with the batch. The values do not depend on it (each query's is its own)
 QUERY_CHUNK = 1 << 20
+
+
+def _triangle_normals(V, F):
+    """``(b - a) x (c - a)`` of every triangle ``abc`` of ``F (m, 3)`` over ``V (n, 3)``:
+    ``(m, 3)`` float64, twice the area times the unit normal. The bits of ``np.cross`` on the
+    gathered ``(m, 3, 3)`` corners, without that array (1M triangles: 0.17 s, not 0.44)."""
+    a = V[F[:, 0]]
+    u = V[F[:, 1]] - a
+    v = V[F[:, 2]] - a
+    c = np.empty_like(u)
+    c[:, 0] = u[:, 1] * v[:, 2] - u[:, 2] * v[:, 1]
+    c[:, 1] = u[:, 2] * v[:, 0] - u[:, 0] * v[:, 2]
+    c[:, 2] = u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]
+    return c
 
 
 def _passes(Q, out):

@@ -99,8 +99,9 @@ def scattered(Q, scale, order=None):
 
 def coherent_order(Q):
     """A permutation ``(n,) int64`` of the rows of ``Q (n, 3) float64`` along the Morton curve
-    of the cube on their bounding box's longest side (10 bits along it), or None when ``Q`` is small (< :data:`COHERENT_FROM` rows) or
-    already in a coherent order (:func:`is_scattered`). ``Q`` must be finite.
+    of the cube on their bounding box's longest side (10 bits along it), or None when ``Q``
+    is small (< :data:`COHERENT_FROM` rows) or already in a coherent order
+    (:func:`is_scattered`). ``Q`` must be finite.
 
     The 30-bit codes are sorted in two stable passes over 16-bit halves (numpy sorts 16-bit
     keys by radix: 5x faster than its quicksort of the 32-bit codes).

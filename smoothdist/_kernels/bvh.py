@@ -94,7 +94,7 @@ class TreeData(NamedTuple):
     depth: int
 
 
-def primitive_table(mesh, order=None):
+def primitive_table(mesh, order=None, paper_weights=True):
     """Gather ``(kind, pts, wc, wcls, pwhi, A)`` for every primitive of a
     :class:`~smoothdist.DataMesh`, in the mesh's own numbering (points, edges, triangles) or,
     given ``order (m,)`` int64, in that order (row ``k`` is primitive ``order[k]``): the tree's
@@ -103,24 +103,44 @@ def primitive_table(mesh, order=None):
     ``wc (k, 13)`` holds the coefficients of the mesh's raw weights ``A w~`` (``A`` folded
     in), one row per weight class (:meth:`~smoothdist.DataMesh.weight_classes`: the edges'
     classes first, then the triangles'; a point cloud has one row of zeros), and ``wcls (m,)``
-    each primitive's row.
+    each primitive's row. Without ``paper_weights`` the weight classes are not computed (the
+    caller puts another scheme in, :func:`tree_with_weights`): one row of zeros, ``A = 1``.
     """
     V = mesh.V
     P, E, T = mesh.points, mesh.edges, mesh.triangles
-    w = mesh.weight_classes()
-    A = w.A
-    p, e = P.size, E.shape[0]
-    m = p + e + T.shape[0]
+    m = P.size + E.shape[0] + T.shape[0]
     if order is None:
         order = np.arange(m, dtype=np.int64)
-    ke = w.edge_coeffs.shape[0]
-    wc = np.zeros((max(1, ke + w.tri_coeffs.shape[0]), 13))
-    wc[:ke, :5] = A * w.edge_coeffs
-    wc[ke:ke + w.tri_coeffs.shape[0]] = A * w.tri_coeffs
     kind = np.empty(m, dtype=np.int64)
     pts = np.zeros((m, 9))
     wcls = np.zeros(m, dtype=np.int64)
     pwhi = np.ones(m)
+    if not paper_weights:
+        for _ in _gather(V, P, E, T, order, kind, pts):
+            pass
+        return kind, pts, np.zeros((1, 13)), wcls, pwhi, 1.0
+    w = mesh.weight_classes()
+    A = w.A
+    ke = w.edge_coeffs.shape[0]
+    wc = np.zeros((max(1, ke + w.tri_coeffs.shape[0]), 13))
+    wc[:ke, :5] = A * w.edge_coeffs
+    wc[ke:ke + w.tri_coeffs.shape[0]] = A * w.tri_coeffs
+    for code, at, i in _gather(V, P, E, T, order, kind, pts):
+        if code == KIND_EDGE:
+            wcls[at] = w.edge_class[i]
+            pwhi[at] = w.edge_whi[w.edge_class[i]]
+        elif code == KIND_TRIANGLE:
+            wcls[at] = ke + w.tri_class[i]
+            pwhi[at] = w.tri_whi[w.tri_class[i]]
+    return kind, pts, wc, wcls, pwhi, A
+
+
+def _gather(V, P, E, T, order, kind, pts):
+    """Write :func:`primitive_table`'s ``kind`` and ``pts`` in ``order``, one kind at a time,
+    yielding ``(code, at, i)`` after each: the kind, its rows of the table, and their indices
+    among that kind's primitives."""
+    p, e = P.size, E.shape[0]
+    m = kind.size
     for code, first, rows in ((KIND_POINT, 0, P[:, None]), (KIND_EDGE, p, E),
                               (KIND_TRIANGLE, p + e, T)):
         if rows.shape[0] == 0:
@@ -133,13 +153,7 @@ def primitive_table(mesh, order=None):
         kind[at] = code
         for j in range(rows.shape[1]):
             pts[at, 3 * j:3 * j + 3] = V[rows[i, j]]
-        if code == KIND_EDGE:
-            wcls[at] = w.edge_class[i]
-            pwhi[at] = w.edge_whi[w.edge_class[i]]
-        elif code == KIND_TRIANGLE:
-            wcls[at] = ke + w.tri_class[i]
-            pwhi[at] = w.tri_whi[w.tri_class[i]]
-    return kind, pts, wc, wcls, pwhi, A
+        yield code, at, i
 
 
 def primitive_boxes(mesh):
@@ -168,7 +182,7 @@ def primitive_boxes(mesh):
     return np.concatenate(cent), np.concatenate(plo), np.concatenate(phi)
 
 
-def build_tree(mesh, leaf_size=1, progress=None):
+def build_tree(mesh, leaf_size=1, progress=None, weights="paper"):
     """Build the :class:`TreeData` of a :class:`~smoothdist.DataMesh`.
 
     Parameters
@@ -179,6 +193,9 @@ def build_tree(mesh, leaf_size=1, progress=None):
     progress : callable(done, total, elapsed_s), optional
         Called about twice a second while the tree is built (``done`` primitives of
         ``total`` placed in leaves), and once at the end.
+    weights : str
+        The weight scheme (:func:`tree_with_weights`): another than ``"paper"`` is put in
+        directly, without computing the paper's weight classes first (0.37 s at 1M triangles).
 
     Memory: the primitive table, ``(9 + 4) x 8`` bytes per primitive, written once in tree
     order (the weight polynomials are a few rows that the primitives index), plus 104 bytes
@@ -210,12 +227,14 @@ def build_tree(mesh, leaf_size=1, progress=None):
     del built
     release_freed_memory()          # the boxes and the build's scratch: back to the system
     diag = np.sqrt(((hi - lo) ** 2).sum(axis=1))
-    kind, pts, wc, wcls, pwhi, A = primitive_table(mesh, order)
+    paper = check_weights(weights) == "paper"
+    kind, pts, wc, wcls, pwhi, A = primitive_table(mesh, order, paper)
     points_only = mesh.edges.shape[0] == 0 and mesh.triangles.shape[0] == 0
-    whi = np.ones(lo.shape[0]) if points_only else _node_max(pwhi, start, count)
-    return TreeData(lo=lo, hi=hi, left=left, right=right, start=start, count=count, diag=diag,
+    whi = np.ones(lo.shape[0]) if points_only or not paper else _node_max(pwhi, start, count)
+    tree = TreeData(lo=lo, hi=hi, left=left, right=right, start=start, count=count, diag=diag,
                     whi=whi, lwhi=np.log(whi), kind=kind, pts=pts, wc=wc, wcls=wcls, pwhi=pwhi,
                     orig=order, A=float(A), depth=int(depth))
+    return tree if paper else tree_with_weights(tree, mesh, weights)
 
 
 #: trees of at least this many primitives are built on several threads (below it a thread's

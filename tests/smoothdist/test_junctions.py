@@ -193,6 +193,22 @@ def test_points_are_unchanged_and_switching_shares_the_geometry():
     assert paper.with_weights("paper") is paper
 
 
+@pytest.mark.parametrize("name", ["noisy_sphere", "fin", "polyline", "mixed"])
+def test_a_field_built_with_the_junction_weights_is_the_switched_one(name):
+    """Issue 60: ``SmoothDistanceField(weights="inclusion-exclusion")`` builds its tree with
+    the junction weights directly (the paper's weight classes are not computed first: 0.37 s
+    at 1M triangles); every array of the tree is the one a paper build switched with
+    ``with_weights`` has, bit for bit."""
+    mesh = MESHES[name]
+    direct = smoothdist.SmoothDistanceField(mesh, weights="inclusion-exclusion")
+    switched = smoothdist.SmoothDistanceField(mesh).with_weights("inclusion-exclusion")
+    assert direct.weights == switched.weights == "inclusion-exclusion"
+    for field in direct.tree._fields:
+        a, b = getattr(direct.tree, field), getattr(switched.tree, field)
+        np.testing.assert_array_equal(a, b, err_msg=field)
+    assert direct.weight_bound == switched.weight_bound
+
+
 def test_refusals():
     """Unknown schemes, whole-mesh distance (its kernels use the paper's weights) and a forest
     of both schemes are refused with a message, not computed wrongly."""

@@ -22,7 +22,8 @@ from smoothdist.convert import is_foreign_geometry
 from tracer.errors import ThinFeatureWarning, user_stacklevel
 from tracer.rendering.camera import UP_AXES, LookAt, frame_points, frame_width
 from tracer.rendering.renderer import render
-from tracer.scenes.scene import field_scene, with_default_eps, with_weights
+from tracer.scenes.scene import (automatic_surface, field_scene, planned_weights,
+                                 with_default_eps, with_weights)
 from tracer.scenes.settings import KINDS, Film, March, Surface, View, defaults
 from tracer.stages import StageClock, stage, stage_progress
 
@@ -178,7 +179,10 @@ def build_mesh_scene(mesh, F, kind, surface, march, film, view, camera=None, nam
     with stage("load", "reading the mesh"):
         data = load_geometry(mesh, F, kind)
     with stage("tree", "building the tree"):
-        field = SmoothDistanceField(data, progress=stage_progress("building the tree"))
+        # with the weights the scene will have (not the paper's, then the scene's)
+        field = SmoothDistanceField(data, progress=stage_progress("building the tree"),
+                                    weights=planned_weights(march.weights,
+                                                            automatic_surface(surface, march)))
     with stage("parameters", "choosing alpha and the offset"):
         scene = field_scene(field, surface, march, film,
                             replace(view, view=view.view if camera is None else None, up=up),

@@ -566,11 +566,19 @@ def with_weights(objects, weights, automatic):
     if weights not in WEIGHT_CHOICES:
         raise ValueError(f"weights must be one of {', '.join(map(repr, WEIGHT_CHOICES))}, "
                          f"got {weights!r}")
-    if weights == "auto":
-        weights = "inclusion-exclusion" if all(automatic) else "paper"
+    weights = planned_weights(weights, all(automatic))
     for o in objects:
         o.field = o.field.with_weights(weights)
     return weights
+
+
+def planned_weights(weights, automatic):
+    """The scheme :func:`with_weights` gives a scene of the ``weights`` setting whose objects
+    all have the automatic surface (``automatic``, :func:`automatic_surface`) or not, so that
+    a field can be built with it from the start; ``"paper"`` for a name it refuses."""
+    if weights == "auto":
+        return "inclusion-exclusion" if automatic else "paper"
+    return weights if weights in WEIGHT_CHOICES else "paper"
 
 
 def _build_object(spec, path, gradient):
@@ -740,7 +748,7 @@ def field_scene(field, surface, march, film, view=View(), camera=None, name="sce
         raise ValueError(f"mode must be one of {MODES}, got {march.mode!r}")
     if film.shading not in SHADINGS:
         raise ValueError(f"shading must be one of {SHADINGS}, got {film.shading!r}")
-    automatic = _automatic(surface, march)
+    automatic = automatic_surface(surface, march)
     surface, beta = _api_surface(field, surface, march)
     march = _api_march(march, beta)
     film = _api_film(film)
@@ -756,7 +764,7 @@ def field_scene(field, surface, march, film, view=View(), camera=None, name="sce
                                   march=march, film=film))
 
 
-def _automatic(surface, march):
+def automatic_surface(surface, march):
     """Whether ``surface`` leaves alpha, alpha_U and the offset to ``"auto"`` in smooth mode:
     the automatic surface (:meth:`smoothdist.SmoothDistanceField.auto_surface`)."""
     return (isinstance(surface.alpha, str) and surface.alpha == "auto"
@@ -768,7 +776,7 @@ def _api_surface(field, surface, march):
     """``(surface, beta)`` of :func:`field_scene`: ``"auto"`` and ``"off"`` resolved, alpha,
     alpha_U, beta and the offset checked (``offset`` None: the mode's default level)."""
     alpha, alpha_u, offset = surface.alpha, surface.alpha_u, surface.offset
-    if _automatic(surface, march):
+    if automatic_surface(surface, march):
         # all three left to "auto": chosen together (issue 35; see
         # SmoothDistanceField.auto_surface)
         alpha, alpha_u, offset = field.auto_surface()
