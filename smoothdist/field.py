@@ -17,7 +17,7 @@ from smoothdist._kernels.spacing import gap_probes, local_smooth_distance
 from smoothdist.error_budget import Within, point_alpha, within
 from smoothdist.junctions import check_weights
 from smoothdist.connectivity import unique_sorted_rows
-from smoothdist.mesh import as_data_mesh
+from smoothdist.mesh import as_data_mesh, triangle_normals
 from smoothdist.query_order import coherent_order, scattered
 from smoothdist.schedule import parallel_tasks, run_tasks
 
@@ -476,7 +476,7 @@ class SmoothDistanceField:
         m = self.mesh
         if m.triangles.shape[0] == 0:
             return np.empty(0)
-        cr = _triangle_normals(m.V, m.triangles)
+        cr = triangle_normals(m.V, m.triangles)
         area = np.linalg.norm(cr, axis=1)
         ok = area > 0
         if not ok.any():
@@ -823,20 +823,6 @@ def _device_and_points(device, Q, method="bvh"):
 #: that its working memory (the sorted copy, per-query scratch) stays fixed while the outputs
 #: grow with the batch. The values do not depend on it (each query's is its own)
 QUERY_CHUNK = 1 << 20
-
-
-def _triangle_normals(V, F):
-    """``(b - a) x (c - a)`` of every triangle ``abc`` of ``F (m, 3)`` over ``V (n, 3)``:
-    ``(m, 3)`` float64, twice the area times the unit normal. The bits of ``np.cross`` on the
-    gathered ``(m, 3, 3)`` corners, without that array (1M triangles: 0.17 s, not 0.44)."""
-    a = V[F[:, 0]]
-    u = V[F[:, 1]] - a
-    v = V[F[:, 2]] - a
-    c = np.empty_like(u)
-    c[:, 0] = u[:, 1] * v[:, 2] - u[:, 2] * v[:, 1]
-    c[:, 1] = u[:, 2] * v[:, 0] - u[:, 0] * v[:, 2]
-    c[:, 2] = u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]
-    return c
 
 
 def _passes(Q, out):

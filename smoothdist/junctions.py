@@ -45,7 +45,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from smoothdist.connectivity import row_counts, triangle_half_edges
+from smoothdist.connectivity import key_counts, row_counts, triangle_half_edges
 
 __all__ = ["WEIGHTS", "JUNCTION_COLUMNS", "JunctionWeights", "junction_weights",
            "junction_table", "check_weights"]
@@ -117,9 +117,7 @@ def _triangle_edges(T, n):
     for j, (a, b) in enumerate(((0, 1), (1, 2), (2, 0))):
         np.minimum(T[:, a], T[:, b], out=lo[j * t:(j + 1) * t])
         np.maximum(T[:, a], T[:, b], out=hi[j * t:(j + 1) * t])
-    key = lo * n + hi
-    _, inverse, counts = np.unique(key, return_inverse=True, return_counts=True)
-    return lo, hi, counts[inverse.ravel()].astype(np.float64)
+    return lo, hi, key_counts(lo * n + hi).astype(np.float64)
 
 
 def junction_table(mesh, kind, order):

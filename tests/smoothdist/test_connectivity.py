@@ -33,6 +33,8 @@ def test_the_keys_give_numpys_answers(rng, k, n):
     np.testing.assert_array_equal(cn.unique_sorted_rows(rows, n), ref_rows)
     np.testing.assert_array_equal(cn.first_of_each(rows, n), np.sort(ref_first))
     np.testing.assert_array_equal(cn.row_counts(rows, n), ref_counts[ref_inv.ravel()])
+    if key is not None:     # the counts of the keys themselves (the junction weights' edges)
+        np.testing.assert_array_equal(cn.key_counts(key), ref_counts[ref_inv.ravel()])
 
 
 def test_rows_without_repeats_and_tiny_inputs(rng):
@@ -44,6 +46,7 @@ def test_rows_without_repeats_and_tiny_inputs(rng):
         assert cn.first_of_each(rows, 5).size == r
         assert cn.unique_sorted_rows(rows, 5).shape == (r, 3)
         assert cn.row_counts(rows, 5).size == r
+        assert cn.key_counts(np.zeros(r, dtype=np.int64)).size == r
 
 
 def test_unique_edges_of_triangles(rng):

@@ -447,3 +447,18 @@ def test_needs_trimesh_says_which_files_trimesh_reads(tmp_path, monkeypatch):
 def test_malformed_ascii_off(tmp_path, text, word):
     with pytest.raises(ValueError, match=word):
         DataMesh.load(write(tmp_path / "bad.off", text))
+
+
+def test_triangle_normals_are_numpys_cross_bit_for_bit():
+    """Issue 60: the repair's zero-area test and the feature sizes' area weights take the
+    triangles' normals without the gathered (t, 3, 3) corners; the values are the bits of
+    ``np.cross`` of the same edge vectors (the same products, in the same order), so a
+    triangle dropped or sampled before is dropped or sampled now."""
+    from smoothdist.mesh import triangle_normals
+
+    rng = np.random.default_rng(11)
+    V = rng.normal(size=(500, 3)) * rng.uniform(1e-6, 1e6, (500, 1))
+    T = rng.integers(0, 500, (2000, 3))
+    ref = np.cross(V[T[:, 1]] - V[T[:, 0]], V[T[:, 2]] - V[T[:, 0]])
+    np.testing.assert_array_equal(triangle_normals(V, T), ref)
+    assert triangle_normals(V, T[:0]).shape == (0, 3)
