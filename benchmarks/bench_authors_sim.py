@@ -5,7 +5,7 @@ For each simulation file in the authors' format (``objects[]``, ``meshes[]``, ``
 other in the same run, 2 threads each:
 
 * theirs: ``rigid_body_simulator FILE 2`` (abhimadan/smoothdists, built CPU-only for this
-  comparison: ``../shared/tools/authors-bench/README.md``), in a scratch folder (it writes
+  comparison: ``benchmarks/authors/README.md``), in a scratch folder (it writes
   ``<name>__<object>__state.txt`` and ``__times.txt`` files there);
 * ours: ``python -m tracer simulate FILE -o DIR --no-render --threads 2 --scheduler serial``
   (a fresh process, like theirs: start-up, loading numba's cached kernels and BVH builds

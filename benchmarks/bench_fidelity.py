@@ -9,8 +9,8 @@ exact surface at the render's own mean offset, and the share of lit streaks. Tar
 The corpus: trimesh and pyvista creation functions at coarse and fine resolutions (isotropic
 and long thin triangles), thin parts (plates, washers, a strip, an open plane), a sphere with
 holes, text, the repository's meshes, random and structured point clouds, polylines; with
-``--shared DIR`` also the Thingi10K meshes and scans of ``DIR`` (``../shared/data`` on our
-machines; not in the repository).
+``--thingi10k`` also the 12 Thingi10K meshes (fetched with checksums on first use:
+``tracer data fetch thingi10k``) and the shipped lion scan.
 
 Usage (from the repository root)::
 
@@ -145,25 +145,27 @@ def _clouds_and_curves():
     }
 
 
-def _shared(folder):
-    out = {}
-    if folder is None or not Path(folder).is_dir():
-        return out
-    for p in sorted((Path(folder) / "thingi10k").glob("*.obj")):
-        out["thingi_" + p.stem.split("_", 1)[-1]] = str(p)
-    lion = Path(folder) / "pointclouds" / "scan_guardian_lion_points.ply"
-    if lion.is_file():
-        out["scan_lion_points"] = str(lion)
+def _thingi10k(wanted):
+    """The 12 Thingi10K meshes (:mod:`tracer.datasets`) and the shipped lion scan."""
+    if not wanted:
+        return {}
+    from tracer import datasets  # after the corpus is asked for: the download says so first
+
+    folder = datasets.folder("thingi10k", progress=print)
+    out = {"thingi_" + Path(n).stem.split("_", 1)[-1]: str(folder / Path(n).name)
+           for n in datasets.GROUPS["thingi10k"]}
+    out["scan_lion_points"] = str(REPO / "scenes" / "data" / "pointclouds"
+                                  / "scan_guardian_lion_points.ply")
     return out
 
 
-def corpus(shared=None):
+def corpus(thingi10k=False):
     shapes = {}
     shapes.update(_trimesh_shapes())
     shapes.update(_pyvista_shapes())
     shapes.update(_new_user_shapes())
     shapes.update(_clouds_and_curves())
-    shapes.update(_shared(shared))
+    shapes.update(_thingi10k(thingi10k))
     return shapes
 
 
@@ -234,12 +236,13 @@ def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--size", type=int, default=128)
     p.add_argument("--shapes", nargs="+", help="only these shapes")
-    p.add_argument("--shared", default=None, help="a ../shared/data folder (Thingi10K, scans)")
+    p.add_argument("--thingi10k", action="store_true",
+                   help="also the 12 Thingi10K meshes (fetched on first use) and the lion scan")
     p.add_argument("--json", help="write the results here")
     p.add_argument("--weights", default="auto", choices=("auto", "paper", "inclusion-exclusion"),
                    help="render_mesh's weights (auto: its default)")
     args = p.parse_args(argv)
-    shapes = corpus(args.shared)
+    shapes = corpus(args.thingi10k)
     if args.shapes:
         unknown = sorted(set(args.shapes) - set(shapes))
         if unknown:

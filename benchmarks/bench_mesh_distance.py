@@ -30,7 +30,7 @@ Usage (from the repository root)::
         --rounds 10 --repeat 20                               # side by side with the authors
 
 Side by side (``--authors-bin``, the authors' ``meshDistance`` built as ``mesh_bench``, see
-``../shared/tools/authors-bench/README.md``): each case's arrays and placement are written to a
+``benchmarks/authors/README.md``): each case's arrays and placement are written to a
 case directory (``--case-dir``, default a temporary one; ``max_alpha`` 1, i.e. no attenuation, as
 ours), then ``--rounds`` rounds alternate their ``mesh_bench DIR THREADS REPEAT`` and ``REPEAT`` of
 our calls, so that both see the same machine load; the best and the median of the rounds' bests

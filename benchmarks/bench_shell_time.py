@@ -9,7 +9,7 @@ two alternating, best of ``--repeat`` after a warm-up render; the ratio shell / 
 
 Usage (from the repository root)::
 
-    python benchmarks/bench_shell_time.py --shared ../shared/data --json benchmarks/data/shell_time.json
+    python benchmarks/bench_shell_time.py --thingi10k --json benchmarks/data/shell_time.json
 """
 
 import argparse
@@ -55,10 +55,11 @@ def main(argv=None):
     p.add_argument("--size", type=int, default=512)
     p.add_argument("--repeat", type=int, default=2)
     p.add_argument("--shapes", nargs="+")
-    p.add_argument("--shared", default=None)
+    p.add_argument("--thingi10k", action="store_true",
+                   help="also the 12 Thingi10K meshes (fetched on first use) and the lion scan")
     p.add_argument("--json")
     args = p.parse_args(argv)
-    shapes = bf.corpus(args.shared)
+    shapes = bf.corpus(args.thingi10k)
     if args.shapes:
         shapes = {k: shapes[k] for k in args.shapes}
     rows = []

@@ -7,8 +7,9 @@ numba thread each, started inside the timed region, as a user's run pays for it)
 * ``beta``: the beta study's renders of the three data types at the given betas (default
   0.5 and 1: beta = 0 takes minutes) of the bunny at 256 x 256, through
   :func:`tracer.runner.run_study` with :func:`tracer.studies.beta.render_task`;
-* ``grid``: the grid study (``tracer bench-grid``) over a folder of meshes, default
-  ``../shared/data/thingi10k``, N = 100;
+* ``grid``: the grid study (``tracer bench-grid``) over a folder of meshes, default the 12
+  Thingi10K meshes (:mod:`tracer.datasets`: fetched with checksums on first use, or a local
+  copy), N = 100;
 * ``overhead``: ``--trivial`` no-op tasks; wall time per task once the cluster is up.
 
 Usage (from the repository root)::
@@ -32,7 +33,7 @@ if str(REPO) not in sys.path:
     sys.path.insert(0, str(REPO))
 
 from tracer.cli import main as tracer_main  # noqa: E402
-from tracer import runner  # noqa: E402
+from tracer import datasets, runner  # noqa: E402
 from tracer.studies import beta  # noqa: E402
 
 MODES = (("serial", "serial", None), ("local-1", "local", 1), ("local-2", "local", 2))
@@ -112,17 +113,25 @@ def bench_overhead(count):
     return out
 
 
+def _grid_folder():
+    """The Thingi10K meshes' folder, or the shipped meshes where they cannot be had (said)."""
+    try:
+        return str(datasets.folder("thingi10k", progress=print))
+    except datasets.DataUnavailable as exc:
+        print(f"grid: {exc}; the shipped scenes/data/meshes instead", flush=True)
+        return str(REPO / "scenes" / "data" / "meshes")
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--only", default="beta,grid,overhead")
     ap.add_argument("--betas", default="0.5,1")
     ap.add_argument("--size", type=int, default=256)
     ap.add_argument("--mesh", default=str(REPO / "scenes" / "data" / "bunny.off"))
-    shared = REPO / ".." / "shared" / "data" / "thingi10k"
-    ap.add_argument("--folder", default=str(shared if shared.is_dir() else
-                                            REPO / "scenes" / "data" / "meshes"),
-                    help="meshes for the grid study (default: ../shared/data/thingi10k "
-                         "where it exists, else the shipped scenes/data/meshes)")
+    ap.add_argument("--folder", default=None,
+                    help="meshes for the grid study (default: the 12 Thingi10K meshes, fetched "
+                         "on first use; where they cannot be had, the shipped "
+                         "scenes/data/meshes, said so)")
     ap.add_argument("--grid", type=int, default=100)
     ap.add_argument("--trivial", type=int, default=200)
     ap.add_argument("--json")
@@ -134,7 +143,7 @@ def main(argv=None):
     if "beta" in only:
         res["beta"] = bench_beta([float(b) for b in a.betas.split(",")], a.size, a.mesh)
     if "grid" in only:
-        res["grid"] = bench_grid(a.folder, a.grid)
+        res["grid"] = bench_grid(a.folder or _grid_folder(), a.grid)
     if a.json:
         Path(a.json).write_text(json.dumps(res, indent=2) + "\n", encoding="utf-8")
     return 0

@@ -10,8 +10,14 @@
 * ``octopus``, ``trefoil``: small real meshes shipped in ``tests/data`` (always available).
 * ``shared_data``: the project's ``../shared/data`` folder; tests using it are skipped when it
   is absent (CI has it, users usually do not).
+
+Where that folder exists and ``$SMOOTHDIST_DATA`` is not set, it is named there as the folder
+of local copies of :mod:`tracer.datasets` (it holds every registered file, checked the same
+way), so that the tests that run the benchmarks and the reproduction read it instead of
+downloading; without it they download on first use, or say which data is missing.
 """
 
+import os
 from pathlib import Path
 
 import numpy as np
@@ -23,6 +29,11 @@ from smoothdist import DataMesh
 TESTS = Path(__file__).resolve().parent
 DATA = TESTS / "data"
 SEED = 20220722
+
+#: the project's data folder beside the repository (our machines and CI have it; users do not)
+SHARED_DATA = (TESTS.parent / ".." / "shared" / "data").resolve()
+if (SHARED_DATA / "README.md").is_file():
+    os.environ.setdefault("SMOOTHDIST_DATA", str(SHARED_DATA))
 
 ZOO_NAMES = ("point_cloud", "circle", "segment_star", "icosphere", "cube", "mixed_mesh",
              "nonmanifold_mesh")
@@ -179,7 +190,7 @@ def trefoil():
 @pytest.fixture(scope="session")
 def shared_data():
     """Path of the project's shared data folder (``<repo>/../shared/data``); skips if absent."""
-    path = (Path(__file__).resolve().parents[1] / ".." / "shared" / "data").resolve()
+    path = SHARED_DATA
     if not (path / "README.md").is_file():
         pytest.skip(f"shared data folder not found at {path}: the tests on the bunny, "
                     "Thingi10K meshes and curves need it (CI has it)")

@@ -47,6 +47,7 @@ COMMANDS = {
     "animate": "tracer.sim.cli_animate",
     "reproduce": "tracer.reproduce.cli",
     "warmup": "tracer.cli_warmup",
+    "data": "tracer.cli_data",
 }
 
 

@@ -154,13 +154,13 @@ NOT_RUN = {
         "nothing",
     "python benchmarks/bench_authors.py --authors-bin PATH":
         "it needs the authors' renderer built outside the repository "
-        "(../shared/tools/authors-bench); the same script without --authors-bin is run",
+        "(benchmarks/authors); the same script without --authors-bin is run",
     "python benchmarks/bench_authors.py --authors-bin PATH --sizes 256 512 --repeat 2 --our-eps":
         "it needs the authors' renderer built outside the repository "
-        "(../shared/tools/authors-bench); the same script without --authors-bin is run",
+        "(benchmarks/authors); the same script without --authors-bin is run",
     "python benchmarks/bench_authors.py --authors-bin PATH --sizes 512 --repeat 3 --our-eps":
         "it needs the authors' renderer built outside the repository "
-        "(../shared/tools/authors-bench); the same script without --authors-bin is run",
+        "(benchmarks/authors); the same script without --authors-bin is run",
     "python -m tracer bench-grid MESH_DIR -o OUT_DIR --scheduler tcp://host:8786 # an existing cluster":
         "it needs an existing Dask cluster; tests/tracer/test_runner_cluster.py starts one with "
         "the dask command line and runs this command against it",
@@ -168,12 +168,12 @@ NOT_RUN = {
     "../authors-build/bench/rigid_body_simulator scenes/simulations/table3/ico_bowl.json "
     "--steps 400 --timeout 1200":
         "it needs the authors' simulator built outside the repository "
-        "(../shared/tools/authors-bench) and takes minutes; tests/repo/test_bench_authors_sim.py "
+        "(benchmarks/authors) and takes minutes; tests/repo/test_bench_authors_sim.py "
         "runs the script against a stand-in simulator",
     "python benchmarks/bench_mesh_distance.py --authors-bin ../authors-build/bench/mesh_bench "
     "--rounds 5 --repeat 10 --threads 2 --json benchmarks/data/mesh_distance_authors.json":
         "it needs the authors' mesh_bench built outside the repository "
-        "(../shared/tools/authors-bench); the same script without --authors-bin is run",
+        "(benchmarks/authors); the same script without --authors-bin is run",
     "python benchmarks/tables.py mesh-distance benchmarks/data/mesh_distance_authors.json":
         "it reads the results of the side-by-side run above (the authors' mesh_bench, built "
         "outside the repository), which no run has written yet; tests/repo/test_docs_tables.py "
