@@ -53,12 +53,12 @@ def add_arguments(p):
     p.add_argument("--only", metavar="LIST",
                    help="comma-separated experiments to run (default all: "
                    "underestimate, table3, grid, bh_switch, box_test, gpu, beta, alpha, "
-                   "beta_alpha, attenuation); into an "
+                   "beta_alpha, attenuation, bh_centre, bulges, quadrature, vbowl); into an "
                    "existing results folder of the same mode it updates those experiments and "
                    "keeps the others (unless --overwrite)")
     p.add_argument("--authors-bin", metavar="PATH",
                    help="the authors' rigid_body_simulator (built as "
-                   "../shared/tools/authors-bench/README.md says): Table 3 then also runs "
+                   "benchmarks/authors/README.md says): Table 3 then also runs "
                    "their simulator on the same files and steps, on this machine, in the same "
                    "run (rows it cannot finish within the timeout say so)")
     p.add_argument("--table3-scenes", metavar="LIST",

@@ -29,7 +29,7 @@ import numpy as np
 
 from smoothdist import DataMesh, MeshDistance, SmoothDistanceField
 from smoothdist.cuda import CudaUnavailable, cuda_module, simulated
-from tracer import runner
+from tracer import datasets, runner
 from tracer.cli import build_parser
 from tracer.outputs import write_json
 from tracer.runner import cpu_count
@@ -41,8 +41,8 @@ from tracer.studies.plots import bench_plots
 
 #: the bunny of the paper's beta study
 BUNNY = REPO / "scenes" / "data" / "bunny.off"
-#: the Thingi10K meshes of the paper's benchmark, where the shared data folder has them
-THINGI = REPO.parent / "shared" / "data" / "thingi10k"
+#: the scanned lion's points (the Barnes-Hut centre check)
+DEFAULT_LION = REPO / "scenes" / "data" / "pointclouds" / "scan_guardian_lion_points.ply"
 TABLE3 = REPO / "scenes" / "simulations" / "table3"
 
 #: the paper's Table 3 (Sec. 5.5): scene file -> (row, data, query, paper ms at 28 threads, dt)
@@ -63,7 +63,8 @@ SETTINGS = {
     "quick": {
         "beta": {"size": 24, "betas": [0.0, 0.2, 0.5, 1.0], "repeat": 3},
         "alpha": {"study": "underestimate", "size": 24},
-        "underestimate": {"queries": 2000, "seed": 0, "alpha": 200.0},
+        "underestimate": {"queries": 2000, "seed": 0, "alpha": 200.0,
+                          "alphas": [25.0, 50.0, 100.0, 200.0, 400.0, 800.0]},
         "bh_switch": {"trials": 40},
         "grid": {"grid": 24, "generated": [100, 1000, 10000], "thingi10k": True, "repeat": 3},
         "table3": {"scenes": ["ico_bowl", "trefoil_ringtoss", "sphere_slide"], "steps": 100,
@@ -71,26 +72,38 @@ SETTINGS = {
         "box_test": {"cases": ["bowl-ico", "slide-sphere"], "repeat": 5},
         "gpu": {"size": [640, 360], "grid": 50, "repeat": 3},
         "beta_alpha": {"size": 48, "alphas": [50.0, 200.0, 800.0], "betas": [0.0, 0.5, 1.0]},
+        "bh_centre": {"seed": 0, "clusters": 40, "cluster": 64, "queries": 50,
+                      "alphas": [1.0, 4.0, 16.0], "library_queries": 2000},
+        "bulges": {"cells": 4, "alpha": 200.0, "height_x_alpha": 1.0},
+        "quadrature": {"order": 5, "queries": 2000, "seed": 0, "alphas": [1.0, 10.0, 100.0]},
+        "vbowl": {"steps": 600},
         "attenuation": {"R": 4.0, "r": 1.5, "alpha": 2.0, "alpha_us": [4, 8, 16, 64],
                         "grid": 201},
     },
     "smoke": {  # the test suite's: every experiment at its smallest (seconds, once compiled)
         "beta": {"size": 12, "betas": [0.0, 0.2, 0.5], "repeat": 2},
         "alpha": {"study": "underestimate", "size": 12},
-        "underestimate": {"queries": 300, "seed": 0, "alpha": 200.0},
+        "underestimate": {"queries": 300, "seed": 0, "alpha": 200.0,
+                          "alphas": [25.0, 50.0, 100.0, 200.0, 400.0, 800.0]},
         "bh_switch": {"trials": 20},
         "grid": {"grid": 8, "generated": [100], "thingi10k": False, "repeat": 2},
         "table3": {"scenes": ["trefoil_ringtoss"], "steps": 10, "threads": [1, None]},
         "box_test": {"cases": ["bowl-ico"], "repeat": 2},
         "gpu": {"size": [320, 180], "grid": 20, "repeat": 1},
         "beta_alpha": {"size": 12, "alphas": [100.0, 400.0], "betas": [0.0, 1.0]},
+        "bh_centre": {"seed": 0, "clusters": 5, "cluster": 32, "queries": 20,
+                      "alphas": [1.0, 16.0], "library_queries": 200},
+        "bulges": {"cells": 4, "alpha": 200.0, "height_x_alpha": 1.0},
+        "quadrature": {"order": 5, "queries": 200, "seed": 0, "alphas": [1.0, 100.0]},
+        "vbowl": {"steps": 300},
         "attenuation": {"R": 4.0, "r": 1.5, "alpha": 2.0, "alpha_us": [16], "grid": 151},
     },
     "full": {
         "beta": {"size": 512, "betas": [0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0],
                  "repeat": 3},
         "alpha": {"study": "all", "size": 512},
-        "underestimate": {"queries": 100000, "seed": 0, "alpha": 200.0},
+        "underestimate": {"queries": 100000, "seed": 0, "alpha": 200.0,
+                          "alphas": [25.0, 50.0, 100.0, 200.0, 400.0, 800.0]},
         "bh_switch": {"trials": 500},
         "grid": {"grid": 100, "generated": [100, 1000, 10000, 100000, 1000000],
                  "thingi10k": True, "repeat": 3},
@@ -100,6 +113,12 @@ SETTINGS = {
                      "repeat": 9},
         "gpu": {"size": [1920, 1080], "grid": 100, "repeat": 3},
         "beta_alpha": {"size": 128, "alphas": [50.0, 200.0, 800.0], "betas": [0.0, 0.5, 1.0]},
+        "bh_centre": {"seed": 0, "clusters": 400, "cluster": 64, "queries": 100,
+                      "alphas": [1.0, 4.0, 16.0, 64.0], "library_queries": 100000},
+        "bulges": {"cells": 4, "alpha": 200.0, "height_x_alpha": 1.0},
+        "quadrature": {"order": 5, "queries": 20000, "seed": 0,
+                       "alphas": [1.0, 3.0, 10.0, 30.0, 100.0]},
+        "vbowl": {"steps": 600},
         "attenuation": {"R": 4.0, "r": 1.5, "alpha": 2.0, "alpha_us": [4, 8, 16, 64],
                         "grid": 401},
     },
@@ -403,7 +422,7 @@ def bh_switch(out, s, where):
     spacing = _point_spacing(np.asarray(field.mesh.V) * scale)
     return {"cloud": os.path.relpath(j["cloud"], REPO) if os.path.isabs(j["cloud"])
             else j["cloud"], "points": j["points"], "trials": j["trials"], "hits": j["hits"],
-            "alpha": j["alpha"], "beta": j["beta"], "dbeta": j["dbeta"],
+            "alpha": j["alpha"], "beta": j["beta"], "dbeta": j["dbeta"], "iso": j.get("iso"),
             "kept_points": k["count"], "mean_discrepancy": k["mean_discrepancy"],
             "max_discrepancy": k["max_discrepancy"], "mean_cosine": k["mean_cosine"],
             "min_cosine": k["min_cosine"], "scale": scale,
@@ -493,12 +512,28 @@ def fit_spread(fits):
     return out
 
 
+def thingi10k_folder(progress=None):
+    """The folder of the 12 Thingi10K meshes (:mod:`tracer.datasets`: a local copy, the cache,
+    or downloaded and checked), or the one-line reason why not."""
+    try:
+        return datasets.folder("thingi10k", progress=progress), None
+    except datasets.DataUnavailable as exc:
+        return None, str(exc)
+
+
 def grid(out, s, where):
-    """The grid benchmark (``tracer bench-grid``) over the shipped meshes, the Thingi10K
-    meshes where present and generated height fields of 1e2.. primitives; the fit."""
+    """The grid benchmark (``tracer bench-grid``) over the shipped meshes, the 12 Thingi10K
+    meshes (fetched on first use) and generated height fields of 1e2.. primitives; the fit.
+    Where the settings ask for Thingi10K and it cannot be had, nothing is measured: the
+    result says which data is missing, and the claims say "not run" rather than judging
+    another mesh set."""
     sets = [("shipped", REPO / "scenes" / "data" / "meshes")]
-    if s["thingi10k"] and THINGI.is_dir():
-        sets.append(("thingi10k", THINGI))
+    if s["thingi10k"]:
+        thingi, why = thingi10k_folder(progress=print)
+        if thingi is None:
+            return {"grid": s["grid"], "alpha": 1.0, "beta": 0.5, "missing_data": ["thingi10k"],
+                    "missing_why": why}
+        sets.append(("thingi10k", thingi))
     tmp = tempfile.mkdtemp(prefix="reproduce-meshes-")
     try:
         gen = Path(tmp)
@@ -526,7 +561,7 @@ def grid(out, s, where):
                             "threads": "/".join(map(str, threads)) or "?"})
     return {"grid": s["grid"], "alpha": 1.0, "beta": 0.5,
             "sets": [n for n, _ in sets], "generated_triangles": sorted(made.values()),
-            "thingi10k_present": THINGI.is_dir(), "meshes": len(rows),
+            "thingi10k_present": any(n == "thingi10k" for n, _ in sets), "meshes": len(rows),
             "fit": fits[0], "repeat": len(fits), "fit_spread": fit_spread(fits),
             "csv": [f"grid/{n}/bench_grid.csv" for n, _ in sets]}
 
@@ -605,6 +640,9 @@ def _timed_run(path, steps, cap, threads):
         "threads": n, "evaluations": int(ev.size),
         "ms_mean": float(1e3 * ev.mean()) if ev.size else None,
         "ms_median": float(1e3 * np.median(ev)) if ev.size else None,
+        "ms_p10": float(1e3 * np.percentile(ev, 10)) if ev.size else None,
+        "ms_p90": float(1e3 * np.percentile(ev, 90)) if ev.size else None,
+        "ms_max": float(1e3 * ev.max()) if ev.size else None,
         "simulate_seconds": round(wall, 3), "load_seconds": round(load_s, 3),
         "load_average_before": None if load0 is None else round(load0, 2),
         "load_average_after": load_average(),
@@ -629,7 +667,7 @@ AUTHORS_THREADS = 2
 
 def authors_run(path, steps, binary, timeout):
     """The authors' ``rigid_body_simulator`` on the simulation file ``path`` for ``steps``
-    steps (``../shared/tools/authors-bench/README.md``, beside the repository), in a scratch
+    steps (``benchmarks/authors/README.md``), in a scratch
     folder: their mean milliseconds per distance evaluation (one ``meshDistance`` call: the
     lines of their ``__times.txt`` files, microseconds each), the count and the wall time; or
     why not."""
@@ -702,7 +740,7 @@ def table3(out, s, where):
     return {"scenes": s["scenes"], "steps": s["steps"], "step_caps": caps,
             "scheduler": info.describe(), "rows": {n: rows[n] for n in s["scenes"]},
             "authors_simulator": ("their rigid_body_simulator (abhimadan/smoothdists a2706a2, "
-                                  "CPU build of ../shared/tools/authors-bench), the same "
+                                  "CPU build of benchmarks/authors), the same "
                                   f"files and steps, {AUTHORS_THREADS} threads, after ours in "
                                   "the same task" if authors else "not run (no --authors-bin)"),
             "not_run": [n for n in TABLE3_PAPER if n not in s["scenes"]]}
@@ -805,7 +843,9 @@ def box_test(out, s, where):
 # ============================================================================ underestimate
 def underestimate(out, s, where):
     """Sec. 3 and App. A: ``0 <= d - d_hat <= log(A N) / alpha`` at random queries around the
-    bunny, per type, at beta 0 and 0.5 (exact distance from the library's exact query)."""
+    bunny, per type, at beta 0 and 0.5 (exact distance from the library's exact query); and
+    the largest and mean gap at beta 0 for each of ``alphas`` (Sec. 3.1: more accurate as
+    alpha grows)."""
     mesh = DataMesh.load(BUNNY)
     lo, hi = mesh.V.min(0), mesh.V.max(0)
     diag = float(np.linalg.norm(hi - lo))
@@ -824,8 +864,138 @@ def underestimate(out, s, where):
             row[f"beta_{b:g}"] = {"min_gap": float(gap.min()), "max_gap": float(gap.max()),
                                   "over_bound": int(np.sum(gap > bound * (1 + 1e-12))),
                                   "negative": int(np.sum(gap < -1e-12 * np.maximum(1, d)))}
+        row["by_alpha"] = {}  # Sec. 3.1: more accurate as alpha grows (beta 0)
+        for a in s.get("alphas", ()):
+            gap = d - f.smooth_distance(Q, alpha=a, beta=0.0)[0]
+            row["by_alpha"][f"{a:g}"] = {"max_gap": float(gap.max()),
+                                         "mean_gap": float(gap.mean())}
         res["types"][kind] = row
     return res
+
+
+# ============================================================================ Sec. 3 checks
+def _lse_distance(d, w, alpha):
+    """``-log(sum w exp(-alpha d)) / alpha`` per row of ``d (n, k)``, shifted (stable)."""
+    m = d.min(axis=1, keepdims=True)
+    return m[:, 0] - np.log(np.sum(w * np.exp(-alpha * (d - m)), axis=1)) / alpha
+
+
+def bh_centre(out, s, where):
+    """Sec. 3.5: the far field of a cluster placed at its box's closest point can only
+    underestimate the cluster's smooth distance; placed at its centre of mass it can
+    overestimate. Independent of the library: clusters of the lion scan's points (each the
+    ``cluster`` nearest neighbours of a random point), queries 2-6 cluster radii away, the
+    three LogSumExps in numpy; then the library's own Barnes-Hut (beta 0.5) against beta 0 at
+    random queries around the scan."""
+    import trimesh  # the PLY reader: an optional extra (NEEDS), loaded on use
+
+    P = np.asarray(trimesh.load(DEFAULT_LION).vertices, float)
+    P = (P - P.min(0)) / np.linalg.norm(np.ptp(P, 0))
+    rng = np.random.default_rng(s["seed"])
+    over_box = over_com = 0
+    worst_com = 0.0
+    n = 0
+    for _ in range(s["clusters"]):
+        c = P[rng.integers(len(P))]
+        C = P[np.argsort(np.linalg.norm(P - c, axis=1))[:s["cluster"]]]
+        lo, hi, com = C.min(0), C.max(0), C.mean(0)
+        r = float(np.linalg.norm(hi - lo)) / 2 + 1e-12
+        u = rng.normal(size=(s["queries"], 3))
+        Q = com + u / np.linalg.norm(u, axis=1, keepdims=True) * r * rng.uniform(2, 6, (
+            s["queries"], 1))
+        for alpha in s["alphas"]:
+            a = alpha / r  # alpha in units of the cluster's size
+            exact = _lse_distance(np.linalg.norm(Q[:, None] - C[None], axis=2), 1.0, a)
+            box = np.linalg.norm(Q - np.clip(Q, lo, hi), axis=1) - np.log(len(C)) / a
+            com_d = np.linalg.norm(Q - com, axis=1) - np.log(len(C)) / a
+            tol = 1e-12 * np.maximum(1.0, np.abs(exact))
+            over_box += int(np.sum(box > exact + tol))
+            over_com += int(np.sum(com_d > exact + tol))
+            worst_com = max(worst_com, float(np.max((com_d - exact) * a)))
+            n += len(Q)
+    field, _ = normalised_field(DEFAULT_LION)
+    lo, hi = field.bounds
+    Q = rng.uniform(lo - 0.1 * (hi - lo), hi + 0.1 * (hi - lo), (s["library_queries"], 3))
+    d0, _ = field.smooth_distance(Q, alpha=100.0, beta=0.0)
+    d5, _ = field.smooth_distance(Q, alpha=100.0, beta=0.5)
+    return {"cloud": "scenes/data/pointclouds/scan_guardian_lion_points.ply",
+            "clusters": s["clusters"], "cluster": s["cluster"], "alphas": s["alphas"],
+            "evaluations": n, "box_over": over_box, "com_over": over_com,
+            "com_worst_over_x_alpha": worst_com, "library_queries": s["library_queries"],
+            "library_over": int(np.sum(d5 > d0 + 1e-12 * np.maximum(1, np.abs(d0)))),
+            "library_max_under": float(np.max(d0 - d5))}
+
+
+def _flat_sheet(n):
+    """A unit square of ``n x n`` cells, each split into two triangles: ``(V, F)``."""
+    g = np.linspace(0.0, 1.0, n + 1)
+    x, y = np.meshgrid(g, g, indexing="ij")
+    V = np.stack([x.ravel(), y.ravel(), np.zeros(x.size)], 1)
+    i = np.arange(n)[:, None] * (n + 1) + np.arange(n)[None, :]
+    i = i.ravel()
+    F = np.concatenate([np.stack([i, i + n + 1, i + 1], 1),
+                        np.stack([i + 1, i + n + 1, i + n + 2], 1)])
+    return V, F
+
+
+def bulges(out, s, where):
+    """Sec. 3.3: the weight functions remove the bulges of edge and triangle isosurfaces. On a
+    flat sheet of triangles and a straight polyline of equal segments, at a fixed height above
+    the data, the smooth distance above an interior vertex (a joint) against above the middle
+    of a triangle (a segment): the bulge is how much closer the vertex looks (times alpha:
+    ``log`` of the number of primitives counted there, unweighted), with the paper's weights
+    and with all weights 1."""
+    n, h = s["cells"], s["height_x_alpha"] / s["alpha"]
+    V, F = _flat_sheet(n)
+    inner = (V[:, 0] > 0) & (V[:, 0] < 1) & (V[:, 1] > 0) & (V[:, 1] < 1)
+    line = np.stack([np.linspace(0, 1, n + 1), np.zeros(n + 1), np.zeros(n + 1)], 1)
+    E = np.stack([np.arange(n), np.arange(1, n + 1)], 1)
+    cases = {"triangles": (DataMesh(V, triangles=F), V[inner], V[F].mean(1)),
+             "edges": (DataMesh(line, edges=E), line[1:-1], line[E].mean(1))}
+    res = {"alpha": s["alpha"], "height_x_alpha": s["height_x_alpha"], "cells": n,
+           "types": {}}
+    for kind, (mesh, joints, middles) in cases.items():
+        weighted = SmoothDistanceField(mesh, weights="paper")
+        row = {"primitives": int(weighted.num_primitives)}
+        for name, f in (("weights", weighted), ("weights_off", unweighted_field(weighted))):
+            dj, _ = f.smooth_distance(joints + [0, 0, h], alpha=s["alpha"], beta=0.0)
+            dm, _ = f.smooth_distance(middles + [0, 0, h], alpha=s["alpha"], beta=0.0)
+            row[name] = {"bulge_x_alpha": float((dm.mean() - dj.mean()) * s["alpha"])}
+        res["types"][kind] = row
+    return res
+
+
+def quadrature(out, s, where):
+    """Sec. 3.2 (Fig. quadrature): LogSumExp over Gauss quadrature points of an edge, with the
+    quadrature weights, overestimates the distance at low alpha (it is no longer
+    conservative); over the exact distances to the primitives with weights >= 1 it never does.
+    One unit edge, queries around it, numpy only."""
+    x, w = np.polynomial.legendre.leggauss(s["order"])
+    nodes = np.stack([(x + 1) / 2, np.zeros_like(x), np.zeros_like(x)], 1)
+    rng = np.random.default_rng(s["seed"])
+    Q = rng.uniform([-0.5, -1, -1], [1.5, 1, 1], (s["queries"], 3))
+    exact = np.linalg.norm(Q - np.clip(Q, [0, 0, 0], [1, 0, 0]), axis=1)
+    res = {"order": s["order"], "queries": s["queries"], "alphas": {}}
+    for alpha in s["alphas"]:
+        dq = _lse_distance(np.linalg.norm(Q[:, None] - nodes[None], axis=2), w / 2, alpha)
+        ours = _lse_distance(exact[:, None], 1.0, alpha)
+        res["alphas"][f"{alpha:g}"] = {
+            "quadrature_over": int(np.sum(dq > exact + 1e-12)),
+            "quadrature_max_over": float(np.max(dq - exact)),
+            "lse_over": int(np.sum(ours > exact + 1e-12))}
+    return res
+
+
+def vbowl(out, s, where):
+    """Sec. 5.5 (the V-shaped bowls): a point mass dropped into a V-shaped bowl with the
+    exact-minimum and the smooth constraint (:mod:`tracer.sim.vbowl`, the same integrator and
+    solver)."""
+    from tracer.sim import vbowl as vb  # the simulator needs scipy (NEEDS), loaded on use
+
+    runs = {f"{b}/{m}": vb.summary(vb.run(b, m, steps=s["steps"]))
+            for b in vb.BOWLS for m in ("exact", "smooth")}
+    return {"alpha": vb.ALPHA, "alpha_u": vb.ALPHA_U, "dt": vb.DT, "steps": s["steps"],
+            "runs": runs}
 
 
 # ============================================================================ GPU (App. E)
@@ -889,7 +1059,9 @@ def gpu(out, s, where):
 #: name -> experiment, in the order they run (quick first where they are quick)
 EXPERIMENTS = {"underestimate": underestimate, "table3": table3, "grid": grid,
                "bh_switch": bh_switch, "box_test": box_test, "gpu": gpu, "beta": beta,
-               "alpha": alpha, "beta_alpha": beta_alpha, "attenuation": attenuation}
+               "alpha": alpha, "beta_alpha": beta_alpha, "attenuation": attenuation,
+               "bh_centre": bh_centre, "bulges": bulges, "quadrature": quadrature,
+               "vbowl": vbowl}
 #: name -> the optional packages the experiment imports (``tracer reproduce`` checks them
 #: before it runs anything): the studies' plots and images, the simulator's solver, trimesh
 #: for the PLY scans (the lion, the Autzen tile), the generated icospheres and Thingi10K's STLs
@@ -898,4 +1070,5 @@ NEEDS = {"underestimate": (), "table3": ("scipy", "trimesh"),
          "bh_switch": ("matplotlib", "PIL", "trimesh", "scipy"),
          "box_test": ("trimesh",), "gpu": (), "beta": ("matplotlib", "PIL"),
          "alpha": ("matplotlib", "PIL", "trimesh"), "beta_alpha": ("matplotlib", "PIL"),
-         "attenuation": ()}
+         "attenuation": (), "bh_centre": ("trimesh",), "bulges": (), "quadrature": (),
+         "vbowl": ("scipy",)}

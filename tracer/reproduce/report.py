@@ -7,12 +7,12 @@ folder (``tests/tracer/reproduce/test_reproduce.py``).
 """
 
 import json
+import re
 from pathlib import Path
 
 from tracer.reproduce.claims import evaluate, g3
 from tracer.reproduce.experiments import (EXPERIMENTS, MEASURED_CODE, TABLE3_PAPER, code_changed,
                                           grid_fit, head_commit, measured_code, read_csv)
-from tracer.studies.common import REPO
 
 #: the files of a results folder that are not an experiment's
 NOT_EXPERIMENTS = {"claims.json", "run.json"}
@@ -65,6 +65,15 @@ def dirty_results(folder):
     return out
 
 
+def measured_commit(res):
+    """The commit an experiment's figures measured: its run's, except for figures read from a
+    committed measurement (the GPU card's file), which name their own."""
+    m = res.get("measured") or {}
+    if res.get("source") not in (None, "measured here") and m.get("commit"):
+        return m["commit"]
+    return res["provenance"].get("commit")
+
+
 def report_state(folder, allow_dirty):
     """The report's commit (HEAD now) and, per experiment (and per commit of a Table 3 row),
     whether its measured code (:func:`tracer.reproduce.experiments.measured_code`) changed
@@ -72,8 +81,7 @@ def report_state(folder, allow_dirty):
     the page is written."""
     head = head_commit()
     res = load_results(folder)
-    code = {n: code_changed(r["provenance"].get("commit"), head, measured_code(n))
-            for n, r in res.items()}
+    code = {n: code_changed(measured_commit(r), head, measured_code(n)) for n, r in res.items()}
     rows = {}
     for r in res.get("table3", {}).get("rows", {}).values():
         c = (r.get("run") or {}).get("commit")
@@ -88,11 +96,9 @@ def _cell(text):
 
 
 def _relative(text):
-    """Paths of this machine's shared folder (beside the repository) named as
-    ``../shared/...``, as the repository's other files name them (results written before the
-    experiments did so name it absolutely)."""
-    return str(text).replace(str(REPO.parent / "shared") + "/", "../shared/").replace(
-        "/work/shared/", "../shared/")
+    """Results written before the authors' build recipe moved into ``benchmarks/authors`` name
+    its older folder outside the repository: named as the repository's folder here."""
+    return re.sub(r"\S*/tools/authors-bench", "benchmarks/authors", str(text))
 
 
 def _loads(before, after):
@@ -106,6 +112,17 @@ def _date(d):
     return d[:10] if d else "-"
 
 
+def _last_run(row, results, code):
+    """A claim's last-run cell: the date and commit its figures measured, and whether the code
+    they measure changed between that commit and the report's."""
+    exp = row.get("experiment")
+    if not row.get("last_run") or exp not in results:
+        return _date(row.get("last_run"))
+    since = {"changed": "measured code changed since", "unchanged": "measured code unchanged "
+             "since"}.get(code.get(exp), "measured code since: not recorded")
+    return f"{_date(row['last_run'])} at {measured_commit(results[exp])[:12]} ({since})"
+
+
 def _experiment_lines(results, code, state):
     """The page's Experiments table."""
     L = []
@@ -115,7 +132,9 @@ def _experiment_lines(results, code, state):
           "|---|---|---:|---|---|---|---:|---|---|"]
     for name, res in results.items():
         p = res["provenance"]
-        commit = p["commit"][:12]
+        commit = measured_commit(res)[:12]
+        if measured_commit(res) != p["commit"]:
+            commit += f" (read at {p['commit'][:12]} from {res.get('source')})"
         since = code.get(name, "not recorded")
         if name == "table3":  # rows kept from earlier runs carry their own commit
             rc = state.get("table3_row_commits", {})
@@ -237,7 +256,9 @@ def render_page(folder, shown_as):
          + ("--scheduler serial " if run.get("scheduler") == "serial" else "")
          + "--out DIR --page docs/reproduction.md` on a clean commit (`--scheduler serial`: "
          "every experiment in this process on all its threads; Table 3 then times 1 and all "
-         "threads).", ""]
+         "threads). The data column says what each row reads: files shipped in `scenes/`, "
+         "or fetched with a checksum on first use (`python -m tracer data fetch`); a run "
+         "that cannot get a row's data says so in the row.", ""]
     state = run.get("report") or {}
     code = state.get("code", {})
     if state.get("commit"):
@@ -274,14 +295,14 @@ def render_page(folder, shown_as):
           + ("; in this run they are indicative only" if run["mode"] != "full" else "")
           + ".", "",
           "## Claims", "",
-          "| # | claim (quoted) | section | paper | ours | setting | verdict | last run |",
-          "|---:|---|---|---|---|---|---|---|"]
+          "| # | claim (quoted) | section | paper | ours | setting | data | verdict | last run |",
+          "|---:|---|---|---|---|---|---|---|---|"]
     for i, r in enumerate(rows, 1):
         verdict = r["verdict"] + (f" ({r['indicative']})" if r.get("indicative") else "") \
             + (f": {r['reason'].strip()}" if r["reason"].strip() else "")
         L.append("| " + " | ".join(_cell(x) for x in (
-            i, f"“{r['quote']}”", r["section"], r["paper"], r["ours"], r["setting"], verdict,
-            _date(r["last_run"]))) + " |")
+            i, f"“{r['quote']}”", r["section"], r["paper"], r["ours"], r["setting"],
+            r.get("data", "-"), verdict, _last_run(r, results, code))) + " |")
     L += _experiment_lines(results, code, state)
     if "table3" in results:
         L += _table3_lines(results["table3"])
