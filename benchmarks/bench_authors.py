@@ -20,7 +20,7 @@ Optional extra columns (ours only, against the same authors' beta 0.5 time):
   absolute; ours is within ``log(1 + T) / alpha`` of beta 0, at a 40x tighter eps).
 
 The authors' renderer is not part of this project. Build it yourself from their public
-repository (MIT) for this comparison only: see the project's notes, or in short: their
+repository (MIT) for this comparison only: ``benchmarks/authors/README.md``, or in short: their
 sources at commit a2706a2 and libigl v2.4.0 headers, Eigen 3.4, a patch that makes
 ``beta_error_test`` read ``SD_RES`` / ``SD_BETAS`` from the environment and use 2 threads,
 and a CPU-only Release build. Pass the binary with ``--authors-bin``. Without it, this

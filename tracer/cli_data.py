@@ -14,9 +14,10 @@ def add_arguments(p):
     p.add_argument("names", nargs="*", metavar="NAME",
                    help="files (thingi10k/72960_guardian_lion.obj) or groups ("
                    + ", ".join(sorted(datasets.GROUPS)) + "); default: every file")
-    p.add_argument("--base", default=datasets.RAW, metavar="URL",
+    p.add_argument("--base", default=None, metavar="URL",
                    help="where the sources are downloaded from, {URL}/{repo}/{commit}/{path} "
-                   "(a mirror of raw.githubusercontent.com; default %(default)s)")
+                   "(a mirror of raw.githubusercontent.com; default $SMOOTHDIST_DATA_URL, "
+                   f"else {datasets.RAW})")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
 
 

@@ -14,8 +14,9 @@ Where a file is looked for, in order (:func:`path`):
 3. the user cache: ``$SMOOTHDIST_DATA_CACHE``, else the platform's cache folder
    (``~/.cache/smoothdist/data`` on Linux);
 4. a download from the source into that cache (checked, then renamed into place, so that an
-   interrupted download never leaves a file that looks complete). ``SMOOTHDIST_OFFLINE=1``
-   stops before this step.
+   interrupted download never leaves a file that looks complete), from
+   ``raw.githubusercontent.com`` or ``$SMOOTHDIST_DATA_URL`` (a mirror laid out the same way).
+   ``SMOOTHDIST_OFFLINE=1`` stops before this step.
 
 A file that cannot be had raises :class:`DataUnavailable` with the command that gets it
 (``tracer data fetch NAME``).
@@ -40,6 +41,8 @@ ENV_CACHE = "SMOOTHDIST_DATA_CACHE"
 ENV_OFFLINE = "SMOOTHDIST_OFFLINE"
 #: where the sources are downloaded from: ``{base}/{repo}/{commit}/{path}``
 RAW = "https://raw.githubusercontent.com"
+#: another base URL laid out as :data:`RAW` (a mirror, a proxy); read at each download
+ENV_URL = "SMOOTHDIST_DATA_URL"
 #: the repository's own small copies (present in a checkout, not in an installed package)
 SHIPPED = Path(__file__).resolve().parents[1] / "scenes" / "data"
 
@@ -258,10 +261,15 @@ def find(name):
     return None
 
 
-def path(name, download=True, base=RAW, progress=None):
+def base_url():
+    """``$SMOOTHDIST_DATA_URL`` when set, else :data:`RAW`."""
+    return os.environ.get(ENV_URL, "").strip().rstrip("/") or RAW
+
+
+def path(name, download=True, base=None, progress=None):
     """The local path of the registered file ``name``: found in a local folder or the cache,
-    else downloaded (``download`` and not ``$SMOOTHDIST_OFFLINE``) into the cache. ``progress``:
-    a callable given one line per download."""
+    else downloaded (``download`` and not ``$SMOOTHDIST_OFFLINE``) from ``base`` (default
+    :func:`base_url`) into the cache. ``progress``: a callable given one line per download."""
     found = find(name)
     if found is not None:
         return found
@@ -269,10 +277,10 @@ def path(name, download=True, base=RAW, progress=None):
         raise DataUnavailable(f"{name} is not here (looked in {_where()}); get it with "
                               f"`tracer data fetch {name}` (downloads {entry(name).size:,} "
                               f"bytes), or set ${ENV_LOCAL} to a folder of copies")
-    return _download(entry(name), base, progress)
+    return _download(entry(name), base or base_url(), progress)
 
 
-def folder(group, download=True, base=RAW, progress=None):
+def folder(group, download=True, base=None, progress=None):
     """The folder that holds every file of ``group`` (:data:`GROUPS`); the files are fetched
     first where missing. The folder may hold other files too."""
     names = GROUPS[group]

@@ -41,6 +41,7 @@ def isolated(tmp_path, monkeypatch):
     """No local copies, an empty cache in tmp_path, downloads allowed."""
     monkeypatch.delenv(datasets.ENV_LOCAL, raising=False)
     monkeypatch.delenv(datasets.ENV_OFFLINE, raising=False)
+    monkeypatch.delenv(datasets.ENV_URL, raising=False)
     monkeypatch.setenv(datasets.ENV_CACHE, str(tmp_path / "cache"))
     monkeypatch.setattr(datasets, "SHIPPED", tmp_path / "no-checkout")
     return tmp_path / "cache"
@@ -118,7 +119,8 @@ def test_download_checks_converts_and_caches(isolated, server, monkeypatch, tmp_
     p = datasets.path(conv.name, base=base, progress=lines.append)
     assert p == isolated / conv.name and p.read_bytes() == obj
     assert lines and base in lines[0]
-    assert datasets.path(copy.name, base=base).read_bytes() == text
+    monkeypatch.setenv(datasets.ENV_URL, base + "/")  # a mirror named by the environment
+    assert datasets.path(copy.name).read_bytes() == text
     # cached: found again with the server's copy gone and downloads off
     (root / copy.source.repo).rename(root / "gone")
     monkeypatch.setenv(datasets.ENV_OFFLINE, "1")
