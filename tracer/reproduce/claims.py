@@ -758,9 +758,9 @@ CLAIMS = [
 #: experiment, or fetched on first use with a checksum (``tracer data fetch``)
 DATA = {
     "beta": "bunny.off (shipped)",
-    "alpha": "bunny.off, the octopus and the Autzen tile (shipped); generated shapes",
+    "alpha": "the lion scan, the torus and the octopus (shipped)",
     "underestimate": "bunny.off (shipped)",
-    "bh_switch": "the lion scan's points (shipped)",
+    "bh_switch": "the Autzen LiDAR tile (shipped)",
     "grid": "scenes/data/meshes (shipped), 12 Thingi10K meshes (fetched: tracer data fetch "
             "thingi10k), generated height fields",
     "table3": "scenes/simulations/table3 and the Autzen tile (shipped); generated bodies",
