@@ -444,7 +444,9 @@ def test_experiments_table_shows_tree_and_code_state():
     assert {r[0] for r in rows} == set(report.load_results(RESULTS))
     for r in rows:
         res = json.loads((RESULTS / f"{r[0]}.json").read_text())
-        assert r[3].startswith(res["provenance"]["commit"][:12])
+        # the commit its figures measured (a card's committed file names its own)
+        assert r[3].startswith(report.measured_commit(res)[:12])
+        assert res["provenance"]["commit"][:12] in r[3]
         assert r[4] == {True: "dirty", False: "clean"}.get(res["provenance"]["dirty"],
                                                            "unknown")
         assert r[5].split()[0] == run["report"]["code"][r[0]]
