@@ -193,3 +193,24 @@ def test_a_reproduction_without_its_data_says_so(isolated, monkeypatch, tmp_path
     assert rows and all(r["verdict"] == claims.NOT_RUN for r in rows)
     assert all("thingi10k" in r["reason"] and "tracer data fetch" in r["reason"] for r in rows)
     assert all("Thingi10K" in r["data"] for r in rows)
+
+
+def test_tracer_reproduce_without_its_data_writes_a_page_that_says_so(isolated, monkeypatch,
+                                                                      tmp_path):
+    """The command end to end, offline, with the grid asking for Thingi10K: exit 0, a page
+    and claims whose grid rows say "not run" and name the data."""
+    import json
+
+    from tracer.reproduce import experiments
+
+    monkeypatch.setenv(datasets.ENV_OFFLINE, "1")
+    monkeypatch.setitem(experiments.SETTINGS["smoke"], "grid",
+                        dict(experiments.SETTINGS["smoke"]["grid"], thingi10k=True))
+    out = tmp_path / "res"
+    assert main(["reproduce", "--smoke", "--only", "grid", "--out", str(out), "-q",
+                 "--allow-dirty"]) == 0
+    rows = [r for r in json.loads((out / "claims.json").read_text())
+            if r["experiment"] == "grid"]
+    assert rows and all(r["verdict"] == "not run" and "thingi10k" in r["reason"] for r in rows)
+    page = (out / "reproduction.md").read_text(encoding="utf-8")
+    assert "needs data this run could not get: thingi10k" in page

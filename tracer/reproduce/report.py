@@ -30,7 +30,7 @@ def load_results(folder):
         with open(p, encoding="utf-8") as fh:
             out[p.stem] = json.load(fh)
     g = out.get("grid")
-    if g and any("share_sd_pct" not in f for f in g["fit"].values()):
+    if g and "fit" in g and any("share_sd_pct" not in f for f in g["fit"].values()):
         rows = [r for c in g["csv"] for r in read_csv(folder / c)
                 if r.get("status", "ok") == "ok"]
         fit = grid_fit(rows, g["grid"])
@@ -308,7 +308,7 @@ def render_page(folder, shown_as):
         L += _table3_lines(results["table3"])
     if "box_test" in results:
         L += _box_test_lines(results["box_test"])
-    if "grid" in results:
+    if "grid" in results and "fit" in results["grid"]:  # not when its data was missing
         L += _grid_lines(results["grid"], shown_as)
     L.append("")
     return "\n".join(L)
