@@ -152,6 +152,10 @@ NOT_RUN = {
         "once (minutes); tests/smoothdist/test_kernel_cache.py shows a second copy loading the "
         "kernels and tests/smoothdist/test_warmup.py a first call after the warm-up compiling "
         "nothing",
+    "python benchmarks/bench_authors_error.py --authors-bin PATH --size 256 --json "
+    "tracer/studies/authors_beta_error.json":
+        "it needs the authors' renderer built outside the repository (benchmarks/authors) and "
+        "takes minutes; tests/tracer/studies/test_studies.py reads the file it wrote",
     "python benchmarks/bench_authors.py --authors-bin PATH":
         "it needs the authors' renderer built outside the repository "
         "(benchmarks/authors); the same script without --authors-bin is run",

@@ -26,10 +26,10 @@ from tracer.outputs import atomic_write, write_text
 from tracer.studies.common import (TYPE_COLORS, TYPE_LETTER, TYPES, beta_tag, close, fmt,
                                    machine_info)
 
-#: the authors' isosurface error at each beta (bunny, alpha 200, alpha_U 1200, their
-#: ``beta_error_test``), in % of the bbox diagonal for points / edges / triangles. Errors do
+#: the authors' isosurface error at each beta they were run at (bunny, alpha 200, alpha_U
+#: 1200, their ``beta_error_test``), written by ``benchmarks/bench_authors_error.py``. Errors do
 #: not depend on the machine.
-PAPER_BETA_ERROR = {0.0: (0.0, 0.0, 0.0), 0.5: (2.5, 3.7, 3.4), 1.0: (4.9, 6.5, 6.0)}
+AUTHORS_ERROR_FILE = Path(__file__).with_name("authors_beta_error.json")
 
 #: the authors' render times in seconds (points / edges / triangles) by image size and beta,
 #: measured side by side with ours in one run: see :data:`AUTHORS_TIMES_SETUP`. Only shown
@@ -111,10 +111,32 @@ def parameters_title(params):
     return f"{who} {value}"
 
 
-def authors_errors(params):
-    """:data:`PAPER_BETA_ERROR` for the authors' own study (:func:`has_reference`), else
-    ``{}``: their errors were measured on their bunny, not on a user's mesh."""
-    return PAPER_BETA_ERROR if has_reference(params) else {}
+def authors_errors(params, path=AUTHORS_ERROR_FILE):
+    """``{beta: (points, edges, triangles)}``, the authors' errors in % of the diagonal at the
+    betas of their run (:data:`AUTHORS_ERROR_FILE`), for the authors' own study
+    (:func:`has_reference`), else ``{}``: their errors were measured on their bunny, not on a
+    user's mesh. ``{}`` too where no results file exists."""
+    if not has_reference(params) or not Path(path).is_file():
+        return {}
+    with open(path, encoding="utf-8") as fh:
+        res = json.load(fh)
+    return {float(b): tuple(e[k] for k in TYPES) for b, e in res["error_pct"].items()}
+
+
+def _beta_span(betas):
+    """``0-1 every 0.1`` for an evenly spaced list, else the values."""
+    steps = {round(b - a, 9) for a, b in zip(betas, betas[1:])}
+    if len(betas) > 3 and len(steps) == 1:
+        return f"{betas[0]:g}-{betas[-1]:g} every {steps.pop():g}"
+    return ", ".join(f"{x:g}" for x in betas)
+
+
+def authors_error_size(path=AUTHORS_ERROR_FILE):
+    """The image size the authors' errors were measured at (None without a results file)."""
+    if not Path(path).is_file():
+        return None
+    with open(path, encoding="utf-8") as fh:
+        return json.load(fh)["size"]
 
 
 #: the paper's Barnes-Hut switch numbers on its city LiDAR scan (Sec. 4.3)
@@ -319,7 +341,8 @@ def beta_plots(out, rows, params):
             # measured at these betas only: markers, no line drawn as if measured between
             ax.plot(ref_b, [ref_e[x][TYPES.index(k)] for x in ref_b], "D", ls="none", ms=7,
                     color=TYPE_COLORS[k], mfc="none", alpha=0.8,
-                    label=f"{k} (authors' C++, β = {', '.join(f'{x:g}' for x in ref_b)})")
+                    label=f"{k} (authors' C++ run here, {authors_error_size()}², "
+                    f"β = {_beta_span(ref_b)})")
         tol_series(ax, k, "error_rel_diag", 100.0)
     ax.set_xlabel("β")
     ax.set_ylabel("mean |t_β − t_0| (% of bbox diagonal)")
@@ -650,7 +673,9 @@ def _reference_lines(params):
             f"Reference times: {AUTHORS_TIMES_SETUP}; shown only for a study at the size "
             f"({', '.join(f'{n}²' for n in sorted(AUTHORS_TIMES))}) and eps "
             f"({AUTHORS_EPS:g}) they were measured at, and only for "
-            "the betas measured. Reference errors: the authors' `beta_error_test`.", ""]
+            "the betas measured. Reference errors: the authors' `beta_error_test`, run here at "
+            f"{authors_error_size()}² (`tracer/studies/authors_beta_error.json`, written by "
+            "`benchmarks/bench_authors_error.py`; errors do not depend on the machine).", ""]
 
 
 def panel_grid_png(panels, title, cell=2.3):

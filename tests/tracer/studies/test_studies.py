@@ -76,7 +76,10 @@ def test_beta_bunny_keeps_the_authors_reference(tmp_path):
     assert main(["ablate-beta", str(BUNNY), "-o", str(out), "--size", "16", "--betas", "0,0.5",
                  "--types", "points", "-q"]) == 0
     report = (out / "report.md").read_text(encoding="utf-8")
-    assert _column(report, "ref. error (% diag)") == ["0", "2.5"]
+    from tracer.studies import plots  # the authors' errors come from their results file
+
+    ref = plots.authors_errors({"authors_reference": True})
+    assert _column(report, "ref. error (% diag)") == ["0", plots.fmt(ref[0.5][0], 3)]
     assert set(_column(report, "ref. time (s)")) == {"–"}
     assert "side by side" in report
     # the paper's own mesh keeps the paper's parameters, and says so (issue 46)
@@ -178,7 +181,12 @@ def test_authors_reference_times_only_at_their_size_and_eps():
     assert plots.authors_times(p(256))[0.5] == (1.48, 2.37, 2.63)
     assert plots.authors_times(p(256, ref=False)) == {}   # not their bunny and protocol
     assert plots.authors_errors(p(256, ref=False)) == {}
-    assert plots.authors_errors(p(32))[0.5] == (2.5, 3.7, 3.4)
+    # their errors from the results file their own program wrote, at every beta it ran
+    res = json.loads(plots.AUTHORS_ERROR_FILE.read_text(encoding="utf-8"))
+    errors = plots.authors_errors(p(32))
+    assert sorted(errors) == sorted(res["betas"]) and errors[0.0] == (0.0, 0.0, 0.0)
+    assert errors[0.5] == tuple(res["error_pct"]["0.5"][k] for k in plots.TYPES)
+    assert all(0 < e < 10 for e in errors[1.0])  # % of the diagonal
     assert plots.authors_times(p(512))[0.5] == (6.33, 9.33, 10.46)
     assert plots.authors_times(p(32)) == {}
     assert plots.authors_times(p(512, eps=2.5e-5)) == {}   # our eps: not the same measurement
