@@ -37,7 +37,7 @@ from tracer.sim.primitives import (bowl_edges, icosphere_edges, ring_toss_points
                                    trefoil_100, uv_sphere)
 from tracer.studies.bh_switch import DEFAULT_CLOUD, normalised_field
 from tracer.studies.common import REPO, TYPE_LETTER, TYPES, unweighted_field
-from tracer.studies.plots import bench_plots
+from tracer.studies.plots import beta_plots, bench_plots
 
 #: the bunny of the paper's beta study
 BUNNY = REPO / "scenes" / "data" / "bunny.off"
@@ -277,7 +277,18 @@ def beta(out, s, where):
                 reps[r["type"]][f"{r['beta']:g}"].append(r["seconds"])
     res["render_seconds_repeats"] = reps
     res["repeat"] = int(s.get("repeat", 1))
+    if res["repeat"] > 1:
+        beta_time_spread(out, reps)
     return res
+
+
+def beta_time_spread(out, reps):
+    """The beta study's time plot in ``out`` redrawn with the repeats' min-max bars
+    (``reps``: ``{type: {beta: [seconds]}}``, the first run's included)."""
+    with open(out / "beta_params.json", encoding="utf-8") as fh:
+        params = json.load(fh)
+    rows = [r for r in read_csv(out / "beta_ablation.csv") if r.get("status", "ok") == "ok"]
+    beta_plots(out, rows, params, spread=reps)
 
 
 # ============================================================================ alpha (Sec. 3)

@@ -286,9 +286,10 @@ def beta_outputs(out, cache, rows, params, types, grid_betas):
     write_text(out / "report.md", beta_report(rows, params, present, diff=diff, front=front))
 
 
-def beta_plots(out, rows, params):
+def beta_plots(out, rows, params, spread=None):
     """``beta_time.png`` and ``beta_error.png`` from the study's rows; returns the types
-    present. Needs only the rows (the CSV), not the renders."""
+    present. Needs only the rows (the CSV), not the renders. ``spread``: ``{type: {beta:
+    [seconds of each run]}}`` of repeated renders, drawn as min-max bars on the time plot."""
     plt = pyplot()
     all_rows = rows
     extra = [r for r in rows if r.get("tol", 0.0)]
@@ -316,6 +317,7 @@ def beta_plots(out, rows, params):
                     mfc="none", ms=8, label=f"{k} (authors' C++, {params['width']}², "
                     "side by side)")
         tol_series(ax, k, "seconds")
+        _spread_bars(ax, k, (spread or {}).get(k))
     ax.set_yscale("log")
     ax.set_xlabel("β")
     ax.set_ylabel("render time (s)")
@@ -357,6 +359,23 @@ def beta_plots(out, rows, params):
 
 #: betas labelled in ``beta_frontier.png`` when a series has more than six
 FRONTIER_LABELS = (0.1, 0.2, 0.3, 0.5, 1.0)
+
+
+def _spread_bars(ax, kind, runs):
+    """Min-max bars over repeated renders (``{beta: [seconds]}``) of one type, labelled once
+    with the number of runs."""
+    runs = {float(b): v for b, v in (runs or {}).items() if len(v) > 1}
+    if not runs:
+        return
+    b = sorted(runs)
+    lo = np.array([min(runs[x]) for x in b])
+    hi = np.array([max(runs[x]) for x in b])
+    n = min(len(v) for v in runs.values())
+    ax.vlines(b, lo, hi, color=TYPE_COLORS[kind], lw=1.2, zorder=3,
+              label=f"{kind}: min-max of {n} runs at β {', '.join(f'{x:g}' for x in b)}")
+    for y in (lo, hi):  # caps, so that a short bar behind a marker still shows
+        ax.hlines(y, np.array(b) - 0.02, np.array(b) + 0.02, color=TYPE_COLORS[kind], lw=1.2,
+                  zorder=3)
 
 
 def frontier(rows, kind):

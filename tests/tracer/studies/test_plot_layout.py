@@ -94,6 +94,21 @@ def test_beta_plots_keep_their_texts_in_the_figure_and_off_the_data(tmp_path, sa
     assert "16 threads" in saved["beta_time.png"][1].axes[0].get_title().replace("\n", " ")
 
 
+def test_repeated_renders_show_their_spread_on_the_time_plot(tmp_path, saved):
+    """Three runs at beta 0 and 0.5: one min-max bar per type and beta, spanning the runs'
+    fastest and slowest, named in the legend; the layout still holds."""
+    spread = {k: {"0": [0.05, 0.06, 0.045], "0.5": [0.017, 0.02, 0.016]}
+              for k in ("points", "edges", "triangles")}
+    plots.beta_plots(tmp_path, rows(), PARAMS, spread=spread)
+    problems, fig = saved["beta_time.png"]
+    assert not problems, problems
+    bars = [c for c in fig.axes[0].collections if "min-max of 3 runs" in c.get_label()]
+    assert len(bars) == 3
+    segs = bars[0].get_segments()
+    assert sorted((s[0][0], s[0][1], s[1][1]) for s in segs) == [(0.0, 0.045, 0.06),
+                                                                  (0.5, 0.016, 0.02)]
+
+
 def test_the_old_layout_fails_the_check(tmp_path, saved, monkeypatch):
     """The check can fail: the legend inside the axes and the title on one line, as before."""
     def inside(fig, ax, fontsize=7):
