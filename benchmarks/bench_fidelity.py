@@ -151,7 +151,7 @@ def _thingi10k(wanted):
         return {}
     from tracer import datasets  # after the corpus is asked for: the download says so first
 
-    folder = datasets.folder("thingi10k", progress=print)
+    folder = datasets.group_folder("thingi10k", progress=print)
     out = {"thingi_" + Path(n).stem.split("_", 1)[-1]: str(folder / Path(n).name)
            for n in datasets.GROUPS["thingi10k"]}
     out["scan_lion_points"] = str(REPO / "scenes" / "data" / "pointclouds"

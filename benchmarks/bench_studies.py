@@ -116,7 +116,7 @@ def bench_overhead(count):
 def _grid_folder():
     """The Thingi10K meshes' folder, or the shipped meshes where they cannot be had (said)."""
     try:
-        return str(datasets.folder("thingi10k", progress=print))
+        return str(datasets.group_folder("thingi10k", progress=print))
     except datasets.DataUnavailable as exc:
         print(f"grid: {exc}; the shipped scenes/data/meshes instead", flush=True)
         return str(REPO / "scenes" / "data" / "meshes")

@@ -280,7 +280,7 @@ def path(name, download=True, base=None, progress=None):
     return _download(entry(name), base or base_url(), progress)
 
 
-def folder(group, download=True, base=None, progress=None):
+def group_folder(group, download=True, base=None, progress=None):
     """The folder that holds every file of ``group`` (:data:`GROUPS`); the files are fetched
     first where missing. The folder may hold other files too."""
     names = GROUPS[group]

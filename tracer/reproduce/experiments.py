@@ -527,7 +527,7 @@ def thingi10k_folder(progress=None):
     """The folder of the 12 Thingi10K meshes (:mod:`tracer.datasets`: a local copy, the cache,
     or downloaded and checked), or the one-line reason why not."""
     try:
-        return datasets.folder("thingi10k", progress=progress), None
+        return datasets.group_folder("thingi10k", progress=progress), None
     except datasets.DataUnavailable as exc:
         return None, str(exc)
 
