@@ -223,14 +223,20 @@ def legend_below(fig, ax, fontsize=7, handles=None, top=0.0):
 def fit_suptitle(fig, text, fontsize=9):
     """``fig``'s suptitle, wrapped to the figure's width (measured); returns the height in
     inches that it needs at the top (for ``tight_layout``'s ``rect``)."""
+    title = fig.suptitle(text, fontsize=fontsize, y=0.995, va="top")
+    wrap_to_figure(fig, title, text)
+    return title.get_window_extent(fig.canvas.get_renderer()).height / fig.dpi + 0.1
+
+
+def wrap_to_figure(fig, title, text):
+    """Wrap the text artist ``title`` (holding ``text``) until it is no wider than the
+    figure (measured with the figure's renderer)."""
     renderer = fig.canvas.get_renderer()
     limit = 0.96 * fig.get_size_inches()[0] * fig.dpi
     width = max(len(line) for line in text.split("\n"))
-    title = fig.suptitle(text, fontsize=fontsize, y=0.995, va="top")
     while title.get_window_extent(renderer).width > limit and width > 20:
         width = int(width * 0.85)
         title.set_text("\n".join(textwrap.fill(part, width) for part in text.split("\n")))
-    return title.get_window_extent(renderer).height / fig.dpi + 0.1
 
 
 def savefig(fig, path, dpi=100, max_bytes=195_000):
@@ -611,8 +617,10 @@ def beta_diff_figure(cache, rows, present, grid_betas, params):
                       extend="max" if over else "neither", shrink=0.9)
     cb.set_label(DIFF_LABEL, fontsize=8)
     cb.ax.tick_params(labelsize=7)
-    fig.suptitle(f"{params['mesh_name']}: depth difference to β = 0 (grey: not hit by both)"
-                 f"\n{parameters_title(params)}", fontsize=8)
+    text = (f"{params['mesh_name']}: depth difference to β = 0 (grey: not hit by both)\n"
+            f"{parameters_title(params)}")
+    # placed by the constrained layout (which keeps room for it), wrapped so a long name fits
+    wrap_to_figure(fig, fig.suptitle(text, fontsize=8), text)
     return fig
 
 

@@ -8,6 +8,8 @@ import pytest
 
 pytest.importorskip("matplotlib")
 
+from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: E402
+
 from tracer.studies import plots  # noqa: E402
 
 NAME = "mobius_strip_scanned_at_home_with_a_rather_long_file_name_v2.obj"
@@ -199,3 +201,41 @@ def test_bench_grid_and_bh_switch_plots(tmp_path, saved):
                           "bh_switch.png"}
     for name, (problems, _) in saved.items():
         assert not problems, (name, problems)
+
+
+def fake_cache(folder, params, betas=(0.0, 0.25, 0.5, 1.0), n=24):
+    """A beta study's depth cache of ``n x n`` renders (a gradient) and depth buffers (a
+    sphere's, moved by beta), as the study writes them."""
+    from tracer.image import save_png  # the test's own cache of renders
+    from tracer.studies.common import beta_tag
+
+    folder.mkdir()
+    y, x = np.mgrid[0:n, 0:n] / (n - 1)
+    r2 = (x - 0.5) ** 2 + (y - 0.5) ** 2
+    for k in ("points", "edges", "triangles"):
+        for b in betas:
+            rgb = (np.stack([x, y, np.full_like(x, b)], -1) * 255).astype(np.uint8)
+            save_png(folder / f"render_{k}_beta{beta_tag(b)}.png", rgb)
+            depth = np.where(r2 < 0.2, 1.0 - np.sqrt(np.maximum(0.2 - r2, 0)) + 0.01 * b,
+                             np.nan)
+            np.save(folder / f"depth_{k}_beta{beta_tag(b)}.npy", depth.astype(np.float32))
+    return folder
+
+
+def test_the_image_grid_and_the_heat_maps_keep_their_texts_in_the_figure(tmp_path, saved):
+    """``beta_grid.png`` and ``beta_diff.png`` from a depth cache, with the long per-type
+    labels of a user's mesh: no text leaves the figure, no legend over a panel."""
+    cache = fake_cache(tmp_path / "cache", PARAMS)
+    rs = [dict(r, diag=1.0) for r in rows()]
+    present = ["points", "edges", "triangles"]
+    plots.beta_grid(tmp_path, cache, rs, present, (0.0, 0.5, 1.0), PARAMS)
+    assert plots.beta_diff(tmp_path, cache, rs, present, (0.5, 1.0), PARAMS)
+    assert set(saved) == {"beta_grid.png", "beta_diff.png"}
+    for name, (problems, fig) in saved.items():
+        assert not problems, (name, problems)
+        assert len(fig.axes) >= 6
+        FigureCanvasAgg(fig).draw()  # closed after saving: draw it again to measure
+        top = fig._suptitle.get_window_extent(fig.canvas.get_renderer())
+        for ax in fig.axes:  # the wrapped suptitle stays above every panel and its title
+            for box in (ax.get_window_extent(), ax.title.get_window_extent()):
+                assert not _overlap(top, box), name
