@@ -3,10 +3,10 @@ judged from the results folder of ``tracer reproduce``.
 
 :func:`evaluate` turns ``{experiment: results dict}`` into one row per claim: the quote, the
 section, the paper's value, ours, the setting, the verdict (:data:`VERDICTS`: ``match``,
-``differs``, ``not comparable`` (another quantity or unit), ``cannot be reproduced`` (data,
-hardware), ``inconclusive`` (a timing whose spread straddles the paper's threshold) or ``not
-run``) with its reason, the experiment it came from and that experiment's
-date. Every number in a row is formatted here from a results file; the paper's values are the
+``differs``, ``not comparable`` (another quantity, unit, mesh set or hardware), ``cannot be
+reproduced`` (the data or the hardware is not there at all), ``inconclusive`` (a timing whose
+spread straddles the paper's threshold) or ``not run``) with its reason, the experiment it
+came from and that experiment's date. Every number in a row is formatted here from a results file; the paper's values are the
 quoted text.
 """
 
@@ -16,7 +16,7 @@ from tracer.reproduce.experiments import TABLE3_PAPER
 
 TYPES = ("points", "edges", "triangles")
 MATCH, DIFFERS, CANNOT, NOT_RUN = "match", "differs", "cannot be reproduced", "not run"
-#: another quantity or unit than the paper's (the reason says which)
+#: another quantity, unit, mesh set or hardware than the paper's (the reason says which)
 NOT_COMPARABLE = "not comparable"
 #: a timing whose spread over the repeats straddles the paper's threshold
 INCONCLUSIVE = "inconclusive"

@@ -287,8 +287,9 @@ def render_page(folder, shown_as):
               "(`tracer reproduce`, an hour or more on 2 cores) uses the paper's sizes.", ""]
     L += ["Verdicts: " + ", ".join(f"{v}: {n}" for v, n in sorted(counts.items())) + ". "
           "*match* and *differs*: the paper's quantity, measured here; *not comparable*: "
-          "another quantity or unit than the paper's (the reason says which); *cannot be "
-          "reproduced*: the data or the hardware is not available; *inconclusive*: a timing "
+          "another quantity, unit, mesh set or hardware than the paper's (the reason says "
+          "which); *cannot be reproduced*: the data or the hardware is not available at all; "
+          "*inconclusive*: a timing "
           "whose spread over the repeats (min-max, shown) straddles the paper's threshold; "
           "*not run*: not part of this run. Timing rows give the load average before and "
           "after their experiment"
