@@ -6,8 +6,8 @@ section, the paper's value, ours, the setting, the verdict (:data:`VERDICTS`: ``
 ``differs``, ``not comparable`` (another quantity, unit, mesh set or hardware), ``cannot be
 reproduced`` (the data or the hardware is not there at all), ``inconclusive`` (a timing whose
 spread straddles the paper's threshold) or ``not run``) with its reason, the experiment it
-came from and that experiment's date. Every number in a row is formatted here from a results file; the paper's values are the
-quoted text.
+came from and that experiment's date. Every number in a row is formatted here from a results
+file; the paper's values are the quoted text.
 """
 
 import math
