@@ -79,29 +79,33 @@ def paper_camera(V):
     return c + np.array([0.0, 0.0, 2.0 * float((hi - lo).max())]), c, np.array([0.0, 1.0, 0.0])
 
 
-def run_authors(binary, size, beta=BETA, workdir=None):
-    """Run the authors' ``beta_error_test`` once; returns ``{type: seconds}``.
-
-    It reads ``../data/bunny.off`` relative to its working folder, so it runs in a temporary
-    folder with a copy of the bunny, and writes its ``t-*.dmat`` files there.
-    """
+def their_output(binary, size, betas, timeout=3600):
+    """The standard output of one run of the authors' ``beta_error_test`` at ``size``² and
+    ``betas``. It reads ``../data/bunny.off`` relative to its working folder, so it runs in a
+    temporary folder with a copy of the bunny, and writes its ``t-*.dmat`` files there."""
     with tempfile.TemporaryDirectory(prefix="authors-bench-") as tmp:
         tmp = Path(tmp)
         (tmp / "data").mkdir()
         shutil.copyfile(MESH, tmp / "data" / "bunny.off")
         (tmp / "run").mkdir()
-        env = dict(os.environ, SD_RES=str(size), SD_BETAS=f"{beta:g}")
+        env = dict(os.environ, SD_RES=str(size), SD_BETAS=",".join(f"{b:g}" for b in betas))
         p = subprocess.run([str(binary)], cwd=tmp / "run", env=env, capture_output=True,
-                           text=True, timeout=3600)
+                           text=True, timeout=timeout)
     if p.returncode != 0:
         raise RuntimeError(f"{binary} failed with status {p.returncode}: "
                            f"{(p.stderr or p.stdout).strip()[-300:]}")
+    return p.stdout
+
+
+def run_authors(binary, size, beta=BETA, workdir=None):
+    """Run the authors' ``beta_error_test`` once at one beta; returns ``{type: seconds}``."""
+    text = their_output(binary, size, [beta])
     out = {}
-    for m in re.finditer(r"(point|edge|face) render took ([0-9.eE+-]+)s", p.stdout):
+    for m in re.finditer(r"(point|edge|face) render took ([0-9.eE+-]+)s", text):
         out[THEIR_NAMES[m.group(1)]] = float(m.group(2))
-    if f"res={size}x{size} threads=2" not in p.stdout or len(out) != 3:
+    if f"res={size}x{size} threads=2" not in text or len(out) != 3:
         raise RuntimeError(f"{binary}: unexpected output (is it the patched beta_error_test "
-                           f"with SD_RES / 2 threads?):\n{p.stdout[-500:]}")
+                           f"with SD_RES / 2 threads?):\n{text[-500:]}")
     return out
 
 

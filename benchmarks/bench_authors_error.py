@@ -21,34 +21,13 @@ import json
 import os
 import platform
 import re
-import shutil
-import subprocess
 import sys
-import tempfile
 import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-MESH = ROOT / "scenes" / "data" / "bunny.off"
-THEIR_NAMES = {"point": "points", "edge": "edges", "face": "triangles"}
+from bench_authors import THEIR_NAMES, their_output  # the same run of their program
+
 BETAS = (0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0)
-
-
-def run(binary, size, betas, timeout):
-    """Their program's standard output, run in a scratch folder whose ``../data/bunny.off``
-    is the bunny."""
-    with tempfile.TemporaryDirectory(prefix="authors-error-") as tmp:
-        tmp = Path(tmp)
-        (tmp / "data").mkdir()
-        shutil.copyfile(MESH, tmp / "data" / "bunny.off")
-        (tmp / "run").mkdir()
-        env = dict(os.environ, SD_RES=str(size), SD_BETAS=",".join(f"{b:g}" for b in betas))
-        p = subprocess.run([str(binary)], cwd=tmp / "run", env=env, capture_output=True,
-                           text=True, timeout=timeout)
-    if p.returncode != 0:
-        raise SystemExit(f"error: {binary} failed with status {p.returncode}: "
-                         f"{(p.stderr or p.stdout).strip()[-300:]}")
-    return p.stdout
 
 
 def parse(text, betas):
@@ -94,7 +73,10 @@ def main(argv=None):
         ap.error(f"--authors-bin {a.authors_bin}: not an executable file")
     load0 = os.getloadavg()
     t0 = time.perf_counter()
-    text = run(a.authors_bin, a.size, betas, a.timeout)
+    try:
+        text = their_output(a.authors_bin, a.size, betas, a.timeout)
+    except RuntimeError as exc:
+        raise SystemExit(f"error: {exc}") from None
     diag, errors, times, hits = parse(text, betas)
     res = {"what": "the authors' beta_error_test (abhimadan/smoothdists a2706a2, CPU build of "
                    "benchmarks/authors), bunny, alpha 200, alpha_U 1200, eps 1e-3 absolute, "

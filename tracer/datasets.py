@@ -24,7 +24,6 @@ A file that cannot be had raises :class:`DataUnavailable` with the command that 
 
 import hashlib
 import os
-import tempfile
 import urllib.request
 from dataclasses import dataclass
 from pathlib import Path
@@ -32,6 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from tracer.errors import TracerError
+from tracer.outputs import write_bytes
 
 #: a folder of local copies (checked like downloads)
 ENV_LOCAL = "SMOOTHDIST_DATA"
@@ -299,7 +299,8 @@ def group_folder(group, download=True, base=None, progress=None):
 
 
 def status(name):
-    """``(where, path)``: ``"local"``, ``"shipped"``, ``"cached"`` or ``"missing"``."""
+    """``(where, path)``: ``"local"``, ``"shipped"``, ``"cached"``, ``"missing"`` or
+    ``"changed"`` (a copy whose checksum is not the registered one; path None)."""
     try:
         p = find(name)
     except DataUnavailable:
@@ -346,14 +347,7 @@ def _place(data, target, e):
         raise DataUnavailable(f"{e.name}: made from its source, SHA-256 {got[:16]}... is not "
                               f"the registered {e.sha256[:16]}...; nothing was kept")
     target.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=".part")
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-        os.replace(tmp, target)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    write_bytes(target, data)
 
 
 # ============================================================================ conversion
