@@ -37,6 +37,21 @@ TARGETS = {"iou": 0.90, "p95_deg": 10.0, "streak_share": 0.001}
 #: the flat pixels turned more than 1 degree, none more than 5, at most 0.05 % of them more
 #: than 4 levels off their 5 x 5 median
 SEAM_TARGETS = {"seam_turned_share": 0.005, "seam_max_deg": 5.0, "seam_off_share": 0.0005}
+#: issue 62's target for dense clouds of flat things: the p95 angle of the render's normals
+#: from the faces the cloud was sampled from, on the pixels over one face
+#: (:func:`tracer.checks.fidelity.flat_seams` with ``source``)
+FACES_TARGET = 5.0
+
+
+def _unit_box():
+    import trimesh
+
+    b = trimesh.creation.box()
+    return b.vertices, b.faces
+
+
+#: clouds sampled from a mesh with flat faces: the mesh, for the faces measure
+SOURCES = {"box_points_100k": _unit_box}
 
 
 def _trimesh_shapes():
@@ -171,7 +186,7 @@ def corpus(thingi10k=False):
 
 def run_shape(name, shape, size, weights="auto"):
     import tracer
-    from tracer.checks.fidelity import fidelity
+    from tracer.checks.fidelity import fidelity, flat_seams
 
     t0 = time.perf_counter()
     F = None
@@ -182,6 +197,9 @@ def run_shape(name, shape, size, weights="auto"):
         res = tracer.render_mesh(shape, F, size=(size, size), progress=None, weights=weights)
         render_s = time.perf_counter() - t0
         f = fidelity(res)
+        if name in SOURCES:
+            faces = flat_seams(res, source=SOURCES[name]())
+            f.update(faces_p95_deg=faces["p95_deg"], faces_flat=faces["flat"])
     o = res.scene.objects[0]
     kinds = [k for k, n in (("points", o.field.mesh.points.size),
                             ("edges", o.field.mesh.edges.shape[0]),
@@ -194,6 +212,8 @@ def run_shape(name, shape, size, weights="auto"):
                   for k, v in TARGETS.items()}
     f["meets"].update({k: bool(f[k] <= v) for k, v in SEAM_TARGETS.items()
                        if np.isfinite(f[k])})
+    if "faces_p95_deg" in f:
+        f["meets"]["faces_p95_deg"] = bool(f["faces_p95_deg"] <= FACES_TARGET)
     return f
 
 
@@ -224,12 +244,18 @@ def summary(result):
     if not flat:                        # a file from before the seam measure
         return text
     seams = {k: sum(r["meets"].get(k, False) for r in flat) for k in SEAM_TARGETS}
-    return (f"{text}; of the {len(flat)} with flat pixels, "
+    text = (f"{text}; of the {len(flat)} with flat pixels, "
             f"{seams['seam_turned_share']} have <= "
             f"{100 * SEAM_TARGETS['seam_turned_share']:g} % of them turned more than 1 degree, "
             f"{seams['seam_max_deg']} none more than {SEAM_TARGETS['seam_max_deg']:g} degrees "
             f"and {seams['seam_off_share']} <= {100 * SEAM_TARGETS['seam_off_share']:g} % of "
             f"them more than 4 levels off their median")
+    faces = [r for r in rows if np.isfinite(r.get("faces_p95_deg", np.nan))]
+    if not faces:                       # a file from before the faces measure
+        return text
+    return text + "; " + ", ".join(
+        f"{r['shape']}'s normals lie within {r['faces_p95_deg']:.1f} degrees of the faces it "
+        f"was sampled from at the 95th percentile (target {FACES_TARGET:g})" for r in faces)
 
 
 def main(argv=None):

@@ -25,8 +25,12 @@ triangles that meet there, so a triangle's term is its own distance's with the w
     W_T = 1 - sum_{E of T} a_E exp(-alpha (d_E - d_T)) + sum_{v of T} b_v exp(-alpha (d_v - d_T)),
 
 ``a_E = (n_E - 1) / n_E``, ``b_v = c_v / k_v``; an edge mesh (a polyline) likewise has
-``W_E = 1 - sum_{v of E} a_v exp(-alpha (d_v - d_E))``, ``a_v = (n_v - 1) / n_v``. Points keep
-weight 1. The weight and its gradient are exact (``smoothdist._kernels.query.primitive_term``).
+``W_E = 1 - sum_{v of E} a_v exp(-alpha (d_v - d_E))``, ``a_v = (n_v - 1) / n_v``. Points share
+no junctions; what a cloud counts twice is its clumps: a random sample's clump of ``n`` points
+raises the surface by ``log(n) / alpha``. So a point's weight is the share of the sampled curve
+or surface it stands for, from its nearest neighbours
+(:func:`smoothdist._kernels.spacing.area_weights`, in ``pwhi``; a volume sample keeps 1).
+The weight and its gradient are exact (``smoothdist._kernels.query.primitive_term``).
 
 Limits: a term's weight can be negative (a sliver's corner), and seen from far away the sum
 over a closed surface tends to its Euler characteristic times one term (0 for a torus) instead
@@ -36,7 +40,8 @@ primitive's (``d_hat <= d``, the conservative property, always holds). The rende
 these weights for its automatic thin shell and tubes (``alpha`` large against the edges);
 the paper's weights stay the default of the library and of scene files.
 
-Attenuation ``S`` (``alpha_u``) scales the junction terms: ``W = 1 + S (W_ie - 1)``; the bound
+Attenuation ``S`` (``alpha_u``) scales the junction terms: ``W = 1 + S (W_ie - 1)``, and a point's
+area weight ``w`` to ``w ** S`` (a point cloud's automatic ``alpha_u`` is ``alpha``); the bound
 ``pwhi = exp(B)`` (``B`` the sum of a primitive's positive ``b_v``) keeps ``pwhi ** S >= W``
 for every ``S`` in ``(0, 1]``, so the far fields stay upper bounds.
 """

@@ -41,7 +41,8 @@ def user_stacklevel():
 class ThinFeatureWarning(UserWarning):
     """A render whose tubes (edges) are thinner than half a pixel: they show as specks. The
     message gives the alpha that would show them (``tracer render`` prints it as one
-    ``warning: ...`` line)."""
+    ``warning: ...`` line). Also a point cloud too sparse for its shape: its surface is
+    drawn thicker than its spacing (:func:`tracer.scenes.from_mesh.sparse_cloud`)."""
 
 
 class TracerError(Exception):

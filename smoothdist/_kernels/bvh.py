@@ -22,6 +22,7 @@ import numba
 import numpy as np
 
 from smoothdist._config import NJIT, NJIT_GENERIC, NJIT_IR_INLINE, PARALLEL
+from smoothdist._kernels.spacing import area_weights
 from smoothdist.junctions import check_weights, junction_table
 from smoothdist.mesh import KIND_EDGE, KIND_POINT, KIND_TRIANGLE
 from smoothdist.schedule import run_largest_first
@@ -725,8 +726,13 @@ def tree_with_weights(tree, mesh, weights):
         _, _, wc, wcls, pwhi, A = primitive_table(mesh, tree.orig)
     else:
         wc, wcls, pwhi = junction_table(mesh, tree.kind, tree.orig)
+        if mesh.points.size:        # points weighted by the area they stand for
+            pwhi = np.where(tree.kind == 0, area_weights(tree), pwhi)
         A = float(pwhi.max()) if pwhi.size else 1.0
-    whi = _node_max(pwhi, tree.start, tree.count)
+    # at least 1: a far field's distance minus log(whi) / alpha then never exceeds its box
+    # distance, so the running shift stays at most the nearest distance (the clamp's d_hat <= d
+    # with area weights below 1)
+    whi = np.maximum(_node_max(pwhi, tree.start, tree.count), 1.0)
     return tree._replace(wc=wc, wcls=wcls, pwhi=pwhi, whi=whi, lwhi=np.log(whi), A=float(A))
 
 

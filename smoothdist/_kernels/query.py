@@ -60,15 +60,18 @@ JUNCTION_REACH = 37.0
 
 
 @numba.njit(**NJIT_INLINE)
-def junction_term(P, k, c, px, py, pz, S, alpha):
+def junction_term(P, k, c, wp, px, py, pz, S, alpha):
     """Term of a primitive with inclusion-exclusion junction weights (:mod:`smoothdist.junctions`):
     corners ``P (9,)``, kind ``k``, coefficient row ``c`` (``a_01 a_12 a_20 b_0 b_1 b_2`` of a
-    triangle, ``a_0 a_1`` of an edge). Returns ``(d, W, vx, vy, vz)`` as :func:`primitive_term`;
+    triangle, ``a_0 a_1`` of an edge), ``wp`` a point's area weight (its ``pwhi``; the term's
+    weight is ``wp ** S``). Returns ``(d, W, vx, vy, vz)`` as :func:`primitive_term`;
     the weight and gradient are exact (the junction terms are distances' exponentials)."""
+    W = 1.0
     if k == 0:
         cx = P[0]
         cy = P[1]
         cz = P[2]
+        W = wp if S == 1.0 else math.exp(S * math.log(wp))
     elif k == 1:
         cx, cy, cz, _, _ = closest_point_segment(px, py, pz, P[0], P[1], P[2], P[3], P[4], P[5])
     else:
@@ -78,14 +81,13 @@ def junction_term(P, k, c, px, py, pz, S, alpha):
     ry = py - cy
     rz = pz - cz
     d = math.sqrt(rx * rx + ry * ry + rz * rz)
-    W = 1.0
     vx = 0.0
     vy = 0.0
     vz = 0.0
     if d > 0.0:
-        vx = rx / d
-        vy = ry / d
-        vz = rz / d
+        vx = W * rx / d
+        vy = W * ry / d
+        vz = W * rz / d
     # the junction cells: a triangle's edges 01, 12, 20 (subtracted) and corners 0, 1, 2
     # (added); an edge's two ends (subtracted). Each adds coef exp(-alpha (d_x - d)) to W and
     # that times the unit gradient of d_x to v
@@ -140,7 +142,7 @@ def primitive_term(tree, i, px, py, pz, S, wgrad_scale, alpha):
     k = tree.kind[i]
     P = tree.pts[i]
     if tree.wc.shape[1] == JUNCTION_COLUMNS:
-        return junction_term(P, k, tree.wc[tree.wcls[i]], px, py, pz, S, alpha)
+        return junction_term(P, k, tree.wc[tree.wcls[i]], tree.pwhi[i], px, py, pz, S, alpha)
     gwx = 0.0
     gwy = 0.0
     gwz = 0.0

@@ -13,6 +13,7 @@ import pytest
 import trimesh
 
 import smoothdist
+from smoothdist._kernels.spacing import area_weights
 from smoothdist.junctions import junction_weights
 from smoothdist.kernels import concatenate_trees
 from tests import naive
@@ -172,16 +173,17 @@ def test_straight_polyline_is_the_exact_tube_at_any_alpha():
     assert np.ptp(paper.distance) > 1e-3 * r
 
 
-def test_points_are_unchanged_and_switching_shares_the_geometry():
-    """A point cloud sums the same terms with either scheme; with_weights shares the nodes and
-    corners, and switching back gives the tree a fresh paper build has."""
+def test_points_take_area_weights_and_switching_shares_the_geometry():
+    """A point cloud's junction weights are its area weights (``tests/smoothdist/
+    test_area_weights.py`` checks their sums; the paper's scheme keeps weight 1);
+    with_weights shares the nodes and corners, and switching back gives the tree a fresh
+    paper build has."""
     P = RNG.normal(size=(300, 3))
-    Q = RNG.normal(size=(50, 3)) * 1.5
     a = smoothdist.SmoothDistanceField(P)
     b = a.with_weights("inclusion-exclusion")
-    for kw in (dict(alpha=5.0, beta=0.0), dict(alpha=5.0, beta=0.5), dict(alpha=5.0, tol=1e-6)):
-        np.testing.assert_array_equal(a.smooth_distance(Q, **kw).distance,
-                                      b.smooth_distance(Q, **kw).distance)
+    np.testing.assert_array_equal(a.tree.pwhi, 1.0)
+    np.testing.assert_array_equal(b.tree.pwhi, area_weights(a.tree))
+    assert b.tree.pts is a.tree.pts
     mesh = MESHES["box"]
     paper = smoothdist.SmoothDistanceField(mesh)
     ie = paper.with_weights("inclusion-exclusion")

@@ -38,6 +38,7 @@ runs a corpus of shapes made by trimesh and pyvista, real meshes, scans and curv
 
 import numpy as np
 
+from smoothdist import SmoothDistanceField
 from tracer.rendering.camera import pixel_points
 from tracer.rendering.ripple import mean_offset
 from tracer.scenes.from_mesh import render_mesh
@@ -99,17 +100,23 @@ def plane_ids(V, T):
     return ids.ravel().astype(np.int64), n
 
 
-def flat_seams(res):
+def flat_seams(res, source=None):
     """``dict`` of the seam figures on flat faces (module notes) of a render ``res`` of one
     object with triangles: ``flat`` (flat pixels), ``turned_share`` (turned more than
-    :data:`TURN_DEG`), ``p99_deg``, ``max_deg``, ``off_share`` (more than :data:`LEVELS` off
-    their 5 x 5 median); NaN shares where no pixel is flat or the data has no triangles."""
+    :data:`TURN_DEG`), ``p95_deg``, ``p99_deg``, ``max_deg``, ``off_share`` (more than
+    :data:`LEVELS` off their 5 x 5 median); NaN shares where no pixel is flat or the data has
+    no triangles.
+
+    ``source``: a ``(V, F)`` triangle mesh the render's data was sampled from (a point cloud
+    of a box's faces): its planes are the flat faces, instead of the data's own triangles."""
     # scipy (sim extra): loaded on use
     from scipy.ndimage import maximum_filter, median_filter, minimum_filter
 
-    out = {"flat": 0, "turned_share": float("nan"), "p99_deg": float("nan"),
-           "max_deg": float("nan"), "off_share": float("nan")}
+    out = {"flat": 0, "turned_share": float("nan"), "p95_deg": float("nan"),
+           "p99_deg": float("nan"), "max_deg": float("nan"), "off_share": float("nan")}
     field = res.scene.objects[0].field
+    if source is not None:
+        field = SmoothDistanceField(*source)
     m = field.mesh
     if not m.triangles.shape[0] or not res.hit.any():
         return out
@@ -146,6 +153,7 @@ def flat_seams(res):
             off &= maximum_filter(a, size=5) - minimum_filter(a, size=5) <= EVEN_LIGHT
     off = off[flat]
     out.update(turned_share=float(np.mean(angle > TURN_DEG)),
+               p95_deg=float(np.percentile(angle, 95)),
                p99_deg=float(np.percentile(angle, 99)), max_deg=float(angle.max()),
                off_share=float(np.mean(off)))
     return out

@@ -194,6 +194,7 @@ def build_mesh_scene(mesh, F, kind, surface, march, film, view, camera=None, nam
             if front != "front" or new_up != up:
                 frame_scene(scene, front, new_up, view.view_width)
         warn_thin_tubes(scene)
+        note_sparse_clouds(scene, automatic_surface(surface, march))
     return scene
 
 
@@ -270,6 +271,9 @@ def _several_objects(meshes, kind, surface, march, film, view, camera, name):
     if camera is None:      # frame every object's surface (each grown by its own bound)
         frame_scene(scene, view.view, ups[0], view.view_width)
     warn_thin_tubes(scene)
+    notes = {o.name: note for o, part in zip(scene.objects, parts)
+             for note in part.extra.get("sparse", {}).values()}
+    note_sparse_clouds(scene, notes)
     return scene
 
 
@@ -422,6 +426,45 @@ def warn_thin_tubes(scene, probes=128):
                   stacklevel=user_stacklevel())
 
 
+#: a point cloud whose automatic alpha times its median spacing falls below this is too sparse
+#: for its shape: random samples of surfaces close at 0.5-0.8 (the fidelity corpus: scans,
+#: random and even samples of meshes, a box's faces, a grid); 500 random points on a circle
+#: need 0.24, their widest gaps being 8 median spacings
+SPARSE_ALPHA_SPACING = 0.35
+
+
+def sparse_cloud(obj):
+    """A phrase when ``obj`` (a scene object of points only, drawn on its automatic surface)
+    is a cloud too sparse for its shape (:data:`SPARSE_ALPHA_SPACING`), else None."""
+    fld = obj.field
+    m = fld.mesh
+    if m.points.size < 3 or m.edges.size or m.triangles.size:
+        return None
+    s = fld.point_spacing()
+    if not obj.alpha * s < SPARSE_ALPHA_SPACING:
+        return None
+    return (f"too sparse for its shape (surface about {2 / obj.alpha:.3g} from points "
+            f"{s:.3g} apart)")
+
+
+def note_sparse_clouds(scene, automatic):
+    """Keep in ``scene.extra["sparse"]`` (object name to phrase) the objects drawn on their
+    automatic surface (``automatic``: a bool, or the phrases already found, by name) that
+    :func:`sparse_cloud` finds too sparse for their shape, and warn
+    (:class:`~tracer.errors.ThinFeatureWarning`) for each; the summary line
+    (:func:`describe_parameters`) says so too."""
+    if isinstance(automatic, dict):
+        notes = automatic
+    else:
+        notes = {o.name: sparse_cloud(o) for o in scene.objects} if automatic else {}
+    scene.extra["sparse"] = {k: v for k, v in notes.items() if v}
+    for name, note in scene.extra["sparse"].items():
+        warnings.warn(f"{name} is a point cloud {note}: its widest gaps are many times its "
+                      "median spacing, and the surface that closes them is thicker than the "
+                      "spacing; a denser or more even sample draws it thinner",
+                      ThinFeatureWarning, stacklevel=user_stacklevel())
+
+
 def render_mesh(mesh, F=None, *, kind=None, alpha=_MESH["alpha"], alpha_u=_MESH["alpha_u"],
                 beta=_MESH["beta"], size=(_MESH["width"], _MESH["height"]),
                 view=_MESH["view"], camera=None, mode=_MESH["mode"], offset=_MESH["offset"],
@@ -484,6 +527,9 @@ def describe_parameters(scene):
         c = o.level(scene.march.mode)
         if scene.march.mode == "smooth" and c > 0:
             text += f", offset {c:.3g} ({100 * c / diag:.2g}%)"
+        note = scene.extra.get("sparse", {}).get(o.name)
+        if note:
+            text += f", a cloud {note}"
         parts.append(text)
     return "; ".join(parts)
 
