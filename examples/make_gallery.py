@@ -65,7 +65,9 @@ def own_meshes(out_dir, size=384):
               ("pyvista arrow", pv.Arrow().triangulate()),
               ("pyvista Text3D", pv.Text3D("Hi", depth=0.2).triangulate()),
               ("octopus, 898 triangles", str(ROOT / "scenes" / "data" / "meshes"
-                                              / "octopus_low.obj")))
+                                              / "octopus_low.obj")),
+              ("20,000 random samples of a box",
+               trimesh.sample.sample_surface(trimesh.creation.box(), 20_000, seed=0)[0]))
     images = [(tracer.render_mesh(shape, size=(size, size), progress=None).rgb, title)
               for title, shape in shapes]
     _panels(out_dir / "own_meshes.png", images, (3.2 * len(shapes), 3.4), 10)

@@ -47,9 +47,11 @@ AUTO_GAP_OPEN = 5e-4
 #: distances spread more than ``AUTO_RANDOM_SPREAD``, their standard deviation over their
 #: mean: about 0.5 for uniform random samples of a surface, 0.9 of a curve, 0.3 for a scan,
 #: at most 0.16 for even samples and mesh vertices) with junction (area) weights takes
-#: ``AUTO_CLOUD_MARGIN`` of :meth:`SmoothDistanceField.auto_alpha`: the relief the random
-#: spacing leaves, once the weights have evened the clumps, is smoothed over a longer scale
-#: (p95 5.3 against 3.0 degrees from the faces of 100k random points on a box)
+#: ``AUTO_CLOUD_MARGIN`` of :meth:`SmoothDistanceField.auto_alpha` where that smooths over less
+#: than ``AUTO_OFFSET`` of the diagonal (``1 / alpha``: a cloud dense for its size; a sparse
+#: one, 200 points on a torus, would close its hole): the relief the random spacing leaves,
+#: once the weights have evened the clumps, is smoothed over a longer scale (p95 5.3 against
+#: 3.8 degrees from the faces of 100k random points on a box)
 AUTO_CLOUD_MARGIN = 0.8
 AUTO_RANDOM_SPREAD = 0.4
 #: ``alpha_u="auto"`` is this times alpha (see :meth:`SmoothDistanceField.auto_alpha_u`)
@@ -217,7 +219,9 @@ class SmoothDistanceField:
         if check_weights(weights) == self.weights:
             return self
         out = copy.copy(self)
-        out.__dict__ = {k: v for k, v in self.__dict__.items() if k != "_cuda_tree"}
+        # not the GPU's copy of the tree, nor the automatic parameters (the weights move them)
+        out.__dict__ = {k: v for k, v in self.__dict__.items()
+                        if k != "_cuda_tree" and not k.startswith("_auto_")}
         out.tree = tree_with_weights(self.tree, self.mesh, weights)
         out.weights = weights
         return out
@@ -436,8 +440,9 @@ class SmoothDistanceField:
         as smooth as the exact tube (``renders/ripple/auto.csv``).
 
         Point clouds and meshes with points: :meth:`auto_alpha` (times
-        ``AUTO_CLOUD_MARGIN`` for a random sample, :meth:`spacing_spread`, with junction
-        weights, whose points carry area weights),
+        ``AUTO_CLOUD_MARGIN`` for a random sample, :meth:`spacing_spread`, dense for its size,
+        ``1 / alpha`` below ``AUTO_OFFSET`` of the diagonal, with junction weights, whose
+        points carry area weights),
         :meth:`auto_alpha_u` and offset 0 (a cloud's surface is the smooth one that closes
         it). The result is cached.
         """
@@ -453,7 +458,8 @@ class SmoothDistanceField:
         value = None
         if m.points.size or not (shell or (h is not None and h > 0)) or not L > 0:
             alpha = self.auto_alpha()
-            if self.weights != "paper" and self.spacing_spread() > AUTO_RANDOM_SPREAD:
+            if (self.weights != "paper" and alpha * L * AUTO_OFFSET > 1.0
+                    and self.spacing_spread() > AUTO_RANDOM_SPREAD):
                 alpha *= AUTO_CLOUD_MARGIN
             value = (alpha, self.auto_alpha_u(alpha), 0.0)
         elif self.is_wire_net():

@@ -142,3 +142,27 @@ def test_the_local_bound_of_the_closing_alpha_reads_the_weights():
     m = np.where(near, d, np.inf).min(axis=1)
     s = np.maximum(np.where(near, w * np.exp(-alpha * (d - m[:, None])), 0).sum(axis=1), 1.0)
     np.testing.assert_allclose(got, m - np.log(s) / alpha, rtol=0, atol=1e-12)
+
+
+def test_the_automatic_surface_follows_the_weights():
+    """A field switched to junction weights does not keep the paper field's automatic
+    parameters (area weights move them), and a dense random sample takes 0.8 of its
+    ``auto_alpha`` with them (the offset target, not its gaps, set that); an even sample (a
+    grid) keeps ``auto_alpha``."""
+    from smoothdist.field import AUTO_CLOUD_MARGIN
+
+    P = _sheet(20_000)
+    paper = smoothdist.SmoothDistanceField(P)
+    a_paper = paper.auto_surface()[0]
+    switched = paper.with_weights("inclusion-exclusion")
+    fresh = smoothdist.SmoothDistanceField(P, weights="inclusion-exclusion")
+    assert switched.auto_surface() == fresh.auto_surface()
+    assert fresh.auto_surface()[0] != a_paper
+    assert fresh.spacing_spread() > 0.4
+    assert fresh.auto_surface()[0] == pytest.approx(AUTO_CLOUD_MARGIN * fresh.auto_alpha())
+    g = np.arange(0.0, 1.0, 0.02)
+    X, Y = np.meshgrid(g, g)
+    grid = smoothdist.SmoothDistanceField(np.c_[X.ravel(), Y.ravel(), np.zeros(X.size)],
+                                          weights="inclusion-exclusion")
+    assert grid.spacing_spread() < 0.01
+    assert grid.auto_surface()[0] == grid.auto_alpha()
