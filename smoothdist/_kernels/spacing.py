@@ -259,12 +259,14 @@ def _nearest_k_tasks(tree, idx, k, dim, out_d, out_area, stack_len, ntasks, task
     for task in range(task0, task1):
         for q in range(task, idx.size, ntasks):
             i = idx[q]
-            best[:] = np.inf
+            for j in range(k):
+                best[j] = np.inf
             nearest_first(tree, _NearestQuery(tree.pts[i, 0], tree.pts[i, 1], tree.pts[i, 2], i,
                                               best), np.inf, stack, dstack, ZERO, 0.0,
                           _beyond_kth, no_far_field, _insert_points, _near_children, _within_kth)
             if out_d.shape[0]:
-                out_d[q, :] = best
+                for j in range(k):
+                    out_d[q, j] = best[j]
             if dim > 0.0:
                 a = 0.0
                 for j in range(k):
