@@ -95,13 +95,6 @@ def points_within(tree, P, radius, max_count):
     ``min(count, max_count)`` rows of ``coords[i]`` are neighbours of ``P[i]`` (in no
     particular order); ``count`` is how many there are in all.
     """
-    out, counts = _points_within_index(tree, P, radius, max_count)
-    return tree.pts[np.maximum(out, 0), :3], counts
-
-
-def _points_within_index(tree, P, radius, max_count):
-    """:func:`points_within`'s tree-order indices ``(q, max_count)`` (-1 past the count) and
-    counts."""
     P = np.ascontiguousarray(P, dtype=np.float64).reshape(-1, 3)
     out = np.full((P.shape[0], max_count), -1, dtype=np.int64)
     counts = np.zeros(P.shape[0], dtype=np.int64)
@@ -110,7 +103,8 @@ def _points_within_index(tree, P, radius, max_count):
         r2, k = float(radius) ** 2, 2 * tree.depth + 4
         run_tasks(lambda a, b: _points_within_tasks(tree, P, r2, out, counts, k, ntasks, a, b),
                   ntasks, pool=True)
-    return out, counts
+    coords = tree.pts[np.maximum(out, 0), :3]
+    return coords, counts
 
 
 def gap_probes(tree, P, radius, neighbours=24, max_count=96):
@@ -165,22 +159,23 @@ def _circumcentre(a, b):
 
 def local_smooth_distance(tree, Q, alpha, radius, max_count=256):
     """An upper bound of a point cloud's smooth distance at ``Q (q, 3)``, from its points
-    within ``radius`` only, with their weights (``tree.pwhi``: 1, or the area weights of
-    junction weights, unattenuated).
+    within ``radius`` only, with weight 1 (also under junction weights: the closing alpha
+    stays where the unit sum puts it, and the area weights, heavier at a gap's edges, close
+    the gaps as well; judged with them, the gaps of a sparse random sample closed at a
+    higher alpha, which showed more of its relief: p95 11.6 against 6.5 degrees from the
+    sphere's normals for 2,000 random samples of a sphere).
 
     Leaving terms out of the LogSumExp sum can only raise ``d_hat``, so this bounds the
     full ``beta = 0`` value from above, and every Barnes-Hut value (which lies below it).
     Queries with no point within ``radius`` get ``+inf``. Returns ``(q,) float64``.
     """
-    idx, count = _points_within_index(tree, Q, radius, max_count)
-    nb = tree.pts[np.maximum(idx, 0), :3]
+    nb, count = points_within(tree, Q, radius, max_count)
     d = np.linalg.norm(nb - Q[:, None, :], axis=2)
     d = np.where(np.arange(max_count)[None, :] < np.minimum(count, max_count)[:, None], d,
                  np.inf)
     m = d.min(axis=1)
     with np.errstate(invalid="ignore"):
-        s = (tree.pwhi[np.maximum(idx, 0)] * np.exp(-alpha * (d - m[:, None]))).sum(axis=1)
-        s = np.maximum(s, 1.0)          # the kernels' clamp: d_hat <= the nearest distance
+        s = np.exp(-alpha * (d - m[:, None])).sum(axis=1)
         return np.where(np.isfinite(m), m - np.log(s) / alpha, np.inf)
 
 

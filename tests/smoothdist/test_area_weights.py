@@ -128,20 +128,23 @@ def test_the_weighted_sum_is_the_numpy_one_and_stays_below_the_distance(alpha):
         assert np.all(dh <= m + 1e-12)
 
 
-def test_the_local_bound_of_the_closing_alpha_reads_the_weights():
-    """``local_smooth_distance`` (the closing alpha's probe) sums the weighted terms of the
-    points within its radius, as numpy does."""
+def test_the_local_bound_of_the_closing_alpha_sums_unit_weights():
+    """``local_smooth_distance`` (the closing alpha's probe) sums the unit-weight terms of the
+    points within its radius, as numpy does, under either scheme: a cloud's gaps are judged
+    as closed where the unit sum closes them."""
     P = RNG.uniform(0, 1, (500, 3)) * [1, 1, 0]
     field = smoothdist.SmoothDistanceField(P, weights="inclusion-exclusion")
-    w = _weights_in_mesh_order(field)
+    assert np.ptp(field.tree.pwhi) > 0
     Q = RNG.uniform(0.2, 0.8, (40, 3)) * [1, 1, 0] + [0, 0, 0.01]
     alpha, radius = 60.0, 0.15
     got = local_smooth_distance(field.tree, Q, alpha, radius)
     d = np.linalg.norm(Q[:, None] - P[None], axis=2)
     near = d <= radius
     m = np.where(near, d, np.inf).min(axis=1)
-    s = np.maximum(np.where(near, w * np.exp(-alpha * (d - m[:, None])), 0).sum(axis=1), 1.0)
+    s = np.where(near, np.exp(-alpha * (d - m[:, None])), 0).sum(axis=1)
     np.testing.assert_allclose(got, m - np.log(s) / alpha, rtol=0, atol=1e-12)
+    paper = smoothdist.SmoothDistanceField(P)
+    np.testing.assert_array_equal(got, local_smooth_distance(paper.tree, Q, alpha, radius))
 
 
 def test_the_automatic_surface_follows_the_weights():
