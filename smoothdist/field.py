@@ -50,8 +50,8 @@ AUTO_GAP_OPEN = 5e-4
 #: ``AUTO_CLOUD_MARGIN`` of :meth:`SmoothDistanceField.auto_alpha` where that smooths over less
 #: than ``AUTO_OFFSET`` of the diagonal (``1 / alpha``: a cloud dense for its size; a sparse
 #: one, 200 points on a torus, would close its hole): the relief the random spacing leaves,
-#: once the weights have evened the clumps, is smoothed over a longer scale (p95 5.3 against
-#: 3.8 degrees from the faces of 100k random points on a box)
+#: once the weights have evened the clumps, is smoothed over a longer scale
+#: (``box_points_100k`` in ``benchmarks/data/fidelity.json``: its normals against its faces)
 AUTO_CLOUD_MARGIN = 0.8
 AUTO_RANDOM_SPREAD = 0.4
 #: ``alpha_u="auto"`` is this times alpha (see :meth:`SmoothDistanceField.auto_alpha_u`)

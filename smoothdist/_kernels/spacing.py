@@ -291,7 +291,8 @@ def nearest_k(tree, idx, k):
 
 def area_weights(tree, k=AREA_NEIGHBOURS, cap=AREA_WEIGHT_CAP, samples=2000):
     """The share of the sampled shape each point primitive of ``tree`` stands for, relative
-    to the typical point's: ``a / median a`` clipped to ``[1 / cap, cap]``, with
+    to what a random spot of the shape sees: ``a / (sum a^2 / sum a)`` clipped to
+    ``[1 / cap, cap]``, with
     ``a = mean_j r_j ** dim / j`` over its ``k`` nearest other points (``r_j`` the distance
     to the ``j``-th) and ``dim`` the cloud's
     dimension (1 for samples of a curve, 2 of a surface, 3 of a volume), estimated from how
@@ -325,7 +326,10 @@ def area_weights(tree, k=AREA_NEIGHBOURS, cap=AREA_WEIGHT_CAP, samples=2000):
     area = np.empty(idx.size)
     _nearest_k_run(tree, idx, k, dim, np.empty((0, k)), area)
     fin = np.isfinite(area)
-    scale = float(np.median(area[fin])) if fin.any() else 0.0
+    # relative to the area a random spot of the shape sees (the points' mean area weighted by
+    # area): where the sample is sparsest the weights are about 1, as unit weights were, and
+    # denser patches weigh less (a scan's detailed parts no longer bulge)
+    scale = float(np.sum(area[fin] ** 2) / np.sum(area[fin])) if fin.any() else 0.0
     if not scale > 0:
         return w
     w[idx] = np.clip(np.where(fin, area / scale, cap), 1.0 / cap, cap)

@@ -194,7 +194,9 @@ def build_mesh_scene(mesh, F, kind, surface, march, film, view, camera=None, nam
             if front != "front" or new_up != up:
                 frame_scene(scene, front, new_up, view.view_width)
         warn_thin_tubes(scene)
-        note_sparse_clouds(scene, automatic_surface(surface, march))
+        auto = automatic_surface(surface, march)
+        note_sparse_clouds(scene, {o.name: sparse_cloud(o) for o in scene.objects} if auto
+                           else {})
     return scene
 
 
@@ -447,16 +449,11 @@ def sparse_cloud(obj):
             f"{s:.3g} apart)")
 
 
-def note_sparse_clouds(scene, automatic):
-    """Keep in ``scene.extra["sparse"]`` (object name to phrase) the objects drawn on their
-    automatic surface (``automatic``: a bool, or the phrases already found, by name) that
-    :func:`sparse_cloud` finds too sparse for their shape, and warn
-    (:class:`~tracer.errors.ThinFeatureWarning`) for each; the summary line
+def note_sparse_clouds(scene, notes):
+    """Keep ``notes`` (object name to :func:`sparse_cloud`'s phrase or None; only objects
+    drawn on their automatic surface) in ``scene.extra["sparse"]``, and warn
+    (:class:`~tracer.errors.ThinFeatureWarning`) for each phrase; the summary line
     (:func:`describe_parameters`) says so too."""
-    if isinstance(automatic, dict):
-        notes = automatic
-    else:
-        notes = {o.name: sparse_cloud(o) for o in scene.objects} if automatic else {}
     scene.extra["sparse"] = {k: v for k, v in notes.items() if v}
     for name, note in scene.extra["sparse"].items():
         warnings.warn(f"{name} is a point cloud {note}: its widest gaps are many times its "

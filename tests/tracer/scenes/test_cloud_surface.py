@@ -62,6 +62,11 @@ def test_a_sparse_random_ring_is_called_too_sparse_and_a_dense_cloud_is_not():
     u, v = rng.uniform(0, 2 * np.pi, (2, 5000))
     torus = np.c_[(1 + 0.35 * np.cos(v)) * np.cos(u), (1 + 0.35 * np.cos(v)) * np.sin(u),
                   0.35 * np.sin(v)]
+    with warnings.catch_warnings(record=True) as caught:     # a list: one note per cloud
+        warnings.simplefilter("always")
+        res = tracer.render_mesh([ring, torus + [4, 0, 0]], size=(48, 48), progress=None)
+    assert describe_parameters(res.scene).count("too sparse") == 1
+    assert sum("too sparse" in str(w.message) for w in caught) == 1
     for P, kw in ((torus, {}), (ring, dict(alpha=50.0, alpha_u=50.0))):
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
