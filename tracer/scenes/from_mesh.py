@@ -428,10 +428,11 @@ def warn_thin_tubes(scene, probes=128):
                   stacklevel=user_stacklevel())
 
 
-#: a point cloud whose automatic alpha times its median spacing falls below this is too sparse
-#: for its shape: random samples of surfaces close at 0.5-0.8 (the fidelity corpus: scans,
-#: random and even samples of meshes, a box's faces, a grid); 500 random points on a circle
-#: need 0.24, their widest gaps being 8 median spacings
+#: a point cloud whose ``auto_alpha`` times its median spacing falls below this is too sparse
+#: for its shape: random samples of surfaces close at 0.57-1.0 (the fidelity corpus: scans,
+#: random and even samples of meshes, a box's faces, a grid), an airborne LiDAR tile, dense
+#: along its scan lines, at 0.40; 500 random points on a circle need 0.30, their widest gaps
+#: being 8 median spacings
 SPARSE_ALPHA_SPACING = 0.35
 
 
@@ -443,7 +444,9 @@ def sparse_cloud(obj):
     if m.points.size < 3 or m.edges.size or m.triangles.size:
         return None
     s = fld.point_spacing()
-    if not obj.alpha * s < SPARSE_ALPHA_SPACING:
+    # auto_alpha (cached: the object is on its automatic surface), before the smoothing
+    # margin of a dense random sample: how sharp closing the gaps allows, not a look chosen
+    if not fld.auto_alpha() * s < SPARSE_ALPHA_SPACING:
         return None
     return (f"too sparse for its shape (surface about {2 / obj.alpha:.3g} from points "
             f"{s:.3g} apart)")
