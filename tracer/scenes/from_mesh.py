@@ -19,6 +19,7 @@ import numpy as np
 import smoothdist
 from smoothdist import DataMesh, SmoothDistanceField
 from smoothdist.convert import is_foreign_geometry
+from smoothdist.field import AUTO_RANDOM_SPREAD
 from tracer.errors import ThinFeatureWarning, user_stacklevel
 from tracer.rendering.camera import UP_AXES, LookAt, frame_points, frame_width
 from tracer.rendering.renderer import render
@@ -438,15 +439,20 @@ SPARSE_ALPHA_SPACING = 0.35
 
 def sparse_cloud(obj):
     """A phrase when ``obj`` (a scene object of points only, drawn on its automatic surface)
-    is a cloud too sparse for its shape (:data:`SPARSE_ALPHA_SPACING`), else None."""
+    is a random sample (:meth:`~smoothdist.SmoothDistanceField.spacing_spread` above
+    ``AUTO_RANDOM_SPREAD``) too sparse for its shape (:data:`SPARSE_ALPHA_SPACING`), else
+    None."""
     fld = obj.field
     m = fld.mesh
     if m.points.size < 3 or m.edges.size or m.triangles.size:
         return None
     s = fld.point_spacing()
     # auto_alpha (cached: the object is on its automatic surface), before the smoothing
-    # margin of a dense random sample: how sharp closing the gaps allows, not a look chosen
-    if not fld.auto_alpha() * s < SPARSE_ALPHA_SPACING:
+    # margin of a dense random sample: how sharp closing the gaps allows, not a look chosen;
+    # and only for a random sample: an even one's widest gap is its spacing, so a surface
+    # several spacings out is the smoothing auto_alpha chose, not a gap it had to close
+    if not (fld.auto_alpha() * s < SPARSE_ALPHA_SPACING
+            and fld.spacing_spread() > AUTO_RANDOM_SPREAD):
         return None
     return (f"too sparse for its shape (surface about {2 / obj.alpha:.3g} from points "
             f"{s:.3g} apart)")

@@ -52,8 +52,9 @@ def test_a_sparse_random_ring_is_called_too_sparse_and_a_dense_cloud_is_not():
     that closes them is thicker than the spacing; the summary and a warning say so. A
     random sample of a torus' surface, an airborne LiDAR tile (dense along its scan lines
     with wide gaps between them: ``auto_alpha`` is 0.40 over its median spacing; read after
-    the dense random sample's margin it was 0.32 and was called too sparse), or the ring at
-    an alpha the user chose, says nothing."""
+    the dense random sample's margin it was 0.32 and was called too sparse), an even line of
+    points (its widest gap is its spacing), or the ring at an alpha the user chose, says
+    nothing."""
     rng = np.random.default_rng(0)
     t = rng.uniform(0, 2 * np.pi, 500)
     ring = np.c_[np.cos(t), np.sin(t), np.zeros_like(t)]
@@ -73,7 +74,9 @@ def test_a_sparse_random_ring_is_called_too_sparse_and_a_dense_cloud_is_not():
     assert describe_parameters(res.scene).count("too sparse") == 1
     assert sum("too sparse" in str(w.message) for w in caught) == 1
     lidar = ROOT / "scenes" / "data" / "pointclouds" / "lidar_autzen_trim.ply"
-    for P, kw in ((torus, {}), (ring, dict(alpha=50.0, alpha_u=50.0)), (lidar, {})):
+    even_line = np.c_[np.linspace(0, 1, 1000), np.zeros((1000, 2))]   # its spacing: its gaps
+    for P, kw in ((torus, {}), (ring, dict(alpha=50.0, alpha_u=50.0)), (lidar, {}),
+                  (even_line, {})):
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             res = tracer.render_mesh(P, size=(48, 48), progress=None, **kw)
