@@ -292,13 +292,12 @@ def nearest_k(tree, idx, k):
 def area_weights(tree, k=AREA_NEIGHBOURS, cap=AREA_WEIGHT_CAP, samples=2000):
     """The share of the sampled shape each point primitive of ``tree`` stands for, relative
     to what a random spot of the shape sees: ``a / (sum a^2 / sum a)`` clipped to
-    ``[1 / cap, cap]``, with
-    ``a = mean_j r_j ** dim / j`` over its ``k`` nearest other points (``r_j`` the distance
-    to the ``j``-th) and ``dim`` the cloud's
-    dimension (1 for samples of a curve, 2 of a surface, 3 of a volume), estimated from how
-    the neighbour distances grow, ``r_k / r_(k/2) = 2 ** (1 / dim)`` (median over up to
-    ``samples`` points). ``(m,) float64`` in tree order, 1 for edges and triangles, and 1
-    everywhere for a cloud of dimension above :data:`AREA_MAX_DIMENSION`.
+    ``[1 / cap, cap]``, with ``a = mean_j r_j ** dim / j`` over its ``k`` nearest other
+    points (``r_j`` the distance to the ``j``-th) and ``dim`` the cloud's dimension (1 for
+    samples of a curve, 2 of a surface, 3 of a volume), estimated from how the neighbour
+    distances grow, ``r_k / r_(k/2) = 2 ** (1 / dim)`` (median over up to ``samples``
+    points). ``(m,) float64`` in tree order, 1 for edges and triangles, and 1 everywhere for
+    a cloud of dimension above :data:`AREA_MAX_DIMENSION`.
 
     Why: a random sample clumps, and each clump of ``n`` points adds ``log(n) / alpha`` to
     the LogSumExp surface (bumps: "stucco" on a scanned wall). Weighted by area, the sum over
@@ -322,7 +321,8 @@ def area_weights(tree, k=AREA_NEIGHBOURS, cap=AREA_WEIGHT_CAP, samples=2000):
     if dim > AREA_MAX_DIMENSION:
         return w
     # the area is estimated from each of the k neighbours (the j-th nearest spans about j
-    # points' areas) and averaged: half the noise of the k-th alone
+    # points' areas) and averaged: less noisy than the k-th alone (the faces of 100k random
+    # points on a box turned 6.1 degrees at p95 with the 8th alone, 5.3 with the mean of 12)
     area = np.empty(idx.size)
     _nearest_k_run(tree, idx, k, dim, np.empty((0, k)), area)
     fin = np.isfinite(area)
