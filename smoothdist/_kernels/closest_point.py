@@ -17,7 +17,7 @@ Feature codes
 
 import numba
 
-from smoothdist._config import NJIT_INLINE
+from smoothdist._config import NJIT_INLINE, NJIT_IR_INLINE
 
 SEG_INTERIOR, SEG_A, SEG_B = 0, 1, 2
 TRI_INTERIOR, TRI_AB, TRI_AC, TRI_BC, TRI_A, TRI_B, TRI_C = 0, 1, 2, 3, 4, 5, 6
@@ -109,3 +109,13 @@ def box_distance2(px, py, pz, lo, hi, node):
     dy = py - cy
     dz = pz - cz
     return dx * dx + dy * dy + dz * dz, cx, cy, cz
+
+
+@numba.njit(**NJIT_IR_INLINE)
+def box_children(tree, q, node):
+    """``children`` of a point's nearest-first traversal (``q`` has ``px, py, pz``): both
+    children of ``node``, keyed by their boxes' squared distance."""
+    l = tree.left[node]
+    r = tree.right[node]
+    return (l, box_distance2(q.px, q.py, q.pz, tree.lo, tree.hi, l)[0],
+            r, box_distance2(q.px, q.py, q.pz, tree.lo, tree.hi, r)[0])

@@ -25,7 +25,7 @@ from numba import prange
 
 from smoothdist._config import NJIT, NJIT_INLINE, NJIT_IR_INLINE, NJIT_PARALLEL
 from smoothdist._kernels.closest_point import (SEG_INTERIOR, TRI_AB, TRI_AC, TRI_BC, TRI_INTERIOR,
-                                               box_distance2, closest_point_segment,
+                                               box_children, box_distance2, closest_point_segment,
                                                closest_point_triangle)
 from smoothdist._kernels.traversal import (NONE, ZERO, always, beyond_best, nearest_first, never,
                                           no_far_field, within_best)
@@ -275,15 +275,6 @@ class _ExactQuery(NamedTuple):
 
 
 @numba.njit(**NJIT_IR_INLINE)
-def _box_children(tree, q, node):
-    """``children`` of the point kernels: both children, keyed by squared box distance."""
-    l = tree.left[node]
-    r = tree.right[node]
-    return (l, box_distance2(q.px, q.py, q.pz, tree.lo, tree.hi, l)[0],
-            r, box_distance2(q.px, q.py, q.pz, tree.lo, tree.hi, r)[0])
-
-
-@numba.njit(**NJIT_IR_INLINE)
 def _smooth_skip(tree, q, node, bd2, st):
     """Negligible-term pruning: the node is at least ``cut = m + reach`` away."""
     return bd2 >= st[5]
@@ -369,7 +360,7 @@ def smooth_distance_point(tree, px, py, pz, alpha, beta, S, wgrad_scale, stack, 
     (m, s, gx, gy, gz, _, leaves), nodes = nearest_first(
         tree, q, (np.inf, 0.0, 0.0, 0.0, 0.0, np.inf, ZERO), stack, dstack, root,
         box_distance2(px, py, pz, tree.lo, tree.hi, root)[0], _smooth_skip, _smooth_far,
-        _smooth_leaf, _box_children, always)
+        _smooth_leaf, box_children, always)
     if s < 1.0:
         s = 1.0     # only junction weights go below: d_hat <= m (JUNCTION_CLAMP)
     inv = 1.0 / s
@@ -610,7 +601,7 @@ def exact_distance_point(tree, px, py, pz, stack, dstack, root=0, floor=-1.0):
     (best, bi, bx, by, bz, leaves), nodes = nearest_first(
         tree, _ExactQuery(px, py, pz, floor), (np.inf, NONE, px, py, pz, ZERO), stack, dstack, root,
         box_distance2(px, py, pz, tree.lo, tree.hi, root)[0], beyond_best, no_far_field,
-        _exact_leaf, _box_children, within_best)
+        _exact_leaf, box_children, within_best)
     d = math.sqrt(best)
     if d > 0.0:
         return d, (px - bx) / d, (py - by) / d, (pz - bz) / d, tree.orig[bi], nodes, leaves

@@ -18,7 +18,7 @@ import numba
 import numpy as np
 
 from smoothdist._config import NJIT, NJIT_IR_INLINE
-from smoothdist._kernels.closest_point import box_distance2
+from smoothdist._kernels.closest_point import box_children, box_distance2
 from smoothdist._kernels.traversal import ZERO, always, nearest_first, no_far_field
 from smoothdist.schedule import parallel_tasks, run_tasks
 
@@ -200,15 +200,6 @@ class _NearestQuery(NamedTuple):
 
 
 @numba.njit(**NJIT_IR_INLINE)
-def _near_children(tree, q, node):
-    """``children`` keyed by squared box distance."""
-    l = tree.left[node]
-    r = tree.right[node]
-    return (l, box_distance2(q.px, q.py, q.pz, tree.lo, tree.hi, l)[0],
-            r, box_distance2(q.px, q.py, q.pz, tree.lo, tree.hi, r)[0])
-
-
-@numba.njit(**NJIT_IR_INLINE)
 def _beyond_kth(tree, q, node, key, st):
     """``skip``: the node is no nearer than the k-th best so far."""
     return key >= st
@@ -258,7 +249,7 @@ def _nearest_k_tasks(tree, idx, k, dim, out_d, out_area, stack_len, ntasks, task
                 best[j] = np.inf
             nearest_first(tree, _NearestQuery(tree.pts[i, 0], tree.pts[i, 1], tree.pts[i, 2], i,
                                               best), np.inf, stack, dstack, ZERO, 0.0,
-                          _beyond_kth, no_far_field, _insert_points, _near_children, _within_kth)
+                          _beyond_kth, no_far_field, _insert_points, box_children, _within_kth)
             if out_d.shape[0]:
                 for j in range(k):
                     out_d[q, j] = best[j]
