@@ -229,15 +229,16 @@ def _timed_parts(run):
     log = {"samples": [], "light": []}
     orig = gpu_render.trace_samples_cuda, gpu_render.light_points_cuda
 
-    def samples(tree, ray, rows, cols, offsets, *rest):
+    def samples(tree, ray, rays, *rest):
         t = time.perf_counter()
-        orig[0](tree, ray, rows, cols, offsets, *rest)
-        log["samples"].append([int(rows.size), int(offsets.shape[0]), time.perf_counter() - t])
+        orig[0](tree, ray, rays, *rest)
+        log["samples"].append([int(rays.rows.size), int(rays.offsets.shape[0]),
+                               time.perf_counter() - t])
 
-    def light(tree, roots, params, mode, tol, P, *rest):
+    def light(tree, objs, points, *rest):
         t = time.perf_counter()
-        orig[1](tree, roots, params, mode, tol, P, *rest)
-        log["light"].append([int(P.shape[0]), time.perf_counter() - t])
+        orig[1](tree, objs, points, *rest)
+        log["light"].append([int(points[0].shape[0]), time.perf_counter() - t])
 
     gpu_render.trace_samples_cuda, gpu_render.light_points_cuda = samples, light
     try:

@@ -60,28 +60,27 @@ def kernels_work(tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps, re
         tx = j - ty * ntx
         r_lo, c_lo = ty * T, tx * T
         r_hi, c_hi = min(H, r_lo + T), min(W, c_lo + T)
-        stack = np.empty(depth_max + 4, dtype=np.int64)
-        dstack = np.empty(depth_max + 4)
-        first, t_min, D, gx, gy, gz, ev, lv = march.tile_cone(
-            tree, roots, params, mode, tol, cam, lo, hi, eps, r_lo, r_hi, c_lo, c_hi, stack,
-            dstack, relax, newton)
+        work = march.scratch(depth_max)
+        sc = (tree, roots, params, mode, tol)
+        limits = (lo, hi, eps, max_steps)
+        tile = (r_lo, r_hi, c_lo, c_hi)
+        first, t_min, D, gx, gy, gz, ev, lv = march.tile_cone(sc, cam, limits, tile, work,
+                                                              relax, newton)
         tile_evals[ty, tx, 0] = ev
         tile_leaves[ty, tx, 0] = lv
         t_end = np.inf
         if end and first >= 0:
-            t_end, e_ev, e_lv = march.cone_end(tree, roots, params, mode, tol, cam, lo, hi, eps,
-                                               r_lo, r_hi, c_lo, c_hi, stack, dstack, relax)
+            t_end, e_ev, e_lv = march.cone_end(sc, cam, limits, tile, work, relax)
             tile_evals[ty, tx, 1] = e_ev
             tile_leaves[ty, tx, 1] = e_lv
         for r in range(r_lo, r_hi):
             for c in range(c_lo, c_hi):
                 ray = camera_ray(cam, float(r), float(c))
-                t_pred, d_lb = march.cone_first_step(cam, r_lo, r_hi, c_lo, c_hi, t_min, D, gx,
-                                                     gy, gz, ray)
+                t_pred, d_lb = march.cone_first_step(cam, tile, (t_min, t_end, D, gx, gy, gz),
+                                                     ray)
                 h, t, _, _, _, st, lv2, _, _ = march.march_ray(
-                    tree, roots, params, mode, tol, *ray, lo, hi,
-                    eps, max_steps, stack, dstack, relax, omega, t_min, newton, t_end,
-                    march.NEWTON_COS, t_pred, d_lb)
+                    sc, ray, limits, (relax, omega, newton, march.NEWTON_COS),
+                    (t_min, t_end, t_pred, d_lb), work)
                 hit[r, c] = h == 1
                 leaves[r, c] = lv2
 

@@ -39,7 +39,7 @@ import numba  # noqa: E402
 import smoothdist  # noqa: E402
 from smoothdist import SmoothDistanceField  # noqa: E402
 from tracer.rendering import march  # noqa: E402
-from tracer.rendering.frame import MarchArgs  # noqa: E402
+from tracer.rendering.frame import MarchArgs, TraceOptions  # noqa: E402
 from tracer.rendering.frame import camera_of, scene_arrays  # noqa: E402
 from tracer.rendering.renderer import render  # noqa: E402
 from tracer.scenes.scene import scene_from_field  # noqa: E402
@@ -61,8 +61,9 @@ def reference_depths(scene, stride):
     leaves = np.zeros(rows.size, dtype=np.int64)
     ray = MarchArgs(roots, params, mode, tol, camera_of(scene).as_array(), lo, hi,
                     float(scene.eps), int(scene.max_steps))
-    march.trace_pixels(tree, ray, rows, cols, depth_max, hit, t, steps, leaves, 0.0, march.OMEGA,
-                       march.newton_distance(scene.eps, lo, hi))
+    march.trace_pixels(tree, ray, rows, cols, depth_max, (hit, t, steps, leaves),
+                       TraceOptions(0.0, march.OMEGA, False,
+                                    march.newton_distance(scene.eps, lo, hi)))
     return rows, cols, hit, t
 
 

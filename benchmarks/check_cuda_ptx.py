@@ -228,7 +228,7 @@ def kernel_jobs(cc, scene_path):
     # the film's kernels (issue 49): the extra samples and the light, with the arguments the
     # film passes (tracer.rendering.film._trace and _Shader.light_at)
     from tracer.rendering.frame import (LightArgs, LightBuffers, MarchArgs, SampleBuffers,
-                                        TraceOptions, scene_arrays)
+                                        SampleRays, TraceOptions, scene_arrays)
     from tracer.rendering.frame import kernel_roots
 
     from benchmarks import bench_gpu
@@ -241,25 +241,24 @@ def kernel_jobs(cc, scene_path):
                          np.zeros((m, K), np.int64), np.zeros((m, K), np.int32), np.zeros(m),
                          np.zeros(m))
     opts = TraceOptions(1.0, 1.0, True, 0.0)
-    sdata = (tree, ray, n, n, np.zeros((K, 2)), sbuf, opts)
+    sdata = (tree, ray, SampleRays(n, n, np.zeros((K, 2)), 0.0, 0.02), sbuf, opts)
     light = LightArgs(np.zeros(3), lo, hi, 1e-3, 10.0, 0.01, True, True, 0.0, 1e-3, 1e-2)
     lbuf = LightBuffers(d, d.copy(), np.zeros((4, 2), np.int64))
-    ldata = (tree, roots, params, mode, tol, Q, Q.copy(), light, lbuf)
+    ldata = (tree, (roots, params, mode, tol), (Q, Q.copy()), light, lbuf)
     q1, tr, tc, tf = (sdcuda.THREADS, gpu_render.BLOCK[0] * gpu_render.BLOCK[1],
                       gpu_render.CONE_BLOCK[0] * gpu_render.CONE_BLOCK[1], gpu_render.THREADS)
     smooth_sig = (ty(tree), ty(Q), f64, f64, f64, f64, f64, ty(d), ty(g), ty(n), ty(n))
-    render_tail = tuple(ty(a) for a in rargs[1:]) + (ty(cone_f), ty(cone_n)) + tuple(
-        ty(o) for o in outs)
+    render_tail = (ty(tuple(rargs[1:])), ty(cone_f), ty(cone_n), ty(outs[:7]), ty(outs[7]))
     return [("smoothdist.cuda smooth", sdcuda._smooth_kernel, smooth_sig, q1),
             ("smoothdist.cuda exact", sdcuda._exact_kernel,
              (ty(tree), ty(Q), ty(d), ty(g), ty(n), ty(n), ty(n)), q1),
             ("smoothdist.cuda check", sdcuda._check_kernel, (ty(Q), f64, ty(n)), q1),
             ("tracer.rendering.gpu_render cone", gpu_render._cone_kernel,
-             (ty(rargs.data), ty(rargs.mode), f64, f64, f64, f64, ty(cone_f), ty(cone_n)), tc),
+             (ty(rargs.data), ty(tuple(rargs[1:])), ty(cone_f), ty(cone_n)), tc),
             ("tracer.rendering.gpu_render render", gpu_render._render_kernel,
              (ty(rargs.data),) + render_tail, tr),
             ("tracer.rendering.gpu_render samples", gpu_render._samples_kernel,
-             (ty(sdata), numba.int64, f64, f64, numba.int64), tf),
+             (ty(sdata), numba.int64, numba.int64), tf),
             ("tracer.rendering.gpu_render light", gpu_render._light_kernel,
              (ty(ldata), numba.int64), tf),
             # bench_gpu.py's kernel variants (issue 49 item 3: --variants stack32 box32)

@@ -47,7 +47,7 @@ from tracer.rendering import lighting as _lighting
 from tracer.rendering import march
 from tracer.rendering.camera import box_corners, primary_rays, ray_origins, sample_rays
 from tracer.rendering.frame import (LightArgs, LightBuffers, MarchArgs, SampleBuffers,
-                                    TraceOptions)
+                                    SampleRays, TraceOptions)
 from tracer.rendering.shading import (load_matcap, shade_headlight, shade_matcap, shade_normals,
                             view_normals)
 from tracer.rendering.threads import CHUNK, in_bands, in_chunks
@@ -169,7 +169,7 @@ class _Shader:
         tree, roots, params, mode, lo, hi, depth_max, tol = self.arrays
         out = np.empty(len(P), dtype=np.int64)
         march_roots = roots if np.ndim(roots) else np.asarray([roots], dtype=np.int64)
-        _lighting.object_ids(tree, march_roots, params, mode, tol, np.ascontiguousarray(P),
+        _lighting.object_ids(tree, (march_roots, params, mode, tol), np.ascontiguousarray(P),
                              depth_max, out, parallel_tasks(len(P)))
         return out
 
@@ -204,11 +204,11 @@ class _Shader:
                           t_judge)
         out = LightBuffers(shadow, ao, work)
         if self.gpu is not None:
-            self.gpu.light_points_cuda(tree, roots, params, mode, tol, P, N, light, out)
+            self.gpu.light_points_cuda(tree, (roots, params, mode, tol), (P, N), light, out)
         else:
             run_tasks(lambda a, b: _lighting.light_tasks(
-                tree, roots, params, mode, tol, P, N, depth_max, light, out, ntasks, a, b),
-                ntasks)
+                tree, (roots, params, mode, tol), (P, N), depth_max, light, out,
+                (ntasks, a, b)), ntasks)
         self.queries += int(work[:, 0].sum())
         self.leaves += int(work[:, 1].sum())
         return shadow, ao
@@ -601,13 +601,12 @@ def _trace(kargs, depth_max, options, pixels, W, offsets, bounds=None, eps_px=EP
         ray = MarchArgs(roots, params, mode, tol, cam, lo, hi, eps, max_steps)
         out = SampleBuffers(hit, t, grad, steps, objs, bounds[0], bounds[1])
         opts = TraceOptions(relax, omega, cone, newton)
+        samples = SampleRays(rows, cols, offsets, float(eps_px), float(SAMPLE_NEWTON_COS))
         if gpu is not None:
-            gpu.trace_samples_cuda(tree, ray, rows, cols, offsets, out, opts, eps_px,
-                                   SAMPLE_NEWTON_COS)
+            gpu.trace_samples_cuda(tree, ray, samples, out, opts)
         else:
             run_tasks(lambda a, b: march.sample_tasks(
-                tree, ray, rows, cols, offsets, depth_max, out, opts, eps_px,
-                SAMPLE_NEWTON_COS, ntasks, a, b), ntasks)
+                tree, ray, samples, depth_max, out, opts, (ntasks, a, b)), ntasks)
     return hit.ravel(), t.ravel(), grad.reshape(-1, 3), steps.ravel(), objs.ravel()
 
 

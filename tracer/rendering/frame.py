@@ -27,7 +27,7 @@ from tracer.rendering.shading import (load_matcap, shade_headlight, shade_matcap
                             view_normals)
 
 __all__ = ["RenderResult", "RayArgs", "MarchArgs", "PixelBuffers", "SampleBuffers", "LightArgs",
-           "LightBuffers",           "TraceOptions", "SceneArrays", "scene_arrays",
+           "LightBuffers", "SampleRays", "TraceOptions", "SceneArrays", "scene_arrays",
            "object_level", "kernel_roots", "camera_of", "distance_at_camera", "shade",
            "ProgressBar", "MAX_SAMPLES", "pixel_buffers", "posed_params", "checked_samples",
            "progress_callback", "check_steps", "with_overrides", "trace_options",
@@ -219,6 +219,18 @@ class SampleBuffers(NamedTuple):
     t_hi: np.ndarray
 
 
+class SampleRays(NamedTuple):
+    """Which anti-aliasing rays the sample kernels trace, and how
+    (:func:`tracer.rendering.march.trace_samples`): for pixel ``(rows[i], cols[i])`` the rays
+    through ``(rows[i] + offsets[k, 0], cols[i] + offsets[k, 1])``."""
+
+    rows: np.ndarray     # (m,) int64
+    cols: np.ndarray     # (m,) int64
+    offsets: np.ndarray  # (K, 2) float64, within one pixel
+    eps_px: float        # the rays' hit threshold in pixels, at least
+    newton_cos: float    # the rays' Newton cosine (tracer.rendering.march.NEWTON_COS)
+
+
 class TraceOptions(NamedTuple):
     """The march kernels' trailing options (see :func:`tracer.render`)."""
 
@@ -352,8 +364,8 @@ def distance_at_camera(scene, arrays=None):
     """Scene distance at the camera origin (> 0 when the camera is outside the surface)."""
     tree, roots, params, mode, lo, hi, depth_max, tol = arrays or scene_arrays(scene)
     o = scene.camera.origin
-    return float(march.distance_at(tree, kernel_roots(roots, params, mode, tol), params, mode,
-                                   tol, float(o[0]), float(o[1]), float(o[2]), depth_max))
+    sc = (tree, kernel_roots(roots, params, mode, tol), params, mode, tol)
+    return float(march.distance_at(sc, float(o[0]), float(o[1]), float(o[2]), depth_max))
 
 
 def check_camera_outside(scene, arrays=None):
@@ -389,9 +401,9 @@ def check_image_plane(scene, camera, arrays):
     rows = np.unique(np.linspace(0, camera.height - 1, min(PLANE_PROBES, camera.height)).round())
     cols = np.unique(np.linspace(0, camera.width - 1, min(PLANE_PROBES, camera.width)).round())
     origins = ray_origins(camera)[rows.astype(int)][:, cols.astype(int)].reshape(-1, 3)
-    root = kernel_roots(roots, params, mode, tol)
-    inside = sum(march.distance_at(tree, root, params, mode, tol, float(p[0]), float(p[1]),
-                                   float(p[2]), depth_max) <= scene.march.eps for p in origins)
+    sc = (tree, kernel_roots(roots, params, mode, tol), params, mode, tol)
+    inside = sum(march.distance_at(sc, float(p[0]), float(p[1]), float(p[2]), depth_max)
+                 <= scene.march.eps for p in origins)
     if inside:
         raise RenderError(f"the orthographic camera's image plane through "
                           f"{np.round(camera.origin, 6).tolist()} cuts the surface: rays would "

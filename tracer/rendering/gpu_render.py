@@ -120,18 +120,18 @@ def normal_colour(gx, gy, gz, cam):
     return _channel(vx), _channel(vy), _channel(vz)
 
 
-def _cone_kernel(data, mode, tol, eps, relax, newton, cone, cone_n):
+def _cone_kernel(data, how, cone, cone_n):
     # one thread per TILE x TILE tile: the CPU's cone pass (march.tile_cone) into
-    # ``cone[ty, tx] = (first, t_min, D, gx, gy, gz)`` and ``cone_n[ty, tx] = (evals, leaves)``
+    # ``cone[ty, tx] = (first, t_min, D, gx, gy, gz)`` and ``cone_n[ty, tx] = (evals, leaves)``;
+    # ``how``: GpuArgs' scalars, ``(mode, tol, eps, max_steps, relax, omega, newton)``
     tree, roots, params, cam, lo, hi, bg = data
+    mode, tol, eps, max_steps, relax, omega, newton = how
     tx, ty = cuda.grid(2)
     if ty < cone.shape[0] and tx < cone.shape[1]:
-        stack = cuda.local.array(STACK, numba.int64)
-        dstack = cuda.local.array(STACK, numba.float64)
-        r_lo, r_hi, c_lo, c_hi = _tile_of(cam, ty, tx)
+        work = (cuda.local.array(STACK, numba.int64), cuda.local.array(STACK, numba.float64))
         first, t_min, D, gx, gy, gz, ev, lv = march.tile_cone(
-            tree, roots, params, mode, tol, cam, lo, hi, eps, r_lo, r_hi, c_lo, c_hi, stack,
-            dstack, relax, newton)
+            (tree, roots, params, mode, tol), cam, (lo, hi, eps, max_steps),
+            _tile_of(cam, ty, tx), work, relax, newton)
         cone[ty, tx, 0] = first
         cone[ty, tx, 1] = t_min
         cone[ty, tx, 2] = D
@@ -151,26 +151,26 @@ def _tile_of(cam, ty, tx):
     return ty * T, min(H, (ty + 1) * T), tx * T, min(W, (tx + 1) * T)
 
 
-def _render_kernel(data, mode, tol, eps, max_steps, relax, omega, newton, cone, cone_n, out,
-                   rgb):
-    # ``data = (tree, roots, params, cam, lo, hi, bg)`` and ``out`` (the PixelBuffers arrays),
+def _render_kernel(data, how, cone, cone_n, out, rgb):
+    # ``data = (tree, roots, params, cam, lo, hi, bg)``, ``how`` (GpuArgs' scalars, ``(mode,
+    # tol, eps, max_steps, relax, omega, newton)``) and ``out`` (the PixelBuffers arrays),
     # tuples: the simulator hands tuples to the kernel as they are (and top-level arrays as
     # its own wrappers, which the CPU-compiled functions it calls cannot take). ``cone``: the
     # tile kernel's results (no cone pass: ``first = -1``, ``t_min = 0``, ``D = -1``
     # everywhere). The pixel itself is march.march_pixel and march.store_pixel, as on the CPU
     tree, roots, params, cam, lo, hi, bg = data
+    mode, tol, eps, max_steps, relax, omega, newton = how
     c, r = cuda.grid(2)
     if r < rgb.shape[0] and c < rgb.shape[1]:
-        stack = cuda.local.array(STACK, numba.int64)
-        dstack = cuda.local.array(STACK, numba.float64)
+        work = (cuda.local.array(STACK, numba.int64), cuda.local.array(STACK, numba.float64))
         ty = r // march.TILE
         tx = c // march.TILE
         tile = _tile_of(cam, ty, tx)
-        seed = (cone[ty, tx, 1], cone[ty, tx, 2], cone[ty, tx, 3], cone[ty, tx, 4],
+        seed = (cone[ty, tx, 1], np.inf, cone[ty, tx, 2], cone[ty, tx, 3], cone[ty, tx, 4],
                 cone[ty, tx, 5])
         ray = (roots, params, mode, tol, cam, lo, hi, eps, max_steps)
-        res = march.march_pixel(tree, ray, (relax, omega, True, newton), r, c, tile, seed,
-                                np.inf, stack, dstack)
+        res = march.march_pixel(tree, ray, (relax, omega, True, newton), (r, c), tile, seed,
+                                work)
         ev = 0
         lv = 0
         if (r - tile[0]) * (tile[3] - tile[2]) + c - tile[2] == int(cone[ty, tx, 0]):
@@ -188,50 +188,46 @@ def _render_kernel(data, mode, tol, eps, max_steps, relax, omega, newton, cone, 
         rgb[r, c, 2] = cb
 
 
-def _samples_kernel(data, n, eps_px, newton_cos, part):
-    # the film's extra samples: ``data = (tree, ray, rows, cols, offsets, out, opts)`` as
+def _samples_kernel(data, n, part):
+    # the film's extra samples: ``data = (tree, ray, samples, out, opts)`` as
     # :func:`tracer.rendering.march.sample_tasks` takes them, one tuple (see _render_kernel).
     # ``part`` WHOLE: one thread per pixel, its bounds and then its K rays (as the CPU's
     # march.sample_tasks); BOUNDS: one thread per pixel, its bounds (their evaluations parked
-    # in ``steps[i, 0]``); RAYS: one thread per ray (pixel ``j // K``, ray ``j % K``), after a
-    # BOUNDS launch. One call site each of sample_bounds and sample_ray: the device functions
-    # are inlined, and march_ray is the kernel's bulk
-    tree, ray, rows, cols, offsets, out, opts = data
+    # in ``steps[i, 0]``, as on the CPU); RAYS: one thread per ray (pixel ``j // K``, ray
+    # ``j % K``), after a BOUNDS launch. One call site each of sample_bounds and sample_ray:
+    # the device functions are inlined, and march_ray is the kernel's bulk
+    tree, ray, samples, out, opts = data
     j = cuda.grid(1)
-    K = offsets.shape[0]
-    stack = cuda.local.array(STACK, numba.int64)
-    dstack = cuda.local.array(STACK, numba.float64)
+    K = samples[2].shape[0]
+    work = (cuda.local.array(STACK, numba.int64), cuda.local.array(STACK, numba.float64))
     if part == RAYS:
         if j >= n * K:
             return
         i = j // K
         k0 = j - i * K
         k1 = k0 + 1
-        c_ev = out[3][i, 0] if k0 == 0 else 0
     else:
         if j >= n:
             return
         i = j
-        c_ev = march.sample_bounds(tree, ray, rows, cols, out, opts, i, stack, dstack)
+        march.sample_bounds(tree, ray, samples, out, opts, i, work)
         if part == BOUNDS:
-            out[3][i, 0] = c_ev
             return
         k0 = 0
         k1 = K
     for k in range(k0, k1):
-        march.sample_ray(tree, ray, rows, cols, offsets, out, opts, eps_px, newton_cos, i, k,
-                         c_ev if k == 0 else 0, stack, dstack)
+        march.sample_ray(tree, ray, samples, out, opts, i, k, work)
 
 
 def _light_kernel(data, n):
-    # one thread per lit point: ``data = (tree, roots, params, mode, tol, P, N, light, out)``
-    # as :func:`tracer.rendering.lighting.light_tasks` takes them
-    tree, roots, params, mode, tol, P, N, light, out = data
+    # one thread per lit point: ``data = (tree, objs, points, light, out)`` as
+    # :func:`tracer.rendering.lighting.light_tasks` takes them
+    tree, objs, points, light, out = data
     i = cuda.grid(1)
     if i < n:
-        stack = cuda.local.array(STACK, numba.int64)
-        dstack = cuda.local.array(STACK, numba.float64)
-        lighting.light_point(tree, roots, params, mode, tol, P, N, light, out, i, stack, dstack)
+        work = (cuda.local.array(STACK, numba.int64), cuda.local.array(STACK, numba.float64))
+        lighting.light_point((tree, objs[0], objs[1], objs[2], objs[3]), points, light, out, i,
+                             work)
 
 
 def kernel(name="render"):
@@ -269,43 +265,44 @@ def _copy_back(pairs):
         host[...] = dev.copy_to_host()
 
 
-def trace_samples_cuda(tree, ray, rows, cols, offsets, out, opts, eps_px, newton_cos):
-    """:func:`tracer.rendering.march.trace_samples` on the GPU: the samples ``offsets (K, 2)``
-    of the pixels ``rows, cols (m,)``, written into ``out``
+def trace_samples_cuda(tree, ray, samples, out, opts):
+    """:func:`tracer.rendering.march.trace_samples` on the GPU: ``samples``
+    (:class:`tracer.rendering.frame.SampleRays`), written into ``out``
     (:class:`tracer.rendering.frame.SampleBuffers`, host arrays) as the CPU writes them."""
     kernel()
-    n = int(rows.size)
+    n = int(samples.rows.size)
     if n == 0:
         return
     # roots as the (k,) array: the general path (see prepare); CUDA types no int root
     dray, _ = _to_device(ray._replace(roots=_root_array(ray.roots)))
     dout, pairs = _to_device(out)
-    (drows, dcols, doffsets), _ = _to_device((rows, cols, offsets))
-    data = (sdcuda.device_tree(tree), dray, drows, dcols, doffsets, dout, opts)
-    K = int(offsets.shape[0])
+    dsamples, _ = _to_device(samples)
+    data = (sdcuda.device_tree(tree), dray, dsamples, dout, opts)
+    K = int(samples.offsets.shape[0])
     if SPLIT_SAMPLES and K > 1:
         parts = ((BOUNDS, n), (RAYS, n * K))
     else:
         parts = ((WHOLE, n),)
     with sdcuda.quiet_small_launches():
         for part, threads in parts:
-            kernel("samples")[(threads + THREADS - 1) // THREADS, THREADS](
-                data, n, float(eps_px), float(newton_cos), part)
+            kernel("samples")[(threads + THREADS - 1) // THREADS, THREADS](data, n, part)
     _copy_back(pairs)
 
 
-def light_points_cuda(tree, roots, params, mode, tol, P, N, light, out):
+def light_points_cuda(tree, objs, points, light, out):
     """:func:`tracer.rendering.lighting.light_points` on the GPU: shadow and occlusion at
-    points ``P (n, 3)`` with unit normals ``N``, written into ``out``
+    ``points = (P (n, 3), N (n, 3))`` (unit normals) in the scene of ``tree`` and ``objs =
+    (roots, params, mode, tol)``, written into ``out``
     (:class:`tracer.rendering.frame.LightBuffers`, host arrays) as the CPU writes them."""
     kernel()
-    n = int(P.shape[0])
+    roots, params, mode, tol = objs
+    n = int(points[0].shape[0])
     if n == 0:
         return
     dlight, _ = _to_device(light)
     dout, pairs = _to_device(out)
-    (droots, dparams, dP, dN), _ = _to_device((_root_array(roots), params, P, N))
-    data = (sdcuda.device_tree(tree), droots, dparams, mode, tol, dP, dN, dlight, dout)
+    (droots, dparams, dP, dN), _ = _to_device((_root_array(roots), params) + tuple(points))
+    data = (sdcuda.device_tree(tree), (droots, dparams, mode, tol), (dP, dN), dlight, dout)
     with sdcuda.quiet_small_launches():
         kernel("light")[(n + THREADS - 1) // THREADS, THREADS](data, n)
     _copy_back(pairs)
@@ -366,8 +363,7 @@ def launch(args, shape, cone=True, block=BLOCK, out=None, kernels=None):
         cone_n = cuda.device_array((nty, ntx, 2), dtype=np.int64)
         with sdcuda.quiet_small_launches():     # small images: a few blocks of tiles
             kernels["cone"][_launch_grid(ntx, nty, CONE_BLOCK), CONE_BLOCK](
-                args.data, args.mode, args.tol, args.eps, args.relax, args.newton, cone_f,
-                cone_n)
+                args.data, args[1:], cone_f, cone_n)
     else:
         none = np.zeros((nty, ntx, 6))
         none[:, :, 0] = -1.0
@@ -382,8 +378,8 @@ def launch(args, shape, cone=True, block=BLOCK, out=None, kernels=None):
                empty((H, W), dtype=np.int64), empty((H, W), dtype=np.int32),
                empty((H, W, 3), dtype=np.uint8))
     with sdcuda.quiet_small_launches():
-        kernels["render"][_launch_grid(W, H, block), block](*args, cone_f, cone_n, out[:7],
-                                                             out[7])
+        kernels["render"][_launch_grid(W, H, block), block](args.data, args[1:], cone_f,
+                                                             cone_n, out[:7], out[7])
     return out
 
 

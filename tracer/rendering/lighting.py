@@ -34,8 +34,9 @@ from numba import prange
 from smoothdist.kernels import NJIT, NJIT_IR_INLINE, NJIT_PARALLEL, borrowed
 from tracer.rendering.camera import box_corners
 from tracer.rendering.frame import kernel_roots
-from tracer.rendering.march import (NEWTON_COS, OMEGA, RELAX, march_ray, nearest_object,
-                                    object_lower_bound, ray_box, scene_distance, visiting_order)
+from tracer.rendering.march import (NEWTON_COS, OMEGA, PLAIN_SPAN, RELAX, march_ray,
+                                    nearest_object, object_lower_bound, ray_box, scene_distance,
+                                    scratch, visiting_order)
 
 __all__ = ["Lighting", "DEFAULT_COLOR", "PALETTE", "soft_shadow", "ambient_occlusion",
            "light_points", "light_point", "object_ids", "ground_height", "light_directions",
@@ -124,11 +125,13 @@ def check_color(color, name):
 
 # =============================================================================== kernels
 @numba.njit(**NJIT)
-def soft_shadow(tree, roots, params, mode, tol, px, py, pz, lx, ly, lz, lo, hi, eps, t_min,
-                k, stack, dstack, slack=0.0, t_judge=-1.0):
-    """Fraction of the key light reaching ``p`` (0 in full shadow, 1 lit), the queries made
-    and the leaves they visited. ``l`` is the unit direction towards the light,
-    ``k = 1 / penumbra``.
+def soft_shadow(sc, p, light, work):
+    """Fraction of the key light reaching ``p = (px, py, pz)`` (0 in full shadow, 1 lit), the
+    queries made and the leaves they visited, in the scene ``sc`` (as
+    :func:`tracer.rendering.march.scene_distance` takes it). ``light``
+    (:class:`tracer.rendering.frame.LightArgs`): ``L`` the unit direction towards the light,
+    ``lo, hi`` the box the ray marches in, ``eps``, ``k = 1 / penumbra``, ``slack``, ``t_min``
+    and ``t_judge``; ``work = (stack, dstack)``.
 
     The ray starts at ``t_min`` and judges the light from ``t_judge`` on (negative: the
     default, ``SHADOW_JUDGE x t_min``, for a point on the surface; a ground point passes
@@ -139,6 +142,9 @@ def soft_shadow(tree, roots, params, mode, tol, px, py, pz, lx, ly, lz, lo, hi, 
     the start casts no shadow on it. (A ray that ended in full shadow there drew the dark
     specks and scratches of issue 35: 36 and 420 pixels on two random clouds at 512², now 0;
     a surface still there at ``SHADOW_JUDGE x t_min`` shadows as before.)"""
+    px, py, pz = p
+    L, lo, hi, eps, k, delta, do_shadow, do_ao, slack, t_min, t_judge = light
+    lx, ly, lz = L[0], L[1], L[2]
     t0, t1 = ray_box(px, py, pz, lx, ly, lz, lo, hi)
     if t0 > t1:
         return 1.0, 0, 0
@@ -149,8 +155,7 @@ def soft_shadow(tree, roots, params, mode, tol, px, py, pz, lx, ly, lz, lo, hi, 
     n = 0
     leaves = 0
     while t < t1 and n < SHADOW_STEPS:
-        r = scene_distance(tree, roots, params, mode, tol, px + t * lx, py + t * ly,
-                           pz + t * lz, stack, dstack, slack)
+        r = scene_distance(sc, px + t * lx, py + t * ly, pz + t * lz, work, slack)
         d = r[0]
         leaves += r[5]
         n += 1
@@ -169,18 +174,19 @@ def soft_shadow(tree, roots, params, mode, tol, px, py, pz, lx, ly, lz, lo, hi, 
 
 
 @numba.njit(**NJIT)
-def ambient_occlusion(tree, roots, params, mode, tol, px, py, pz, nx, ny, nz, delta, stack,
-                      dstack, slack=0.0):
-    """Occlusion factor in ``[0, 1]`` (1: open) at ``p`` with unit normal ``n``, and the
-    leaves visited."""
+def ambient_occlusion(sc, p, n, delta, work, slack):
+    """Occlusion factor in ``[0, 1]`` (1: open) at ``p = (px, py, pz)`` with unit normal
+    ``n = (nx, ny, nz)``, and the leaves visited: ``AO_SAMPLES`` distances of the scene ``sc``
+    (:func:`soft_shadow`), ``delta`` (scene units) apart along ``n``."""
+    px, py, pz = p
+    nx, ny, nz = n
     occ = 0.0
     tot = 0.0
     w = 1.0
     leaves = 0
     for j in range(1, AO_SAMPLES + 1):
         h = j * delta
-        r = scene_distance(tree, roots, params, mode, tol, px + h * nx, py + h * ny,
-                           pz + h * nz, stack, dstack, slack)
+        r = scene_distance(sc, px + h * nx, py + h * ny, pz + h * nz, work, slack)
         d = r[0] + slack          # the upper bound of the true distance (see soft_shadow)
         leaves += r[5]
         occ += w * (h - min(max(d, 0.0), h))
@@ -203,8 +209,10 @@ def _ao_total(delta):
 
 
 @numba.njit(**NJIT_PARALLEL)
-def light_points(tree, roots, params, mode, tol, P, N, depth_max, light, out, ntasks=1):
-    """Shadow and occlusion at points ``P (n, 3)`` with unit normals ``N (n, 3)``.
+def light_points(tree, objs, points, depth_max, light, out, ntasks):
+    """Shadow and occlusion at points ``points = (P, N)``: ``P (n, 3)`` with unit normals
+    ``N (n, 3)``, in the scene of ``tree`` and ``objs = (roots, params, mode, tol)``
+    (:func:`tracer.rendering.march.scene_distance`'s ``sc`` without its tree).
 
     ``light`` (:class:`tracer.rendering.frame.LightArgs`): ``L (3,)`` the unit direction towards
     the key light, ``lo, hi`` the box the shadow rays march in, ``eps``, ``k = 1 / penumbra``,
@@ -217,44 +225,44 @@ def light_points(tree, roots, params, mode, tol, P, N, depth_max, light, out, nt
     queries and leaves visited. Every point is
     independent (no dependence on threads); ``ntasks`` strided tasks share them out
     (:mod:`smoothdist.schedule`)."""
-    ntasks = max(1, min(P.shape[0], ntasks))
+    ntasks = max(1, min(points[0].shape[0], ntasks))
     for task in prange(ntasks):
-        _light_task(tree, roots, params, mode, tol, P, N, depth_max, light, out, task, ntasks)
+        _light_task((tree,) + objs, points, depth_max, light, out, task, ntasks)
 
 
 @numba.njit(**NJIT)
-def light_tasks(tree, roots, params, mode, tol, P, N, depth_max, light, out, ntasks, task0,
-                task1):
+def light_tasks(tree, objs, points, depth_max, light, out, tasks):
     """Tasks ``task0 <= task < task1`` of :func:`light_points` (``ntasks`` of them), serial and
     ``nogil``, for Python threads (``smoothdist.schedule.run_tasks``): the same values, and no
     ``prange`` to compile (a parallel loop costs numba as much again as its body)."""
-    tree = borrowed(tree)
-    params = borrowed(params)
+    ntasks, task0, task1 = tasks
+    sc = (borrowed(tree), objs[0], borrowed(objs[1]), objs[2], objs[3])
     light = borrowed(light)
     for task in range(task0, task1):
-        _light_task(tree, roots, params, mode, tol, P, N, depth_max, light, out, task, ntasks)
+        _light_task(sc, points, depth_max, light, out, task, ntasks)
 
 
 @numba.njit(**NJIT_IR_INLINE)
-def _light_task(tree, roots, params, mode, tol, P, N, depth_max, light, out, task, ntasks):
+def _light_task(sc, points, depth_max, light, out, task, ntasks):
     """Points ``task, task + ntasks, ...`` of :func:`light_points`."""
-    n = P.shape[0]
-    stack = np.empty(depth_max + 4, dtype=np.int64)
-    dstack = np.empty(depth_max + 4)
+    n = points[0].shape[0]
+    work = scratch(depth_max)
     for i in range(task, n, ntasks):  # every ntasks-th point
-        light_point(tree, roots, params, mode, tol, P, N, light, out, i, stack, dstack)
+        light_point(sc, points, light, out, i, work)
 
 
 @numba.njit(**NJIT)
-def light_point(tree, roots, params, mode, tol, P, N, light, out, i, stack, dstack):
-    """Point ``i`` of :func:`light_points`, with the traversal stacks ``stack``, ``dstack``
-    (the CPU's tasks and the GPU's threads, :mod:`tracer.rendering.gpu_render`, call this).
+def light_point(sc, points, light, out, i, work):
+    """Point ``i`` of :func:`light_points`, with the traversal scratch ``work = (stack,
+    dstack)`` (the CPU's tasks and the GPU's threads, :mod:`tracer.rendering.gpu_render`, call
+    this).
     A function of its own, not inlined: inlined twice into the parallel loop of
     :func:`light_points` (numba 0.68) it lost the shadow of some points (1 where the serial
     tasks and a direct :func:`soft_shadow` give 0; tests/tracer/rendering/
     test_render_coldstart.py)."""
+    P, N = points
     L, lo, hi, eps, k, delta, do_shadow, do_ao, slack, t_min, t_judge = light
-    shadow, ao, work = out
+    shadow, ao, counts = out
     bias = 2.0 * eps
     nx, ny, nz = N[i, 0], N[i, 1], N[i, 2]
     px = P[i, 0] + bias * nx
@@ -264,45 +272,43 @@ def light_point(tree, roots, params, mode, tol, P, N, light, out, i, stack, dsta
     q = 0
     lv = 0
     if do_shadow and nx * L[0] + ny * L[1] + nz * L[2] > 0.0:
-        s, q, lv = soft_shadow(tree, roots, params, mode, tol, px, py, pz, L[0], L[1],
-                               L[2], lo, hi, eps, t_min, k, stack, dstack, slack,
-                               t_judge)
+        s, q, lv = soft_shadow(sc, (px, py, pz), light, work)
     elif do_shadow:
         s = 0.0          # facing away from the light: no direct light anyway
     a = 1.0
     if do_ao:
-        a, la = ambient_occlusion(tree, roots, params, mode, tol, px, py, pz, nx, ny, nz,
-                                  delta, stack, dstack, slack)
+        a, la = ambient_occlusion(sc, (px, py, pz), (nx, ny, nz), delta, work, slack)
         q += AO_SAMPLES
         lv += la
     shadow[i] = s
     ao[i] = a
-    work[i, 0] = q
-    work[i, 1] = lv
+    counts[i, 0] = q
+    counts[i, 1] = lv
 
 
 @numba.njit(**NJIT_PARALLEL)
-def object_ids(tree, roots, params, mode, tol, P, depth_max, out, ntasks=1):
-    """Index of the object nearest to each point ``P (n, 3)`` (its own distance, smallest);
+def object_ids(tree, objs, P, depth_max, out, ntasks):
+    """Index of the object nearest to each point ``P (n, 3)`` (its own distance, smallest)
+    in the scene of ``tree`` and ``objs = (roots, params, mode, tol)`` (:func:`light_points`);
     ``ntasks`` strided tasks (:mod:`smoothdist.schedule`)."""
     n = P.shape[0]
     ntasks = max(1, min(n, ntasks))
     for task in prange(ntasks):
-        stack = np.empty(depth_max + 4, dtype=np.int64)
-        dstack = np.empty(depth_max + 4)
+        roots, params, mode, tol = objs
+        sc = (tree, roots, params, mode, tol)
+        work = scratch(depth_max)
         for i in range(task, n, ntasks):
             best = np.inf
             arg = 0
             # nearest root box first; an object whose lower bound is not below the best distance
             # so far cannot be nearer
-            first = nearest_object(tree, roots, params, mode, tol, P[i, 0], P[i, 1], P[i, 2], 0.0)
+            first = nearest_object(sc, P[i, 0], P[i, 1], P[i, 2], 0.0)
             for j in range(roots.size):
                 kk = visiting_order(j, first)
-                if j > 0 and object_lower_bound(tree, roots, params, mode, tol, kk, P[i, 0],
-                                                P[i, 1], P[i, 2], 0.0) >= best:
+                if j > 0 and object_lower_bound(sc, kk, P[i, 0], P[i, 1], P[i, 2], 0.0) >= best:
                     continue
-                d = scene_distance(tree, roots[kk:kk + 1], params[kk:kk + 1], mode, tol, P[i, 0],
-                                   P[i, 1], P[i, 2], stack, dstack, 0.0)[0]
+                d = scene_distance((tree, roots[kk:kk + 1], params[kk:kk + 1], mode, tol),
+                                   P[i, 0], P[i, 1], P[i, 2], work, 0.0)[0]
                 if d < best:
                     best = d
                     arg = kk
@@ -310,17 +316,15 @@ def object_ids(tree, roots, params, mode, tol, P, depth_max, out, ntasks=1):
 
 
 @numba.njit(**NJIT)
-def _lowest_hit(tree, roots, params, mode, tol, starts, up, lo, hi, eps, max_steps, depth_max):
-    """Smallest height (along ``up``) at which upward rays from ``starts`` meet the surface."""
-    stack = np.empty(depth_max + 4, dtype=np.int64)
-    dstack = np.empty(depth_max + 4)
+def _lowest_hit(sc, starts, up, limits, depth_max):
+    """Smallest height (along ``up``) at which upward rays from ``starts`` meet the surface
+    of the scene ``sc`` (``limits``: :func:`tracer.rendering.march.march_ray`'s)."""
+    work = scratch(depth_max)
     best = np.inf
     for i in range(starts.shape[0]):
-        # every argument given (the defaults' values): the camera rays' specialisation of
-        # march_ray, compiled once for both
-        h, t = march_ray(tree, roots, params, mode, tol, starts[i, 0], starts[i, 1],
-                         starts[i, 2], up[0], up[1], up[2], lo, hi, eps, max_steps, stack,
-                         dstack, RELAX, OMEGA, 0.0, 0.0, np.inf, NEWTON_COS, 0.0, 0.0)[:2]
+        # march_ray's arguments typed as the camera rays' (one specialisation for both)
+        pr = (starts[i, 0], starts[i, 1], starts[i, 2], up[0], up[1], up[2])
+        h, t = march_ray(sc, pr, limits, (RELAX, OMEGA, 0.0, NEWTON_COS), PLAIN_SPAN, work)[:2]
         if h == 1:
             z = (starts[i, 0] + t * up[0]) * up[0] + (starts[i, 1] + t * up[1]) * up[1] \
                 + (starts[i, 2] + t * up[2]) * up[2]
@@ -356,8 +360,8 @@ def ground_height(arrays, data_vertices, up, eps, max_steps=400):
     box_bottom = float((box_corners(lo, hi) @ up).min())
     starts = lowest - ((lowest @ up) - box_bottom + eps)[:, None] * up
     # the render's own kernel form of the roots: the lean path when the render takes it
-    h = _lowest_hit(tree, kernel_roots(np.atleast_1d(roots), params, mode, tol), params, mode,
-                    tol, np.ascontiguousarray(starts), up, lo, hi, eps, max_steps, depth_max)
+    sc = (tree, kernel_roots(np.atleast_1d(roots), params, mode, tol), params, mode, tol)
+    h = _lowest_hit(sc, np.ascontiguousarray(starts), up, (lo, hi, eps, max_steps), depth_max)
     return float(h) if np.isfinite(h) else box_bottom
 
 

@@ -115,6 +115,8 @@ END_AFTER = 4
 TILE = 4
 #: a prime: tile j of the parallel loop traces tile (j * STRIDE) mod n
 STRIDE = 7919
+#: :func:`march_ray`'s ``span`` of a ray marched whole: ``(t_min, t_max, t_pred, d_lb)``
+PLAIN_SPAN = (0.0, np.inf, 0.0, 0.0)
 
 
 def _root_of(roots):
@@ -133,11 +135,12 @@ def _root_of_impl(roots):
 
 
 @numba.njit(**NJIT)
-def scene_distance(tree, roots, params, mode, tol, x, y, z, stack, dstack, slack=0.0):
+def scene_distance(sc, x, y, z, work, slack=0.0):
     """Scene distance and gradient at ``(x, y, z)``.
 
-    ``tol``: the scene's tolerance-controlled pruning (0 = off). ``stack, dstack``: traversal
-    scratch. ``slack >= 0`` (scene units) loosens a tolerance ``tol > 0`` to
+    ``sc = (tree, roots, params, mode, tol)``: the scene (see the module docstring; ``tol`` its
+    tolerance-controlled pruning, 0 = off). ``work = (stack, dstack)``: traversal scratch.
+    ``slack >= 0`` (scene units) loosens a tolerance ``tol > 0`` to
     ``max(tol, expm1(alpha * slack))`` per object, i.e. lets each object's ``d_hat`` be up to
     ``slack`` below the ``tol = 0`` value (never above it).
 
@@ -150,6 +153,8 @@ def scene_distance(tree, roots, params, mode, tol, x, y, z, stack, dstack, slack
     path with ``roots = [root]``. Numba then compiles only that branch (``isinstance`` is resolved
     at compile time), which is what keeps the first render of such a scene short.
     """
+    tree, roots, params, mode, tol = sc
+    stack, dstack = work
     if isinstance(roots, int):
         d, gx, gy, gz, nodes, leaves = smooth_distance_point(
             tree, x, y, z, params[0, P_ALPHA], params[0, P_BETA], params[0, P_S],
@@ -157,8 +162,7 @@ def scene_distance(tree, roots, params, mode, tol, x, y, z, stack, dstack, slack
         return d - params[0, P_OFFSET], gx, gy, gz, nodes, leaves, 0
     nobj = roots.size
     if params.shape[1] >= P_COLUMNS_POSED:
-        return _scene_distance_objects(tree, roots, params, mode, tol, x, y, z, stack, dstack,
-                                       slack)
+        return _scene_distance_objects(sc, x, y, z, work, slack)
     if nobj == 1:
         if mode == MODE_SMOOTH:
             alpha = params[0, P_ALPHA]
@@ -170,7 +174,7 @@ def scene_distance(tree, roots, params, mode, tol, x, y, z, stack, dstack, slack
         d, gx, gy, gz, p, nodes, leaves = exact_distance_point(tree, x, y, z, stack, dstack,
                                                                roots[0])
         return d - params[0, P_OFFSET], gx, gy, gz, nodes, leaves, 0
-    return _scene_distance_objects(tree, roots, params, mode, tol, x, y, z, stack, dstack, slack)
+    return _scene_distance_objects(sc, x, y, z, work, slack)
 
 
 @numba.njit(**NJIT)
@@ -189,13 +193,14 @@ def _local_point(params, k, x, y, z):
 
 
 @numba.njit(**NJIT)
-def object_lower_bound(tree, roots, params, mode, tol, k, x, y, z, slack):
+def object_lower_bound(sc, k, x, y, z, slack):
     """A lower bound (scene units) of object ``k``'s distance at ``(x, y, z)`` from its root
     box alone: smooth mode ``b - (log N + S max(log whi, 0) + log(1 + tol_k)) / alpha`` (``b``
     the distance to the box; no term of ``N`` primitives is larger than ``whi**S
     exp(-alpha b)``, Barnes-Hut far fields included, and tolerance pruning lowers the sum's
     log by at most ``log(1 + tol_k)``), minus the object's smooth offset; exact-offset mode
     ``b - offset``."""
+    tree, roots, params, mode, tol = sc
     lx, ly, lz = _local_point(params, k, x, y, z)
     root = roots[k]
     b = math.sqrt(box_distance2(lx, ly, lz, tree.lo, tree.hi, root)[0])
@@ -208,10 +213,12 @@ def object_lower_bound(tree, roots, params, mode, tol, k, x, y, z, slack):
 
 
 @numba.njit(**NJIT)
-def _object_distance(tree, roots, params, mode, tol, k, x, y, z, stack, dstack, slack):
+def _object_distance(sc, k, x, y, z, work, slack):
     """Object ``k``'s distance and gradient at ``(x, y, z)`` (posed when ``params`` has the
     pose columns; the object's offset subtracted in both modes). Returns ``(d, gx, gy, gz, nodes,
     leaves)``, the gradient in scene coordinates."""
+    tree, roots, params, mode, tol = sc
+    stack, dstack = work
     lx, ly, lz = _local_point(params, k, x, y, z)
     if mode == MODE_SMOOTH:
         alpha = params[k, P_ALPHA]
@@ -234,13 +241,13 @@ def _object_distance(tree, roots, params, mode, tol, k, x, y, z, stack, dstack, 
 
 
 @numba.njit(**NJIT)
-def nearest_object(tree, roots, params, mode, tol, x, y, z, slack):
+def nearest_object(sc, x, y, z, slack):
     """The object with the smallest :func:`object_lower_bound` at ``(x, y, z)`` (visited
     first: the one most likely to set the minimum)."""
     first = 0
     lb_first = np.inf
-    for k in range(roots.size):
-        lb = object_lower_bound(tree, roots, params, mode, tol, k, x, y, z, slack)
+    for k in range(sc[1].size):
+        lb = object_lower_bound(sc, k, x, y, z, slack)
         if lb < lb_first:
             lb_first = lb
             first = k
@@ -263,7 +270,7 @@ SKIP_LOG = 53.0 * math.log(2.0)
 
 
 @numba.njit(**NJIT)
-def _scene_distance_objects(tree, roots, params, mode, tol, x, y, z, stack, dstack, slack):
+def _scene_distance_objects(sc, x, y, z, work, slack):
     """:func:`scene_distance` of several objects (posed or not): the object with the smallest
     :func:`object_lower_bound` first, then every other one unless its bound shows it cannot
     matter: in exact-offset mode a bound ``>=`` the minimum so far (the minimum is exact), in
@@ -271,10 +278,11 @@ def _scene_distance_objects(tree, roots, params, mode, tol, x, y, z, stack, dsta
     the last place of the sum). The last value returned is the object whose own distance is
     the smallest (the first of equals in visiting order; a skipped object cannot be it: its
     bound is not below the minimum), what :func:`tracer.rendering.lighting.object_ids` computes."""
+    tree, roots, params, mode, tol = sc
     nobj = roots.size
     nodes = 0
     leaves = 0
-    first = nearest_object(tree, roots, params, mode, tol, x, y, z, slack)
+    first = nearest_object(sc, x, y, z, slack)
     a = params[0, P_ALPHA]
     for k in range(1, nobj):
         a = max(a, params[k, P_ALPHA])
@@ -288,11 +296,10 @@ def _scene_distance_objects(tree, roots, params, mode, tol, x, y, z, stack, dsta
     for j in range(nobj):
         k = visiting_order(j, first)
         if j > 0:
-            lb = object_lower_bound(tree, roots, params, mode, tol, k, x, y, z, slack)
+            lb = object_lower_bound(sc, k, x, y, z, slack)
             if lb >= (m if mode == MODE_EXACT else m + reach):
                 continue
-        d, gx, gy, gz, nn, ll = _object_distance(tree, roots, params, mode, tol, k, x, y, z,
-                                                 stack, dstack, slack)
+        d, gx, gy, gz, nn, ll = _object_distance(sc, k, x, y, z, work, slack)
         nodes += nn
         leaves += ll
         if d < m:               # m is the smallest object distance so far in both modes
@@ -367,9 +374,9 @@ def ray_box(ox, oy, oz, dx, dy, dz, lo, hi):
 
 
 @numba.njit(**NJIT)
-def _false_position(tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, a, fa, b, fb, gx, gy,
-                    gz, nearest, eps, stack, dstack):
-    """Root of ``d(t)`` in the bracket ``d(a) = fa > eps``, ``d(b) = fb < -eps``.
+def _false_position(sc, pr, bracket, g, nearest, eps, work):
+    """Root of ``d(t)`` along the ray ``pr = (ox, oy, oz, dx, dy, dz)`` in the bracket
+    ``bracket = (a, fa, b, fb)``: ``d(a) = fa > eps``, ``d(b) = fb < -eps``.
 
     Illinois false position (the kept end's value is halved when the same end is kept twice),
     falling back to the midpoint when the interpolate is not inside the bracket. Stops at the
@@ -378,6 +385,9 @@ def _false_position(tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, a, f
     gradient and the nearest object are those of the returned point (``g`` and ``nearest`` as
     given if ``b`` is never moved).
     """
+    ox, oy, oz, dx, dy, dz = pr
+    a, fa, b, fb = bracket
+    gx, gy, gz = g
     side = 0
     evals = 0
     leaves = 0
@@ -385,9 +395,8 @@ def _false_position(tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, a, f
         x = (a * fb - b * fa) / (fb - fa)
         if not (a < x < b):
             x = 0.5 * (a + b)
-        dm, mx, my, mz, nn, ll, ob = scene_distance(tree, roots, params, mode, tol,
-                                                    ox + x * dx, oy + x * dy, oz + x * dz,
-                                                    stack, dstack, 0.0)
+        dm, mx, my, mz, nn, ll, ob = scene_distance(sc, ox + x * dx, oy + x * dy, oz + x * dz,
+                                                    work, 0.0)
         evals += 1
         leaves += ll
         if dm > eps:
@@ -412,8 +421,9 @@ def _false_position(tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, a, f
 
 
 @numba.njit(**NJIT)
-def next_step(d, gx, gy, gz, slope, mode, omega, near, newton_on, newton_cos):
-    """The step from a point outside the band (``d > eps``) with distance gradient ``g``,
+def next_step(d, g, slope, mode, omega, near, newton_on, newton_cos):
+    """The step from a point outside the band (``d > eps``) with distance gradient
+    ``g = (gx, gy, gz)``,
     along which the distance changes at the rate ``slope = g . dir``:
     ``(step, relaxed, newton)``.
 
@@ -431,6 +441,7 @@ def next_step(d, gx, gy, gz, slope, mode, omega, near, newton_on, newton_cos):
     :func:`stepped_over`). Smooth mode only, both: the exact-offset field of a point cloud is
     a union of spheres, kinked everywhere; its gradient says little about the next step.
     """
+    gx, gy, gz = g
     step = d
     if omega > 1.0 and mode == MODE_SMOOTH:
         step = d * min(omega, max(1.0, 2.0 * OMEGA_SAFETY / (1.0 - min(slope, 0.999))))
@@ -458,10 +469,15 @@ def stepped_over(step, d_prev, d, eps, slope):
 
 
 @numba.njit(**NJIT)
-def march_ray(tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, lo, hi, eps, max_steps,
-              stack, dstack, relax=RELAX, omega=OMEGA, t_min=0.0, newton=0.0, t_max=np.inf,
-              newton_cos=NEWTON_COS, t_pred=0.0, d_lb=0.0):
-    """March one ray; returns ``(hit, t, gx, gy, gz, steps, leaves, bisections, nearest)``.
+def march_ray(sc, pr, limits, stepping, span, work):
+    """March the ray ``pr = (ox, oy, oz, dx, dy, dz)`` (unit direction) through the scene
+    ``sc``; returns ``(hit, t, gx, gy, gz, steps, leaves, bisections, nearest)``.
+
+    ``limits = (lo, hi, eps, max_steps)``: the box the ray marches in, the hit threshold
+    (scene units) and the most distance evaluations; ``stepping = (relax, omega, newton,
+    newton_cos)`` and ``span = (t_min, t_max, t_pred, d_lb)`` as below (:data:`PLAIN_SPAN`:
+    the whole ray, no first-step prediction); ``work = (stack, dstack)``. Every caller gives
+    every tuple whole: one specialisation serves the camera rays, the samples and the ground.
 
     Each step comes from :func:`next_step`: over-relaxed by up to ``omega >= 1`` (1: plain
     sphere tracing), or a Newton step once ``d <= newton`` (scene units, see
@@ -486,6 +502,11 @@ def march_ray(tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, lo, hi, ep
     ``nearest`` the object whose own distance is the smallest (:func:`scene_distance`).
     Misses return ``t = nan``, ``nearest = -1``.
     """
+    tree, roots, params, mode, tol = sc
+    ox, oy, oz, dx, dy, dz = pr
+    lo, hi, eps, max_steps = limits
+    relax, omega, newton, newton_cos = stepping
+    t_min, t_max, t_pred, d_lb = span
     t, t_exit = ray_box(ox, oy, oz, dx, dy, dz, lo, hi)
     t = max(t, t_min)
     t_exit = min(t_exit, t_max)
@@ -517,15 +538,13 @@ def march_ray(tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, lo, hi, ep
         t = t_pred
         slack = 0.0
     while steps < max_steps:
-        d, gx, gy, gz, nn, ll, ob = scene_distance(tree, roots, params, mode, tol, ox + t * dx,
-                                                   oy + t * dy, oz + t * dz, stack, dstack,
-                                                   slack)
+        d, gx, gy, gz, nn, ll, ob = scene_distance(sc, ox + t * dx, oy + t * dy, oz + t * dz,
+                                                   work, slack)
         steps += 1
         leaves += ll
         if d <= eps and slack > 0.0 and relaxable and _was_loosened(params, tol, slack):
-            d, gx, gy, gz, nn, ll, ob = scene_distance(tree, roots, params, mode, tol,
-                                                       ox + t * dx, oy + t * dy, oz + t * dz,
-                                                       stack, dstack, 0.0)
+            d, gx, gy, gz, nn, ll, ob = scene_distance(sc, ox + t * dx, oy + t * dy,
+                                                       oz + t * dz, work, 0.0)
             steps += 1
             leaves += ll
         slope = gx * dx + gy * dy + gz * dz
@@ -543,16 +562,14 @@ def march_ray(tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, lo, hi, ep
             if d < -eps and t > t_prev:
                 # overshoot into the negative band: find the root in [t_prev (d > eps), t]
                 bis += 1
-                t, gx, gy, gz, ev, lv, ob = _false_position(tree, roots, params, mode, tol, ox,
-                                                            oy, oz, dx, dy, dz, t_prev, d_prev,
-                                                            t, d, gx, gy, gz, ob, eps, stack,
-                                                            dstack)
+                t, gx, gy, gz, ev, lv, ob = _false_position(sc, pr, (t_prev, d_prev, t, d),
+                                                            (gx, gy, gz), ob, eps, work)
                 steps += ev
                 leaves += lv
             return 1, t, gx, gy, gz, steps, leaves, bis, ob
         t_prev = t
         d_prev = d
-        step, relaxed, newton_step = next_step(d, gx, gy, gz, slope, mode, omega, near,
+        step, relaxed, newton_step = next_step(d, (gx, gy, gz), slope, mode, omega, near,
                                                newton_on, newton_cos)
         t += step
         # near the surface the next point is evaluated at full accuracy at once (a loosened
@@ -569,10 +586,12 @@ def march_ray(tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, lo, hi, ep
             step = d_prev
     return 0, np.nan, 0.0, 0.0, 0.0, steps, leaves, bis, -1
 
-@numba.njit(**NJIT)
-def cone_start(tree, roots, params, mode, tol, cam, lo, hi, eps, r_lo, r_hi, c_lo, c_hi, stack,
-               dstack, relax=RELAX):
-    """Conservative common start depth for the rays of pixels ``[r_lo, r_hi) x [c_lo, c_hi)``.
+
+@numba.njit(**NJIT_IR_INLINE)
+def cone_start(sc, cam, limits, tile, work, relax):
+    """Conservative common start depth for the rays of the pixels of ``tile = (r_lo, r_hi,
+    c_lo, c_hi)``: ``[r_lo, r_hi) x [c_lo, c_hi)`` (``sc``, ``limits``, ``work`` as in
+    :func:`march_ray`).
 
     Cone marching along the tile's central ray ``o + t u``: every pixel ray of the tile stays
     within ``near + t spread`` of it at the same ``t`` (the camera's
@@ -589,31 +608,10 @@ def cone_start(tree, roots, params, mode, tol, cam, lo, hi, eps, r_lo, r_hi, c_l
     depth on the central ray (``D = -1``: none; with ``relax``, ``D`` may be a loosened value,
     which is still a lower bound).
     """
-    ox, oy, oz, ux, uy, uz, near, spread = block_rays(cam, r_lo, r_hi, c_lo, c_hi)
-    t_in, t_out = ray_box(ox, oy, oz, ux, uy, uz, lo, hi)
-    t = 0.0
-    evals = 0
-    leaves = 0
-    loose = mode == MODE_SMOOTH and tol > 0.0 and relax > 0.0
-    slack = np.inf if loose else 0.0
-    d = -1.0
-    gx = gy = gz = 0.0
-    while evals < CONE_STEPS:
-        d, gx, gy, gz, nn, ll, ob = scene_distance(tree, roots, params, mode, tol,
-                                                   ox + t * ux, oy + t * uy, oz + t * uz,
-                                                   stack, dstack, slack)
-        if loose:
-            slack = relax * d
-        evals += 1
-        leaves += ll
-        step = d - (near + t * spread)
-        if step <= 0.25 * d or step <= eps:
-            break
-        t += step
-        if t > t_out:
-            d = -1.0
-            break
-    return t, evals, leaves, d, gx, gy, gz
+    beam = block_rays(cam, tile[0], tile[1], tile[2], tile[3])
+    t_in, t_out = ray_box(beam[0], beam[1], beam[2], beam[3], beam[4], beam[5], limits[0],
+                          limits[1])
+    return cone_march(sc, beam, limits, work, relax, 0.0, t_out, 1.0)
 
 
 @numba.njit(**NJIT)
@@ -643,12 +641,11 @@ def cone_newton_step(t_min, D, gx, gy, gz, beam, ray):
     return min((cu - D) / gv, t_min + NEWTON_CAP * d_lb), d_lb
 
 
-@numba.njit(**NJIT)
-def cone_end(tree, roots, params, mode, tol, cam, lo, hi, eps, r_lo, r_hi, c_lo, c_hi, stack,
-             dstack, relax=RELAX):
-    """Conservative common end depth for the rays of pixels ``[r_lo, r_hi) x [c_lo, c_hi)``:
-    :func:`cone_start` run backwards, from the depth beyond which every ray has left the box
-    (:func:`~tracer.rendering.camera.far_depth`) towards the camera.
+@numba.njit(**NJIT_IR_INLINE)
+def cone_end(sc, cam, limits, tile, work, relax):
+    """Conservative common end depth for the rays of the pixels of ``tile`` (arguments as
+    :func:`cone_start`'s): :func:`cone_start` run backwards, from the depth beyond which every
+    ray has left the box (:func:`~tracer.rendering.camera.far_depth`) towards the camera.
 
     Every ray of the block is surface-free from the returned ``t_end`` on: beyond that
     depth a point is outside the box (no surface there), and each step ``t -= D - w(t)``
@@ -658,19 +655,35 @@ def cone_end(tree, roots, params, mode, tol, cam, lo, hi, eps, r_lo, r_hi, c_lo,
     the growing distances behind the silhouette. Stops when the step falls below a quarter
     of ``D`` (or ``eps``), or the cone reaches the camera. Returns ``(t_end, evaluations,
     leaves)``."""
-    ox, oy, oz, ux, uy, uz, near, spread = block_rays(cam, r_lo, r_hi, c_lo, c_hi)
-    # every ray is outside the box beyond the camera's far_depth: the cone starts there.
-    # (The loop below is cone_start's, run backwards. One function for both, inlined,
-    # measured 0.45 s more compiling of a first lit render, 16.0 against 15.6 CPU s.)
-    t = far_depth(cam, lo, hi)
+    # every ray is outside the box beyond the camera's far_depth: the cone starts there
+    beam = block_rays(cam, tile[0], tile[1], tile[2], tile[3])
+    t, evals, leaves = cone_march(sc, beam, limits, work, relax,
+                                  far_depth(cam, limits[0], limits[1]), 0.0, -1.0)[:3]
+    return t, evals, leaves
+
+
+@numba.njit(**NJIT)
+def cone_march(sc, beam, limits, work, relax, t, t_out, sign):
+    """The cone passes' march along the central ray of ``beam``
+    (:func:`~tracer.rendering.camera.block_rays`: ``(ox, oy, oz, ux, uy, uz, near, spread)``)
+    from depth ``t``: away from the camera up to ``t_out`` (``sign`` 1.0, :func:`cone_start`),
+    or towards it down to 0 (``sign`` -1.0, :func:`cone_end`), by steps ``D - (near + t
+    spread)``, until one falls below a quarter of ``D`` or ``eps`` (``limits[2]``). One loop for
+    both passes (``sign`` a float, not a bool: numba would compile a literal flag twice).
+    Returns ``(t, evaluations, leaves, D, gx, gy, gz)``: ``D = -1`` past ``t_out``; ``t = 0``
+    at the camera."""
+    mode, tol = sc[3], sc[4]
+    eps = limits[2]
+    ox, oy, oz, ux, uy, uz, near, spread = beam
     evals = 0
     leaves = 0
     loose = mode == MODE_SMOOTH and tol > 0.0 and relax > 0.0
     slack = np.inf if loose else 0.0
+    d = -1.0
+    gx = gy = gz = 0.0
     while evals < CONE_STEPS:
-        d, gx, gy, gz, nn, ll, ob = scene_distance(tree, roots, params, mode, tol,
-                                                   ox + t * ux, oy + t * uy, oz + t * uz,
-                                                   stack, dstack, slack)
+        d, gx, gy, gz, nn, ll, ob = scene_distance(sc, ox + t * ux, oy + t * uy, oz + t * uz,
+                                                   work, slack)
         if loose:
             slack = relax * d
         evals += 1
@@ -678,16 +691,18 @@ def cone_end(tree, roots, params, mode, tol, cam, lo, hi, eps, r_lo, r_hi, c_lo,
         step = d - (near + t * spread)
         if step <= 0.25 * d or step <= eps:
             break
-        t -= step
-        if t <= 0.0:
-            return 0.0, evals, leaves
-    return t, evals, leaves
+        t += sign * step        # exactly t - step for sign -1
+        if sign < 0.0 and t <= 0.0:
+            return 0.0, evals, leaves, d, gx, gy, gz
+        if sign > 0.0 and t > t_out:
+            return t, evals, leaves, -1.0, gx, gy, gz
+    return t, evals, leaves, d, gx, gy, gz
 
 
 @numba.njit(**NJIT)
-def tile_cone(tree, roots, params, mode, tol, cam, lo, hi, eps, r_lo, r_hi, c_lo, c_hi, stack,
-              dstack, relax, newton):
-    """The cone pass of the tile ``[r_lo, r_hi) x [c_lo, c_hi)``, as every tile's rays start.
+def tile_cone(sc, cam, limits, tile, work, relax, newton):
+    """The cone pass of the tile ``tile = (r_lo, r_hi, c_lo, c_hi)``, as every tile's rays
+    start (arguments as :func:`cone_start`'s).
 
     Returns ``(first, t_min, D, gx, gy, gz, evals, leaves)``: ``first`` the tile-local index
     (``(r - r_lo) * (c_hi - c_lo) + c - c_lo``) of the first ray, in row order, that meets the
@@ -696,6 +711,8 @@ def tile_cone(tree, roots, params, mode, tol, cam, lo, hi, eps, r_lo, r_hi, c_lo
     on the central ray when they may seed :func:`cone_newton_step` (``0 < D <= newton`` with
     :data:`CONE_NEWTON`), else ``D = -1``; the cone's evaluations and leaves (booked on the
     ray ``first``). Shared by the CPU tiles and the GPU's tile kernel."""
+    r_lo, r_hi, c_lo, c_hi = tile
+    lo, hi = limits[0], limits[1]
     first = -1
     k = 0
     for r in range(r_lo, r_hi):
@@ -708,32 +725,53 @@ def tile_cone(tree, roots, params, mode, tol, cam, lo, hi, eps, r_lo, r_hi, c_lo
             k += 1
     if first < 0:
         return -1, 0.0, -1.0, 0.0, 0.0, 0.0, 0, 0
-    t_min, evals, leaves, D, gx, gy, gz = cone_start(tree, roots, params, mode, tol, cam, lo,
-                                                     hi, eps, r_lo, r_hi, c_lo, c_hi, stack,
-                                                     dstack, relax)
+    t_min, evals, leaves, D, gx, gy, gz = cone_start(sc, cam, limits, tile, work, relax)
     if not (CONE_NEWTON and 0.0 < D <= newton):
         D = -1.0
     return first, t_min, D, gx, gy, gz, evals, leaves
 
 
 @numba.njit(**NJIT)
-def cone_first_step(cam, r_lo, r_hi, c_lo, c_hi, t_min, D, gx, gy, gz, ray):
-    """``(t_pred, d_lb)`` of a ray ``ray = (ox, oy, oz, dx, dy, dz)`` of the tile from its
-    :func:`tile_cone` result (``D <= 0``: none, ``(0, 0)``); see :func:`cone_newton_step`."""
+def cone_first_step(cam, tile, seed, ray):
+    """``(t_pred, d_lb)`` of a ray ``ray = (ox, oy, oz, dx, dy, dz)`` of the tile ``tile``
+    from its cone passes ``seed = (t_min, t_max, D, gx, gy, gz)`` (:func:`tile_cone`;
+    ``D <= 0``: none, ``(0, 0)``); see :func:`cone_newton_step`."""
+    t_min, t_max, D, gx, gy, gz = seed
     if not D > 0.0:
         return 0.0, 0.0
-    beam = block_rays(cam, r_lo, r_hi, c_lo, c_hi)
+    beam = block_rays(cam, tile[0], tile[1], tile[2], tile[3])
     return cone_newton_step(t_min, D, gx, gy, gz, beam, ray)
 
 
 @numba.njit(**NJIT_IR_INLINE)
-def _render_tile(tree, ray, r_lo, r_hi, c_lo, c_hi, depth_max, out, opts):
-    """Trace the pixels ``r_lo <= r < r_hi, c_lo <= c < c_hi`` of one tile (see
-    :func:`render_rows`; ``tree``, ``ray``, ``out``, ``opts`` as there)."""
-    roots, params, mode, tol, cam, lo, hi, eps, max_steps = ray
+def scene_of(tree, ray):
+    """The scene ``sc = (tree, roots, params, mode, tol)`` the distance kernels take, from the
+    tree and :class:`tracer.rendering.frame.MarchArgs` (or its plain tuple: the GPU's)."""
+    return (tree, ray[0], ray[1], ray[2], ray[3])
+
+
+@numba.njit(**NJIT_IR_INLINE)
+def limits_of(ray):
+    """The march's ``limits = (lo, hi, eps, max_steps)`` in
+    :class:`tracer.rendering.frame.MarchArgs` ``ray``."""
+    return (ray[5], ray[6], ray[7], ray[8])
+
+
+@numba.njit(**NJIT_IR_INLINE)
+def scratch(depth_max):
+    """``work = (stack, dstack)``, the traversal scratch of a tree of depth ``depth_max``."""
+    return (np.empty(depth_max + 4, dtype=np.int64), np.empty(depth_max + 4))
+
+
+@numba.njit(**NJIT_IR_INLINE)
+def _render_tile(tree, ray, tile, depth_max, out, opts):
+    """Trace the pixels ``r_lo <= r < r_hi, c_lo <= c < c_hi`` of one tile ``tile = (r_lo,
+    r_hi, c_lo, c_hi)`` (see :func:`render_rows`; ``tree``, ``ray``, ``out``, ``opts`` as
+    there)."""
+    sc = scene_of(tree, ray)
+    cam = ray[4]
     relax, omega, cone, newton = opts
-    stack = np.empty(depth_max + 4, dtype=np.int64)
-    dstack = np.empty(depth_max + 4)
+    work = scratch(depth_max)
     first = -1
     t_min = 0.0
     t_max = np.inf
@@ -742,21 +780,18 @@ def _render_tile(tree, ray, r_lo, r_hi, c_lo, c_hi, depth_max, out, opts):
     c_ev0 = c_lv0 = 0
     if cone:
         first, t_min, D, cgx, cgy, cgz, c_ev0, c_lv0 = tile_cone(
-            tree, roots, params, mode, tol, cam, lo, hi, eps, r_lo, r_hi, c_lo, c_hi, stack,
-            dstack, relax, newton)
+            sc, cam, limits_of(ray), tile, work, relax, newton)
     pending_end = cone
-    tile = (r_lo, r_hi, c_lo, c_hi)
-    seed = (t_min, D, cgx, cgy, cgz)
     k = 0
-    for r in range(r_lo, r_hi):
-        for c in range(c_lo, c_hi):
+    for r in range(tile[0], tile[1]):
+        for c in range(tile[2], tile[3]):
             c_ev = c_ev0 if k == first else 0
             c_lv = c_lv0 if k == first else 0
             k += 1
-            res = march_pixel(tree, ray, opts, r, c, tile, seed, t_max, stack, dstack)
+            res = march_pixel(tree, ray, opts, (r, c), tile, (t_min, t_max, D, cgx, cgy, cgz),
+                              work)
             if res[0] == 0 and pending_end and res[5] > END_AFTER:
-                t_max, e_ev, e_lv = cone_end(tree, roots, params, mode, tol, cam, lo, hi, eps,
-                                             r_lo, r_hi, c_lo, c_hi, stack, dstack, relax)
+                t_max, e_ev, e_lv = cone_end(sc, cam, limits_of(ray), tile, work, relax)
                 c_ev += e_ev
                 c_lv += e_lv
                 pending_end = False
@@ -764,23 +799,19 @@ def _render_tile(tree, ray, r_lo, r_hi, c_lo, c_hi, depth_max, out, opts):
 
 
 @numba.njit(**NJIT_IR_INLINE)
-def march_pixel(tree, ray, opts, r, c, tile, seed, t_max, stack, dstack):
-    """The camera ray of pixel ``(r, c)`` of the tile ``tile = (r_lo, r_hi, c_lo, c_hi)``,
-    marched from the tile's cone pass ``seed = (t_min, D, gx, gy, gz)`` (:func:`tile_cone`;
-    ``D <= 0``: no first-step prediction) and ended at ``t_max``: :func:`march_ray`'s nine
-    values. ``ray``: :class:`tracer.rendering.frame.MarchArgs`; ``opts``:
-    :class:`tracer.rendering.frame.TraceOptions`. The one per-pixel path of the CPU's tiles and
-    the GPU's render kernel."""
-    roots, params, mode, tol, cam, lo, hi, eps, max_steps = ray
+def march_pixel(tree, ray, opts, pixel, tile, seed, work):
+    """The camera ray of pixel ``pixel = (r, c)`` of the tile ``tile = (r_lo, r_hi, c_lo,
+    c_hi)``, marched from the tile's cone passes ``seed = (t_min, t_max, D, gx, gy, gz)``
+    (:func:`tile_cone`, :func:`cone_end`; ``D <= 0``: no first-step prediction):
+    :func:`march_ray`'s nine values. ``ray``: :class:`tracer.rendering.frame.MarchArgs`;
+    ``opts``: :class:`tracer.rendering.frame.TraceOptions`. The one per-pixel path of the
+    CPU's tiles and the GPU's render kernel."""
     relax, omega, cone, newton = opts
-    t_min, D, gx, gy, gz = seed
-    pr = camera_ray(cam, float(r), float(c))
-    ox, oy, oz, dx, dy, dz = pr
-    t_pred, d_lb = cone_first_step(cam, tile[0], tile[1], tile[2], tile[3], t_min, D, gx, gy,
-                                   gz, pr)
-    return march_ray(tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, lo, hi, eps,
-                     max_steps, stack, dstack, relax, omega, t_min, newton, t_max, NEWTON_COS,
-                     t_pred, d_lb)
+    cam = ray[4]
+    pr = camera_ray(cam, float(pixel[0]), float(pixel[1]))
+    t_pred, d_lb = cone_first_step(cam, tile, seed, pr)
+    return march_ray(scene_of(tree, ray), pr, limits_of(ray), (relax, omega, newton, NEWTON_COS),
+                     (seed[0], seed[1], t_pred, d_lb), work)
 
 
 @numba.njit(**NJIT_IR_INLINE)
@@ -789,32 +820,42 @@ def store_pixel(out, r, c, res, evals, leaves):
     (:class:`tracer.rendering.frame.PixelBuffers`), with ``evals`` and ``leaves`` of the
     tile's cone passes added to the pixel's own."""
     hit, tbuf, grad, steps, lvs, bisect, objs = out
-    h, t, gx, gy, gz, st, lv, bs, ob = res
-    hit[r, c] = h == 1
-    tbuf[r, c] = t
-    grad[r, c, 0] = gx
-    grad[r, c, 1] = gy
-    grad[r, c, 2] = gz
-    steps[r, c] = st + evals
-    lvs[r, c] = lv + leaves
-    bisect[r, c] = bs
-    objs[r, c] = ob
+    store_ray((hit, tbuf, grad, steps, objs), r, c, res, evals)
+    lvs[r, c] = res[6] + leaves
+    bisect[r, c] = res[7]
+
+
+@numba.njit(**NJIT_IR_INLINE)
+def store_ray(buffers, r, c, res, evals):
+    """Write :func:`march_ray`'s result ``res`` into entry ``(r, c)`` of ``buffers = (hit,
+    tbuf, grad, steps, objs)`` (a pixel of :func:`store_pixel`'s image, or a sample of
+    :func:`sample_ray`'s pixel), with ``evals`` added to its steps."""
+    hit, tbuf, grad, steps, objs = buffers
+    hit[r, c] = res[0] == 1
+    tbuf[r, c] = res[1]
+    grad[r, c, 0] = res[2]
+    grad[r, c, 1] = res[3]
+    grad[r, c, 2] = res[4]
+    steps[r, c] = res[5] + evals
+    objs[r, c] = res[8]
 
 
 @numba.njit(**NJIT)
-def _tile_grid(cam, row0, row1):
-    """Tiles of rows ``row0 <= r < row1``: ``(image width, tiles per row, number of tiles,
-    stride of the scattered visiting order)``."""
+def _tile_grid(cam, band):
+    """Tiles of rows ``row0 <= r < row1`` (``band = (row0, row1)``): ``(image width, tiles
+    per row, number of tiles, stride of the scattered visiting order)``."""
     W = image_size(cam)[0]
     ntx = (W + TILE - 1) // TILE
-    n = ntx * ((row1 - row0 + TILE - 1) // TILE)
+    n = ntx * ((band[1] - band[0] + TILE - 1) // TILE)
     return W, ntx, n, (STRIDE if n % STRIDE != 0 else 1)
 
 
 @numba.njit(**NJIT)
-def _tile_rect(j, n, stride, ntx, row0, row1, W):
+def _tile_rect(j, grid, band):
     """Pixel rectangle ``(r_lo, r_hi, c_lo, c_hi)`` of the ``j``-th tile visited (tile
-    ``j * stride mod n``, see :func:`render_rows`)."""
+    ``j * stride mod n``, see :func:`render_rows`; ``grid``: :func:`_tile_grid`'s)."""
+    W, ntx, n, stride = grid
+    row0, row1 = band
     tile = (j * stride) % n
     ty = tile // ntx
     tx = tile - ty * ntx
@@ -823,8 +864,9 @@ def _tile_rect(j, n, stride, ntx, row0, row1, W):
 
 
 @numba.njit(**NJIT_PARALLEL)
-def render_rows(tree, ray, row0, row1, depth_max, out, opts):
-    """Trace rows ``row0 <= r < row1`` of the image into the per-pixel output arrays.
+def render_rows(tree, ray, band, depth_max, out, opts):
+    """Trace rows ``row0 <= r < row1`` (``band = (row0, row1)``) of the image into the
+    per-pixel output arrays.
 
     ``tree``: the scene's (forest of) trees; ``ray``:
     :class:`tracer.rendering.frame.MarchArgs` (the rest of the scene's arrays, the camera,
@@ -844,49 +886,55 @@ def render_rows(tree, ray, row0, row1, depth_max, out, opts):
     are visited in a scattered order (``j * STRIDE mod n``) so that the static split of the
     loop between threads gives each thread a similar mix of empty and busy tiles.
     """
-    n = _tile_grid(ray.cam, row0, row1)[2]
+    n = _tile_grid(ray.cam, band)[2]
     for j in prange(n):
         # a call of the serial kernel, not its code inlined into the parallel loop: numba's
         # parfors marched no ray with the per-pixel functions inlined here
-        render_tiles(tree, ray, row0, row1, depth_max, out, opts, j, j + 1)
+        render_tiles(tree, ray, band, depth_max, out, opts, j, j + 1)
 
 
 @numba.njit(**NJIT)
-def distance_at(tree, roots, params, mode, tol, x, y, z, depth_max):
-    """Scene distance at one point (used to check that the camera is outside the surface)."""
-    stack = np.empty(depth_max + 4, dtype=np.int64)
-    dstack = np.empty(depth_max + 4)
-    return scene_distance(tree, roots, params, mode, tol, x, y, z, stack, dstack, 0.0)[0]
+def distance_at(sc, x, y, z, depth_max):
+    """Scene distance at one point (used to check that the camera is outside the surface);
+    ``sc`` as in :func:`scene_distance`."""
+    return scene_distance(sc, x, y, z, scratch(depth_max), 0.0)[0]
 
 
 @numba.njit(**NJIT_PARALLEL)
-def trace_pixels(tree, ray, rows, cols, depth_max, hit, tbuf, steps, leaves, relax=RELAX,
-                 omega=OMEGA, newton=0.0):
+def trace_pixels(tree, ray, rows, cols, depth_max, out, opts):
     """Trace only the pixels ``(rows[i], cols[i])`` (e.g. a subsample for an expensive
-    reference render); outputs ``hit, tbuf, steps, leaves`` have the shape of ``rows``;
-    ``tree``, ``ray`` as in :func:`render_rows`."""
-    roots, params, mode, tol, cam, lo, hi, eps, max_steps = ray
+    reference render), from the camera (no cone pass: ``opts.cone`` is not read); ``out =
+    (hit, tbuf, steps, leaves)`` have the shape of ``rows``; ``tree``, ``ray``, ``opts`` as in
+    :func:`render_rows`."""
     for i in prange(rows.size):
-        stack = np.empty(depth_max + 4, dtype=np.int64)
-        dstack = np.empty(depth_max + 4)
-        ox, oy, oz, dx, dy, dz = camera_ray(cam, float(rows[i]), float(cols[i]))
-        h, t, gx, gy, gz, st, lv, bs, ob = march_ray(tree, roots, params, mode, tol, ox,
-                                                     oy, oz, dx, dy, dz, lo, hi, eps,
-                                                     max_steps, stack, dstack, relax, omega, 0.0,
-                                                     newton)
-        hit[i] = h == 1
-        tbuf[i] = t
-        steps[i] = st
-        leaves[i] = lv
+        # a call, not code inlined into the parallel loop: numba's parfors marched no ray
+        # with the march's tuples built here
+        _trace_pixel(tree, ray, (rows[i], cols[i]), depth_max, out, opts, i)
+
+
+@numba.njit(**NJIT)
+def _trace_pixel(tree, ray, pixel, depth_max, out, opts, i):
+    """Pixel ``pixel = (r, c)`` of :func:`trace_pixels`, into entry ``i`` of ``out``."""
+    hit, tbuf, steps, leaves = out
+    relax, omega, cone, newton = opts
+    pr = camera_ray(ray[4], float(pixel[0]), float(pixel[1]))
+    h, t, gx, gy, gz, st, lv, bs, ob = march_ray(
+        scene_of(tree, ray), pr, limits_of(ray), (relax, omega, newton, NEWTON_COS), PLAIN_SPAN,
+        scratch(depth_max))
+    hit[i] = h == 1
+    tbuf[i] = t
+    steps[i] = st
+    leaves[i] = lv
 
 
 @numba.njit(**NJIT_PARALLEL)
-def trace_samples(tree, ray, rows, cols, offsets, depth_max, out, opts, eps_px=0.0,
-                  newton_cos=NEWTON_COS, ntasks=1):
-    """Trace anti-aliasing samples: for pixel ``(rows[i], cols[i])`` the rays through
+def trace_samples(tree, ray, samples, depth_max, out, opts, ntasks):
+    """Trace anti-aliasing samples: ``samples``
+    (:class:`tracer.rendering.frame.SampleRays`: ``rows, cols (m,)``, ``offsets (K, 2)``,
+    ``eps_px``, ``newton_cos``); for pixel ``(rows[i], cols[i])`` the rays through
     ``(rows[i] + offsets[k, 0], cols[i] + offsets[k, 1])`` for every ``k``.
 
-    ``offsets (K, 2)`` lie within one pixel of the pixel's own ray (``|offset| <= 1`` per
+    ``offsets`` lie within one pixel of the pixel's own ray (``|offset| <= 1`` per
     axis), so one cone pass over the pixel's 3 x 3 block from the camera (:func:`cone_start`)
     and one from beyond the box (:func:`cone_end`) bound the part of all ``K`` rays that can
     meet the surface: ``[t_lo[i], t_hi[i]]``. ``t_lo, t_hi (m,)`` are read when finite (from
@@ -903,101 +951,82 @@ def trace_samples(tree, ray, rows, cols, offsets, depth_max, out, opts, eps_px=0
     ``eps_px >= 0``: the hit threshold of these rays is at least ``eps_px`` pixels, measured at
     the cone's start depth (a lower bound of any hit's depth): a sample only decides how much
     of the pixel is covered, and a ray that comes within a fraction of a pixel of the surface
-    covers it.
+    covers it. ``newton_cos``: as :data:`NEWTON_COS`, for these rays.
     """
-    ntasks = max(1, min(rows.size, ntasks))
+    ntasks = max(1, min(samples[0].size, ntasks))
     for task in prange(ntasks):
         # a call, not code inlined into the parallel loop: numba's parfors marched no ray with
         # the per-pixel functions inlined here
-        sample_tasks(tree, ray, rows, cols, offsets, depth_max, out, opts, eps_px, newton_cos,
-                     ntasks, task, task + 1)
+        sample_tasks(tree, ray, samples, depth_max, out, opts, (ntasks, task, task + 1))
 
 
 @numba.njit(**NJIT)
-def sample_tasks(tree, ray, rows, cols, offsets, depth_max, out, opts, eps_px, newton_cos,
-                 ntasks, task0, task1):
-    """Tasks ``task0 <= task < task1`` of :func:`trace_samples` (``ntasks`` of them; every
-    argument is required here), serial and ``nogil``, for Python threads
+def sample_tasks(tree, ray, samples, depth_max, out, opts, tasks):
+    """Tasks ``task0 <= task < task1`` of :func:`trace_samples`'s ``ntasks`` (``tasks =
+    (ntasks, task0, task1)``), serial and ``nogil``, for Python threads
     (``smoothdist.schedule.run_tasks``): the same values, and no ``prange`` to compile."""
+    ntasks, task0, task1 = tasks
     tree = borrowed(tree)
     ray = borrowed(ray)
+    work = scratch(depth_max)
+    n = samples[0].size
     for task in range(task0, task1):
-        _samples_task(tree, ray, rows, cols, offsets, depth_max, out, opts, eps_px, newton_cos,
-                      task, ntasks)
+        for i in range(task, n, ntasks):    # every ntasks-th pixel
+            # its cone bounds, then its rays: the GPU's threads call the same two functions
+            sample_bounds(tree, ray, samples, out, opts, i, work)
+            for k in range(samples[2].shape[0]):
+                sample_ray(tree, ray, samples, out, opts, i, k, work)
 
 
 @numba.njit(**NJIT_IR_INLINE)
-def _samples_task(tree, ray, rows, cols, offsets, depth_max, out, opts, eps_px, newton_cos, task,
-                  ntasks):
-    """Pixels ``task, task + ntasks, ...`` of :func:`trace_samples`."""
-    n = rows.size
-    stack = np.empty(depth_max + 4, dtype=np.int64)
-    dstack = np.empty(depth_max + 4)
-    for i in range(task, n, ntasks):    # every ntasks-th pixel
-        # its cone bounds, then its rays: the GPU's threads call the same two functions
-        c_ev = sample_bounds(tree, ray, rows, cols, out, opts, i, stack, dstack)
-        for k in range(offsets.shape[0]):
-            sample_ray(tree, ray, rows, cols, offsets, out, opts, eps_px, newton_cos, i, k,
-                       c_ev if k == 0 else 0, stack, dstack)
-
-
-@numba.njit(**NJIT_IR_INLINE)
-def sample_bounds(tree, ray, rows, cols, out, opts, i, stack, dstack):
+def sample_bounds(tree, ray, samples, out, opts, i, work):
     """The cone bounds ``out.t_lo[i]``, ``out.t_hi[i]`` of pixel ``i`` of
-    :func:`trace_samples` where they are not given (without the cone: ``0`` and ``inf``);
-    returns the distance evaluations they took (int, booked on the pixel's sample 0)."""
-    roots, params, mode, tol, cam, lo, hi, eps, max_steps = ray
+    :func:`trace_samples` where they are not given (without the cone: ``0`` and ``inf``), and
+    the distance evaluations they took in ``out.steps[i, 0]`` (0 when given), which
+    :func:`sample_ray` adds to the pixel's sample 0."""
     t_lo = out[5]
     t_hi = out[6]
     relax, omega, cone, newton = opts
-    r = rows[i]
-    c = cols[i]
+    r = samples[0][i]
+    c = samples[1][i]
     c_ev = 0
     if cone and not (math.isfinite(t_lo[i]) and math.isfinite(t_hi[i])):   # CUDA: no ufunc
-        t_lo[i], ev = cone_start(tree, roots, params, mode, tol, cam, lo, hi, eps,
-                                 r - 1, r + 2, c - 1, c + 2, stack, dstack, relax)[:2]
+        sc = scene_of(tree, ray)
+        block = (r - 1, r + 2, c - 1, c + 2)
+        t_lo[i], ev = cone_start(sc, ray[4], limits_of(ray), block, work, relax)[:2]
         c_ev += ev
-        t_hi[i], ev, lv = cone_end(tree, roots, params, mode, tol, cam, lo, hi, eps, r - 1,
-                                   r + 2, c - 1, c + 2, stack, dstack, relax)
+        t_hi[i], ev, lv = cone_end(sc, ray[4], limits_of(ray), block, work, relax)
         c_ev += ev
     elif not cone:
         t_lo[i] = 0.0
         t_hi[i] = np.inf
-    return c_ev
+    out[3][i, 0] = c_ev
 
 
 @numba.njit(**NJIT_IR_INLINE)
-def sample_ray(tree, ray, rows, cols, offsets, out, opts, eps_px, newton_cos, i, k, c_ev,
-               stack, dstack):
+def sample_ray(tree, ray, samples, out, opts, i, k, work):
     """Ray ``k`` (``offsets[k]``) of pixel ``i`` of :func:`trace_samples`, from the pixel's
-    cone bounds (:func:`sample_bounds`, done); ``c_ev``: evaluations added to its steps."""
-    roots, params, mode, tol, cam, lo, hi, eps, max_steps = ray
+    cone bounds (:func:`sample_bounds`, done; its evaluations, in ``out.steps[i, 0]``, are
+    added to sample 0's)."""
     hit, tbuf, grad, steps, objs, t_lo, t_hi = out
     relax, omega, cone, newton = opts
+    rows, cols, offsets, eps_px, newton_cos = samples
+    cam = ray[4]
+    lo, hi, eps, max_steps = limits_of(ray)
     near_px, pixel = footprint(cam)      # a pixel's size at depth t: near_px + pixel t
     t_min = t_lo[i]
     e = max(eps, eps_px * pixel * t_min + eps_px * near_px)
-    ox, oy, oz, dx, dy, dz = camera_ray(cam, rows[i] + offsets[k, 0], cols[i] + offsets[k, 1])
-    # every argument given (t_pred and d_lb at their defaults' values): the camera
-    # rays' specialisation of march_ray, compiled once for both
-    h, t, gx, gy, gz, st, lv, bs, ob = march_ray(
-        tree, roots, params, mode, tol, ox, oy, oz, dx, dy, dz, lo, hi,
-        e, max_steps, stack, dstack, relax, omega, t_min, newton, t_hi[i],
-        newton_cos, 0.0, 0.0)
-    hit[i, k] = h == 1
-    tbuf[i, k] = t
-    grad[i, k, 0] = gx
-    grad[i, k, 1] = gy
-    grad[i, k, 2] = gz
-    steps[i, k] = st + c_ev
-    objs[i, k] = ob
+    pr = camera_ray(cam, rows[i] + offsets[k, 0], cols[i] + offsets[k, 1])
+    res = march_ray(scene_of(tree, ray), pr, (lo, hi, e, max_steps),
+                    (relax, omega, newton, newton_cos), (t_min, t_hi[i], 0.0, 0.0), work)
+    store_ray((hit, tbuf, grad, steps, objs), i, k, res, steps[i, 0] if k == 0 else 0)
 
 
 @numba.njit(**NJIT)
-def render_tiles(tree, ray, row0, row1, depth_max, out, opts, j0, j1):
-    """Trace tiles ``j0 <= j < j1`` of :func:`render_rows`' tile order for rows
-    ``row0 <= r < row1``, in the calling thread (same arguments and outputs as
-    ``render_rows``; ``relax, omega, cone, newton`` are required here).
+def render_tiles(tree, ray, band, depth_max, out, opts, j0, j1):
+    """Trace tiles ``j0 <= j < j1`` of :func:`render_rows`' tile order for the rows of
+    ``band = (row0, row1)``, in the calling thread (same arguments and outputs as
+    ``render_rows``).
 
     Serial and ``nogil``: ``tracer.rendering.renderer`` runs it from a few Python threads that take
     chunks of tiles as they finish (the tiles, hence the pixels, are exactly those of
@@ -1006,7 +1035,6 @@ def render_tiles(tree, ray, row0, row1, depth_max, out, opts, j0, j1):
     """
     tree = borrowed(tree)
     ray = borrowed(ray)
-    W, ntx, n, stride = _tile_grid(ray.cam, row0, row1)
-    for j in range(j0, min(j1, n)):
-        r_lo, r_hi, c_lo, c_hi = _tile_rect(j, n, stride, ntx, row0, row1, W)
-        _render_tile(tree, ray, r_lo, r_hi, c_lo, c_hi, depth_max, out, opts)
+    grid = _tile_grid(ray.cam, band)
+    for j in range(j0, min(j1, grid[2])):
+        _render_tile(tree, ray, _tile_rect(j, grid, band), depth_max, out, opts)

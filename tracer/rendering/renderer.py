@@ -24,7 +24,7 @@ from tracer.rendering.shading import load_matcap
 from tracer.rendering.threads import in_bands, render_threads
 from tracer.stages import stage
 
-__all__ = ["render", "trace_tiles", "CHUNKS_PER_THREAD"]
+__all__ = ["render", "trace_tiles", "ray_args", "CHUNKS_PER_THREAD"]
 
 
 def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None, omega=None,
@@ -90,14 +90,11 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
     camera = camera_of(scene)
     arrays = scene_arrays(scene, transforms)
     tree, roots, params, mode, lo, hi, depth_max, tol = arrays
-    march_ = scene.march
     check_camera_outside(scene, arrays)
     film = scene.film
     H, W = film.height, film.width
     hit, tbuf, grad, steps, leaves, bis, objs = pixel_buffers(H, W)
-    cam = camera.as_array()
-    args = RayArgs(tree, kernel_roots(roots, params, mode, tol), params, mode, tol, cam, lo, hi,
-                   float(march_.eps), int(march_.max_steps))
+    args = ray_args(scene, camera, arrays)
     options = trace_options(scene, lo, hi, relax, omega, cone)
     band = band_rows or H
     t0 = time.perf_counter()
@@ -144,6 +141,15 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
     return RenderResult(rgb=rgb, hit=hit, depth=depth, normals=normals, steps=steps,
                         leaves=leaves, bisections=bis, seconds=seconds, camera=camera,
                         scene=scene, alpha=alpha, samples=spp, aovs=aovs)
+
+
+def ray_args(scene, camera, arrays):
+    """The march kernels' :class:`~tracer.rendering.frame.RayArgs` of a render of ``scene``
+    with ``camera`` and ``arrays`` (:func:`~tracer.rendering.frame.scene_arrays`)."""
+    tree, roots, params, mode, lo, hi, depth_max, tol = arrays
+    return RayArgs(tree, kernel_roots(roots, params, mode, tol), params, mode, tol,
+                   camera.as_array(), lo, hi, float(scene.march.eps),
+                   int(scene.march.max_steps))
 
 
 #: the share of a render's progress bar given to its film (light, samples) when it has one
@@ -215,7 +221,7 @@ def trace_tiles(args, row0, row1, depth_max, outputs, options, report=None, thre
                     if j >= n or state["stop"]:
                         return
                     state["next"] = j + chunk
-                march.render_tiles(args.tree, args.march, row0, row1, depth_max, outputs,
+                march.render_tiles(args.tree, args.march, (row0, row1), depth_max, outputs,
                                    options, j, j + chunk)
                 with lock:
                     state["done"] += min(chunk, n - j)

@@ -28,7 +28,7 @@ from tracer.rendering.camera import primary_rays
 from tracer.rendering.lighting import (AO_SAMPLES, Lighting, ambient_occlusion, light_directions,
                              linear_to_srgb, shade_ground, shade_lit, soft_shadow,
                              srgb_to_linear)
-from tracer.rendering.frame import camera_of, kernel_roots, scene_arrays
+from tracer.rendering.frame import LightArgs, camera_of, kernel_roots, scene_arrays
 from tracer.rendering.renderer import render
 from tracer.scenes.scene import Scene, SceneObject, default_eps, load_scene, scene_from_field
 
@@ -202,8 +202,10 @@ def test_soft_shadow_kernel_against_the_cone_test():
     P = np.c_[rng.uniform(-1.5, 3.0, 300), np.full(300, 1e-3), rng.uniform(-2.0, 2.0, 300)]
     lo = np.array(lo)
     lo[1] = -1.0                                  # the box reaches the ground
-    got = np.array([soft_shadow(*args, *p, *L, lo, hi, scene.eps, 1e-3, k, stack, dstack)[0]
-                    for p in P])
+    # t_judge -1: a surface point's own (SHADOW_JUDGE x t_min)
+    light = LightArgs(np.asarray(L, float), lo, np.asarray(hi, float), float(scene.eps), k, 0.1,
+                      True, True, 0.0, 1e-3, -1.0)
+    got = np.array([soft_shadow(args, tuple(p), light, (stack, dstack))[0] for p in P])
     ref = soft_shadow_reference(P, L, BALL_C, BALL_R, k)
     assert (ref == 0).sum() > 20 and (ref == 1).sum() > 100 and ((ref > 0) & (ref < 1)).sum() > 5
     assert (got[ref == 0] == 0).all() and (got[ref == 1] == 1).all()
@@ -230,7 +232,7 @@ def test_ambient_occlusion_kernel_is_the_formula():
     normals = [np.array([np.cos(a), 0.0, np.sin(a)]) for a in angles]
     points = [(p, np.array([0.0, 0.0, 1.0])) for p in ground] + \
              [(REST_C + R * n, n) for n in normals]
-    got = np.array([ambient_occlusion(*args, *p, *n, delta, stack, dstack, 0.0)[0]
+    got = np.array([ambient_occlusion(args, tuple(p), tuple(n), delta, (stack, dstack), 0.0)[0]
                     for p, n in points])
     ref = np.array([ao_reference(p, n, delta) for p, n in points])
     np.testing.assert_allclose(got, ref, atol=1e-9)

@@ -17,6 +17,7 @@
 
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -24,14 +25,16 @@ import pytest
 from smoothdist import DataMesh, SmoothDistanceField
 from tracer.rendering import march
 from tracer.rendering.camera import block_rays, camera_ray, primary_rays
-from tracer.rendering.frame import MarchArgs, SampleBuffers, TraceOptions
+from tracer.rendering.frame import MarchArgs, SampleBuffers, SampleRays, TraceOptions
 from tracer.cli import main
 from tracer.image import load_png
 from tracer.rendering.frame import camera_of, scene_arrays
 from tracer.rendering.renderer import render
 from tracer.errors import SceneError
 from tracer.scenes.scene import load_scene, scene_from_field
-from test_query_tol import BUNNY, ROOT
+
+ROOT = Path(__file__).resolve().parents[3]
+BUNNY = ROOT / "scenes" / "data" / "bunny.off"
 
 SCENES = ROOT / "scenes"
 
@@ -107,7 +110,7 @@ def test_newton_steps_against_plain(request, bunny_points, case):
     rr, cc = np.nonzero(fast.hit)
     for r, c in list(zip(rr, cc))[::7]:
         p = cam.origin + float(fast.depth[r, c]) * rays[r, c]
-        d = march.distance_at(tree, roots, params, mode, tol, p[0], p[1], p[2], depth_max)
+        d = march.distance_at((tree, roots, params, mode, tol), p[0], p[1], p[2], depth_max)
         assert abs(d) <= eps * (1 + 1e-3) + 1e-6 * field.diagonal, (r, c, d / eps)
     # against a plain render with a 1000x tighter eps: at least as close as plain sphere
     # tracing at the same eps (which stops up to eps / cos before the surface); on a
@@ -139,8 +142,9 @@ def test_trace_pixels_equals_render(bunny_points):
     leaves = np.zeros(5, dtype=np.int64)
     ray = MarchArgs(roots, params, mode, tol, camera_of(scene).as_array(), lo, hi,
                     float(scene.eps), int(scene.max_steps))
-    march.trace_pixels(tree, ray, rows, cols, depth_max, hit, t, steps, leaves, march.RELAX,
-                       march.OMEGA, march.newton_distance(scene.eps, lo, hi))
+    march.trace_pixels(tree, ray, rows, cols, depth_max, (hit, t, steps, leaves),
+                       TraceOptions(march.RELAX, march.OMEGA, False,
+                                    march.newton_distance(scene.eps, lo, hi)))
     np.testing.assert_array_equal(hit, full.hit[rows, cols])
     np.testing.assert_array_equal(t.astype(np.float32), full.depth[rows, cols])
     np.testing.assert_array_equal(steps, full.steps[rows, cols])
@@ -389,8 +393,9 @@ def _plain_first_hit(arrays, cam, r, c, eps, max_steps):
     stack = np.empty(depth_max + 4, dtype=np.int64)
     dstack = np.empty(depth_max + 4)
     ray = camera_ray(cam, r, c)
-    h, t, *_ = march.march_ray(tree, roots, params, mode, tol, *ray, lo, hi, eps, max_steps,
-                               stack, dstack, 0.0, 1.0, 0.0, 0.0)
+    h, t, *_ = march.march_ray((tree, roots, params, mode, tol), ray, (lo, hi, eps, max_steps),
+                               (0.0, 1.0, 0.0, march.NEWTON_COS), march.PLAIN_SPAN,
+                               (stack, dstack))
     return t if h == 1 else np.inf
 
 
@@ -417,10 +422,10 @@ def test_cone_end_bounds_every_ray_of_the_block(kind, bunny_points):
     rng = np.random.default_rng(4)
     shortened = 0
     for r, c in list(zip(rr, cc))[::2]:
-        t_lo = march.cone_start(tree, roots, params, mode, tol, cam, lo, hi, scene.eps,
-                                r - 1, r + 2, c - 1, c + 2, stack, dstack)[0]
-        t_hi, _, _ = march.cone_end(tree, roots, params, mode, tol, cam, lo, hi, scene.eps,
-                                    r - 1, r + 2, c - 1, c + 2, stack, dstack)
+        cone = ((tree, roots, params, mode, tol), cam, (lo, hi, scene.eps, 4000),
+                (r - 1, r + 2, c - 1, c + 2), (stack, dstack), march.RELAX)
+        t_lo = march.cone_start(*cone)[0]
+        t_hi, _, _ = march.cone_end(*cone)
         assert t_lo <= t_hi
         exits = []
         for dr, dc in [(0, 0), (-1, -1), (1, 1), (-1, 1), (1, -1)] + \
@@ -461,16 +466,14 @@ def test_samples_are_bounds_then_rays(bunny_points, cone):
                              np.full(m, np.nan))
 
     whole = buffers()
-    march.trace_samples(tree, ray, rows, cols, offsets, depth_max, whole, opts, 0.02,
-                        SAMPLE_NEWTON_COS, 3)
+    samples = SampleRays(rows, cols, offsets, 0.02, SAMPLE_NEWTON_COS)
+    march.trace_samples(tree, ray, samples, depth_max, whole, opts, 3)
     parts = buffers()
-    stack = np.empty(depth_max + 4, np.int64)
-    dstack = np.empty(depth_max + 4)
+    work = (np.empty(depth_max + 4, np.int64), np.empty(depth_max + 4))
     for i in range(m):
-        c_ev = march.sample_bounds(tree, ray, rows, cols, parts, opts, i, stack, dstack)
+        march.sample_bounds(tree, ray, samples, parts, opts, i, work)
         for k in range(K):
-            march.sample_ray(tree, ray, rows, cols, offsets, parts, opts, 0.02,
-                             SAMPLE_NEWTON_COS, i, k, c_ev if k == 0 else 0, stack, dstack)
+            march.sample_ray(tree, ray, samples, parts, opts, i, k, work)
     assert whole.hit.any() and not whole.hit.all()       # silhouettes and misses among them
     assert [a.tobytes() for a in parts] == [a.tobytes() for a in whole]
 
@@ -502,10 +505,10 @@ def test_samples_equal_a_plain_march(bunny_points, newton):
         steps = np.zeros((m, k), dtype=np.int64)
         objs = np.full((m, k), -1, dtype=np.int32)
         march.trace_samples(
-            tree, MarchArgs(roots, params, mode, tol, cam, lo, hi, float(scene.eps), 4000), rows,
-            cols, np.ascontiguousarray(part), depth_max,
-            SampleBuffers(hit, t, grad, steps, objs, t_lo, t_hi),
-            TraceOptions(march.RELAX, SAMPLE_OMEGA, True, nd), 0.0, SAMPLE_NEWTON_COS)
+            tree, MarchArgs(roots, params, mode, tol, cam, lo, hi, float(scene.eps), 4000),
+            SampleRays(rows, cols, np.ascontiguousarray(part), 0.0, SAMPLE_NEWTON_COS),
+            depth_max, SampleBuffers(hit, t, grad, steps, objs, t_lo, t_hi),
+            TraceOptions(march.RELAX, SAMPLE_OMEGA, True, nd), 1)
         assert ((objs == 0) == hit).all()           # one object: 0 at every hit, -1 elsewhere
         assert np.isfinite(t_lo).all() and np.isfinite(t_hi).all()
         ref = np.array([[_plain_first_hit(arrays, cam, rows[i] + o[0], cols[i] + o[1],
@@ -519,7 +522,7 @@ def test_samples_equal_a_plain_march(bunny_points, newton):
         for i, j in zip(*np.nonzero(hit)):
             ray = np.array(camera_ray(cam, rows[i] + part[j, 0], cols[i] + part[j, 1]))
             p = ray[:3] + t[i, j] * ray[3:]
-            assert march.distance_at(tree, roots, params, mode, tol, *p, depth_max) \
+            assert march.distance_at((tree, roots, params, mode, tol), *p, depth_max) \
                 <= scene.eps * (1 + 1e-9)
         # the steps stop anywhere in the band: within a few eps / cos of plain sphere
         # tracing, except where a ray runs through the band along a stretch that dips below
@@ -544,12 +547,13 @@ def test_an_over_relaxed_step_past_t_max_is_taken_again_plainly():
     stack = np.empty(depth_max + 4, dtype=np.int64)
     dstack = np.empty(depth_max + 4)
     o = np.array([0.0, 0.0, -2.0])
+    sc, pr, limits = (tree, roots, params, mode, tol), (*o, 0.0, 0.0, 1.0), (lo, hi, 1e-6, 200)
     for omega, t_max in ((1.0, np.inf), (1.0, 2.5), (1.9, 2.5), (1.9, 2.01)):
-        h, t, *_ = march.march_ray(tree, roots, params, mode, tol, *o, 0.0, 0.0, 1.0, lo, hi,
-                                   1e-6, 200, stack, dstack, 0.0, omega, 0.0, 0.0, t_max)
+        h, t, *_ = march.march_ray(sc, pr, limits, (0.0, omega, 0.0, march.NEWTON_COS),
+                                   (0.0, t_max, 0.0, 0.0), (stack, dstack))
         assert h == 1 and abs(t - 2.0) < 1e-5, (omega, t_max, h, t)
-    h, t, *_ = march.march_ray(tree, roots, params, mode, tol, *o, 0.0, 0.0, 1.0, lo, hi, 1e-6,
-                               200, stack, dstack, 0.0, 1.9, 0.0, 0.0, 1.99)
+    h, t, *_ = march.march_ray(sc, pr, limits, (0.0, 1.9, 0.0, march.NEWTON_COS),
+                               (0.0, 1.99, 0.0, 0.0), (stack, dstack))
     assert h == 0                                     # the point lies beyond t_max
 
 
@@ -589,6 +593,7 @@ def test_cone_newton_step_against_plain(case, eps_rel, bunny_points):
     cam = camera_of(scene).as_array()
     eps = float(scene.eps)
     nd = march.newton_distance(eps, lo, hi)
+    sc = (tree, roots, params, mode, tol)
     stack = np.empty(depth_max + 4, dtype=np.int64)
     dstack = np.empty(depth_max + 4)
     steps = {"predicted": 0, "plain": 0}
@@ -598,9 +603,9 @@ def test_cone_newton_step_against_plain(case, eps_rel, bunny_points):
     # Newton distance: at a coarser resolution it ends farther out)
     for r0 in range(0, 256, 32):
         for c0 in range(0, 256, 32):
-            t_min, _, _, D, gx, gy, gz = march.cone_start(tree, roots, params, mode, tol, cam,
-                                                          lo, hi, eps, r0, r0 + 4, c0, c0 + 4,
-                                                          stack, dstack)
+            t_min, _, _, D, gx, gy, gz = march.cone_start(
+                sc, cam, (lo, hi, eps, 4000), (r0, r0 + 4, c0, c0 + 4), (stack, dstack),
+                march.RELAX)
             if not 0.0 < D <= nd:
                 continue
             beam = block_rays(cam, r0, r0 + 4, c0, c0 + 4)
@@ -610,16 +615,15 @@ def test_cone_newton_step_against_plain(case, eps_rel, bunny_points):
                     v = ray[3:]
                     t_pred, d_lb = march.cone_newton_step(t_min, D, gx, gy, gz, beam, ray)
                     p = np.asarray(ray[:3]) + t_min * np.asarray(v)
-                    d_own = march.scene_distance(tree, roots, params, mode, tol, *p, stack,
-                                                 dstack, 0.0)[0]
+                    d_own = march.scene_distance(sc, *p, (stack, dstack), 0.0)[0]
                     assert d_lb <= d_own + 1e-12
                     if not (t_pred > t_min and d_lb > 0.0):
                         continue
                     predicted += 1
-                    common = (tree, roots, params, mode, tol, *ray, lo, hi, eps, 4000, stack,
-                              dstack, march.RELAX, 1.0, t_min, nd)
-                    a = march.march_ray(*common, np.inf, march.NEWTON_COS, t_pred, d_lb)
-                    b = march.march_ray(*common)
+                    head = (sc, ray, (lo, hi, eps, 4000), (march.RELAX, 1.0, nd,
+                                                           march.NEWTON_COS))
+                    a = march.march_ray(*head, (t_min, np.inf, t_pred, d_lb), (stack, dstack))
+                    b = march.march_ray(*head, (t_min, np.inf, 0.0, 0.0), (stack, dstack))
                     ref = _plain_first_hit(arrays, cam, r, c, eps, 4000)
                     assert a[0] == b[0] == np.isfinite(ref)
                     if a[0]:

@@ -87,8 +87,8 @@ def _kernel(arrays, Q):
     leaves = np.empty(len(Q), dtype=np.int64)
     near = np.empty(len(Q), dtype=np.int64)
     for i, q in enumerate(Q):
-        d, gx, gy, gz, nodes, lv, nearest = march.scene_distance(tree, roots, params, mode,
-                                                                 tol, *q, stack, dstack, 0.0)
+        d, gx, gy, gz, nodes, lv, nearest = march.scene_distance(
+            (tree, roots, params, mode, tol), *q, (stack, dstack), 0.0)
         out[i] = d, gx, gy, gz
         leaves[i] = lv
         near[i] = nearest
@@ -148,9 +148,9 @@ def test_object_lower_bound_is_below_each_object(rng):
                 continue
             for q in Q:
                 for k in range(3):
-                    lb = march.object_lower_bound(tree, roots, params, mode_k, tol, k, *q, 0.0)
-                    d = march._object_distance(tree, roots, params, mode_k, tol, k, *q, stack,
-                                               dstack, 0.0)[0]
+                    sc = (tree, roots, params, mode_k, tol)
+                    lb = march.object_lower_bound(sc, k, *q, 0.0)
+                    d = march._object_distance(sc, k, *q, (stack, dstack), 0.0)[0]
                     assert lb <= d + 1e-12 * (1 + abs(d)), (mode, tol, k, lb, d)
                     assert math.isfinite(lb)
 
@@ -184,8 +184,8 @@ def test_render_object_map_is_the_nearest_object(mode, samples, rng):
     arrays = scene_arrays(scene)
     tree, roots, params, mode_k, lo, hi, depth_max, tol = arrays
     ref = np.empty(int(res.hit.sum()), dtype=np.int64)
-    lighting.object_ids(tree, roots, params, mode_k, tol, np.ascontiguousarray(P[res.hit]),
-                        depth_max, ref)
+    lighting.object_ids(tree, (roots, params, mode_k, tol), np.ascontiguousarray(P[res.hit]),
+                        depth_max, ref, 1)
     # depth is stored in float32: hit points lie within rounding of the march's own points
     assert np.mean(obj[res.hit] == ref) > 0.995
     if samples > 1:

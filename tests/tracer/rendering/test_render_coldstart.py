@@ -26,7 +26,7 @@ from smoothdist import DataMesh, SmoothDistanceField
 from tracer.rendering import march, renderer as render_mod
 from tracer.rendering.camera import sample_rays
 from tracer.rendering.frame import (LightArgs, LightBuffers, MarchArgs, PixelBuffers,
-                                    SampleBuffers)
+                                    SampleBuffers, SampleRays)
 from tracer.rendering.frame import RayArgs, TraceOptions, camera_of, kernel_roots, scene_arrays
 from tracer.rendering.renderer import render, trace_tiles
 from tracer.scenes.scene import load_scene, scene_from_field
@@ -53,7 +53,7 @@ def trace(scene, roots=None, threads=None, band=None, kernel="tiles"):
     for r0 in range(0, H, band):
         r1 = min(H, r0 + band)
         if kernel == "rows":
-            march.render_rows(args.tree, args.march, r0, r1, depth_max, PixelBuffers(*out),
+            march.render_rows(args.tree, args.march, (r0, r1), depth_max, PixelBuffers(*out),
                               options)
         else:
             trace_tiles(args, r0, r1, depth_max, out, options, threads=threads)
@@ -81,8 +81,8 @@ def test_lean_path_equals_general_path(bunny, kind, beta, alpha_u, gradient):
     # the camera check and a bisection-only call use the slack-less specialisation
     o = [float(v) for v in scene.camera_origin]
     for p in (o, [float(v) for v in tree.pts[0, :3] + 1e-3]):
-        assert march.distance_at(tree, lean, params, mode, tol, *p, depth_max) == \
-            march.distance_at(tree, roots, params, mode, tol, *p, depth_max)
+        assert march.distance_at((tree, lean, params, mode, tol), *p, depth_max) == \
+            march.distance_at((tree, roots, params, mode, tol), *p, depth_max)
 
 
 def test_lean_path_on_a_mixed_mesh():
@@ -190,14 +190,27 @@ def test_a_plain_render_is_lean(tmp_path):
     # the march kernels ran with an int root (the lean path), one specialisation each
     tiles = sigs["tracer.rendering.march.render_tiles"]     # (tree, MarchArgs(roots, ...), ...)
     assert len(tiles) == 1 and tiles[0][1].startswith("MarchArgs(int64,"), tiles
-    dist = sigs["tracer.rendering.march.distance_at"]       # (tree, roots, ...)
-    assert len(dist) == 1 and dist[0][1] == "int64", dist
+    dist = sigs["tracer.rendering.march.distance_at"]       # ((tree, roots, ...), ...)
+    assert len(dist) == 1 and _items(dist[0][0])[1] == "int64", dist
     # nothing of the general path was compiled or loaded
     for name in ("tracer.rendering.march.render_rows", "tracer.rendering.march._scene_distance_posed",
                  "tracer.rendering.march.trace_pixels",
                  "smoothdist._kernels.query.smooth_distance_point_tol",
                  "smoothdist._kernels.query.exact_distance_point"):
         assert name not in sigs, sigs.get(name)
+
+
+def _items(typename):
+    """The top-level items of a tuple type's name (``"Tuple(A(x, y), int64)"`` -> ``["A(x,
+    y)", "int64"]``; a NamedTuple's fields too)."""
+    inner = typename[typename.index("(") + 1:typename.rindex(")")]
+    items, depth, start = [], 0, 0
+    for i, ch in enumerate(inner):
+        depth += {"(": 1, "[": 1, ")": -1, "]": -1}.get(ch, 0)
+        if ch == "," and depth == 0:
+            items.append(inner[start:i].strip())
+            start = i + 1
+    return items + [inner[start:].strip()]
 
 
 COLDSTART = ROOT / "benchmarks" / "data" / "coldstart.json"
@@ -230,11 +243,12 @@ def test_a_lit_adaptive_render_is_lean(tmp_path):
     sigs = report["signatures"]
     # samples, light and the ground probe on the lean path (an int root), one each; the march
     # kernels take the roots first in their MarchArgs
-    for name in ("tracer.rendering.march.render_tiles", "tracer.rendering.march.sample_tasks",
-                 "tracer.rendering.lighting.light_tasks", "tracer.rendering.lighting._lowest_hit"):
+    for name, arg, item in (("tracer.rendering.march.render_tiles", 1, 0),
+                            ("tracer.rendering.march.sample_tasks", 1, 0),
+                            ("tracer.rendering.lighting.light_tasks", 1, 0),
+                            ("tracer.rendering.lighting._lowest_hit", 0, 1)):
         assert len(sigs[name]) == 1, sigs.get(name)
-        roots = sigs[name][0][1]
-        assert roots == "int64" or roots.startswith("MarchArgs(int64,"), sigs.get(name)
+        assert _items(sigs[name][0][arg])[item] == "int64", sigs.get(name)
     # no prange kernel (a parallel loop costs numba about as much again as its body), and
     # nothing of the general path
     for name in ("tracer.rendering.march.trace_samples", "tracer.rendering.lighting.light_points",
@@ -272,14 +286,14 @@ def test_task_kernels_equal_the_prange_kernels(name):
     rows = rng.integers(0, scene.height, m).astype(np.int64)
     cols = rng.integers(0, scene.width, m).astype(np.int64)
     off = sample_offsets(5)
-    head = (tree, MarchArgs(roots, params, mode, tol, cam, lo, hi, float(scene.eps), 400), rows,
-            cols, off, depth_max)
+    head = (tree, MarchArgs(roots, params, mode, tol, cam, lo, hi, float(scene.eps), 400),
+            SampleRays(rows, cols, off, 0.0, 0.02), depth_max)
     opts = TraceOptions(march.RELAX, 2.0, True, march.newton_distance(scene.eps, lo, hi))
     ref = SampleBuffers(*_sample_outputs(m, len(off)))
-    march.trace_samples(*head, ref, opts, 0.0, 0.02, 3)
+    march.trace_samples(*head, ref, opts, 3)
     for ntasks, threads in ((3, 1), (3, 2), (5, 3), (1, 1)):
         got = SampleBuffers(*_sample_outputs(m, len(off)))
-        run_tasks(lambda a, b: march.sample_tasks(*head, got, opts, 0.0, 0.02, ntasks, a, b),
+        run_tasks(lambda a, b: march.sample_tasks(*head, got, opts, (ntasks, a, b)),
                   ntasks, threads)
         assert [x.tobytes() for x in got] == [x.tobytes() for x in ref], (ntasks, threads)
     # light at the hits
@@ -292,7 +306,7 @@ def test_task_kernels_equal_the_prange_kernels(name):
     assert n > 5
     key = np.array([0.3, 0.8, 0.52])
     key /= np.linalg.norm(key)
-    args = (tree, roots, params, mode, tol, P, N, depth_max,
+    args = (tree, (roots, params, mode, tol), (P, N), depth_max,
             LightArgs(key, lo, hi, float(scene.eps), 8.0, 0.01 * scene.diagonal, True, True, 0.0,
                       2 * float(scene.eps), 20 * float(scene.eps)))
 
@@ -303,7 +317,8 @@ def test_task_kernels_equal_the_prange_kernels(name):
     lighting.light_points(*args, ref_l, 2)
     for ntasks, threads in ((2, 1), (2, 2), (4, 3)):
         got = light_out()
-        run_tasks(lambda a, b: lighting.light_tasks(*args, got, ntasks, a, b), ntasks, threads)
+        run_tasks(lambda a, b: lighting.light_tasks(*args, got, (ntasks, a, b)), ntasks,
+                  threads)
         assert [x.tobytes() for x in got] == [x.tobytes() for x in ref_l], (ntasks, threads)
 
 

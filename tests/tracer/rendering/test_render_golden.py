@@ -289,7 +289,7 @@ def test_scene_field_matches_the_tracer_kernel(compare_mod):
         tree, roots, params, mode, lo, hi, depth_max, tol = scene_arrays(scene)
         P = lo + (hi - lo) * rng.random((40, 3))
         d, _ = compare_mod.scene_field(scene, P)
-        ref = [march.distance_at(tree, roots, params, mode, tol, *map(float, p), depth_max)
+        ref = [march.distance_at((tree, roots, params, mode, tol), *map(float, p), depth_max)
                for p in P]
         np.testing.assert_allclose(d, ref, rtol=1e-12, atol=1e-12 * scene.diagonal,
                                    err_msg=name)
