@@ -27,6 +27,7 @@ import argparse
 import importlib
 import importlib.util
 import os
+import re
 import signal
 import sys
 import traceback
@@ -55,6 +56,11 @@ class _Parser(argparse.ArgumentParser):
     """An argument parser whose usage errors are one ``error: ...`` line (exit status 2)."""
 
     def error(self, message):
+        # an option's check that names its flag (tracer.cli_render: "argument --beta: --beta
+        # must be >= 0, got -1.0") says it alone, as the command's own checks do
+        checked = re.match(r"argument (\S+): (\1 .*)", message)
+        if checked:
+            raise CLIError(checked.group(2))
         raise CLIError(f"{self.prog}: {message} (see {self.prog} --help)")
 
 

@@ -1,5 +1,6 @@
 """``tracer render``: sphere-trace a scene file to a PNG, with optional AOVs."""
 
+import argparse
 import json
 import math
 import os
@@ -12,116 +13,51 @@ from smoothdist.mesh import MESH_EXTENSIONS, needs_trimesh
 from tracer.errors import CLIError
 from tracer.image import false_color, save_npy, save_png
 from tracer.outputs import atomic_write, check_outputs, make_parents
-from tracer.rendering.camera import (PROJECTIONS, UP_AXES, VIEWS, LookAt, frame_points,
-                                     frame_width)
-from tracer.rendering.frame import MAX_SAMPLES, ProgressBar, scene_arrays
+from tracer.rendering.camera import LookAt, frame_points, frame_width
+from tracer.rendering.frame import ProgressBar, scene_arrays
 from tracer.rendering.renderer import render
 from tracer.scenes import from_mesh
 from tracer.scenes.from_mesh import describe_parameters, resolve_up, scene_dict
-from tracer.scenes.scene import (AUTHORS_KEYS, BVH_TYPES, WEIGHT_CHOICES, load_scene, mesh_paths,
-                                 read_scene_json)
-from tracer.scenes.settings import KINDS, default_text, defaults, table
+from tracer.scenes.scene import AUTHORS_KEYS, BVH_TYPES, load_scene, mesh_paths, read_scene_json
+from tracer.scenes.settings import (KINDS, REQUIRED, RGB, check, default_text, defaults,
+                                    flag_of, row, table)
 from tracer.stages import StageClock, stage
 
 HELP = "sphere-trace a scene file to a PNG (and AOVs)"
 
 
 def add_arguments(p):
-    """Arguments of ``tracer render``; the defaults they name come from
-    :mod:`tracer.scenes.settings` (``_def(key)``: a scene file's, ``_def(key, "mesh")``: a mesh
-    file's)."""
-    _def = default_text
+    """Arguments of ``tracer render``: one option per setting of :mod:`tracer.scenes.settings`
+    (``_add_setting_options``), the options whose shape is not one setting's, and the
+    outputs."""
     p.add_argument("scene", metavar="PATH",
                    help="a scene JSON file (the authors' format, or ours; see "
                    "docs/scene-format.md) or a mesh / point-cloud file "
                    f"({', '.join(e[1:] for e in MESH_EXTENSIONS)}) to render directly")
     p.add_argument("-o", "--output", help="output PNG (default: renders/<file name>.png)")
+    # two settings (width, height) in one option
     p.add_argument("--size", nargs=2, type=int, metavar=("W", "H"),
                    help="image size in pixels (overrides the scene's width/height; "
-                   f"mesh default {_def('width', 'mesh')} {_def('height', 'mesh')})")
-    p.add_argument("--beta", type=float, help="Barnes-Hut beta (0 = exact; default: scene's, "
-                   f"{_def('beta', 'mesh')} for a mesh)")
-    p.add_argument("--alpha", type=_auto_or_number("--alpha"), metavar="auto|A",
-                   help="alpha of the (first) object, or 'auto' (default for a mesh): with "
-                   "--alpha-u and --offset left out too, triangles get a thin shell, the level "
-                   "set d_hat = C at C = 0.3%% of the bbox diagonal or a tenth of the local "
-                   "feature size, alpha 20/C; curves a tube, C = 0.75 mean edge lengths, "
-                   "alpha 6/C (30/C for wireframes); otherwise mean surface offset <= 2%% of "
-                   "the bbox diagonal")
-    p.add_argument("--alpha-u", type=_auto_or_number("--alpha-u", "off"),
-                   metavar="auto|off|U",
-                   help="alpha_U (attenuation) of the (first) object, or 'auto' = 20 x alpha, "
-                   "which removes ribbing on tubes (default when the scene has no alpha_u), "
-                   "or 'off' = alpha (no attenuation: the paper's weights even out an uneven "
-                   "triangle tessellation that 'auto' shows as pleats)")
+                   f"mesh default {default_text('width', 'mesh')} "
+                   f"{default_text('height', 'mesh')})")
+    # not a setting: the mesh file's primitives (a scene file sets them per object)
     p.add_argument("--kind", choices=KINDS,
                    help="mesh file: render its triangles, edges, points, or everything it "
                    "holds (mixed; the default)")
-    p.add_argument("--view", choices=tuple(VIEWS),
-                   help="camera framing the whole surface from this side (default for a mesh: "
-                   f"{_def('view', 'mesh')}); with a scene file it replaces the scene's camera")
-    p.add_argument("--up", choices=("auto",) + UP_AXES,
-                   help="the data's up axis for --view (mesh files: auto = z for .stl and "
-                   ".ply, y otherwise, and for the front view a flat object seen edge-on or "
-                   "a long one end-on turned to its largest silhouette; scene files: y)")
+    # not a setting: the camera itself, nine numbers
     p.add_argument("--camera", nargs=9, type=float,
                    metavar=("OX", "OY", "OZ", "DX", "DY", "DZ", "UX", "UY", "UZ"),
                    help="explicit camera: ORIGIN DEST UP, 9 numbers")
-    p.add_argument("--projection", choices=PROJECTIONS,
-                   help="perspective (the authors' pinhole; default: scene's, else "
-                   f"{_def('projection', 'mesh')}) or orthographic (parallel rays)")
-    p.add_argument("--view-width", type=float, metavar="W",
-                   help="orthographic: the view's width in scene units (default: the width "
-                   "framing the surface, or the perspective camera's width at dest)")
     p.add_argument("--save-scene", metavar="OUT.json",
                    help="write the scene file used (camera, alpha, alpha_U, ...) to edit and "
                    "render again")
-    p.add_argument("--tol", type=float, metavar="TOL",
-                   help="tolerance-controlled pruning: d_hat within log(1 + TOL)/alpha of the "
-                        f"exact sum, never above it (0 = off; default: scene's, else "
-                        f"{_def('tol')}). With --beta 0 "
-                        "it is the only pruning")
     newton = p.add_mutually_exclusive_group()
-    newton.add_argument("--newton", type=float, metavar="N",
-                        help="smooth mode: Newton steps along the ray once the distance is "
-                        "below N x eps (at most 1%% of the bbox diagonal; default: scene's, "
-                        f"else {_def('newton')})")
+    _add_setting_options(p, {"newton": newton})
+    # a second spelling of a setting's value (--newton 0), exclusive with --newton
     newton.add_argument("--no-newton", dest="newton", action="store_const", const=0.0,
                         help="plain sphere tracing (= --newton 0); the images agree, Newton "
                         "steps only save distance evaluations")
-    p.add_argument("--mode", choices=("smooth", "exact"),
-                   help="smooth distance, or exact distance offset surface")
-    p.add_argument("--weights", choices=WEIGHT_CHOICES,
-                   help="weights of edges and triangles: paper (the paper's polynomials; "
-                   f"default for a scene file: {_def('weights')}), inclusion-exclusion (the "
-                   "exact distance's sum above flat faces and outside convex edges: no seams "
-                   f"on flat faces), or auto (default for a mesh file: "
-                   f"{_def('weights', 'mesh')}): inclusion-exclusion for the automatic "
-                   "surface, paper once --alpha, --alpha-u or --offset is given")
-    p.add_argument("--offset", type=float, metavar="C",
-                   help="the surface's offset C >= 0: smooth mode d_hat = C (default 0; "
-                   "with alpha and alpha_U auto, edges and triangles: see --alpha), "
-                   "exact mode d = C (default 1/alpha per object)")
-    p.add_argument("--eps", type=float, help="hit threshold in scene units "
-                   f"(default {_def('eps')})")
-    p.add_argument("--shading", choices=("lit", "normals", "matcap", "headlight"),
-                   help="lit: key and fill lights, soft shadows, ambient occlusion and a "
-                   "ground; normals: the paper's view-space normal colours; matcap; diffuse "
-                   f"headlight (default for a mesh file: {_def('shading', 'mesh')}; for a "
-                   f"scene file: {_def('shading')}, matcap when it names a matcap)")
-    p.add_argument("--samples", type=int, metavar="N",
-                   help="anti-aliasing: N samples per pixel, tent-filtered (default: scene's, "
-                   f"{_def('samples')})")
-    p.add_argument("--adaptive", action="store_true", default=None,
-                   help="give the extra samples only to pixels that differ from a neighbour "
-                   "(edges, shadow borders)")
-    p.add_argument("--transparent", action="store_true", default=None,
-                   help="RGBA PNG: transparent background, alpha = coverage (with the lit "
-                   "shading's ground: its shadow only)")
-    p.add_argument("--color", nargs=3, type=int, metavar=("R", "G", "B"),
-                   help="lit shading: base colour of the (first) object, 0-255")
-    p.add_argument("--background", nargs=3, type=int, metavar=("R", "G", "B"),
-                   help=f"background colour, 0-255 (default {_def('background')})")
+    # the lit shading's settings: fields of Lighting (the table's lighting), one by one
     p.add_argument("--penumbra", type=float,
                    help="lit shading: shadow softness > 0 (0.02 nearly hard, default "
                    f"{defaults('file')['lighting'].penumbra:g})")
@@ -132,6 +68,83 @@ def add_arguments(p):
     p.add_argument("--no-ground", dest="ground", action="store_false", default=None,
                    help="lit shading: no ground plane")
     _add_output_arguments(p)
+
+
+#: what an option adds to its setting's help on the command line
+_NOTES = {"view": "; with a scene file it replaces the scene's camera",
+          "up": "; for a scene file's --view: y",
+          **{k: "; with a scene file: its first object's" for k in ("alpha", "alpha_u",
+                                                                    "color")}}
+
+
+def _add_setting_options(p, groups=None):
+    """One option per setting of the table with ``flag`` (:func:`tracer.scenes.settings.table`):
+    ``--`` + its key with dashes, its choices, its values checked by
+    :func:`tracer.scenes.settings.check` (the error names the option), its help the field's
+    with the defaults of scene files and mesh files; argparse's default None is "not given".
+    ``groups``: the argument group of a key (``--newton``'s, exclusive with ``--no-newton``)."""
+    for r in table():
+        if not r.flag:
+            continue
+        kw = dict(help=f"{r.help} ({_default_phrase(r)}{_NOTES.get(r.key, '')})"
+                  .replace("%", "%%"))
+        if r.choices:
+            kw.update(choices=r.choices)
+        elif r.kind is bool:
+            kw.update(action="store_true", default=None)
+        elif r.kind == RGB:
+            kw.update(nargs=3, type=int, metavar=r.metavar, action=_Vector)
+        else:
+            kw.update(type=_setting_type(r.key),
+                      metavar="|".join(r.words + (r.metavar or r.key.upper(),)))
+        (groups or {}).get(r.key, p).add_argument(flag_of(r.key), **kw)
+
+
+def _default_phrase(r):
+    """The defaults of a setting as its option's help names them (:func:`default_text`)."""
+    mesh = default_text(r.key, "mesh")
+    if r.file is REQUIRED:
+        return f"default for a mesh file: {mesh}"
+    file = r.text or default_text(r.key)
+    if file == mesh:
+        return f"default: the scene file's, else {file}"
+    return f"default: the scene file's, else {file}; for a mesh file: {mesh}"
+
+
+def _setting_type(key):
+    """The ``type=`` of a number setting's option: one of its words (``auto``) as it is, else
+    the number checked (:func:`tracer.scenes.settings.check`; the error names the option)."""
+    r, flag = row(key), flag_of(key)
+
+    def parse(text):
+        if text in r.words:
+            return text
+        try:
+            value = r.kind(text)
+        except ValueError:
+            if not r.words:
+                raise           # argparse: "invalid float value: 'abc'"
+            raise argparse.ArgumentTypeError(
+                f"{flag} must be a number or {' or '.join(map(repr, r.words))}, "
+                f"got {text!r}") from None
+        try:
+            return check(key, value, flag, typed=True)
+        except ValueError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+    parse.__name__ = r.kind.__name__
+    return parse
+
+
+class _Vector(argparse.Action):
+    """A colour setting's option (``--background R G B``): the three numbers checked together
+    (:func:`tracer.scenes.settings.check`), kept as given."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        try:
+            check(self.dest, list(values), option_string, typed=True)
+        except ValueError as exc:
+            raise argparse.ArgumentError(self, str(exc)) from None
+        setattr(namespace, self.dest, list(values))
 
 
 def _add_output_arguments(p):
@@ -157,55 +170,21 @@ def _add_output_arguments(p):
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
 
 
-def _auto_or_number(flag, *words):
-    words = ("auto",) + words
-
-    def parse(text):
-        if text in words:
-            return text
-        try:
-            return float(text)
-        except ValueError:
-            raise ValueError(f"{flag} must be a number or {' or '.join(map(repr, words))}, "
-                             f"got {text!r}") from None
-    parse.__name__ = flag
-    return parse
-
-
-#: numeric options and what they must be: (flag, attribute, lower bound, bound included)
-_NUMBERS = (("--alpha", "alpha", 0.0, False), ("--alpha-u", "alpha_u", 0.0, False),
-            ("--beta", "beta", 0.0, True), ("--eps", "eps", 0.0, False),
-            ("--tol", "tol", 0.0, True), ("--newton", "newton", 0.0, True),
-            ("--offset", "offset", 0.0, True), ("--penumbra", "penumbra", 0.0, False),
-            ("--samples", "samples", 1, True), ("--view-width", "view_width", 0.0, False))
-
-
 def check_options(args):
-    """The command line's numbers, checked before any file is read or any output looked at
-    (so ``--size 0 0`` is reported as such, not as an existing output). One-line
-    :class:`~tracer.errors.CLIError` naming the flag; the scene and mesh loaders check them
-    again."""
+    """The command line's numbers that no option's ``type=`` checks (``--size``,
+    ``--penumbra``) and the options that need another, checked before any file is read or any
+    output looked at (so ``--size 0 0`` is reported as such, not as an existing output).
+    One-line :class:`~tracer.errors.CLIError` naming the flag; the scene and mesh loaders
+    check them again."""
     if args.size:
         for what, v in zip(("width", "height"), args.size):
             if v <= 0:
                 raise CLIError(f"--size {what} must be > 0, got {v}")
-    for flag, attr, low, closed in _NUMBERS:
-        v = getattr(args, attr, None)
-        if v is None or v in ("auto", "off"):
-            continue
-        if not math.isfinite(v):
-            raise CLIError(f"{flag} must be finite, got {v}")
-        if v < low or (v == low and not closed):
-            raise CLIError(f"{flag} must be {'>=' if closed else '>'} {low:g}, got {v}")
-
+    if args.penumbra is not None and not (math.isfinite(args.penumbra) and args.penumbra > 0):
+        raise CLIError(f"--penumbra must be {'> 0' if math.isfinite(args.penumbra) else 'finite'}"
+                       f", got {args.penumbra}")
     if args.view_width is not None and args.projection != "orthographic":
         raise CLIError("--view-width applies to --projection orthographic")
-    if args.samples is not None and args.samples > MAX_SAMPLES:
-        raise CLIError(f"--samples must be at most {MAX_SAMPLES}, got {args.samples}")
-    for flag in ("color", "background"):
-        v = getattr(args, flag, None)
-        if v is not None and not all(0 <= c <= 255 for c in v):
-            raise CLIError(f"--{flag} must be three integers 0-255, got {' '.join(map(str, v))}")
 
 
 def input_kind(path):
@@ -262,13 +241,8 @@ def run(args):
         raise CLIError("--kind applies to mesh files; a scene file sets kind per object")
     if source == "scene" and args.up and not args.view:
         raise CLIError("--up applies to a --view; a scene file's camera sets its own up")
-    overrides = {"beta": args.beta, "alpha": args.alpha, "alpha_u": args.alpha_u,
-                 "mode": args.mode, "eps": args.eps, "shading": args.shading,
-                 "offset": args.offset, "tol": args.tol, "newton": args.newton,
-                 "samples": args.samples, "adaptive": args.adaptive,
-                 "transparent": args.transparent, "lighting": _lighting_args(args),
-                 "projection": args.projection, "view_width": args.view_width,
-                 "weights": args.weights}
+    overrides = {k: getattr(args, k) for k in mesh_options(args)}  # None: not given
+    overrides["lighting"] = _lighting_args(args)
     if args.size:
         overrides["width"], overrides["height"] = args.size
     name = os.path.splitext(os.path.basename(args.scene))[0]
@@ -312,8 +286,6 @@ def _render_and_write(args, source, overrides, name, out, outputs):
             _replace_camera(scene, args)
         if args.color is not None:
             scene.objects[0].color = tuple(float(c) for c in args.color)
-        if args.background is not None:
-            scene.background = tuple(args.background)
     bar = None if args.quiet else ProgressBar(f"render {name}")
     result = render(scene, progress=bar, device=args.device)
     with stage("write", "writing the image"):
@@ -417,7 +389,7 @@ def mesh_options(args):
 
 def _flag_of(name):
     """The option of the setting ``name``: ``alpha_u`` -> ``--alpha-u``."""
-    return "--" + name.replace("_", "-")
+    return flag_of(name)
 
 
 def _build_mesh_scene(args):
@@ -502,8 +474,7 @@ def _edited_scene(data, args, scene):
                             else float(f"{scene.objects[0].alpha_u:.6g}"))
     if args.size:
         data["width"], data["height"] = args.size
-    for key in ("beta", "mode", "eps", "shading", "offset", "tol", "newton", "samples",
-                "adaptive", "transparent"):
+    for key in (r.key for r in table() if r.scene_key and r.key in vars(args)):
         if getattr(args, key) is not None:
             data[key] = getattr(args, key)
             if key in ("beta", "offset"):  # the command line overrode per-object values too
@@ -514,6 +485,4 @@ def _edited_scene(data, args, scene):
         data.setdefault("lighting", {}).update(given)
     if args.color is not None:
         first["color"] = list(args.color)
-    if args.background is not None:
-        data["background"] = list(args.background)
     return data

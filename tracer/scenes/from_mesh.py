@@ -25,11 +25,9 @@ from tracer.rendering.camera import UP_AXES, LookAt, frame_points, frame_width
 from tracer.rendering.renderer import render
 from tracer.scenes.scene import (automatic_surface, field_scene, planned_weights,
                                  with_default_eps, with_weights)
-from tracer.scenes.settings import KINDS, Film, March, Surface, View, defaults
+from tracer.scenes.settings import (KINDS, Surface, defaults, groups, settings_entry,
+                                     split_size)
 from tracer.stages import StageClock, stage, stage_progress
-
-#: defaults of the mesh entry points (:mod:`tracer.scenes.settings`; ``tracer render MESH`` too)
-_MESH = defaults("mesh")
 
 __all__ = ["render_mesh", "mesh_scene", "build_mesh_scene", "settings_groups", "is_mesh_list",
            "load_geometry", "guess_up", "resolve_up", "describe_parameters", "scene_dict"]
@@ -77,16 +75,17 @@ def resolve_up(mesh, up):
     return up
 
 
-def mesh_scene(mesh, F=None, *, kind=None, alpha=_MESH["alpha"], alpha_u=_MESH["alpha_u"],
-               beta=_MESH["beta"], size=(_MESH["width"], _MESH["height"]), view=_MESH["view"],
-               camera=None, mode=_MESH["mode"], offset=_MESH["offset"], eps=_MESH["eps"],
-               shading=_MESH["shading"], matcap=_MESH["matcap"], name=None, tol=_MESH["tol"],
-               newton=_MESH["newton"], up=_MESH["up"], samples=_MESH["samples"],
-               adaptive=_MESH["adaptive"], transparent=_MESH["transparent"],
-               lighting=_MESH["lighting"], color=_MESH["color"],
-               background=_MESH["background"], projection=_MESH["projection"],
-               view_width=_MESH["view_width"], weights=_MESH["weights"]):
+#: the settings the mesh entry points do not take (the scene files' and the research API's)
+_NOT_MESH = ("max_steps", "gradient")
+
+
+@settings_entry("mesh", size=True, leave_out=_NOT_MESH)
+def mesh_scene(mesh, F=None, *, kind=None, camera=None, name=None, settings):
     """A one-object :class:`tracer.scenes.scene.Scene` for ``mesh``, camera framing the surface.
+
+    Every setting of :mod:`tracer.scenes.settings` but ``max_steps`` and ``gradient`` is a
+    keyword (:func:`~tracer.scenes.settings.settings_entry`; the lines of those not described
+    here are made from the table), as in :func:`tracer.scenes.scene.scene_from_field`.
 
     Parameters
     ----------
@@ -140,13 +139,10 @@ def mesh_scene(mesh, F=None, *, kind=None, alpha=_MESH["alpha"], alpha_u=_MESH["
     shading : {"lit", "normals", "matcap", "headlight"}
         ``"lit"`` (the default here): key and fill lights, soft shadows, ambient occlusion
         and a ground (:mod:`tracer.rendering.lighting`); ``"normals"``: the paper's normal colours.
-    mode, offset, eps, matcap, tol, newton, samples, adaptive, transparent, lighting, color :
-        As in :func:`tracer.scenes.scene.scene_from_field` (``background`` too).
     name : str, optional
         The scene's name (default: the mesh's).
     """
-    settings = locals()     # the keyword arguments by name, for settings_groups
-    return build_mesh_scene(mesh, F, kind, *settings_groups(settings), camera=camera, name=name)
+    return build_mesh_scene(mesh, F, kind, *settings, camera=camera, name=name)
 
 
 def settings_groups(settings):
@@ -154,25 +150,20 @@ def settings_groups(settings):
     keyword arguments of :func:`mesh_scene` or :func:`render_mesh` by name (``size`` is the
     film's ``(width, height)``; a setting not given keeps its ``"mesh"`` default); not yet
     checked (:func:`tracer.scenes.scene.field_scene` checks them)."""
-    size = settings["size"]
-    try:
-        width, height = size
-    except (TypeError, ValueError):
-        raise ValueError(f"size must be (width, height), got {size!r}") from None
-    given = dict(settings, width=width, height=height)
-
-    def group(cls):
-        return cls(**{f.name: given.get(f.name, _MESH[f.name]) for f in fields(cls)})
-    return group(Surface), group(March), group(Film), group(View)
+    given = dict(settings)
+    if "size" in given:
+        given["width"], given["height"] = split_size(given.pop("size"))
+    return groups("mesh", given)
 
 
 def build_mesh_scene(mesh, F, kind, surface, march, film, view, camera=None, name=None):
     """:func:`mesh_scene` with its settings as groups (:func:`settings_groups`): one object,
     or one per entry of a list of meshes (``kind``, the surface's fields and ``film.matcap``
     may then hold one value per mesh)."""
-    if is_mesh_list(mesh):
-        if F is not None:
-            raise ValueError("F must be None with a list of meshes: give (V, F) pairs")
+    several = is_mesh_list(mesh)
+    if several and F is not None:
+        raise ValueError("F must be None with a list of meshes: give (V, F) pairs")
+    if several:
         return _several_objects(mesh, kind, surface, march, film, view, camera, name)
     up = view.up
     guessed = up is None or up == "auto"
@@ -471,20 +462,14 @@ def note_sparse_clouds(scene, notes):
                       ThinFeatureWarning, stacklevel=user_stacklevel())
 
 
-def render_mesh(mesh, F=None, *, kind=None, alpha=_MESH["alpha"], alpha_u=_MESH["alpha_u"],
-                beta=_MESH["beta"], size=(_MESH["width"], _MESH["height"]),
-                view=_MESH["view"], camera=None, mode=_MESH["mode"], offset=_MESH["offset"],
-                eps=_MESH["eps"], shading=_MESH["shading"], matcap=_MESH["matcap"],
-                progress="auto", up=_MESH["up"], samples=_MESH["samples"],
-                adaptive=_MESH["adaptive"], transparent=_MESH["transparent"],
-                lighting=_MESH["lighting"], color=_MESH["color"],
-                background=_MESH["background"], tol=_MESH["tol"], newton=_MESH["newton"],
-                device="cpu", projection=_MESH["projection"], view_width=_MESH["view_width"],
-                weights=_MESH["weights"]):
+@settings_entry("mesh", size=True, leave_out=_NOT_MESH)
+def render_mesh(mesh, F=None, *, kind=None, camera=None, progress="auto", device="cpu",
+                settings):
     """Sphere-trace the smooth-distance surface of ``mesh``; arrays back, nothing written.
 
     Parameters are those of :func:`mesh_scene` (the ``"lit"`` shading by default;
-    ``shading="normals"`` gives the paper's normal colours); ``progress`` and ``device``
+    ``shading="normals"`` gives the paper's normal colours; the settings' lines below are made
+    from :mod:`tracer.scenes.settings`); ``progress`` and ``device``
     (``"cpu"`` or ``"cuda"``) as in :func:`tracer.render`: by default (``"auto"``) a progress
     bar appears on stderr once the render has run 3 s, and each stage before and after the
     trace that runs longer (reading a big mesh, building its tree, the automatic parameters,
@@ -507,14 +492,13 @@ def render_mesh(mesh, F=None, *, kind=None, alpha=_MESH["alpha"], alpha_u=_MESH[
                                  samples=8, adaptive=True)     # anti-aliased, lit
         res.save("renders/ico.png")         # res.rgb, res.depth, res.hit, ... are arrays
     """
-    settings = locals()     # the keyword arguments by name, for settings_groups
     # a progress bar asked for (or "auto"): the stages before and after the trace say what
     # they do once they pass a few seconds too (a big mesh's tree, the light)
     talk = progress is True or (isinstance(progress, str) and progress == "auto")
     label = (os.path.splitext(os.path.basename(os.fspath(mesh)))[0]
              if isinstance(mesh, (str, os.PathLike)) else "render_mesh")
     with StageClock(label, quiet=not talk):
-        scene = build_mesh_scene(mesh, F, kind, *settings_groups(settings), camera=camera)
+        scene = build_mesh_scene(mesh, F, kind, *settings, camera=camera)
         return render(scene, progress=progress, device=device)
 
 

@@ -56,19 +56,19 @@ import numpy as np
 
 import smoothdist
 from smoothdist import DataMesh, SmoothDistanceField
-from smoothdist.junctions import WEIGHTS
 from tracer.errors import SceneError, user_stacklevel
 from tracer.rendering.camera import (PROJECTIONS, LookAt, check_projection, frame_points,
                                       frame_width, look_at)
-from tracer.rendering.frame import MAX_SAMPLES
-from tracer.rendering.lighting import Lighting, check_color
-from tracer.scenes.settings import KINDS, SCENE_KEYS, Film, March, Surface, View, defaults
+from tracer.rendering.lighting import Lighting
+from tracer.scenes.settings import (KINDS, LIGHTING_KEYS, MAX_PIXELS, MAX_STEPS,
+                                    MODES, SCENE_KEYS, SHADINGS, WEIGHT_CHOICES, Film, March,
+                                    View, check, defaults, flag_of, settings_entry, table)
 from tracer.validate import (check_keys, choice, file_error, number, read_json, resolve_path, show,
                              vec3)
 
 __all__ = ["Scene", "SceneObject", "load_scene", "read_scene_json",
            "scene_from_field", "field_scene", "default_eps", "with_default_eps", "merge_meshes",
-           "AUTHORS_KEYS"]
+           "AUTHORS_KEYS", "MODES", "SHADINGS", "WEIGHT_CHOICES", "MAX_PIXELS", "MAX_STEPS"]
 
 #: the values of ``bvh_type``, the authors' spelling of ``kind`` (their ``"faces"`` is
 #: ``"triangles"``)
@@ -76,19 +76,12 @@ BVH_TYPES = {"faces": "triangles", **{k: k for k in KINDS}}
 #: the authors' spelling of a key -> ours; files in either are read, a file giving both is
 #: refused (the vocabulary: docs/design-notes.md)
 AUTHORS_KEYS = {"max_alpha": "alpha_u", "bvh_type": "kind"}
-SHADINGS = ("normals", "matcap", "headlight", "lit")
-MODES = ("smooth", "exact")
-#: ``weights`` of a scene: the schemes of :mod:`smoothdist.junctions`, or ``"auto"``
-WEIGHT_CHOICES = ("auto",) + WEIGHTS
 
 #: defaults of scene files and of ``Scene`` (:mod:`tracer.scenes.settings`)
 _FILE = defaults("file")
-#: defaults of :func:`scene_from_field` (:mod:`tracer.scenes.settings`)
-_API = defaults("api")
 #: the scene file's top-level keys: the settings table's, and the file's own
 _TOP_KEYS = set(SCENE_KEYS) | {"camera", "objects", "description", "name"}
-_LIGHTING_KEYS = {"shadows", "penumbra", "ao", "ao_distance", "ground", "ground_color", "key",
-                  "exposure"}
+_LIGHTING_KEYS = set(LIGHTING_KEYS)
 _CAMERA_KEYS = {"origin", "dest", "up", "projection", "view_width"}
 _OBJECT_KEYS = {"path", "parts", "alpha", "alpha_u", "max_alpha", "kind", "bvh_type", "matcap",
                 "beta", "offset", "name", "scale", "translate", "color"}
@@ -230,13 +223,6 @@ for _name, _group in _SHORTHANDS.items():
             else _shorthand(_group, _name))
 
 
-# ---------------------------------------------------------------------- limits
-#: largest image, in pixels (about 150 bytes of buffers per pixel)
-MAX_PIXELS = 64_000_000
-#: largest number of distance evaluations per ray (bounds the time of any render)
-MAX_STEPS = 1_000_000
-
-
 # ---------------------------------------------------------------------- loading
 def read_scene_json(path):
     """Parse a scene file into a dict, with one-line errors for unreadable or malformed JSON
@@ -275,11 +261,14 @@ def load_scene(path, overrides=None):
     path : str
         The scene JSON file.
     overrides : dict, optional
-        Values that replace the file's: ``width``, ``height``, ``beta``, ``alpha`` (first
-        object; a number or "auto"), ``alpha_u`` (first object's ``alpha_u``; a number or
-        "auto"), ``mode``, ``eps``, ``shading``, ``offset``, ``tol``, ``newton``,
-        ``samples``, ``adaptive``, ``transparent`` and ``lighting`` (a dict of
-        :class:`~tracer.rendering.lighting.Lighting` fields).
+        Values that replace the file's (None: not given), named as the command line's flags
+        in messages: every top-level setting of :mod:`tracer.scenes.settings` (``width``,
+        ``height``, ``beta``, ``mode``, ``eps``, ``shading``, ``offset``, ``tol``,
+        ``newton``, ``samples``, ``adaptive``, ``transparent``, ``background``, ``weights``,
+        ...), ``alpha`` (first object; a number or "auto"), ``alpha_u`` (first object's
+        ``alpha_u``; a number, "auto" or "off"), ``projection`` and ``view_width`` (the
+        camera's) and ``lighting`` (a dict of :class:`~tracer.rendering.lighting.Lighting`
+        fields).
 
     Raises
     ------
@@ -303,46 +292,11 @@ def load_scene(path, overrides=None):
     up = vec3(cam["up"], path, "camera.up")
     projection, view_width = _projection(cam, overrides, path)
 
-    def top(key, default, flag=None, **kw):
-        if key in overrides and overrides[key] is not None:
-            value, where = overrides[key], flag or f"--{key}"
-        elif key in data:
-            value, where = data[key], key
-        else:
-            return default
-        return number(value, path, where, **kw)
-
-    width = top("width", _FILE["width"], "--size width", positive=True, integer=True)
-    height = top("height", _FILE["height"], "--size height", positive=True, integer=True)
+    top = _top_settings(data, overrides, path)
+    width, height = top["width"], top["height"]
     if width * height > MAX_PIXELS:
         raise file_error(path, "width x height", f"is {width}x{height}: larger than "
                                                  f"{MAX_PIXELS // 1_000_000} megapixels")
-    beta = top("beta", _FILE["beta"], non_negative=True)
-    tol = top("tol", _FILE["tol"], non_negative=True)
-    if isinstance(data.get("newton"), bool) and overrides.get("newton") is None:
-        raise file_error(path, "newton", f"must be a number (a multiple of eps; 0 turns Newton "
-                                         f"steps off), got {show(data['newton'])}")
-    newton = top("newton", _FILE["newton"], non_negative=True)
-    eps = top("eps", _FILE["eps"], positive=True)
-    max_steps = top("max_steps", _FILE["max_steps"], positive=True, integer=True)
-    if max_steps > MAX_STEPS:
-        raise file_error(path, "max_steps", f"must be at most {MAX_STEPS}, got {max_steps}")
-    mode = choice(overrides.get("mode") or data.get("mode", _FILE["mode"]), MODES, path, "mode")
-    gradient = choice(data.get("gradient", _FILE["gradient"]), ("metric", "exact"), path,
-                      "gradient")
-    weights = choice(overrides.get("weights") or data.get("weights", _FILE["weights"]),
-                     WEIGHT_CHOICES, path, "weights")
-    bg = data.get("background", list(_FILE["background"]))
-    if (not isinstance(bg, list) or len(bg) != 3
-            or not all(isinstance(v, int) and not isinstance(v, bool) and 0 <= v <= 255
-                       for v in bg)):
-        raise file_error(path, "background", f"must be [r, g, b] integers 0-255, got {show(bg)}")
-    samples = top("samples", _FILE["samples"], "--samples", positive=True, integer=True)
-    if samples > MAX_SAMPLES:
-        where = "--samples" if overrides.get("samples") is not None else "samples"
-        raise file_error(path, where, f"must be at most {MAX_SAMPLES}, got {samples}")
-    adaptive = _flag(data, overrides, "adaptive", path)
-    transparent = _flag(data, overrides, "transparent", path)
     lighting = _lighting(data.get("lighting", {}), overrides.get("lighting"), path)
     for key in ("description", "name"):
         if key in data and not isinstance(data[key], str):
@@ -359,31 +313,76 @@ def load_scene(path, overrides=None):
         raise file_error(path, "the top level", "is missing the required key 'objects'")
     if not isinstance(objs, list) or not objs:
         raise file_error(path, "objects", f"must be a non-empty list of objects, got {show(objs)}")
-    specs = [_object_spec(od, i, base, path, data, overrides, beta) for i, od in enumerate(objs)]
+    specs = [_object_spec(od, i, base, path, data, overrides, top["beta"])
+             for i, od in enumerate(objs)]
     matcap = data.get("matcap", "")
     if not isinstance(matcap, str):
         raise file_error(path, "matcap", f"must be a file path or \"\", got {show(matcap)}")
     matcap = resolve_path(base, matcap, path, "matcap") if matcap else ""
     if not matcap:
         matcap = next((sp["matcap"] for sp in specs if sp["matcap"]), "")
-    default_shading = "matcap" if matcap else _FILE["shading"]
-    shading = choice(overrides.get("shading") or data.get("shading", default_shading), SHADINGS,
-                     path, "shading")
+    if overrides.get("shading") is not None:
+        shading = _setting("shading", overrides["shading"], path, "--shading")
+    else:   # "matcap" by default when the file names a matcap
+        shading = _setting("shading", data.get("shading", "matcap" if matcap else
+                                               _FILE["shading"]), path, "shading")
     if shading == "matcap" and not matcap:
         raise file_error(path, "shading", "is 'matcap' but no matcap file is given (key 'matcap')")
     # everything checked: now read the meshes and build the fields
-    objects = [_build_object(dict(sp, mode=mode), path, gradient) for sp in specs]
-    weights = with_weights(objects, weights, [
+    mode = top["mode"]
+    film = Film(**_group(Film, top), shading=shading, matcap=matcap, lighting=lighting)
+    objects = [_build_object(dict(sp, mode=mode), path, top["gradient"]) for sp in specs]
+    weights = with_weights(objects, top["weights"], [
         sp["alpha"] == "auto" and sp["alpha_u"] == "auto" and sp["offset"] is None
         and mode == "smooth" for sp in specs])
     desc = data.get("description", "")
-    march = March(mode=mode, beta=beta, eps=eps, tol=tol, newton=newton, max_steps=max_steps,
-                  gradient=gradient, weights=weights)
-    film = Film(width=width, height=height, samples=samples, adaptive=adaptive,
-                transparent=transparent, background=tuple(bg), shading=shading, matcap=matcap,
-                lighting=lighting)
+    march = March(**dict(_group(March, top), weights=weights))
     return with_default_eps(Scene(path=path, camera=pose, objects=objects,
                                   march=march, film=film, description=str(desc)))
+
+
+#: top-level settings the loader reads by rules of their own: ``offset`` per object
+#: (:func:`_object_spec`: an object's own wins), ``matcap`` a file (or an object's),
+#: ``shading`` "matcap" by default when a matcap is named, ``lighting`` an object of fields
+_OWN_RULES = {"offset", "matcap", "shading", "lighting"}
+#: the command-line flag of an override whose flag is not the key's (``--size W H``)
+_OVERRIDE_FLAGS = {"width": "--size width", "height": "--size height"}
+
+
+def _top_settings(data, overrides, path):
+    """``{key: value}`` of the scene file's top-level settings of the table (but
+    :data:`_OWN_RULES`), each checked (:func:`tracer.scenes.settings.check`): the command
+    line's override when given (named by its flag), else the file's value, else the file
+    default."""
+    if isinstance(data.get("newton"), bool) and overrides.get("newton") is None:
+        raise file_error(path, "newton", f"must be a number (a multiple of eps; 0 turns Newton "
+                                         f"steps off), got {show(data['newton'])}")
+    out = {}
+    for r in table():
+        if not r.scene_key or r.key in _OWN_RULES:
+            continue
+        if overrides.get(r.key) is not None:
+            out[r.key] = _setting(r.key, overrides[r.key], path,
+                                  _OVERRIDE_FLAGS.get(r.key, flag_of(r.key)))
+        elif r.key in data:
+            out[r.key] = _setting(r.key, data[r.key], path, r.key)
+        else:
+            out[r.key] = r.file
+    return out
+
+
+def _setting(key, value, path, where):
+    """:func:`tracer.scenes.settings.check` for a scene file (no null): a
+    :class:`~tracer.errors.SceneError` ``<file name>: <where> <problem>``."""
+    try:
+        return check(key, value, where, none=False)
+    except ValueError as exc:
+        raise SceneError(f"{os.path.basename(path)}: {exc}") from None
+
+
+def _group(cls, values):
+    """The values of ``cls``'s fields (a settings group) in ``values``, by name."""
+    return {f.name: values[f.name] for f in fields(cls) if f.name in values}
 
 
 def _projection(cam, overrides, path):
@@ -418,16 +417,6 @@ def default_eps(scene):
     if not ref > 0:
         ref = max(max(1.0 / o.alpha, o.offset) for o in scene.objects)
     return 1e-4 * max(ref, 1e-12)
-
-
-def _flag(data, overrides, key, path):
-    """A boolean top-level key (an override, when given, wins)."""
-    if overrides.get(key) is not None:
-        return bool(overrides[key])
-    value = data.get(key, _FILE[key])
-    if not isinstance(value, bool):
-        raise file_error(path, key, f"must be true or false, got {show(value)}")
-    return value
 
 
 def color(value, path, where):
@@ -560,9 +549,10 @@ def _part_spec(pd, base, path, where):
 
 def with_weights(objects, weights, automatic):
     """Give every object's field the weight scheme ``weights`` (one of
-    :data:`WEIGHT_CHOICES`; ``"auto"``: ``"inclusion-exclusion"`` when every object's surface is
-    the automatic one, ``automatic`` a bool per object, ``"paper"`` otherwise: one scheme per
-    scene, as its objects' trees make one forest). Returns the scheme."""
+    :data:`~tracer.scenes.settings.WEIGHT_CHOICES`; ``"auto"``: ``"inclusion-exclusion"`` when
+    every object's surface is the automatic one, ``automatic`` a bool per object, ``"paper"``
+    otherwise: one scheme per scene, as its objects' trees make one forest). Returns the
+    scheme."""
     if weights not in WEIGHT_CHOICES:
         raise ValueError(f"weights must be one of {', '.join(map(repr, WEIGHT_CHOICES))}, "
                          f"got {weights!r}")
@@ -650,18 +640,8 @@ def merge_meshes(meshes, name="mixed"):
                     triangles=np.concatenate(T), name=name)
 
 
-def scene_from_field(field, *, alpha, alpha_u=_API["alpha_u"], beta=_API["beta"],
-                     view=_API["view"], camera=None, width=_API["width"],
-                     height=_API["height"], mode=_API["mode"], eps=_API["eps"],
-                     offset=_API["offset"],
-                     shading=_API["shading"], matcap=_API["matcap"],
-                     gradient=_API["gradient"], name="scene", max_steps=_API["max_steps"],
-                     tol=_API["tol"], newton=_API["newton"], up=_API["up"],
-                     samples=_API["samples"], adaptive=_API["adaptive"],
-                     transparent=_API["transparent"], lighting=_API["lighting"],
-                     color=_API["color"], background=_API["background"],
-                     projection=_API["projection"], view_width=_API["view_width"],
-                     weights=_API["weights"]):
+@settings_entry("api")
+def scene_from_field(field, *, camera=None, name="scene", settings):
     """Build a one-object :class:`Scene` in code (no JSON), e.g. for parameter studies.
 
     Parameters
@@ -726,16 +706,10 @@ def scene_from_field(field, *, alpha, alpha_u=_API["alpha_u"], beta=_API["beta"]
         flat faces), or ``"auto"``: inclusion-exclusion for the automatic surface (alpha,
         alpha_u and offset ``"auto"``), the paper's otherwise. The scene's object gets
         ``field.with_weights(...)``; ``field`` itself is not changed.
+    name : str
+        The scene's name.
     """
-    return field_scene(
-        field, Surface(alpha=alpha, alpha_u=alpha_u, offset=offset, color=color),
-        March(mode=mode, beta=beta, eps=eps, tol=tol, newton=newton, max_steps=max_steps,
-              gradient=gradient, weights=weights),
-        Film(width=width, height=height, samples=samples, adaptive=adaptive,
-             transparent=transparent, background=background, shading=shading, matcap=matcap,
-             lighting=lighting),
-        View(view=view, up=up, projection=projection, view_width=view_width), camera=camera,
-        name=name)
+    return field_scene(field, *settings, camera=camera, name=name)
 
 
 def field_scene(field, surface, march, film, view=View(), camera=None, name="scene"):
@@ -744,24 +718,40 @@ def field_scene(field, surface, march, film, view=View(), camera=None, name="sce
     ``march``, ``film`` and ``view`` hold the keyword arguments of the same names, unchecked;
     each is checked here (a ``ValueError`` naming the setting) and the scene holds the checked
     groups. ``camera`` as in :func:`scene_from_field`."""
-    if march.mode not in MODES:
-        raise ValueError(f"mode must be one of {MODES}, got {march.mode!r}")
-    if film.shading not in SHADINGS:
-        raise ValueError(f"shading must be one of {SHADINGS}, got {film.shading!r}")
+    surface, march, film = (_checked(surface, _API_CHECKED), _checked(march, _API_CHECKED),
+                            _checked(film, _API_CHECKED))
+    if film.width * film.height > MAX_PIXELS:
+        raise ValueError(f"width x height is {film.width}x{film.height}: larger than "
+                         f"{MAX_PIXELS // 1_000_000} megapixels")
     automatic = automatic_surface(surface, march)
     surface, beta = _api_surface(field, surface, march)
-    march = _api_march(march, beta)
-    film = _api_film(film)
-    color = None if surface.color is None else check_color(surface.color, "color")
+    march = dataclasses.replace(march, beta=beta, newton=_NEWTON if march.newton is None
+                                else march.newton)
     camera = _api_camera(field, _view_or_camera(view.view, camera), surface, march, film, view)
     offset = surface.offset
     obj = SceneObject(name=name, field=field, alpha=surface.alpha, alpha_u=surface.alpha_u,
                       beta=beta, offset=offset if offset is not None else 1.0 / surface.alpha,
-                      matcap=film.matcap, color=color,
+                      matcap=film.matcap, color=surface.color,
                       smooth_offset=offset if offset is not None else 0.0)
     march = dataclasses.replace(march, weights=with_weights([obj], march.weights, [automatic]))
     return with_default_eps(Scene(path=f"{name}.json", camera=camera, objects=[obj],
                                   march=march, film=film))
+
+
+#: the settings :func:`field_scene` checks (:func:`tracer.scenes.settings.check`); the view's
+#: are the camera's (:func:`_api_camera`), ``matcap`` is read by the renderer (a path)
+_API_CHECKED = {"alpha", "alpha_u", "offset", "color", "mode", "beta", "eps", "tol", "newton",
+                "max_steps", "gradient", "weights", "width", "height", "samples", "adaptive",
+                "transparent", "background", "shading", "lighting"}
+#: ``newton=None`` of :func:`scene_from_field`: the default
+_NEWTON = March().newton
+
+
+def _checked(group, keys):
+    """``group`` (a frozen settings group) with its fields in ``keys`` checked and normalised
+    (:func:`tracer.scenes.settings.check`: a ``ValueError`` naming the keyword)."""
+    return dataclasses.replace(group, **{f.name: check(f.name, getattr(group, f.name))
+                                         for f in fields(group) if f.name in keys})
 
 
 def automatic_surface(surface, march):
@@ -774,7 +764,8 @@ def automatic_surface(surface, march):
 
 def _api_surface(field, surface, march):
     """``(surface, beta)`` of :func:`field_scene`: ``"auto"`` and ``"off"`` resolved, alpha,
-    alpha_U, beta and the offset checked (``offset`` None: the mode's default level)."""
+    alpha_U and beta checked together against the data (``offset`` None: the mode's default
+    level)."""
     alpha, alpha_u, offset = surface.alpha, surface.alpha_u, surface.offset
     if automatic_surface(surface, march):
         # all three left to "auto": chosen together (issue 35; see
@@ -789,57 +780,7 @@ def _api_surface(field, surface, march):
         else alpha_u
     # validates alpha, beta and alpha_U together
     alpha, beta, _, _ = field.kernel_args(alpha, march.beta, alpha_u, march.gradient)
-    if offset is not None:
-        offset = _api_number(offset, "offset", non_negative=True)
     return dataclasses.replace(surface, alpha=alpha, alpha_u=float(alpha_u), offset=offset), beta
-
-
-def _api_march(march, beta):
-    """:func:`field_scene`'s ``march`` checked, with the checked ``beta``."""
-    eps = None if march.eps is None else _api_number(march.eps, "eps", positive=True)
-    tol = _api_number(march.tol, "tol", non_negative=True)
-    newton = (_API["newton"] if march.newton is None else
-              _api_number(march.newton, "newton", non_negative=True))
-    max_steps = int(_api_number(march.max_steps, "max_steps", positive=True, integer=True))
-    if max_steps > MAX_STEPS:
-        raise ValueError(f"max_steps must be at most {MAX_STEPS}, got {max_steps}")
-    return dataclasses.replace(march, beta=beta, eps=eps, tol=tol, newton=newton,
-                               max_steps=max_steps)
-
-
-def _api_film(film):
-    """:func:`field_scene`'s ``film`` checked: size, samples, lighting and background."""
-    width = int(_api_number(film.width, "width", positive=True, integer=True))
-    height = int(_api_number(film.height, "height", positive=True, integer=True))
-    if width * height > MAX_PIXELS:
-        raise ValueError(f"width x height is {width}x{height}: larger than "
-                         f"{MAX_PIXELS // 1_000_000} megapixels")
-    samples = int(_api_number(film.samples, "samples", positive=True, integer=True))
-    if samples > MAX_SAMPLES:
-        raise ValueError(f"samples must be at most {MAX_SAMPLES}, got {samples}")
-    lighting = _api_lighting(film.lighting)
-    background = tuple(int(round(v)) for v in check_color(film.background, "background"))
-    return dataclasses.replace(film, width=width, height=height, samples=samples,
-                               adaptive=bool(film.adaptive),
-                               transparent=bool(film.transparent), lighting=lighting,
-                               background=background)
-
-
-def _api_lighting(lighting):
-    """``lighting`` of :func:`scene_from_field` (None, a dict of fields or a
-    :class:`~tracer.rendering.lighting.Lighting`) as a ``Lighting``."""
-    if lighting is None:
-        return Lighting()
-    if isinstance(lighting, dict):
-        unknown = sorted(set(lighting) - _LIGHTING_KEYS)
-        if unknown:
-            raise ValueError(f"lighting has unknown key(s) {', '.join(map(repr, unknown))} "
-                             f"(allowed: {', '.join(sorted(_LIGHTING_KEYS))})")
-        return Lighting(**lighting)
-    if not isinstance(lighting, Lighting):
-        raise ValueError(f"lighting must be a tracer.rendering.lighting.Lighting or a dict, got "
-                         f"{type(lighting).__name__}")
-    return lighting
 
 
 def _view_or_camera(view, camera):
@@ -896,12 +837,3 @@ def _api_camera(field, camera, surface, march, film, view):
     pose = LookAt(origin, dest, up, projection, view_width)
     pose.camera(film.width, film.height)  # validates the camera
     return pose
-
-
-def _api_number(value, name, **kw):
-    """:func:`tracer.validate.number` for keyword arguments: a ``ValueError`` naming the
-    argument."""
-    try:
-        return number(value, "", name, **kw)
-    except SceneError as exc:
-        raise ValueError(str(exc).lstrip(": ")) from None

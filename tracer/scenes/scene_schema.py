@@ -12,6 +12,14 @@ module
 * renders it as the Markdown reference ``docs/scene-format.md`` (:func:`markdown`):
   ``python -m tracer.scenes.scene_schema > docs/scene-format.md``.
 
+The settings' keys (``width``, ``beta``, ``mode``, ...: every top-level key of the table of
+:mod:`tracer.scenes.settings` but ``lighting``, whose node lists the fields of
+:class:`~tracer.rendering.lighting.Lighting`) are made from the table
+(:func:`setting_properties`: type, choices, range, default, description, example);
+``python -m tracer.scenes.scene_schema --write-schema`` writes them into the file, and a test
+checks that the file holds what the table makes (:func:`generated_schema`). The rest of the
+schema (camera, objects, parts, lighting) is written by hand.
+
 ``tests/tracer/scenes/test_scene_schema.py`` keeps the schema, the docs and
 :mod:`tracer.scenes.scene` equal.
 """
@@ -19,6 +27,9 @@ module
 import json
 import os
 import sys
+
+from tracer.rendering.lighting import Lighting
+from tracer.scenes.settings import RGB, table
 
 SCHEMA_PATH = os.path.join(os.path.dirname(os.path.abspath(__file__)), "scene.schema.json")
 
@@ -49,6 +60,101 @@ def sections(schema=None):
             ("lighting", "lighting.", props["lighting"]),
             ("objects[i]", "objects[i].", schema["$defs"]["object"]),
             ("objects[i].parts[j]", "objects[i].parts[j].", schema["$defs"]["part"])]
+
+
+# ---------------------------------------------------------------------- made from the table
+#: JSON Schema types of the settings' kinds
+_JSON_TYPES = {float: "number", int: "integer", bool: "boolean", str: "string"}
+
+
+def setting_properties():
+    """``{key: node}``: the schema of each top-level setting key of the table
+    (:mod:`tracer.scenes.settings`) but ``lighting`` (an object of fields, written by hand)."""
+    return {r.key: _setting_node(r) for r in table() if r.scene_key and r.kind is not Lighting}
+
+
+def _json_number(value):
+    """A number as the schema writes it (``0``, not ``0.0``)."""
+    return int(value) if isinstance(value, float) and value.is_integer() else value
+
+
+def _setting_node(r):
+    """The schema of one setting (a :class:`~tracer.scenes.settings.Row`)."""
+    if r.choices:
+        node = {"enum": list(r.choices)}
+    elif r.kind == RGB:
+        node = {"type": "array", "items": {"type": _JSON_TYPES[r.item], "minimum": 0,
+                                           "maximum": 255}, "minItems": 3, "maxItems": 3}
+    else:
+        node = {"type": _JSON_TYPES[r.kind]}
+    if r.above is not None:     # an integer > n is one >= n + 1
+        node.update({"minimum": r.above + 1} if r.kind is int else
+                    {"exclusiveMinimum": _json_number(r.above)})
+    if r.at_least is not None:
+        node["minimum"] = _json_number(r.at_least)
+    if r.at_most is not None:
+        node["maximum"] = _json_number(r.at_most)
+    if r.text:
+        node["x-default"] = r.text
+    else:
+        node["default"] = (list(r.file) if isinstance(r.file, tuple) else
+                           _json_number(r.file))
+    node["description"] = r.doc or r.help[0].upper() + r.help[1:] + "."
+    if r.example is not None:
+        node["examples"] = [r.example]
+    return node
+
+
+def generated_schema(schema=None):
+    """The schema (default: the file's) with its settings' keys as the table makes them
+    (:func:`setting_properties`): each in its place, a new one before ``description``."""
+    schema = json.loads(json.dumps(schema or load_schema()))
+    made = setting_properties()
+    props = {}
+    for key, node in schema["properties"].items():
+        if key == "description":
+            props.update({k: v for k, v in made.items() if k not in schema["properties"]})
+        props[key] = made.get(key, node)
+    schema["properties"] = props
+    return schema
+
+
+def schema_text(schema):
+    """The schema file's text: the layout of ``scene.schema.json`` (one line per key of a
+    table, objects with properties spread over lines)."""
+    return _layout(schema, 0) + "\n"
+
+
+def _layout(node, depth):
+    """``node`` as JSON: a dict with ``properties`` (or ``items`` naming a definition, or a
+    table of named nodes: the root's ``properties`` and ``$defs``) over several lines, every
+    other value on one."""
+    spread = isinstance(node, dict) and (
+        depth == 0 or "properties" in node or "$ref" in node.get("items", {})
+        or node.get("_table"))
+    if not spread:
+        return json.dumps(node, ensure_ascii=False)
+    pad = "  " * (depth + 1)
+    lines = []
+    for key, value in node.items():
+        if key == "_table":
+            continue
+        if key in ("properties", "$defs") and isinstance(value, dict):
+            value = dict(value, _table=True)
+        lines.append(f"{pad}{json.dumps(key)}: {_layout(value, depth + 1)}")
+    return "{\n" + ",\n".join(lines) + "\n" + "  " * depth + "}"
+
+
+def write_schema(path=SCHEMA_PATH):
+    """Write the schema file with its settings' keys made from the table
+    (:func:`generated_schema`); returns whether it changed."""
+    text = schema_text(generated_schema())
+    with open(path, encoding="utf-8") as fh:
+        old = fh.read()
+    if text != old:
+        with open(path, "w", encoding="utf-8") as fh:
+            fh.write(text)
+    return text != old
 
 
 # ---------------------------------------------------------------------- validation
@@ -189,9 +295,14 @@ def markdown(schema=None):
 
 
 def main(argv=None):
-    """``python -m tracer.scenes.scene_schema [--check FILE]``: print the Markdown reference, or
-    exit 1 when FILE differs from it."""
+    """``python -m tracer.scenes.scene_schema [--check FILE | --write-schema]``: print the
+    Markdown reference, or exit 1 when FILE differs from it, or write the settings' keys of
+    the schema file from the table (:func:`write_schema`)."""
     argv = list(sys.argv[1:] if argv is None else argv)
+    if argv == ["--write-schema"]:
+        changed = write_schema()
+        print(f"{SCHEMA_PATH} {'written' if changed else 'is up to date'}")
+        return 0
     text = markdown()
     if argv[:1] == ["--check"] and len(argv) == 2:
         with open(argv[1], encoding="utf-8") as fh:
