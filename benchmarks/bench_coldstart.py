@@ -20,6 +20,11 @@ trimesh's ``icosphere(3)``, its 1,920 edges, its 642 vertices, 2,000 points on a
   (``scenes/bunny_triangles.json --shading lit --samples 16 --adaptive``);
 * ``sim``: ``tracer simulate scenes/simulations/ico_bowl.json --steps 1 --no-render``.
 
+Each render case also runs once more with a new empty cache and its film's kernels compiled
+in a second process beside it (``cold_ahead``: ``tracer.scenes.compile_ahead``, what ``tracer
+render`` does on a machine with two cores; the ``cold`` run has it off, so that one process
+compiles, and counts, every kernel); its ``cpu_children_s`` is that second process's CPU.
+
 With ``--copies`` (issue 63) each case also runs (a) in a second copy of the source (its
 ``smoothdist`` and ``tracer`` folders copied elsewhere, as a fresh clone, a new virtual
 environment or another install of the same version would be) with the cache the first run
@@ -111,7 +116,9 @@ else:
     rc = tracer.cli.main(args)
 wall = time.perf_counter() - t0
 ru = resource.getrusage(resource.RUSAGE_SELF)
+kids = resource.getrusage(resource.RUSAGE_CHILDREN)     # a render's compile-ahead child
 print(json.dumps({"rc": rc, "in_process_s": wall, "cpu_s": ru.ru_utime + ru.ru_stime,
+                  "cpu_children_s": kids.ru_utime + kids.ru_stime,
                   "compiled": sum(compiled.values()), "kernels": dict(sorted(compiled.items()))}))
 """
 
@@ -176,10 +183,13 @@ def write_inputs(folder):
     return cases
 
 
-def run(args, cache, work, threads, source):
+def run(args, cache, work, threads, source, ahead=False):
     """One child process: ``args`` as given by :func:`write_inputs`, with the kernel cache in
-    ``cache`` and ``source`` (a checkout) first on the path."""
-    env = dict(os.environ, NUMBA_CACHE_DIR=str(cache), MPLBACKEND="Agg")
+    ``cache`` and ``source`` (a checkout) first on the path; ``ahead``: a render may compile
+    its film's kernels in a second process (``tracer.scenes.compile_ahead``; off otherwise, so
+    that one process compiles every kernel and ``compiled`` counts them all)."""
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(cache), MPLBACKEND="Agg",
+               TRACER_COMPILE_AHEAD="on" if ahead else "off")
     env.pop("SMOOTHDIST_CACHE_DIR", None)  # the kernels' cache: $NUMBA_CACHE_DIR/smoothdist
     env["PYTHONPATH"] = str(source) + os.pathsep + env.get("PYTHONPATH", "")
     if args[0] == "library":
@@ -301,6 +311,10 @@ def main(argv=None):
             warm = run(inputs[case], cache, work, args.threads, source)
             r = results["cases"][case] = {"command": describe(case, inputs[case], work),
                                           "cold": cold, "warm": warm}
+            if case in RENDERS:     # the same first render, its film compiled alongside
+                ahead = work / f"cache-{case}-ahead"
+                ahead.mkdir()
+                r["cold_ahead"] = run(inputs[case], ahead, work, args.threads, source, True)
             extra = ""
             if args.copies:
                 r["second_copy"] = run(inputs[case], cache, work, args.threads, second)
@@ -309,6 +323,10 @@ def main(argv=None):
                 r["after_warmup"] = run(inputs[case], mine, work, args.threads, source)
                 extra = (f"  {r['second_copy']['cpu_s']:11.1f}  "
                          f"{r['after_warmup']['cpu_s']:16.1f}")
+            if "cold_ahead" in r:
+                a = r["cold_ahead"]
+                extra += (f"  ahead {a['wall_s']:.1f} s wall, "
+                          f"{a['cpu_s'] + a['cpu_children_s']:.1f} s CPU")
             print(f"{case:15} {cold['wall_s']:7.1f} {cold['cpu_s']:6.1f} {warm['wall_s']:7.1f} "
                   f"{cold['compiled']:9d} {cold['load_before']:4.1f}-{cold['load_after']:.1f}"
                   f"{extra}", flush=True)

@@ -16,6 +16,7 @@ Usage::
     python benchmarks/tables.py registers benchmarks/data/cuda_registers.json
     python benchmarks/tables.py build-scale benchmarks/data/build_scale.json
     python benchmarks/tables.py coldstart-copies benchmarks/data/coldstart_issue63.json
+    python benchmarks/tables.py coldstart-ahead benchmarks/data/coldstart.json
 """
 
 import argparse
@@ -130,6 +131,30 @@ def coldstart_copies_table(path):
               f"{w['cpu_s']:.1f} s CPU (its child processes), {w['compiled']} specialisations "
               f"compiled, on {w['cores']} cores.",
               "", f"{d['date']}, commit {(d.get('commit') or '?')[:10]}"
+              f"{' (dirty)' if d.get('dirty') else ''}, {d['machine']['cores']} cores, Python "
+              f"{d['machine']['python']}, load average {min(loads):.1f}-{max(loads):.1f}"]
+    return "\n".join(lines)
+
+
+def coldstart_ahead_table(path):
+    """Issue 63's compile-ahead table of a ``bench_coldstart.py`` results file: per render case
+    its first render with an empty cache in one process (``cold``) and with the light's kernels
+    compiled in a second process beside it (``cold_ahead``: both processes' CPU), and the
+    ratio of their wall seconds."""
+    d = _load(path)
+    cells = ["first render (empty cache)", "one process: CPU s", "wall s",
+             "light compiled alongside: CPU s", "wall s", "wall ratio"]
+    lines = ["| " + " | ".join(cells) + " |", "|" + "---|" * len(cells)]
+    loads = []
+    for r in d["cases"].values():
+        if "cold_ahead" not in r:
+            continue
+        c, a = r["cold"], r["cold_ahead"]
+        lines.append(f"| `{r['command']}` | {c['cpu_s']:.1f} | {c['wall_s']:.1f} | "
+                     f"{a['cpu_s'] + a['cpu_children_s']:.1f} | {a['wall_s']:.1f} | "
+                     f"{a['wall_s'] / c['wall_s']:.2f} |")
+        loads += [c["load_before"], c["load_after"], a["load_before"], a["load_after"]]
+    lines += ["", f"{d['date']}, commit {(d.get('commit') or '?')[:10]}"
               f"{' (dirty)' if d.get('dirty') else ''}, {d['machine']['cores']} cores, Python "
               f"{d['machine']['python']}, load average {min(loads):.1f}-{max(loads):.1f}"]
     return "\n".join(lines)
@@ -416,7 +441,7 @@ TABLES = {"scaling": scaling_table, "gpu": gpu_table, "coldstart": coldstart_tab
           "coldstart-steps": coldstart_steps_table, "exact-mix": exact_mix_table,
           "smooth-cost": smooth_cost_table, "mesh-distance": mesh_distance_table,
           "registers": registers_table, "build-scale": build_scale_table,
-          "coldstart-copies": coldstart_copies_table}
+          "coldstart-copies": coldstart_copies_table, "coldstart-ahead": coldstart_ahead_table}
 
 
 def main(argv=None):

@@ -25,11 +25,14 @@ import sys
 import time
 
 import numpy as np
+from numba.core.dispatcher import Dispatcher
 
 import smoothdist as sd
 from smoothdist import _kernel_cache
+from smoothdist._kernels import bvh
 
-__all__ = ["JOBS", "run", "jobs_of", "main"]
+__all__ = ["JOBS", "run", "jobs_of", "main", "cache_folder", "switched_off",
+           "build_trees_in_python"]
 
 #: runs in a child process: ``module.JOBS[name]()``, then one JSON line with what it compiled
 CHILD = r"""
@@ -57,6 +60,27 @@ ru = resource.getrusage(resource.RUSAGE_SELF)
 print(json.dumps({"compiled": sum(compiled.values()), "kernels": compiled,
                   "cpu_s": ru.ru_utime + ru.ru_stime, "wall_s": time.perf_counter() - t0}))
 """
+
+
+def cache_folder():
+    """This copy's folder of the per-machine kernel cache (:mod:`smoothdist._kernel_cache`), or
+    None when it is switched off: where a warm-up's kernels land."""
+    return _kernel_cache.folder()
+
+
+def switched_off(value):
+    """Whether an environment variable's ``value`` says off (``off``, ``0``, ``no``,
+    ``false``), as ``SMOOTHDIST_CACHE_DIR=off`` does."""
+    return str(value).strip().lower() in _kernel_cache.OFF
+
+
+def build_trees_in_python():
+    """Make this process build trees (:class:`smoothdist.SmoothDistanceField`) with the pure
+    Python functions of the build kernels: nothing compiled, for a process that compiles other
+    kernels ahead on a tiny mesh (``tracer.scenes.compile_ahead``). Slow on a real mesh."""
+    for name, value in list(vars(bvh).items()):
+        if isinstance(value, Dispatcher):
+            setattr(bvh, name, value.py_func)
 
 
 def sphere(level):

@@ -34,6 +34,10 @@ SEED = 20220722
 SHARED_DATA = (TESTS.parent / ".." / "shared" / "data").resolve()
 if (SHARED_DATA / "README.md").is_file():
     os.environ.setdefault("SMOOTHDIST_DATA", str(SHARED_DATA))
+#: no child processes compiling a first render's film kernels beside the test workers (they
+#: share a cold cache at the start of a CI run, and the workers already use every core);
+#: tests/tracer/scenes/test_compile_ahead.py tests them on purpose
+os.environ.setdefault("TRACER_COMPILE_AHEAD", "off")
 
 ZOO_NAMES = ("point_cloud", "circle", "segment_star", "icosphere", "cube", "mixed_mesh",
              "nonmanifold_mesh")

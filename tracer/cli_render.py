@@ -10,6 +10,7 @@ import numpy as np
 
 from smoothdist.cuda import CudaUnavailable, cuda_module
 from smoothdist.mesh import MESH_EXTENSIONS, needs_trimesh
+from tracer.compiling import ahead_allowed
 from tracer.errors import CLIError
 from tracer.image import false_color, save_npy, save_png
 from tracer.outputs import atomic_write, check_outputs, make_parents
@@ -262,7 +263,8 @@ def run(args):
                args.save_scene, args.stage_times]
     check_outputs(outputs, args.overwrite, create=False)
     clock = StageClock(name, quiet=args.quiet)
-    with clock:
+    # a first render may compile its film's kernels in a second process (compile_ahead)
+    with clock, ahead_allowed(args.device == "cpu"):
         _render_and_write(args, source, overrides, name, out, outputs)
     if args.stage_times:
         with atomic_write(args.stage_times, overwrite=args.overwrite) as tmp:

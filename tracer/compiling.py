@@ -8,14 +8,30 @@ ETA tens of times too long. :func:`compile_watch` registers one listener of numb
 compiling now and computes the time left from the progress made since the last compilation
 ended. :class:`tracer.rendering.frame.ProgressBar` and :class:`tracer.runner.StudyProgress` show
 :data:`COMPILING` while numba compiles.
+
+A first render can compile its film's kernels in a second process meanwhile
+(:mod:`tracer.scenes.compile_ahead`): :func:`start_ahead` starts that child where it helps (within
+:func:`ahead_allowed`), :func:`wait_ahead` waits for it before the film.
 """
 
+import atexit
+import glob
+import json
+import os
+import select
+import subprocess
+import sys
 import threading
 import time
+from contextlib import contextmanager
 
 from numba.core import event
 
-__all__ = ["COMPILING", "CompileWatch", "compile_watch", "Eta"]
+from smoothdist.warmup import cache_folder, switched_off
+
+__all__ = ["COMPILING", "CompileWatch", "compile_watch", "Eta", "ahead", "wait_ahead",
+           "AHEAD_WAIT", "AHEAD_ENV", "AHEAD_TAGS", "ahead_allowed", "ahead_config", "ahead_needed",
+           "start_ahead"]
 
 #: what the progress displays say while numba compiles
 COMPILING = "compiling kernels (once per machine)"
@@ -100,3 +116,148 @@ class Eta:
         if self.watch.compiling or frac <= f0 or elapsed <= e0:
             return None
         return (elapsed - e0) * (1.0 - frac) / (frac - f0)
+
+
+# ------------------------------------------------------------- compiling in another process
+#: the environment variable that turns compiling ahead off (``off``, ``0``, ``no``, ``false``)
+AHEAD_ENV = "TRACER_COMPILE_AHEAD"
+#: the film's own kernel whose cache index says that the film's kernels are compiled
+AHEAD_MARKER = os.path.join("tracer.rendering", "lighting.light_tasks-*.nbi")
+#: the child's code: :func:`tracer.scenes.compile_ahead.child_main` of its JSON argument
+AHEAD_CHILD = ("import sys; from tracer.scenes import compile_ahead; "
+               "compile_ahead.child_main(sys.argv[1])")
+_AHEAD = []
+_ALLOWED = []
+
+
+@contextmanager
+def ahead_allowed(on=True):
+    """Within this block :func:`start_ahead` may start a child (``on`` False: may not): the
+    entry points that own their process and render once on the CPU (``tracer render``,
+    :func:`tracer.render_mesh`) allow it."""
+    _ALLOWED.append(bool(on))
+    try:
+        yield
+    finally:
+        _ALLOWED.pop()
+
+
+def ahead_config(march, film, objects):
+    """What the child's scene copies (a dict for JSON; :mod:`tracer.scenes.compile_ahead`): the
+    number of ``objects``, the ``mode``, ``tol`` and ``beta`` of the scene's ``march`` settings
+    and the settings of its ``film`` that choose the film's kernels."""
+    return {"objects": int(objects), "mode": str(march.mode), "tol": float(march.tol),
+            "beta": float(march.beta), "shading": str(film.shading),
+            "samples": int(film.samples), "adaptive": bool(film.adaptive),
+            "transparent": bool(film.transparent)}
+
+
+def ahead_needed(cfg):
+    """Whether a render of ``cfg`` (:func:`ahead_config`) lights its hits with kernels that a
+    child should compile now: the lit shading, compiling ahead allowed and not turned off, a
+    second core, the per-machine kernel cache (``smoothdist.warmup.cache_folder``) active
+    and without them."""
+    if not (_ALLOWED and _ALLOWED[-1]) or switched_off(os.environ.get(AHEAD_ENV, "")):
+        return False
+    if cfg["shading"] != "lit":
+        return False        # no light: the film's other kernels are mostly the trace's
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    if (cores or 1) < 2:
+        return False
+    folder = cache_folder()
+    return folder is not None and not glob.glob(os.path.join(folder, AHEAD_MARKER))
+
+
+def start_ahead(march, film, objects):
+    """Start a child that compiles the film kernels of a render with these settings (``march``,
+    ``film``: the scene's groups, given before they are checked; ``objects``: how many) when
+    :func:`ahead_needed`, registered with :func:`ahead`. Returns whether one started."""
+    try:
+        cfg = ahead_config(march, film, objects)
+    except (TypeError, ValueError, AttributeError):
+        return False        # a setting the scene's own checks will refuse, with a message
+    if not ahead_needed(cfg):
+        return False
+    try:
+        # unbuffered: a line read leaves nothing behind in a buffer that select cannot see
+        p = subprocess.Popen([sys.executable, "-c", AHEAD_CHILD, json.dumps(cfg)],
+                             stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
+                             stderr=subprocess.DEVNULL, bufsize=0)
+    except OSError:         # no process to spare: this one compiles, as before
+        return False
+    ahead(p)
+    return True
+#: the longest a render waits for a child compiling its film's kernels (seconds): then it
+#: compiles what is left itself
+AHEAD_WAIT = 300.0
+
+
+def ahead(process):
+    """Register ``process`` (a ``subprocess.Popen`` whose stdout is an unbuffered pipe), a child
+    compiling kernels this process will need into the per-machine cache
+    (:mod:`tracer.scenes.compile_ahead`); it prints a line with a tag as each group of them is
+    done (:data:`AHEAD_TAGS`)."""
+    process.tags = set()
+    with _LOCK:
+        _AHEAD.append(process)
+
+
+#: what a child says when a group of kernels is in the cache: ``"distance"`` the scene's
+#: distance (:func:`tracer.rendering.march.distance_at` and its callees, which the trace
+#: shares), ``"done"`` everything
+AHEAD_TAGS = ("distance", "done")
+
+
+def wait_ahead(tag="done", timeout=AHEAD_WAIT):
+    """Wait until every child of :func:`ahead` has said ``tag`` (:data:`AHEAD_TAGS`), or
+    ended: this process then loads those kernels instead of compiling them again. At
+    ``"done"`` the children are forgotten; one still running after ``timeout`` seconds is
+    stopped. Returns the seconds waited."""
+    t0 = time.perf_counter()
+    with _LOCK:
+        pending = list(_AHEAD)
+        if tag == "done":
+            _AHEAD[:] = []
+    for p in pending:
+        try:
+            _read_until(p, tag, t0 + timeout)
+            if tag == "done":
+                p.wait(max(0.0, t0 + timeout - time.perf_counter()))
+                _stop(p)
+        except BaseException as exc:    # too long, or interrupted: the child stops too
+            _stop(p)
+            if not isinstance(exc, (subprocess.TimeoutExpired, TimeoutError)):
+                raise
+    return time.perf_counter() - t0
+
+
+def _read_until(p, tag, deadline):
+    """Read ``p``'s lines until it has said ``tag`` or closed its output; TimeoutError at
+    ``deadline`` (``time.perf_counter()``)."""
+    while tag not in p.tags and p.stdout is not None and not p.stdout.closed:
+        left = deadline - time.perf_counter()
+        if left <= 0 or not select.select([p.stdout], [], [], left)[0]:
+            raise TimeoutError(tag)
+        line = p.stdout.readline()
+        if not line:        # the child ended (or failed): nothing more will come
+            p.stdout.close()
+            return
+        p.tags.add(line.decode("ascii", "replace").strip())
+
+
+def _stop(p):
+    if p.poll() is None:
+        p.kill()
+    p.wait()
+    if p.stdout is not None:
+        p.stdout.close()
+
+
+@atexit.register
+def _stop_ahead():
+    """A process that ends before its render's film stops its children (they would only
+    finish compiling into the cache)."""
+    with _LOCK:
+        pending, _AHEAD[:] = list(_AHEAD), []
+    for p in pending:
+        _stop(p)

@@ -46,6 +46,7 @@ from smoothdist.schedule import parallel_tasks, run_tasks
 from tracer.rendering import lighting as _lighting
 from tracer.rendering import march
 from tracer.rendering.camera import box_corners, primary_rays, ray_origins, sample_rays
+from tracer.compiling import wait_ahead
 from tracer.rendering.frame import (LightArgs, LightBuffers, MarchArgs, SampleBuffers,
                                     SampleRays, TraceOptions)
 from tracer.rendering.shading import (load_matcap, shade_headlight, shade_matcap, shade_normals,
@@ -835,6 +836,7 @@ def form_image(scene, camera, arrays, kargs, options, centre, gpu=None, progress
         centre_normals = (H, W, np.where(hit0, objs0, -1), t0, _unit(grad0))
     tell = progress or (lambda fraction: None)
     tell(0.1 if skargs is not None else 0.0)
+    wait_ahead()    # a child compiling the light's kernels ends first (compile_ahead)
     shader = _Shader(scene, camera, arrays, kargs, gpu)
     colour0, alpha0, rec0 = shader.shade(hit0, t0, grad0, rays0, grid=(H, W), objs=objs0)
     tell(0.5 if samples > 1 else 0.9)

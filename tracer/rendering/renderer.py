@@ -12,6 +12,7 @@ import time
 import numpy as np
 
 from smoothdist.cuda import check_device, cuda_module
+from tracer.compiling import wait_ahead
 from tracer.rendering import march
 from tracer.rendering.camera import image_size
 from tracer.rendering.film import form_image
@@ -90,6 +91,7 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
     camera = camera_of(scene)
     arrays = scene_arrays(scene, transforms)
     tree, roots, params, mode, lo, hi, depth_max, tol = arrays
+    wait_ahead("distance")      # a child compiling the scene's distance (compile_ahead) first
     check_camera_outside(scene, arrays)
     film = scene.film
     H, W = film.height, film.width

@@ -20,6 +20,7 @@ import smoothdist
 from smoothdist import DataMesh, SmoothDistanceField
 from smoothdist.convert import is_foreign_geometry
 from smoothdist.field import AUTO_RANDOM_SPREAD
+from tracer.compiling import ahead_allowed, start_ahead
 from tracer.errors import ThinFeatureWarning, user_stacklevel
 from tracer.rendering.camera import UP_AXES, LookAt, frame_points, frame_width
 from tracer.rendering.renderer import render
@@ -163,6 +164,7 @@ def build_mesh_scene(mesh, F, kind, surface, march, film, view, camera=None, nam
     several = is_mesh_list(mesh)
     if several and F is not None:
         raise ValueError("F must be None with a list of meshes: give (V, F) pairs")
+    start_ahead(march, film, len(mesh) if several else 1)     # where it helps and is allowed
     if several:
         return _several_objects(mesh, kind, surface, march, film, view, camera, name)
     up = view.up
@@ -497,7 +499,8 @@ def render_mesh(mesh, F=None, *, kind=None, camera=None, progress="auto", device
     talk = progress is True or (isinstance(progress, str) and progress == "auto")
     label = (os.path.splitext(os.path.basename(os.fspath(mesh)))[0]
              if isinstance(mesh, (str, os.PathLike)) else "render_mesh")
-    with StageClock(label, quiet=not talk):
+    # a first render may compile its film's kernels in a second process (compile_ahead)
+    with StageClock(label, quiet=not talk), ahead_allowed(device == "cpu"):
         scene = build_mesh_scene(mesh, F, kind, *settings, camera=camera)
         return render(scene, progress=progress, device=device)
 

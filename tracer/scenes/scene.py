@@ -56,6 +56,7 @@ import numpy as np
 
 import smoothdist
 from smoothdist import DataMesh, SmoothDistanceField
+from tracer.compiling import start_ahead
 from tracer.errors import SceneError, user_stacklevel
 from tracer.rendering.camera import (PROJECTIONS, LookAt, check_projection, frame_points,
                                       frame_width, look_at)
@@ -328,9 +329,11 @@ def load_scene(path, overrides=None):
                                                _FILE["shading"]), path, "shading")
     if shading == "matcap" and not matcap:
         raise file_error(path, "shading", "is 'matcap' but no matcap file is given (key 'matcap')")
-    # everything checked: now read the meshes and build the fields
+    # everything checked: now read the meshes and build the fields (a first render may compile
+    # its film's kernels meanwhile, in a second process: tracer.scenes.compile_ahead)
     mode = top["mode"]
     film = Film(**_group(Film, top), shading=shading, matcap=matcap, lighting=lighting)
+    start_ahead(March(**_group(March, top)), film, len(specs))
     objects = [_build_object(dict(sp, mode=mode), path, top["gradient"]) for sp in specs]
     weights = with_weights(objects, top["weights"], [
         sp["alpha"] == "auto" and sp["alpha_u"] == "auto" and sp["offset"] is None

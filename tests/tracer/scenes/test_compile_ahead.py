@@ -1,0 +1,130 @@
+"""A first render's light kernels compiled in a child process (``tracer.scenes.compile_ahead``).
+
+* On an empty cache ``tracer render``'s child compiles the scene's distance and the light's
+  kernels with the types the render calls them with: the render compiles none of them (it loads
+  them), and its image is byte for byte the one of a render that compiled everything itself.
+* :func:`~tracer.compiling.ahead_needed` starts nothing where it cannot help: outside an
+  entry point that allows it, turned off, one core, a film without kernels of its own, a cache
+  that holds them already.
+* A child that fails or hangs never fails the render: :func:`tracer.compiling.wait_ahead` stops
+  it after its timeout.
+"""
+
+import json
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from smoothdist.warmup import cache_folder
+from tracer import compiling
+from tracer.scenes.settings import Film, March
+
+ROOT = Path(__file__).resolve().parents[3]
+BUNNY = ROOT / "scenes" / "data" / "bunny.off"
+CORES = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+#: the light's top-level kernels (what a lit render's film calls from Python for its light)
+LIGHT_KERNELS = ("tracer.rendering.lighting.light_tasks", "tracer.rendering.lighting._lowest_hit")
+#: the scene's distance, which the child compiles first (the render's camera check calls it)
+DISTANCE = "tracer.rendering.march.distance_at"
+
+RENDER = r"""
+import json, sys
+from numba.core import event
+compiled = {}
+class Count(event.Listener):
+    def on_start(self, ev):
+        pass
+    def on_end(self, ev):
+        fn = getattr(ev.data.get("dispatcher"), "py_func", None)
+        name = f"{getattr(fn, '__module__', '')}.{getattr(fn, '__qualname__', '?')}"
+        compiled[name] = compiled.get(name, 0) + 1
+event.register("numba:compile", Count())
+import tracer.cli
+rc = tracer.cli.main(["render", *sys.argv[1:]])
+print(json.dumps({"rc": rc, "compiled": compiled}))
+"""
+
+
+def _env(cache, ahead):
+    env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""),
+               MPLBACKEND="Agg")
+    env[compiling.AHEAD_ENV] = ahead
+    if cache is not None:
+        env["SMOOTHDIST_CACHE_DIR"] = str(cache)
+    return env
+
+
+def _render(out, cache, ahead):
+    p = subprocess.run([sys.executable, "-c", RENDER, str(BUNNY), "--size", "24", "20", "-o",
+                        str(out), "-q"], env=_env(cache, ahead), capture_output=True, text=True,
+                       timeout=600)
+    assert p.returncode == 0, p.stderr[-3000:]
+    return json.loads(p.stdout.strip().splitlines()[-1])
+
+
+def _mesh_settings():
+    """The settings ``tracer render MESH`` renders with (the table's mesh column)."""
+    from tracer.scenes.settings import defaults
+
+    d = defaults("mesh")
+    return (March(**{k: d[k] for k in March.__dataclass_fields__}),
+            Film(**{k: d[k] for k in Film.__dataclass_fields__}))
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(CORES < 2, reason="compiling ahead needs a second core")
+def test_a_first_render_loads_the_film_kernels_its_child_compiled(tmp_path):
+    """``tracer render MESH`` on an empty cache: its child compiles the scene's distance and the
+    light's kernels, which the render then loads (it compiles the tree's, the trace's and the
+    shading normals'), and the image is byte for byte the one of a render that compiles
+    everything itself."""
+    report = _render(tmp_path / "ahead.png", tmp_path / "cache", "on")
+    compiled = report["compiled"]
+    assert any(name.startswith("smoothdist._kernels.bvh") for name in compiled)   # cold cache
+    assert "tracer.rendering.march.render_tiles" in compiled
+    assert not set(LIGHT_KERNELS + (DISTANCE,)) & set(compiled), compiled
+    # a second empty cache, nothing compiled ahead: the render compiles the film's kernels
+    alone = _render(tmp_path / "alone.png", tmp_path / "cache2", "off")
+    assert set(LIGHT_KERNELS + (DISTANCE,)) <= set(alone["compiled"]), alone["compiled"]
+    assert (tmp_path / "ahead.png").read_bytes() == (tmp_path / "alone.png").read_bytes()
+
+
+def test_needed_only_where_it_can_help(monkeypatch, tmp_path):
+    march, film = _mesh_settings()
+    cfg = compiling.ahead_config(march, film, 1)
+    monkeypatch.delenv(compiling.AHEAD_ENV, raising=False)
+    monkeypatch.setenv("SMOOTHDIST_CACHE_DIR", str(tmp_path / "empty"))
+    if hasattr(os, "sched_getaffinity"):
+        monkeypatch.setattr(os, "sched_getaffinity", lambda pid: {0, 1})
+    assert not compiling.ahead_needed(cfg)                    # not within an entry point
+    with compiling.ahead_allowed():
+        assert compiling.ahead_needed(cfg)
+        assert not compiling.ahead_needed(dict(cfg, shading="normals"))   # no light
+        assert not compiling.ahead_needed(dict(cfg, shading="normals", samples=4))
+        monkeypatch.setenv(compiling.AHEAD_ENV, "off")
+        assert not compiling.ahead_needed(cfg)
+        monkeypatch.delenv(compiling.AHEAD_ENV)
+        if hasattr(os, "sched_getaffinity"):
+            monkeypatch.setattr(os, "sched_getaffinity", lambda pid: {0})
+            assert not compiling.ahead_needed(cfg)                # one core
+            monkeypatch.setattr(os, "sched_getaffinity", lambda pid: {0, 1})
+        folder = Path(cache_folder()) / "tracer.rendering"
+        folder.mkdir(parents=True, exist_ok=True)
+        (folder / "lighting.light_tasks-233.py311.nbi").write_bytes(b"")
+        assert not compiling.ahead_needed(cfg)                    # compiled already
+
+
+def test_a_hung_child_is_stopped_and_a_failed_one_ignored():
+    hung = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+    failed = subprocess.Popen([sys.executable, "-c", "raise SystemExit(3)"])
+    compiling.ahead(hung)
+    compiling.ahead(failed)
+    t0 = time.perf_counter()
+    waited = compiling.wait_ahead(timeout=1.0)
+    assert 0.9 < waited < 30 and time.perf_counter() - t0 < 30
+    assert hung.poll() is not None and failed.poll() == 3
+    assert compiling.wait_ahead() < 0.5                         # nothing left to wait for

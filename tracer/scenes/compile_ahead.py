@@ -1,0 +1,83 @@
+"""Compile a first render's light kernels in a second process, beside the tree and the trace.
+
+The first render on a machine compiles every kernel it calls, one after the other on one core
+(the performance guide's cold-start table says how long). The lit film's light kernels
+(shadows, occlusion, the ground, the objects' ids: :func:`tracer.rendering.film.form_image`)
+depend on the tree and the trace only through their arrays' types. So, where the per-machine
+kernel cache (``smoothdist.warmup.cache_folder``) holds none of them yet,
+:func:`tracer.compiling.start_ahead` runs this module's :func:`child_main` in a child process.
+It makes a tiny scene of the same build (the number of objects, the mode, ``tol``, the film's
+settings: the same kernel types; its trees built by numba's pure-Python functions, which
+compiles nothing), compiles the scene's distance (which the trace needs too; the render waits
+for that part before its camera check, :func:`tracer.compiling.wait_ahead`) and then runs the
+film on made-up hits. Meanwhile the render loads its mesh, builds its tree, traces and computes
+its shading normals; it waits for the child before its light, and loads the light's kernels.
+
+Only the entry points that own their process ask for it (``tracer render``,
+:func:`tracer.render_mesh`), and only for the lit shading, with a second core and a cache to
+fill (:func:`tracer.compiling.ahead_needed`). ``TRACER_COMPILE_AHEAD=off`` turns it off.
+"""
+
+import json
+from dataclasses import replace
+
+import numpy as np
+
+from smoothdist import DataMesh, SmoothDistanceField
+from smoothdist.warmup import build_trees_in_python
+from tracer.rendering.film import BETA_SHADE, form_image
+from tracer.rendering.frame import (camera_of, distance_at_camera, pixel_buffers, scene_arrays,
+                                    trace_options)
+from tracer.rendering.renderer import ray_args
+from tracer.scenes.scene import scene_from_field
+
+__all__ = ["tiny_scene", "run_film", "child_main"]
+
+
+def tiny_scene(cfg):
+    """A scene of ``cfg["objects"]`` octahedra (8 triangles each) with ``cfg``'s settings, a
+    camera on the z axis; its trees built without compiling."""
+    build_trees_in_python()      # the mesh has 8 triangles: nothing to compile
+    V = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]], float)
+    F = np.array([[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5],
+                  [0, 3, 5]])
+    field = SmoothDistanceField(DataMesh(V, triangles=F))
+    scene = scene_from_field(field, alpha=10.0, beta=cfg["beta"], mode=cfg["mode"],
+                             tol=cfg["tol"], width=8, height=8, shading=cfg["shading"],
+                             samples=cfg["samples"], adaptive=cfg["adaptive"],
+                             transparent=cfg["transparent"],
+                             camera=((0.0, 0.0, 6.0), (0.0, 0.0, 0.0), (0.0, 1.0, 0.0)))
+    if cfg["objects"] > 1:
+        first = scene.objects[0]
+        scene.objects = [replace(first, name=f"o{k}", field=SmoothDistanceField(
+            DataMesh(V + [3.0 * k, 0.0, 0.0], triangles=F))) for k in range(cfg["objects"])]
+    return scene
+
+
+def run_film(scene):
+    """The film of ``scene`` on made-up hits (a 4 x 4 block of the image): the kernels of
+    :func:`tracer.rendering.film.form_image` compiled for ``scene``'s types."""
+    camera = camera_of(scene)
+    arrays = scene_arrays(scene)
+    hit, tbuf, grad, steps, leaves, bis, objs = pixel_buffers(scene.film.height,
+                                                              scene.film.width)
+    hit[2:6, 2:6] = True
+    tbuf[hit] = 5.0
+    grad[hit] = (0.0, 0.0, 1.0)
+    objs[hit] = 0
+    form_image(scene, camera, arrays, ray_args(scene, camera, arrays),
+               trace_options(scene, arrays.lo, arrays.hi), (hit, tbuf, grad, objs))
+
+
+def child_main(text):
+    """The child: :func:`run_film` of :func:`tiny_scene` for the JSON ``text``, one sample per
+    pixel and the shading normals of the render's own field (beta at most
+    :data:`~tracer.rendering.film.BETA_SHADE`): the light's kernels only (shadows, occlusion,
+    the ground, the objects' ids). The samples' kernel shares most of its code with the trace's,
+    which the render compiles meanwhile; it compiles that one itself, after its trace."""
+    cfg = json.loads(text)
+    scene = tiny_scene(dict(cfg, samples=1, adaptive=False, beta=min(cfg["beta"], BETA_SHADE)))
+    distance_at_camera(scene)       # the scene's distance first: the render's trace needs it
+    print("distance", flush=True)
+    run_film(scene)
+    print("done", flush=True)
