@@ -24,6 +24,9 @@ from tracer import compiling
 from tracer.scenes.settings import Film, March
 
 ROOT = Path(__file__).resolve().parents[3]
+sys.path.insert(0, str(ROOT / "benchmarks"))
+import bench_coldstart  # noqa: E402  (its child script reports what a process compiled)
+
 BUNNY = ROOT / "scenes" / "data" / "bunny.off"
 CORES = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
 #: the light's top-level kernels (what a lit render's film calls from Python for its light)
@@ -31,22 +34,6 @@ LIGHT_KERNELS = ("tracer.rendering.lighting.light_tasks", "tracer.rendering.ligh
 #: the scene's distance, which the child compiles first (the render's camera check calls it)
 DISTANCE = "tracer.rendering.march.distance_at"
 
-RENDER = r"""
-import json, sys
-from numba.core import event
-compiled = {}
-class Count(event.Listener):
-    def on_start(self, ev):
-        pass
-    def on_end(self, ev):
-        fn = getattr(ev.data.get("dispatcher"), "py_func", None)
-        name = f"{getattr(fn, '__module__', '')}.{getattr(fn, '__qualname__', '?')}"
-        compiled[name] = compiled.get(name, 0) + 1
-event.register("numba:compile", Count())
-import tracer.cli
-rc = tracer.cli.main(["render", *sys.argv[1:]])
-print(json.dumps({"rc": rc, "compiled": compiled}))
-"""
 
 
 def _env(cache, ahead):
@@ -59,11 +46,15 @@ def _env(cache, ahead):
 
 
 def _render(out, cache, ahead):
-    p = subprocess.run([sys.executable, "-c", RENDER, str(BUNNY), "--size", "24", "20", "-o",
-                        str(out), "-q"], env=_env(cache, ahead), capture_output=True, text=True,
-                       timeout=600)
+    """``tracer render BUNNY`` in a fresh process (``bench_coldstart``'s child: it reports the
+    specialisations of our functions it compiled, ``kernels``)."""
+    p = subprocess.run([sys.executable, "-c", bench_coldstart.CHILD, "cli", "render", str(BUNNY),
+                        "--size", "24", "20", "-o", str(out), "-q"], env=_env(cache, ahead),
+                       capture_output=True, text=True, timeout=600)
     assert p.returncode == 0, p.stderr[-3000:]
-    return json.loads(p.stdout.strip().splitlines()[-1])
+    report = json.loads(p.stdout.strip().splitlines()[-1])
+    assert report["rc"] == 0
+    return report["kernels"]
 
 
 def _mesh_settings():
@@ -82,14 +73,13 @@ def test_a_first_render_loads_the_film_kernels_its_child_compiled(tmp_path):
     light's kernels, which the render then loads (it compiles the tree's, the trace's and the
     shading normals'), and the image is byte for byte the one of a render that compiles
     everything itself."""
-    report = _render(tmp_path / "ahead.png", tmp_path / "cache", "on")
-    compiled = report["compiled"]
+    compiled = _render(tmp_path / "ahead.png", tmp_path / "cache", "on")
     assert any(name.startswith("smoothdist._kernels.bvh") for name in compiled)   # cold cache
     assert "tracer.rendering.march.render_tiles" in compiled
     assert not set(LIGHT_KERNELS + (DISTANCE,)) & set(compiled), compiled
     # a second empty cache, nothing compiled ahead: the render compiles the film's kernels
     alone = _render(tmp_path / "alone.png", tmp_path / "cache2", "off")
-    assert set(LIGHT_KERNELS + (DISTANCE,)) <= set(alone["compiled"]), alone["compiled"]
+    assert set(LIGHT_KERNELS + (DISTANCE,)) <= set(alone), alone
     assert (tmp_path / "ahead.png").read_bytes() == (tmp_path / "alone.png").read_bytes()
 
 
