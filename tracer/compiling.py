@@ -161,6 +161,8 @@ def ahead_needed(cfg):
         return False
     if cfg["shading"] != "lit":
         return False        # no light: the film's other kernels are mostly the trace's
+    if os.name != "posix":
+        return False        # the child's progress is read with select(), which needs POSIX pipes
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
     if (cores or 1) < 2:
         return False
