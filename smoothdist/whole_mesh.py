@@ -34,6 +34,7 @@ import numpy as np
 
 from smoothdist._kernels import mesh_moment as _mm
 from smoothdist._kernels import mesh_query as _mq
+from smoothdist._kernels import query as _q
 from smoothdist._cast import COORD_LIMIT, as_indices, as_points, non_negative, positive
 from smoothdist._config import NJIT
 from smoothdist.convert import is_foreign_geometry
@@ -320,6 +321,10 @@ class MeshDistance:
         self.alpha_u = alpha_u
         self.gradient = gradient
         self._used = np.unique(self.query.index)
+        kind = self.query.kind
+        # the point queries' rows and the others': each kind has kernels of its own, so that a
+        # first call compiles only what its query mesh needs
+        self._rows = np.flatnonzero(kind == 0), np.flatnonzero(kind != 0)
         self.last_stats = None
 
     @property
@@ -356,6 +361,34 @@ class MeshDistance:
     def _primitive_coords(self, R, t):
         return self._place(R, t)[1]
 
+    def _smooth_by_kind(self, pts, kernel, outs):
+        """Run the task kernel ``kernel`` for the edge and triangle queries (its outputs
+        ``outs``, each with a row per query primitive, filled in their rows) and the point
+        kernel (:func:`smoothdist._kernels.query.smooth_distance_tasks`) for the point queries.
+        Returns the point queries' rows and their ``(d, g, nodes, leaves)``, which the caller
+        puts in its outputs (None without point queries)."""
+        P, J = self._rows
+        tree = self.field.tree
+        args = (self.alpha, self.beta, self.S, self.wgrad_scale)
+        m = self.query.kind.size
+        if J.size == m:
+            _run_tasks(kernel, m, SERIAL_BELOW["smooth"], tree, self.query.kind, pts, *args,
+                       *outs, self.tol)
+        elif J.size:
+            part = [np.empty((J.size,) + o.shape[1:], o.dtype) for o in outs]
+            _run_tasks(kernel, J.size, SERIAL_BELOW["smooth"], tree, self.query.kind[J], pts[J],
+                       *args, *part, self.tol)
+            for o, p in zip(outs, part):
+                o[J] = p
+        n = P.size
+        if not n:
+            return P, None
+        point = (np.empty(n), np.empty((n, 3)), np.empty(n, dtype=np.int64),
+                 np.empty(n, dtype=np.int64))
+        _run_tasks(_q.smooth_distance_tasks, n, SERIAL_BELOW["smooth"], tree,
+                   np.ascontiguousarray(pts[P, :3]), *args, *point, 0)
+        return P, point
+
     def primitive_distances(self, R=None, t=None, *, method="bvh"):
         """Per query primitive: ``(d_hat (m,), translation gradient (m, 3))``.
 
@@ -376,9 +409,11 @@ class MeshDistance:
             leaves[:] = self.field.tree.kind.size
         else:
             # box_test off: far fields at the exact primitive-box distance
-            _run_tasks(_mq.smooth_distance_primitive_tasks, m, SERIAL_BELOW["smooth"],
-                       self.field.tree, self.query.kind, pts, self.alpha, self.beta, self.S,
-                       self.wgrad_scale, d, g, nodes, leaves, self.tol, bool(self.box_test))
+            kernel = (_mq.smooth_distance_primitive_tasks if self.box_test
+                      else _mq.exact_box_primitive_tasks)
+            P, point = self._smooth_by_kind(pts, kernel, (d, g, nodes, leaves))
+            if point:
+                d[P], g[P], nodes[P], leaves[P] = point
         self.last_stats = (nodes, leaves)
         return d, g
 
@@ -423,9 +458,11 @@ class MeshDistance:
             _mm.smooth_vertex_primitives_brute(self.field.tree, q.kind, pts, self.alpha,
                                                self.beta, self.S, self.wgrad_scale, d, g, Gp)
         else:
-            _run_tasks(_mm.smooth_vertex_primitive_tasks, m, SERIAL_BELOW["smooth"],
-                       self.field.tree, q.kind, pts, self.alpha, self.beta, self.S,
-                       self.wgrad_scale, d, g, Gp, self.tol)
+            P, point = self._smooth_by_kind(pts, _mm.smooth_vertex_primitive_tasks, (d, g, Gp))
+            if point:
+                d[P], g[P] = point[:2]
+                Gp[P] = 0.0
+                Gp[P, 0] = point[1]
         dmin = d.min()
         e = np.exp(-self.alpha_q * (d - dmin))
         w = e / e.sum()
@@ -458,9 +495,11 @@ class MeshDistance:
             nodes[:] = 0
             leaves[:] = self.field.tree.kind.size
         else:
-            _run_tasks(_mm.smooth_moment_primitive_tasks, m, SERIAL_BELOW["smooth"],
-                       self.field.tree, self.query.kind, pts, self.alpha, self.beta, self.S,
-                       self.wgrad_scale, d, g, mo, nodes, leaves, self.tol)
+            P, point = self._smooth_by_kind(pts, _mm.smooth_moment_primitive_tasks,
+                                            (d, g, mo, nodes, leaves))
+            if point:
+                d[P], g[P], nodes[P], leaves[P] = point
+                mo[P] = 0.0
         self.last_stats = (nodes, leaves)
         return d, g, mo
 

@@ -37,7 +37,7 @@ import math
 import numba
 import numpy as np
 
-from smoothdist._config import NJIT, NJIT_INLINE
+from smoothdist._config import NJIT, NJIT_INLINE, NJIT_IR_INLINE
 from smoothdist._kernels.closest_point import (SEG_A, SEG_B, SEG_INTERIOR, TRI_A, TRI_AB, TRI_AC,
                                                TRI_B, TRI_BC, TRI_C, TRI_INTERIOR,
                                                closest_point_segment, closest_point_triangle)
@@ -342,7 +342,10 @@ def segment_crosses_triangle(px, py, pz, qx, qy, qz, ax, ay, az, bx, by, bz, cx,
     return True, u, s, t
 
 
-@numba.njit(**NJIT)
+#: the four wrappers below are merged into their callers (``NJIT_IR_INLINE``): a compiled
+#: wrapper would optimise and generate its callee's whole code again (performance guide, "Cold
+#: start")
+@numba.njit(**NJIT_IR_INLINE)
 def segment_triangle(px, py, pz, qx, qy, qz, ax, ay, az, bx, by, bz, cx, cy, cz):
     """Segment ``pq`` (query) against triangle ``abc`` (degenerate either side allowed).
 
@@ -354,10 +357,11 @@ def segment_triangle(px, py, pz, qx, qy, qz, ax, ay, az, bx, by, bz, cx, cy, cz)
                              _SEGMENT_QUERY)
 
 
-@numba.njit(**NJIT_INLINE)
+@numba.njit(**NJIT)
 def _segment_triangle(px, py, pz, qx, qy, qz, ax, ay, az, bx, by, bz, cx, cy, cz, seg_query):
     """:func:`segment_triangle`; ``seg_query`` False: the triangle is the query (ties are
-    resolved on its side), the result still in the segment-first convention."""
+    resolved on its side), the result still in the segment-first convention. One compiled
+    function for both (inlined into each, it was compiled twice)."""
     if not triangle_is_degenerate(ax, ay, az, bx, by, bz, cx, cy, cz):
         hit, u, s, t = segment_crosses_triangle(px, py, pz, qx, qy, qz, ax, ay, az, bx, by, bz,
                                                 cx, cy, cz)
@@ -434,7 +438,7 @@ def _segment_triangle(px, py, pz, qx, qy, qz, ax, ay, az, bx, by, bz, cx, cy, cz
     return out
 
 
-@numba.njit(**NJIT)
+@numba.njit(**NJIT_IR_INLINE)
 def triangle_segment(px, py, pz, qx, qy, qz, rx_, ry_, rz_, ax, ay, az, bx, by, bz):
     """Triangle ``pqr`` (query) against segment ``ab``."""
     c = _segment_triangle(ax, ay, az, bx, by, bz, px, py, pz, qx, qy, qz, rx_, ry_, rz_,
@@ -442,14 +446,14 @@ def triangle_segment(px, py, pz, qx, qy, qz, rx_, ry_, rz_, ax, ay, az, bx, by, 
     return c[0], -c[1], -c[2], -c[3], c[7], c[8], c[9], c[4], c[5], c[6]
 
 
-@numba.njit(**NJIT)
+@numba.njit(**NJIT_IR_INLINE)
 def triangle_point(px, py, pz, qx, qy, qz, rx_, ry_, rz_, ax, ay, az):
     """Triangle ``pqr`` (query) against point ``a``."""
     c = point_triangle(ax, ay, az, px, py, pz, qx, qy, qz, rx_, ry_, rz_)
     return c[0], -c[1], -c[2], -c[3], c[7], c[8], c[9], 0.0, 0.0, 0
 
 
-@numba.njit(**NJIT)
+@numba.njit(**NJIT_IR_INLINE)
 def segment_point(px, py, pz, qx, qy, qz, ax, ay, az):
     """Segment ``pq`` (query) against point ``a``."""
     c = point_segment(ax, ay, az, px, py, pz, qx, qy, qz)

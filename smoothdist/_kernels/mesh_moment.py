@@ -42,11 +42,12 @@ import math
 import numba
 import numpy as np
 
-from smoothdist._config import NJIT
+from smoothdist._config import NJIT, NJIT_GENERIC
+from smoothdist._kernels.box_moment import box_lower_bound_moment, extreme_levers, gap_moment
 from smoothdist._kernels.mesh_query import (VERTEX_1, VERTEX_2,  # noqa: F401
-                                            _accumulate, centroid, pair_terms,
-                                            query_coefficient, smooth_traverse,
-                                            task_scratch)
+                                            _accumulate, box_gap_far, centroid, far_field,
+                                            halfspace_far, no_levers, pair_terms,
+                                            query_coefficient, smooth_traverse, task_scratch)
 from smoothdist._kernels.query import DEFAULT_TOL, smooth_distance_point
 from smoothdist._kernels.traversal import ZERO
 
@@ -66,18 +67,48 @@ def pair_term_moment(tree, i, kq, Q, S, wgrad_scale, cx, cy, cz):
                       wgrad_scale, kq >= 0, cx, cy, cz, tree.kind[i])
 
 
-@numba.njit(**NJIT)
-def smooth_moment_primitive(tree, kq, Q, alpha, beta, S, wgrad_scale, stack, dstack, scratch,
-                            tol=DEFAULT_TOL):
-    """:func:`smoothdist._kernels.mesh_query.smooth_distance_primitive` with the moment about the
-    query's centroid.
+@numba.njit(**NJIT_GENERIC)
+def centroid_levers(kq, Q, scratch):
+    """``setup`` of the moment (:func:`smoothdist._kernels.mesh_query.smooth_traverse`): the
+    query's :func:`~smoothdist._kernels.box_moment.extreme_levers` about its centroid in
+    ``scratch[15:33]``; ``(L, cx, cy, cz)``."""
+    L = scratch[15:33]
+    cx, cy, cz = centroid(kq, Q)
+    extreme_levers(kq, Q, cx, cy, cz, L)
+    return L, cx, cy, cz
 
-    Same traversal (:func:`smoothdist._kernels.mesh_query.smooth_traverse`) and arguments
-    (``kq`` 1 or 2), but ``scratch (33,)``. Returns
-    ``(d_hat, gx, gy, gz, mx, my, mz, nodes_visited, leaves_visited)``.
-    """
-    return smooth_traverse(tree, kq, Q, alpha, beta, S, wgrad_scale, stack, dstack, scratch, tol,
-                           True)
+
+@numba.njit(**NJIT_GENERIC)
+def gap_lever(q, ux, uy, uz):
+    """``lever`` of the moment: the box gap's moment (:func:`gap_moment`)."""
+    return gap_moment(q.L, ux, uy, uz)
+
+
+@numba.njit(**NJIT_GENERIC)
+def split_lever(q, ux, uy, uz):
+    """``lever`` of a vertex's motion: a far field's gradient split equally among the query's
+    vertices."""
+    return ux * q.split, uy * q.split, uz * q.split
+
+
+@numba.njit(**NJIT_GENERIC)
+def halfspace_moment_far(q, lo, hi, node, lever):
+    """``fine`` of the moment: the halfspace bound and its moment
+    (:func:`box_lower_bound_moment`)."""
+    return box_lower_bound_moment(q.kq, q.Q, q.qlo, q.qhi, lo, hi, node, q.E, q.cx, q.cy, q.cz,
+                                  q.L)
+
+
+@numba.njit(**NJIT_GENERIC)
+def moment_far(tree, q, node, bd2, st):
+    """``approximate`` of the moment: far fields with their moments about the centroid."""
+    return far_field(tree, q, node, bd2, st, box_gap_far, halfspace_moment_far, gap_lever)
+
+
+@numba.njit(**NJIT_GENERIC)
+def vertex_far(tree, q, node, bd2, st):
+    """``approximate`` of a vertex's motion: far fields split equally among the vertices."""
+    return far_field(tree, q, node, bd2, st, box_gap_far, halfspace_far, split_lever)
 
 
 @numba.njit(**NJIT)
@@ -98,25 +129,18 @@ def smooth_moment_brute_primitive(tree, kq, Q, alpha, S, wgrad_scale):
 @numba.njit(**NJIT)
 def smooth_moment_primitive_tasks(tree, qkind, qpts, alpha, beta, S, wgrad_scale, out_d, out_g,
                                   out_m, out_nodes, out_leaves, tol, ntasks, task0, task1):
-    """``d_hat``, translation gradient and moment (about the centroid) of every query primitive.
+    """``d_hat``, translation gradient and moment (about the centroid) of every edge and
+    triangle query (a point's moment is 0: the caller runs the point kernel for those).
 
     As :func:`smoothdist._kernels.mesh_query.smooth_distance_primitive_tasks` (a serial task
     kernel), plus ``out_m (m, 3)`` float64.
     """
     stack, dstack, scratch = task_scratch(tree, 33)
-    root = ZERO
     for task in range(task0, task1):
         for j in range(task, qkind.size, ntasks):
-            kq = qkind[j]
-            Q = qpts[j]
-            mx = my = mz = 0.0
-            if kq == 0:
-                # a point: its closest point is itself, no moment about it
-                d, gx, gy, gz, nodes, leaves = smooth_distance_point(
-                    tree, Q[0], Q[1], Q[2], alpha, beta, S, wgrad_scale, stack, dstack, root)
-            else:
-                d, gx, gy, gz, mx, my, mz, nodes, leaves = smooth_traverse(
-                    tree, kq, Q, alpha, beta, S, wgrad_scale, stack, dstack, scratch, tol, True)
+            d, gx, gy, gz, mx, my, mz, nodes, leaves = smooth_traverse(
+                tree, qkind[j], qpts[j], alpha, beta, S, wgrad_scale, stack, dstack, scratch,
+                tol, True, centroid_levers, moment_far)
             out_d[j] = d
             out_g[j, 0] = gx
             out_g[j, 1] = gy
@@ -154,13 +178,15 @@ def smooth_vertex_primitive(tree, kq, Q, alpha, beta, S, wgrad_scale, stack, dst
     """
     G = np.zeros((kq + 1, 3))
     d, gx, gy, gz, ax, ay, az, nodes, leaves = smooth_traverse(
-        tree, kq, Q, alpha, beta, S, wgrad_scale, stack, dstack, scratch, tol, VERTEX_1)
+        tree, kq, Q, alpha, beta, S, wgrad_scale, stack, dstack, scratch, tol, VERTEX_1, no_levers,
+        vertex_far)
     G[1, 0] = ax
     G[1, 1] = ay
     G[1, 2] = az
     if kq == 2:
         _, _, _, _, ax, ay, az, _, _ = smooth_traverse(
-            tree, kq, Q, alpha, beta, S, wgrad_scale, stack, dstack, scratch, tol, VERTEX_2)
+            tree, kq, Q, alpha, beta, S, wgrad_scale, stack, dstack, scratch, tol, VERTEX_2,
+            no_levers, vertex_far)
         G[2, 0] = ax
         G[2, 1] = ay
         G[2, 2] = az
@@ -199,26 +225,18 @@ def smooth_vertex_brute_primitive(tree, kq, Q, alpha, S, wgrad_scale):
 def smooth_vertex_primitive_tasks(tree, qkind, qpts, alpha, beta, S, wgrad_scale, out_d, out_g,
                                   out_G, tol, ntasks, task0, task1):
     """``d_hat``, translation gradient and per-vertex derivatives ``out_G (m, 3, 3)`` (slot ``k``
-    for the primitive's vertex ``k``; unused slots 0) of every query primitive, as a serial task
-    kernel (tasks ``task0 <= t < task1`` of ``ntasks``, as
-    :func:`smoothdist._kernels.mesh_query.smooth_distance_primitive_tasks`)."""
+    for the primitive's vertex ``k``; unused slots 0) of every edge and triangle query, as a
+    serial task kernel (tasks ``task0 <= t < task1`` of ``ntasks``, as
+    :func:`smoothdist._kernels.mesh_query.smooth_distance_primitive_tasks`; a point's row is
+    its translation gradient, from the point kernel, which the caller runs)."""
     stack, dstack, scratch = task_scratch(tree, 33)
-    root = ZERO
     for task in range(task0, task1):
         for j in range(task, qkind.size, ntasks):
             kq = qkind[j]
-            Q = qpts[j]
             out_G[j] = 0.0
-            if kq == 0:
-                d, gx, gy, gz, _, _ = smooth_distance_point(tree, Q[0], Q[1], Q[2], alpha, beta,
-                                                            S, wgrad_scale, stack, dstack, root)
-                out_G[j, 0, 0] = gx
-                out_G[j, 0, 1] = gy
-                out_G[j, 0, 2] = gz
-            else:
-                d, gx, gy, gz, G = smooth_vertex_primitive(tree, kq, Q, alpha, beta, S, wgrad_scale,
-                                                           stack, dstack, scratch, tol)
-                out_G[j, :kq + 1] = G
+            d, gx, gy, gz, G = smooth_vertex_primitive(tree, kq, qpts[j], alpha, beta, S,
+                                                       wgrad_scale, stack, dstack, scratch, tol)
+            out_G[j, :kq + 1] = G
             out_d[j] = d
             out_g[j, 0] = gx
             out_g[j, 1] = gy

@@ -27,9 +27,10 @@ else
 conservatively). So the far field overestimates the subtree's sum and ``d_hat_beta <= d_hat_0``.
 Point queries use the point kernels themselves.
 
-One traversal (:func:`smooth_traverse`) serves the translation gradient and, with ``moment``,
-:mod:`smoothdist._kernels.mesh_moment`'s rotational one; ``moment`` is a compile-time constant
-of each caller, so the distance kernel carries none of the moment's work. For speed (the same nodes,
+One traversal (:func:`smooth_traverse`) serves the translation gradient and
+:mod:`smoothdist._kernels.mesh_moment`'s rotational and per-vertex ones; its kind (the moment
+flag and the far-field functions) is an argument fixed by each caller, so the distance kernel
+neither runs nor compiles any of the moment's work. For speed (the same nodes,
 terms and values as a plain version; issue 17): the traversal reads the tree's arrays without
 reference counts (``smoothdist._kernels.traversal.borrowed``), the data primitive's
 coordinates go to the closest-pair kernels as scalars, small helpers are inlined
@@ -44,19 +45,17 @@ import numba
 import numpy as np
 from numba import prange
 
-from smoothdist._config import NJIT, NJIT_INLINE, NJIT_IR_INLINE, NJIT_PARALLEL
+from smoothdist._config import NJIT, NJIT_GENERIC, NJIT_INLINE, NJIT_IR_INLINE, NJIT_PARALLEL
 from smoothdist._kernels.box_distance import (box_box_distance, box_box_offset, box_distance_exact,
                                               signed_gap,
                                               box_lower_bound)
-from smoothdist._kernels.box_moment import box_lower_bound_moment, extreme_levers, gap_moment
 from smoothdist._kernels.closest_pair import (closest_pair, point_segment, point_triangle,
                                               segment_point, segment_segment,
                                               segment_triangle, triangle_point, triangle_segment,
                                               triangle_triangle)
 from smoothdist._kernels.closest_point import (SEG_INTERIOR, TRI_AB, TRI_AC, TRI_BC, TRI_INTERIOR)
-from smoothdist._kernels.query import (DEFAULT_TOL, _attenuate, exact_distance_point,
-                                       logsumexp_accumulate, negligible_reach,
-                                       smooth_distance_point)
+from smoothdist._kernels.query import (_attenuate, exact_distance_point, logsumexp_accumulate,
+                                       negligible_reach)
 from smoothdist._kernels.traversal import (NONE, ZERO, always, nearest_first, no_far_field,
                                            python_function)
 from smoothdist._kernels.weights import eval_triangle_weight
@@ -430,8 +429,46 @@ class _PrimitiveQuery(NamedTuple):
     wgrad_scale: float
     tol: float
     moment: int
-    box_test: bool        # the paper's box test (off: the exact primitive-box distance)
     reach: float          # negligible-term pruning (query.negligible_reach)
+
+
+@numba.njit(**NJIT_GENERIC)
+def no_levers(kq, Q, scratch):
+    """``setup`` of the distance: no lever arms (``L`` is the box bounds' scratch) and the
+    centroid unused, ``(L, cx, cy, cz)``."""
+    return scratch[6:15], 0.0, 0.0, 0.0
+
+
+@numba.njit(**NJIT_GENERIC)
+def no_lever(q, ux, uy, uz):
+    """``lever`` of the distance: a far field's moment is 0."""
+    return 0.0, 0.0, 0.0
+
+
+@numba.njit(**NJIT_GENERIC)
+def box_gap_far(q, lo, hi, node, lever):
+    """``coarse`` (and the ``tol`` rule's far field): the box-box distance and its direction,
+    with the kind's ``lever``; ``(delta, ux, uy, uz, ax, ay, az)``."""
+    delta, ux, uy, uz = box_box_offset(q.qlo, q.qhi, lo, hi, node)
+    ax, ay, az = lever(q, ux, uy, uz)
+    return delta, ux, uy, uz, ax, ay, az
+
+
+@numba.njit(**NJIT_GENERIC)
+def halfspace_far(q, lo, hi, node, lever):
+    """``fine``: the paper's halfspace test (:func:`box_lower_bound`), with the kind's
+    ``lever``."""
+    delta, ux, uy, uz = box_lower_bound(q.kq, q.Q, q.qlo, q.qhi, lo, hi, node, q.E)
+    ax, ay, az = lever(q, ux, uy, uz)
+    return delta, ux, uy, uz, ax, ay, az
+
+
+@numba.njit(**NJIT_GENERIC)
+def exact_box_far(q, lo, hi, node, lever):
+    """``coarse`` and ``fine`` with the box test off: the exact primitive-box distance
+    (:func:`box_distance_exact`), no moment."""
+    delta, ux, uy, uz = box_distance_exact(q.kq, q.Q, lo, hi, node, q.E)
+    return delta, ux, uy, uz, 0.0, 0.0, 0.0
 
 
 @numba.njit(**NJIT_IR_INLINE)
@@ -449,72 +486,52 @@ def _prim_skip(tree, q, node, bd2, st):
     return bd2 >= st[8]
 
 
-@numba.njit(**NJIT_IR_INLINE)
-def _barnes_hut(tree, q, node, bd2):
+@numba.njit(**NJIT_GENERIC)
+def _barnes_hut(tree, q, node, bd2, coarse, fine, lever):
     """Barnes-Hut for a query primitive: ``(far, delta, ux, uy, uz, ax, ay, az)``, the node's
     lower-bound distance ``delta``, its direction ``u`` and the moment lever ``a``.
 
-    The box-box distance (a lower bound) qualifies the node first; the finer bound
-    (:func:`smoothdist._kernels.box_distance.box_lower_bound`) is tried only if the smallest
+    The kind's coarse bound (the box-box distance, a lower bound) qualifies the node first; its
+    fine bound (the paper's halfspace test,
+    :func:`smoothdist._kernels.box_distance.box_lower_bound`) is tried only if the smallest
     query-vertex distance could qualify it, and that only if the box-box distance plus the query
-    box's diagonal (an upper bound of it) could. ``box_test`` off: the exact primitive-box
-    distance instead.
+    box's diagonal (an upper bound of it) could. With the box test off both are the exact
+    primitive-box distance.
     """
     lo = tree.lo
     hi = tree.hi
-    kq = q.kq
-    Q = q.Q
-    moment = q.moment
     dg = tree.diag[node]
     delta = ux = uy = uz = 0.0
     ax = ay = az = 0.0
     far = False
-    if not q.box_test and dg * dg < q.b2 * bd2:
-        delta, ux, uy, uz = box_distance_exact(kq, Q, lo, hi, node, q.E)
-        far = True
-    elif dg * dg < q.b2 * bd2:
-        # the box-box distance (a lower bound) already qualifies the node
-        delta, ux, uy, uz = box_box_offset(q.qlo, q.qhi, lo, hi, node)
-        if moment >= VERTEX_1:
-            ax, ay, az = ux * q.split, uy * q.split, uz * q.split
-        elif moment:
-            ax, ay, az = gap_moment(q.L, ux, uy, uz)
+    if dg * dg < q.b2 * bd2:
+        delta, ux, uy, uz, ax, ay, az = coarse(q, lo, hi, node, lever)
         far = True
     else:
         x = dg * q.ib - q.qd
-        if (x <= 0.0 or x * x < bd2) and dg < q.beta * _point_box(kq, Q, lo, hi, node):
-            if moment == 1:
-                delta, ux, uy, uz, ax, ay, az = box_lower_bound_moment(
-                    kq, Q, q.qlo, q.qhi, lo, hi, node, q.E, q.cx, q.cy, q.cz, q.L)
-            elif not q.box_test:
-                delta, ux, uy, uz = box_distance_exact(kq, Q, lo, hi, node, q.E)
-            else:
-                delta, ux, uy, uz = box_lower_bound(kq, Q, q.qlo, q.qhi, lo, hi, node, q.E)
-                if moment >= VERTEX_1:
-                    ax, ay, az = ux * q.split, uy * q.split, uz * q.split
+        if (x <= 0.0 or x * x < bd2) and dg < q.beta * _point_box(q.kq, q.Q, lo, hi, node):
+            delta, ux, uy, uz, ax, ay, az = fine(q, lo, hi, node, lever)
             far = dg < q.beta * delta
     return far, delta, ux, uy, uz, ax, ay, az
 
 
-@numba.njit(**NJIT_IR_INLINE)
-def _prim_far(tree, q, node, bd2, st):
+@numba.njit(**NJIT_GENERIC)
+def far_field(tree, q, node, bd2, st, coarse, fine, lever):
     """Far fields: Barnes-Hut, then the ``tol`` rule; ``st = (m, s, gx, gy, gz, mx, my, mz,
-    cut2, leaves)``."""
+    cut2, leaves)``. ``coarse``, ``fine``, ``lever``: the traversal kind's far-field functions
+    (:func:`_barnes_hut`); each kind's ``approximate`` of the traversal passes its own
+    (:func:`distance_far`)."""
     m, s, gx, gy, gz, mx, my, mz, cut2, leaves = st
     cnt = tree.count[node]
     far = False
     delta = ux = uy = uz = 0.0
     ax = ay = az = 0.0
     if cnt > 1 and q.beta > 0.0:
-        far, delta, ux, uy, uz, ax, ay, az = _barnes_hut(tree, q, node, bd2)
+        far, delta, ux, uy, uz, ax, ay, az = _barnes_hut(tree, q, node, bd2, coarse, fine, lever)
     if not far and q.tol > 0.0 and s > 0.0:
         W = _far_weight(tree.whi, node, cnt, q.S)
         if W * math.exp(-q.alpha * (math.sqrt(bd2) - m)) <= q.tol * s:
-            delta, ux, uy, uz = box_box_offset(q.qlo, q.qhi, tree.lo, tree.hi, node)
-            if q.moment >= VERTEX_1:
-                ax, ay, az = ux * q.split, uy * q.split, uz * q.split
-            elif q.moment:
-                ax, ay, az = gap_moment(q.L, ux, uy, uz)
+            delta, ux, uy, uz, ax, ay, az = box_gap_far(q, tree.lo, tree.hi, node, lever)
             far = True
     if not far:
         return False, st
@@ -524,6 +541,19 @@ def _prim_far(tree, q, node, bd2, st):
         q.alpha, q.moment)
     cut = max(m + q.reach, 0.0)
     return True, (m, s, gx, gy, gz, mx, my, mz, cut * cut, leaves + 1)
+
+
+@numba.njit(**NJIT_GENERIC)
+def distance_far(tree, q, node, bd2, st):
+    """``approximate`` of the distance: the box-box distance, then the halfspace test."""
+    return far_field(tree, q, node, bd2, st, box_gap_far, halfspace_far, no_lever)
+
+
+@numba.njit(**NJIT_GENERIC)
+def exact_box_far_field(tree, q, node, bd2, st):
+    """``approximate`` of the distance with the box test off: the exact primitive-box
+    distance."""
+    return far_field(tree, q, node, bd2, st, exact_box_far, exact_box_far, no_lever)
 
 
 @numba.njit(**NJIT_IR_INLINE)
@@ -537,39 +567,43 @@ def _prim_leaf(tree, q, node, st):
     st_ = tree.start[node]
     cnt = tree.count[node]
     for i in range(st_, st_ + cnt):
-        k = kind[i]
-        if kq == 1 and k == 1:
-            # edges against edges: a copy of the inlined term in which the compiler knows both
-            # kinds (and keeps only that case)
-            d, W, vx, vy, vz, tx, ty, tz = _pair(kind, tree.pts, tree.wc, tree.wcls, tree.pwhi, i,
-                                                 kq, q.Q, q.S, q.wgrad_scale, q.moment, q.cx,
-                                                 q.cy, q.cz, k)
-        else:
-            d, W, vx, vy, vz, tx, ty, tz = _pair(kind, tree.pts, tree.wc, tree.wcls, tree.pwhi, i,
-                                                 kq, q.Q, q.S, q.wgrad_scale, q.moment, q.cx,
-                                                 q.cy, q.cz, k)
+        # one copy of the term (a second for edges against edges, in which the compiler knew
+        # both kinds, was no faster and cost the first call 0.6 s of compiling)
+        d, W, vx, vy, vz, tx, ty, tz = _pair(kind, tree.pts, tree.wc, tree.wcls, tree.pwhi, i, kq,
+                                             q.Q, q.S, q.wgrad_scale, q.moment, q.cx, q.cy, q.cz,
+                                             kind[i])
         m, s, gx, gy, gz, mx, my, mz = _accumulate(
             m, s, gx, gy, gz, mx, my, mz, d, W, vx, vy, vz, tx, ty, tz, q.alpha, q.moment)
     cut = max(m + q.reach, 0.0)
     return True, (m, s, gx, gy, gz, mx, my, mz, cut * cut, leaves + cnt)
 
 
-@numba.njit(**NJIT_IR_INLINE)
+@numba.njit(**NJIT_GENERIC)
 def smooth_traverse(tree, kq, Q, alpha, beta, S, wgrad_scale, stack, dstack, scratch, tol, moment,
-                    box_test=True):
-    """The traversal of :func:`smooth_distance_primitive` and, with ``moment``,
-    :func:`smoothdist._kernels.mesh_moment.smooth_moment_primitive` (one code for both, so that
-    their ``d_hat`` and gradients agree bit for bit).
+                    setup, far):
+    """The traversal of the distance kernels (:func:`smooth_distance_primitive_tasks`) and of
+    :mod:`smoothdist._kernels.mesh_moment`'s (one code for all, so that their ``d_hat`` and
+    gradients agree bit for bit).
 
-    ``scratch`` holds 15 float64 (33 with ``moment``). Returns
-    ``(d_hat, gx, gy, gz, mx, my, mz, nodes_visited, leaves_visited)``; the moment about the
-    query's centroid is 0 without ``moment``.
+    ``moment, setup, far`` are the kind, fixed by each caller: ``moment`` False (the
+    distance), True (the moment about the query's centroid) or ``VERTEX_1`` / ``VERTEX_2`` (the
+    motion of one query vertex), the function that gives the lever arms
+    (``setup(kq, Q, scratch)``) and the traversal's far-field function (:func:`far_field` with
+    the kind's bounds, e.g. :func:`distance_far`). They are arguments, not run-time flags, so
+    that a kernel compiles only its own kind's far fields (the distance neither the moment's
+    nor the box-test-off's; performance guide, "Cold start"). Each caller names the functions
+    in its call, so that numba merges them into it (``NJIT_GENERIC``); kept in a tuple they
+    would be compiled on their own, and stored in one that a kernel builds, numba would keep
+    their Python objects' addresses, and the kernel could not be cached.
+
+    ``scratch`` holds 15 float64 (33 for the moment). Returns
+    ``(d_hat, gx, gy, gz, mx, my, mz, nodes_visited, leaves_visited)``; the moment is 0 for
+    the distance.
 
     The keys are squared box-box distances; Barnes-Hut tests ``diag**2 < beta**2 d**2``, as the
     point kernel does, and tries finer bounds only where they could help (``_barnes_hut``).
-
-    ``box_test`` False (``moment`` False only): the box test off, i.e. every Barnes-Hut
-    candidate's distance is the exact primitive-box distance
+    With the box test off (:func:`exact_box_far_field`) every Barnes-Hut candidate's distance is the
+    exact primitive-box distance
     (:func:`smoothdist._kernels.box_distance.box_distance_exact`, the quadratic program the paper's
     halfspace test avoids) instead of the box-box distance or the halfspace bound; the same
     traversal otherwise.
@@ -580,52 +614,24 @@ def smooth_traverse(tree, kq, Q, alpha, beta, S, wgrad_scale, stack, dstack, scr
     query_box(kq, Q, qlo, qhi)
     l0, l1, l2 = qlo[0], qlo[1], qlo[2]
     h0, h1, h2 = qhi[0], qhi[1], qhi[2]
-    cx = cy = cz = 0.0
-    if moment == 1:
-        L = scratch[15:33]
-        cx, cy, cz = centroid(kq, Q)
-        extreme_levers(kq, Q, cx, cy, cz, L)
-    else:
-        L = E
+    L, cx, cy, cz = setup(kq, Q, scratch)
     q = _PrimitiveQuery(
         kq, Q, qlo, qhi, E, L, l0, l1, l2, h0, h1, h2,
         # any query vertex is within the query box's diagonal of the box-box closest point
         math.sqrt((h0 - l0) ** 2 + (h1 - l1) ** 2 + (h2 - l2) ** 2),
         beta, beta * beta, (1.0 - 1e-9) / beta if beta > 0.0 else 0.0,
         # vertex modes: a far field's gradient is split equally among the query's vertices
-        1.0 / (kq + 1), cx, cy, cz, alpha, S, wgrad_scale, tol, moment, box_test,
+        1.0 / (kq + 1), cx, cy, cz, alpha, S, wgrad_scale, tol, moment,
         # negligible-term pruning, as in the point kernel: a node at box-box distance
         # >= m + reach adds less than 2**-53 x n_B / N of the sum
         negligible_reach(tree, ZERO, S, alpha))
     (m, s, gx, gy, gz, mx, my, mz, _, leaves), nodes = nearest_first(
         tree, q, (np.inf, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, np.inf, ZERO), stack, dstack, ZERO,
-        _box_gap2(l0, l1, l2, h0, h1, h2, tree.lo, tree.hi, ZERO), _prim_skip, _prim_far,
-        _prim_leaf, _gap_children, always)
+        _box_gap2(l0, l1, l2, h0, h1, h2, tree.lo, tree.hi, ZERO), _prim_skip, far, _prim_leaf,
+        _gap_children, always)
     inv = 1.0 / s
     return (m - math.log(s) / alpha, gx * inv, gy * inv, gz * inv, mx * inv, my * inv, mz * inv,
             nodes, leaves)
-
-
-@numba.njit(**NJIT)
-def smooth_distance_primitive(tree, kq, Q, alpha, beta, S, wgrad_scale, stack, dstack, scratch,
-                              tol=DEFAULT_TOL, box_test=True):
-    """Smooth distance ``d_hat(g)`` and its translation gradient for an edge or triangle query.
-
-    ``Q (9,)`` the query's vertices, ``kq`` 1 or 2; ``scratch (15,)`` float64 work space; other
-    arguments as :func:`smoothdist._kernels.query.smooth_distance_point`. Returns
-    ``(d_hat, gx, gy, gz, nodes_visited, leaves_visited)``.
-
-    ``tol > 0`` adds a second far-field rule (docs/design-notes.md §3, not in the paper): a
-    node whose far-field term ``count * whi**S * exp(-alpha delta)`` (``delta`` its box-box
-    distance) is at most ``tol`` times the sum so far is replaced by that term. It is the same
-    overestimate of the subtree's sum as Barnes-Hut's, so ``d_hat`` only decreases, by at most
-    ``-log(1 - k tol) / alpha`` for ``k`` such nodes (``k tol < 1``).
-
-    ``box_test``: the paper's box test, on by default (see :func:`smooth_traverse`).
-    """
-    d, gx, gy, gz, _, _, _, nodes, leaves = smooth_traverse(
-        tree, kq, Q, alpha, beta, S, wgrad_scale, stack, dstack, scratch, tol, False, box_test)
-    return d, gx, gy, gz, nodes, leaves
 
 
 @numba.njit(**NJIT)
@@ -739,40 +745,58 @@ def task_scratch(tree, n):
     return np.empty(k, dtype=np.int64), np.empty(k), np.empty(n)
 
 
-@numba.njit(**NJIT)
-def smooth_distance_primitive_tasks(tree, qkind, qpts, alpha, beta, S, wgrad_scale, out_d, out_g,
-                                    out_nodes, out_leaves, tol, box_test, ntasks, task0, task1):
-    """``d_hat`` and translation gradient of every query primitive, as a serial task kernel.
-
-    ``qkind (m,)`` int64, ``qpts (m, 9)`` float64; fills ``out_d (m,)``, ``out_g (m, 3)``,
-    ``out_nodes``, ``out_leaves (m,)``. ``tol``: see :func:`smooth_distance_primitive` (edge
-    and triangle queries only); ``box_test``: the paper's box test (False: off,
-    :func:`smooth_traverse`). Runs tasks ``task0 <= t < task1`` of ``ntasks`` strided tasks
-    (task ``t`` takes primitives ``t, t + ntasks, ...``), GIL-free, from Python threads
-    (:func:`smoothdist.schedule.run_tasks`): no ``prange`` loop, which would compile the whole
-    traversal again (:mod:`smoothdist.schedule`). Values do not depend on the split.
-    """
+@numba.njit(**NJIT_GENERIC)
+def _distance_tasks(tree, qkind, qpts, alpha, beta, S, wgrad_scale, out_d, out_g, out_nodes,
+                    out_leaves, tol, far, ntasks, task0, task1):
+    """The body of :func:`smooth_distance_primitive_tasks` with the far-field function ``far``
+    (:func:`smooth_traverse`)."""
     stack, dstack, scratch = task_scratch(tree, 15)
-    # the whole tree's root as an int64 (a constant would be typed as a literal: another
-    # specialisation of the point kernel than the point queries' and the renderer's)
-    root = ZERO
     for task in range(task0, task1):
         for j in range(task, qkind.size, ntasks):
-            kq = qkind[j]
-            Q = qpts[j]
-            if kq == 0:
-                d, gx, gy, gz, nodes, leaves = smooth_distance_point(
-                    tree, Q[0], Q[1], Q[2], alpha, beta, S, wgrad_scale, stack, dstack, root)
-            else:
-                d, gx, gy, gz, _, _, _, nodes, leaves = smooth_traverse(
-                    tree, kq, Q, alpha, beta, S, wgrad_scale, stack, dstack, scratch, tol, False,
-                    box_test)
+            d, gx, gy, gz, _, _, _, nodes, leaves = smooth_traverse(
+                tree, qkind[j], qpts[j], alpha, beta, S, wgrad_scale, stack, dstack, scratch,
+                tol, False, no_levers, far)
             out_d[j] = d
             out_g[j, 0] = gx
             out_g[j, 1] = gy
             out_g[j, 2] = gz
             out_nodes[j] = nodes
             out_leaves[j] = leaves
+
+
+@numba.njit(**NJIT)
+def smooth_distance_primitive_tasks(tree, qkind, qpts, alpha, beta, S, wgrad_scale, out_d, out_g,
+                                    out_nodes, out_leaves, tol, ntasks, task0, task1):
+    """``d_hat`` and translation gradient of every edge and triangle query, as a serial task
+    kernel (point queries: the point kernel's
+    :func:`smoothdist._kernels.query.smooth_distance_tasks`).
+
+    ``qkind (m,)`` int64 (1 or 2), ``qpts (m, 9)`` float64; fills ``out_d (m,)``,
+    ``out_g (m, 3)``, ``out_nodes``, ``out_leaves (m,)``.
+
+    ``tol > 0`` adds a second far-field rule (docs/design-notes.md §3, not in the paper): a
+    node whose far-field term ``count * whi**S * exp(-alpha delta)`` (``delta`` its box-box
+    distance) is at most ``tol`` times the sum so far is replaced by that term. It is the same
+    overestimate of the subtree's sum as Barnes-Hut's, so ``d_hat`` only decreases, by at most
+    ``-log(1 - k tol) / alpha`` for ``k`` such nodes (``k tol < 1``).
+
+    Runs tasks ``task0 <= t < task1`` of ``ntasks`` strided tasks (task ``t`` takes primitives
+    ``t, t + ntasks, ...``), GIL-free, from Python threads
+    (:func:`smoothdist.schedule.run_tasks`): no ``prange`` loop, which would compile the whole
+    traversal again (:mod:`smoothdist.schedule`). Values do not depend on the split.
+    """
+    _distance_tasks(tree, qkind, qpts, alpha, beta, S, wgrad_scale, out_d, out_g, out_nodes,
+                    out_leaves, tol, distance_far, ntasks, task0, task1)
+
+
+@numba.njit(**NJIT)
+def exact_box_primitive_tasks(tree, qkind, qpts, alpha, beta, S, wgrad_scale, out_d, out_g,
+                              out_nodes, out_leaves, tol, ntasks, task0, task1):
+    """:func:`smooth_distance_primitive_tasks` with the box test off: every Barnes-Hut
+    candidate at its exact primitive-box distance (``MeshDistance(box_test=False)``; a kernel
+    of its own, so that the default compiles none of it)."""
+    _distance_tasks(tree, qkind, qpts, alpha, beta, S, wgrad_scale, out_d, out_g, out_nodes,
+                    out_leaves, tol, exact_box_far_field, ntasks, task0, task1)
 
 
 @numba.njit(**NJIT)
