@@ -80,7 +80,8 @@ def centroid_levers(kq, Q, scratch):
 
 @numba.njit(**NJIT_GENERIC)
 def gap_lever(q, ux, uy, uz):
-    """``lever`` of the moment: the box gap's moment (:func:`gap_moment`)."""
+    """``lever`` of the moment: the box gap's moment
+    (:func:`~smoothdist._kernels.box_moment.gap_moment`)."""
     return gap_moment(q.L, ux, uy, uz)
 
 
@@ -94,7 +95,7 @@ def split_lever(q, ux, uy, uz):
 @numba.njit(**NJIT_GENERIC)
 def halfspace_moment_far(q, lo, hi, node, lever):
     """``fine`` of the moment: the halfspace bound and its moment
-    (:func:`box_lower_bound_moment`)."""
+    (:func:`~smoothdist._kernels.box_moment.box_lower_bound_moment`)."""
     return box_lower_bound_moment(q.kq, q.Q, q.qlo, q.qhi, lo, hi, node, q.E, q.cx, q.cy, q.cz,
                                   q.L)
 

@@ -456,7 +456,8 @@ def box_gap_far(q, lo, hi, node, lever):
 
 @numba.njit(**NJIT_GENERIC)
 def halfspace_far(q, lo, hi, node, lever):
-    """``fine``: the paper's halfspace test (:func:`box_lower_bound`), with the kind's
+    """``fine``: the paper's halfspace test
+    (:func:`~smoothdist._kernels.box_distance.box_lower_bound`), with the kind's
     ``lever``."""
     delta, ux, uy, uz = box_lower_bound(q.kq, q.Q, q.qlo, q.qhi, lo, hi, node, q.E)
     ax, ay, az = lever(q, ux, uy, uz)
@@ -466,7 +467,7 @@ def halfspace_far(q, lo, hi, node, lever):
 @numba.njit(**NJIT_GENERIC)
 def exact_box_far(q, lo, hi, node, lever):
     """``coarse`` and ``fine`` with the box test off: the exact primitive-box distance
-    (:func:`box_distance_exact`), no moment."""
+    (:func:`~smoothdist._kernels.box_distance.box_distance_exact`), no moment."""
     delta, ux, uy, uz = box_distance_exact(q.kq, q.Q, lo, hi, node, q.E)
     return delta, ux, uy, uz, 0.0, 0.0, 0.0
 
@@ -519,7 +520,7 @@ def _barnes_hut(tree, q, node, bd2, coarse, fine, lever):
 def far_field(tree, q, node, bd2, st, coarse, fine, lever):
     """Far fields: Barnes-Hut, then the ``tol`` rule; ``st = (m, s, gx, gy, gz, mx, my, mz,
     cut2, leaves)``. ``coarse``, ``fine``, ``lever``: the traversal kind's far-field functions
-    (:func:`_barnes_hut`); each kind's ``approximate`` of the traversal passes its own
+    (``_barnes_hut``); each kind's ``approximate`` of the traversal passes its own
     (:func:`distance_far`)."""
     m, s, gx, gy, gz, mx, my, mz, cut2, leaves = st
     cnt = tree.count[node]
