@@ -357,11 +357,12 @@ def segment_triangle(px, py, pz, qx, qy, qz, ax, ay, az, bx, by, bz, cx, cy, cz)
                              _SEGMENT_QUERY)
 
 
-@numba.njit(**NJIT)
+@numba.njit(**NJIT_INLINE)
 def _segment_triangle(px, py, pz, qx, qy, qz, ax, ay, az, bx, by, bz, cx, cy, cz, seg_query):
     """:func:`segment_triangle`; ``seg_query`` False: the triangle is the query (ties are
-    resolved on its side), the result still in the segment-first convention. One compiled
-    function for both (inlined into each, it was compiled twice)."""
+    resolved on its side), the result still in the segment-first convention. Inlined into
+    both, with ``seg_query`` a constant (a call, compiled once, made the edge-triangle pairs of
+    the whole-mesh distance slower warm)."""
     if not triangle_is_degenerate(ax, ay, az, bx, by, bz, cx, cy, cz):
         hit, u, s, t = segment_crosses_triangle(px, py, pz, qx, qy, qz, ax, ay, az, bx, by, bz,
                                                 cx, cy, cz)
