@@ -1,6 +1,7 @@
 """The performance guide's sentences on issue 51's warm side-by-side runs, made from
-``benchmarks/data/coldstart_issue51_warm.json`` (``tests/repo/test_docs_tables.py`` checks that the
-guide holds them)."""
+``benchmarks/data/coldstart_issue51_warm.json``, and on issue 63's
+(``coldstart_issue63_kinds_warm.json``); ``tests/repo/test_docs_tables.py`` checks that the
+guide holds them."""
 
 import json
 from pathlib import Path
@@ -36,6 +37,13 @@ def warm_sentences(path=DATA):
                + " s for this CPU against " + " / ".join(_range(c["generic"][k], ".3f")
                                                           for k in c["generic"]) + " s generic)")
     return mesh, exact, render, grid, generic
+
+
+def kinds_warm_sentence(path=DATA.parent / "coldstart_issue63_kinds_warm.json"):
+    """Issue 63's warm side by side (``bench_mesh_distance_ab.py``): the Table 3 cases' best
+    milliseconds per round, before -> after."""
+    d = json.loads(Path(path).read_text(encoding="utf-8"))
+    return _pairs(d["mesh_distance_ms_best"], ".2f", {"ring-toss": "ring toss"}) + " ms"
 
 
 if __name__ == "__main__":

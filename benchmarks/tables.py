@@ -17,6 +17,8 @@ Usage::
     python benchmarks/tables.py build-scale benchmarks/data/build_scale.json
     python benchmarks/tables.py coldstart-copies benchmarks/data/coldstart_issue63.json
     python benchmarks/tables.py coldstart-ahead benchmarks/data/coldstart.json
+    python benchmarks/tables.py coldstart-kinds benchmarks/data/coldstart.json \\
+        benchmarks/data/coldstart_issue63_kinds_before.json
 """
 
 import argparse
@@ -75,6 +77,14 @@ COLDSTART_TARGETS = {"exact": 4, "smooth": 5, "smooth_alpha_u": 5, "md_triangles
                      "mesh": 10, "edges": 10, "cloud": 10, "lit": 10}
 
 
+def _provenance(d, loads):
+    """The closing line of a ``bench_coldstart.py`` table: when, which commit, the machine, and
+    the range of the ``loads`` (load averages) seen."""
+    return (f"{d['date']}, commit {(d.get('commit') or '?')[:10]}"
+            f"{' (dirty)' if d.get('dirty') else ''}, {d['machine']['cores']} cores, Python "
+            f"{d['machine']['python']}, load average {min(loads):.1f}-{max(loads):.1f}")
+
+
 def coldstart_table(path, before_path=None):
     """The first-call table of a ``bench_coldstart.py`` results file: per case its command, the
     cold CPU and wall seconds and compiled specialisations (and those of ``before_path``, the
@@ -98,9 +108,7 @@ def coldstart_table(path, before_path=None):
         lines.append(row)
     loads = [x for r in d["cases"].values() for x in (r["cold"]["load_before"],
                                                        r["cold"]["load_after"])]
-    lines += ["", f"{d['date']}, commit {(d.get('commit') or '?')[:10]}"
-              f"{' (dirty)' if d.get('dirty') else ''}, {d['machine']['cores']} cores, Python "
-              f"{d['machine']['python']}, load average {min(loads):.1f}-{max(loads):.1f}"]
+    lines += ["", _provenance(d, loads)]
     return "\n".join(lines)
 
 
@@ -130,9 +138,7 @@ def coldstart_copies_table(path):
     lines += ["", f"`python -m tracer warmup` into an empty cache: {w['wall_s']:.1f} s wall, "
               f"{w['cpu_s']:.1f} s CPU (its child processes), {w['compiled']} specialisations "
               f"compiled, on {w['cores']} cores.",
-              "", f"{d['date']}, commit {(d.get('commit') or '?')[:10]}"
-              f"{' (dirty)' if d.get('dirty') else ''}, {d['machine']['cores']} cores, Python "
-              f"{d['machine']['python']}, load average {min(loads):.1f}-{max(loads):.1f}"]
+              "", _provenance(d, loads)]
     return "\n".join(lines)
 
 
@@ -154,9 +160,28 @@ def coldstart_ahead_table(path):
                      f"{a['cpu_s'] + a['cpu_children_s']:.1f} | {a['wall_s']:.1f} | "
                      f"{a['wall_s'] / c['wall_s']:.2f} |")
         loads += [c["load_before"], c["load_after"], a["load_before"], a["load_after"]]
-    lines += ["", f"{d['date']}, commit {(d.get('commit') or '?')[:10]}"
-              f"{' (dirty)' if d.get('dirty') else ''}, {d['machine']['cores']} cores, Python "
-              f"{d['machine']['python']}, load average {min(loads):.1f}-{max(loads):.1f}"]
+    lines += ["", _provenance(d, loads)]
+    return "\n".join(lines)
+
+
+def coldstart_kinds_table(path, before_path):
+    """Issue 63's whole-mesh table: per case of ``before_path`` (``bench_coldstart.py --source``
+    on the code before) its first call there and in ``path`` (this code, the same sitting),
+    CPU and wall seconds and compiled specialisations, and the ratio of the CPU seconds."""
+    d, b = _load(path), _load(before_path)
+    cells = ["first call (empty cache)", "before: CPU s", "wall s", "compiled", "after: CPU s",
+             "wall s", "compiled", "CPU ratio"]
+    lines = ["| " + " | ".join(cells) + " |", "|" + "---|" * len(cells)]
+    loads = {"after": [], "before": []}
+    for case, o in b["cases"].items():
+        c, r = o["cold"], d["cases"][case]["cold"]
+        lines.append(f"| `{o['command']}` | {c['cpu_s']:.1f} | {c['wall_s']:.1f} | "
+                     f"{c['compiled']} | {r['cpu_s']:.1f} | {r['wall_s']:.1f} | "
+                     f"{r['compiled']} | {r['cpu_s'] / c['cpu_s']:.2f} |")
+        loads["before"] += [c["load_before"], c["load_after"]]
+        loads["after"] += [r["load_before"], r["load_after"]]
+    lines += ["", f"Before: {_provenance(b, loads['before'])}. After: "
+              f"{_provenance(d, loads['after'])}."]
     return "\n".join(lines)
 
 
@@ -441,14 +466,16 @@ TABLES = {"scaling": scaling_table, "gpu": gpu_table, "coldstart": coldstart_tab
           "coldstart-steps": coldstart_steps_table, "exact-mix": exact_mix_table,
           "smooth-cost": smooth_cost_table, "mesh-distance": mesh_distance_table,
           "registers": registers_table, "build-scale": build_scale_table,
-          "coldstart-copies": coldstart_copies_table, "coldstart-ahead": coldstart_ahead_table}
+          "coldstart-copies": coldstart_copies_table, "coldstart-ahead": coldstart_ahead_table,
+          "coldstart-kinds": coldstart_kinds_table}
 
 
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("kind", choices=sorted(TABLES))
     p.add_argument("path")
-    p.add_argument("before", nargs="?", help="coldstart: the results of the code before")
+    p.add_argument("before", nargs="?",
+                   help="coldstart, coldstart-kinds: the results of the code before")
     # coldstart-steps: benchmarks/data/coldstart_issue51_steps.json
     args = p.parse_args(argv)
     print(TABLES[args.kind](args.path, *([args.before] if args.before else [])))

@@ -56,6 +56,8 @@ def generated_lines():
             T.coldstart_table(DATA / "coldstart.json", DATA / "coldstart_issue51_before.json"),
             T.coldstart_steps_table(DATA / "coldstart_issue51_steps.json"),
             T.coldstart_copies_table(DATA / "coldstart_issue63.json"),
+            T.coldstart_kinds_table(DATA / "coldstart.json",
+                                    DATA / "coldstart_issue63_kinds_before.json"),
             T.exact_mix_table(DATA / "exact_mix.json"),
             T.smooth_cost_table(DATA / "exact_mix.json"),
             T.registers_table(DATA / "cuda_registers.json"),

@@ -17,10 +17,11 @@ GUIDE = ROOT / "docs" / "guide" / "performance.md"
 DATA = ROOT / "benchmarks" / "data"
 sys.path.insert(0, str(ROOT))
 
-from benchmarks.coldstart_words import warm_sentences  # noqa: E402
+from benchmarks.coldstart_words import kinds_warm_sentence, warm_sentences  # noqa: E402
 from benchmarks.tables import (build_scale_table, build_scale_words,  # noqa: E402
                                scale_points_words,
                                coldstart_ahead_table, coldstart_copies_table,
+                               coldstart_kinds_table,
                                coldstart_steps_table,
                                coldstart_table, exact_mix_table,
                                exact_mix_words, gpu_table, mesh_distance_table,
@@ -115,6 +116,18 @@ def test_the_guide_holds_the_compile_ahead_table():
                if "cold_ahead" in r)
 
 
+def test_the_guide_holds_the_whole_mesh_kinds_table_and_warm_runs():
+    """Issue 63's whole-mesh table (``coldstart.json`` against
+    ``coldstart_issue63_kinds_before.json``, ``tables.py coldstart-kinds``) between its
+    markers, and the warm side by side it quotes (``coldstart_issue63_kinds_warm.json``)."""
+    want = coldstart_kinds_table(DATA / "coldstart.json",
+                                 DATA / "coldstart_issue63_kinds_before.json").strip()
+    text = _guide()
+    start = text.index("<!-- coldstart-kinds -->") + len("<!-- coldstart-kinds -->")
+    assert text[start:text.index("<!-- /coldstart-kinds -->")].strip() == want, "paste it again"
+    assert kinds_warm_sentence(DATA / "coldstart_issue63_kinds_warm.json") in _flat(text)
+
+
 def test_the_guide_holds_the_cold_start_steps_and_sentences():
     """Issue 51's steps table (``coldstart_issue51_steps.json``), its warm side-by-side
     sentences (``coldstart_issue51_warm.json``) and the first calls it quotes
@@ -132,6 +145,12 @@ def test_the_guide_holds_the_cold_start_steps_and_sentences():
     md, mdb = cases["md_triangles"]["cold"], before["md_triangles"]["cold"]
     assert f"the first exact query {cases['exact']['cold']['cpu_s']:.1f} s of CPU" in text
     assert f"the first smooth one {cases['smooth']['cold']['cpu_s']:.1f} s" in text
+    # the run before this one, on a faster day: the same kernels of the point queries
+    prev = _load("coldstart_issue63_round2.json")["cases"]
+    assert (f"the same kernels took {prev['exact']['cold']['cpu_s']:.1f} s and "
+            f"{prev['smooth']['cold']['cpu_s']:.1f} s") in text
+    kinds = _load("coldstart_issue63_kinds_before.json")["cases"]["md_triangles"]["cold"]
+    assert f"against the 15 s target: {md['cpu_s'] / kinds['cpu_s']:.2f} of what" in text
     assert (f"takes {md['cpu_s']:.1f} s against {mdb['cpu_s']:.1f} s before "
             f"({md['compiled']} specialisations against {mdb['compiled']})") in text
     renders = [cases[c]["cold"]["cpu_s"] for c in ("mesh", "edges", "cloud", "lit")]
