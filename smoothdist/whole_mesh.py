@@ -325,6 +325,14 @@ class MeshDistance:
         # the point queries' rows and the others': each kind has kernels of its own, so that a
         # first call compiles only what its query mesh needs
         self._rows = np.flatnonzero(kind == 0), np.flatnonzero(kind != 0)
+        # ... and where the data and the query's edges and triangles are of one kind, the
+        # distance's traversal has a kernel that compiles that kind's pair kernel only
+        data_kinds = set(np.unique(self.field.tree.kind).tolist())
+        query_kinds = set(np.unique(kind[kind != 0]).tolist())
+        self._distance_kernel = {2: _mq.triangle_distance_tasks,
+                                 1: _mq.segment_distance_tasks}.get(
+            next(iter(data_kinds)) if data_kinds == query_kinds and len(data_kinds) == 1
+            else None, _mq.smooth_distance_primitive_tasks)
         self.last_stats = None
 
     @property
@@ -409,8 +417,7 @@ class MeshDistance:
             leaves[:] = self.field.tree.kind.size
         else:
             # box_test off: far fields at the exact primitive-box distance
-            kernel = (_mq.smooth_distance_primitive_tasks if self.box_test
-                      else _mq.exact_box_primitive_tasks)
+            kernel = self._distance_kernel if self.box_test else _mq.exact_box_primitive_tasks
             P, point = self._smooth_by_kind(pts, kernel, (d, g, nodes, leaves))
             if point:
                 d[P], g[P], nodes[P], leaves[P] = point

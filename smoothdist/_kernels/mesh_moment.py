@@ -45,8 +45,8 @@ import numpy as np
 from smoothdist._config import NJIT, NJIT_GENERIC
 from smoothdist._kernels.box_moment import box_lower_bound_moment, extreme_levers, gap_moment
 from smoothdist._kernels.mesh_query import (VERTEX_1, VERTEX_2,  # noqa: F401
-                                            _accumulate, box_gap_far, centroid, far_field,
-                                            halfspace_far, no_levers, pair_terms,
+                                            _accumulate, any_leaf, box_gap_far, centroid,
+                                            far_field, halfspace_far, no_levers, pair_terms,
                                             query_coefficient, smooth_traverse, task_scratch)
 from smoothdist._kernels.query import DEFAULT_TOL, smooth_distance_point
 from smoothdist._kernels.traversal import ZERO
@@ -141,7 +141,7 @@ def smooth_moment_primitive_tasks(tree, qkind, qpts, alpha, beta, S, wgrad_scale
         for j in range(task, qkind.size, ntasks):
             d, gx, gy, gz, mx, my, mz, nodes, leaves = smooth_traverse(
                 tree, qkind[j], qpts[j], alpha, beta, S, wgrad_scale, stack, dstack, scratch,
-                tol, True, centroid_levers, moment_far)
+                tol, True, centroid_levers, moment_far, any_leaf)
             out_d[j] = d
             out_g[j, 0] = gx
             out_g[j, 1] = gy
@@ -180,14 +180,14 @@ def smooth_vertex_primitive(tree, kq, Q, alpha, beta, S, wgrad_scale, stack, dst
     G = np.zeros((kq + 1, 3))
     d, gx, gy, gz, ax, ay, az, nodes, leaves = smooth_traverse(
         tree, kq, Q, alpha, beta, S, wgrad_scale, stack, dstack, scratch, tol, VERTEX_1, no_levers,
-        vertex_far)
+        vertex_far, any_leaf)
     G[1, 0] = ax
     G[1, 1] = ay
     G[1, 2] = az
     if kq == 2:
         _, _, _, _, ax, ay, az, _, _ = smooth_traverse(
             tree, kq, Q, alpha, beta, S, wgrad_scale, stack, dstack, scratch, tol, VERTEX_2,
-            no_levers, vertex_far)
+            no_levers, vertex_far, any_leaf)
         G[2, 0] = ax
         G[2, 1] = ay
         G[2, 2] = az

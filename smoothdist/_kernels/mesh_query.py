@@ -204,7 +204,29 @@ def _pair(kind, pts, wc, wcls, pwhi, i, kq, Q, S, wgrad_scale, moment, cx, cy, c
     numerator for a motion of that query vertex alone
     (:func:`smoothdist._kernels.mesh_moment.smooth_vertex_primitive`); else 0.
     """
-    c = _closest(kind, pts, i, kq, Q, k)
+    return _pair_term(_closest(kind, pts, i, kq, Q, k), kind, pts, wc, wcls, pwhi, i, kq, Q, S,
+                      wgrad_scale, moment, cx, cy, cz, k)
+
+
+@numba.njit(**NJIT_GENERIC)
+def closest_triangles(kind, P, i, kq, Q, k):
+    """:func:`_closest` where the query and the data primitive are both triangles (the
+    traversal of a triangle mesh against a triangle mesh compiles this pair kernel only)."""
+    return triangle_triangle(Q[0], Q[1], Q[2], Q[3], Q[4], Q[5], Q[6], Q[7], Q[8], P[i, 0],
+                             P[i, 1], P[i, 2], P[i, 3], P[i, 4], P[i, 5], P[i, 6], P[i, 7],
+                             P[i, 8])
+
+
+@numba.njit(**NJIT_GENERIC)
+def closest_segments(kind, P, i, kq, Q, k):
+    """:func:`_closest` where the query and the data primitive are both edges."""
+    return _segment_segment_inline(Q[0], Q[1], Q[2], Q[3], Q[4], Q[5], P[i, 0], P[i, 1],
+                                   P[i, 2], P[i, 3], P[i, 4], P[i, 5])
+
+
+@numba.njit(**NJIT_INLINE)
+def _pair_term(c, kind, pts, wc, wcls, pwhi, i, kq, Q, S, wgrad_scale, moment, cx, cy, cz, k):
+    """:func:`_pair` from the pair's closest points ``c`` (:func:`_closest`'s tuple)."""
     d = math.sqrt(c[0])
     rx = c[1]
     ry = c[2]
@@ -557,9 +579,28 @@ def exact_box_far_field(tree, q, node, bd2, st):
     return far_field(tree, q, node, bd2, st, exact_box_far, exact_box_far, no_lever)
 
 
-@numba.njit(**NJIT_IR_INLINE)
-def _prim_leaf(tree, q, node, st):
-    """A leaf's data primitives against the query primitive, exactly."""
+@numba.njit(**NJIT_GENERIC)
+def any_leaf(tree, q, node, st):
+    """``leaf`` of the traversal for any kinds of data and query primitives."""
+    return _prim_leaf(tree, q, node, st, _closest)
+
+
+@numba.njit(**NJIT_GENERIC)
+def triangles_leaf(tree, q, node, st):
+    """``leaf`` of the traversal where the data and the query are triangles only."""
+    return _prim_leaf(tree, q, node, st, closest_triangles)
+
+
+@numba.njit(**NJIT_GENERIC)
+def segments_leaf(tree, q, node, st):
+    """``leaf`` of the traversal where the data and the query are edges only."""
+    return _prim_leaf(tree, q, node, st, closest_segments)
+
+
+@numba.njit(**NJIT_GENERIC)
+def _prim_leaf(tree, q, node, st, closest):
+    """A leaf's data primitives against the query primitive, exactly; ``closest``: the pair
+    kernel of the kinds the traversal meets (:func:`_closest` for any)."""
     if tree.left[node] >= 0:
         return False, st
     m, s, gx, gy, gz, mx, my, mz, cut2, leaves = st
@@ -570,9 +611,10 @@ def _prim_leaf(tree, q, node, st):
     for i in range(st_, st_ + cnt):
         # one copy of the term (a second for edges against edges, in which the compiler knew
         # both kinds, was no faster and cost the first call 0.6 s of compiling)
-        d, W, vx, vy, vz, tx, ty, tz = _pair(kind, tree.pts, tree.wc, tree.wcls, tree.pwhi, i, kq,
-                                             q.Q, q.S, q.wgrad_scale, q.moment, q.cx, q.cy, q.cz,
-                                             kind[i])
+        k = kind[i]
+        d, W, vx, vy, vz, tx, ty, tz = _pair_term(
+            closest(kind, tree.pts, i, kq, q.Q, k), kind, tree.pts, tree.wc, tree.wcls,
+            tree.pwhi, i, kq, q.Q, q.S, q.wgrad_scale, q.moment, q.cx, q.cy, q.cz, k)
         m, s, gx, gy, gz, mx, my, mz = _accumulate(
             m, s, gx, gy, gz, mx, my, mz, d, W, vx, vy, vz, tx, ty, tz, q.alpha, q.moment)
     cut = max(m + q.reach, 0.0)
@@ -581,7 +623,7 @@ def _prim_leaf(tree, q, node, st):
 
 @numba.njit(**NJIT_GENERIC)
 def smooth_traverse(tree, kq, Q, alpha, beta, S, wgrad_scale, stack, dstack, scratch, tol, moment,
-                    setup, far):
+                    setup, far, leaf):
     """The traversal of the distance kernels (:func:`smooth_distance_primitive_tasks`) and of
     :mod:`smoothdist._kernels.mesh_moment`'s (one code for all, so that their ``d_hat`` and
     gradients agree bit for bit).
@@ -589,8 +631,10 @@ def smooth_traverse(tree, kq, Q, alpha, beta, S, wgrad_scale, stack, dstack, scr
     ``moment, setup, far`` are the kind, fixed by each caller: ``moment`` False (the
     distance), True (the moment about the query's centroid) or ``VERTEX_1`` / ``VERTEX_2`` (the
     motion of one query vertex), the function that gives the lever arms
-    (``setup(kq, Q, scratch)``) and the traversal's far-field function (:func:`far_field` with
-    the kind's bounds, e.g. :func:`distance_far`). They are arguments, not run-time flags, so
+    (``setup(kq, Q, scratch)``), the traversal's far-field function (:func:`far_field` with
+    the kind's bounds, e.g. :func:`distance_far`) and its leaf function (:func:`any_leaf`, or
+    :func:`triangles_leaf` / :func:`segments_leaf` where the data and the query are of one kind:
+    one pair kernel compiled instead of all). They are arguments, not run-time flags, so
     that a kernel compiles only its own kind's far fields (the distance neither the moment's
     nor the box-test-off's; performance guide, "Cold start"). Each caller names the functions
     in its call, so that numba merges them into it (``NJIT_GENERIC``); kept in a tuple they
@@ -628,7 +672,7 @@ def smooth_traverse(tree, kq, Q, alpha, beta, S, wgrad_scale, stack, dstack, scr
         negligible_reach(tree, ZERO, S, alpha))
     (m, s, gx, gy, gz, mx, my, mz, _, leaves), nodes = nearest_first(
         tree, q, (np.inf, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, np.inf, ZERO), stack, dstack, ZERO,
-        _box_gap2(l0, l1, l2, h0, h1, h2, tree.lo, tree.hi, ZERO), _prim_skip, far, _prim_leaf,
+        _box_gap2(l0, l1, l2, h0, h1, h2, tree.lo, tree.hi, ZERO), _prim_skip, far, leaf,
         _gap_children, always)
     inv = 1.0 / s
     return (m - math.log(s) / alpha, gx * inv, gy * inv, gz * inv, mx * inv, my * inv, mz * inv,
@@ -748,15 +792,15 @@ def task_scratch(tree, n):
 
 @numba.njit(**NJIT_GENERIC)
 def _distance_tasks(tree, qkind, qpts, alpha, beta, S, wgrad_scale, out_d, out_g, out_nodes,
-                    out_leaves, tol, far, ntasks, task0, task1):
-    """The body of :func:`smooth_distance_primitive_tasks` with the far-field function ``far``
-    (:func:`smooth_traverse`)."""
+                    out_leaves, tol, far, leaf, ntasks, task0, task1):
+    """The body of :func:`smooth_distance_primitive_tasks` with the far-field and leaf functions
+    ``far``, ``leaf`` (:func:`smooth_traverse`)."""
     stack, dstack, scratch = task_scratch(tree, 15)
     for task in range(task0, task1):
         for j in range(task, qkind.size, ntasks):
             d, gx, gy, gz, _, _, _, nodes, leaves = smooth_traverse(
                 tree, qkind[j], qpts[j], alpha, beta, S, wgrad_scale, stack, dstack, scratch,
-                tol, False, no_levers, far)
+                tol, False, no_levers, far, leaf)
             out_d[j] = d
             out_g[j, 0] = gx
             out_g[j, 1] = gy
@@ -787,7 +831,26 @@ def smooth_distance_primitive_tasks(tree, qkind, qpts, alpha, beta, S, wgrad_sca
     traversal again (:mod:`smoothdist.schedule`). Values do not depend on the split.
     """
     _distance_tasks(tree, qkind, qpts, alpha, beta, S, wgrad_scale, out_d, out_g, out_nodes,
-                    out_leaves, tol, distance_far, ntasks, task0, task1)
+                    out_leaves, tol, distance_far, any_leaf, ntasks, task0, task1)
+
+
+@numba.njit(**NJIT)
+def triangle_distance_tasks(tree, qkind, qpts, alpha, beta, S, wgrad_scale, out_d, out_g,
+                            out_nodes, out_leaves, tol, ntasks, task0, task1):
+    """:func:`smooth_distance_primitive_tasks` where the data and the query are triangles only:
+    a kernel of its own, so that a first call between triangle meshes compiles the
+    triangle-triangle pair kernel only (performance guide, "Cold start")."""
+    _distance_tasks(tree, qkind, qpts, alpha, beta, S, wgrad_scale, out_d, out_g, out_nodes,
+                    out_leaves, tol, distance_far, triangles_leaf, ntasks, task0, task1)
+
+
+@numba.njit(**NJIT)
+def segment_distance_tasks(tree, qkind, qpts, alpha, beta, S, wgrad_scale, out_d, out_g,
+                           out_nodes, out_leaves, tol, ntasks, task0, task1):
+    """:func:`smooth_distance_primitive_tasks` where the data and the query are edges only (the
+    segment-segment pair kernel only)."""
+    _distance_tasks(tree, qkind, qpts, alpha, beta, S, wgrad_scale, out_d, out_g, out_nodes,
+                    out_leaves, tol, distance_far, segments_leaf, ntasks, task0, task1)
 
 
 @numba.njit(**NJIT)
@@ -797,7 +860,7 @@ def exact_box_primitive_tasks(tree, qkind, qpts, alpha, beta, S, wgrad_scale, ou
     candidate at its exact primitive-box distance (``MeshDistance(box_test=False)``; a kernel
     of its own, so that the default compiles none of it)."""
     _distance_tasks(tree, qkind, qpts, alpha, beta, S, wgrad_scale, out_d, out_g, out_nodes,
-                    out_leaves, tol, exact_box_far_field, ntasks, task0, task1)
+                    out_leaves, tol, exact_box_far_field, any_leaf, ntasks, task0, task1)
 
 
 @numba.njit(**NJIT)

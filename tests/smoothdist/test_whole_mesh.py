@@ -341,6 +341,26 @@ def test_mixed_query_rows_equal_each_kind_alone(data_name):
     np.testing.assert_allclose(Gv.sum(axis=0), G0.sum(axis=0), rtol=1e-12, atol=1e-15)
 
 
+@pytest.mark.parametrize("data_name, query_name, kernel", [
+    ("triangles", "triangles", "triangle_distance_tasks"),
+    ("edges", "edges", "segment_distance_tasks"),
+    ("triangles", "edges", "smooth_distance_primitive_tasks"),
+    ("mixed", "triangles", "smooth_distance_primitive_tasks")])
+def test_one_kind_kernels_equal_the_general_one(data_name, query_name, kernel):
+    """Data and query of one kind take a kernel that compiles that pair kernel only; its
+    values and stats are the general kernel's, bit for bit."""
+    from smoothdist._kernels import mesh_query as mq
+    md = MeshDistance(DATA[data_name], QUERY[query_name], alpha=15.0, alpha_q=9.0, beta=0.5)
+    assert md._distance_kernel is getattr(mq, kernel)
+    t = np.array([0.3, -0.2, 1.1])
+    d, g = md.primitive_distances(t=t)
+    stats = md.last_stats
+    md._distance_kernel = mq.smooth_distance_primitive_tasks
+    d0, g0 = md.primitive_distances(t=t)
+    assert np.array_equal(d, d0) and np.array_equal(g, g0)
+    assert all(np.array_equal(a, b) for a, b in zip(stats, md.last_stats))
+
+
 def test_combine_distances():
     d, w = combine_distances([1.0, 2.0, 1.5], [10.0, 20.0, 5.0])
     ref = -np.log(np.exp(-20.0) + np.exp(-40.0) + np.exp(-30.0)) / 20.0
