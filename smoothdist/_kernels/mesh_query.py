@@ -210,7 +210,7 @@ def _pair(kind, pts, wc, wcls, pwhi, i, kq, Q, S, wgrad_scale, moment, cx, cy, c
 
 @numba.njit(**NJIT_GENERIC)
 def closest_triangles(kind, P, i, kq, Q, k):
-    """:func:`_closest` where the query and the data primitive are both triangles (the
+    """``_closest`` where the query and the data primitive are both triangles (the
     traversal of a triangle mesh against a triangle mesh compiles this pair kernel only)."""
     return triangle_triangle(Q[0], Q[1], Q[2], Q[3], Q[4], Q[5], Q[6], Q[7], Q[8], P[i, 0],
                              P[i, 1], P[i, 2], P[i, 3], P[i, 4], P[i, 5], P[i, 6], P[i, 7],
@@ -219,7 +219,7 @@ def closest_triangles(kind, P, i, kq, Q, k):
 
 @numba.njit(**NJIT_GENERIC)
 def closest_segments(kind, P, i, kq, Q, k):
-    """:func:`_closest` where the query and the data primitive are both edges."""
+    """``_closest`` where the query and the data primitive are both edges."""
     return _segment_segment_inline(Q[0], Q[1], Q[2], Q[3], Q[4], Q[5], P[i, 0], P[i, 1],
                                    P[i, 2], P[i, 3], P[i, 4], P[i, 5])
 
