@@ -328,11 +328,11 @@ class MeshDistance:
         # ... and where the data and the query's edges and triangles are of one kind, the
         # distance's traversal has a kernel that compiles that kind's pair kernel only
         data_kinds = set(np.unique(self.field.tree.kind).tolist())
-        query_kinds = set(np.unique(kind[kind != 0]).tolist())
-        self._distance_kernel = {2: _mq.triangle_distance_tasks,
-                                 1: _mq.segment_distance_tasks}.get(
-            next(iter(data_kinds)) if data_kinds == query_kinds and len(data_kinds) == 1
-            else None, _mq.smooth_distance_primitive_tasks)
+        self._distance_kernel = _mq.smooth_distance_primitive_tasks
+        if data_kinds == {1} == set(kind[kind != 0].tolist()):
+            self._distance_kernel = _mq.segment_distance_tasks
+        elif data_kinds == {2} == set(kind[kind != 0].tolist()):
+            self._distance_kernel = _mq.triangle_distance_tasks
         self.last_stats = None
 
     @property
