@@ -63,6 +63,10 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
+if str(ROOT) not in sys.path:  # run from a checkout without installing
+    sys.path.insert(0, str(ROOT))
+
+from benchmarks.machine import cpu_name  # noqa: E402
 DEFAULT_OUT = ROOT / "benchmarks" / "data" / "coldstart.json"
 
 #: library cases: the code run in the child after the imports (``V``, ``F``, ``E``, ``Q`` given)
@@ -72,6 +76,7 @@ LIBRARY = {
     "smooth_alpha_u": "sd.smooth_distance(Q, V, F, alpha=50.0, alpha_u='auto')",
     "md_triangles": "sd.MeshDistance((V, F), (0.3 * V, F), alpha=50, alpha_q=50)(R, t)",
     "md_edges": "sd.MeshDistance((V, E), (0.3 * V, E), alpha=50, alpha_q=50)(R, t)",
+    "md_tri_edges": "sd.MeshDistance((V, E), (0.3 * V, F), alpha=50, alpha_q=50)(R, t)",
     "md_points": "sd.MeshDistance(V, 0.3 * V, alpha=50, alpha_q=50)(R, t)",
     "md_exact": "sd.MeshDistance((V, F), (0.3 * V, F), alpha=50, alpha_q=50).exact(R, t)",
     "md_vertex": ("sd.MeshDistance((V, F), (0.3 * V, F), alpha=50, alpha_q=50)"
@@ -289,8 +294,8 @@ def main(argv=None):
         p.error(f"--source {source} holds no smoothdist package")
     commit, dirty = git_state(source)
     results = {"date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
-               "machine": {"cores": os.cpu_count(), "platform": platform.platform(),
-                           "python": platform.python_version()},
+               "machine": {"cores": os.cpu_count(), "cpu": cpu_name(),
+                           "platform": platform.platform(), "python": platform.python_version()},
                "commit": commit, "dirty": dirty, "cases": {}}
     work = Path(tempfile.mkdtemp(prefix="coldstart-"))
     try:

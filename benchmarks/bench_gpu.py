@@ -51,6 +51,8 @@ if str(REPO) not in sys.path:
 import numba  # noqa: E402
 import numpy as np  # noqa: E402
 
+from benchmarks.machine import cpu_name  # noqa: E402
+
 
 KINDS = ("points", "edges", "triangles")
 DEFAULT_JSON = REPO / "renders" / "gpu" / "bench_gpu.json"
@@ -389,17 +391,6 @@ def variant_launch(variant, tree, dtree):
                                                           wgrad_scale, *outs)
         cuda.synchronize()
     return go
-
-
-def cpu_name():
-    """The CPU's model name (``/proc/cpuinfo``), else what ``platform`` knows."""
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or platform.machine()
 
 
 def markdown(card, rows, threads, cpu=None):

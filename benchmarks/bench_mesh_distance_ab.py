@@ -24,6 +24,10 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+if str(ROOT) not in sys.path:  # run from a checkout without installing
+    sys.path.insert(0, str(ROOT))
+
+from benchmarks.machine import cpu_name  # noqa: E402
 
 
 def run(checkout, args, out):
@@ -56,6 +60,7 @@ def main(argv=None):
                    f"--tol 0 in each checkout, alternating, one value per round",
            "date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
            "commit_before": commits["before"], "commit_after": commits["after"],
+           "cpu": cpu_name(), "cores": os.cpu_count(),
            "load_average": [round(min(loads), 2), round(max(loads), 2)],
            "mesh_distance_ms_best": best}
     Path(a.out).write_text(json.dumps(out, indent=1) + "\n", encoding="utf-8")

@@ -124,6 +124,19 @@ def _run_tasks(kernel, m, serial_below, *args):
     run_tasks(lambda a, b: kernel(*args, ntasks, a, b), ntasks, pool=True)
 
 
+# (data kind, query kind) -> the distance's kernel that compiles that pair kernel only
+# (1 edges, 2 triangles; point queries have kernels of their own)
+_ONE_KIND_KERNELS = {(1, 1): _mq.segment_distance_tasks, (2, 2): _mq.triangle_distance_tasks,
+                     (1, 2): _mq.triangles_on_segments_tasks,
+                     (2, 1): _mq.segments_on_triangles_tasks}
+
+
+def _one_kind(kind):
+    """The one primitive kind of ``kind (n,)`` int8/int64, or None for a mix (or none)."""
+    kinds = np.unique(kind)
+    return int(kinds[0]) if kinds.size == 1 else None
+
+
 def _as_field(data, leaf_size):
     if isinstance(data, SmoothDistanceField):
         return data
@@ -327,12 +340,9 @@ class MeshDistance:
         self._rows = np.flatnonzero(kind == 0), np.flatnonzero(kind != 0)
         # ... and where the data and the query's edges and triangles are of one kind, the
         # distance's traversal has a kernel that compiles that kind's pair kernel only
-        data_kinds = set(np.unique(self.field.tree.kind).tolist())
-        self._distance_kernel = _mq.smooth_distance_primitive_tasks
-        if data_kinds == {1} == set(kind[kind != 0].tolist()):
-            self._distance_kernel = _mq.segment_distance_tasks
-        elif data_kinds == {2} == set(kind[kind != 0].tolist()):
-            self._distance_kernel = _mq.triangle_distance_tasks
+        self._distance_kernel = _ONE_KIND_KERNELS.get(
+            (_one_kind(self.field.tree.kind), _one_kind(kind[kind != 0])),
+            _mq.smooth_distance_primitive_tasks)
         self.last_stats = None
 
     @property

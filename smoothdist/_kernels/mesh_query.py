@@ -224,6 +224,20 @@ def closest_segments(kind, P, i, kq, Q, k):
                                    P[i, 2], P[i, 3], P[i, 4], P[i, 5])
 
 
+@numba.njit(**NJIT_GENERIC)
+def closest_triangles_segments(kind, P, i, kq, Q, k):
+    """``_closest`` where the query is a triangle and the data primitive an edge."""
+    return triangle_segment(Q[0], Q[1], Q[2], Q[3], Q[4], Q[5], Q[6], Q[7], Q[8], P[i, 0],
+                            P[i, 1], P[i, 2], P[i, 3], P[i, 4], P[i, 5])
+
+
+@numba.njit(**NJIT_GENERIC)
+def closest_segments_triangles(kind, P, i, kq, Q, k):
+    """``_closest`` where the query is an edge and the data primitive a triangle."""
+    return segment_triangle(Q[0], Q[1], Q[2], Q[3], Q[4], Q[5], P[i, 0], P[i, 1], P[i, 2],
+                            P[i, 3], P[i, 4], P[i, 5], P[i, 6], P[i, 7], P[i, 8])
+
+
 @numba.njit(**NJIT_INLINE)
 def _pair_term(c, kind, pts, wc, wcls, pwhi, i, kq, Q, S, wgrad_scale, moment, cx, cy, cz, k):
     """:func:`_pair` from the pair's closest points ``c`` (:func:`_closest`'s tuple)."""
@@ -598,6 +612,18 @@ def segments_leaf(tree, q, node, st):
 
 
 @numba.njit(**NJIT_GENERIC)
+def triangles_on_segments_leaf(tree, q, node, st):
+    """``leaf`` of the traversal where the query is triangles only and the data edges only."""
+    return _prim_leaf(tree, q, node, st, closest_triangles_segments)
+
+
+@numba.njit(**NJIT_GENERIC)
+def segments_on_triangles_leaf(tree, q, node, st):
+    """``leaf`` of the traversal where the query is edges only and the data triangles only."""
+    return _prim_leaf(tree, q, node, st, closest_segments_triangles)
+
+
+@numba.njit(**NJIT_GENERIC)
 def _prim_leaf(tree, q, node, st, closest):
     """A leaf's data primitives against the query primitive, exactly; ``closest``: the pair
     kernel of the kinds the traversal meets (:func:`_closest` for any)."""
@@ -851,6 +877,26 @@ def segment_distance_tasks(tree, qkind, qpts, alpha, beta, S, wgrad_scale, out_d
     segment-segment pair kernel only)."""
     _distance_tasks(tree, qkind, qpts, alpha, beta, S, wgrad_scale, out_d, out_g, out_nodes,
                     out_leaves, tol, distance_far, segments_leaf, ntasks, task0, task1)
+
+
+@numba.njit(**NJIT)
+def triangles_on_segments_tasks(tree, qkind, qpts, alpha, beta, S, wgrad_scale, out_d, out_g,
+                                out_nodes, out_leaves, tol, ntasks, task0, task1):
+    """:func:`smooth_distance_primitive_tasks` where the query is triangles only and the data
+    edges only (the triangle-segment pair kernel only)."""
+    _distance_tasks(tree, qkind, qpts, alpha, beta, S, wgrad_scale, out_d, out_g, out_nodes,
+                    out_leaves, tol, distance_far, triangles_on_segments_leaf, ntasks, task0,
+                    task1)
+
+
+@numba.njit(**NJIT)
+def segments_on_triangles_tasks(tree, qkind, qpts, alpha, beta, S, wgrad_scale, out_d, out_g,
+                                out_nodes, out_leaves, tol, ntasks, task0, task1):
+    """:func:`smooth_distance_primitive_tasks` where the query is edges only and the data
+    triangles only (the segment-triangle pair kernel only)."""
+    _distance_tasks(tree, qkind, qpts, alpha, beta, S, wgrad_scale, out_d, out_g, out_nodes,
+                    out_leaves, tol, distance_far, segments_on_triangles_leaf, ntasks, task0,
+                    task1)
 
 
 @numba.njit(**NJIT)

@@ -344,8 +344,10 @@ def test_mixed_query_rows_equal_each_kind_alone(data_name):
 @pytest.mark.parametrize("data_name, query_name, kernel", [
     ("triangles", "triangles", "triangle_distance_tasks"),
     ("edges", "edges", "segment_distance_tasks"),
-    ("triangles", "edges", "smooth_distance_primitive_tasks"),
-    ("mixed", "triangles", "smooth_distance_primitive_tasks")])
+    ("triangles", "edges", "segments_on_triangles_tasks"),
+    ("edges", "triangles", "triangles_on_segments_tasks"),
+    ("mixed", "triangles", "smooth_distance_primitive_tasks"),
+    ("points", "triangles", "smooth_distance_primitive_tasks")])
 def test_one_kind_kernels_equal_the_general_one(data_name, query_name, kernel):
     """Data and query of one kind take a kernel that compiles that pair kernel only; its
     values and stats are the general kernel's, bit for bit."""
