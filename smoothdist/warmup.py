@@ -164,6 +164,24 @@ def _whole_mesh(kind, which, levels=LEVELS):
     return job
 
 
+def _mixed_kinds(levels=LEVELS):
+    """``MeshDistance`` between meshes of different kinds: triangles on edges, edges on
+    triangles, and triangles on a mesh of triangles and edges (each one-kind pair above compiles
+    only its own pair kernel; these take the other distance kernels)."""
+    pairs = []
+    for level in levels:
+        V, F, E = sphere(level)
+        pairs += [((V, E), (0.3 * V, F)), ((V, F), (0.3 * V, E)),
+                  (sd.DataMesh(V, edges=E[::2], triangles=F), (0.3 * V, F))]
+
+    def job():
+        R, t = np.eye(3), np.array([0.0, 0.0, 2.0])
+        for data, query in pairs:
+            sd.MeshDistance(data, query, alpha=50, alpha_q=50)(R, t)
+
+    return job
+
+
 def _every_kind():
     """Every entry point above on edges and points (mostly loaded from the cache by then)."""
     calls = [f(kind, w, LEVELS) for kind in ("edges", "points")
@@ -195,10 +213,12 @@ JOBS = _Lazy({
     "smooth-distance": lambda: _distances("triangles", "smooth"),
     "mesh-distance-exact": lambda: _whole_mesh("triangles", "exact"),
     "edges-and-points": _every_kind,
+    "mesh-distance-mixed-kinds": _mixed_kinds,
 })
 #: ``{job: jobs it waits for}``: the vertex gradient and the whole-mesh exact distance share
 #: most of ``mesh-distance``'s kernels (66 of 68), so they start once those are cached
 AFTER = {"mesh-distance-vertex": ("mesh-distance",), "mesh-distance-exact": ("mesh-distance",),
+         "mesh-distance-mixed-kinds": ("mesh-distance",),
          "edges-and-points": ("mesh-distance-vertex", "mesh-distance-exact", "smooth-distance",
                               "exact-distance")}
 
