@@ -13,7 +13,8 @@ trimesh's ``icosphere(3)``, its 1,920 edges, its 642 vertices, 2,000 points on a
 * library: ``exact`` (``smoothdist.exact_distance``, 1,000 points), ``smooth``
   (``smooth_distance``, alpha 50), ``smooth_alpha_u`` (the same with ``alpha_u="auto"``),
   ``md_triangles`` / ``md_edges`` / ``md_points`` (``MeshDistance`` of the mesh against a
-  copy scaled by 0.3, alpha 50, and its first call), ``md_exact`` (``MeshDistance.exact``),
+  copy scaled by 0.3, alpha 50, and its first call), ``md_tri_edges`` (the copy's triangles on
+  the mesh's edges, as the paper's slide-sphere), ``md_exact`` (``MeshDistance.exact``),
   ``md_vertex`` (``MeshDistance.vertex_gradient``), triangles;
 * renders (``tracer render ... --size 256 256``, lit, auto alpha): ``mesh`` (``ball.obj``),
   ``edges`` (``ball_edges.obj``, its edges as OBJ lines), ``cloud`` (``cloud.xyz``), ``lit``
@@ -35,7 +36,8 @@ next one, so each gets a copy of it.
 Results go to ``benchmarks/data/coldstart.json`` with the load average before and after each
 run (other jobs slow a compile down as much as a render), the commit and whether the tree was
 dirty. ``--source DIR`` measures another checkout (e.g. a ``git worktree`` of an older
-commit) with this script, for a before/after table. The README's first-render figures and the
+commit) with this script, for a before/after table (the lit and simulation cases read that
+checkout's scene files). The README's first-render figures and the
 performance guide's cold-start table are read from these files (``tests/repo/test_docs_tables.py``,
 ``tests/tracer/rendering/test_render_coldstart.py``).
 
@@ -156,8 +158,9 @@ def icosphere(subdivisions=3):
     return np.array(V), np.array(F)
 
 
-def write_inputs(folder):
-    """The cases' input files in ``folder``; ``{case: child arguments}``."""
+def write_inputs(folder, scenes=ROOT / "scenes"):
+    """The cases' input files in ``folder``; ``{case: child arguments}``. The scene files come
+    from ``scenes`` (the measured checkout's: its scene format may differ from this one's)."""
     V, F = icosphere(3)
     ball = folder / "ball.obj"
     with open(ball, "w", encoding="ascii") as f:
@@ -181,9 +184,9 @@ def write_inputs(folder):
     cases.update(
         mesh=["render", str(ball), *size], edges=["render", str(wire), *size],
         cloud=["render", str(cloud), *size],
-        lit=["render", str(ROOT / "scenes" / "bunny_triangles.json"), *size, "--shading", "lit",
+        lit=["render", str(scenes / "bunny_triangles.json"), *size, "--shading", "lit",
              "--samples", "16", "--adaptive"],
-        sim=["simulate", str(ROOT / "scenes" / "simulations" / "ico_bowl.json"), "--steps", "1",
+        sim=["simulate", str(scenes / "simulations" / "ico_bowl.json"), "--steps", "1",
              "--no-render"])
     return cases
 
@@ -299,7 +302,7 @@ def main(argv=None):
                "commit": commit, "dirty": dirty, "cases": {}}
     work = Path(tempfile.mkdtemp(prefix="coldstart-"))
     try:
-        inputs = write_inputs(work)
+        inputs = write_inputs(work, source / "scenes")
         if args.copies:
             second = copy_source(source, work / "second-copy")
             warmed = work / "cache-warmup"
