@@ -125,6 +125,11 @@ def test_the_guide_holds_the_whole_mesh_kinds_table_and_warm_runs():
     text = _guide()
     start = text.index("<!-- coldstart-kinds -->") + len("<!-- coldstart-kinds -->")
     assert text[start:text.index("<!-- /coldstart-kinds -->")].strip() == want, "paste it again"
+    head = _load("coldstart_issue63_tri_edges_head.json")["cases"]["md_tri_edges"]["cold"]
+    own = _load("coldstart.json")["cases"]["md_tri_edges"]["cold"]
+    assert (f"Triangles on edges took {head['cpu_s']:.1f} s ({head['compiled']} specialisations)"
+            in _flat(text))
+    assert f"{own['cpu_s']:.1f} s ({own['compiled']}) with their own" in _flat(text)
     for name in ("coldstart_issue63_kinds_warm.json", "coldstart_issue63_kinds_warm_amd.json",
                  "coldstart_issue63_kinds_warm_amd_600ff68.json"):
         assert kinds_warm_sentence(DATA / name) in _flat(text), name
