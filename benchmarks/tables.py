@@ -73,8 +73,8 @@ def gpu_table(path):
 #: the cold-start table's targets (issue 51): CPU seconds of a first call, fresh process, empty
 #: kernel cache, our quiet 2-core machine
 COLDSTART_TARGETS = {"exact": 4, "smooth": 5, "smooth_alpha_u": 5, "md_triangles": 15,
-                     "md_edges": 15, "md_tri_edges": 15, "md_points": 15, "md_exact": 15, "md_vertex": 15,
-                     "mesh": 10, "edges": 10, "cloud": 10, "lit": 10}
+                     "md_edges": 15, "md_tri_edges": 15, "md_points": 15, "md_exact": 15,
+                     "md_vertex": 15, "mesh": 10, "edges": 10, "cloud": 10, "lit": 10}
 
 
 def _cpu(machine):
@@ -85,10 +85,10 @@ def _cpu(machine):
 def _provenance(d, loads):
     """The closing line of a ``bench_coldstart.py`` table: when, which commit, the machine, and
     the range of the ``loads`` (load averages) seen."""
+    m = d["machine"]
     return (f"{d['date']}, commit {(d.get('commit') or '?')[:10]}"
-            f"{' (dirty)' if d.get('dirty') else ''}, {_cpu(d['machine'])}{d['machine']['cores']} "
-            f"cores, Python "
-            f"{d['machine']['python']}, load average {min(loads):.1f}-{max(loads):.1f}")
+            f"{' (dirty)' if d.get('dirty') else ''}, {_cpu(m)}{m['cores']} cores, Python "
+            f"{m['python']}, load average {min(loads):.1f}-{max(loads):.1f}")
 
 
 def coldstart_table(path, before_path=None):

@@ -659,8 +659,9 @@ def smooth_traverse(tree, kq, Q, alpha, beta, S, wgrad_scale, stack, dstack, scr
     motion of one query vertex), the function that gives the lever arms
     (``setup(kq, Q, scratch)``), the traversal's far-field function (:func:`far_field` with
     the kind's bounds, e.g. :func:`distance_far`) and its leaf function (:func:`any_leaf`, or
-    :func:`triangles_leaf` / :func:`segments_leaf` where the data and the query are of one kind:
-    one pair kernel compiled instead of all). They are arguments, not run-time flags, so
+    :func:`triangles_leaf`, :func:`segments_leaf`, :func:`triangles_on_segments_leaf` or
+    :func:`segments_on_triangles_leaf` where the data and the query are each of one kind: one
+    pair kernel compiled instead of all). They are arguments, not run-time flags, so
     that a kernel compiles only its own kind's far fields (the distance neither the moment's
     nor the box-test-off's; performance guide, "Cold start"). Each caller names the functions
     in its call, so that numba merges them into it (``NJIT_GENERIC``); kept in a tuple they
