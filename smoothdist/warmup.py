@@ -141,14 +141,31 @@ def _distances(kind, which, levels=(*LEVELS, BIG_LEVEL)):
     return job
 
 
-def _whole_mesh(kind, which, levels=LEVELS):
-    """A collision constraint between two meshes of ``kind``: ``which`` is ``"call"`` (value
-    and gradient), ``"vertex"`` (the gradient per query vertex) or ``"exact"`` (the exact
-    distance)."""
+def whole_mesh_pairs(kind, levels=LEVELS):
+    """``[(data, query)]``: a sphere of ``kind`` against a copy scaled by 0.3, per level."""
     pairs = []
     for level in levels:
         V, F = _mesh(kind, level)
         pairs.append((V if F is None else (V, F), 0.3 * V if F is None else (0.3 * V, F)))
+    return pairs
+
+
+def mixed_kind_pairs(levels=LEVELS):
+    """``[(data, query)]`` of different kinds, per level: triangles on edges, edges on
+    triangles, and triangles on a mesh of triangles and edges."""
+    pairs = []
+    for level in levels:
+        V, F, E = sphere(level)
+        pairs += [((V, E), (0.3 * V, F)), ((V, F), (0.3 * V, E)),
+                  (sd.DataMesh(V, edges=E[::2], triangles=F), (0.3 * V, F))]
+    return pairs
+
+
+def _whole_mesh(kind, which, levels=LEVELS):
+    """A collision constraint between two meshes of ``kind``: ``which`` is ``"call"`` (value
+    and gradient), ``"vertex"`` (the gradient per query vertex) or ``"exact"`` (the exact
+    distance)."""
+    pairs = whole_mesh_pairs(kind, levels)
 
     def job():
         R, t = np.eye(3), np.array([0.0, 0.0, 2.0])
@@ -168,11 +185,7 @@ def _mixed_kinds(levels=LEVELS):
     """``MeshDistance`` between meshes of different kinds: triangles on edges, edges on
     triangles, and triangles on a mesh of triangles and edges (each one-kind pair above compiles
     only its own pair kernel; these take the other distance kernels)."""
-    pairs = []
-    for level in levels:
-        V, F, E = sphere(level)
-        pairs += [((V, E), (0.3 * V, F)), ((V, F), (0.3 * V, E)),
-                  (sd.DataMesh(V, edges=E[::2], triangles=F), (0.3 * V, F))]
+    pairs = mixed_kind_pairs(levels)
 
     def job():
         R, t = np.eye(3), np.array([0.0, 0.0, 2.0])

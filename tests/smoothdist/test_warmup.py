@@ -5,6 +5,7 @@
 * For real: after ``python -m smoothdist warmup --only smooth-distance`` into an empty cache, a
   new process's first ``smooth_distance`` compiles nothing.
 * The command lines list their jobs and refuse unknown ones.
+* The whole-mesh jobs reach every distance kernel ``MeshDistance`` can choose.
 """
 
 import json
@@ -114,3 +115,18 @@ def test_the_commands_list_their_jobs_and_refuse_unknown_ones(tmp_path):
     bad = subprocess.run([sys.executable, "-m", "tracer", "warmup", "--only", "nope"], env=env,
                          capture_output=True, text=True, timeout=120)
     assert bad.returncode == 2 and "unknown job(s) nope" in bad.stderr
+
+
+def test_the_whole_mesh_jobs_reach_every_distance_kernel():
+    """Each (data kind, query kind) has a distance kernel of its own, compiled on first use: the
+    warm-up's pairs (same kind, and mixed) must choose every one of them, the general kernel
+    included (it once chose none after the one-kind kernels came)."""
+    from smoothdist import whole_mesh
+    from smoothdist._kernels import mesh_query
+
+    pairs = [p for kind in ("triangles", "edges") for p in warmup.whole_mesh_pairs(kind, (0,))]
+    pairs += warmup.mixed_kind_pairs((0,))
+    chosen = {whole_mesh.MeshDistance(d, q, alpha=50, alpha_q=50)._distance_kernel
+              for d, q in pairs}
+    want = {*whole_mesh._ONE_KIND_KERNELS.values(), mesh_query.smooth_distance_primitive_tasks}
+    assert chosen == want
