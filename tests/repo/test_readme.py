@@ -97,6 +97,8 @@ TINY = {
     "benchmarks/bench_studies.py": ["--size", "8", "--betas", "1", "--grid", "4",
                                     "--trivial", "4", "--folder", "scenes/data/meshes"],
     "benchmarks/bench_frame.py": ["--size", "16", "9", "--repeat", "1"],
+    # every shape lit at 128²: 22 s of the suite; two shapes at 16² run the same code
+    "benchmarks/bench_self_shadow.py": ["--size", "16", "--shapes", "icosphere1", "open_plane"],
     "tracer.sim.vbowl -o": ["--steps", "20"],
     "benchmarks/bench_scaling.py": ["--size", "16", "9", "--repeat", "1", "--threads", "1", "2"],
     "benchmarks/bench_png.py": ["--size", "16", "9", "--repeat", "1", "--threads", "1", "2",
