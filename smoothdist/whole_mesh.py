@@ -129,6 +129,10 @@ def _run_tasks(kernel, m, serial_below, *args):
 _ONE_KIND_KERNELS = {(1, 1): _mq.segment_distance_tasks, (2, 2): _mq.triangle_distance_tasks,
                      (1, 2): _mq.triangles_on_segments_tasks,
                      (2, 1): _mq.segments_on_triangles_tasks}
+#: (data kind, query kind) -> the exact distance's (serial, prange) kernels of that pair kernel
+#: only (the query without points)
+_ONE_KIND_EXACT = {(1, 1): (_mq.exact_segment_tasks, _mq.exact_segments),
+                   (2, 2): (_mq.exact_triangle_tasks, _mq.exact_triangles)}
 
 
 def _one_kind(kind):
@@ -340,9 +344,12 @@ class MeshDistance:
         self._rows = np.flatnonzero(kind == 0), np.flatnonzero(kind != 0)
         # ... and where the data and the query's edges and triangles are of one kind, the
         # distance's traversal has a kernel that compiles that kind's pair kernel only
+        data_kind = _one_kind(self.field.tree.kind)
         self._distance_kernel = _ONE_KIND_KERNELS.get(
-            (_one_kind(self.field.tree.kind), _one_kind(kind[kind != 0])),
-            _mq.smooth_distance_primitive_tasks)
+            (data_kind, _one_kind(kind[kind != 0])), _mq.smooth_distance_primitive_tasks)
+        self._exact_kernels = _ONE_KIND_EXACT.get(
+            (data_kind, _one_kind(kind)),
+            (_mq.exact_distance_primitive_tasks, _mq.exact_distance_primitives))
         self.last_stats = None
 
     @property
@@ -571,12 +578,11 @@ class MeshDistance:
             else:
                 dv = float(self.field.exact_distance(X)[0].min())
             bound2 = (dv * (1 + 1e-9)) ** 2 + 1e-300
+        serial, parallel = self._exact_kernels
         if m < SERIAL_BELOW["exact"]:
-            _mq.exact_distance_primitive_tasks(self.field.tree, self.query.kind, pts, bound2, d,
-                                               g, prim, 1, 0, 1)
+            serial(self.field.tree, self.query.kind, pts, bound2, d, g, prim, 1, 0, 1)
         else:
-            _mq.exact_distance_primitives(self.field.tree, self.query.kind, pts, bound2, d, g,
-                                          prim, parallel_tasks(m))
+            parallel(self.field.tree, self.query.kind, pts, bound2, d, g, prim, parallel_tasks(m))
         j = int(np.argmin(d))
         G = np.zeros((self.num_query_vertices, 3))
         k = int(self.query.kind[j]) + 1

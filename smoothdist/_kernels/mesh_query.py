@@ -768,13 +768,40 @@ def _gap_within_best(key, st):
 @numba.njit(**NJIT_IR_INLINE)
 def _pair_leaf(tree, q, node, st):
     """A leaf's closest pairs; ``st = (best d2, prim, r, leaves)``."""
+    return _exact_leaf(tree, q, node, st, any_pair)
+
+
+@numba.njit(**NJIT_IR_INLINE)
+def _triangle_pair_leaf(tree, q, node, st):
+    """:func:`_pair_leaf` where the data and the query are triangles only."""
+    return _exact_leaf(tree, q, node, st, closest_triangles)
+
+
+@numba.njit(**NJIT_IR_INLINE)
+def _segment_pair_leaf(tree, q, node, st):
+    """:func:`_pair_leaf` where the data and the query are edges only."""
+    return _exact_leaf(tree, q, node, st, closest_segments)
+
+
+@numba.njit(**NJIT_GENERIC)
+def any_pair(kind, P, i, kq, Q, k):
+    """:func:`smoothdist._kernels.closest_pair.closest_pair` of query ``(kq, Q)`` and data
+    primitive ``i`` of kind ``k`` (any kinds), in the pair functions' arguments."""
+    return closest_pair(kq, Q, k, P[i])
+
+
+@numba.njit(**NJIT_GENERIC)
+def _exact_leaf(tree, q, node, st, closest):
+    """A leaf's closest pairs with the pair function ``closest`` (:func:`any_pair`, or one
+    kind's: :func:`closest_triangles`, :func:`closest_segments`)."""
     if tree.left[node] >= 0:
         return False, st
     best, bi, brx, bry, brz, leaves = st
     st_ = tree.start[node]
     cnt = tree.count[node]
+    kind = tree.kind
     for i in range(st_, st_ + cnt):
-        c = closest_pair(q.kq, q.Q, tree.kind[i], tree.pts[i])
+        c = closest(kind, tree.pts, i, q.kq, q.Q, kind[i])
         if c[0] < best:
             best = c[0]
             bi = i
@@ -794,13 +821,20 @@ def exact_distance_primitive(tree, kq, Q, stack, dstack, scratch, bound2=np.inf)
     gradient ``r / d`` (0 on contact) and the closest primitive (mesh numbering). Only pairs at
     squared distance ``< bound2`` are considered; with none, ``d = inf`` and ``prim = -1``.
     """
+    return _exact_primitive(tree, kq, Q, stack, dstack, scratch, bound2, _pair_leaf)
+
+
+@numba.njit(**NJIT_GENERIC)
+def _exact_primitive(tree, kq, Q, stack, dstack, scratch, bound2, leaf):
+    """:func:`exact_distance_primitive` with the leaf function ``leaf`` (:func:`_pair_leaf`, or
+    one kind's)."""
     qlo = scratch[0:3]
     qhi = scratch[3:6]
     query_box(kq, Q, qlo, qhi)
     (best, bi, brx, bry, brz, leaves), nodes = nearest_first(
         tree, _PairQuery(kq, Q, qlo, qhi), (bound2, NONE, 0.0, 0.0, 0.0, ZERO), stack, dstack, ZERO,
         box_box_distance(qlo, qhi, tree.lo, tree.hi, ZERO), _gap_beyond_best, no_far_field,
-        _pair_leaf, _box_box_children, _gap_within_best)
+        leaf, _box_box_children, _gap_within_best)
     if bi < 0:
         return np.inf, 0.0, 0.0, 0.0, -1, nodes, leaves
     d = math.sqrt(best)
@@ -964,6 +998,55 @@ def exact_distance_primitives(tree, qkind, qpts, bound2, out_d, out_g, out_prim,
     for task in prange(ntasks):
         exact_distance_primitive_tasks(tree, qkind, qpts, bound2, out_d, out_g, out_prim, ntasks,
                                        np.int64(task), np.int64(task) + 1)
+
+
+@numba.njit(**NJIT_GENERIC)
+def _exact_kind_tasks(tree, qpts, bound2, out_d, out_g, out_prim, ntasks, task0, task1, kq, leaf):
+    """:func:`exact_distance_primitive_tasks` where every query primitive is of kind ``kq`` and
+    ``leaf`` is that kind pair's leaf (no point branch, one pair kernel)."""
+    stack, dstack, scratch = task_scratch(tree, 15)
+    for task in range(task0, task1):
+        for j in range(task, qpts.shape[0], ntasks):
+            d, gx, gy, gz, p, nodes, leaves = _exact_primitive(
+                tree, kq, qpts[j], stack, dstack, scratch, bound2, leaf)
+            out_d[j] = d
+            out_g[j, 0] = gx
+            out_g[j, 1] = gy
+            out_g[j, 2] = gz
+            out_prim[j] = p
+
+
+@numba.njit(**NJIT)
+def exact_triangle_tasks(tree, qkind, qpts, bound2, out_d, out_g, out_prim, ntasks, task0,
+                         task1):
+    """:func:`exact_distance_primitive_tasks` where the data and the query are triangles only
+    (the triangle-triangle pair kernel only: performance guide, "Cold start")."""
+    _exact_kind_tasks(tree, qpts, bound2, out_d, out_g, out_prim, ntasks, task0, task1,
+                      np.int64(2), _triangle_pair_leaf)
+
+
+@numba.njit(**NJIT)
+def exact_segment_tasks(tree, qkind, qpts, bound2, out_d, out_g, out_prim, ntasks, task0,
+                        task1):
+    """:func:`exact_distance_primitive_tasks` where the data and the query are edges only."""
+    _exact_kind_tasks(tree, qpts, bound2, out_d, out_g, out_prim, ntasks, task0, task1,
+                      np.int64(1), _segment_pair_leaf)
+
+
+@numba.njit(**NJIT_PARALLEL)
+def exact_triangles(tree, qkind, qpts, bound2, out_d, out_g, out_prim, ntasks):
+    """:func:`exact_distance_primitives` where the data and the query are triangles only."""
+    for task in prange(ntasks):
+        exact_triangle_tasks(tree, qkind, qpts, bound2, out_d, out_g, out_prim, ntasks,
+                           np.int64(task), np.int64(task) + 1)
+
+
+@numba.njit(**NJIT_PARALLEL)
+def exact_segments(tree, qkind, qpts, bound2, out_d, out_g, out_prim, ntasks):
+    """:func:`exact_distance_primitives` where the data and the query are edges only."""
+    for task in prange(ntasks):
+        exact_segment_tasks(tree, qkind, qpts, bound2, out_d, out_g, out_prim, ntasks,
+                           np.int64(task), np.int64(task) + 1)
 
 
 @numba.njit(**NJIT)

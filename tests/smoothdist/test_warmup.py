@@ -126,7 +126,12 @@ def test_the_whole_mesh_jobs_reach_every_distance_kernel():
 
     pairs = [p for kind in ("triangles", "edges") for p in warmup.whole_mesh_pairs(kind, (0,))]
     pairs += warmup.mixed_kind_pairs((0,))
-    chosen = {whole_mesh.MeshDistance(d, q, alpha=50, alpha_q=50)._distance_kernel
-              for d, q in pairs}
+    mds = [whole_mesh.MeshDistance(d, q, alpha=50, alpha_q=50) for d, q in pairs]
     want = {*whole_mesh._ONE_KIND_KERNELS.values(), mesh_query.smooth_distance_primitive_tasks}
-    assert chosen == want
+    assert {md._distance_kernel for md in mds} == want
+    # the exact distance's: the one-kind pairs' and the general one (points, mixed meshes)
+    mds += [whole_mesh.MeshDistance(d, q, alpha=50, alpha_q=50)
+            for d, q in warmup.whole_mesh_pairs("points", (0,))]
+    want = {*whole_mesh._ONE_KIND_EXACT.values(),
+            (mesh_query.exact_distance_primitive_tasks, mesh_query.exact_distance_primitives)}
+    assert {md._exact_kernels for md in mds} == want

@@ -363,6 +363,29 @@ def test_one_kind_kernels_equal_the_general_one(data_name, query_name, kernel):
     assert all(np.array_equal(a, b) for a, b in zip(stats, md.last_stats))
 
 
+@pytest.mark.parametrize("data_name, query_name, kernel", [
+    ("triangles", "triangles", "exact_triangle_tasks"),
+    ("edges", "edges", "exact_segment_tasks"),
+    ("triangles", "edges", "exact_distance_primitive_tasks"),
+    ("mixed", "triangles", "exact_distance_primitive_tasks")])
+@pytest.mark.parametrize("t", PLACEMENTS)
+def test_one_kind_exact_kernels_equal_the_general_one(data_name, query_name, kernel, t):
+    """The exact distance of data and query of one kind takes kernels of that pair kernel only
+    (serial and ``prange``); distance and gradient are the general kernels', bit for bit."""
+    from smoothdist._kernels import mesh_query as mq
+    md = MeshDistance(DATA[data_name], QUERY[query_name], alpha=15.0, alpha_q=9.0)
+    assert md._exact_kernels[0] is getattr(mq, kernel)
+    general = (mq.exact_distance_primitive_tasks, mq.exact_distance_primitives)
+    for below in (10 ** 9, 0):     # the serial kernel, then the prange one
+        with pytest.MonkeyPatch.context() as mp:
+            mp.setitem(smoothdist.whole_mesh.SERIAL_BELOW, "exact", below)
+            d, G = md.exact(t=t)
+            own, md._exact_kernels = md._exact_kernels, general
+            d0, G0 = md.exact(t=t)
+            md._exact_kernels = own
+        assert d == d0 and np.array_equal(G, G0)
+
+
 def test_combine_distances():
     d, w = combine_distances([1.0, 2.0, 1.5], [10.0, 20.0, 5.0])
     ref = -np.log(np.exp(-20.0) + np.exp(-40.0) + np.exp(-30.0)) / 20.0
