@@ -39,11 +39,23 @@ def warm_sentences(path=DATA):
     return mesh, exact, render, grid, generic
 
 
-def kinds_warm_sentence(path=DATA.parent / "coldstart_issue63_kinds_warm.json"):
+def kinds_warm_sentence(path=DATA.parent / "coldstart_issue63_kinds_warm.json",
+                        key="mesh_distance_ms_best", fmt=".2f"):
     """Issue 63's warm side by side (``bench_mesh_distance_ab.py``): the Table 3 cases' best
-    milliseconds per round, before -> after."""
+    milliseconds per round, before -> after (``key``: ``"mesh_exact_ms_best"`` for the exact
+    distance's)."""
     d = json.loads(Path(path).read_text(encoding="utf-8"))
-    return _pairs(d["mesh_distance_ms_best"], ".2f", {"ring-toss": "ring toss"}) + " ms"
+    return _pairs(d[key], fmt, {"ring-toss": "ring toss"}) + " ms"
+
+
+def exact_cold_sentence(path=DATA.parent / "coldstart_issue63_exact.json"):
+    """The first ``MeshDistance.exact`` call before -> after, CPU seconds (median and range of
+    the alternating runs) and specialisations."""
+    d = json.loads(Path(path).read_text(encoding="utf-8"))
+    b, a = ([r["cpu_s"] for r in d[side]] for side in ("before", "after"))
+    med = lambda v: sorted(v)[len(v) // 2]  # noqa: E731
+    return (f"{med(b):.1f} s ({_range(b, '.1f')}, {d['before'][0]['compiled']} specialisations)"
+            f" -> {med(a):.1f} s ({_range(a, '.1f')}, {d['after'][0]['compiled']})")
 
 
 if __name__ == "__main__":

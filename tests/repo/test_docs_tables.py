@@ -17,7 +17,8 @@ GUIDE = ROOT / "docs" / "guide" / "performance.md"
 DATA = ROOT / "benchmarks" / "data"
 sys.path.insert(0, str(ROOT))
 
-from benchmarks.coldstart_words import kinds_warm_sentence, warm_sentences  # noqa: E402
+from benchmarks.coldstart_words import (exact_cold_sentence, kinds_warm_sentence,  # noqa: E402
+                                         warm_sentences)
 from benchmarks.tables import (build_scale_table, build_scale_words,  # noqa: E402
                                scale_points_words,
                                coldstart_ahead_table, coldstart_copies_table,
@@ -130,6 +131,20 @@ def test_the_guide_holds_the_whole_mesh_kinds_table_and_warm_runs():
     assert (f"Triangles on edges took {head['cpu_s']:.1f} s ({head['compiled']} specialisations)"
             in _flat(text))
     assert f"{own['cpu_s']:.1f} s ({own['compiled']}) with their own" in _flat(text)
+    # the exact distance's kernels of one kind: first call, warm runs, the rounds' ratios
+    assert exact_cold_sentence(DATA / "coldstart_issue63_exact.json") in _flat(text)
+    ex = _load("coldstart_issue63_exact.json")
+    b, a = ([r["cpu_s"] for r in ex[side]] for side in ("before", "after"))
+    ratios = [y / x for x, y in zip(b, a) if x < max(b) and y < max(a)]
+    assert (f"the three rounds without them give ratios of {min(ratios):.2f}-{max(ratios):.2f}"
+            in _flat(text)) and len(ratios) == 3
+    assert f"({max(b):.1f} s before, {max(a):.1f} s after" in _flat(text)
+    sl = _load("coldstart_issue63_exact_warm_amd.json")["mesh_distance_ms_best"]
+    assert (f"best rounds {min(sl['after']['slide-sphere']):.2f} against "
+            f"{min(sl['before']['slide-sphere']):.2f} ms") in _flat(text)
+    warm = DATA / "coldstart_issue63_exact_warm_amd.json"
+    assert kinds_warm_sentence(warm, "mesh_exact_ms_best", ".3f") in _flat(text)
+    assert kinds_warm_sentence(warm) in _flat(text)
     for name in ("coldstart_issue63_kinds_warm.json", "coldstart_issue63_kinds_warm_amd.json",
                  "coldstart_issue63_kinds_warm_amd_600ff68.json"):
         assert kinds_warm_sentence(DATA / name) in _flat(text), name
