@@ -578,11 +578,12 @@ class MeshDistance:
             else:
                 dv = float(self.field.exact_distance(X)[0].min())
             bound2 = (dv * (1 + 1e-9)) ** 2 + 1e-300
-        serial, parallel = self._exact_kernels
+        one_task, prange_loop = self._exact_kernels
         if m < SERIAL_BELOW["exact"]:
-            serial(self.field.tree, self.query.kind, pts, bound2, d, g, prim, 1, 0, 1)
+            one_task(self.field.tree, self.query.kind, pts, bound2, d, g, prim, 1, 0, 1)
         else:
-            parallel(self.field.tree, self.query.kind, pts, bound2, d, g, prim, parallel_tasks(m))
+            prange_loop(self.field.tree, self.query.kind, pts, bound2, d, g, prim,
+                        parallel_tasks(m))
         j = int(np.argmin(d))
         G = np.zeros((self.num_query_vertices, 3))
         k = int(self.query.kind[j]) + 1
