@@ -27,10 +27,17 @@ TOY = textwrap.dedent('''
     OUT = os.environ["TOY_OUT"]
 
 
-    def stamp(name, seconds=0.0, fail=False):
+    def stamp(name, seconds=0.0, fail=False, until=None):
+        # until: a job whose file this one waits for (at most ``seconds``, or $TOY_WAIT), so
+        # that "the other worker ran it meanwhile" does not depend on how loaded the machine is
         def job():
             start = time.time()
-            time.sleep(seconds)
+            limit = float(os.environ.get("TOY_WAIT", seconds))
+            while until and not os.path.exists(os.path.join(OUT, until)):
+                if time.time() - start > limit:
+                    break
+                time.sleep(0.01)
+            time.sleep(0.0 if until else seconds)
             if fail:
                 raise RuntimeError("toy job failed on purpose")
             with open(os.path.join(OUT, name), "w") as f:
@@ -38,7 +45,7 @@ TOY = textwrap.dedent('''
         return job
 
 
-    JOBS = {"slow": stamp("slow", 0.6), "after-slow": stamp("after-slow"),
+    JOBS = {"slow": stamp("slow", 60.0, until="quick"), "after-slow": stamp("after-slow"),
             "broken": stamp("broken", fail=True), "quick": stamp("quick")}
     AFTER = {"after-slow": ("slow",), "unknown-waits": ("nothing",)}
 ''')
@@ -69,9 +76,11 @@ def test_jobs_wait_for_theirs_and_a_failure_is_reported(tmp_path, monkeypatch):
     assert _times(out, "after-slow")[0] >= _times(out, "slow")[1]
     # while it waited, a free worker took the next job
     assert _times(out, "quick")[0] < _times(out, "slow")[1]
-    # one worker: one at a time
+    # one worker: one at a time (the slow job cannot see the quick one run meanwhile: it stops
+    # waiting for it soon)
     for f in out.iterdir():
         f.unlink()
+    monkeypatch.setenv("TOY_WAIT", "0.3")
     warmup.run([j for j in jobs if j[1] != "broken"], workers=1)
     spans = sorted(_times(out, n) for n in ("slow", "after-slow", "quick"))
     assert all(a[1] <= b[0] for a, b in zip(spans, spans[1:]))
