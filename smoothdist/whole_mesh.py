@@ -136,9 +136,11 @@ _ONE_KIND_EXACT = {(1, 1): (_mq.exact_segment_tasks, _mq.exact_segments),
 
 
 def _one_kind(kind):
-    """The one primitive kind of ``kind (n,)`` int8/int64, or None for a mix (or none)."""
-    kinds = np.unique(kind)
-    return int(kinds[0]) if kinds.size == 1 else None
+    """The one primitive kind of ``kind (n,)`` int8/int64, or None for a mix (or none): a
+    minimum and a maximum, no sort (a scan's tree may hold 10M primitives)."""
+    if kind.size == 0 or kind.min() != kind.max():
+        return None
+    return int(kind[0])
 
 
 def _as_field(data, leaf_size):
