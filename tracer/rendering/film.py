@@ -647,10 +647,12 @@ def _shading_normals(skargs, depth_max, options, pixels, W, offsets, hit, t, gra
     pixel-major over ``pixels (m,)`` x ``offsets (K, 2)``, as :func:`_trace` returns them.
     The hit points ``t`` stay those of the render's own field (its silhouettes, its light).
 
-    The samples' own kernel (:func:`tracer.rendering.march.sample_tasks`, compiled already) does it:
-    each ray marches from its hit ``t`` to ``t`` with a hit threshold that any distance
-    meets, so it stops at its first evaluation, and returns the gradient there. Returns the
-    distance evaluations made (one per hit; two where ``tol > 0`` loosens the first)."""
+    Each ray is marched from its hit ``t`` to ``t`` with a hit threshold that any distance
+    meets, so it stops at its first evaluation and returns the gradient there: on the CPU by
+    :func:`tracer.rendering.march.gradient_tasks`, which evaluates just that (a kernel of the
+    distance alone: a first render compiles it in a fraction of the samples' kernel's time),
+    on the GPU by the samples' kernel (:func:`_trace`). Returns the distance evaluations made
+    (one per hit on the CPU; on the GPU two where ``tol > 0`` loosens the first)."""
     K = len(offsets)
     evals = 0
     for k in range(K):          # one kernel call per offset: a sample's ray is (pixel, offset)
@@ -658,12 +660,36 @@ def _shading_normals(skargs, depth_max, options, pixels, W, offsets, hit, t, gra
         if idx.size == 0:
             continue
         at = t[idx]
-        h, _, g, steps, _ = _trace(skargs, depth_max, options, pixels[idx // K], W,
-                                   offsets[k:k + 1], (at.copy(), at.copy()), _ANY_DISTANCE,
-                                   gpu)
+        if gpu is not None:
+            h, _, g, steps, _ = _trace(skargs, depth_max, options, pixels[idx // K], W,
+                                       offsets[k:k + 1], (at.copy(), at.copy()), _ANY_DISTANCE,
+                                       gpu)
+        else:
+            h, g, steps = _gradients(skargs, depth_max, pixels[idx // K], W, offsets[k:k + 1],
+                                     at)
         evals += int(steps.sum())
         grad[idx[h]] = g[h]
     return evals
+
+
+def _gradients(kargs, depth_max, pixels, W, offset, at):
+    """The field's gradient at depth ``at (m,)`` of the ray through ``pixels (m,)`` (flat
+    indices) shifted by ``offset (1, 2)``, where a march from ``at`` to ``at`` would take it
+    (:func:`tracer.rendering.march.gradient_tasks`): ``hit (m,), grad (m, 3), steps (m,)``."""
+    tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps = kargs
+    m = pixels.size
+    hit = np.zeros(m, dtype=np.bool_)
+    grad = np.zeros((m, 3))
+    steps = np.zeros(m, dtype=np.int64)
+    rows, cols = np.divmod(pixels.astype(np.int64), W)
+    ray = MarchArgs(roots, params, mode, tol, cam, lo, hi, eps, max_steps)
+    samples = SampleRays(rows, cols, np.ascontiguousarray(offset, dtype=np.float64),
+                         float(_ANY_DISTANCE), float(SAMPLE_NEWTON_COS))
+    at = np.ascontiguousarray(at, dtype=np.float64)
+    ntasks = parallel_tasks(m)
+    run_tasks(lambda a, b: march.gradient_tasks(tree, ray, samples, at, depth_max,
+                                                (hit, grad, steps), (ntasks, a, b)), ntasks)
+    return hit, grad, steps
 
 
 def _clip01(c):

@@ -1023,6 +1023,51 @@ def sample_ray(tree, ray, samples, out, opts, i, k, work):
 
 
 @numba.njit(**NJIT)
+def gradient_tasks(tree, ray, samples, at, depth_max, out, tasks):
+    """The scene's gradient at depth ``at[i]`` of sample ray 0 of pixel ``i``: what
+    :func:`sample_tasks` returns for the span ``[at[i], at[i]]`` with a hit threshold of
+    ``samples.eps_px`` pixels (the film's shading normals at a lower beta,
+    ``tracer.rendering.film._shading_normals``), in one distance evaluation and without the
+    march's code (a first render compiles this kernel in a fraction of ``sample_tasks``' time).
+
+    ``samples`` (:class:`tracer.rendering.frame.SampleRays`, one offset), ``at (m,)`` float64,
+    ``out = (hit (m,) bool, grad (m, 3) float64, steps (m,) int64)`` written where the point
+    lies in the march's box (else ``hit`` stays False, as the march's miss): ``hit`` where
+    the distance there meets the threshold (:func:`march_ray`'s ``d <= eps``), ``grad`` the
+    unnormalised gradient, ``steps`` the evaluations (one). ``tasks = (ntasks, task0,
+    task1)`` as in :func:`sample_tasks`. The same values bit for bit as ``sample_tasks``
+    (the same ray, the same point, the distance at the scene's own ``tol``, which the march
+    takes for a hit; tested)."""
+    ntasks, task0, task1 = tasks
+    tree = borrowed(tree)
+    ray = borrowed(ray)
+    work = scratch(depth_max)
+    sc = scene_of(tree, ray)
+    hit, grad, steps = out
+    rows, cols, offsets, eps_px, newton_cos = samples
+    cam = ray[4]
+    lo, hi, eps, max_steps = limits_of(ray)
+    near_px, pixel = footprint(cam)
+    n = rows.size
+    for task in range(task0, task1):
+        for i in range(task, n, ntasks):
+            t = at[i]
+            ox, oy, oz, dx, dy, dz = camera_ray(cam, rows[i] + offsets[0, 0],
+                                                cols[i] + offsets[0, 1])
+            t_in, t_out = ray_box(ox, oy, oz, dx, dy, dz, lo, hi)
+            if max(t_in, t) > min(t_out, t) or max_steps < 1:
+                continue                # the march's miss before any evaluation
+            d, gx, gy, gz, nn, ll, ob = scene_distance(sc, ox + t * dx, oy + t * dy,
+                                                       oz + t * dz, work, 0.0)
+            steps[i] = 1
+            if d <= max(eps, eps_px * pixel * t + eps_px * near_px):
+                hit[i] = True
+                grad[i, 0] = gx
+                grad[i, 1] = gy
+                grad[i, 2] = gz
+
+
+@numba.njit(**NJIT)
 def render_tiles(tree, ray, band, depth_max, out, opts, j0, j1):
     """Trace tiles ``j0 <= j < j1`` of :func:`render_rows`' tile order for the rows of
     ``band = (row0, row1)``, in the calling thread (same arguments and outputs as

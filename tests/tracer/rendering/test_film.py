@@ -27,8 +27,8 @@ from smoothdist import SmoothDistanceField
 from tracer.rendering import film
 from tracer.rendering.camera import look_at, primary_rays, ray_direction
 from tracer.rendering.film import sample_offsets
-from tracer.rendering.frame import MAX_SAMPLES, camera_of
-from tracer.rendering.renderer import render
+from tracer.rendering.frame import MAX_SAMPLES, camera_of, scene_arrays, trace_options
+from tracer.rendering.renderer import ray_args, render
 from tracer.scenes.scene import load_scene, scene_from_field
 
 ROOT = Path(__file__).resolve().parents[3]
@@ -469,3 +469,51 @@ def test_neighbour_flags_in_bands_are_the_pairwise_comparison():
             numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
         assert np.array_equal(f, flags.ravel()) and np.array_equal(e, edges.ravel())
     assert 0 < flags.sum() < H * W and 0 < edges.sum() < flags.sum()
+
+
+def _gradient_cases():
+    """Scenes of every distance path the shading normals take: one smooth object (its lean
+    int-root path), the same with ``tol > 0`` (the march evaluates loosened first, then again),
+    two objects (the second LogSumExp), two posed objects (rigid bodies), and exact-offset mode."""
+
+    trefoil = load_scene(ROOT / "scenes" / "trefoil.json", {"width": 24, "height": 20})
+    tol = load_scene(ROOT / "scenes" / "trefoil.json", {"width": 24, "height": 20, "tol": 1e-2})
+    two = load_scene(ROOT / "scenes" / "two_objects.json", {"width": 24, "height": 20})
+    exact = sphere_scene(size=24)
+    R = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+    for name, scene, poses in (("one", trefoil, None), ("tol", tol, None), ("two", two, None),
+                               ("posed", two, [(R, np.array([0.1, 0.0, 0.2])),
+                                               (np.eye(3), np.zeros(3))]),
+                               ("exact", exact, None)):
+        camera = camera_of(scene)
+        arrays = scene_arrays(scene, poses)
+        yield name, scene, camera, arrays, ray_args(scene, camera, arrays)
+
+
+@pytest.mark.parametrize("case", ["one", "tol", "two", "posed", "exact"])
+def test_the_shading_gradients_are_the_samples_march_bit_for_bit(case):
+    # the lit film's shading normals (at BETA_SHADE) come from a kernel of the distance alone
+    # (march.gradient_tasks, compiled in a fraction of the samples' kernel's time); they were
+    # the samples' march from t to t with a threshold any distance meets. Same bits, same hits,
+    # at the render's hit depths and at depths before, inside and beyond the scene's box
+    name, scene, camera, arrays, kargs = next(c for c in _gradient_cases() if c[0] == case)
+    kargs = film._shading_args(kargs) or kargs
+    options = trace_options(scene, arrays.lo, arrays.hi)
+    W, H = camera.width, camera.height
+    pixels = np.arange(W * H)
+    offsets = film.sample_offsets(4)
+    hit, t, _, _, _ = film._trace(kargs, arrays.depth_max, options, pixels, W, offsets)
+    assert 0 < hit.sum() < hit.size
+    rng = np.random.default_rng(5)
+    far = float(np.linalg.norm(arrays.hi - arrays.lo)) + np.linalg.norm(camera.origin)
+    for k in range(len(offsets)):
+        at = np.where(hit[k::len(offsets)], t[k::len(offsets)], rng.uniform(0.0, 1.5 * far, W * H))
+        old_h, _, old_g, _, _ = film._trace(kargs, arrays.depth_max, options, pixels, W,
+                                            offsets[k:k + 1], (at.copy(), at.copy()),
+                                            film._ANY_DISTANCE)
+        new_h, new_g, steps = film._gradients(kargs, arrays.depth_max, pixels, W,
+                                              offsets[k:k + 1], at)
+        assert np.array_equal(new_h, old_h)
+        assert np.array_equal(new_g[new_h], old_g[old_h])      # bit for bit
+        assert old_h.any() and not old_h.all()                  # both kinds of ray met
+        assert np.array_equal(steps, (new_h | (steps > 0)).astype(np.int64))

@@ -250,10 +250,11 @@ def test_a_lit_adaptive_render_is_lean(tmp_path):
     # kernels show their signatures whether compiled or loaded; callees (the query functions)
     # show only where compiled, i.e. where the cache was cold for them
     sigs = report["signatures"]
-    # samples, light and the ground probe on the lean path (an int root), one each; the march
-    # kernels take the roots first in their MarchArgs
+    # samples, shading normals, light and the ground probe on the lean path (an int root), one
+    # each; the march kernels take the roots first in their MarchArgs
     for name, arg, item in (("tracer.rendering.march.render_tiles", 1, 0),
                             ("tracer.rendering.march.sample_tasks", 1, 0),
+                            ("tracer.rendering.march.gradient_tasks", 1, 0),
                             ("tracer.rendering.lighting.light_tasks", 1, 0),
                             ("tracer.rendering.lighting._lowest_hit", 0, 1)):
         assert len(sigs[name]) == 1, sigs.get(name)
