@@ -120,7 +120,8 @@ if case == "library":
     rc = 0
 else:
     import tracer.cli
-    rc = tracer.cli.main(args)
+    sys.argv = ["tracer", *args]
+    rc = tracer.cli.main()      # as the command runs it: the process is the command's own
 wall = time.perf_counter() - t0
 ru = resource.getrusage(resource.RUSAGE_SELF)
 kids = resource.getrusage(resource.RUSAGE_CHILDREN)     # a render's compile-ahead child

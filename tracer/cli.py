@@ -24,6 +24,8 @@ commands share are in :mod:`tracer.outputs`.
 """
 
 import argparse
+import atexit
+import gc
 import importlib
 import importlib.util
 import os
@@ -194,6 +196,13 @@ def main(argv=None):
     the traceback behind an internal error, and behind an ``error:`` line that came from a
     ``ValueError`` or ``OSError``.
     """
+    if argv is None:
+        # the command is the process (``tracer ...``, ``python -m tracer ...``): at its end,
+        # Python's last garbage collection walks every object numba made while compiling
+        # (0.4-0.5 s after a first render here, more than the render's own light and PNG);
+        # frozen, they are left to the process's end. Nothing of ours needs a collection
+        # then: outputs are written and closed, children stopped, by then
+        atexit.register(gc.freeze)
     old_int = _install(signal.SIGINT, signal.default_int_handler)
     old_term = _install(signal.SIGTERM, _on_sigterm)
     old_show = warnings.showwarning

@@ -59,3 +59,19 @@ def _imports(path):
 def test_no_upward_import_of_the_studies(path):
     bad = sorted(n for n in _imports(ROOT / path) if n.startswith("tracer.studies"))
     assert not bad, bad
+
+
+def test_only_a_process_of_its_own_freezes_the_garbage_collector_at_its_end():
+    # the command as the process (argv None: ``tracer``, ``python -m tracer``) leaves the
+    # objects numba made to the process's end instead of a last collection (0.4-0.5 s after a
+    # first render); a call from a program (a test, a notebook: argv given) must not freeze
+    # that program's collector
+    code = ("import atexit, gc, sys\n"
+            "atexit.register(lambda: print('frozen', gc.get_freeze_count() > 0))\n"
+            "import tracer.cli\n"
+            "sys.argv = ['tracer'] + sys.argv[1:]\n"
+            "rc = tracer.cli.main(None if sys.argv[1] == 'own' else ['--help'])\n")
+    for how, frozen in (("own", "True"), ("called", "False")):
+        p = subprocess.run([sys.executable, "-c", code, how], cwd=ROOT, capture_output=True,
+                           text=True, timeout=120)
+        assert p.stdout.strip().splitlines()[-1] == f"frozen {frozen}", (how, p.stdout, p.stderr)
