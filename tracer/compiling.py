@@ -206,8 +206,9 @@ def ahead(process):
 
 #: what a child says when a group of kernels is in the cache: ``"distance"`` the scene's
 #: distance (:func:`tracer.rendering.march.distance_at` and its callees, which the trace
-#: shares), ``"done"`` everything
-AHEAD_TAGS = ("distance", "done")
+#: shares), ``"normals"`` the shading normals' (:func:`tracer.rendering.march.gradient_tasks`),
+#: ``"done"`` everything
+AHEAD_TAGS = ("distance", "normals", "done")
 
 
 def wait_ahead(tag="done", timeout=AHEAD_WAIT):

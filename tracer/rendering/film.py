@@ -857,6 +857,7 @@ def form_image(scene, camera, arrays, kargs, options, centre, gpu=None, progress
     skargs = _shading_args(kargs) if scene.film.shading == "lit" else None
     shade_evals = 0
     if skargs is not None:
+        wait_ahead("normals")   # a child compiling their kernel (compile_ahead) is done with it
         shade_evals += _centre_shading_normals(skargs, arrays.depth_max, options, (H, W), hit0,
                                                t0, grad0, objs0, gpu)
         centre_normals = (H, W, np.where(hit0, objs0, -1), t0, _unit(grad0))

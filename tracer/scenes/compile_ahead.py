@@ -9,9 +9,10 @@ kernel cache (``smoothdist.warmup.cache_folder``) holds none of them yet,
 It makes a tiny scene of the same build (the number of objects, the mode, ``tol``, the film's
 settings: the same kernel types; its trees built by numba's pure-Python functions, which
 compiles nothing), compiles the scene's distance (which the trace needs too; the render waits
-for that part before its camera check, :func:`tracer.compiling.wait_ahead`) and then runs the
-film on made-up hits. Meanwhile the render loads its mesh, builds its tree, traces and computes
-its shading normals; it waits for the child before its light, and loads the light's kernels.
+for that part before its camera check, :func:`tracer.compiling.wait_ahead`), the shading
+normals' kernel (the render waits for it after its trace), then runs the film on made-up hits
+and last the ground probe (:func:`child_main`). Meanwhile the render loads its mesh, builds its
+tree and traces; it waits for the child before its light, and loads the light's kernels.
 
 Only the entry points that own their process ask for it (``tracer render``,
 :func:`tracer.render_mesh`), and only for the lit shading, with a second core and a cache to
@@ -25,18 +26,20 @@ import numpy as np
 
 from smoothdist import DataMesh, SmoothDistanceField
 from smoothdist.warmup import build_trees_in_python
-from tracer.rendering.film import BETA_SHADE, form_image
+from tracer.rendering.film import BETA_SHADE, _gradients, form_image
 from tracer.rendering.frame import (camera_of, distance_at_camera, pixel_buffers, scene_arrays,
                                     trace_options)
+from tracer.rendering.lighting import ground_height
 from tracer.rendering.renderer import ray_args
 from tracer.scenes.scene import scene_from_field
 
-__all__ = ["tiny_scene", "run_film", "child_main"]
+__all__ = ["tiny_scene", "run_film", "run_normals", "run_ground", "child_main"]
 
 
-def tiny_scene(cfg):
+def tiny_scene(cfg, lighting=None):
     """A scene of ``cfg["objects"]`` octahedra (8 triangles each) with ``cfg``'s settings, a
-    camera on the z axis; its trees built without compiling."""
+    camera on the z axis; its trees built without compiling. ``lighting``: the lit shading's
+    settings (None: the defaults)."""
     build_trees_in_python()      # the mesh has 8 triangles: nothing to compile
     V = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]], float)
     F = np.array([[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5],
@@ -45,7 +48,7 @@ def tiny_scene(cfg):
     scene = scene_from_field(field, alpha=10.0, beta=cfg["beta"], mode=cfg["mode"],
                              tol=cfg["tol"], width=8, height=8, shading=cfg["shading"],
                              samples=cfg["samples"], adaptive=cfg["adaptive"],
-                             transparent=cfg["transparent"],
+                             transparent=cfg["transparent"], lighting=lighting,
                              camera=((0.0, 0.0, 6.0), (0.0, 0.0, 0.0), (0.0, 1.0, 0.0)))
     if cfg["objects"] > 1:
         first = scene.objects[0]
@@ -69,15 +72,47 @@ def run_film(scene):
                trace_options(scene, arrays.lo, arrays.hi), (hit, tbuf, grad, objs))
 
 
+def run_normals(scene):
+    """The shading normals' kernel (:func:`tracer.rendering.film._gradients`) compiled for
+    ``scene``'s types, on four rays."""
+    camera = camera_of(scene)
+    arrays = scene_arrays(scene)
+    _gradients(ray_args(scene, camera, arrays), arrays.depth_max, np.arange(4, dtype=np.int64),
+               scene.film.width, np.zeros((1, 2)), np.full(4, 5.0))
+
+
+def run_ground(scene):
+    """The ground probe (:func:`tracer.rendering.lighting.ground_height`) compiled for
+    ``scene``'s types."""
+    arrays = scene_arrays(scene)
+    verts = np.concatenate([o.field.mesh.V for o in scene.objects])
+    ground_height(arrays, verts, np.array([0.0, 1.0, 0.0]), scene.march.eps)
+
+
 def child_main(text):
-    """The child: :func:`run_film` of :func:`tiny_scene` for the JSON ``text``, one sample per
-    pixel and the shading normals of the render's own field (beta at most
-    :data:`~tracer.rendering.film.BETA_SHADE`): the light's kernels only (shadows, occlusion,
-    the ground, the objects' ids). The samples' kernel shares most of its code with the trace's,
-    which the render compiles meanwhile; it compiles that one itself, after its trace."""
+    """The child, for the JSON ``text`` (:func:`tracer.compiling.ahead_config`), in the order
+    the render needs them and says ``distance``, ``normals`` and ``done`` as each is in the
+    cache (:data:`tracer.compiling.AHEAD_TAGS`):
+
+    * the scene's distance (the render's trace needs it);
+    * the shading normals' kernel of a lit render in smooth mode (:func:`run_normals`; the
+      render needs it right after its trace);
+    * :func:`run_film` of :func:`tiny_scene` without the ground, one sample per pixel and the
+      render's own field (beta at most :data:`~tracer.rendering.film.BETA_SHADE`, so no shading
+      normals again): the light's kernels only (shadows, occlusion, the objects' ids). The
+      samples' kernel shares most of its code with the trace's, which the render compiles
+      meanwhile; it compiles that one itself, after its trace;
+    * last the ground probe (:func:`run_ground`), which marches with the trace's
+      ``march_ray``: by then the render has mostly put that into the cache, and this process
+      loads it instead of compiling it a second time."""
     cfg = json.loads(text)
-    scene = tiny_scene(dict(cfg, samples=1, adaptive=False, beta=min(cfg["beta"], BETA_SHADE)))
+    scene = tiny_scene(dict(cfg, samples=1, adaptive=False, beta=min(cfg["beta"], BETA_SHADE)),
+                       lighting={"ground": False})
     distance_at_camera(scene)       # the scene's distance first: the render's trace needs it
     print("distance", flush=True)
+    if cfg["mode"] == "smooth" and cfg["beta"] > BETA_SHADE:
+        run_normals(scene)
+    print("normals", flush=True)
     run_film(scene)
+    run_ground(scene)
     print("done", flush=True)

@@ -1,7 +1,7 @@
 """A first render's light kernels compiled in a child process (``tracer.scenes.compile_ahead``).
 
-* On an empty cache ``tracer render``'s child compiles the scene's distance and the light's
-  kernels with the types the render calls them with: the render compiles none of them (it loads
+* On an empty cache ``tracer render``'s child compiles the scene's distance, the shading
+  normals' and the light's kernels with the types the render calls them with: the render compiles none of them (it loads
   them), and its image is byte for byte the one of a render that compiled everything itself.
 * :func:`~tracer.compiling.ahead_needed` starts nothing where it cannot help: outside an
   entry point that allows it, turned off, one core, a film without kernels of its own, a cache
@@ -33,6 +33,9 @@ CORES = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os
 LIGHT_KERNELS = ("tracer.rendering.lighting.light_tasks", "tracer.rendering.lighting._lowest_hit")
 #: the scene's distance, which the child compiles first (the render's camera check calls it)
 DISTANCE = "tracer.rendering.march.distance_at"
+#: the shading normals' kernel, which the child compiles next (the render calls it after its
+#: trace)
+NORMALS = "tracer.rendering.march.gradient_tasks"
 
 
 
@@ -69,17 +72,17 @@ def _mesh_settings():
 @pytest.mark.slow
 @pytest.mark.skipif(CORES < 2, reason="compiling ahead needs a second core")
 def test_a_first_render_loads_the_film_kernels_its_child_compiled(tmp_path):
-    """``tracer render MESH`` on an empty cache: its child compiles the scene's distance and the
-    light's kernels, which the render then loads (it compiles the tree's, the trace's and the
-    shading normals'), and the image is byte for byte the one of a render that compiles
+    """``tracer render MESH`` on an empty cache: its child compiles the scene's distance, the
+    shading normals' and the light's kernels, which the render then loads (it compiles the
+    tree's and the trace's), and the image is byte for byte the one of a render that compiles
     everything itself."""
     compiled = _render(tmp_path / "ahead.png", tmp_path / "cache", "on")
     assert any(name.startswith("smoothdist._kernels.bvh") for name in compiled)   # cold cache
     assert "tracer.rendering.march.render_tiles" in compiled
-    assert not set(LIGHT_KERNELS + (DISTANCE,)) & set(compiled), compiled
+    assert not set(LIGHT_KERNELS + (DISTANCE, NORMALS)) & set(compiled), compiled
     # a second empty cache, nothing compiled ahead: the render compiles the film's kernels
     alone = _render(tmp_path / "alone.png", tmp_path / "cache2", "off")
-    assert set(LIGHT_KERNELS + (DISTANCE,)) <= set(alone), alone
+    assert set(LIGHT_KERNELS + (DISTANCE, NORMALS)) <= set(alone), alone
     assert (tmp_path / "ahead.png").read_bytes() == (tmp_path / "alone.png").read_bytes()
 
 
