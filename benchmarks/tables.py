@@ -191,6 +191,50 @@ def coldstart_kinds_table(path, before_path):
     return "\n".join(lines)
 
 
+def coldstart_rounds_table(path):
+    """Issue 63's first renders, the code before against this code in alternating runs: a
+    results file ``{"rounds": [{"side": "before" or "after", **bench_coldstart.py results}, ...]}``
+    (each round one ``bench_coldstart.py`` run, ``--source`` for the code before, its file
+    as written, in the order run). Per render case and side the range over the rounds of the
+    first render in one process (CPU s, compiled specialisations) and with the light compiled
+    alongside (wall s, both processes' CPU s)."""
+    d = _load(path)
+    rounds = d["rounds"]
+    sides = ("before", "after")
+    cells = ["first render (empty cache)"] + [f"{s}: {w}" for s in sides for w in (
+        "one process CPU s", "compiled", "alongside: wall s", "CPU s")]
+    lines = ["| " + " | ".join(cells) + " |", "|" + "---|" * len(cells)]
+
+    def span(values, fmt):
+        lo, hi = format(min(values), fmt), format(max(values), fmt)
+        return lo if lo == hi else f"{lo}-{hi}"
+
+    first = next(r for r in rounds if r["side"] == "before")
+    for case, o in first["cases"].items():
+        if "cold_ahead" not in o:
+            continue
+        row = [f"`{o['command']}`"]
+        for side in sides:
+            runs = [r["cases"][case] for r in rounds if r["side"] == side and case in r["cases"]]
+            row += [span([x["cold"]["cpu_s"] for x in runs], ".1f"),
+                    span([x["cold"]["compiled"] for x in runs], "d"),
+                    span([x["cold_ahead"]["wall_s"] for x in runs], ".1f"),
+                    span([x["cold_ahead"]["cpu_s"] + x["cold_ahead"]["cpu_children_s"]
+                          for x in runs], ".1f")]
+        lines.append("| " + " | ".join(row) + " |")
+    lines.append("")
+    for side in sides:
+        runs = [r for r in rounds if r["side"] == side]
+        loads = [x[m][k] for r in runs for x in r["cases"].values() if "cold_ahead" in x
+                 for m in ("cold", "cold_ahead") for k in ("load_before", "load_after")]
+        dates = ", ".join(r["date"] for r in runs)
+        m = runs[0]["machine"]
+        lines.append(f"{side.capitalize()}: commit {(runs[0].get('commit') or '?')[:10]}, "
+                     f"{len(runs)} runs ({dates}), {_cpu(m)}{m['cores']} cores, load average "
+                     f"{min(loads):.1f}-{max(loads):.1f}.")
+    return "\n".join(lines)
+
+
 def coldstart_steps_table(path):
     """The table of ``coldstart_issue51_steps.json``: the first ``MeshDistance`` call after
     each change of issue 51, in the order made."""
@@ -473,7 +517,7 @@ TABLES = {"scaling": scaling_table, "gpu": gpu_table, "coldstart": coldstart_tab
           "smooth-cost": smooth_cost_table, "mesh-distance": mesh_distance_table,
           "registers": registers_table, "build-scale": build_scale_table,
           "coldstart-copies": coldstart_copies_table, "coldstart-ahead": coldstart_ahead_table,
-          "coldstart-kinds": coldstart_kinds_table}
+          "coldstart-kinds": coldstart_kinds_table, "coldstart-rounds": coldstart_rounds_table}
 
 
 def main(argv=None):
