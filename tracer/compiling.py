@@ -207,8 +207,9 @@ def ahead(process):
 #: what a child says when a group of kernels is in the cache: ``"distance"`` the scene's
 #: distance (:func:`tracer.rendering.march.distance_at` and its callees, which the trace
 #: shares), ``"normals"`` the shading normals' (:func:`tracer.rendering.march.gradient_tasks`),
-#: ``"done"`` everything
-AHEAD_TAGS = ("distance", "normals", "done")
+#: ``"light"`` the light's and the ground probe's, ``"done"`` everything (the samples' kernel
+#: of a render of several samples per pixel last)
+AHEAD_TAGS = ("distance", "normals", "light", "done")
 
 
 def wait_ahead(tag="done", timeout=AHEAD_WAIT):

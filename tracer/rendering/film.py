@@ -863,7 +863,7 @@ def form_image(scene, camera, arrays, kargs, options, centre, gpu=None, progress
         centre_normals = (H, W, np.where(hit0, objs0, -1), t0, _unit(grad0))
     tell = progress or (lambda fraction: None)
     tell(0.1 if skargs is not None else 0.0)
-    wait_ahead()    # a child compiling the light's kernels ends first (compile_ahead)
+    wait_ahead("light")     # a child compiling the light's kernels is done with them
     shader = _Shader(scene, camera, arrays, kargs, gpu)
     colour0, alpha0, rec0 = shader.shade(hit0, t0, grad0, rays0, grid=(H, W), objs=objs0)
     tell(0.5 if samples > 1 else 0.9)
@@ -908,6 +908,7 @@ def form_image(scene, camera, arrays, kargs, options, centre, gpu=None, progress
         np.add.at(spp, pix, 1)
         return pix, col, rec
 
+    wait_ahead()    # ... and with the samples' kernel (compile_ahead), last
     if samples > 1 and not adaptive:
         add(np.arange(H * W), range(1, samples))
     elif samples > 1:

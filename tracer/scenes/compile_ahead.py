@@ -11,14 +11,16 @@ settings: the same kernel types; its trees built by numba's pure-Python function
 compiles nothing), compiles the scene's distance (which the trace needs too; the render waits
 for that part before its camera check, :func:`tracer.compiling.wait_ahead`), the shading
 normals' kernel (the render waits for it after its trace), then runs the film on made-up hits
-and last the ground probe (:func:`child_main`). Meanwhile the render loads its mesh, builds its
-tree and traces; it waits for the child before its light, and loads the light's kernels.
+and the ground probe, and last the samples' kernel of a render of several samples per pixel
+(:func:`child_main`). Meanwhile the render loads its mesh, builds its tree and traces; it waits
+for the child before its light and before its samples, and loads their kernels.
 
 Only the entry points that own their process ask for it (``tracer render``,
 :func:`tracer.render_mesh`), and only for the lit shading, with a second core and a cache to
 fill (:func:`tracer.compiling.ahead_needed`). ``TRACER_COMPILE_AHEAD=off`` turns it off.
 """
 
+import gc
 import json
 from dataclasses import replace
 
@@ -26,14 +28,15 @@ import numpy as np
 
 from smoothdist import DataMesh, SmoothDistanceField
 from smoothdist.warmup import build_trees_in_python
-from tracer.rendering.film import BETA_SHADE, _gradients, form_image
+from tracer.rendering.film import BETA_SHADE, _gradients, _trace, form_image, sample_offsets
 from tracer.rendering.frame import (camera_of, distance_at_camera, pixel_buffers, scene_arrays,
                                     trace_options)
 from tracer.rendering.lighting import ground_height
 from tracer.rendering.renderer import ray_args
 from tracer.scenes.scene import scene_from_field
 
-__all__ = ["tiny_scene", "run_film", "run_normals", "run_ground", "child_main"]
+__all__ = ["tiny_scene", "run_film", "run_normals", "run_ground", "run_samples",
+           "child_main"]
 
 
 def tiny_scene(cfg, lighting=None):
@@ -89,22 +92,32 @@ def run_ground(scene):
     ground_height(arrays, verts, np.array([0.0, 1.0, 0.0]), scene.march.eps)
 
 
+def run_samples(scene):
+    """The anti-aliasing samples' kernel (:func:`tracer.rendering.march.sample_tasks`, through
+    :func:`tracer.rendering.film._trace`) compiled for ``scene``'s types, on two rays."""
+    camera = camera_of(scene)
+    arrays = scene_arrays(scene)
+    _trace(ray_args(scene, camera, arrays), arrays.depth_max,
+           trace_options(scene, arrays.lo, arrays.hi), np.arange(2, dtype=np.int64),
+           scene.film.width, sample_offsets(2)[1:])
+
+
 def child_main(text):
     """The child, for the JSON ``text`` (:func:`tracer.compiling.ahead_config`), in the order
-    the render needs them and says ``distance``, ``normals`` and ``done`` as each is in the
-    cache (:data:`tracer.compiling.AHEAD_TAGS`):
+    the render needs them; it says ``distance``, ``normals``, ``light`` and ``done`` as each is
+    in the cache (:data:`tracer.compiling.AHEAD_TAGS`):
 
     * the scene's distance (the render's trace needs it);
     * the shading normals' kernel of a lit render in smooth mode (:func:`run_normals`; the
       render needs it right after its trace);
     * :func:`run_film` of :func:`tiny_scene` without the ground, one sample per pixel and the
       render's own field (beta at most :data:`~tracer.rendering.film.BETA_SHADE`, so no shading
-      normals again): the light's kernels only (shadows, occlusion, the objects' ids). The
-      samples' kernel shares most of its code with the trace's, which the render compiles
-      meanwhile; it compiles that one itself, after its trace;
-    * last the ground probe (:func:`run_ground`), which marches with the trace's
-      ``march_ray``: by then the render has mostly put that into the cache, and this process
-      loads it instead of compiling it a second time."""
+      normals again): the light's kernels (shadows, occlusion, the objects' ids), then the
+      ground probe (:func:`run_ground`). The probe marches with the trace's ``march_ray``,
+      which the render compiles meanwhile: by then it is mostly in the cache, and this process
+      loads it instead of compiling it a second time;
+    * a render of more than one sample per pixel: the samples' kernel
+      (:func:`run_samples`), which the render needs after its light."""
     cfg = json.loads(text)
     scene = tiny_scene(dict(cfg, samples=1, adaptive=False, beta=min(cfg["beta"], BETA_SHADE)),
                        lighting={"ground": False})
@@ -115,4 +128,10 @@ def child_main(text):
     print("normals", flush=True)
     run_film(scene)
     run_ground(scene)
+    print("light", flush=True)
+    if cfg["samples"] > 1:
+        run_samples(scene)
     print("done", flush=True)
+    # the render waits for this process to end: Python's last garbage collection would walk
+    # every object numba made here (as tracer.cli's own process, frozen)
+    gc.freeze()
