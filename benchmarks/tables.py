@@ -191,47 +191,36 @@ def coldstart_kinds_table(path, before_path):
     return "\n".join(lines)
 
 
-def coldstart_rounds_table(path):
-    """Issue 63's first renders, the code before against this code in alternating runs: a
-    results file ``{"rounds": [{"side": "before" or "after", **bench_coldstart.py results}, ...]}``
-    (each round one ``bench_coldstart.py`` run, ``--source`` for the code before, its file
-    as written, in the order run). Per render case and side the range over the rounds of the
-    first render in one process (CPU s, compiled specialisations) and with the light compiled
-    alongside (wall s, both processes' CPU s)."""
+def coldstart_ab_table(path):
+    """Issue 63's first renders, the code before against this code, from a
+    ``bench_coldstart_ab.py`` results file: per render case and side the smallest and the median
+    over the rounds of the render in one process (CPU seconds) and with the light compiled in a
+    second process (wall seconds), and the ratio of the smallest."""
     d = _load(path)
-    rounds = d["rounds"]
-    sides = ("before", "after")
-    cells = ["first render (empty cache)"] + [f"{s}: {w}" for s in sides for w in (
-        "one process CPU s", "compiled", "alongside: wall s", "CPU s")]
+    cells = ["first render (empty cache)", "one process, CPU s: before", "after", "ratio",
+             "light alongside, wall s: before", "after", "ratio"]
     lines = ["| " + " | ".join(cells) + " |", "|" + "---|" * len(cells)]
-
-    def span(values, fmt):
-        lo, hi = format(min(values), fmt), format(max(values), fmt)
-        return lo if lo == hi else f"{lo}-{hi}"
-
-    first = next(r for r in rounds if r["side"] == "before")
-    for case, o in first["cases"].items():
-        if "cold_ahead" not in o:
-            continue
-        row = [f"`{o['command']}`"]
-        for side in sides:
-            runs = [r["cases"][case] for r in rounds if r["side"] == side and case in r["cases"]]
-            row += [span([x["cold"]["cpu_s"] for x in runs], ".1f"),
-                    span([x["cold"]["compiled"] for x in runs], "d"),
-                    span([x["cold_ahead"]["wall_s"] for x in runs], ".1f"),
-                    span([x["cold_ahead"]["cpu_s"] + x["cold_ahead"]["cpu_children_s"]
-                          for x in runs], ".1f")]
+    loads = []
+    for c in d["cases"].values():
+        row = [f"`{c['command']}`"]
+        for mode in ("cold", "cold_ahead"):
+            b, a = (c[side]["summary"][mode] for side in ("before", "after"))
+            row += [f"{b['min']:.1f} ({b['median']:.1f})", f"{a['min']:.1f} ({a['median']:.1f})",
+                    f"{a['min'] / b['min']:.2f}"]
+            loads += [r[k] for side in ("before", "after") for r in c[side][mode]
+                      for k in ("load_before", "load_after")]
         lines.append("| " + " | ".join(row) + " |")
-    lines.append("")
-    for side in sides:
-        runs = [r for r in rounds if r["side"] == side]
-        loads = [x[m][k] for r in runs for x in r["cases"].values() if "cold_ahead" in x
-                 for m in ("cold", "cold_ahead") for k in ("load_before", "load_after")]
-        dates = ", ".join(r["date"] for r in runs)
-        m = runs[0]["machine"]
-        lines.append(f"{side.capitalize()}: commit {(runs[0].get('commit') or '?')[:10]}, "
-                     f"{len(runs)} runs ({dates}), {_cpu(m)}{m['cores']} cores, load average "
-                     f"{min(loads):.1f}-{max(loads):.1f}.")
+    m = d["machine"]
+    def name(side):
+        probe = d[side].get("probe")
+        if probe:           # a patch tried on a copy of the code before, not a commit
+            return f"{side}: that with `{probe['patch']}`"
+        dirty = " (dirty)" if d[side].get("dirty") else ""
+        return f"{side}: commit {(d[side].get('commit') or '?')[:10]}{dirty}"
+    sides = ", ".join(name(side) for side in ("before", "after"))
+    lines += ["", f"Smallest (median) of {d['rounds']} rounds, each side run in turn; "
+              f"{d['date']}, {sides}, {_cpu(m)}{m['cores']} cores, Python {m['python']}, load "
+              f"average {min(loads):.1f}-{max(loads):.1f}"]
     return "\n".join(lines)
 
 
@@ -517,7 +506,7 @@ TABLES = {"scaling": scaling_table, "gpu": gpu_table, "coldstart": coldstart_tab
           "smooth-cost": smooth_cost_table, "mesh-distance": mesh_distance_table,
           "registers": registers_table, "build-scale": build_scale_table,
           "coldstart-copies": coldstart_copies_table, "coldstart-ahead": coldstart_ahead_table,
-          "coldstart-kinds": coldstart_kinds_table, "coldstart-rounds": coldstart_rounds_table}
+          "coldstart-kinds": coldstart_kinds_table, "coldstart-ab": coldstart_ab_table}
 
 
 def main(argv=None):
