@@ -29,7 +29,8 @@ from numba.core import event
 
 from smoothdist.warmup import cache_folder, switched_off
 
-__all__ = ["COMPILING", "CompileWatch", "compile_watch", "Eta", "ahead", "wait_ahead",
+__all__ = ["COMPILING", "CompileWatch", "compile_watch", "Eta", "ahead", "ahead_running",
+           "wait_ahead",
            "AHEAD_WAIT", "AHEAD_ENV", "AHEAD_TAGS", "ahead_allowed", "ahead_config", "ahead_needed",
            "start_ahead"]
 
@@ -210,6 +211,13 @@ def ahead(process):
 #: ``"light"`` the light's and the ground probe's, ``"done"`` everything (the samples' kernel
 #: of a render of several samples per pixel last)
 AHEAD_TAGS = ("distance", "normals", "light", "done")
+
+
+def ahead_running():
+    """Whether a child of :func:`ahead` is compiling for this process now (not yet waited for
+    to its end)."""
+    with _LOCK:
+        return bool(_AHEAD)
 
 
 def wait_ahead(tag="done", timeout=AHEAD_WAIT):

@@ -893,6 +893,32 @@ def render_rows(tree, ray, band, depth_max, out, opts):
         render_tiles(tree, ray, band, depth_max, out, opts, j, j + 1)
 
 
+def compile_helpers(ray, band, opts):
+    """Compile the trace's helpers that do not evaluate the distance (the camera's rays, the
+    box, the tiles, the cone's first steps, the march's steps) with the types
+    :func:`render_tiles` calls them with, by calling each once from Python on ``ray``
+    (:class:`tracer.rendering.frame.MarchArgs`), ``band = (row0, row1)`` and ``opts``
+    (:class:`tracer.rendering.frame.TraceOptions`); the values are not used. A first render
+    calls it while it waits for a child compiling the scene's distance
+    (``tracer.scenes.compile_ahead``): its trace kernel then loads them instead of compiling
+    them after that wait (``tests/tracer/scenes/test_compile_ahead.py`` checks that nothing
+    compiles twice)."""
+    cam, lo, hi, eps = ray.cam, ray.lo, ray.hi, float(ray.eps)
+    relax, omega, cone, newton = opts
+    pr = camera_ray(cam, 0.0, 0.0)
+    ray_box(*pr, lo, hi)
+    far_depth(cam, lo, hi)
+    grid = _tile_grid(cam, (int(band[0]), int(band[1])))
+    tile = _tile_rect(0, grid, (int(band[0]), int(band[1])))
+    block_rays(cam, *tile)
+    # a seed with D > 0: the first step of the cone's Newton prediction too
+    cone_first_step(cam, tile, (0.0, np.inf, 1.0, 0.0, 0.0, 1.0), pr)
+    next_step(1.0, (0.0, 0.0, 1.0), 0.0, int(ray.mode), float(omega), max(eps, float(newton)),
+              True, NEWTON_COS)
+    stepped_over(1.0, 1.0, 1.0, eps, 0.0)
+    _was_loosened(ray.params, float(ray.tol), 0.0)
+
+
 @numba.njit(**NJIT)
 def distance_at(sc, x, y, z, depth_max):
     """Scene distance at one point (used to check that the camera is outside the surface);

@@ -12,7 +12,7 @@ import time
 import numpy as np
 
 from smoothdist.cuda import check_device, cuda_module
-from tracer.compiling import wait_ahead
+from tracer.compiling import ahead_running, wait_ahead
 from tracer.rendering import march
 from tracer.rendering.camera import image_size
 from tracer.rendering.film import form_image
@@ -91,14 +91,18 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
     camera = camera_of(scene)
     arrays = scene_arrays(scene, transforms)
     tree, roots, params, mode, lo, hi, depth_max, tol = arrays
-    wait_ahead("distance")      # a child compiling the scene's distance (compile_ahead) first
-    check_camera_outside(scene, arrays)
     film = scene.film
     H, W = film.height, film.width
-    hit, tbuf, grad, steps, leaves, bis, objs = pixel_buffers(H, W)
     args = ray_args(scene, camera, arrays)
     options = trace_options(scene, lo, hi, relax, omega, cone)
     band = band_rows or H
+    if ahead_running():
+        # a child compiles the scene's distance (compile_ahead): meanwhile, the trace's
+        # helpers that do without it
+        march.compile_helpers(args.march, (0, min(band, H)), options)
+    wait_ahead("distance")      # ... then its distance, which the camera check loads
+    check_camera_outside(scene, arrays)
+    hit, tbuf, grad, steps, leaves, bis, objs = pixel_buffers(H, W)
     t0 = time.perf_counter()
     # a film after the trace (light, samples, RGBA): the trace is the bar's first
     # FILM_SHARE-less part and the film the rest, so that it reaches 100 % at the end

@@ -79,6 +79,11 @@ def test_a_first_render_loads_the_film_kernels_its_child_compiled(tmp_path):
     compiled = _render(tmp_path / "ahead.png", tmp_path / "cache", "on")
     assert any(name.startswith("smoothdist._kernels.bvh") for name in compiled)   # cold cache
     assert "tracer.rendering.march.render_tiles" in compiled
+    # the trace's helpers compiled while the render waited for the child's distance
+    # (march.compile_helpers), with the types the trace calls them with: none compiled twice
+    assert {"tracer.rendering.march.next_step", "tracer.rendering.camera.camera_ray",
+            "tracer.rendering.march.cone_first_step"} <= set(compiled)
+    assert all(n == 1 for n in compiled.values()), compiled
     assert not set(LIGHT_KERNELS + (DISTANCE, NORMALS)) & set(compiled), compiled
     # a second empty cache, nothing compiled ahead: the render compiles the film's kernels
     alone = _render(tmp_path / "alone.png", tmp_path / "cache2", "off")
