@@ -60,3 +60,26 @@ def exact_cold_sentence(path=DATA.parent / "coldstart_issue63_exact.json"):
 
 if __name__ == "__main__":
     print("\n".join(warm_sentences()))
+
+
+def first_render_sentence(ab=DATA.parent / "coldstart_issue63_renders_ab.json",
+                          timeline=DATA.parent / "first_render_timeline.json"):
+    """Issue 63's first render of a mesh file with its light compiled alongside: its wall
+    seconds, smallest over the rounds run in turn against the code before
+    (``bench_coldstart_ab.py``), and in the timeline's run (``timeline_first_render.py``)."""
+    d = json.loads(Path(ab).read_text(encoding="utf-8"))["cases"]["mesh"]
+    b, a = (d[side]["summary"]["cold_ahead"]["min"] for side in ("before", "after"))
+    wall = json.loads(Path(timeline).read_text(encoding="utf-8"))["wall_s"]
+    return (f"the first render of the mesh file with its light alongside took {a:.1f} s of wall "
+            f"time at best ({b:.1f} s before), and {wall:.1f} s in the timeline's run")
+
+
+def warm_render_sentence(path=DATA.parent / "coldstart_issue63_renders_warm.json"):
+    """Issue 63's warm lit render, the code before against this code: smallest and median wall
+    seconds of each."""
+    import statistics
+
+    d = json.loads(Path(path).read_text(encoding="utf-8"))
+    b, a = d["before"]["wall_s"], d["after"]["wall_s"]
+    return (f"{min(b):.2f} s at best ({statistics.median(b):.2f} median) before, "
+            f"{min(a):.2f} s ({statistics.median(a):.2f}) after")

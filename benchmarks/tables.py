@@ -224,6 +224,28 @@ def coldstart_ab_table(path):
     return "\n".join(lines)
 
 
+def timeline_table(path):
+    """The events of a ``timeline_first_render.py`` results file, in time order: seconds since
+    the render's process started, the process, what happened (a compilation with its length,
+    callees included; a wait for the child with its length)."""
+    d = _load(path)
+    lines = ["| s | process | event |", "|---|---|---|"]
+    for e in d["events"]:
+        what = e["what"]
+        if what == "compiled":
+            what = f"compiled `{e['name']}` ({e['s']:.2f} s)"
+        elif what == "waited":
+            what = f"waits {e['s']:.2f} s for the child's `{e['tag']}`"
+        lines.append(f"| {e['at']:.2f} | {e['who']} | {what} |")
+    lines.append(f"| {d['wall_s']:.2f} | render | the process has ended |")
+    m = d["machine"]
+    dirty = " (dirty)" if d.get("dirty") else ""
+    lines += ["", f"`{d['command']}`, an empty cache, its light compiled alongside; {d['date']}, "
+              f"commit {(d.get('commit') or '?')[:10]}{dirty}, {_cpu(m)}{m['cores']} cores, "
+              f"Python {m['python']}, load average {d['load_average'][0]:.1f}"]
+    return "\n".join(lines)
+
+
 def coldstart_steps_table(path):
     """The table of ``coldstart_issue51_steps.json``: the first ``MeshDistance`` call after
     each change of issue 51, in the order made."""
@@ -506,7 +528,8 @@ TABLES = {"scaling": scaling_table, "gpu": gpu_table, "coldstart": coldstart_tab
           "smooth-cost": smooth_cost_table, "mesh-distance": mesh_distance_table,
           "registers": registers_table, "build-scale": build_scale_table,
           "coldstart-copies": coldstart_copies_table, "coldstart-ahead": coldstart_ahead_table,
-          "coldstart-kinds": coldstart_kinds_table, "coldstart-ab": coldstart_ab_table}
+          "coldstart-kinds": coldstart_kinds_table, "coldstart-ab": coldstart_ab_table,
+          "timeline": timeline_table}
 
 
 def main(argv=None):

@@ -17,8 +17,9 @@ GUIDE = ROOT / "docs" / "guide" / "performance.md"
 DATA = ROOT / "benchmarks" / "data"
 sys.path.insert(0, str(ROOT))
 
-from benchmarks.coldstart_words import (exact_cold_sentence, kinds_warm_sentence,  # noqa: E402
-                                         warm_sentences)
+from benchmarks.coldstart_words import (exact_cold_sentence,  # noqa: E402
+                                         first_render_sentence, kinds_warm_sentence,
+                                         warm_render_sentence, warm_sentences)
 from benchmarks.tables import (build_scale_table, build_scale_words,  # noqa: E402
                                scale_points_words,
                                coldstart_ahead_table, coldstart_copies_table,
@@ -27,7 +28,7 @@ from benchmarks.tables import (build_scale_table, build_scale_words,  # noqa: E4
                                coldstart_table, exact_mix_table,
                                exact_mix_words, gpu_table, mesh_distance_table,
                                mesh_distance_words, registers_table, scaling_table,
-                               smooth_cost_table)
+                               smooth_cost_table, TABLES)
 
 
 def _guide():
@@ -117,6 +118,26 @@ def test_the_guide_holds_the_compile_ahead_table():
                if "cold_ahead" in r)
 
 
+@pytest.mark.parametrize("marker, name, make", [
+    ("first-render-timeline", "first_render_timeline.json", "timeline"),
+    ("coldstart-ab", "coldstart_issue63_renders_ab.json", "coldstart-ab"),
+    ("coldstart-probe-one-kind", "coldstart_issue63_probe_one_kind.json", "coldstart-ab"),
+    ("coldstart-probe-light-merged", "coldstart_issue63_probe_light_merged.json",
+     "coldstart-ab")])
+def test_the_guide_holds_the_first_render_tables(marker, name, make):
+    """Issue 63's first-render timeline, the renders run in turn against the code before, and
+    the probes (``benchmarks/tables.py timeline`` / ``coldstart-ab``), each between its
+    markers."""
+    want = TABLES[make](DATA / name).strip()
+    text = _guide()
+    start = text.index(f"<!-- {marker} -->") + len(f"<!-- {marker} -->")
+    assert text[start:text.index(f"<!-- /{marker} -->")].strip() == want, "paste it again"
+    # the sentence that reads the first two against the target
+    assert first_render_sentence(DATA / "coldstart_issue63_renders_ab.json",
+                                 DATA / "first_render_timeline.json") in _flat(text)
+    assert warm_render_sentence(DATA / "coldstart_issue63_renders_warm.json") in _flat(text)
+
+
 def test_the_guide_holds_the_whole_mesh_kinds_table_and_warm_runs():
     """Issue 63's whole-mesh table (``coldstart.json`` against
     ``coldstart_issue63_kinds_before.json``, ``tables.py coldstart-kinds``) between its
@@ -127,10 +148,12 @@ def test_the_guide_holds_the_whole_mesh_kinds_table_and_warm_runs():
     start = text.index("<!-- coldstart-kinds -->") + len("<!-- coldstart-kinds -->")
     assert text[start:text.index("<!-- /coldstart-kinds -->")].strip() == want, "paste it again"
     head = _load("coldstart_issue63_tri_edges_head.json")["cases"]["md_tri_edges"]["cold"]
+    same = _load("coldstart_issue63_amd_5797881.json")["cases"]["md_tri_edges"]["cold"]
     own = _load("coldstart.json")["cases"]["md_tri_edges"]["cold"]
     assert (f"Triangles on edges took {head['cpu_s']:.1f} s ({head['compiled']} specialisations)"
             in _flat(text))
-    assert f"{own['cpu_s']:.1f} s ({own['compiled']}) with their own" in _flat(text)
+    assert f"{same['cpu_s']:.1f} s ({same['compiled']}) with their own" in _flat(text)
+    assert f"{own['cpu_s']:.1f} s ({own['compiled']}) in this table's later run" in _flat(text)
     # the exact distance's kernels of one kind: first call, warm runs, the rounds' ratios
     assert exact_cold_sentence(DATA / "coldstart_issue63_exact.json") in _flat(text)
     ex = _load("coldstart_issue63_exact.json")
@@ -178,10 +201,14 @@ def test_the_guide_holds_the_cold_start_steps_and_sentences():
     renders = [cases[c]["cold"]["cpu_s"] for c in ("mesh", "edges", "cloud", "lit")]
     assert f"the renders {min(renders):.1f}-{max(renders):.1f} s against 10" in text
     # the same renders on the Intel machine, and in this machine's second-copy run
-    for name, words in (("coldstart_issue63_intel.json", "the same kernels as in the Intel run ({}"),
+    for name, words in (("coldstart_issue63_intel.json", "(the Intel run: {} s, with the"),
                         ("coldstart_issue63.json", "{} s of CPU in the second-copy run")):
         was = [_load(name)["cases"][c]["cold"]["cpu_s"] for c in ("mesh", "edges", "cloud", "lit")]
         assert words.format(f"{min(was):.1f}-{max(was):.1f}") in text, name
+    # the simulation step (kernels unchanged since) against the run of 11:24: the drift
+    sim = _load("coldstart_issue63_amd_5797881.json")["cases"]["sim"]["cold"]["cpu_s"]
+    assert (f"{cases['sim']['cold']['cpu_s']:.1f} s here, {sim:.1f} s at 11:24"
+            f" (`coldstart_issue63_amd_5797881.json`)") in text
 
 
 def test_the_whole_mesh_guide_quotes_the_measured_first_call():

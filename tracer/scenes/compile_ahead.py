@@ -76,8 +76,8 @@ def run_film(scene):
 
 
 def run_normals(scene):
-    """The shading normals' kernel (:func:`tracer.rendering.film._gradients`) compiled for
-    ``scene``'s types, on four rays."""
+    """The shading normals' kernel (:func:`tracer.rendering.march.gradient_tasks`, through
+    ``tracer.rendering.film._gradients``) compiled for ``scene``'s types, on four rays."""
     camera = camera_of(scene)
     arrays = scene_arrays(scene)
     _gradients(ray_args(scene, camera, arrays), arrays.depth_max, np.arange(4, dtype=np.int64),
@@ -94,7 +94,7 @@ def run_ground(scene):
 
 def run_samples(scene):
     """The anti-aliasing samples' kernel (:func:`tracer.rendering.march.sample_tasks`, through
-    :func:`tracer.rendering.film._trace`) compiled for ``scene``'s types, on two rays."""
+    ``tracer.rendering.film._trace``) compiled for ``scene``'s types, on two rays."""
     camera = camera_of(scene)
     arrays = scene_arrays(scene)
     _trace(ray_args(scene, camera, arrays), arrays.depth_max,
