@@ -35,15 +35,9 @@ from benchmarks.machine import cpu_name  # noqa: E402
 
 DEFAULT_OUT = ROOT / "benchmarks" / "data" / "first_render_timeline.json"
 
-#: the child's code: compile_ahead's, with its events logged (``log`` a JSON line each)
-CHILD = r"""
-import json, os, sys, time
-T0 = float(os.environ["TIMELINE_T0"])
-log = open(os.environ["TIMELINE_CHILD_LOG"], "a")
-def note(what, **kw):
-    log.write(json.dumps(dict(kw, who="child", what=what, at=time.time() - T0)) + "\n")
-    log.flush()
-note("start")
+#: both scripts: a listener of numba's compile events that notes each outermost compilation
+#: (``note`` is the script's own)
+TIMER = r"""
 from numba.core import event
 stack = []
 class Timer(event.Listener):
@@ -55,6 +49,18 @@ class Timer(event.Listener):
             fn = getattr(ev.data.get("dispatcher"), "py_func", None)
             note("compiled", name=getattr(fn, "__qualname__", "?"), s=time.perf_counter() - t0)
 event.register("numba:compile", Timer())
+"""
+
+#: the child's code: compile_ahead's, with its events logged (``log`` a JSON line each)
+CHILD = r"""
+import json, os, sys, time
+T0 = float(os.environ["TIMELINE_T0"])
+log = open(os.environ["TIMELINE_CHILD_LOG"], "a")
+def note(what, **kw):
+    log.write(json.dumps(dict(kw, who="child", what=what, at=time.time() - T0)) + "\n")
+    log.flush()
+note("start")
+""" + TIMER + r"""
 from tracer.scenes import compile_ahead
 note("imported")
 compile_ahead.child_main(sys.argv[1])
@@ -69,17 +75,7 @@ os.environ["TIMELINE_T0"] = repr(T0)
 events = []
 def note(what, **kw):
     events.append(dict(kw, who="render", what=what, at=time.time() - T0))
-from numba.core import event
-stack = []
-class Timer(event.Listener):
-    def on_start(self, ev):
-        stack.append(time.perf_counter())
-    def on_end(self, ev):
-        t0 = stack.pop()
-        if not stack:
-            fn = getattr(ev.data.get("dispatcher"), "py_func", None)
-            note("compiled", name=getattr(fn, "__qualname__", "?"), s=time.perf_counter() - t0)
-event.register("numba:compile", Timer())
+""" + TIMER + r"""
 import tracer.compiling as compiling
 compiling.AHEAD_CHILD = sys.argv[2]
 wait = compiling.wait_ahead
