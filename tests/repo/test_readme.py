@@ -141,6 +141,14 @@ PLACEHOLDERS = {
 }
 
 NOT_RUN = {
+    "python benchmarks/bench_coldstart_ab.py":
+        "it needs a checkout of the code before (git worktree) and compiles a first render's "
+        "kernels from an empty cache four times per case and round (minutes); "
+        "tests/repo/test_docs_tables.py checks the guide against its results file",
+    "python benchmarks/timeline_first_render.py":
+        "it compiles a first render's kernels from an empty cache (20 s of the suite); "
+        "tests/tracer/scenes/test_compile_ahead.py runs a first render with its child and "
+        "tests/repo/test_docs_tables.py checks the guide against its results file",
     "python benchmarks/profile_compile.py":
         "it compiles every kernel three times over with empty caches (a minute); "
         "tests/repo/test_docs_tables.py checks the guide against its results file and "

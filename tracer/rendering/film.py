@@ -606,6 +606,7 @@ def _trace(kargs, depth_max, options, pixels, W, offsets, bounds=None, eps_px=EP
         if gpu is not None:
             gpu.trace_samples_cuda(tree, ray, samples, out, opts)
         else:
+            wait_ahead()    # a child compiling this kernel (compile_ahead) is done with it
             run_tasks(lambda a, b: march.sample_tasks(
                 tree, ray, samples, depth_max, out, opts, (ntasks, a, b)), ntasks)
     return hit.ravel(), t.ravel(), grad.reshape(-1, 3), steps.ravel(), objs.ravel()
@@ -687,6 +688,7 @@ def _gradients(kargs, depth_max, pixels, W, offset, at):
                          float(_ANY_DISTANCE), float(SAMPLE_NEWTON_COS))
     at = np.ascontiguousarray(at, dtype=np.float64)
     ntasks = parallel_tasks(m)
+    wait_ahead("normals")   # a child compiling this kernel (compile_ahead) is done with it
     run_tasks(lambda a, b: march.gradient_tasks(tree, ray, samples, at, depth_max,
                                                 (hit, grad, steps), (ntasks, a, b)), ntasks)
     return hit, grad, steps
@@ -857,7 +859,6 @@ def form_image(scene, camera, arrays, kargs, options, centre, gpu=None, progress
     skargs = _shading_args(kargs) if scene.film.shading == "lit" else None
     shade_evals = 0
     if skargs is not None:
-        wait_ahead("normals")   # a child compiling their kernel (compile_ahead) is done with it
         shade_evals += _centre_shading_normals(skargs, arrays.depth_max, options, (H, W), hit0,
                                                t0, grad0, objs0, gpu)
         centre_normals = (H, W, np.where(hit0, objs0, -1), t0, _unit(grad0))
@@ -908,7 +909,6 @@ def form_image(scene, camera, arrays, kargs, options, centre, gpu=None, progress
         np.add.at(spp, pix, 1)
         return pix, col, rec
 
-    wait_ahead()    # ... and with the samples' kernel (compile_ahead), last
     if samples > 1 and not adaptive:
         add(np.arange(H * W), range(1, samples))
     elif samples > 1:
