@@ -124,7 +124,7 @@ def _mesh(kind, level):
 def _distances(kind, which, levels=(*LEVELS, BIG_LEVEL)):
     """A library user's first calls on meshes of ``kind``: ``which`` is ``"exact"`` (exact
     distance, the field's too) or ``"smooth"`` (smooth distance with gradients, alpha_U
-    automatic too, and a field's repeated queries)."""
+    automatic too, and a field's repeated queries, with tolerance pruning too)."""
     meshes = [_mesh(kind, level) for level in levels]
     Q = _queries()
 
@@ -136,7 +136,9 @@ def _distances(kind, which, levels=(*LEVELS, BIG_LEVEL)):
             else:
                 sd.smooth_distance(Q, V, F, alpha=50.0)
                 sd.smooth_distance(Q, V, F, alpha=50.0, alpha_u="auto")
-                sd.SmoothDistanceField(V, F).smooth_distance(Q, alpha=50.0)
+                field = sd.SmoothDistanceField(V, F)
+                field.smooth_distance(Q, alpha=50.0)
+                field.smooth_distance(Q, alpha=50.0, beta=0.0, tol=1e-3)  # tolerance pruning
 
     return job
 
@@ -243,6 +245,15 @@ def jobs_of(module):
     return [(module, name, tuple(after.get(name, ()))) for name in mod.JOBS.keys()]
 
 
+def interleaved(lists):
+    """The jobs of several modules taken in turn, one from each (each module's longest chain
+    first): on two cores the renderer's chain runs beside the library's instead of after it."""
+    out = []
+    for i in range(max(map(len, lists), default=0)):
+        out += [jobs[i] for jobs in lists if i < len(jobs)]
+    return out
+
+
 def _next(pending, done, known):
     """Index in ``pending`` of the first job whose prerequisites (those among ``known``) are
     all ``done``; None if every pending job still waits."""
@@ -336,7 +347,7 @@ def add_arguments(p):
 
 def warmup_command(args, modules):
     """Run the parsed ``warmup`` command over the jobs of ``modules``."""
-    jobs = [j for m in modules for j in jobs_of(m)]
+    jobs = interleaved([jobs_of(m) for m in modules])
     if args.list:
         print("\n".join(name for _, name, _ in jobs))
         return 0

@@ -1,8 +1,9 @@
 """``tracer warmup``: compile the library's and the renderer's kernels ahead, on every core.
 
 The jobs of :mod:`smoothdist.warmup` and the renderer's first calls below, each a ``tracer``
-command on a small mesh written into a temporary folder (a triangle mesh, its edges, points on
-it, the lit adaptive look, a simulation step when the sim extra is installed), run in child
+command on a small mesh written into a temporary folder (a triangle mesh, its exact offset
+surface, its edges, points on it, the lit adaptive look, a simulation step when the sim extra is
+installed), run in child
 processes side by side (:func:`smoothdist.warmup.run`); every kernel they compile lands in the
 per-machine cache, so that a user's first render loads it. Once per machine and version: after
 ``pip install``, in a Docker image, before a CI suite.
@@ -84,13 +85,17 @@ JOBS = warmup._Lazy({
     "render-mesh": lambda: _command("triangles"),
     "render-lit": lambda: _command("triangles", "--shading", "lit", "--samples", "16",
                                    "--adaptive"),
-    "render-edges": lambda: _command("edges"),
+    "render-exact": lambda: _command("triangles", "--mode", "exact"),
+    "render-edges": lambda: _command("edges", "--tol", "1e-3"),  # tolerance pruning
     "render-points": lambda: _command("points"),
     "simulate": _simulation,
 })
-#: ``{job: jobs it waits for}``: the other renders share most of ``render-mesh``'s kernels
-AFTER = {"render-lit": ("render-mesh",), "render-edges": ("render-mesh",),
-         "render-points": ("render-mesh",), "simulate": ("mesh-distance",)}
+#: ``{job: jobs it waits for}``: the other renders share most of ``render-mesh``'s kernels; the
+#: exact offset surface and a smooth one pruned with a tolerance share a march of their own (26
+#: specialisations), which the edges render (``--tol``) loads once ``render-exact`` has made it
+AFTER = {"render-lit": ("render-mesh",), "render-exact": ("render-mesh",),
+         "render-edges": ("render-exact",), "render-points": ("render-mesh",),
+         "simulate": ("mesh-distance",)}
 
 #: the modules whose jobs ``tracer warmup`` runs
 MODULES = ("smoothdist.warmup", "tracer.cli_warmup")

@@ -126,6 +126,24 @@ def test_the_commands_list_their_jobs_and_refuse_unknown_ones(tmp_path):
     assert bad.returncode == 2 and "unknown job(s) nope" in bad.stderr
 
 
+def test_the_modules_jobs_are_taken_in_turn():
+    """``tracer warmup`` starts the renderer's chain beside the library's (two cores), each
+    module's own order kept; the waits still hold (the scheduler's)."""
+    a = [("lib", n, ()) for n in ("a1", "a2", "a3")]
+    b = [("tr", n, ()) for n in ("b1",)]
+    assert [n for _, n, _ in warmup.interleaved([a, b])] == ["a1", "b1", "a2", "a3"]
+    assert warmup.interleaved([]) == [] and warmup.interleaved([a]) == a
+    from tracer import cli_warmup
+
+    names = [n for _, n, _ in warmup.interleaved([warmup.jobs_of("smoothdist.warmup"),
+                                                  warmup.jobs_of("tracer.cli_warmup")])]
+    assert names[:2] == ["mesh-distance", "render-mesh"]
+    assert set(names) == set(warmup.JOBS.keys()) | set(cli_warmup.JOBS.keys())
+    # the exact offset surface and the tolerance's march: a job of their own, the edges
+    # render (--tol) after it
+    assert cli_warmup.AFTER["render-edges"] == ("render-exact",)
+
+
 def test_the_whole_mesh_jobs_reach_every_distance_kernel():
     """Each (data kind, query kind) has a distance kernel of its own, compiled on first use: the
     warm-up's pairs (same kind, and mixed) must choose every one of them, the general kernel
