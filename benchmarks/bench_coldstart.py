@@ -84,7 +84,9 @@ LIBRARY = {
     "md_vertex": ("sd.MeshDistance((V, F), (0.3 * V, F), alpha=50, alpha_q=50)"
                   ".vertex_gradient(R, t)"),
 }
-RENDERS = ("mesh", "edges", "cloud", "lit")
+#: renders; ``mesh_exact`` (the exact offset surface) and ``mesh_tol`` (tolerance pruning) share
+#: a march of their own, which the warm-up's ``render-exact`` job compiles
+RENDERS = ("mesh", "edges", "cloud", "lit", "mesh_exact", "mesh_tol")
 CASES = (*LIBRARY, *RENDERS, "sim")
 
 #: runs in the child: the case, then a count of the compiled specialisations (numba's compile
@@ -185,6 +187,8 @@ def write_inputs(folder, scenes=ROOT / "scenes"):
     cases.update(
         mesh=["render", str(ball), *size], edges=["render", str(wire), *size],
         cloud=["render", str(cloud), *size],
+        mesh_exact=["render", str(ball), *size, "--mode", "exact"],
+        mesh_tol=["render", str(ball), *size, "--tol", "1e-3"],
         lit=["render", str(scenes / "bunny_triangles.json"), *size, "--shading", "lit",
              "--samples", "16", "--adaptive"],
         sim=["simulate", str(scenes / "simulations" / "ico_bowl.json"), "--steps", "1",
