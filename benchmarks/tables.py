@@ -19,6 +19,8 @@ Usage::
     python benchmarks/tables.py coldstart-ahead benchmarks/data/coldstart.json
     python benchmarks/tables.py coldstart-kinds benchmarks/data/coldstart.json \\
         benchmarks/data/coldstart_issue63_kinds_before.json
+    python benchmarks/tables.py coldstart-warmup benchmarks/data/coldstart_issue63_modes.json \\
+        benchmarks/data/coldstart_issue63_modes_before.json
 """
 
 import argparse
@@ -144,6 +146,30 @@ def coldstart_copies_table(path):
     lines += ["", f"`python -m tracer warmup` into an empty cache: {w['wall_s']:.1f} s wall, "
               f"{w['cpu_s']:.1f} s CPU (its child processes), {w['compiled']} specialisations "
               f"compiled, on {w['cores']} cores.",
+              "", _provenance(d, loads)]
+    return "\n".join(lines)
+
+
+def coldstart_warmup_table(path, before_path):
+    """Issue 63's warm-up before and after a change: per case of two ``bench_coldstart.py
+    --copies`` results files (``before_path`` on the code before, the same sitting) the first
+    call with an empty cache and with a new cache that each code's ``tracer warmup`` filled;
+    then each warm-up's own cost."""
+    d, b = _load(path), _load(before_path)
+    cells = ["first call", "empty cache: CPU s", "compiled", "after warmup, before: CPU s",
+             "compiled", "after warmup: CPU s", "compiled"]
+    lines = ["| " + " | ".join(cells) + " |", "|" + "---|" * len(cells)]
+    loads = []
+    for case, r in d["cases"].items():
+        c, o, a = r["cold"], b["cases"][case]["after_warmup"], r["after_warmup"]
+        lines.append(f"| `{r['command']}` | {c['cpu_s']:.1f} | {c['compiled']} | "
+                     f"{o['cpu_s']:.1f} | {o['compiled']} | {a['cpu_s']:.1f} | {a['compiled']} |")
+        loads += [x for m in (c, o, a) for x in (m["load_before"], m["load_after"])]
+    wb, wa = b["warmup"], d["warmup"]
+    lines += ["", f"`python -m tracer warmup` into an empty cache, before: {wb['wall_s']:.1f} s "
+              f"wall, {wb['cpu_s']:.1f} s CPU, {wb['compiled']} specialisations; after: "
+              f"{wa['wall_s']:.1f} s wall, {wa['cpu_s']:.1f} s CPU, {wa['compiled']} "
+              f"specialisations (commit {(b.get('commit') or '?')[:10]} before).",
               "", _provenance(d, loads)]
     return "\n".join(lines)
 
@@ -529,6 +555,7 @@ TABLES = {"scaling": scaling_table, "gpu": gpu_table, "coldstart": coldstart_tab
           "registers": registers_table, "build-scale": build_scale_table,
           "coldstart-copies": coldstart_copies_table, "coldstart-ahead": coldstart_ahead_table,
           "coldstart-kinds": coldstart_kinds_table, "coldstart-ab": coldstart_ab_table,
+          "coldstart-warmup": coldstart_warmup_table,
           "timeline": timeline_table}
 
 
@@ -537,7 +564,8 @@ def main(argv=None):
     p.add_argument("kind", choices=sorted(TABLES))
     p.add_argument("path")
     p.add_argument("before", nargs="?",
-                   help="coldstart, coldstart-kinds: the results of the code before")
+                   help="coldstart, coldstart-kinds, coldstart-warmup: the results of the "
+                   "code before")
     # coldstart-steps: benchmarks/data/coldstart_issue51_steps.json
     args = p.parse_args(argv)
     print(TABLES[args.kind](args.path, *([args.before] if args.before else [])))

@@ -58,6 +58,8 @@ def generated_lines():
             T.coldstart_copies_table(DATA / "coldstart_issue63.json"),
             T.coldstart_kinds_table(DATA / "coldstart.json",
                                     DATA / "coldstart_issue63_kinds_before.json"),
+            T.coldstart_warmup_table(DATA / "coldstart_issue63_modes.json",
+                                     DATA / "coldstart_issue63_modes_before.json"),
             T.coldstart_ab_table(DATA / "coldstart_issue63_renders_ab.json"),
             T.coldstart_ab_table(DATA / "coldstart_issue63_probe_one_kind.json"),
             T.coldstart_ab_table(DATA / "coldstart_issue63_probe_light_merged.json"),

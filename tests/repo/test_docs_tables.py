@@ -105,6 +105,27 @@ def test_the_guide_holds_the_second_copy_and_warmup_table():
                for m in ("second_copy", "after_warmup"))
 
 
+def test_the_guide_holds_the_warmup_modes_table():
+    """The exact offset surface's and the tolerance's first renders after the warm-up, before
+    and after it compiled them (``coldstart_issue63_modes*.json``, ``tables.py
+    coldstart-warmup``) between its markers; the files say what the page says: the warm-up
+    before left them to compile, this one leaves nothing, and a second copy compiles nothing."""
+    from benchmarks.tables import coldstart_warmup_table
+
+    after = DATA / "coldstart_issue63_modes.json"
+    before = DATA / "coldstart_issue63_modes_before.json"
+    want = coldstart_warmup_table(after, before).strip()
+    text, marker = _guide(), "<!-- coldstart-warmup-modes -->"
+    start = text.index(marker) + len(marker)
+    assert text[start:text.index("<!-- /coldstart-warmup-modes -->")].strip() == want, \
+        "paste it again"
+    d, b = _load(after.name)["cases"], _load(before.name)["cases"]
+    assert set(d) == set(b) == {"mesh_exact", "mesh_tol"}
+    assert all(r["after_warmup"]["compiled"] == 0 and r["second_copy"]["compiled"] == 0
+               for r in d.values())
+    assert all(r["after_warmup"]["compiled"] > 0 for r in b.values())
+
+
 def test_the_guide_holds_the_compile_ahead_table():
     """Issue 63's first renders with the light compiled in a second process (``cold_ahead``
     of ``coldstart.json``, ``tables.py coldstart-ahead``) between its markers; every one of

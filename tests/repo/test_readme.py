@@ -162,6 +162,11 @@ NOT_RUN = {
         "once (minutes); tests/smoothdist/test_kernel_cache.py shows a second copy loading the "
         "kernels and tests/smoothdist/test_warmup.py a first call after the warm-up compiling "
         "nothing",
+    "python benchmarks/bench_coldstart.py --copies --cases mesh_exact mesh_tol --out "
+    "benchmarks/data/coldstart_issue63_modes.json":
+        "it compiles two first renders from an empty cache four times over, and the warm-up "
+        "once (minutes); tests/repo/test_docs_tables.py checks the guide against its results "
+        "file and tests/smoothdist/test_warmup.py the warm-up's jobs",
     "python benchmarks/bench_authors_error.py --authors-bin PATH --size 256 --json "
     "tracer/studies/authors_beta_error.json":
         "it needs the authors' renderer built outside the repository (benchmarks/authors) and "
