@@ -122,6 +122,9 @@ class Eta:
 # ------------------------------------------------------------- compiling in another process
 #: the environment variable that turns compiling ahead off (``off``, ``0``, ``no``, ``false``)
 AHEAD_ENV = "TRACER_COMPILE_AHEAD"
+#: the environment variable naming a file that a child's error output is appended to (by
+#: default it goes nowhere: a child that fails leaves the render to compile, as without it)
+AHEAD_LOG_ENV = "TRACER_COMPILE_AHEAD_LOG"
 #: the film's own kernel whose cache index says that the film's kernels are compiled
 AHEAD_MARKER = os.path.join("tracer.rendering", "lighting.light_tasks-*.nbi")
 #: the child's code: :func:`tracer.scenes.compile_ahead.child_main` of its JSON argument
@@ -181,15 +184,35 @@ def start_ahead(march, film, objects):
         return False        # a setting the scene's own checks will refuse, with a message
     if not ahead_needed(cfg):
         return False
+    err = _ahead_log()
     try:
         # unbuffered: a line read leaves nothing behind in a buffer that select cannot see
         p = subprocess.Popen([sys.executable, "-c", AHEAD_CHILD, json.dumps(cfg)],
                              stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
-                             stderr=subprocess.DEVNULL, bufsize=0)
+                             stderr=err, bufsize=0)
     except OSError:         # no process to spare: this one compiles, as before
         return False
+    finally:
+        if err is not subprocess.DEVNULL:
+            err.close()     # the child holds its own copy
     ahead(p)
     return True
+
+
+def _ahead_log():
+    """Where a child's error output goes: the file :data:`AHEAD_LOG_ENV` names (appended to,
+    after a line saying which process starts), or nowhere."""
+    path = os.environ.get(AHEAD_LOG_ENV, "").strip()
+    if not path:
+        return subprocess.DEVNULL
+    try:
+        f = open(path, "ab")
+        f.write(f"{time.strftime('%Y-%m-%d %H:%M:%S')} tracer: compile-ahead child of "
+                f"process {os.getpid()}\n".encode())
+        f.flush()
+        return f
+    except OSError:         # a log that cannot be written is no reason to stop a render
+        return subprocess.DEVNULL
 #: the longest a render waits for a child compiling its film's kernels (seconds): then it
 #: compiles what is left itself
 AHEAD_WAIT = 300.0

@@ -126,3 +126,24 @@ def test_a_hung_child_is_stopped_and_a_failed_one_ignored():
     assert 0.9 < waited < 30 and time.perf_counter() - t0 < 30
     assert hung.poll() is not None and failed.poll() == 3
     assert compiling.wait_ahead() < 0.5                         # nothing left to wait for
+
+
+def test_a_childs_errors_go_to_the_log_it_is_given(monkeypatch, tmp_path):
+    """``TRACER_COMPILE_AHEAD_LOG``: a child's error output is appended to that file, after a
+    line naming the render's process; without it, nowhere (and a log that cannot be opened
+    does not stop the child)."""
+    march, film = _mesh_settings()
+    child = ("import sys; print('boom from the child', file=sys.stderr); "
+             "sys.stdout.write('done\\n'); raise SystemExit(4)")
+    monkeypatch.setattr(compiling, "AHEAD_CHILD", child)
+    monkeypatch.setattr(compiling, "ahead_needed", lambda cfg: True)
+    log = tmp_path / "ahead.log"
+    log.write_text("before\n")
+    for path in (str(log), str(tmp_path / "no" / "such" / "folder.log"), ""):
+        monkeypatch.setenv(compiling.AHEAD_LOG_ENV, path)
+        assert compiling.start_ahead(march, film, 1)
+        compiling.wait_ahead(timeout=30.0)
+    lines = log.read_text().splitlines()
+    assert lines[0] == "before" and len(lines) == 3
+    assert lines[1].endswith(f"tracer: compile-ahead child of process {os.getpid()}")
+    assert lines[2] == "boom from the child"
