@@ -66,7 +66,7 @@ SETTINGS = {
         "underestimate": {"queries": 1000, "seed": 0, "alpha": 200.0,
                           "alphas": [25.0, 50.0, 100.0, 200.0, 400.0, 800.0]},
         "bh_switch": {"trials": 40},
-        "grid": {"grid": 16, "generated": [100, 1000, 10000], "thingi10k": True, "repeat": 3},
+        "grid": {"grid": 24, "generated": [100, 1000, 10000], "thingi10k": True, "repeat": 3},
         "table3": {"scenes": ["ico_bowl", "trefoil_ringtoss", "sphere_slide"], "steps": 50,
                    "threads": [1, None], "authors_timeout": 600.0},
         "box_test": {"cases": ["bowl-ico", "slide-sphere"], "repeat": 5},
