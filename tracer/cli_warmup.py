@@ -2,11 +2,11 @@
 
 The jobs of :mod:`smoothdist.warmup` and the renderer's first calls below, each a ``tracer``
 command on a small mesh written into a temporary folder (a triangle mesh, its exact offset
-surface, its edges, points on it, the lit adaptive look, a simulation step when the sim extra is
-installed), run in child
-processes side by side (:func:`smoothdist.warmup.run`); every kernel they compile lands in the
-per-machine cache, so that a user's first render loads it. Once per machine and version: after
-``pip install``, in a Docker image, before a CI suite.
+surface, its edges with a tolerance, points on it, the lit adaptive look, a simulation step when
+the sim extra is installed), run in child processes side by side
+(:func:`smoothdist.warmup.run`); every kernel they compile lands in the per-machine cache, so
+that a user's first render loads it. Once per machine and version: after ``pip install``, in a
+Docker image, before a CI suite.
 """
 
 import importlib.util
