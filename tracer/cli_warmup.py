@@ -90,12 +90,15 @@ JOBS = warmup._Lazy({
     "render-points": lambda: _command("points"),
     "simulate": _simulation,
 })
-#: ``{job: jobs it waits for}``: the other renders share most of ``render-mesh``'s kernels; the
-#: exact offset surface and a smooth one pruned with a tolerance share a march of their own (26
-#: specialisations), which the edges render (``--tol``) loads once ``render-exact`` has made it
-AFTER = {"render-lit": ("render-mesh",), "render-exact": ("render-mesh",),
-         "render-edges": ("render-exact",), "render-points": ("render-mesh",),
-         "simulate": ("mesh-distance",)}
+#: ``{job: jobs it waits for}``: ``render-mesh`` loads the trees' kernels that the first
+#: ``MeshDistance`` call compiles (meanwhile the second core takes the library's next job; on 2
+#: cores the warm-up ended sooner than with both starting at once, in two rounds in turn);
+#: the other renders share most of ``render-mesh``'s kernels; the exact offset surface and a
+#: smooth one pruned with a tolerance share a march of their own (26 specialisations), which
+#: the edges render (``--tol``) loads once ``render-exact`` has made it
+AFTER = {"render-mesh": ("mesh-distance",), "render-lit": ("render-mesh",),
+         "render-exact": ("render-mesh",), "render-edges": ("render-exact",),
+         "render-points": ("render-mesh",), "simulate": ("mesh-distance",)}
 
 #: the modules whose jobs ``tracer warmup`` runs
 MODULES = ("smoothdist.warmup", "tracer.cli_warmup")
