@@ -14,7 +14,8 @@ numba thread each, started inside the timed region, as a user's run pays for it)
 
 Usage (from the repository root)::
 
-    python benchmarks/bench_studies.py [--only beta,grid,overhead] [--json out.json]
+    python benchmarks/bench_studies.py [--only beta,grid,overhead] [--modes serial,local-2]
+        [--json out.json]
 
 The machine's load average is printed with every figure: on a shared machine the numbers
 move with the other jobs.
@@ -47,13 +48,13 @@ def _load():
     return [round(x, 2) for x in os.getloadavg()]
 
 
-def bench_beta(betas, size, mesh):
+def bench_beta(betas, size, mesh, modes=MODES):
     tasks = beta.list_tasks(mesh, list(beta.TYPES), betas, [0.0], size=size, alpha=200.0,
                             alpha_u=1200.0, eps=None)
     tasks = [t for t in tasks if t["beta"] in betas]  # no beta = 0 reference
     beta.probe(tasks[:1], 8)  # compile or load the kernels in this process, untimed
     out = {}
-    for name, sched, workers in MODES:
+    for name, sched, workers in modes:
         secs = {}
         t0 = time.perf_counter()
         info = runner.run_study(beta.render_task, tasks, scheduler=sched, workers=workers,
@@ -68,9 +69,9 @@ def bench_beta(betas, size, mesh):
     return out
 
 
-def bench_grid(folder, n):
+def bench_grid(folder, n, modes=MODES):
     out = {}
-    for name, sched, workers in MODES:
+    for name, sched, workers in modes:
         with tempfile.TemporaryDirectory() as tmp:
             args = ["bench-grid", str(folder), "-o", str(Path(tmp) / "g"), "--grid", str(n),
                     "-q", "--scheduler", sched] + (["--workers", str(workers)] if workers else [])
@@ -82,10 +83,10 @@ def bench_grid(folder, n):
     return out
 
 
-def bench_overhead(count):
+def bench_overhead(count, modes=MODES):
     tasks = [{"key": f"t{i}", "x": i} for i in range(count)]
     out = {}
-    for name, sched, workers in MODES:
+    for name, sched, workers in modes:
         if sched == "serial":
             t0 = time.perf_counter()
             runner.run_study(noop, tasks, scheduler="serial", quiet=True,
@@ -134,16 +135,25 @@ def main(argv=None):
                          "scenes/data/meshes, said so)")
     ap.add_argument("--grid", type=int, default=100)
     ap.add_argument("--trivial", type=int, default=200)
+    ap.add_argument("--modes", default=",".join(m[0] for m in MODES),
+                    help="which of serial, local-1, local-2 (default: all three)")
     ap.add_argument("--json")
     a = ap.parse_args(argv)
     only = a.only.split(",")
+    names = a.modes.split(",")
+    unknown = sorted(set(names) - {m[0] for m in MODES})
+    if unknown:
+        ap.error(f"unknown mode(s) {', '.join(unknown)}: choose from "
+                 f"{', '.join(m[0] for m in MODES)}")
+    modes = tuple(m for m in MODES if m[0] in names)
     res = {"cpu_count": runner.cpu_count(), "load_before": _load()}
     if "overhead" in only:
-        res["overhead"] = bench_overhead(a.trivial)
+        res["overhead"] = bench_overhead(a.trivial, modes)
     if "beta" in only:
-        res["beta"] = bench_beta([float(b) for b in a.betas.split(",")], a.size, a.mesh)
+        res["beta"] = bench_beta([float(b) for b in a.betas.split(",")], a.size, a.mesh,
+                                 modes)
     if "grid" in only:
-        res["grid"] = bench_grid(a.folder or _grid_folder(), a.grid)
+        res["grid"] = bench_grid(a.folder or _grid_folder(), a.grid, modes)
     if a.json:
         Path(a.json).write_text(json.dumps(res, indent=2) + "\n", encoding="utf-8")
     return 0

@@ -94,8 +94,10 @@ TINY = {
     "tracer animate": ["--size", "16", "12"],
     "benchmarks/bench_quality.py": ["--cost-size", "16", "--quality-size", "8", "--reference",
                                     "8", "--samples", "4", "--repeat", "1"],
+    # one cluster size of the two (each of its six cluster starts costs a second or two)
     "benchmarks/bench_studies.py": ["--size", "8", "--betas", "1", "--grid", "4",
-                                    "--trivial", "4", "--folder", "scenes/data/meshes"],
+                                    "--trivial", "4", "--folder", "scenes/data/meshes",
+                                    "--modes", "serial,local-2"],
     "benchmarks/bench_frame.py": ["--size", "16", "9", "--repeat", "1"],
     # every shape lit at 128²: 22 s of the suite; two shapes at 16² run the same code
     "benchmarks/bench_self_shadow.py": ["--size", "16", "--shapes", "icosphere1", "open_plane"],
