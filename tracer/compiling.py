@@ -11,7 +11,8 @@ ended. :class:`tracer.rendering.frame.ProgressBar` and :class:`tracer.runner.Stu
 
 A first render can compile its film's kernels in a second process meanwhile
 (:mod:`tracer.scenes.compile_ahead`): :func:`start_ahead` starts that child where it helps (within
-:func:`ahead_allowed`), :func:`wait_ahead` waits for it before the film.
+:func:`ahead_allowed`), :func:`wait_ahead` waits for it before the film. A first simulation
+step does the same with its whole-mesh kernels (:mod:`tracer.sim.compile_ahead`).
 """
 
 import atexit
@@ -32,7 +33,7 @@ from smoothdist.warmup import cache_folder, switched_off
 __all__ = ["COMPILING", "CompileWatch", "compile_watch", "Eta", "ahead", "ahead_running",
            "wait_ahead",
            "AHEAD_WAIT", "AHEAD_ENV", "AHEAD_TAGS", "ahead_allowed", "ahead_config", "ahead_needed",
-           "start_ahead"]
+           "ahead_possible", "spawn_ahead", "start_ahead"]
 
 #: what the progress displays say while numba compiles
 COMPILING = "compiling kernels (once per machine)"
@@ -156,22 +157,29 @@ def ahead_config(march, film, objects):
             "transparent": bool(film.transparent)}
 
 
-def ahead_needed(cfg):
-    """Whether a render of ``cfg`` (:func:`ahead_config`) lights its hits with kernels that a
-    child should compile now: the lit shading, compiling ahead allowed and not turned off, a
-    second core, the per-machine kernel cache (``smoothdist.warmup.cache_folder``) active
-    and without them."""
+def ahead_possible(marker):
+    """Whether a child compiling ahead can help this process: compiling ahead allowed
+    (:func:`ahead_allowed`) and not turned off (:data:`AHEAD_ENV`), POSIX, a second core, the
+    per-machine kernel cache (``smoothdist.warmup.cache_folder``) active and without the index
+    file that the glob ``marker`` (relative to the cache folder) names."""
     if not (_ALLOWED and _ALLOWED[-1]) or switched_off(os.environ.get(AHEAD_ENV, "")):
         return False
-    if cfg["shading"] != "lit":
-        return False        # no light: the film's other kernels are mostly the trace's
     if os.name != "posix":
         return False        # the child's progress is read with select(), which needs POSIX pipes
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
     if (cores or 1) < 2:
         return False
     folder = cache_folder()
-    return folder is not None and not glob.glob(os.path.join(folder, AHEAD_MARKER))
+    return folder is not None and not glob.glob(os.path.join(folder, marker))
+
+
+def ahead_needed(cfg):
+    """Whether a render of ``cfg`` (:func:`ahead_config`) lights its hits with kernels that a
+    child should compile now: the lit shading, and :func:`ahead_possible` without the light's
+    kernels in the cache."""
+    if cfg["shading"] != "lit":
+        return False        # no light: the film's other kernels are mostly the trace's
+    return ahead_possible(AHEAD_MARKER)
 
 
 def start_ahead(march, film, objects):
@@ -184,12 +192,18 @@ def start_ahead(march, film, objects):
         return False        # a setting the scene's own checks will refuse, with a message
     if not ahead_needed(cfg):
         return False
+    return spawn_ahead(AHEAD_CHILD, json.dumps(cfg))
+
+
+def spawn_ahead(code, arg):
+    """Start ``python -c code arg``, a child that compiles kernels ahead and prints its tags
+    (:data:`AHEAD_TAGS`), its error output to :data:`AHEAD_LOG_ENV`'s file, registered with
+    :func:`ahead`. Returns whether it started."""
     err = _ahead_log()
     try:
         # unbuffered: a line read leaves nothing behind in a buffer that select cannot see
-        p = subprocess.Popen([sys.executable, "-c", AHEAD_CHILD, json.dumps(cfg)],
-                             stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
-                             stderr=err, bufsize=0)
+        p = subprocess.Popen([sys.executable, "-c", code, arg], stdin=subprocess.DEVNULL,
+                             stdout=subprocess.PIPE, stderr=err, bufsize=0)
     except OSError:         # no process to spare: this one compiles, as before
         return False
     finally:
@@ -232,7 +246,8 @@ def ahead(process):
 #: distance (:func:`tracer.rendering.march.distance_at` and its callees, which the trace
 #: shares), ``"normals"`` the shading normals' (:func:`tracer.rendering.march.gradient_tasks`),
 #: ``"light"`` the light's and the ground probe's, ``"done"`` everything (the samples' kernel
-#: of a render of several samples per pixel last)
+#: of a render of several samples per pixel last; a simulation's child,
+#: :mod:`tracer.sim.compile_ahead`, says only this)
 AHEAD_TAGS = ("distance", "normals", "light", "done")
 
 

@@ -14,9 +14,11 @@ and nothing is written.
 import os
 import sys
 
+from tracer.compiling import ahead_allowed, wait_ahead
 from tracer.errors import CLIError
 from tracer.outputs import at_least
 from tracer.rendering.frame import ProgressBar
+from tracer.sim import compile_ahead
 from tracer.sim import run as sim_run
 from tracer.sim.frames import add_frame_arguments, check_frame_arguments, frame_needs, render_movie
 from tracer.sim.simfile import load_simulation
@@ -60,10 +62,13 @@ def run(args):
     if args.resume and not os.path.exists(traj):
         raise CLIError(f"--resume: nothing to resume, {traj} does not exist")
     sim = load_simulation(args.sim)
+    with ahead_allowed():   # a first step's kernels compiled in a second process meanwhile
+        compile_ahead.start(sim, sim_run.torques_of(sim, args.torques))
     built = sim_run.build(sim, torques=args.torques)
     con = built[0]
     if not args.resume:
         sim_run.check_initial_state(sim, con)
+    wait_ahead()            # ... and in the cache before the first step
     created = not os.path.isdir(out)
     os.makedirs(out, exist_ok=True)
     try:

@@ -64,6 +64,22 @@ def mesh_distance_factory():
     return cls
 
 
+def pair_order(bodies):
+    """``[(data body index, query body index)]``: every pair of bodies of which one moves; the
+    static body (or else the one of more primitives) is the pair's data, the other its query."""
+    pairs = []
+    for a in range(len(bodies)):
+        for b in range(a + 1, len(bodies)):
+            A, B = bodies[a], bodies[b]
+            if A.static and B.static:
+                continue
+            if B.static or (not A.static and B.mesh.num_primitives > A.mesh.num_primitives):
+                pairs.append((b, a))
+            else:
+                pairs.append((a, b))
+    return pairs
+
+
 class Pair:
     """One data/query body pair and its :class:`smoothdist.MeshDistance`."""
 
@@ -120,18 +136,8 @@ class ContactConstraint:
         self.bodies = bodies
         self.mode = mode
         self.torques = torques
-        self.pairs = []
         fields = {}
-        for a in range(len(bodies)):
-            for b in range(a + 1, len(bodies)):
-                A, B = bodies[a], bodies[b]
-                if A.static and B.static:
-                    continue
-                if B.static or (not A.static and B.mesh.num_primitives > A.mesh.num_primitives):
-                    a_, b_ = b, a
-                else:
-                    a_, b_ = a, b
-                self.pairs.append(Pair(a_, b_, bodies, beta, factory, fields))
+        self.pairs = [Pair(i, j, bodies, beta, factory, fields) for i, j in pair_order(bodies)]
         if not self.pairs:
             raise ValueError("the scene needs at least one body that moves and two bodies")
         self.alpha = max(max(bodies[p.i].alpha, bodies[p.j].alpha) for p in self.pairs)

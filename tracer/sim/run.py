@@ -37,7 +37,7 @@ from tracer.sim.bodies import thickness
 from tracer.sim.constraint import DEFAULT_TORQUES, ContactConstraint
 from tracer.sim.integrator import Integrator
 
-__all__ = ["simulate", "build", "check_initial_state", "save_trajectory",
+__all__ = ["simulate", "build", "torques_of", "check_initial_state", "save_trajectory",
            "load_trajectory", "restore_frame", "closest_gap", "describe_gap", "FRAME_KEYS"]
 
 #: keys with one row per frame
@@ -52,12 +52,18 @@ def build(sim, factory=None, torques=None):
     ``torques``: ``"exact"`` or ``"split"`` (:mod:`tracer.sim.constraint`); None takes the
     simulation's (its file's ``"torques"`` key, default ``"exact"``).
     """
-    if torques is None:
-        torques = getattr(sim, "torques", None) or DEFAULT_TORQUES
     con = ContactConstraint(sim.bodies, beta=sim.beta, mode=sim.constraint, factory=factory,
-                            torques=torques)
+                            torques=torques_of(sim, torques))
     integ = Integrator(sim.bodies, con, sim.gravity, sim.dt, gap_tol=sim.gap_tol)
     return con, integ
+
+
+def torques_of(sim, torques=None):
+    """The rotation gradient a run of ``sim`` uses: ``torques`` (``"exact"`` or ``"split"``),
+    or, when None, the simulation's (its file's ``"torques"`` key, default ``"exact"``)."""
+    if torques is None:
+        torques = getattr(sim, "torques", None) or DEFAULT_TORQUES
+    return torques
 
 
 def check_initial_state(sim, con):
