@@ -24,7 +24,8 @@ trimesh's ``icosphere(3)``, its 1,920 edges, its 642 vertices, 2,000 points on a
 Each render case also runs once more with a new empty cache and its film's kernels compiled
 in a second process beside it (``cold_ahead``: ``tracer.scenes.compile_ahead``, what ``tracer
 render`` does on a machine with two cores; the ``cold`` run has it off, so that one process
-compiles, and counts, every kernel); its ``cpu_children_s`` is that second process's CPU.
+compiles, and counts, every kernel); its ``cpu_children_s`` is that second process's CPU. So
+does ``sim``, its first step's moments kernel compiled beside it (``tracer.sim.compile_ahead``).
 
 With ``--copies`` (issue 63) each case also runs (a) in a second copy of the source (its
 ``smoothdist`` and ``tracer`` folders copied elsewhere, as a fresh clone, a new virtual
@@ -88,6 +89,8 @@ LIBRARY = {
 #: a march of their own, which the warm-up's ``render-exact`` job compiles
 RENDERS = ("mesh", "edges", "cloud", "lit", "mesh_exact", "mesh_tol")
 CASES = (*LIBRARY, *RENDERS, "sim")
+#: the cases whose command compiles part of its kernels in a second process (``cold_ahead``)
+AHEAD_CASES = (*RENDERS, "sim")
 
 #: runs in the child: the case, then a count of the compiled specialisations (numba's compile
 #: events of smoothdist and tracer functions)
@@ -199,8 +202,9 @@ def write_inputs(folder, scenes=ROOT / "scenes"):
 def run(args, cache, work, threads, source, ahead=False):
     """One child process: ``args`` as given by :func:`write_inputs`, with the kernel cache in
     ``cache`` and ``source`` (a checkout) first on the path; ``ahead``: a render may compile
-    its film's kernels in a second process (``tracer.scenes.compile_ahead``; off otherwise, so
-    that one process compiles every kernel and ``compiled`` counts them all)."""
+    its film's kernels in a second process (``tracer.scenes.compile_ahead``), a simulation its
+    first step's moments kernel (``tracer.sim.compile_ahead``); off otherwise, so that one
+    process compiles every kernel and ``compiled`` counts them all."""
     env = dict(os.environ, NUMBA_CACHE_DIR=str(cache), MPLBACKEND="Agg",
                TRACER_COMPILE_AHEAD="on" if ahead else "off")
     env.pop("SMOOTHDIST_CACHE_DIR", None)  # the kernels' cache: $NUMBA_CACHE_DIR/smoothdist
@@ -324,7 +328,7 @@ def main(argv=None):
             warm = run(inputs[case], cache, work, args.threads, source)
             r = results["cases"][case] = {"command": describe(case, inputs[case], work),
                                           "cold": cold, "warm": warm}
-            if case in RENDERS:     # the same first render, its film compiled alongside
+            if case in AHEAD_CASES:     # the same first call, part of it compiled alongside
                 ahead = work / f"cache-{case}-ahead"
                 ahead.mkdir()
                 r["cold_ahead"] = run(inputs[case], ahead, work, args.threads, source, True)

@@ -175,13 +175,14 @@ def coldstart_warmup_table(path, before_path):
 
 
 def coldstart_ahead_table(path):
-    """Issue 63's compile-ahead table of a ``bench_coldstart.py`` results file: per render case
-    its first render with an empty cache in one process (``cold``) and with the light's kernels
-    compiled in a second process beside it (``cold_ahead``: both processes' CPU), and the
-    ratio of their wall seconds."""
+    """Issue 63's compile-ahead table of a ``bench_coldstart.py`` results file: per case that
+    has one (the renders, the simulation) its first call with an empty cache in one process
+    (``cold``) and with part of its kernels (a render's light, a simulation's moments) compiled
+    in a second process beside it (``cold_ahead``: both processes' CPU), and the ratio of their
+    wall seconds."""
     d = _load(path)
-    cells = ["first render (empty cache)", "one process: CPU s", "wall s",
-             "light compiled alongside: CPU s", "wall s", "wall ratio"]
+    cells = ["first call (empty cache)", "one process: CPU s", "wall s",
+             "part compiled alongside: CPU s", "wall s", "wall ratio"]
     lines = ["| " + " | ".join(cells) + " |", "|" + "---|" * len(cells)]
     loads = []
     for r in d["cases"].values():
