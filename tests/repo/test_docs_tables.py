@@ -126,15 +126,20 @@ def test_the_guide_holds_the_warmup_modes_table():
     assert all(r["after_warmup"]["compiled"] > 0 for r in b.values())
 
 
-def test_the_guide_holds_the_compile_ahead_table():
-    """Issue 63's first renders with the light compiled in a second process (``cold_ahead``
-    of ``coldstart.json``, ``tables.py coldstart-ahead``) between its markers; every one of
-    them took less wall time than the render alone."""
-    want = coldstart_ahead_table(DATA / "coldstart.json").strip()
+@pytest.mark.parametrize("marker, name", [("coldstart-ahead", "coldstart.json"),
+                                          ("coldstart-ahead-sim",
+                                           "coldstart_issue63_sim_ahead.json")])
+def test_the_guide_holds_the_compile_ahead_tables(marker, name):
+    """Issue 63's first renders with the light compiled in a second process and first
+    simulation steps with the moments compiled in one (``cold_ahead`` of the file,
+    ``tables.py coldstart-ahead``) between their markers; every one of them took less wall
+    time than the call alone."""
+    want = coldstart_ahead_table(DATA / name).strip()
     text = _guide()
-    start = text.index("<!-- coldstart-ahead -->") + len("<!-- coldstart-ahead -->")
-    assert text[start:text.index("<!-- /coldstart-ahead -->")].strip() == want, "paste it again"
-    cases = _load("coldstart.json")["cases"]
+    start = text.index(f"<!-- {marker} -->") + len(f"<!-- {marker} -->")
+    assert text[start:text.index(f"<!-- /{marker} -->")].strip() == want, "paste it again"
+    cases = _load(name)["cases"]
+    assert any("cold_ahead" in r for r in cases.values())
     assert all(r["cold_ahead"]["wall_s"] < r["cold"]["wall_s"] for r in cases.values()
                if "cold_ahead" in r)
 
