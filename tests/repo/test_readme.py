@@ -169,6 +169,11 @@ NOT_RUN = {
         "it compiles two first renders from an empty cache four times over, and the warm-up "
         "once (minutes); tests/repo/test_docs_tables.py checks the guide against its results "
         "file and tests/smoothdist/test_warmup.py the warm-up's jobs",
+    "python benchmarks/bench_coldstart.py --cases sim --out "
+    "benchmarks/data/coldstart_issue63_sim_ahead.json":
+        "it compiles a first simulation step from an empty cache twice (a minute); "
+        "tests/tracer/sim/test_sim_compile_ahead.py runs one with its child on an empty cache "
+        "and tests/repo/test_docs_tables.py checks the guide against its results file",
     "python benchmarks/bench_authors_error.py --authors-bin PATH --size 256 --json "
     "tracer/studies/authors_beta_error.json":
         "it needs the authors' renderer built outside the repository (benchmarks/authors) and "

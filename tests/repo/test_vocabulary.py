@@ -43,6 +43,9 @@ PROTOCOLS = {
     # import smoothdist._cast)
     "positive": "a number check: ValueError in smoothdist, CLIError in tracer",
     "non_negative": "a number check: ValueError in smoothdist, CLIError in tracer",
+    # a compile-ahead child's entry point (tracer.compiling.spawn_ahead runs it): one for a
+    # render, one for a simulation
+    "child_main": "a compile-ahead child's entry point",
 }
 #: class names defined in several modules on purpose
 CLASS_COPIES = {"MovedModules": "the moved-modules hook of each package (see PROTOCOLS)"}

@@ -28,7 +28,11 @@ import os
 
 import numpy as np
 
+from smoothdist import DataMesh, MeshDistance, SmoothDistanceField
+from smoothdist.warmup import build_trees_in_python
 from tracer.compiling import ahead_possible, spawn_ahead
+from tracer.sim.constraint import pair_order
+from tracer.sim.simfile import load_simulation
 
 __all__ = ["MARKER", "CHILD", "needed", "start", "tiny_data_mesh", "child_main"]
 
@@ -58,8 +62,6 @@ def start(sim, torques):
 def tiny_data_mesh(mesh):
     """A :class:`smoothdist.DataMesh` with two primitives of each kind ``mesh`` has (points,
     edges, triangles): the same kernels as ``mesh`` as a pair's data."""
-    from smoothdist import DataMesh
-
     V = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
     kinds = {}
     if mesh.points.size:
@@ -76,11 +78,6 @@ def child_main(text):
     (:func:`tracer.sim.constraint.pair_order`) with its settings, its query body's mesh and
     :func:`tiny_data_mesh` of its data body's, and their distances with their couples (then
     it says ``done``)."""
-    from smoothdist import MeshDistance, SmoothDistanceField
-    from smoothdist.warmup import build_trees_in_python
-    from tracer.sim.constraint import pair_order
-    from tracer.sim.simfile import load_simulation
-
     sim = load_simulation(json.loads(text)["sim"])
     build_trees_in_python()      # the data meshes have six primitives: nothing to compile
     bodies = sim.bodies
