@@ -126,8 +126,10 @@ AHEAD_ENV = "TRACER_COMPILE_AHEAD"
 #: the environment variable naming a file that a child's error output is appended to (by
 #: default it goes nowhere: a child that fails leaves the render to compile, as without it)
 AHEAD_LOG_ENV = "TRACER_COMPILE_AHEAD_LOG"
-#: the film's own kernel whose cache index says that the film's kernels are compiled
+#: the film's own kernel whose cache index says that a lit film's kernels are compiled
 AHEAD_MARKER = os.path.join("tracer.rendering", "lighting.light_tasks-*.nbi")
+#: the scene distance's kernel, whose cache index says the same of an unlit render's
+AHEAD_DISTANCE_MARKER = os.path.join("tracer.rendering", "march.distance_at-*.nbi")
 #: the child's code: :func:`tracer.scenes.compile_ahead.child_main` of its JSON argument
 AHEAD_CHILD = ("import sys; from tracer.scenes import compile_ahead; "
                "compile_ahead.child_main(sys.argv[1])")
@@ -174,12 +176,11 @@ def ahead_possible(marker):
 
 
 def ahead_needed(cfg):
-    """Whether a render of ``cfg`` (:func:`ahead_config`) lights its hits with kernels that a
-    child should compile now: the lit shading, and :func:`ahead_possible` without the light's
-    kernels in the cache."""
-    if cfg["shading"] != "lit":
-        return False        # no light: the film's other kernels are mostly the trace's
-    return ahead_possible(AHEAD_MARKER)
+    """Whether a render of ``cfg`` (:func:`ahead_config`) needs kernels that a child should
+    compile now: :func:`ahead_possible` without the light's kernels in the cache (a lit
+    render), or without the scene distance's (any other: the child compiles that distance
+    while the render builds its tree)."""
+    return ahead_possible(AHEAD_MARKER if cfg["shading"] == "lit" else AHEAD_DISTANCE_MARKER)
 
 
 def start_ahead(march, film, objects):

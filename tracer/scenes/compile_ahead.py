@@ -123,11 +123,13 @@ def child_main(text):
                        lighting={"ground": False})
     distance_at_camera(scene)       # the scene's distance first: the render's trace needs it
     print("distance", flush=True)
-    if cfg["mode"] == "smooth" and cfg["beta"] > BETA_SHADE:
+    lit = cfg["shading"] == "lit"
+    if lit and cfg["mode"] == "smooth" and cfg["beta"] > BETA_SHADE:
         run_normals(scene)
     print("normals", flush=True)
     run_film(scene)
-    run_ground(scene)
+    if lit:
+        run_ground(scene)
     print("light", flush=True)
     if cfg["samples"] > 1:
         run_samples(scene)

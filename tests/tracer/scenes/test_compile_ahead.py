@@ -4,9 +4,9 @@
   normals' and the light's kernels with the types the render calls them with: the render
   compiles none of them (it loads them), and its image is byte for byte the one of a render
   that compiled them itself.
+* An unlit first render's child compiles the scene's distance, which the render loads.
 * :func:`~tracer.compiling.ahead_needed` starts nothing where it cannot help: outside an
-  entry point that allows it, turned off, one core, a film without kernels of its own, a cache
-  that holds them already.
+  entry point that allows it, turned off, one core, a cache that holds the kernels already.
 * A child that fails or hangs never fails the render: :func:`tracer.compiling.wait_ahead` stops
   it after its timeout.
 """
@@ -23,6 +23,7 @@ import pytest
 
 from smoothdist.warmup import cache_folder
 from tracer import compiling
+from tracer.cli import main
 from tracer.scenes.settings import Film, March
 
 ROOT = Path(__file__).resolve().parents[3]
@@ -50,12 +51,12 @@ def _env(cache, ahead):
     return env
 
 
-def _render(out, cache, ahead):
+def _render(out, cache, ahead, *extra):
     """``tracer render BUNNY`` in a fresh process (``bench_coldstart``'s child: it reports the
     specialisations of our functions it compiled, ``kernels``)."""
     p = subprocess.run([sys.executable, "-c", bench_coldstart.CHILD, "cli", "render", str(BUNNY),
-                        "--size", "24", "20", "-o", str(out), "-q"], env=_env(cache, ahead),
-                       capture_output=True, text=True, timeout=600)
+                        "--size", "24", "20", "-o", str(out), "-q", *extra],
+                       env=_env(cache, ahead), capture_output=True, text=True, timeout=600)
     assert p.returncode == 0, p.stderr[-3000:]
     report = json.loads(p.stdout.strip().splitlines()[-1])
     assert report["rc"] == 0
@@ -102,6 +103,20 @@ def test_a_first_render_loads_the_film_kernels_its_child_compiled(tmp_path):
     assert (tmp_path / "ahead.png").read_bytes() == (tmp_path / "alone.png").read_bytes()
 
 
+@pytest.mark.slow
+@pytest.mark.skipif(CORES < 2, reason="compiling ahead needs a second core")
+def test_an_unlit_first_render_loads_the_distance_its_child_compiled(tmp_path):
+    """``tracer render MESH --shading normals`` on an empty cache: its child compiles the
+    scene's distance while the render builds its tree; the render loads it, and its image is
+    the one rendered here."""
+    compiled = _render(tmp_path / "ahead.png", tmp_path / "cache", "on", "--shading", "normals")
+    assert "tracer.rendering.march.render_tiles" in compiled                # cold cache
+    assert DISTANCE not in compiled and not set(LIGHT_KERNELS) & set(compiled), compiled
+    assert main(["render", str(BUNNY), "--size", "24", "20", "-o", str(tmp_path / "here.png"),
+                 "-q", "--shading", "normals"]) == 0
+    assert (tmp_path / "ahead.png").read_bytes() == (tmp_path / "here.png").read_bytes()
+
+
 def test_needed_only_where_it_can_help(monkeypatch, tmp_path):
     march, film = _mesh_settings()
     cfg = compiling.ahead_config(march, film, 1)
@@ -112,8 +127,7 @@ def test_needed_only_where_it_can_help(monkeypatch, tmp_path):
     assert not compiling.ahead_needed(cfg)                    # not within an entry point
     with compiling.ahead_allowed():
         assert compiling.ahead_needed(cfg)
-        assert not compiling.ahead_needed(dict(cfg, shading="normals"))   # no light
-        assert not compiling.ahead_needed(dict(cfg, shading="normals", samples=4))
+        assert compiling.ahead_needed(dict(cfg, shading="normals"))   # no light: the distance
         monkeypatch.setenv(compiling.AHEAD_ENV, "off")
         assert not compiling.ahead_needed(cfg)
         monkeypatch.delenv(compiling.AHEAD_ENV)
@@ -125,6 +139,9 @@ def test_needed_only_where_it_can_help(monkeypatch, tmp_path):
         folder.mkdir(parents=True, exist_ok=True)
         (folder / "lighting.light_tasks-233.py311.nbi").write_bytes(b"")
         assert not compiling.ahead_needed(cfg)                    # compiled already
+        assert compiling.ahead_needed(dict(cfg, shading="normals"))
+        (folder / "march.distance_at-923.py311.nbi").write_bytes(b"")
+        assert not compiling.ahead_needed(dict(cfg, shading="normals"))
 
 
 def test_a_hung_child_is_stopped_and_a_failed_one_ignored():
