@@ -18,7 +18,9 @@ trimesh's ``icosphere(3)``, its 1,920 edges, its 642 vertices, 2,000 points on a
   ``md_vertex`` (``MeshDistance.vertex_gradient``), triangles;
 * renders (``tracer render ... --size 256 256``, lit, auto alpha): ``mesh`` (``ball.obj``),
   ``edges`` (``ball_edges.obj``, its edges as OBJ lines), ``cloud`` (``cloud.xyz``), ``lit``
-  (``scenes/bunny_triangles.json --shading lit --samples 16 --adaptive``);
+  (``scenes/bunny_triangles.json --shading lit --samples 16 --adaptive``); unlit:
+  ``mesh_normals`` (``ball.obj --shading normals``), ``two_objects``
+  (``scenes/two_objects.json``);
 * ``sim``: ``tracer simulate scenes/simulations/ico_bowl.json --steps 1 --no-render``.
 
 Each render case also runs once more with a new empty cache and its film's kernels compiled
@@ -86,8 +88,9 @@ LIBRARY = {
                   ".vertex_gradient(R, t)"),
 }
 #: renders; ``mesh_exact`` (the exact offset surface) and ``mesh_tol`` (tolerance pruning) share
-#: a march of their own, which the warm-up's ``render-exact`` job compiles
-RENDERS = ("mesh", "edges", "cloud", "lit", "mesh_exact", "mesh_tol")
+#: a march of their own, which the warm-up's ``render-exact`` job compiles; ``mesh_normals`` and
+#: ``two_objects`` (two meshes in one scene file) are unlit
+RENDERS = ("mesh", "edges", "cloud", "lit", "mesh_exact", "mesh_tol", "mesh_normals", "two_objects")
 CASES = (*LIBRARY, *RENDERS, "sim")
 #: the cases whose command compiles part of its kernels in a second process (``cold_ahead``)
 AHEAD_CASES = (*RENDERS, "sim")
@@ -192,6 +195,8 @@ def write_inputs(folder, scenes=ROOT / "scenes"):
         cloud=["render", str(cloud), *size],
         mesh_exact=["render", str(ball), *size, "--mode", "exact"],
         mesh_tol=["render", str(ball), *size, "--tol", "1e-3"],
+        mesh_normals=["render", str(ball), *size, "--shading", "normals"],
+        two_objects=["render", str(scenes / "two_objects.json"), *size],
         lit=["render", str(scenes / "bunny_triangles.json"), *size, "--shading", "lit",
              "--samples", "16", "--adaptive"],
         sim=["simulate", str(scenes / "simulations" / "ico_bowl.json"), "--steps", "1",
