@@ -132,6 +132,11 @@ else:
     rc = tracer.cli.main()      # as the command runs it: the process is the command's own
 wall = time.perf_counter() - t0
 ru = resource.getrusage(resource.RUSAGE_SELF)
+if case != "library":
+    # a compile-ahead child still running is stopped, as at the process's exit, and reaped
+    # now: its CPU counts (read before, an unreaped child's was left out)
+    from tracer.compiling import wait_ahead
+    wait_ahead(timeout=0.0)
 kids = resource.getrusage(resource.RUSAGE_CHILDREN)     # a render's compile-ahead child
 print(json.dumps({"rc": rc, "in_process_s": wall, "cpu_s": ru.ru_utime + ru.ru_stime,
                   "cpu_children_s": kids.ru_utime + kids.ru_stime,

@@ -128,12 +128,14 @@ def test_the_guide_holds_the_warmup_modes_table():
 
 @pytest.mark.parametrize("marker, name", [("coldstart-ahead", "coldstart.json"),
                                           ("coldstart-ahead-sim",
-                                           "coldstart_issue63_sim_ahead.json")])
+                                           "coldstart_issue63_sim_ahead.json"),
+                                          ("coldstart-ahead-unlit",
+                                           "coldstart_issue63_unlit_ahead.json")])
 def test_the_guide_holds_the_compile_ahead_tables(marker, name):
-    """Issue 63's first renders with the light compiled in a second process and first
-    simulation steps with the moments compiled in one (``cold_ahead`` of the file,
-    ``tables.py coldstart-ahead``) between their markers; every one of them took less wall
-    time than the call alone."""
+    """Issue 63's first renders with the light (or, unlit, the scene's distance) compiled in a
+    second process and first simulation steps with the moments compiled in one (``cold_ahead``
+    of the file, ``tables.py coldstart-ahead``) between their markers; every one of them took
+    less wall time than the call alone."""
     want = coldstart_ahead_table(DATA / name).strip()
     text = _guide()
     start = text.index(f"<!-- {marker} -->") + len(f"<!-- {marker} -->")

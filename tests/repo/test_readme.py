@@ -174,6 +174,11 @@ NOT_RUN = {
         "it compiles a first simulation step from an empty cache twice (a minute); "
         "tests/tracer/sim/test_sim_compile_ahead.py runs one with its child on an empty cache "
         "and tests/repo/test_docs_tables.py checks the guide against its results file",
+    "python benchmarks/bench_coldstart.py --cases mesh_normals two_objects --out "
+    "benchmarks/data/coldstart_issue63_unlit_ahead.json":
+        "it compiles two first renders from an empty cache twice each (a minute); "
+        "tests/tracer/scenes/test_compile_ahead.py runs an unlit one with its child on an empty "
+        "cache and tests/repo/test_docs_tables.py checks the guide against its results file",
     "python benchmarks/bench_authors_error.py --authors-bin PATH --size 256 --json "
     "tracer/studies/authors_beta_error.json":
         "it needs the authors' renderer built outside the repository (benchmarks/authors) and "

@@ -15,9 +15,14 @@ and the ground probe, and last the samples' kernel of a render of several sample
 (:func:`child_main`). Meanwhile the render loads its mesh, builds its tree and traces; it waits
 for the child before its light and before its samples, and loads their kernels.
 
+An unlit render has no light to compile: its child compiles the scene's distance while the
+render builds its tree, then the film's (unlit) kernels and the samples', without the shading
+normals and the ground probe; its marker in the cache is the distance's index instead of the
+light's.
+
 Only the entry points that own their process ask for it (``tracer render``,
-:func:`tracer.render_mesh`), and only for the lit shading, with a second core and a cache to
-fill (:func:`tracer.compiling.ahead_needed`). ``TRACER_COMPILE_AHEAD=off`` turns it off.
+:func:`tracer.render_mesh`), with a second core and a cache to fill
+(:func:`tracer.compiling.ahead_needed`). ``TRACER_COMPILE_AHEAD=off`` turns it off.
 """
 
 import gc
@@ -113,9 +118,9 @@ def child_main(text):
     * :func:`run_film` of :func:`tiny_scene` without the ground, one sample per pixel and the
       render's own field (beta at most :data:`~tracer.rendering.film.BETA_SHADE`, so no shading
       normals again): the light's kernels (shadows, occlusion, the objects' ids), then the
-      ground probe (:func:`run_ground`). The probe marches with the trace's ``march_ray``,
-      which the render compiles meanwhile: by then it is mostly in the cache, and this process
-      loads it instead of compiling it a second time;
+      ground probe of a lit render (:func:`run_ground`). The probe marches with the trace's
+      ``march_ray``, which the render compiles meanwhile: by then it is mostly in the cache,
+      and this process loads it instead of compiling it a second time;
     * a render of more than one sample per pixel: the samples' kernel
       (:func:`run_samples`), which the render needs after its light."""
     cfg = json.loads(text)
