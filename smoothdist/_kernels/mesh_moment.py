@@ -237,7 +237,12 @@ def smooth_vertex_primitive_tasks(tree, qkind, qpts, alpha, beta, S, wgrad_scale
             out_G[j] = 0.0
             d, gx, gy, gz, G = smooth_vertex_primitive(tree, kq, qpts[j], alpha, beta, S,
                                                        wgrad_scale, stack, dstack, scratch, tol)
-            out_G[j, :kq + 1] = G
+            # element by element: an array assigned to a slice compiles numba's shape-mismatch
+            # error message (string formatting, 3 s of a first vertex gradient's compile)
+            for v in range(kq + 1):
+                out_G[j, v, 0] = G[v, 0]
+                out_G[j, v, 1] = G[v, 1]
+                out_G[j, v, 2] = G[v, 2]
             out_d[j] = d
             out_g[j, 0] = gx
             out_g[j, 1] = gy
@@ -266,7 +271,10 @@ def smooth_vertex_primitives_brute(tree, qkind, qpts, alpha, beta, S, wgrad_scal
             out_G[j, 0, 2] = gz
         else:
             d, gx, gy, gz, G = smooth_vertex_brute_primitive(tree, kq, Q, alpha, S, wgrad_scale)
-            out_G[j, :kq + 1] = G
+            for v in range(kq + 1):     # element by element, as smooth_vertex_primitive_tasks
+                out_G[j, v, 0] = G[v, 0]
+                out_G[j, v, 1] = G[v, 1]
+                out_G[j, v, 2] = G[v, 2]
         out_d[j] = d
         out_g[j, 0] = gx
         out_g[j, 1] = gy
