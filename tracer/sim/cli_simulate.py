@@ -69,6 +69,9 @@ def run(args):
     if not args.resume:
         sim_run.check_initial_state(sim, con)
     wait_ahead()            # ... and in the cache before the first step
+    if not args.no_render:
+        with ahead_allowed():   # the movie's kernels compiled while the simulation steps
+            compile_ahead.start_movie(sim, args.size)
     created = not os.path.isdir(out)
     os.makedirs(out, exist_ok=True)
     try:

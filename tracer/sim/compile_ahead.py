@@ -19,7 +19,9 @@ compiled at once: the first step came later.)
 
 Only ``tracer simulate`` asks for it (within :func:`tracer.compiling.ahead_allowed`), for the
 smooth constraint with exact torques, with a second core and a cache to fill
-(:func:`needed`). ``TRACER_COMPILE_AHEAD=off`` turns it off.
+(:func:`needed`). After that child, a simulation that renders its movie starts the render's
+child for the frames' scene (:func:`start_movie`): it compiles their kernels while the
+simulation steps. ``TRACER_COMPILE_AHEAD=off`` turns both off.
 """
 
 import gc
@@ -30,11 +32,13 @@ import numpy as np
 
 from smoothdist import DataMesh, MeshDistance, SmoothDistanceField
 from smoothdist.warmup import build_trees_in_python
-from tracer.compiling import ahead_possible, spawn_ahead
+from tracer.compiling import ahead_possible, spawn_ahead, start_ahead
+from tracer.sim.animate import body_scene
 from tracer.sim.constraint import pair_order
 from tracer.sim.simfile import load_simulation
 
-__all__ = ["MARKER", "CHILD", "needed", "start", "tiny_data_mesh", "child_main"]
+__all__ = ["MARKER", "CHILD", "needed", "start", "start_movie", "tiny_data_mesh",
+           "child_main"]
 
 #: the moments' kernel, whose cache index says that the simulation's kernels are compiled
 MARKER = os.path.join("smoothdist._kernels", "mesh_moment.smooth_moment_primitive_tasks-*.nbi")
@@ -57,6 +61,15 @@ def start(sim, torques):
     if not needed(sim.constraint, torques):
         return False
     return spawn_ahead(CHILD, json.dumps({"sim": os.path.abspath(sim.path)}))
+
+
+def start_movie(sim, size=None):
+    """Start the render's child (:mod:`tracer.scenes.compile_ahead`) for the movie of ``sim``
+    (its frames' scene, :func:`tracer.sim.animate.body_scene`, at ``size``), where
+    :func:`tracer.compiling.ahead_needed`: it compiles the frames' kernels while the
+    simulation steps, and the first frame loads them. Returns whether one started."""
+    scene = body_scene(sim, size)
+    return start_ahead(scene.march, scene.film, len(scene.objects))
 
 
 def tiny_data_mesh(mesh):

@@ -8,6 +8,8 @@
   entry point that allows it, turned off, the exact constraint, split torques, one core, a
   cache that holds the kernel already.
 * The child's stand-in data meshes choose the same kernels as the bodies' own.
+* A simulation that renders its movie starts the render's child for the frames' scene after
+  its first step's (:func:`~tracer.sim.compile_ahead.start_movie`).
 """
 
 import json
@@ -22,7 +24,9 @@ import pytest
 from smoothdist import DataMesh, MeshDistance, SmoothDistanceField
 from smoothdist.warmup import cache_folder
 from tracer import compiling
-from tracer.sim import compile_ahead
+from tracer.cli import main
+from tracer.sim import cli_simulate, compile_ahead
+from tracer.sim.animate import body_scene
 from tracer.sim import run as sim_run
 from tracer.sim.simfile import load_simulation
 
@@ -114,3 +118,28 @@ def test_the_stand_in_data_chooses_the_bodys_kernels(kinds):
             for m in (data, tiny))
     assert a._distance_kernel is b._distance_kernel
     assert a._exact_kernels == b._exact_kernels
+
+
+def test_the_movie_child_gets_the_frames_scene(monkeypatch):
+    """``start_movie``: the render's child for the frames' scene (its number of bodies, its
+    march and film settings at the movie's size)."""
+    calls = []
+    monkeypatch.setattr(compile_ahead, "start_ahead",
+                        lambda march, film, objects: calls.append((march, film, objects)))
+    sim = load_simulation(ICO_BOWL)
+    compile_ahead.start_movie(sim, (32, 24))
+    scene = body_scene(sim, (32, 24))
+    assert calls == [(scene.march, scene.film, len(sim.bodies))]
+    assert (scene.film.width, scene.film.height) == (32, 24)
+
+
+def test_simulate_starts_the_movie_child_unless_it_renders_none(monkeypatch, tmp_path):
+    """``tracer simulate`` asks for the movie's child after its first step's, and not with
+    ``--no-render``."""
+    sizes = []
+    monkeypatch.setattr(compile_ahead, "start_movie", lambda sim, size: sizes.append(size))
+    monkeypatch.setattr(cli_simulate, "render_movie", lambda *a, **k: None)   # no frames
+    for k, extra in enumerate((["--no-render"], ["--size", "16", "12"])):
+        assert main(["simulate", str(ICO_BOWL), "--steps", "1", "-o", str(tmp_path / f"o{k}"),
+                     "-q", *extra]) == 0
+    assert [list(s) for s in sizes] == [[16, 12]]
