@@ -114,10 +114,10 @@ def _skip_member(app, what, name, obj, skip, options):
 
 def _numpydoc_template_once():
     """numpydoc (1.11) makes a Jinja environment and compiles its docstring template anew for
-    every docstring and signature it formats: 3,168 compiles, 9 s of a 60 s build on our 2-core
-    machine. Compile it once per builder and hand numpydoc the same template (its ``setup``
-    takes its ``get_doc_object`` as a parameter for this). Left as it is where numpydoc's
-    names differ."""
+    every docstring and signature it formats: 3,168 compiles, 9 s of a 60 s profiled build on
+    our 2-core machine. Replace the module-level ``get_doc_object`` that its ``setup``
+    installs with one that compiles the template once per builder and hands numpydoc the same
+    template every time. Left as it is where numpydoc's names differ."""
     from numpydoc import docscrape_sphinx as ds
     from numpydoc import numpydoc as nd
 
@@ -131,7 +131,7 @@ def _numpydoc_template_once():
         config = {} if config is None else config
         key = id(builder)
         if key not in templates:
-            probe = {}
+            probe = {}      # numpydoc's own function puts the compiled template here
             ds.get_doc_object(_skip_member, config=probe, builder=builder)
             templates[key] = probe["template"]
         config["template"] = templates[key]
