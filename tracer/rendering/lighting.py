@@ -124,7 +124,7 @@ def check_color(color, name):
 
 
 # =============================================================================== kernels
-@numba.njit(**NJIT)
+@numba.njit(**NJIT_IR_INLINE)
 def soft_shadow(sc, p, light, work):
     """Fraction of the key light reaching ``p = (px, py, pz)`` (0 in full shadow, 1 lit), the
     queries made and the leaves they visited, in the scene ``sc`` (as
@@ -173,7 +173,7 @@ def soft_shadow(sc, p, light, work):
     return min(1.0, res), n, leaves
 
 
-@numba.njit(**NJIT)
+@numba.njit(**NJIT_IR_INLINE)
 def ambient_occlusion(sc, p, n, delta, work, slack):
     """Occlusion factor in ``[0, 1]`` (1: open) at ``p = (px, py, pz)`` with unit normal
     ``n = (nx, ny, nz)``, and the leaves visited: ``AO_SAMPLES`` distances of the scene ``sc``
@@ -227,7 +227,10 @@ def light_points(tree, objs, points, depth_max, light, out, ntasks):
     (:mod:`smoothdist.schedule`)."""
     ntasks = max(1, min(points[0].shape[0], ntasks))
     for task in prange(ntasks):
-        _light_task((tree,) + objs, points, depth_max, light, out, task, ntasks)
+        # a call of the serial kernel, not its code inlined into the parallel loop: numba 0.68
+        # lost the shadow of some points with light_point inlined twice into this loop (1
+        # where the serial tasks and a direct soft_shadow give 0)
+        light_tasks(tree, objs, points, depth_max, light, out, (ntasks, task, task + 1))
 
 
 @numba.njit(**NJIT)
@@ -251,15 +254,15 @@ def _light_task(sc, points, depth_max, light, out, task, ntasks):
         light_point(sc, points, light, out, i, work)
 
 
-@numba.njit(**NJIT)
+@numba.njit(**NJIT_IR_INLINE)
 def light_point(sc, points, light, out, i, work):
     """Point ``i`` of :func:`light_points`, with the traversal scratch ``work = (stack,
     dstack)`` (the CPU's tasks and the GPU's threads, :mod:`tracer.rendering.gpu_render`, call
-    this).
-    A function of its own, not inlined: inlined twice into the parallel loop of
-    :func:`light_points` (numba 0.68) it lost the shadow of some points (1 where the serial
-    tasks and a direct :func:`soft_shadow` give 0; tests/tracer/rendering/
-    test_render_coldstart.py)."""
+    this). Merged into its callers, with :func:`soft_shadow` and :func:`ambient_occlusion`: a
+    level of its own cost a first lit render's compile its optimisation and machine code
+    again (performance guide, "Cold start"). The parallel :func:`light_points` calls
+    :func:`light_tasks` rather than merging it into its loop
+    (``tests/tracer/rendering/test_render_coldstart.py`` compares the two)."""
     P, N = points
     L, lo, hi, eps, k, delta, do_shadow, do_ao, slack, t_min, t_judge = light
     shadow, ao, counts = out

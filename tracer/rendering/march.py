@@ -373,7 +373,7 @@ def ray_box(ox, oy, oz, dx, dy, dz, lo, hi):
     return t0, t1
 
 
-@numba.njit(**NJIT)
+@numba.njit(**NJIT_IR_INLINE)
 def _false_position(sc, pr, bracket, g, nearest, eps, work):
     """Root of ``d(t)`` along the ray ``pr = (ox, oy, oz, dx, dy, dz)`` in the bracket
     ``bracket = (a, fa, b, fb)``: ``d(a) = fa > eps``, ``d(b) = fb < -eps``.
@@ -662,7 +662,7 @@ def cone_end(sc, cam, limits, tile, work, relax):
     return t, evals, leaves
 
 
-@numba.njit(**NJIT)
+@numba.njit(**NJIT_IR_INLINE)
 def cone_march(sc, beam, limits, work, relax, t, t_out, sign):
     """The cone passes' march along the central ray of ``beam``
     (:func:`~tracer.rendering.camera.block_rays`: ``(ox, oy, oz, ux, uy, uz, near, spread)``)
@@ -699,7 +699,7 @@ def cone_march(sc, beam, limits, work, relax, t, t_out, sign):
     return t, evals, leaves, d, gx, gy, gz
 
 
-@numba.njit(**NJIT)
+@numba.njit(**NJIT_IR_INLINE)
 def tile_cone(sc, cam, limits, tile, work, relax, newton):
     """The cone pass of the tile ``tile = (r_lo, r_hi, c_lo, c_hi)``, as every tile's rays
     start (arguments as :func:`cone_start`'s).
