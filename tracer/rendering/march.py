@@ -662,7 +662,7 @@ def cone_end(sc, cam, limits, tile, work, relax):
     return t, evals, leaves
 
 
-@numba.njit(**NJIT_IR_INLINE)
+@numba.njit(**NJIT)
 def cone_march(sc, beam, limits, work, relax, t, t_out, sign):
     """The cone passes' march along the central ray of ``beam``
     (:func:`~tracer.rendering.camera.block_rays`: ``(ox, oy, oz, ux, uy, uz, near, spread)``)
@@ -917,6 +917,21 @@ def compile_helpers(ray, band, opts):
               True, NEWTON_COS)
     stepped_over(1.0, 1.0, 1.0, eps, 0.0)
     _was_loosened(ray.params, float(ray.tol), 0.0)
+
+
+def compile_march(tree, ray, depth_max, opts):
+    """Compile :func:`march_ray` with the types :func:`render_tiles` calls it with, by marching
+    the camera ray of pixel ``(0, 0)`` once from Python (``tree``, ``ray``, ``depth_max``,
+    ``opts`` as :func:`render_rows` takes them; the result is not used). A first render with a
+    child compiling its film's kernels (``tracer.scenes.compile_ahead``) calls it as soon as
+    the child has compiled the scene's distance, before its trace kernel: the child's ground
+    probe and samples' kernel, which march with it too, then load it from the cache instead of
+    compiling it again while the trace kernel compiles (``tests/tracer/scenes/test_compile_ahead.py``
+    checks that nothing compiles twice)."""
+    relax, omega, cone, newton = opts
+    march_ray((tree, ray.roots, ray.params, ray.mode, ray.tol), camera_ray(ray.cam, 0.0, 0.0),
+              (ray.lo, ray.hi, ray.eps, ray.max_steps), (relax, omega, newton, NEWTON_COS),
+              PLAIN_SPAN, (np.empty(depth_max + 4, dtype=np.int64), np.empty(depth_max + 4)))
 
 
 @numba.njit(**NJIT)

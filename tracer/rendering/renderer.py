@@ -96,12 +96,15 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
     args = ray_args(scene, camera, arrays)
     options = trace_options(scene, lo, hi, relax, omega, cone)
     band = band_rows or H
-    if ahead_running():
+    ahead = ahead_running()
+    if ahead:
         # a child compiles the scene's distance (compile_ahead): meanwhile, the trace's
         # helpers that do without it
         march.compile_helpers(args.march, (0, min(band, H)), options)
     wait_ahead("distance")      # ... then its distance, which the camera check loads
     check_camera_outside(scene, arrays)
+    if ahead:   # the march, which the child's ground probe and samples then load
+        march.compile_march(tree, args.march, depth_max, options)
     hit, tbuf, grad, steps, leaves, bis, objs = pixel_buffers(H, W)
     t0 = time.perf_counter()
     # a film after the trace (light, samples, RGBA): the trace is the bar's first
