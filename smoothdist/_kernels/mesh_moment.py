@@ -42,7 +42,7 @@ import math
 import numba
 import numpy as np
 
-from smoothdist._config import NJIT, NJIT_GENERIC
+from smoothdist._config import NJIT, NJIT_GENERIC, NJIT_IR_INLINE
 from smoothdist._kernels.box_moment import box_lower_bound_moment, extreme_levers, gap_moment
 from smoothdist._kernels.mesh_query import (VERTEX_1, VERTEX_2,  # noqa: F401
                                             _accumulate, any_leaf, box_gap_far, centroid,
@@ -169,28 +169,27 @@ def smooth_moment_primitives_brute(tree, qkind, qpts, alpha, S, wgrad_scale, out
         out_m[j, 2] = mz
 
 
-@numba.njit(**NJIT)
+@numba.njit(**NJIT_IR_INLINE)
 def smooth_vertex_primitive(tree, kq, Q, alpha, beta, S, wgrad_scale, stack, dstack, scratch,
                             tol=DEFAULT_TOL):
     """``(d_hat, g (3,), G (kq + 1, 3))`` of an edge or triangle query: the smooth distance, its
     translation gradient and its derivative for a motion of each vertex alone (module notes).
 
-    One traversal per vertex beyond the first (vertex 0's is ``g`` less the others').
+    One traversal per vertex beyond the first (vertex 0's is ``g`` less the others'), from one
+    call in a loop: numba merges the traversal into each call (``NJIT_GENERIC``), so a second
+    call would type and compile it again.
     """
     G = np.zeros((kq + 1, 3))
-    d, gx, gy, gz, ax, ay, az, nodes, leaves = smooth_traverse(
-        tree, kq, Q, alpha, beta, S, wgrad_scale, stack, dstack, scratch, tol, VERTEX_1, no_levers,
-        vertex_far, any_leaf)
-    G[1, 0] = ax
-    G[1, 1] = ay
-    G[1, 2] = az
-    if kq == 2:
-        _, _, _, _, ax, ay, az, _, _ = smooth_traverse(
-            tree, kq, Q, alpha, beta, S, wgrad_scale, stack, dstack, scratch, tol, VERTEX_2,
-            no_levers, vertex_far, any_leaf)
-        G[2, 0] = ax
-        G[2, 1] = ay
-        G[2, 2] = az
+    d = gx = gy = gz = 0.0
+    for v in range(1, kq + 1):
+        dv, tx, ty, tz, ax, ay, az, nodes, leaves = smooth_traverse(
+            tree, kq, Q, alpha, beta, S, wgrad_scale, stack, dstack, scratch, tol,
+            VERTEX_1 + (v - 1), no_levers, vertex_far, any_leaf)
+        if v == 1:      # the distance and its gradient from the first vertex's traversal
+            d, gx, gy, gz = dv, tx, ty, tz
+        G[v, 0] = ax
+        G[v, 1] = ay
+        G[v, 2] = az
     G[0, 0] = gx - G[1:, 0].sum()
     G[0, 1] = gy - G[1:, 1].sum()
     G[0, 2] = gz - G[1:, 2].sum()
