@@ -13,7 +13,7 @@ from smoothdist._kernels import query as _q
 from smoothdist._kernels.bvh import build_tree, tree_with_weights
 from smoothdist._kernels.exact_query import CHUNK as EXACT_CHUNK
 from smoothdist._kernels.exact_query import GROUP, build_exact_tree, exact_tree_batch
-from smoothdist._kernels.spacing import gap_probes, local_smooth_distance
+from smoothdist._kernels.spacing import gap_probes, local_distances, smooth_of_local
 from smoothdist.error_budget import Within, point_alpha, within
 from smoothdist.junctions import check_weights
 from smoothdist.connectivity import unique_sorted_rows
@@ -373,11 +373,11 @@ class SmoothDistanceField:
         if probes.shape[0]:  # gap centres: no sample closer than the triangle's corners
             probes = probes[_exact_bvh(self.tree, probes)[0] >= (1.0 - 1e-9) * radii]
 
-        radius = AUTO_GAP_RADIUS * self.point_spacing()
+        # the probes' neighbours once; each alpha of the search sums their terms again
+        local = local_distances(self.tree, probes, AUTO_GAP_RADIUS * self.point_spacing())
 
         def closed(a):
-            return bool(np.mean(local_smooth_distance(self.tree, probes, a, radius) > 0.0)
-                        <= AUTO_GAP_OPEN)
+            return bool(np.mean(smooth_of_local(local, a) > 0.0) <= AUTO_GAP_OPEN)
 
         hi = float(alpha)
         if probes.shape[0] == 0 or closed(hi):

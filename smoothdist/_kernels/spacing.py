@@ -22,7 +22,8 @@ from smoothdist._kernels.closest_point import box_children, box_distance2
 from smoothdist._kernels.traversal import ZERO, always, nearest_first, no_far_field
 from smoothdist.schedule import parallel_tasks, run_tasks
 
-__all__ = ["points_within", "gap_probes", "local_smooth_distance", "nearest_k", "area_weights",
+__all__ = ["points_within", "gap_probes", "local_smooth_distance", "local_distances",
+           "smooth_of_local", "nearest_k", "area_weights",
            "AREA_NEIGHBOURS", "AREA_WEIGHT_CAP"]
 
 
@@ -169,11 +170,25 @@ def local_smooth_distance(tree, Q, alpha, radius, max_count=256):
     full ``beta = 0`` value from above, and every Barnes-Hut value (which lies below it).
     Queries with no point within ``radius`` get ``+inf``. Returns ``(q,) float64``.
     """
+    return smooth_of_local(local_distances(tree, Q, radius, max_count), alpha)
+
+
+def local_distances(tree, Q, radius, max_count=256):
+    """``(d, m)``: the distances ``d (q, max_count)`` from ``Q (q, 3)`` to the cloud's points
+    within ``radius`` (``inf`` in the unused slots) and their minimum ``m (q,)`` (``inf``:
+    none), which :func:`smooth_of_local` sums at any alpha: a search over alpha
+    (``SmoothDistanceField.closing_alpha``) finds the neighbours once."""
     nb, count = points_within(tree, Q, radius, max_count)
     d = np.linalg.norm(nb - Q[:, None, :], axis=2)
     d = np.where(np.arange(max_count)[None, :] < np.minimum(count, max_count)[:, None], d,
                  np.inf)
-    m = d.min(axis=1)
+    return d, d.min(axis=1)
+
+
+def smooth_of_local(local, alpha):
+    """:func:`local_smooth_distance` at ``alpha`` from ``local = (d, m)``
+    (:func:`local_distances`). Returns ``(q,) float64``."""
+    d, m = local
     with np.errstate(invalid="ignore"):
         s = np.exp(-alpha * (d - m[:, None])).sum(axis=1)
         return np.where(np.isfinite(m), m - np.log(s) / alpha, np.inf)
