@@ -58,6 +58,44 @@ def exact_cold_sentence(path=DATA.parent / "coldstart_issue63_exact.json"):
             f" -> {med(a):.1f} s ({_range(a, '.1f')}, {d['after'][0]['compiled']})")
 
 
+def levels_warm_sentence(path=DATA.parent / "coldstart_issue63_levels_warm.json"):
+    """Warm renders around the render's merged levels (``coldstart_issue63_levels_warm.json``):
+    the best wall seconds over the rounds of each side, before -> after, of the bunny at 256²
+    as points, edges and triangles (``bench_render.py``) and of the clip frame's lit look and
+    its normals (``bench_frame.py``)."""
+    d = json.loads(Path(path).read_text(encoding="utf-8"))
+    best = {side: {f"{part} {k}": min(r[part][k] for r in d[side]["rounds"])
+                   for part in ("render_256", "frame_320x180") for k in d[side]["rounds"][0][part]}
+            for side in ("before", "after")}
+    names = {"render_256 points": "points", "render_256 edges": "edges",
+             "render_256 triangles": "triangles", "frame_320x180 lit": "the lit frame",
+             "frame_320x180 normals": "its normals"}
+    return ", ".join(f"{names[k]} {best['before'][k]:.3f} -> {best['after'][k]:.3f} s"
+                     for k in names)
+
+
+def vertex_cold_sentence(path=DATA.parent / "coldstart_issue63_vertex_loop_ab.json"):
+    """A first ``MeshDistance.vertex_gradient`` on an empty cache, the runs in turn of
+    ``bench_coldstart.py --cases md_vertex`` (``{"runs": [report + side]}``): CPU seconds
+    before -> after."""
+    runs = json.loads(Path(path).read_text(encoding="utf-8"))["runs"]
+    cpu = {side: [r["cases"]["md_vertex"]["cold"]["cpu_s"] for r in runs if r["side"] == side]
+           for side in ("before", "after")}
+    return (f"{_range(cpu['before'], '.1f')} CPU s before, {_range(cpu['after'], '.1f')} "
+            "CPU s after")
+
+
+def library_warm_sentences(path=DATA.parent / "library_issue63_ab.json"):
+    """``(vertex gradient, closing alpha)``: ``bench_library_ab.py``'s best per run, before ->
+    after, milliseconds and seconds."""
+    d = json.loads(Path(path).read_text(encoding="utf-8"))
+    vg = {s: [r["vertex_gradient_ms"] for r in d[s]["runs"]] for s in ("before", "after")}
+    ca = {s: [r["closing_alpha_s"] for r in d[s]["runs"]] for s in ("before", "after")}
+    return (f"{_range(vg['before'], '.2f')} ms before, {_range(vg['after'], '.2f')} ms after",
+            f"{_range(ca['before'], '.2f')} s a call before, {_range(ca['after'], '.2f')} s "
+            "after")
+
+
 if __name__ == "__main__":
     print("\n".join(warm_sentences()))
 

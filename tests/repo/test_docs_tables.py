@@ -19,7 +19,9 @@ sys.path.insert(0, str(ROOT))
 
 from benchmarks.coldstart_words import (exact_cold_sentence,  # noqa: E402
                                          first_render_sentence, kinds_warm_sentence,
-                                         warm_render_sentence, warm_sentences)
+                                         levels_warm_sentence, library_warm_sentences,
+                                         vertex_cold_sentence, warm_render_sentence,
+                                         warm_sentences)
 from benchmarks.tables import (build_scale_table, build_scale_words,  # noqa: E402
                                scale_points_words,
                                coldstart_ahead_table, coldstart_copies_table,
@@ -151,7 +153,8 @@ def test_the_guide_holds_the_compile_ahead_tables(marker, name):
     ("coldstart-ab", "coldstart_issue63_renders_ab.json", "coldstart-ab"),
     ("coldstart-probe-one-kind", "coldstart_issue63_probe_one_kind.json", "coldstart-ab"),
     ("coldstart-probe-light-merged", "coldstart_issue63_probe_light_merged.json",
-     "coldstart-ab")])
+     "coldstart-ab"),
+    ("coldstart-levels", "coldstart_issue63_levels_ab.json", "coldstart-ab")])
 def test_the_guide_holds_the_first_render_tables(marker, name, make):
     """Issue 63's first-render timeline, the renders run in turn against the code before, and
     the probes (``benchmarks/tables.py timeline`` / ``coldstart-ab``), each between its
@@ -164,6 +167,12 @@ def test_the_guide_holds_the_first_render_tables(marker, name, make):
     assert first_render_sentence(DATA / "coldstart_issue63_renders_ab.json",
                                  DATA / "first_render_timeline.json") in _flat(text)
     assert warm_render_sentence(DATA / "coldstart_issue63_renders_warm.json") in _flat(text)
+    # the warm renders around the merged levels (the last table)
+    assert levels_warm_sentence(DATA / "coldstart_issue63_levels_warm.json") in _flat(text)
+    # the vertex gradient's one traversal call, and the closing alpha's neighbours found once
+    assert vertex_cold_sentence(DATA / "coldstart_issue63_vertex_loop_ab.json") in _flat(text)
+    for words in library_warm_sentences(DATA / "library_issue63_ab.json"):
+        assert words in _flat(text), words
 
 
 def test_the_guide_holds_the_whole_mesh_kinds_table_and_warm_runs():

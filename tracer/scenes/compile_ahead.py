@@ -119,8 +119,9 @@ def child_main(text):
       render's own field (beta at most :data:`~tracer.rendering.film.BETA_SHADE`, so no shading
       normals again): the light's kernels (shadows, occlusion, the objects' ids), then the
       ground probe of a lit render (:func:`run_ground`). The probe marches with the trace's
-      ``march_ray``, which the render compiles meanwhile: by then it is mostly in the cache,
-      and this process loads it instead of compiling it a second time;
+      ``march_ray``, which the render compiles as soon as this process has said ``distance``
+      (:func:`tracer.rendering.march.compile_march`): by then it is in the cache, and this
+      process loads it instead of compiling it a second time;
     * a render of more than one sample per pixel: the samples' kernel
       (:func:`run_samples`), which the render needs after its light."""
     cfg = json.loads(text)
