@@ -926,8 +926,8 @@ def compile_march(tree, ray, depth_max, opts):
     child compiling its film's kernels (``tracer.scenes.compile_ahead``) calls it as soon as
     the child has compiled the scene's distance, before its trace kernel: the child's ground
     probe and samples' kernel, which march with it too, then load it from the cache instead of
-    compiling it again while the trace kernel compiles (``tests/tracer/scenes/test_compile_ahead.py``
-    checks that nothing compiles twice)."""
+    compiling it again while the trace kernel compiles
+    (``tests/tracer/scenes/test_compile_ahead.py`` checks that nothing compiles twice)."""
     relax, omega, cone, newton = opts
     march_ray((tree, ray.roots, ray.params, ray.mode, ray.tol), camera_ray(ray.cam, 0.0, 0.0),
               (ray.lo, ray.hi, ray.eps, ray.max_steps), (relax, omega, newton, NEWTON_COS),

@@ -25,7 +25,7 @@ from tracer.rendering.shading import load_matcap
 from tracer.rendering.threads import in_bands, render_threads
 from tracer.stages import stage
 
-__all__ = ["render", "trace_tiles", "ray_args", "CHUNKS_PER_THREAD"]
+__all__ = ["render", "trace_tiles", "ray_args", "checked_camera", "CHUNKS_PER_THREAD"]
 
 
 def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None, omega=None,
@@ -96,15 +96,7 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
     args = ray_args(scene, camera, arrays)
     options = trace_options(scene, lo, hi, relax, omega, cone)
     band = band_rows or H
-    ahead = ahead_running()
-    if ahead:
-        # a child compiles the scene's distance (compile_ahead): meanwhile, the trace's
-        # helpers that do without it
-        march.compile_helpers(args.march, (0, min(band, H)), options)
-    wait_ahead("distance")      # ... then its distance, which the camera check loads
-    check_camera_outside(scene, arrays)
-    if ahead:   # the march, which the child's ground probe and samples then load
-        march.compile_march(tree, args.march, depth_max, options)
+    checked_camera(scene, arrays, args, options, (0, min(band, H)))
     hit, tbuf, grad, steps, leaves, bis, objs = pixel_buffers(H, W)
     t0 = time.perf_counter()
     # a film after the trace (light, samples, RGBA): the trace is the bar's first
@@ -150,6 +142,22 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
     return RenderResult(rgb=rgb, hit=hit, depth=depth, normals=normals, steps=steps,
                         leaves=leaves, bisections=bis, seconds=seconds, camera=camera,
                         scene=scene, alpha=alpha, samples=spp, aovs=aovs)
+
+
+def checked_camera(scene, arrays, args, options, rows):
+    """:func:`~tracer.rendering.frame.check_camera_outside` of a render (``args``: its
+    :func:`ray_args`, ``options`` its trace options, ``rows = (row0, row1)`` its first band),
+    with a compile-ahead child (``tracer.scenes.compile_ahead``) at work: the trace's helpers
+    that do without the scene's distance compile while the child compiles that distance, which
+    the camera check then loads; then the march (``march.compile_march``), which the child's
+    ground probe and samples' kernel load in turn."""
+    ahead = ahead_running()
+    if ahead:
+        march.compile_helpers(args.march, rows, options)
+    wait_ahead("distance")
+    check_camera_outside(scene, arrays)
+    if ahead:
+        march.compile_march(arrays.tree, args.march, arrays.depth_max, options)
 
 
 def ray_args(scene, camera, arrays):
