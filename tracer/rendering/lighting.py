@@ -258,9 +258,9 @@ def _light_task(sc, points, depth_max, light, out, task, ntasks):
 def light_point(sc, points, light, out, i, work):
     """Point ``i`` of :func:`light_points`, with the traversal scratch ``work = (stack,
     dstack)`` (the CPU's tasks and the GPU's threads, :mod:`tracer.rendering.gpu_render`, call
-    this). Merged into its callers, with :func:`soft_shadow` and :func:`ambient_occlusion`: a
-    level of its own cost a first lit render's compile its optimisation and machine code
-    again (performance guide, "Cold start"). The parallel :func:`light_points` calls
+    this). Merged into its callers, with :func:`soft_shadow` and :func:`ambient_occlusion`: as
+    a kernel of its own it was optimised and compiled to machine code once more in a first lit
+    render (performance guide, "Cold start"). The parallel :func:`light_points` calls
     :func:`light_tasks` rather than merging it into its loop
     (``tests/tracer/rendering/test_render_coldstart.py`` compares the two)."""
     P, N = points
