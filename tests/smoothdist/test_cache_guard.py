@@ -259,14 +259,17 @@ def test_guard_once_runs_once_and_can_be_switched_off(monkeypatch):
 def test_serial_runs_do_not_load_the_parallel_kernels(tmp_path):
     """``SMOOTHDIST_PARALLEL=0`` after a parallel run compiles serial kernels: numba's cache
     index does not key on ``parallel=``, so a cached parallel kernel would be loaded."""
+    # the exact point query's prange kernel, called directly: the smallest of the library's
+    # parallel kernels to compile (the smooth one compiles its brute force and tol paths too)
     code = (
         "import numpy as np\n"
         "from smoothdist import DataMesh, SmoothDistanceField\n"
         "import smoothdist._kernels.query as q\n"
         "f = SmoothDistanceField(DataMesh(np.random.default_rng(0).random((50, 3))))\n"
-        "from smoothdist.field import TASK_BATCH\n"
-        "f.smooth_distance(np.zeros((TASK_BATCH + 1, 3)), alpha=20.0, beta=0.5)  # prange\n"
-        "k = q.smooth_distance_batch\n"
+        "n = 4\n"
+        "k = q.exact_distance_batch\n"
+        "k(f.tree, np.zeros((n, 3)), np.empty(n), np.empty((n, 3)), np.empty(n, np.int64),\n"
+        "  np.empty(n, np.int64), np.empty(n, np.int64), 2)\n"
         "print(k.targetoptions['parallel'], sum(k.stats.cache_hits.values()))\n")
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"))
     env.pop("SMOOTHDIST_PARALLEL", None)
