@@ -44,10 +44,10 @@ import numpy as np
 
 from smoothdist._config import NJIT, NJIT_GENERIC, NJIT_IR_INLINE
 from smoothdist._kernels.box_moment import box_lower_bound_moment, extreme_levers, gap_moment
-from smoothdist._kernels.mesh_query import (VERTEX_1, VERTEX_2,  # noqa: F401
-                                            _accumulate, any_leaf, box_gap_far, centroid,
-                                            far_field, halfspace_far, no_levers, pair_terms,
-                                            query_coefficient, smooth_traverse, task_scratch)
+from smoothdist._kernels.mesh_query import (VERTEX_1, _accumulate, any_leaf, box_gap_far,
+                                            centroid, far_field, halfspace_far, no_levers,
+                                            pair_terms, query_coefficient, smooth_traverse,
+                                            task_scratch)
 from smoothdist._kernels.query import DEFAULT_TOL, smooth_distance_point
 from smoothdist._kernels.traversal import ZERO
 
