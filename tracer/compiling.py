@@ -9,10 +9,11 @@ compiling now and computes the time left from the progress made since the last c
 ended. :class:`tracer.rendering.frame.ProgressBar` and :class:`tracer.runner.StudyProgress` show
 :data:`COMPILING` while numba compiles.
 
-A first render can compile its film's kernels in a second process meanwhile
+A first render can compile its kernels in a second process meanwhile
 (:mod:`tracer.scenes.compile_ahead`): :func:`start_ahead` starts that child where it helps (within
-:func:`ahead_allowed`), :func:`wait_ahead` waits for it before the film. A first simulation
-step does the same with its whole-mesh kernels (:mod:`tracer.sim.compile_ahead`).
+:func:`ahead_allowed`), :func:`wait_ahead` waits for it before the film; the two share out the
+trace and the film through files in a folder of their own (:func:`claim_job`). A first
+simulation step does the same with its whole-mesh kernels (:mod:`tracer.sim.compile_ahead`).
 """
 
 import atexit
@@ -20,8 +21,10 @@ import glob
 import json
 import os
 import select
+import shutil
 import subprocess
 import sys
+import tempfile
 import threading
 import time
 from contextlib import contextmanager
@@ -33,7 +36,8 @@ from smoothdist.warmup import cache_folder, switched_off
 __all__ = ["COMPILING", "CompileWatch", "compile_watch", "Eta", "ahead", "ahead_running",
            "wait_ahead",
            "AHEAD_WAIT", "AHEAD_ENV", "AHEAD_TAGS", "ahead_allowed", "ahead_config", "ahead_needed",
-           "ahead_possible", "spawn_ahead", "start_ahead"]
+           "ahead_possible", "spawn_ahead", "start_ahead", "AHEAD_TRACE_ENV", "claim",
+           "claim_job", "claim_trace", "tell_children", "wait_for"]
 
 #: what the progress displays say while numba compiles
 COMPILING = "compiling kernels (once per machine)"
@@ -193,13 +197,76 @@ def start_ahead(march, film, objects):
         return False        # a setting the scene's own checks will refuse, with a message
     if not ahead_needed(cfg):
         return False
-    return spawn_ahead(AHEAD_CHILD, json.dumps(cfg))
+    claims = tempfile.mkdtemp(prefix="tracer-ahead-")
+    if os.environ.get(AHEAD_TRACE_ENV, "").strip() == "render":
+        claim(claims, "trace")     # taken before the child starts: the render traces
+    if spawn_ahead(AHEAD_CHILD, json.dumps(dict(cfg, claims=claims)), claims):
+        return True
+    shutil.rmtree(claims, ignore_errors=True)
+    return False
 
 
-def spawn_ahead(code, arg):
+def claim(folder, name):
+    """Take the job ``name`` in ``folder`` (shared by a render and its child): True for the
+    one process whose file creation succeeds, False for the other."""
+    try:
+        os.close(os.open(os.path.join(folder, name), os.O_CREAT | os.O_EXCL | os.O_WRONLY))
+    except FileExistsError:
+        return False
+    except OSError:         # no folder (removed, unwritable): the child keeps to the film
+        return False
+    return True
+
+
+def tell_children(name):
+    """Leave the file ``name`` in the folder of every child of :func:`start_ahead` (the render
+    says ``march`` when it has compiled its march, which the child's ground probe then loads:
+    :func:`wait_for`)."""
+    with _LOCK:
+        folders = [p.claims for p in _AHEAD if getattr(p, "claims", None)]
+    for folder in folders:
+        claim(folder, name)
+
+
+def wait_for(folder, name, timeout=None):
+    """Wait (a child, :mod:`tracer.scenes.compile_ahead`) until the file ``name`` is in
+    ``folder`` (:func:`tell_children`), the folder is gone (the render ended) or ``timeout``
+    seconds (default :data:`AHEAD_WAIT`) have passed."""
+    deadline = time.perf_counter() + (AHEAD_WAIT if timeout is None else timeout)
+    path = os.path.join(folder, name)
+    while not os.path.exists(path) and os.path.isdir(folder) and time.perf_counter() < deadline:
+        time.sleep(0.02)
+
+
+def claim_trace():
+    """Whether this process compiles its trace kernel itself: True unless a child of
+    :func:`start_ahead` has taken it (the child takes it when it has compiled the scene's
+    distance before this process asks, :mod:`tracer.scenes.compile_ahead`; the process that
+    does not compile the trace compiles the film's kernels). :data:`AHEAD_TRACE_ENV` set to
+    ``child`` leaves it to the child."""
+    forced = os.environ.get(AHEAD_TRACE_ENV, "").strip()
+    if forced in ("child", "render"):
+        return forced == "render" or not ahead_running()     # start_ahead took it for "render"
+    return claim_job("trace")
+
+
+def claim_job(name):
+    """Whether this process compiles the kernels of job ``name`` itself: True unless a child of
+    :func:`start_ahead` has taken it first (:func:`claim`)."""
+    with _LOCK:
+        children = [p for p in _AHEAD if getattr(p, "claims", None)]
+    if not all(claim(p.claims, name) for p in children):
+        return False
+    for p in children:
+        p.mine.add(name)        # not to be waited for (wait_ahead)
+    return True
+
+
+def spawn_ahead(code, arg, claims=None):
     """Start ``python -c code arg``, a child that compiles kernels ahead and prints its tags
     (:data:`AHEAD_TAGS`), its error output to :data:`AHEAD_LOG_ENV`'s file, registered with
-    :func:`ahead`. Returns whether it started."""
+    :func:`ahead` (``claims``: the folder of its jobs, :func:`claim_trace`, removed when it is
+    waited for or stopped). Returns whether it started."""
     err = _ahead_log()
     try:
         # unbuffered: a line read leaves nothing behind in a buffer that select cannot see
@@ -210,7 +277,7 @@ def spawn_ahead(code, arg):
     finally:
         if err is not subprocess.DEVNULL:
             err.close()     # the child holds its own copy
-    ahead(p)
+    ahead(p, claims)
     return True
 
 
@@ -233,40 +300,51 @@ def _ahead_log():
 AHEAD_WAIT = 300.0
 
 
-def ahead(process):
+def ahead(process, claims=None):
     """Register ``process`` (a ``subprocess.Popen`` whose stdout is an unbuffered pipe), a child
     compiling kernels this process will need into the per-machine cache
     (:mod:`tracer.scenes.compile_ahead`); it prints a line with a tag as each group of them is
-    done (:data:`AHEAD_TAGS`)."""
+    done (:data:`AHEAD_TAGS`). ``claims``: the folder where it and this process share out
+    their jobs (:func:`claim_trace`), or None."""
     process.tags = set()
+    process.claims = claims
+    process.mine = set()
     with _LOCK:
         _AHEAD.append(process)
 
 
-#: what a child says when a group of kernels is in the cache: ``"distance"`` the scene's
-#: distance (:func:`tracer.rendering.march.distance_at` and its callees, which the trace
-#: shares), ``"normals"`` the shading normals' (:func:`tracer.rendering.march.gradient_tasks`),
-#: ``"light"`` the light's and the ground probe's, ``"done"`` everything (the samples' kernel
-#: of a render of several samples per pixel last; a simulation's child,
-#: :mod:`tracer.sim.compile_ahead`, says only this)
-AHEAD_TAGS = ("distance", "normals", "light", "done")
+#: what a child says when a group of kernels is in the cache (or is not its job: it says so
+#: at once): ``"distance"`` the scene's distance (:func:`tracer.rendering.march.distance_at`
+#: and its callees, which the trace shares), ``"march"`` the march
+#: (:func:`tracer.rendering.march.march_ray`) and ``"trace"`` the trace kernel when it took the
+#: trace (:func:`claim_trace`), ``"normals"`` the shading normals'
+#: (:func:`tracer.rendering.march.gradient_tasks`), ``"light"`` the light's and the ground
+#: probe's, ``"samples"`` the samples' kernel of a render of several samples per pixel (last),
+#: ``"done"`` everything (a simulation's child, :mod:`tracer.sim.compile_ahead`, says only
+#: this)
+AHEAD_TAGS = ("distance", "march", "trace", "normals", "light", "samples", "done")
+#: the environment variable that decides who compiles a first render's trace kernel, for the
+#: tests and the benchmarks: ``render`` (the render), ``child`` (its child); unset, the child
+#: when it has compiled the scene's distance before the render asks (:func:`claim_trace`)
+AHEAD_TRACE_ENV = "TRACER_COMPILE_AHEAD_TRACE"
 
 
 def ahead_running():
     """Whether a child of :func:`ahead` is compiling for this process now (not yet waited for
-    to its end)."""
+    to its end, and not ended)."""
     with _LOCK:
-        return bool(_AHEAD)
+        return any(p.poll() is None for p in _AHEAD)
 
 
 def wait_ahead(tag="done", timeout=AHEAD_WAIT):
     """Wait until every child of :func:`ahead` has said ``tag`` (:data:`AHEAD_TAGS`), or
     ended: this process then loads those kernels instead of compiling them again. At
     ``"done"`` the children are forgotten; one still running after ``timeout`` seconds is
-    stopped. Returns the seconds waited."""
+    stopped. A job this process has taken (:func:`claim_job`) is not waited for. Returns the
+    seconds waited."""
     t0 = time.perf_counter()
     with _LOCK:
-        pending = list(_AHEAD)
+        pending = [p for p in _AHEAD if tag not in getattr(p, "mine", ())]
         if tag == "done":
             _AHEAD[:] = []
     for p in pending:
@@ -302,6 +380,8 @@ def _stop(p):
     p.wait()
     if p.stdout is not None:
         p.stdout.close()
+    if getattr(p, "claims", None):
+        shutil.rmtree(p.claims, ignore_errors=True)
 
 
 @atexit.register

@@ -606,7 +606,7 @@ def _trace(kargs, depth_max, options, pixels, W, offsets, bounds=None, eps_px=EP
         if gpu is not None:
             gpu.trace_samples_cuda(tree, ray, samples, out, opts)
         else:
-            wait_ahead()    # a child compiling this kernel (compile_ahead) is done with it
+            wait_ahead("samples")   # a child compiling this kernel (compile_ahead) is done
             run_tasks(lambda a, b: march.sample_tasks(
                 tree, ray, samples, depth_max, out, opts, (ntasks, a, b)), ntasks)
     return hit.ravel(), t.ravel(), grad.reshape(-1, 3), steps.ravel(), objs.ravel()

@@ -8,24 +8,28 @@ below the film, the light and the GPU path that use them; import them from there
 
 import threading
 import time
+from dataclasses import replace
 
 import numpy as np
 
 from smoothdist.cuda import check_device, cuda_module
-from tracer.compiling import ahead_running, wait_ahead
+from tracer.compiling import (ahead_running, claim_job, claim_trace, tell_children,
+                              wait_ahead)
 from tracer.rendering import march
 from tracer.rendering.camera import image_size
-from tracer.rendering.film import form_image
+from tracer.rendering.film import _gradients, _trace, form_image, sample_offsets
 from tracer.rendering.frame import (PixelBuffers, RayArgs, RenderResult, camera_of,
                                     check_camera_outside, check_steps, kernel_roots,
                                     pixel_buffers, progress_callback, scene_arrays, shade,
                                     trace_options, with_overrides)
 from tracer.rendering.gpu_render import render_cuda
+from tracer.rendering.lighting import ground_height
 from tracer.rendering.shading import load_matcap
 from tracer.rendering.threads import in_bands, render_threads
 from tracer.stages import stage
 
-__all__ = ["render", "trace_tiles", "ray_args", "checked_camera", "CHUNKS_PER_THREAD"]
+__all__ = ["render", "trace_tiles", "ray_args", "checked_camera", "compile_film", "run_trace",
+           "run_film", "run_normals", "run_ground", "run_samples", "CHUNKS_PER_THREAD"]
 
 
 def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None, omega=None,
@@ -147,17 +151,109 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
 def checked_camera(scene, arrays, args, options, rows):
     """:func:`~tracer.rendering.frame.check_camera_outside` of a render (``args``: its
     :func:`ray_args`, ``options`` its trace options, ``rows = (row0, row1)`` its first band),
-    with a compile-ahead child (``tracer.scenes.compile_ahead``) at work: the trace's helpers
-    that do without the scene's distance compile while the child compiles that distance, which
-    the camera check then loads; then the march (``march.compile_march``), which the child's
-    ground probe and samples' kernel load in turn."""
+    with a compile-ahead child (``tracer.scenes.compile_ahead``) at work, which compiles the
+    scene's distance first (the camera check loads it). Then one of the two compiles the trace
+    kernel and the other the film's (:func:`tracer.compiling.claim_trace`: the child when it
+    has compiled the distance before this process gets here):
+
+    * here: the trace's helpers that do without the scene's distance compile while the child
+      compiles that distance; after the camera check, the march (``march.compile_march``),
+      which the child's ground probe and samples' kernel load in turn;
+    * in the child: this process compiles the film's kernels (:func:`compile_film`) meanwhile
+      and waits for the trace kernel."""
     ahead = ahead_running()
-    if ahead:
+    here = claim_trace()
+    if ahead and here:
         march.compile_helpers(args.march, rows, options)
     wait_ahead("distance")
     check_camera_outside(scene, arrays)
-    if ahead:
+    if ahead and here:
         march.compile_march(arrays.tree, args.march, arrays.depth_max, options)
+        tell_children("march")
+    elif ahead:
+        film = scene.film
+        if film.samples > 1 or film.shading == "lit" or film.transparent:
+            compile_film(scene, arrays)
+        wait_ahead("trace")
+
+
+def compile_film(scene, arrays):
+    """Compile the film's kernels of a render of ``scene`` (its shading normals', light's and
+    ground probe's; ``arrays``: its :func:`~tracer.rendering.frame.scene_arrays`) by running
+    them on made-up hits of an 8 x 8 image of it (:func:`run_film`, :func:`run_ground`), the
+    same types as the render's; then the samples' kernel of a render of several samples per
+    pixel (:func:`run_samples`) unless the child has taken it. A first render does this while
+    its compile-ahead child compiles the trace kernel (:func:`checked_camera`); the probe and
+    the samples march with ``march_ray``, which the child compiles first."""
+    small = replace(scene, width=8, height=8, samples=1, adaptive=False,
+                    lighting=replace(scene.film.lighting, ground=False))
+    run_film(small, arrays)
+    if scene.film.shading == "lit":
+        wait_ahead("march")
+        run_ground(small, arrays)
+    if scene.film.samples > 1 and claim_job("samples"):
+        wait_ahead("march")
+        run_samples(small, arrays)
+
+
+def run_trace(scene, arrays=None, said=print):
+    """Compile the trace of ``scene`` (``arrays``: its
+    :func:`~tracer.rendering.frame.scene_arrays`, made here when None): the march
+    (``march.compile_march``), then ``said("march")``, then the trace kernel, on its whole
+    image (a compile-ahead child's tiny scene, ``tracer.scenes.compile_ahead``)."""
+    arrays = scene_arrays(scene) if arrays is None else arrays
+    camera = camera_of(scene)
+    args = ray_args(scene, camera, arrays)
+    options = trace_options(scene, arrays.lo, arrays.hi)
+    march.compile_march(arrays.tree, args.march, arrays.depth_max, options)
+    said("march")
+    H, W = scene.film.height, scene.film.width
+    trace_tiles(args, 0, H, arrays.depth_max, pixel_buffers(H, W), options)
+
+
+def run_film(scene, arrays=None):
+    """The film of ``scene`` on made-up hits (a 4 x 4 block of the image): the kernels of
+    :func:`tracer.rendering.film.form_image` compiled for ``scene``'s types (``arrays``: its
+    :func:`~tracer.rendering.frame.scene_arrays`, made here when None)."""
+    camera = camera_of(scene)
+    arrays = scene_arrays(scene) if arrays is None else arrays
+    hit, tbuf, grad, steps, leaves, bis, objs = pixel_buffers(scene.film.height,
+                                                              scene.film.width)
+    hit[2:6, 2:6] = True
+    tbuf[hit] = 5.0
+    grad[hit] = (0.0, 0.0, 1.0)
+    objs[hit] = 0
+    form_image(scene, camera, arrays, ray_args(scene, camera, arrays),
+               trace_options(scene, arrays.lo, arrays.hi), (hit, tbuf, grad, objs))
+
+
+def run_normals(scene):
+    """The shading normals' kernel (:func:`tracer.rendering.march.gradient_tasks`, through
+    ``tracer.rendering.film._gradients``) compiled for ``scene``'s types, on four rays."""
+    camera = camera_of(scene)
+    arrays = scene_arrays(scene)
+    _gradients(ray_args(scene, camera, arrays), arrays.depth_max, np.arange(4, dtype=np.int64),
+               scene.film.width, np.zeros((1, 2)), np.full(4, 5.0))
+
+
+def run_ground(scene, arrays=None):
+    """The ground probe (:func:`tracer.rendering.lighting.ground_height`) compiled for
+    ``scene``'s types, from the first vertices of its objects (``arrays`` as in
+    :func:`run_film`)."""
+    arrays = scene_arrays(scene) if arrays is None else arrays
+    verts = np.concatenate([o.field.mesh.V[:4] for o in scene.objects])
+    ground_height(arrays, verts, np.array([0.0, 1.0, 0.0]), scene.march.eps)
+
+
+def run_samples(scene, arrays=None):
+    """The anti-aliasing samples' kernel (:func:`tracer.rendering.march.sample_tasks`, through
+    ``tracer.rendering.film._trace``) compiled for ``scene``'s types, on two rays (``arrays``
+    as in :func:`run_film`)."""
+    camera = camera_of(scene)
+    arrays = scene_arrays(scene) if arrays is None else arrays
+    _trace(ray_args(scene, camera, arrays), arrays.depth_max,
+           trace_options(scene, arrays.lo, arrays.hi), np.arange(2, dtype=np.int64),
+           scene.film.width, sample_offsets(2)[1:])
 
 
 def ray_args(scene, camera, arrays):

@@ -4,6 +4,10 @@
   normals' and the light's kernels with the types the render calls them with: the render
   compiles none of them (it loads them), and its image is byte for byte the one of a render
   that compiled them itself.
+* A child that has compiled the distance before the render asks takes the trace kernel, and
+  the render compiles the film's kernels meanwhile: no kernel twice, the same image. The two
+  processes share out those jobs through files in a folder of their own
+  (:func:`~tracer.compiling.claim_job`).
 * An unlit first render's child compiles the scene's distance, which the render loads.
 * :func:`~tracer.compiling.ahead_needed` starts nothing where it cannot help: outside an
   entry point that allows it, turned off, one core, a cache that holds the kernels already.
@@ -39,24 +43,32 @@ DISTANCE = "tracer.rendering.march.distance_at"
 #: the shading normals' kernel, which the child compiles next (the render calls it after its
 #: trace)
 NORMALS = "tracer.rendering.march.gradient_tasks"
+#: the anti-aliasing samples' kernel, which the child compiles last (the render calls it after
+#: its light)
+SAMPLES = "tracer.rendering.march.sample_tasks"
 
 
 
-def _env(cache, ahead):
+def _env(cache, ahead, trace="render"):
     env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""),
                MPLBACKEND="Agg")
     env[compiling.AHEAD_ENV] = ahead
+    # who compiles the trace kernel: left to the race between the two processes, the test
+    # would check whichever came first
+    env[compiling.AHEAD_TRACE_ENV] = trace
     if cache is not None:
         env["SMOOTHDIST_CACHE_DIR"] = str(cache)
     return env
 
 
-def _render(out, cache, ahead, *extra):
+def _render(out, cache, ahead, *extra, trace="render"):
     """``tracer render BUNNY`` in a fresh process (``bench_coldstart``'s child: it reports the
-    specialisations of our functions it compiled, ``kernels``)."""
+    specialisations of our functions it compiled, ``kernels``); ``trace``: who compiles the
+    trace kernel when a child compiles ahead (``render`` or ``child``)."""
     p = subprocess.run([sys.executable, "-c", bench_coldstart.CHILD, "cli", "render", str(BUNNY),
                         "--size", "24", "20", "-o", str(out), "-q", *extra],
-                       env=_env(cache, ahead), capture_output=True, text=True, timeout=600)
+                       env=_env(cache, ahead, trace), capture_output=True, text=True,
+                       timeout=600)
     assert p.returncode == 0, p.stderr[-3000:]
     report = json.loads(p.stdout.strip().splitlines()[-1])
     assert report["rc"] == 0
@@ -105,6 +117,27 @@ def test_a_first_render_loads_the_film_kernels_its_child_compiled(tmp_path):
 
 @pytest.mark.slow
 @pytest.mark.skipif(CORES < 2, reason="compiling ahead needs a second core")
+def test_a_child_that_takes_the_trace_leaves_the_film_to_the_render(tmp_path):
+    """A child that has compiled the scene's distance before the render asks for the trace
+    (here made to: ``TRACER_COMPILE_AHEAD_TRACE=child``) compiles the march and the trace
+    kernel; the render compiles the film's kernels (the shading normals', the light's, the
+    ground probe's and, of 4 samples per pixel, the samples') on a tiny image of its own
+    scene meanwhile. Neither the distance nor the trace is compiled by the render, nothing
+    twice, and the image is byte for byte the one rendered here."""
+    extra = ("--samples", "4")
+    compiled = _render(tmp_path / "ahead.png", tmp_path / "cache", "on", *extra, trace="child")
+    assert any(name.startswith("smoothdist._kernels.bvh") for name in compiled)   # cold cache
+    trace = {"tracer.rendering.march.render_tiles", "tracer.rendering.march.march_ray", DISTANCE}
+    assert not trace & set(compiled), compiled
+    assert set(LIGHT_KERNELS + (NORMALS, SAMPLES)) <= set(compiled), compiled
+    assert all(n == 1 for n in compiled.values()), compiled
+    assert main(["render", str(BUNNY), "--size", "24", "20", "-o", str(tmp_path / "here.png"),
+                 "-q", *extra]) == 0
+    assert (tmp_path / "ahead.png").read_bytes() == (tmp_path / "here.png").read_bytes()
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(CORES < 2, reason="compiling ahead needs a second core")
 def test_an_unlit_first_render_loads_the_distance_its_child_compiled(tmp_path):
     """``tracer render MESH --shading normals`` on an empty cache: its child compiles the
     scene's distance while the render builds its tree; the render loads it, and its image is
@@ -142,6 +175,34 @@ def test_needed_only_where_it_can_help(monkeypatch, tmp_path):
         assert compiling.ahead_needed(dict(cfg, shading="normals"))
         (folder / "march.distance_at-923.py311.nbi").write_bytes(b"")
         assert not compiling.ahead_needed(dict(cfg, shading="normals"))
+
+
+def test_a_job_goes_to_the_process_that_claims_it_first(tmp_path):
+    """:func:`~tracer.compiling.claim_job`: the render takes a job only where its child has not
+    (one file created with ``O_EXCL`` in their folder); it does not wait for its child to say
+    the tag of a job it took; ``tell_children`` leaves a file that ``wait_for`` sees, and
+    ``wait_for`` gives up when the folder is gone (the render ended)."""
+    child = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"],
+                             stdout=subprocess.PIPE, bufsize=0)
+    folder = tmp_path / "claims"
+    folder.mkdir()
+    compiling.ahead(child, str(folder))
+    try:
+        assert compiling.claim(str(folder), "trace")          # the child's claim comes first
+        assert not compiling.claim_job("trace")
+        assert compiling.claim_job("samples")
+        assert not compiling.claim(str(folder), "samples")   # the child's comes second
+        assert compiling.wait_ahead("samples", timeout=30.0) < 1.0  # its own job: no wait
+        compiling.tell_children("march")
+        t0 = time.perf_counter()
+        compiling.wait_for(str(folder), "march", timeout=30.0)
+        compiling.wait_for(str(tmp_path / "gone"), "march", timeout=30.0)
+        assert time.perf_counter() - t0 < 5.0
+        assert compiling.ahead_running()
+    finally:
+        compiling.wait_ahead(timeout=0.5)                      # stopped, its folder removed
+    assert child.poll() is not None and not folder.exists()
+    assert not compiling.ahead_running()
 
 
 def test_a_hung_child_is_stopped_and_a_failed_one_ignored():
