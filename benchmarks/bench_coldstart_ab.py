@@ -57,6 +57,9 @@ def main(argv=None):
                    "this one)")
     p.add_argument("--cases", nargs="+", choices=RENDERS, default=["mesh", "cloud"])
     p.add_argument("--rounds", type=int, default=3)
+    p.add_argument("--modes", nargs="+", choices=MODES, default=list(MODES),
+                   help="cold: the render in one process; cold_ahead: with its child "
+                   "compiling alongside (default: both)")
     p.add_argument("--out", required=True, help="results JSON")
     args = p.parse_args(argv)
     sources = {"before": Path(args.before).resolve(), "after": Path(args.after).resolve()}
@@ -66,7 +69,7 @@ def main(argv=None):
     results = {"date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
                "machine": {"cores": os.cpu_count(), "cpu": cpu_name(),
                            "platform": platform.platform(), "python": platform.python_version()},
-               "rounds": args.rounds, "cases": {}}
+               "rounds": args.rounds, "modes": args.modes, "cases": {}}
     for side, source in sources.items():
         commit, dirty = git_state(source)
         results[side] = {"commit": commit, "dirty": dirty}
@@ -79,13 +82,14 @@ def main(argv=None):
         for case in args.cases:
             results["cases"][case] = {"command": describe(case, inputs["after"][case],
                                                           work / "after"),
-                                      **{side: {m: [] for m in MODES} for side in sources}}
+                                      **{side: {m: [] for m in args.modes}
+                                         for side in sources}}
         for k in range(args.rounds):
             order = ("before", "after", "after", "before") if k % 2 == 0 else \
                 ("after", "before", "before", "after")
             for case in args.cases:
-                for mode in MODES:
-                    for side in order[:2] if mode == "cold" else order[2:]:
+                for mode in args.modes:
+                    for side in order[:2] if mode == args.modes[0] else order[2:]:
                         cache = Path(tempfile.mkdtemp(prefix="cache-", dir=work))
                         r = run(inputs[side][case], cache, work / side, None, sources[side],
                                 ahead=mode == "cold_ahead")
@@ -96,7 +100,7 @@ def main(argv=None):
                               f"load {r['load_before']:.1f}", flush=True)
         for case, c in results["cases"].items():
             for side in sources:
-                c[side]["summary"] = {m: summary(c[side][m], m) for m in MODES}
+                c[side]["summary"] = {m: summary(c[side][m], m) for m in args.modes}
     finally:
         shutil.rmtree(work, ignore_errors=True)
     os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)

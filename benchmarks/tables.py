@@ -222,15 +222,17 @@ def coldstart_ab_table(path):
     """Issue 63's first renders, the code before against this code, from a
     ``bench_coldstart_ab.py`` results file: per render case and side the smallest and the median
     over the rounds of the render in one process (CPU seconds) and with the light compiled in a
-    second process (wall seconds), and the ratio of the smallest."""
+    second process (wall seconds), and the ratio of the smallest (the modes the file holds)."""
     d = _load(path)
-    cells = ["first render (empty cache)", "one process, CPU s: before", "after", "ratio",
-             "light alongside, wall s: before", "after", "ratio"]
+    modes = d.get("modes", ["cold", "cold_ahead"])     # older files ran both
+    heads = {"cold": "one process, CPU s: before", "cold_ahead": "light alongside, wall s: before"}
+    cells = ["first render (empty cache)"] + [c for m in modes for c in (heads[m], "after",
+                                                                          "ratio")]
     lines = ["| " + " | ".join(cells) + " |", "|" + "---|" * len(cells)]
     loads = []
     for c in d["cases"].values():
         row = [f"`{c['command']}`"]
-        for mode in ("cold", "cold_ahead"):
+        for mode in modes:
             b, a = (c[side]["summary"][mode] for side in ("before", "after"))
             row += [f"{b['min']:.1f} ({b['median']:.1f})", f"{a['min']:.1f} ({a['median']:.1f})",
                     f"{a['min'] / b['min']:.2f}"]
