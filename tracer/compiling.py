@@ -151,6 +151,17 @@ def ahead_allowed(on=True):
         yield
     finally:
         _ALLOWED.pop()
+        _forget_ended()
+
+
+def _forget_ended():
+    """Forget the children of :func:`ahead` that have ended (their job folders removed); one
+    still compiling is left to finish (it is stopped at this process's exit)."""
+    with _LOCK:
+        ended = [p for p in _AHEAD if p.poll() is not None]
+        _AHEAD[:] = [p for p in _AHEAD if p not in ended]
+    for p in ended:
+        _stop(p)
 
 
 def ahead_config(march, film, objects):
@@ -197,7 +208,10 @@ def start_ahead(march, film, objects):
         return False        # a setting the scene's own checks will refuse, with a message
     if not ahead_needed(cfg):
         return False
-    claims = tempfile.mkdtemp(prefix="tracer-ahead-")
+    try:
+        claims = tempfile.mkdtemp(prefix="tracer-ahead-")
+    except OSError:         # no temporary folder to write: the child compiles the film
+        return spawn_ahead(AHEAD_CHILD, json.dumps(cfg))
     if os.environ.get(AHEAD_TRACE_ENV, "").strip() == "render":
         claim(claims, "trace")     # taken before the child starts: the render traces
     if spawn_ahead(AHEAD_CHILD, json.dumps(dict(cfg, claims=claims)), claims):
