@@ -154,7 +154,9 @@ def test_the_guide_holds_the_compile_ahead_tables(marker, name):
     ("coldstart-probe-one-kind", "coldstart_issue63_probe_one_kind.json", "coldstart-ab"),
     ("coldstart-probe-light-merged", "coldstart_issue63_probe_light_merged.json",
      "coldstart-ab"),
-    ("coldstart-levels", "coldstart_issue63_levels_ab.json", "coldstart-ab")])
+    ("coldstart-levels", "coldstart_issue63_levels_ab.json", "coldstart-ab"),
+    ("coldstart-share", "coldstart_issue63_share_ab.json", "coldstart-ab"),
+    ("coldstart-share-cloud", "coldstart_issue63_share_cloud_ab.json", "coldstart-ab")])
 def test_the_guide_holds_the_first_render_tables(marker, name, make):
     """Issue 63's first-render timeline, the renders run in turn against the code before, and
     the probes (``benchmarks/tables.py timeline`` / ``coldstart-ab``), each between its

@@ -148,6 +148,11 @@ NOT_RUN = {
         "it needs a checkout of the code before (git worktree) and compiles first renders from "
         "an empty cache sixteen times per round (minutes); tests/repo/test_docs_tables.py "
         "checks the guide against its results file",
+    "python benchmarks/bench_coldstart_ab.py --before /tmp/before --cases mesh edges cloud lit "
+    "mesh_exact two_objects mesh_normals --modes cold_ahead --rounds 3":
+        "it needs a checkout of the code before (git worktree) and compiles first renders from "
+        "an empty cache fourteen times per round (minutes); tests/repo/test_docs_tables.py "
+        "checks the guide against its results file",
     "python benchmarks/bench_library_ab.py --before /tmp/before --rounds 3":
         "it needs a checkout of the code before (git worktree) and compiles the whole-mesh "
         "vertex gradient's kernels in each (a minute); tests/repo/test_docs_tables.py checks "
