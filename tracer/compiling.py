@@ -269,7 +269,8 @@ def claim_job(name):
     :func:`start_ahead` has taken it first (:func:`claim`)."""
     with _LOCK:
         children = [p for p in _AHEAD if getattr(p, "claims", None)]
-    if not all(claim(p.claims, name) for p in children):
+    # a job taken before (a later frame of the same process) is still this process's
+    if not all(name in p.mine or claim(p.claims, name) for p in children):
         return False
     for p in children:
         p.mine.add(name)        # not to be waited for (wait_ahead)

@@ -191,6 +191,7 @@ def test_a_job_goes_to_the_process_that_claims_it_first(tmp_path):
         assert compiling.claim(str(folder), "trace")          # the child's claim comes first
         assert not compiling.claim_job("trace")
         assert compiling.claim_job("samples")
+        assert compiling.claim_job("samples")                 # still its own the second time
         assert not compiling.claim(str(folder), "samples")   # the child's comes second
         assert compiling.wait_ahead("samples", timeout=30.0) < 1.0  # its own job: no wait
         compiling.tell_children("march")
