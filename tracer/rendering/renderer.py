@@ -28,7 +28,8 @@ from tracer.rendering.shading import load_matcap
 from tracer.rendering.threads import in_bands, render_threads
 from tracer.stages import stage
 
-__all__ = ["render", "trace_tiles", "ray_args", "checked_camera", "compile_film", "run_trace",
+__all__ = ["render", "trace_tiles", "ray_args", "checked_camera", "while_waiting",
+           "compile_film", "run_trace",
            "run_film", "run_normals", "run_ground", "run_samples", "CHUNKS_PER_THREAD"]
 
 
@@ -100,7 +101,7 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
     args = ray_args(scene, camera, arrays)
     options = trace_options(scene, lo, hi, relax, omega, cone)
     band = band_rows or H
-    checked_camera(scene, arrays, args, options, (0, min(band, H)))
+    pending = checked_camera(scene, arrays, args, options, (0, min(band, H)))
     hit, tbuf, grad, steps, leaves, bis, objs = pixel_buffers(H, W)
     t0 = time.perf_counter()
     # a film after the trace (light, samples, RGBA): the trace is the bar's first
@@ -108,6 +109,8 @@ def render(scene, *, progress=None, band_rows=None, transforms=None, relax=None,
     plain = film.samples == 1 and film.shading != "lit" and not film.transparent
     share = 1.0 if plain else 1.0 - FILM_SHARE
     with stage("trace", "tracing"):
+        if pending is not None:     # the child compiles the trace kernel: the bar says so
+            while_waiting(pending, progress, H * W, t0)
         for r0 in range(0, H, band):
             r1 = min(H, r0 + band)
             report = None
@@ -160,7 +163,8 @@ def checked_camera(scene, arrays, args, options, rows):
       compiles that distance; after the camera check, the march (``march.compile_march``),
       which the child's ground probe and samples' kernel load in turn;
     * in the child: this process compiles the film's kernels (:func:`compile_film`) meanwhile
-      and waits for the trace kernel."""
+      and waits for the trace kernel; the function that does that is returned (None
+      otherwise), for the render to run under its progress bar (:func:`while_waiting`)."""
     ahead = ahead_running()
     here = claim_trace()
     if ahead and here:
@@ -172,9 +176,40 @@ def checked_camera(scene, arrays, args, options, rows):
         tell_children("march")
     elif ahead:
         film = scene.film
-        if film.samples > 1 or film.shading == "lit" or film.transparent:
-            compile_film(scene, arrays)
-        wait_ahead("trace")
+        with_film = film.samples > 1 or film.shading == "lit" or film.transparent
+
+        def pending():
+            if with_film:
+                compile_film(scene, arrays)
+            wait_ahead("trace")
+
+        return pending
+    return None
+
+
+def while_waiting(job, progress, total, t0):
+    """Run ``job()`` (compiling, or waiting for a child that compiles) in a thread while this
+    one reports to ``progress`` that nothing is done yet, as :func:`trace_tiles` does while its
+    first chunk waits for its kernel (the bar shows that numba compiles); ``total`` pixels,
+    ``t0`` the render's ``time.perf_counter()``. Without ``progress``, just ``job()``."""
+    if progress is None:
+        job()
+        return
+    failed = []
+
+    def run():
+        try:
+            job()
+        except BaseException as exc:   # re-raised in the calling thread
+            failed.append(exc)
+
+    worker = threading.Thread(target=run, daemon=True)
+    worker.start()
+    while worker.is_alive():
+        _report(progress, 0, total, time.perf_counter() - t0)
+        worker.join(REPORT_SECONDS)
+    if failed:
+        raise failed[0]
 
 
 def compile_film(scene, arrays):

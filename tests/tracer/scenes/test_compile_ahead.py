@@ -206,6 +206,35 @@ def test_a_job_goes_to_the_process_that_claims_it_first(tmp_path):
     assert not compiling.ahead_running()
 
 
+def test_the_render_waits_for_the_childs_trace_under_its_progress_bar():
+    """:func:`tracer.rendering.renderer.while_waiting` (the render compiling its film while its
+    child compiles the trace): the job runs while the calling thread tells the progress display
+    that nothing is done yet, a few times a second; its error is raised in the caller; without
+    a display the job just runs."""
+    from tracer.rendering import renderer
+
+    calls = []
+
+    class Bar:
+        def __call__(self, done, total, elapsed):
+            calls.append(("done", done))
+
+        def waiting(self, elapsed):
+            calls.append(("waiting", elapsed))
+
+    renderer.while_waiting(lambda: time.sleep(0.6), Bar(), 100, time.perf_counter())
+    assert len(calls) >= 2 and {c[0] for c in calls} == {"waiting"}
+
+    def boom():
+        raise ValueError("boom")
+
+    with pytest.raises(ValueError, match="boom"):
+        renderer.while_waiting(boom, Bar(), 100, time.perf_counter())
+    ran = []
+    renderer.while_waiting(lambda: ran.append(1), None, 100, 0.0)
+    assert ran == [1]
+
+
 def test_a_hung_child_is_stopped_and_a_failed_one_ignored():
     hung = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
     failed = subprocess.Popen([sys.executable, "-c", "raise SystemExit(3)"])
