@@ -225,9 +225,7 @@ def claim(folder, name):
     one process whose file creation succeeds, False for the other."""
     try:
         os.close(os.open(os.path.join(folder, name), os.O_CREAT | os.O_EXCL | os.O_WRONLY))
-    except FileExistsError:
-        return False
-    except OSError:         # no folder (removed, unwritable): the child keeps to the film
+    except OSError:         # taken already; or no folder (removed, unwritable)
         return False
     return True
 

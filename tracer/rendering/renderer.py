@@ -262,11 +262,12 @@ def run_film(scene, arrays=None):
                trace_options(scene, arrays.lo, arrays.hi), (hit, tbuf, grad, objs))
 
 
-def run_normals(scene):
+def run_normals(scene, arrays=None):
     """The shading normals' kernel (:func:`tracer.rendering.march.gradient_tasks`, through
-    ``tracer.rendering.film._gradients``) compiled for ``scene``'s types, on four rays."""
+    ``tracer.rendering.film._gradients``) compiled for ``scene``'s types, on four rays
+    (``arrays`` as in :func:`run_film`)."""
     camera = camera_of(scene)
-    arrays = scene_arrays(scene)
+    arrays = scene_arrays(scene) if arrays is None else arrays
     _gradients(ray_args(scene, camera, arrays), arrays.depth_max, np.arange(4, dtype=np.int64),
                scene.film.width, np.zeros((1, 2)), np.full(4, 5.0))
 
