@@ -3,7 +3,7 @@
 A render first traces one ray per pixel, through the pixel's own position (the tile kernels of
 :mod:`tracer.rendering.march`); those *centre samples* give the depth, normals and hit mask of a
 :class:`~tracer.rendering.frame.RenderResult`. With ``samples = N > 1`` every pixel gets ``N - 1``
-more rays (:func:`tracer.rendering.march.trace_samples`) at the offsets of :func:`sample_offsets`: a
+more rays (:func:`tracer.rendering.march.sample_tasks`) at the offsets of :func:`sample_offsets`: a
 low-discrepancy (R2) sequence warped so that the offsets are distributed like a tent filter of
 radius one pixel. Every sample then carries the same weight and the pixel is their mean, which
 is the tent-filtered image (filter importance sampling); sample 0 is the centre.
@@ -16,7 +16,7 @@ object, another object, nothing), get :data:`ADAPTIVE_SECOND` (8); those whose 8
 different things get all ``N``. Elsewhere one sample is enough. The samples of a pixel are
 traced together between two cone passes over its 3 x 3 block, one from the camera and one back
 from beyond the box, which bound where any of them can meet the surface
-(:func:`tracer.rendering.march.trace_samples`, done once per pixel), with over-relaxed steps
+(:func:`tracer.rendering.march.sample_tasks`, done once per pixel), with over-relaxed steps
 (:data:`SAMPLE_OMEGA`), Newton steps down to a grazing cosine of :data:`SAMPLE_NEWTON_COS`
 and the scene's hit threshold (:data:`EPS_PX`).
 
@@ -70,7 +70,7 @@ COLOR_CONTRAST = 0.08
 #: samples of a pixel that spread by more than this (display values, any channel) disagree
 SAMPLE_SPREAD = 0.02
 
-#: hit threshold of the extra samples, in pixels (see :func:`tracer.rendering.march.trace_samples`).
+#: hit threshold of the extra samples, in pixels (see :func:`tracer.rendering.march.sample_tasks`).
 #: 0: the scene's eps, unbiased coverage. Measured on the 512^2 lit bunny, adaptive 16: 0.1
 #: pixel saves 10 % of the time (0.25: 22 %) but fattens silhouettes (coverage +0.036 on
 #: edge pixels at 0.1), so it is off
@@ -581,7 +581,7 @@ def _trace(kargs, depth_max, options, pixels, W, offsets, bounds=None, eps_px=EP
     """The samples ``offsets (K, 2)`` of the pixels ``pixels (m,)`` (flat indices), flattened
     pixel-major: ``hit, t, grad, steps, objs`` of length ``m K``. ``bounds = (t_lo, t_hi)``, each
     ``(m,)``: the pixels' cone bounds, read where finite, written where not (NaN). ``eps_px``:
-    the rays' hit threshold in pixels (:func:`tracer.rendering.march.trace_samples`).
+    the rays' hit threshold in pixels (:func:`tracer.rendering.march.sample_tasks`).
     ``gpu``: :mod:`tracer.rendering.gpu_render` to trace on the GPU
     (:func:`~tracer.rendering.gpu_render.trace_samples_cuda`), None on the CPU."""
     tree, roots, params, mode, tol, cam, lo, hi, eps, max_steps = kargs
@@ -874,7 +874,7 @@ def form_image(scene, camera, arrays, kargs, options, centre, gpu=None, progress
     offsets = sample_offsets(samples)
     rays = 0
     work = [0]
-    # the pixels' cone bounds (march.trace_samples), kept from one pass to the next
+    # the pixels' cone bounds (march.sample_tasks), kept from one pass to the next
     cone_lo = np.full(H * W, np.nan)
     cone_hi = np.full(H * W, np.nan)
 

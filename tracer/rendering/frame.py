@@ -168,7 +168,7 @@ class MarchArgs(NamedTuple):
 
 
 class LightArgs(NamedTuple):
-    """The light kernels' settings (:func:`tracer.rendering.lighting.light_points`)."""
+    """The light kernels' settings (:func:`tracer.rendering.lighting.light_tasks`)."""
 
     L: np.ndarray        # (3,) unit direction towards the key light
     lo: np.ndarray       # (3,) the box the shadow rays march in (the ground included)
@@ -193,8 +193,8 @@ class LightBuffers(NamedTuple):
 
 
 class PixelBuffers(NamedTuple):
-    """The per-pixel outputs of the render kernels (:func:`tracer.rendering.march.render_rows`,
-    :func:`tracer.rendering.march.render_tiles`), full-image arrays."""
+    """The per-pixel outputs of the render kernel (:func:`tracer.rendering.march.render_tiles`),
+    full-image arrays."""
 
     hit: np.ndarray      # (H, W) bool
     tbuf: np.ndarray     # (H, W) float64, the depth along the ray
@@ -207,7 +207,7 @@ class PixelBuffers(NamedTuple):
 
 class SampleBuffers(NamedTuple):
     """The outputs of the anti-aliasing sample kernels
-    (:func:`tracer.rendering.march.trace_samples`, ``sample_tasks``): ``(m, K)`` per pixel and
+    (:func:`tracer.rendering.march.sample_tasks`): ``(m, K)`` per pixel and
     sample, and the pixels' cone bounds ``t_lo, t_hi (m,)`` (read when finite)."""
 
     hit: np.ndarray
@@ -221,7 +221,7 @@ class SampleBuffers(NamedTuple):
 
 class SampleRays(NamedTuple):
     """Which anti-aliasing rays the sample kernels trace, and how
-    (:func:`tracer.rendering.march.trace_samples`): for pixel ``(rows[i], cols[i])`` the rays
+    (:func:`tracer.rendering.march.sample_tasks`): for pixel ``(rows[i], cols[i])`` the rays
     through ``(rows[i] + offsets[k, 0], cols[i] + offsets[k, 1])``."""
 
     rows: np.ndarray     # (m,) int64

@@ -266,7 +266,7 @@ def _copy_back(pairs):
 
 
 def trace_samples_cuda(tree, ray, samples, out, opts):
-    """:func:`tracer.rendering.march.trace_samples` on the GPU: ``samples``
+    """:func:`tracer.rendering.march.sample_tasks` on the GPU: ``samples``
     (:class:`tracer.rendering.frame.SampleRays`), written into ``out``
     (:class:`tracer.rendering.frame.SampleBuffers`, host arrays) as the CPU writes them."""
     kernel()
@@ -290,7 +290,7 @@ def trace_samples_cuda(tree, ray, samples, out, opts):
 
 
 def light_points_cuda(tree, objs, points, light, out):
-    """:func:`tracer.rendering.lighting.light_points` on the GPU: shadow and occlusion at
+    """:func:`tracer.rendering.lighting.light_tasks` on the GPU: shadow and occlusion at
     ``points = (P (n, 3), N (n, 3))`` (unit normals) in the scene of ``tree`` and ``objs =
     (roots, params, mode, tol)``, written into ``out``
     (:class:`tracer.rendering.frame.LightBuffers`, host arrays) as the CPU writes them."""

@@ -39,7 +39,7 @@ from tracer.rendering.march import (NEWTON_COS, OMEGA, PLAIN_SPAN, RELAX, march_
                                     scratch, visiting_order)
 
 __all__ = ["Lighting", "DEFAULT_COLOR", "PALETTE", "soft_shadow", "ambient_occlusion",
-           "light_points", "light_point", "object_ids", "ground_height", "light_directions",
+           "light_tasks", "light_point", "object_ids", "ground_height", "light_directions",
            "shade_lit", "shade_ground", "srgb_to_linear", "linear_to_srgb"]
 
 #: at most this many distance queries along a shadow ray
@@ -208,8 +208,8 @@ def _ao_total(delta):
     return tot
 
 
-@numba.njit(**NJIT_PARALLEL)
-def light_points(tree, objs, points, depth_max, light, out, ntasks):
+@numba.njit(**NJIT)
+def light_tasks(tree, objs, points, depth_max, light, out, tasks):
     """Shadow and occlusion at points ``points = (P, N)``: ``P (n, 3)`` with unit normals
     ``N (n, 3)``, in the scene of ``tree`` and ``objs = (roots, params, mode, tol)``
     (:func:`tracer.rendering.march.scene_distance`'s ``sc`` without its tree).
@@ -223,21 +223,11 @@ def light_points(tree, objs, points, depth_max, light, out, ntasks):
     light, :func:`soft_shadow`). Writes ``out`` (:class:`tracer.rendering.frame.LightBuffers`):
     ``shadow (n,)``, ``ao (n,)`` (1 where not asked for) and ``work (n, 2) int64``: distance
     queries and leaves visited. Every point is
-    independent (no dependence on threads); ``ntasks`` strided tasks share them out
-    (:mod:`smoothdist.schedule`)."""
-    ntasks = max(1, min(points[0].shape[0], ntasks))
-    for task in prange(ntasks):
-        # a call of the serial kernel, not its code inlined into the parallel loop: numba 0.68
-        # lost the shadow of some points with light_point inlined twice into this loop (1
-        # where the serial tasks and a direct soft_shadow give 0)
-        light_tasks(tree, objs, points, depth_max, light, out, (ntasks, task, task + 1))
-
-
-@numba.njit(**NJIT)
-def light_tasks(tree, objs, points, depth_max, light, out, tasks):
-    """Tasks ``task0 <= task < task1`` of :func:`light_points` (``ntasks`` of them), serial and
-    ``nogil``, for Python threads (``smoothdist.schedule.run_tasks``): the same values, and no
-    ``prange`` to compile (a parallel loop costs numba as much again as its body)."""
+    independent (no dependence on threads or tasks): ``tasks = (ntasks, task0, task1)``, this
+    call runs tasks ``task0 <= task < task1`` of ``ntasks`` strided ones (task ``t`` the points
+    ``t, t + ntasks, ...``; :mod:`smoothdist.schedule`). Serial and ``nogil``, for Python
+    threads (``smoothdist.schedule.run_tasks``): no ``prange`` to compile (a parallel loop
+    costs numba as much again as its body)."""
     ntasks, task0, task1 = tasks
     sc = (borrowed(tree), objs[0], borrowed(objs[1]), objs[2], objs[3])
     light = borrowed(light)
@@ -247,7 +237,7 @@ def light_tasks(tree, objs, points, depth_max, light, out, tasks):
 
 @numba.njit(**NJIT_IR_INLINE)
 def _light_task(sc, points, depth_max, light, out, task, ntasks):
-    """Points ``task, task + ntasks, ...`` of :func:`light_points`."""
+    """Points ``task, task + ntasks, ...`` of :func:`light_tasks`."""
     n = points[0].shape[0]
     work = scratch(depth_max)
     for i in range(task, n, ntasks):  # every ntasks-th point
@@ -256,13 +246,11 @@ def _light_task(sc, points, depth_max, light, out, task, ntasks):
 
 @numba.njit(**NJIT_IR_INLINE)
 def light_point(sc, points, light, out, i, work):
-    """Point ``i`` of :func:`light_points`, with the traversal scratch ``work = (stack,
+    """Point ``i`` of :func:`light_tasks`, with the traversal scratch ``work = (stack,
     dstack)`` (the CPU's tasks and the GPU's threads, :mod:`tracer.rendering.gpu_render`, call
     this). Merged into its callers, with :func:`soft_shadow` and :func:`ambient_occlusion`: as
     a kernel of its own it was optimised and compiled to machine code once more in a first lit
-    render (performance guide, "Cold start"). The parallel :func:`light_points` calls
-    :func:`light_tasks` rather than merging it into its loop
-    (``tests/tracer/rendering/test_render_coldstart.py`` compares the two)."""
+    render (performance guide, "Cold start")."""
     P, N = points
     L, lo, hi, eps, k, delta, do_shadow, do_ao, slack, t_min, t_judge = light
     shadow, ao, counts = out
@@ -292,7 +280,7 @@ def light_point(sc, points, light, out, i, work):
 @numba.njit(**NJIT_PARALLEL)
 def object_ids(tree, objs, P, depth_max, out, ntasks):
     """Index of the object nearest to each point ``P (n, 3)`` (its own distance, smallest)
-    in the scene of ``tree`` and ``objs = (roots, params, mode, tol)`` (:func:`light_points`);
+    in the scene of ``tree`` and ``objs = (roots, params, mode, tol)`` (:func:`light_tasks`);
     ``ntasks`` strided tasks (:mod:`smoothdist.schedule`)."""
     n = P.shape[0]
     ntasks = max(1, min(n, ntasks))

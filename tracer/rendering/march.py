@@ -766,7 +766,7 @@ def scratch(depth_max):
 @numba.njit(**NJIT_IR_INLINE)
 def _render_tile(tree, ray, tile, depth_max, out, opts):
     """Trace the pixels ``r_lo <= r < r_hi, c_lo <= c < c_hi`` of one tile ``tile = (r_lo,
-    r_hi, c_lo, c_hi)`` (see :func:`render_rows`; ``tree``, ``ray``, ``out``, ``opts`` as
+    r_hi, c_lo, c_hi)`` (see :func:`render_tiles`; ``tree``, ``ray``, ``out``, ``opts`` as
     there)."""
     sc = scene_of(tree, ray)
     cam = ray[4]
@@ -853,7 +853,7 @@ def _tile_grid(cam, band):
 @numba.njit(**NJIT)
 def _tile_rect(j, grid, band):
     """Pixel rectangle ``(r_lo, r_hi, c_lo, c_hi)`` of the ``j``-th tile visited (tile
-    ``j * stride mod n``, see :func:`render_rows`; ``grid``: :func:`_tile_grid`'s)."""
+    ``j * stride mod n``, see :func:`render_tiles`; ``grid``: :func:`_tile_grid`'s)."""
     W, ntx, n, stride = grid
     row0, row1 = band
     tile = (j * stride) % n
@@ -861,36 +861,6 @@ def _tile_rect(j, grid, band):
     tx = tile - ty * ntx
     return (row0 + ty * TILE, min(row1, row0 + (ty + 1) * TILE), tx * TILE,
             min(W, (tx + 1) * TILE))
-
-
-@numba.njit(**NJIT_PARALLEL)
-def render_rows(tree, ray, band, depth_max, out, opts):
-    """Trace rows ``row0 <= r < row1`` (``band = (row0, row1)``) of the image into the
-    per-pixel output arrays.
-
-    ``tree``: the scene's (forest of) trees; ``ray``:
-    :class:`tracer.rendering.frame.MarchArgs` (the rest of the scene's arrays, the camera,
-    ``eps``, ``max_steps``); ``opts``:
-    :class:`tracer.rendering.frame.TraceOptions` (``relax, omega, cone, newton``);
-    ``depth_max``: the tree's depth (stack size). ``out``
-    (:class:`tracer.rendering.frame.PixelBuffers`) holds full-image arrays: ``hit (H, W)
-    bool``, ``tbuf (H, W) float64``, ``grad (H, W, 3) float64``, ``steps``, ``leaves``,
-    ``bisect (H, W) int64`` and ``objs (H, W) int32``, the object each hit shows (its own
-    distance the smallest at the hit; -1 where the ray misses; see :func:`march_ray`).
-
-    Work is split into ``TILE x TILE`` tiles so that neighbouring rays share cache lines of the
-    tree; a tile is traced by one thread, so the result does not depend on the number of
-    threads. With ``cone``, a tile's rays start at its :func:`cone_start` depth and, once one of
-    them has missed after more than :data:`END_AFTER` evaluations, the later ones end at its
-    :func:`cone_end` depth. Tiles
-    are visited in a scattered order (``j * STRIDE mod n``) so that the static split of the
-    loop between threads gives each thread a similar mix of empty and busy tiles.
-    """
-    n = _tile_grid(ray.cam, band)[2]
-    for j in prange(n):
-        # a call of the serial kernel, not its code inlined into the parallel loop: numba's
-        # parfors marched no ray with the per-pixel functions inlined here
-        render_tiles(tree, ray, band, depth_max, out, opts, j, j + 1)
 
 
 def compile_helpers(ray, band, opts):
@@ -922,7 +892,7 @@ def compile_helpers(ray, band, opts):
 def compile_march(tree, ray, depth_max, opts):
     """Compile :func:`march_ray` with the types :func:`render_tiles` calls it with, by marching
     the camera ray of pixel ``(0, 0)`` once from Python (``tree``, ``ray``, ``depth_max``,
-    ``opts`` as :func:`render_rows` takes them; the result is not used). A first render with a
+    ``opts`` as :func:`render_tiles` takes them; the result is not used). A first render with a
     child compiling its film's kernels (``tracer.scenes.compile_ahead``) calls it as soon as
     the child has compiled the scene's distance, before its trace kernel: the child's ground
     probe and samples' kernel, which march with it too, then load it from the cache instead of
@@ -946,7 +916,7 @@ def trace_pixels(tree, ray, rows, cols, depth_max, out, opts):
     """Trace only the pixels ``(rows[i], cols[i])`` (e.g. a subsample for an expensive
     reference render), from the camera (no cone pass: ``opts.cone`` is not read); ``out =
     (hit, tbuf, steps, leaves)`` have the shape of ``rows``; ``tree``, ``ray``, ``opts`` as in
-    :func:`render_rows`."""
+    :func:`render_tiles`."""
     for i in prange(rows.size):
         # a call, not code inlined into the parallel loop: numba's parfors marched no ray
         # with the march's tuples built here
@@ -968,8 +938,8 @@ def _trace_pixel(tree, ray, pixel, depth_max, out, opts, i):
     leaves[i] = lv
 
 
-@numba.njit(**NJIT_PARALLEL)
-def trace_samples(tree, ray, samples, depth_max, out, opts, ntasks):
+@numba.njit(**NJIT)
+def sample_tasks(tree, ray, samples, depth_max, out, opts, tasks):
     """Trace anti-aliasing samples: ``samples``
     (:class:`tracer.rendering.frame.SampleRays`: ``rows, cols (m,)``, ``offsets (K, 2)``,
     ``eps_px``, ``newton_cos``); for pixel ``(rows[i], cols[i])`` the rays through
@@ -984,28 +954,18 @@ def trace_samples(tree, ray, samples, depth_max, out, opts, ntasks):
     outputs, ``(m, K)``: ``hit`` bool, ``tbuf``, ``steps`` int64 (the cone
     passes booked on sample 0), ``objs`` int32 (the object each hit shows, -1 for a miss;
     :func:`march_ray`), and ``grad (m, K, 3)``; ``tree``, ``ray`` and ``opts`` as in
-    :func:`render_rows`. Pixels are independent, so the
-    result does not depend on the number of threads; ``ntasks`` strided tasks share them out
-    (:mod:`smoothdist.schedule`: the flagged pixels come in image order, and their cost
-    follows the silhouette).
+    :func:`render_tiles`. Pixels are independent, so the
+    result does not depend on the number of threads or tasks: ``tasks = (ntasks, task0,
+    task1)``, this call runs tasks ``task0 <= task < task1`` of ``ntasks`` strided ones (task
+    ``t`` the pixels ``t, t + ntasks, ...``; :mod:`smoothdist.schedule`: the flagged pixels
+    come in image order, and their cost follows the silhouette). Serial and ``nogil``, for
+    Python threads (``smoothdist.schedule.run_tasks``): no ``prange`` to compile.
 
     ``eps_px >= 0``: the hit threshold of these rays is at least ``eps_px`` pixels, measured at
     the cone's start depth (a lower bound of any hit's depth): a sample only decides how much
     of the pixel is covered, and a ray that comes within a fraction of a pixel of the surface
     covers it. ``newton_cos``: as :data:`NEWTON_COS`, for these rays.
     """
-    ntasks = max(1, min(samples[0].size, ntasks))
-    for task in prange(ntasks):
-        # a call, not code inlined into the parallel loop: numba's parfors marched no ray with
-        # the per-pixel functions inlined here
-        sample_tasks(tree, ray, samples, depth_max, out, opts, (ntasks, task, task + 1))
-
-
-@numba.njit(**NJIT)
-def sample_tasks(tree, ray, samples, depth_max, out, opts, tasks):
-    """Tasks ``task0 <= task < task1`` of :func:`trace_samples`'s ``ntasks`` (``tasks =
-    (ntasks, task0, task1)``), serial and ``nogil``, for Python threads
-    (``smoothdist.schedule.run_tasks``): the same values, and no ``prange`` to compile."""
     ntasks, task0, task1 = tasks
     tree = borrowed(tree)
     ray = borrowed(ray)
@@ -1022,7 +982,7 @@ def sample_tasks(tree, ray, samples, depth_max, out, opts, tasks):
 @numba.njit(**NJIT_IR_INLINE)
 def sample_bounds(tree, ray, samples, out, opts, i, work):
     """The cone bounds ``out.t_lo[i]``, ``out.t_hi[i]`` of pixel ``i`` of
-    :func:`trace_samples` where they are not given (without the cone: ``0`` and ``inf``), and
+    :func:`sample_tasks` where they are not given (without the cone: ``0`` and ``inf``), and
     the distance evaluations they took in ``out.steps[i, 0]`` (0 when given), which
     :func:`sample_ray` adds to the pixel's sample 0."""
     t_lo = out[5]
@@ -1046,7 +1006,7 @@ def sample_bounds(tree, ray, samples, out, opts, i, work):
 
 @numba.njit(**NJIT_IR_INLINE)
 def sample_ray(tree, ray, samples, out, opts, i, k, work):
-    """Ray ``k`` (``offsets[k]``) of pixel ``i`` of :func:`trace_samples`, from the pixel's
+    """Ray ``k`` (``offsets[k]``) of pixel ``i`` of :func:`sample_tasks`, from the pixel's
     cone bounds (:func:`sample_bounds`, done; its evaluations, in ``out.steps[i, 0]``, are
     added to sample 0's)."""
     hit, tbuf, grad, steps, objs, t_lo, t_hi = out
@@ -1110,14 +1070,30 @@ def gradient_tasks(tree, ray, samples, at, depth_max, out, tasks):
 
 @numba.njit(**NJIT)
 def render_tiles(tree, ray, band, depth_max, out, opts, j0, j1):
-    """Trace tiles ``j0 <= j < j1`` of :func:`render_rows`' tile order for the rows of
-    ``band = (row0, row1)``, in the calling thread (same arguments and outputs as
-    ``render_rows``).
+    """Trace tiles ``j0 <= j < j1`` of the rows ``row0 <= r < row1`` (``band = (row0,
+    row1)``) of the image into the per-pixel output arrays, in the calling thread.
 
-    Serial and ``nogil``: ``tracer.rendering.renderer`` runs it from a few Python threads that take
-    chunks of tiles as they finish (the tiles, hence the pixels, are exactly those of
-    ``render_rows``). Without ``prange`` numba compiles the render in seconds less. The scene's
-    arrays are passed down as borrowed views (``borrowed``), as ``prange`` would.
+    ``tree``: the scene's (forest of) trees; ``ray``:
+    :class:`tracer.rendering.frame.MarchArgs` (the rest of the scene's arrays, the camera,
+    ``eps``, ``max_steps``); ``opts``:
+    :class:`tracer.rendering.frame.TraceOptions` (``relax, omega, cone, newton``);
+    ``depth_max``: the tree's depth (stack size). ``out``
+    (:class:`tracer.rendering.frame.PixelBuffers`) holds full-image arrays: ``hit (H, W)
+    bool``, ``tbuf (H, W) float64``, ``grad (H, W, 3) float64``, ``steps``, ``leaves``,
+    ``bisect (H, W) int64`` and ``objs (H, W) int32``, the object each hit shows (its own
+    distance the smallest at the hit; -1 where the ray misses; see :func:`march_ray`).
+
+    The band is split into ``TILE x TILE`` tiles so that neighbouring rays share cache lines of
+    the tree, visited in a scattered order (the ``j``-th is tile ``j * STRIDE mod n``,
+    ``_tile_rect``) so that a run of tiles is a sample of the whole image. With ``cone``,
+    a tile's rays start at its :func:`cone_start` depth and, once one of them has missed after
+    more than :data:`END_AFTER` evaluations, the later ones end at its :func:`cone_end` depth.
+
+    Serial and ``nogil``: ``tracer.rendering.renderer.trace_tiles`` runs it from a few Python
+    threads that take chunks of tiles as they finish; a tile is traced by one call start to
+    finish, so the result does not depend on the number of threads or the chunks. Without
+    ``prange`` numba compiles the render in seconds less. The scene's arrays are passed down
+    as borrowed views (``borrowed``), as ``prange`` would.
     """
     tree = borrowed(tree)
     ray = borrowed(ray)

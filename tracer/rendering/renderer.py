@@ -326,7 +326,7 @@ def _report(progress, done, total, elapsed):
 
 #: a render's tiles are taken by the threads in chunks of ``1 / CHUNKS_PER_THREAD`` of a
 #: thread's share (at least one tile). The chunks follow the scattered tile order of
-#: ``tracer.rendering.march.render_rows``, so each is a sample of the whole image and costs about
+#: ``tracer.rendering.march.render_tiles``, so each is a sample of the whole image and costs about
 #: the same; a thread that drew expensive tiles takes fewer chunks. Each chunk is one kernel call
 #: (8 us of dispatch under the GIL, serial): chunks of 4 tiles gave a 1080p frame 32,400 calls
 #: (0.25 s serial); 64 chunks per thread leave at most 1/64 of a share idle at the end
@@ -340,18 +340,16 @@ def trace_tiles(args, row0, row1, depth_max, outputs, options, report=None, thre
 
     ``args`` (:class:`~tracer.rendering.frame.RayArgs`) and
     ``outputs`` (:class:`~tracer.rendering.frame.PixelBuffers`, or the same arrays in a tuple) as
-    for
-    :func:`tracer.rendering.march.render_rows`, ``options``
+    for :func:`tracer.rendering.march.render_tiles`, ``options``
     (:class:`~tracer.rendering.frame.TraceOptions`). ``threads`` Python threads (default
     :func:`~tracer.rendering.threads.render_threads`) take chunks of tiles
     (:data:`CHUNKS_PER_THREAD`) from a shared counter and trace them with
     the serial, GIL-free kernel :func:`tracer.rendering.march.render_tiles`, so that a thread that
     drew cheap tiles takes more; every tile is traced by one thread start to finish, so the
-    result does not depend on the number of threads or the chunking (it equals
-    ``render_rows``'). ``report(done_pixels)`` is called from the calling thread a few times
-    a second (with 0 while no chunk is done: the first one waits for its kernel to compile)
-    and at the end. Ctrl-C (KeyboardInterrupt) stops the workers after their
-    current chunk and is re-raised.
+    result does not depend on the number of threads or the chunking. ``report(done_pixels)``
+    is called from the calling thread a few times a second (with 0 while no chunk is done: the
+    first one waits for its kernel to compile) and at the end. Ctrl-C (KeyboardInterrupt)
+    stops the workers after their current chunk and is re-raised.
     """
     W = image_size.py_func(args.cam)[0]     # in Python: nothing to compile
     outputs = PixelBuffers(*outputs)

@@ -13,19 +13,27 @@ import naive
 from smoothdist import DataMesh, SmoothDistanceField
 from smoothdist import field as field_mod
 from smoothdist._kernels import query
-from smoothdist._kernels.exact_query import (MAX_LEAF, build_exact_tree, exact_stack_size,
-                                             exact_tree_batch, exact_tree_point, primitive_d2)
+from smoothdist._kernels.exact_query import (GROUP, MAX_LEAF, build_exact_tree,
+                                             exact_stack_size, exact_tree_batch,
+                                             exact_tree_point, primitive_d2)
 
 ROOT = Path(__file__).resolve().parents[3]
 ZOO = ("point_cloud", "circle", "segment_star", "icosphere", "cube", "mixed_mesh",
        "nonmanifold_mesh")
 
 
+#: no order: the queries in their own order (``smoothdist.field``'s ``_NO_ORDER``)
+NO_ORDER = np.empty(0, dtype=np.int64)
+
+
 def run_tree(et, Q, seeded=True):
     n = Q.shape[0]
     d, g = np.empty(n), np.empty((n, 3))
     p, no, le = (np.empty(n, dtype=np.int64) for _ in range(3))
-    exact_tree_batch(et, np.ascontiguousarray(Q, dtype=np.float64), seeded, d, g, p, no, le)
+    # every argument given, as SmoothDistanceField.exact_distance gives them: the kernel the
+    # warm-up compiled (an omitted default is a specialisation of its own, compiled again)
+    exact_tree_batch(et, np.ascontiguousarray(Q, dtype=np.float64), seeded, d, g, p, no, le, 1,
+                     True, NO_ORDER, GROUP)
     return d, g, p, no, le
 
 
@@ -34,7 +42,7 @@ def run_plain(field, Q):
     d, g = np.empty(n), np.empty((n, 3))
     p, no, le = (np.empty(n, dtype=np.int64) for _ in range(3))
     query.exact_distance_batch(field.tree, np.ascontiguousarray(Q, dtype=np.float64), d, g, p,
-                               no, le)
+                               no, le, 1)
     return d, g, p, no, le
 
 
@@ -419,7 +427,7 @@ def test_groups_equal_one_query_at_a_time(request, name, rng):
     n = Q.shape[0]
     d, g = np.empty(n), np.empty((n, 3))
     p, no, le = (np.empty(n, dtype=np.int64) for _ in range(3))
-    exact_tree_batch(et, Q, True, d, g, p, no, le, 1, False)
+    exact_tree_batch(et, Q, True, d, g, p, no, le, 1, False, NO_ORDER, GROUP)
     np.testing.assert_array_equal(d, a[0])
     np.testing.assert_array_equal(g, a[1])
     np.testing.assert_array_equal(p, a[2])

@@ -23,6 +23,7 @@ import numpy as np
 import pytest
 
 from smoothdist import DataMesh, SmoothDistanceField
+from smoothdist.schedule import run_tasks
 from tracer.rendering import march
 from tracer.rendering.camera import block_rays, camera_ray, primary_rays
 from tracer.rendering.frame import MarchArgs, SampleBuffers, SampleRays, TraceOptions
@@ -440,10 +441,9 @@ def test_cone_end_bounds_every_ray_of_the_block(kind, bunny_points):
 
 @pytest.mark.parametrize("cone", [True, False])
 def test_samples_are_bounds_then_rays(bunny_points, cone):
-    """``trace_samples``' prange loop (each task a call of the serial ``sample_tasks``) and
-    the GPU's pieces, ``sample_bounds`` once per pixel and then ``sample_ray`` for each offset
-    (here called one by one from Python), write the same values bit for bit. (With the two
-    inlined into the prange loop, numba's parfors marched no ray: this test failed.)"""
+    """The CPU's samples kernel, ``sample_tasks`` (three tasks on two threads), and the GPU's
+    pieces, ``sample_bounds`` once per pixel and then ``sample_ray`` for each offset (here
+    called one by one from Python), write the same values bit for bit."""
     from tracer.rendering.film import SAMPLE_NEWTON_COS, SAMPLE_OMEGA, sample_offsets
 
     scene = _scene(bunny_points, size=24)
@@ -467,7 +467,8 @@ def test_samples_are_bounds_then_rays(bunny_points, cone):
 
     whole = buffers()
     samples = SampleRays(rows, cols, offsets, 0.02, SAMPLE_NEWTON_COS)
-    march.trace_samples(tree, ray, samples, depth_max, whole, opts, 3)
+    run_tasks(lambda a, b: march.sample_tasks(tree, ray, samples, depth_max, whole, opts,
+                                              (3, a, b)), 3, 2)
     parts = buffers()
     work = (np.empty(depth_max + 4, np.int64), np.empty(depth_max + 4))
     for i in range(m):
@@ -480,7 +481,7 @@ def test_samples_are_bounds_then_rays(bunny_points, cone):
 
 @pytest.mark.parametrize("newton", [False, True])
 def test_samples_equal_a_plain_march(bunny_points, newton):
-    """``trace_samples`` (cone passes both ways, over-relaxed steps, bounds reused by a second
+    """``sample_tasks`` (cone passes both ways, over-relaxed steps, bounds reused by a second
     call; with ``newton``: Newton steps down to the film's grazing cosine) finds the hits of
     plain sphere tracing at the same sub-pixel positions."""
     from tracer.rendering.film import SAMPLE_NEWTON_COS, SAMPLE_OMEGA, sample_offsets
@@ -504,11 +505,11 @@ def test_samples_equal_a_plain_march(bunny_points, newton):
         grad = np.zeros((m, k, 3))
         steps = np.zeros((m, k), dtype=np.int64)
         objs = np.full((m, k), -1, dtype=np.int32)
-        march.trace_samples(
+        march.sample_tasks(
             tree, MarchArgs(roots, params, mode, tol, cam, lo, hi, float(scene.eps), 4000),
             SampleRays(rows, cols, np.ascontiguousarray(part), 0.0, SAMPLE_NEWTON_COS),
             depth_max, SampleBuffers(hit, t, grad, steps, objs, t_lo, t_hi),
-            TraceOptions(march.RELAX, SAMPLE_OMEGA, True, nd), 1)
+            TraceOptions(march.RELAX, SAMPLE_OMEGA, True, nd), (1, 0, 1))
         assert ((objs == 0) == hit).all()           # one object: 0 at every hit, -1 elsewhere
         assert np.isfinite(t_lo).all() and np.isfinite(t_hi).all()
         ref = np.array([[_plain_first_hit(arrays, cam, rows[i] + o[0], cols[i] + o[1],

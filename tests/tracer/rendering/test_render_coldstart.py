@@ -7,8 +7,9 @@
   gradients; every other scene (exact mode, several objects, poses, ``tol > 0``) keeps the
   general path.
 * Tiles traced by Python threads over the serial kernel ``march.render_tiles``
-  (``tracer.rendering.renderer.trace_tiles``) equal the ``prange`` kernel ``march.render_rows`` bit for
-  bit, for any number of threads, bands and chunk size.
+  (``tracer.rendering.renderer.trace_tiles``) give the image of one thread bit for bit, for any
+  number of threads, bands and chunk size; the samples' and the light's task kernels give the
+  values of one task, for any split into tasks and threads.
 * A plain ``tracer render`` of the default scene imports none of matplotlib, pyvista,
   trimesh, dask, imageio and compiles (or loads) only the lean kernels, one signature each.
 """
@@ -25,8 +26,8 @@ import pytest
 from smoothdist import DataMesh, SmoothDistanceField
 from tracer.rendering import march, renderer as render_mod
 from tracer.rendering.camera import sample_rays
-from tracer.rendering.frame import (LightArgs, LightBuffers, MarchArgs, PixelBuffers,
-                                    SampleBuffers, SampleRays)
+from tracer.rendering.frame import (LightArgs, LightBuffers, MarchArgs, SampleBuffers,
+                                    SampleRays)
 from tracer.rendering.frame import RayArgs, TraceOptions, camera_of, kernel_roots, scene_arrays
 from tracer.rendering.renderer import render, trace_tiles
 from tracer.scenes.scene import load_scene, scene_from_field
@@ -37,7 +38,7 @@ BUNNY = SCENES / "data" / "bunny.off"
 SIZE = {"width": 24, "height": 20}
 
 
-def trace(scene, roots=None, threads=None, band=None, kernel="tiles"):
+def trace(scene, roots=None, threads=None, band=None):
     """All per-pixel outputs of tracing ``scene`` (``roots`` overrides the kernel roots)."""
     tree, sroots, params, mode, lo, hi, depth_max, tol = scene_arrays(scene)
     roots = kernel_roots(sroots, params, mode, tol) if roots is None else roots
@@ -52,11 +53,7 @@ def trace(scene, roots=None, threads=None, band=None, kernel="tiles"):
     band = band or H
     for r0 in range(0, H, band):
         r1 = min(H, r0 + band)
-        if kernel == "rows":
-            march.render_rows(args.tree, args.march, (r0, r1), depth_max, PixelBuffers(*out),
-                              options)
-        else:
-            trace_tiles(args, r0, r1, depth_max, out, options, threads=threads)
+        trace_tiles(args, r0, r1, depth_max, out, options, threads=threads)
     return [np.ascontiguousarray(a).tobytes() for a in out]
 
 
@@ -112,10 +109,14 @@ def test_posed_scenes_keep_the_general_path():
 @pytest.mark.parametrize("name", ["bunny_triangles", "two_objects", "capillary_exact",
                                   "trefoil"])
 @pytest.mark.slow
-def test_threaded_tiles_equal_the_prange_kernel(name):
+def test_threaded_tiles_equal_one_thread(name):
+    """Any number of threads and bands gives one thread's image (the whole image in one band)
+    bit for bit. (The parallel ``prange`` kernel that this compared with, ``render_rows``, is
+    gone: a render never ran it, and it cost the suite seconds of compiling per scene.)"""
     scene = load_scene(SCENES / f"{name}.json", SIZE)
-    ref = trace(scene, kernel="rows")
-    for threads in (1, 2, 3):
+    ref = trace(scene, threads=1)
+    assert np.frombuffer(ref[0], dtype=np.bool_).any(), "the image shows the object"
+    for threads in (2, 3):
         assert trace(scene, threads=threads) == ref, f"{threads} threads"
     assert trace(scene, threads=2, band=8) == ref, "bands of 8 rows"
 
@@ -124,7 +125,7 @@ def test_threaded_tiles_equal_the_prange_kernel(name):
 def test_chunk_size_does_not_change_the_image(monkeypatch, per_thread):
     # one chunk per thread, a few, and chunks of one tile
     scene = load_scene(SCENES / "bunny_edges.json", SIZE)
-    ref = trace(scene, kernel="rows")
+    ref = trace(scene, threads=1)
     monkeypatch.setattr(render_mod, "CHUNKS_PER_THREAD", per_thread)
     assert trace(scene, threads=2) == ref
 
@@ -193,7 +194,7 @@ def test_a_plain_render_is_lean(tmp_path):
     dist = sigs["tracer.rendering.march.distance_at"]       # ((tree, roots, ...), ...)
     assert len(dist) == 1 and _items(dist[0][0])[1] == "int64", dist
     # nothing of the general path was compiled or loaded
-    for name in ("tracer.rendering.march.render_rows", "tracer.rendering.march._scene_distance_posed",
+    for name in ("tracer.rendering.march._scene_distance_posed",
                  "tracer.rendering.march.trace_pixels",
                  "smoothdist._kernels.query.smooth_distance_point_tol",
                  "smoothdist._kernels.query.exact_distance_point"):
@@ -266,9 +267,7 @@ def test_a_lit_adaptive_render_is_lean(tmp_path):
         assert _items(sigs[name][0][arg])[item] == "int64", sigs.get(name)
     # no prange kernel (a parallel loop costs numba about as much again as its body), and
     # nothing of the general path
-    for name in ("tracer.rendering.march.trace_samples", "tracer.rendering.lighting.light_points",
-                 "tracer.rendering.march.render_rows",
-                 "smoothdist._kernels.query.smooth_distance_point_tol",
+    for name in ("smoothdist._kernels.query.smooth_distance_point_tol",
                  "smoothdist._kernels.query.exact_distance_point"):
         assert name not in sigs, sigs.get(name)
     # compiled specialisations (all kernels, callees included, each counted once; each one
@@ -285,9 +284,11 @@ def _sample_outputs(m, K):
 
 
 @pytest.mark.parametrize("name", ["bunny_triangles", "two_objects"])
-def test_task_kernels_equal_the_prange_kernels(name):
+def test_task_kernels_equal_one_task(name):
     """``march.sample_tasks`` and ``lighting.light_tasks`` run from Python threads
-    (``smoothdist.schedule.run_tasks``, any split) give the prange kernels' values bit for bit."""
+    (``smoothdist.schedule.run_tasks``, any split) give the values of one task in one call bit
+    for bit. (The ``prange`` kernels they were compared with, ``trace_samples`` and
+    ``light_points``, are gone: a render never ran them.)"""
     from smoothdist.schedule import run_tasks
     from tracer.rendering import lighting
     from tracer.rendering.film import sample_offsets
@@ -305,8 +306,9 @@ def test_task_kernels_equal_the_prange_kernels(name):
             SampleRays(rows, cols, off, 0.0, 0.02), depth_max)
     opts = TraceOptions(march.RELAX, 2.0, True, march.newton_distance(scene.eps, lo, hi))
     ref = SampleBuffers(*_sample_outputs(m, len(off)))
-    march.trace_samples(*head, ref, opts, 3)
-    for ntasks, threads in ((3, 1), (3, 2), (5, 3), (1, 1)):
+    march.sample_tasks(*head, ref, opts, (1, 0, 1))
+    assert ref.hit.any() and not ref.hit.all()     # hits and misses among the samples
+    for ntasks, threads in ((3, 1), (3, 2), (5, 3), (37, 2), (40, 2)):
         got = SampleBuffers(*_sample_outputs(m, len(off)))
         run_tasks(lambda a, b: march.sample_tasks(*head, got, opts, (ntasks, a, b)),
                   ntasks, threads)
@@ -329,7 +331,8 @@ def test_task_kernels_equal_the_prange_kernels(name):
         return LightBuffers(np.ones(n), np.ones(n), np.zeros((n, 2), dtype=np.int64))
 
     ref_l = light_out()
-    lighting.light_points(*args, ref_l, 2)
+    lighting.light_tasks(*args, ref_l, (1, 0, 1))
+    assert (ref_l.shadow < 1).any() and (ref_l.ao < 1).any()    # shadows and occlusion
     for ntasks, threads in ((2, 1), (2, 2), (4, 3)):
         got = light_out()
         run_tasks(lambda a, b: lighting.light_tasks(*args, got, (ntasks, a, b)), ntasks,
