@@ -42,6 +42,23 @@ os.environ.setdefault("TRACER_COMPILE_AHEAD", "off")
 ZOO_NAMES = ("point_cloud", "circle", "segment_star", "icosphere", "cube", "mixed_mesh",
              "nonmanifold_mesh")
 
+#: the files that take longest on CI's two cores (their tests' seconds summed, largest first,
+#: from a run with ``--durations=0``), run first: ``.ci/run`` hands whole files to its two
+#: workers in collection order (``--dist loadfile --no-loadscope-reorder``), so a long file
+#: taken last would keep one worker busy while the other waits. The rest keep their order.
+LONG_FILES = ("repo/test_readme.py", "tracer/reproduce/test_reproduce.py", "repo/test_docs.py",
+              "smoothdist/test_cuda_sim.py", "tracer/scenes/test_compile_ahead.py",
+              "repo/test_coldstart_counts.py", "smoothdist/test_cache_guard.py",
+              "tracer/sim/test_sim_compile_ahead.py", "smoothdist/test_warmup.py",
+              "tracer/test_cli_errors.py")
+
+
+def pytest_collection_modifyitems(config, items):
+    """The files of :data:`LONG_FILES` first, in its order; the order within a file and of
+    the other files is kept (a stable sort)."""
+    rank = {f"{TESTS.name}/{name}": i for i, name in enumerate(LONG_FILES)}
+    items.sort(key=lambda item: rank.get(item.nodeid.split("::")[0], len(rank)))
+
 
 # ----------------------------------------------------------------------------- randomness
 @pytest.fixture
