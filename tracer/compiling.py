@@ -243,11 +243,14 @@ def tell_children(name):
 def wait_for(folder, name, timeout=None):
     """Wait (a child, :mod:`tracer.scenes.compile_ahead`) until the file ``name`` is in
     ``folder`` (:func:`tell_children`), the folder is gone (the render ended) or ``timeout``
-    seconds (default :data:`AHEAD_WAIT`) have passed."""
+    seconds (default :data:`AHEAD_WAIT`) have passed. Returns False for the last (timed out)."""
     deadline = time.perf_counter() + (AHEAD_WAIT if timeout is None else timeout)
     path = os.path.join(folder, name)
-    while not os.path.exists(path) and os.path.isdir(folder) and time.perf_counter() < deadline:
+    while not os.path.exists(path) and os.path.isdir(folder):
+        if time.perf_counter() >= deadline:
+            return False
         time.sleep(0.02)
+    return True
 
 
 def claim_trace():
