@@ -7,7 +7,14 @@ import io
 import numpy as np
 import pytest
 
+from smoothdist import _kernel_cache
+
 pytest_plugins = ["pytester"]
+
+#: the kernel cache this run loads from, read before ``pytester`` points HOME at its own folder:
+#: a subprocess run there would look for the per-machine cache under that HOME, find it empty
+#: and compile a first render's kernels afresh (19 s of CPU, for nothing this file tests)
+KERNEL_CACHE = _kernel_cache.root()
 
 USER_TEST = """
 import numpy as np
@@ -56,7 +63,9 @@ def test_a_changed_image_fails_and_writes_the_three_images(pytester):
 
 
 @pytest.mark.slow
-def test_render_results_are_checked(pytester):
+def test_render_results_are_checked(pytester, monkeypatch):
+    if KERNEL_CACHE:
+        monkeypatch.setenv("SMOOTHDIST_CACHE_DIR", KERNEL_CACHE)
     pytester.makepyfile(test_user="""
         import numpy as np
         import tracer
