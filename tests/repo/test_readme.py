@@ -17,8 +17,14 @@ What is changed on the way is listed here, explicitly, so that a reader can chec
 mapping is honest:
 
 * ``python`` and ``python3`` are a shim (:data:`SHIM`) that appends :data:`TINY` options
-  (smaller images, grids and repeats) to the commands it recognises, then runs this
-  interpreter. Nothing else about the command changes.
+  (smaller images, grids and repeats) to the commands it recognises, then runs the command
+  with this interpreter: in a fork of one prepared for it (``command_server.py``, which has
+  imported numpy, numba, scipy, matplotlib, PIL and trimesh, but not our packages, and set
+  up numba's tables: about 0.7 s of CPU that each of the hundred commands would otherwise
+  spend before its work; its docstring lists what a command sees), or afresh where the
+  server declines (interpreter options, an environment that sets what those modules read).
+  :func:`test_commands_run_as_in_a_fresh_interpreter` compares the two. Nothing else about
+  the command changes.
 * :data:`SETUP_REWRITES`: the quick start's venv and pip steps are dropped (CI's ``.ci/run``
   has just made the venv and installed the ``test`` extra, which holds the quick start's
   ``tracer`` extra) and ``.venv/bin/python`` is the shim.
@@ -41,17 +47,22 @@ marker must be removed once they pass.
 """
 
 import os
+import json
 import re
+import shlex
 import shutil
 import subprocess
 import sys
 import textwrap
+import time
 from pathlib import Path
 
 import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
 README = ROOT / "README.md"
+#: the fork server the ``python`` shim hands commands to (its docstring: what it changes)
+SERVER = Path(__file__).resolve().parent / "command_server.py"
 GUIDE = ROOT / "docs" / "guide"
 #: the pages whose commands run, in this order (README first; the guide pages by name)
 PAGES = [README, ROOT / "docs" / "getting-started.md"] + sorted(GUIDE.glob("*.md"))
@@ -111,15 +122,35 @@ TINY = {
 
 SHIM = textwrap.dedent('''\
     #!{python}
-    # README-command shim: append tiny-size options, then run the real interpreter
-    import os, sys
+    # README-command shim: append tiny-size options, then run the command in a fork of the
+    # prepared interpreter (command_server.py), or in a fresh one where the server declines
+    import array, json, os, socket, struct, sys
     TINY = {tiny!r}
     args = sys.argv[1:]
     key = " ".join(args[1:3]) if args[:1] == ["-m"] else (args[0] if args else "")
     extra = TINY.get(key, [])
     if "--help" in args or "-h" in args:
         extra = []
-    os.execv({python!r}, [{python!r}] + args + extra)
+    args = args + extra
+    s = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+    try:
+        s.connect({socket_path!r})
+    except OSError:  # no server (a command run by hand from the scratch folder)
+        s.close()
+        os.execv({python!r}, [{python!r}] + args)
+    msg = json.dumps({{"argv": args, "cwd": os.getcwd(), "env": dict(os.environ)}})
+    s.sendmsg([msg.encode() + b"\\n"],
+              [(socket.SOL_SOCKET, socket.SCM_RIGHTS, array.array("i", [0, 1, 2]))])
+    got = b""
+    while len(got) < 4:
+        more = s.recv(4 - len(got))
+        if not more:
+            sys.exit("error: the command server's process ended without an exit status")
+        got += more
+    code = struct.unpack("i", got)[0]
+    if code >= 0:  # else the server declined: a fresh interpreter
+        sys.exit(code)
+    os.execv({python!r}, [{python!r}] + args)
 ''')
 
 SETUP_REWRITES = [
@@ -438,19 +469,30 @@ def workspace(tmp_path_factory):
     """A scratch folder, a shim ``python`` on PATH, and a record of the commands run so far
     (some commands use the output of an earlier one; a command shown twice runs once)."""
     base = tmp_path_factory.mktemp("readme")
+    sock = base / "server.sock"
     work = make_work(base / "work")
     bindir = base / "bin"
     bindir.mkdir()
     for name in ("python", "python3"):
         p = bindir / name
-        p.write_text(SHIM.format(python=sys.executable, tiny=TINY))
+        p.write_text(SHIM.format(python=sys.executable, tiny=TINY, socket_path=str(sock)))
         p.chmod(0o755)
     env = dict(os.environ)
     env["PATH"] = f"{bindir}{os.pathsep}{env.get('PATH', '')}"
     env["PYTHONPATH"] = str(ROOT) + (os.pathsep + env["PYTHONPATH"]
                                      if env.get("PYTHONPATH") else "")
     env["MPLBACKEND"] = "Agg"
-    return {"base": base, "work": work, "env": env, "done": {}}
+    server = subprocess.Popen([sys.executable, str(SERVER), str(sock)], env=env,
+                              stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL)
+    try:
+        deadline = time.monotonic() + 120
+        while not sock.exists() and server.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert sock.exists(), "the command server did not start"
+        yield {"base": base, "work": work, "env": env, "done": {}}
+    finally:
+        server.kill()
+        server.wait()
 
 
 def run_bash(ws, cmd, timeout=600, cwd=None):
@@ -534,6 +576,42 @@ def test_myst_directives_are_not_commands():
         """)
     assert page_commands(text) == [("bash", "python -m tracer diff A.png B.png"),
                                    ("bash", "python -m tracer ablate-alpha metric")]
+
+
+PROBE = """\
+import json, os, sys
+print(json.dumps({"argv": sys.argv, "path0": sys.path[0], "cwd": os.getcwd(), "name": __name__,
+                  "x": os.environ.get("PROBE_X"), "forked": "numba" in sys.modules,
+                  "ours": [m for m in ("smoothdist", "tracer") if m in sys.modules],
+                  "stdin": sys.stdin.read()}))
+sys.exit(int(os.environ.get("PROBE_EXIT", "0")))
+"""
+
+
+def test_commands_run_as_in_a_fresh_interpreter(workspace):
+    """The shim's fork server (command_server.py) against the real interpreter: the same
+    argv, sys.path[0], working folder, ``__name__``, environment, stdin, exit status and
+    stderr, for a script, a module and ``-c``; our packages imported by neither; a command
+    whose environment sets a variable the preloaded modules read runs in a fresh one."""
+    probe = workspace["base"] / "probe"
+    probe.mkdir()
+    (probe / "probe.py").write_text(PROBE)
+    (probe / "probemod.py").write_text(PROBE)
+    real = sys.executable
+    for args in ('probe.py a "b c"', "-m probemod a", f"-c {shlex.quote(PROBE)} a"):
+        via, fresh = (run_bash(workspace, f"echo in | PROBE_X=1 PROBE_EXIT=3 {py} {args}",
+                               cwd=probe) for py in ("python", real))
+        assert via.returncode == fresh.returncode == 3, (via.stderr, fresh.stderr)
+        a, b = json.loads(via.stdout), json.loads(fresh.stdout)
+        assert a.pop("forked") and not b.pop("forked"), args  # the server ran it, forked
+        assert a == b and a["x"] == "1" and a["stdin"] == "in\n" and a["ours"] == [], (a, b)
+    declined = run_bash(workspace, "NUMBA_NUM_THREADS=1 python probe.py", cwd=probe)
+    assert declined.returncode == 0 and not json.loads(declined.stdout)["forked"]
+    for code, status, err in (("raise ValueError('boom')", 1, "ValueError: boom"),
+                              ("import sys; sys.exit('bye')", 1, "bye"),
+                              ("import sys; sys.exit(None)", 0, "")):
+        via = run_bash(workspace, f"python -c {shlex.quote(code)}", cwd=probe)
+        assert via.returncode == status and err in via.stderr, (code, via.stderr)
 
 
 @pytest.mark.parametrize("item", [pytest.param(
