@@ -184,6 +184,12 @@ def _first_launch_note(meta):
 def _worker(out):
     """Run in the subprocess: every case on both devices, saved to ``out`` (npz + json)."""
     os.environ["NUMBA_ENABLE_CUDASIM"] = "1"
+    # on one core: the simulator runs each CUDA thread as a Python thread, and a thread
+    # calling our compiled functions holds the GIL; spread over the cores, every hand-over
+    # waits for another core's scheduler (beside a busy core, as under pytest-xdist, the
+    # worker took 31 s wall for 14 s of CPU; pinned to one core, 12 s)
+    if hasattr(os, "sched_setaffinity"):
+        os.sched_setaffinity(0, {min(os.sched_getaffinity(0))})
     from smoothdist import cuda as sdcuda
     from tracer.cli import main
     from tracer.rendering.renderer import render
