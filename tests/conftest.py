@@ -47,10 +47,10 @@ ZOO_NAMES = ("point_cloud", "circle", "segment_star", "icosphere", "cube", "mixe
 #: workers in collection order (``--dist loadfile --no-loadscope-reorder``), so a long file
 #: taken last would keep one worker busy while the other waits. The rest keep their order.
 LONG_FILES = ("repo/test_readme.py", "tracer/reproduce/test_reproduce.py", "repo/test_docs.py",
-              "smoothdist/test_cuda_sim.py", "tracer/scenes/test_compile_ahead.py",
-              "repo/test_coldstart_counts.py", "smoothdist/test_cache_guard.py",
-              "tracer/sim/test_sim_compile_ahead.py", "smoothdist/test_warmup.py",
-              "tracer/test_cli_errors.py")
+              "tracer/scenes/test_compile_ahead.py", "smoothdist/test_cuda_sim.py",
+              "smoothdist/test_warmup.py", "tracer/test_cli_errors.py",
+              "repo/test_coldstart_counts.py", "smoothdist/test_whole_mesh_continuity.py",
+              "tracer/sim/test_sim_compile_ahead.py")
 
 
 def pytest_collection_modifyitems(config, items):
