@@ -46,8 +46,8 @@ gives the study commands defaults for ``-o``); they are ``xfail(strict=True)``, 
 marker must be removed once they pass.
 """
 
-import os
 import json
+import os
 import re
 import shlex
 import shutil
