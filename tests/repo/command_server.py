@@ -103,9 +103,12 @@ def serve(path):
             for i, fd in enumerate(fds):
                 os.dup2(fd, i)
                 os.close(fd)
-            code = run(req)
-            conn.sendall(struct.pack("i", code))
-            os._exit(code)
+            code = 1
+            try:  # whatever happens, this process never returns to the server's loop
+                code = run(req)
+                conn.sendall(struct.pack("i", code))
+            finally:
+                os._exit(code)
         conn.close()
         for fd in fds:
             os.close(fd)
@@ -123,6 +126,7 @@ def run(req):
     import runpy
     import threading
     import traceback
+    import types
 
     os.chdir(req["cwd"])
     os.environ.clear()
@@ -138,7 +142,9 @@ def run(req):
             elif argv[0] == "-c":
                 sys.argv = ["-c"] + argv[2:]
                 sys.path[:] = [""] + base
-                exec(compile(argv[1], "<string>", "exec"), {"__name__": "__main__"})
+                main = types.ModuleType("__main__")  # as the interpreter's: in sys.modules
+                sys.modules["__main__"] = main
+                exec(compile(argv[1], "<string>", "exec"), main.__dict__)
             else:
                 sys.argv = list(argv)
                 sys.path[:] = [os.path.dirname(os.path.abspath(argv[0]))] + base

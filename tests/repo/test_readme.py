@@ -585,7 +585,8 @@ parent = subprocess.run(["ps", "-o", "args=", "-p", str(os.getppid())], capture_
 print(json.dumps({"argv": sys.argv, "path0": sys.path[0], "cwd": os.getcwd(), "name": __name__,
                   "x": os.environ.get("PROBE_X"), "forked": "command_server" + ".py" in parent,
                   "ours": [m for m in ("smoothdist", "tracer") if m in sys.modules],
-                  "stdin": sys.stdin.read()}))
+                  "stdin": sys.stdin.read(),
+                  "main": sys.modules["__main__"].__dict__ is globals()}))
 sys.exit(int(os.environ.get("PROBE_EXIT", "0")))
 """
 
@@ -607,6 +608,7 @@ def test_commands_run_as_in_a_fresh_interpreter(workspace):
         a, b = json.loads(via.stdout), json.loads(fresh.stdout)
         assert a.pop("forked") and not b.pop("forked"), args  # the server ran it, forked
         assert a == b and a["x"] == "1" and a["stdin"] == "in\n" and a["ours"] == [], (a, b)
+        assert a["main"], args  # __main__ is the command's own module
     declined = run_bash(workspace, "NUMBA_NUM_THREADS=1 python probe.py", cwd=probe)
     assert declined.returncode == 0 and not json.loads(declined.stdout)["forked"]
     for code, status, err in (("raise ValueError('boom')", 1, "ValueError: boom"),
